@@ -1,0 +1,35 @@
+# Everything a fresh machine needs: Python 3.10+, a C compiler and make.
+PYTHON ?= python3
+VENV   := .venv
+BIN    := $(VENV)/bin
+STAMP  := $(VENV)/.installed
+
+.PHONY: install paper test test-slow bench derive clean
+
+$(STAMP): pyproject.toml
+	$(PYTHON) -m venv $(VENV)
+	$(BIN)/pip install --quiet --upgrade pip
+	$(BIN)/pip install --quiet -e ".[test]"
+	touch $(STAMP)
+
+install: $(STAMP)
+
+## The main job: the paper's 40-step evaluation, its tables, report and plots, in out/paper.
+paper: $(STAMP)
+	$(BIN)/gsfric paper --out out/paper
+
+## The whole test suite (the slow statistical suites are left to `make test-slow`).
+test: $(STAMP)
+	$(BIN)/python -m pytest -n 2 tests
+
+test-slow: $(STAMP)
+	$(BIN)/python -m pytest -m slow tests
+
+bench: $(STAMP)
+	$(BIN)/gsfric bench
+
+derive: $(STAMP)
+	$(BIN)/gsfric derive
+
+clean:
+	rm -rf $(VENV) out

@@ -1,0 +1,239 @@
+"""Entry point of the derivation: translate the model to CasADi and write generated/.
+
+``python -m derive.build [--check]`` (or ``gsfric derive [--check]``) writes
+
+* ``generated/gsfric_model.c`` and ``.h``: the C code of every function below;
+* ``generated/gsfric_model.casadi``: the same functions serialized, for evaluation without a C
+  compiler;
+* ``generated/manifest.json``: hash of the derive/ sources, tool versions, each function's inputs
+  and outputs with shapes and units, the effect catalog.
+
+Nothing written depends on the time or the machine, so regenerating is byte-identical.
+"""
+
+from __future__ import annotations
+
+import argparse
+import hashlib
+import json
+import sys
+from pathlib import Path
+
+from . import effects as fx
+from . import model as mdl
+
+ROOT = Path(__file__).resolve().parent.parent
+GENERATED = ROOT / "generated"
+DERIVE = Path(__file__).resolve().parent
+BASENAME = "gsfric_model"
+
+# Parameters of P whose Jacobian the identification needs, followed by all of Q.
+JACOBIAN_P = ("joint_viscous", "joint_coulomb", "prismatic_viscous", "prismatic_coulomb",
+              "payload_mass", "platform_mass")
+
+REACTION_OUTPUTS = ("F0", "R_E", "R_C", "M_C", "R_3", "M_3", "D", "D_dot", "u", "omega_leg",
+                    "omega_rel", "s2")
+FRICTION_OUTPUTS = ("MfrE", "MfrC", "Ffr", "MfrE_s", "MfrC_s", "Ffr_s")
+
+
+def source_hash() -> str:
+    """SHA-256 over the derive/ sources (names and contents, sorted by name)."""
+    h = hashlib.sha256()
+    for path in sorted(DERIVE.glob("*.py")):
+        h.update(path.name.encode())
+        h.update(b"\0")
+        h.update(path.read_bytes().replace(b"\r\n", b"\n"))
+        h.update(b"\0")
+    return h.hexdigest()
+
+
+def _layout(specs) -> list[dict]:
+    out, offset = [], 0
+    for name, shape, unit, desc in specs:
+        size = mdl._size(shape)
+        out.append(dict(name=name, offset=offset, shape=list(shape), unit=unit,
+                        description=desc))
+        offset += size
+    return out
+
+
+def _split(sx, specs, ch_inputs, env):
+    """Map the chain's input blocks onto slices of the flat CasADi symbol ``sx``."""
+    offset = 0
+    for name, shape, *_ in specs:
+        size = mdl._size(shape)
+        env[name] = sx[offset:offset + size]
+        offset += size
+
+
+def _functions():
+    import casadi as ca
+
+    nx = mdl.input_size(mdl.STATE)
+    nP = mdl.input_size(mdl.PARAMETERS)
+    q_names = fx.parameter_names()
+    nQ = len(q_names)
+    nK = mdl.input_size(mdl.PAPER_CONSTANTS)
+    x = ca.SX.sym("x", nx)
+    P = ca.SX.sym("P", nP)
+    Q = ca.SX.sym("Q", nQ)
+    K = ca.SX.sym("K", nK)
+    specs = {"x": mdl.STATE, "P": mdl.PARAMETERS,
+             "Q": tuple((n, (), "", "") for n in q_names), "K": mdl.PAPER_CONSTANTS}
+
+    def translate(model):
+        env = {}
+        _split(x, mdl.STATE, None, env)
+        _split(P, mdl.PARAMETERS, None, env)
+        env["effects"] = Q
+        if model.mode == "paper":
+            _split(K, mdl.PAPER_CONSTANTS, None, env)
+        return model.chain.to_casadi(env, model.outputs)
+
+    out_names = [n for n, *_ in mdl.OUTPUTS]
+    kin = translate(mdl.build("kinematic"))
+    pap = translate(mdl.build("paper"))
+    fric = mdl.build_friction()
+    fric_in = {n: ca.SX.sym(n, mdl._size(s)) for n, s, *_ in mdl.FRICTION_INPUTS}
+    env = dict(fric_in)
+    _split(P, mdl.PARAMETERS, None, env)
+    env["effects"] = Q
+    fric_out = fric.chain.to_casadi(env, fric.outputs)
+
+    offsets = {d["name"]: d["offset"] for d in _layout(mdl.PARAMETERS)}
+    theta = ca.vertcat(*[P[offsets[n]] for n in JACOBIAN_P], Q)
+    theta_names = list(JACOBIAN_P) + q_names
+
+    funcs = [
+        ca.Function(f"{BASENAME}_eval", [x, P, Q], [kin[n] for n in out_names],
+                    ["x", "P", "Q"], out_names),
+        ca.Function(f"{BASENAME}_eval_paper", [x, P, Q, K], [pap[n] for n in out_names],
+                    ["x", "P", "Q", "K"], out_names),
+        ca.Function(f"{BASENAME}_actuator", [x, P, Q], [kin["F"]], ["x", "P", "Q"], ["F"]),
+        ca.Function(f"{BASENAME}_reactions", [x, P, Q], [kin[n] for n in REACTION_OUTPUTS],
+                    ["x", "P", "Q"], list(REACTION_OUTPUTS)),
+        ca.Function(f"{BASENAME}_friction", list(fric_in.values()) + [P, Q],
+                    [fric_out[n] for n in FRICTION_OUTPUTS],
+                    list(fric_in) + ["P", "Q"], list(FRICTION_OUTPUTS)),
+        ca.Function(f"{BASENAME}_jacobian", [x, P, Q],
+                    [kin["F"], ca.jacobian(kin["F"], theta)], ["x", "P", "Q"], ["F", "dF"]),
+    ]
+    shapes = {n: list(s) for n, s, *_ in mdl.OUTPUTS}
+    units = {n: u for n, _, u, _ in mdl.OUTPUTS}
+    descs = {n: d for n, _, _, d in mdl.OUTPUTS}
+    for n, s, u, d in mdl.FRICTION_INPUTS:
+        shapes.setdefault(n, list(s))
+        units.setdefault(n, u)
+        descs.setdefault(n, d)
+    shapes["dF"] = [6, len(theta_names)]
+    units["dF"] = "N per unit of each parameter"
+    descs["dF"] = "Jacobian of F with respect to theta (see jacobian_parameters)"
+    meta = dict(specs=specs, shapes=shapes, units=units, descriptions=descs,
+                theta=theta_names)
+    return funcs, meta
+
+
+def generate(out_dir: Path = GENERATED) -> dict[str, bytes]:
+    """Derive, translate and return the generated files as {name: bytes} (nothing written)."""
+    import casadi as ca
+    import sympy
+
+    funcs, meta = _functions()
+    tmp = out_dir / f".{BASENAME}.tmp"
+    tmp.mkdir(parents=True, exist_ok=True)
+    try:
+        cg = ca.CodeGenerator(f"{BASENAME}.c", {"with_header": True, "casadi_int": "long long int",
+                                                "with_mem": False})
+        for f in funcs:
+            cg.add(f)
+        cg.generate(str(tmp) + "/")
+        files = {f"{BASENAME}.c": (tmp / f"{BASENAME}.c").read_bytes(),
+                 f"{BASENAME}.h": (tmp / f"{BASENAME}.h").read_bytes()}
+        ser = ca.FileSerializer(str(tmp / f"{BASENAME}.casadi"))
+        for f in funcs:
+            ser.pack(f)
+        del ser
+        files[f"{BASENAME}.casadi"] = (tmp / f"{BASENAME}.casadi").read_bytes()
+    finally:
+        for p in tmp.glob("*"):
+            p.unlink()
+        tmp.rmdir()
+
+    def io(f, kind):
+        names = f.name_in() if kind == "in" else f.name_out()
+        sizes = [f.size1_in(i) if kind == "in" else f.size1_out(i) for i in range(len(names))]
+        items = []
+        for name, size in zip(names, sizes):
+            item = dict(name=name, size=size)
+            if kind == "in" and name in meta["specs"]:
+                item["layout"] = _layout(meta["specs"][name])
+            else:
+                item.update(shape=meta["shapes"].get(name, [size]),
+                            unit=meta["units"].get(name, ""),
+                            description=meta["descriptions"].get(name, ""))
+            items.append(item)
+        return items
+
+    manifest = dict(
+        generator="derive/build.py",
+        source_hash=source_hash(),
+        tools=dict(casadi=ca.__version__, sympy=sympy.__version__,
+                   python=".".join(map(str, sys.version_info[:2]))),
+        files={n: hashlib.sha256(b).hexdigest() for n, b in sorted(files.items())},
+        functions=[dict(name=f.name(), inputs=io(f, "in"), outputs=io(f, "out"),
+                        n_instructions=f.n_instructions()) for f in funcs],
+        jacobian_parameters=meta["theta"],
+        effects=[dict(name=e.name, description=e.description,
+                      parameters=[dict(name=p.name, default=p.default, unit=p.unit,
+                                       description=p.description) for p in e.parameters])
+                 for e in fx.CATALOG],
+    )
+    files["manifest.json"] = (json.dumps(manifest, indent=2) + "\n").encode()
+    return files
+
+
+def write(files: dict[str, bytes], out_dir: Path = GENERATED) -> None:
+    out_dir.mkdir(parents=True, exist_ok=True)
+    for name, data in files.items():
+        tmp = out_dir / f".{name}.tmp"
+        tmp.write_bytes(data)
+        tmp.replace(out_dir / name)
+
+
+def is_stale(out_dir: Path = GENERATED) -> str | None:
+    """A one-line reason why generated/ does not match derive/, or None when it matches."""
+    path = out_dir / "manifest.json"
+    if not path.exists():
+        return f"{path} is missing"
+    try:
+        manifest = json.loads(path.read_text())
+    except json.JSONDecodeError as exc:
+        return f"{path} is not valid JSON ({exc})"
+    if manifest.get("source_hash") != source_hash():
+        return "derive/ changed since generated/ was written"
+    for name, digest in manifest.get("files", {}).items():
+        f = out_dir / name
+        if not f.exists() or hashlib.sha256(f.read_bytes()).hexdigest() != digest:
+            return f"generated/{name} does not match the manifest"
+    return None
+
+
+def main(argv=None) -> int:
+    parser = argparse.ArgumentParser(prog="derive.build", description=__doc__.splitlines()[0])
+    parser.add_argument("--check", action="store_true",
+                        help="exit 1 when generated/ is stale instead of regenerating")
+    args = parser.parse_args(argv)
+    if args.check:
+        reason = is_stale()
+        if reason:
+            print(f"generated/ is stale: {reason}; run `gsfric derive`", file=sys.stderr)
+            return 1
+        print("generated/ is up to date")
+        return 0
+    write(generate())
+    print(f"wrote {GENERATED}")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -1,0 +1,286 @@
+"""An ordered chain of symbolic definitions: the derivation's intermediate quantities.
+
+Every intermediate quantity of the derivation (a leg direction, a required moment, a reaction) is
+given a name and a symbol of its own, defined once from earlier symbols. Expressions stay small,
+shared quantities are computed once, and the same chain is translated three ways:
+
+* to CasADi (``to_casadi``), which generates the C code;
+* to NumPy (``evaluate``), the lambdified reference the compiled code is tested against;
+* to LaTeX (``definitions``), to read in a notebook.
+
+A step is either a definition ``symbol := expression`` or a linear solve ``x := solve(A, b)``
+(the 6x6 system in the legs' axial forces), which each back end performs in its own way.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import sympy as sp
+
+
+@dataclass
+class Step:
+    """One step of a chain: ``targets := exprs`` (``kind == "let"``) or ``targets := A^-1 b``."""
+
+    kind: str
+    name: str
+    targets: list[sp.Symbol]
+    exprs: list[sp.Expr] = field(default_factory=list)
+    A: sp.Matrix | None = None
+    b: sp.Matrix | None = None
+    equation: str = ""
+
+
+class Chain:
+    """Ordered definitions in terms of named inputs.
+
+    ``input`` declares an input block (a vector, or a matrix stored row-major);
+    ``let`` defines a scalar, vector or matrix quantity; ``solve`` defines the solution of a
+    linear system. Each returns SymPy symbols that later expressions use.
+    """
+
+    def __init__(self) -> None:
+        self.inputs: dict[str, sp.Matrix] = {}
+        self.steps: list[Step] = []
+        self._names: set[str] = set()
+        self._symbol_names: set[str] = set()
+
+    def _claim(self, name: str, base: str | None = None) -> None:
+        """Reserve a quantity's name and the base name of its symbols (both must be unique)."""
+        if name in self._names:
+            raise ValueError(f"chain: {name!r} is defined twice")
+        base = base or name
+        if base in self._symbol_names:
+            raise ValueError(f"chain: symbol name {base!r} of {name!r} is already taken")
+        self._names.add(name)
+        self._symbol_names.add(base)
+
+    def input(self, name: str, rows: int, cols: int = 1, latex: str | None = None) -> sp.Matrix:
+        """Declare an input block of shape (rows, cols); returns a Matrix of real symbols."""
+        base = latex or name
+        self._claim(name, base)
+        syms = [
+            [sp.Symbol(_entry_name(base, r, c, rows, cols), real=True) for c in range(cols)]
+            for r in range(rows)
+        ]
+        m = sp.Matrix(syms)
+        self.inputs[name] = m
+        return m
+
+    def let(self, name: str, expr, latex: str | None = None, equation: str = ""):
+        """Define ``name := expr``; returns a Symbol (scalar) or a Matrix of symbols."""
+        base = latex or name
+        self._claim(name, base)
+        if isinstance(expr, sp.MatrixBase):
+            rows, cols = expr.shape
+            targets = [
+                sp.Symbol(_entry_name(base, r, c, rows, cols), real=True)
+                for r in range(rows)
+                for c in range(cols)
+            ]
+            self.steps.append(Step("let", name, targets, list(expr), equation=equation))
+            return sp.Matrix(rows, cols, targets)
+        target = sp.Symbol(base, real=True)
+        self.steps.append(Step("let", name, [target], [sp.sympify(expr)], equation=equation))
+        return target
+
+    def solve(self, name: str, A: sp.Matrix, b: sp.Matrix, latex: str | None = None,
+              equation: str = "") -> sp.Matrix:
+        """Define ``name := A^-1 b`` for a square A; returns a column Matrix of symbols."""
+        base = latex or name
+        self._claim(name, base)
+        n = A.shape[0]
+        targets = [sp.Symbol(_entry_name(base, r, 0, n, 1), real=True) for r in range(n)]
+        self.steps.append(Step("solve", name, targets, A=sp.Matrix(A), b=sp.Matrix(b),
+                               equation=equation))
+        return sp.Matrix(targets)
+
+    def definitions(self, equation: str | None = None):
+        """The ``let`` steps (optionally of one equation group) as (name, LaTeX) pairs."""
+        out = []
+        for step in self.steps:
+            if equation is not None and step.equation != equation:
+                continue
+            if step.kind == "let":
+                lhs = sp.Matrix(step.targets) if len(step.targets) > 1 else step.targets[0]
+                rhs = sp.Matrix(step.exprs) if len(step.exprs) > 1 else step.exprs[0]
+                out.append((step.name, sp.latex(sp.Eq(lhs, rhs, evaluate=False))))
+            else:
+                out.append((step.name, r"%s = \left(%s\right)^{-1} %s" % (
+                    sp.latex(sp.Matrix(step.targets)), sp.latex(step.A), sp.latex(step.b))))
+        return out
+
+    # ----------------------------------------------------------------- back ends
+    def to_casadi(self, inputs: dict, outputs: dict[str, sp.Matrix]) -> dict:
+        """Translate the chain into CasADi SX expressions.
+
+        Parameters
+        ----------
+        inputs : dict
+            input name -> casadi.SX column of the block's entries (row-major).
+        outputs : dict
+            output name -> Matrix of chain symbols.
+
+        Returns
+        -------
+        dict of output name -> casadi.SX column (row-major entries of the Matrix).
+        """
+        import casadi as ca
+
+        env: dict[sp.Symbol, object] = {}
+        for name, mat in self.inputs.items():
+            col = inputs[name]
+            for k, s in enumerate(mat):
+                env[s] = col[k]
+        conv = _CasadiConverter(env)
+        for step in self.steps:
+            if step.kind == "let":
+                for t, e in zip(step.targets, step.exprs):
+                    env[t] = conv(e)
+            else:
+                n = step.A.shape[0]
+                A = ca.SX(n, n)
+                for r in range(n):
+                    for c in range(n):
+                        A[r, c] = conv(step.A[r, c])
+                b = ca.vertcat(*[conv(v) for v in step.b])
+                x = ca.solve(A, b)
+                for k, t in enumerate(step.targets):
+                    env[t] = x[k]
+        return {name: ca.vertcat(*[conv(v) for v in mat]) for name, mat in outputs.items()}
+
+    def evaluate(self, values: dict, outputs: dict[str, sp.Matrix]) -> dict:
+        """Evaluate the chain with NumPy (lambdified SymPy), vectorised over a leading axis.
+
+        Parameters
+        ----------
+        values : dict
+            input name -> array of shape (N, size) or (size,), entries row-major.
+        outputs : dict
+            output name -> Matrix of chain symbols.
+
+        Returns
+        -------
+        dict of output name -> ndarray of shape (N, size).
+        """
+        import numpy as np
+
+        env: dict[sp.Symbol, object] = {}
+        n = 1
+        for name, mat in self.inputs.items():
+            arr = np.asarray(values[name], dtype=float)
+            if arr.ndim == 2:
+                n = max(n, arr.shape[0])
+        for name, mat in self.inputs.items():
+            arr = np.asarray(values[name], dtype=float)
+            arr = np.broadcast_to(arr.reshape(-1, len(mat)) if arr.ndim == 2 else arr, (n, len(mat)))
+            for k, s in enumerate(mat):
+                env[s] = arr[:, k]
+
+        def ev(expr):
+            expr = sp.sympify(expr)
+            free = sorted(expr.free_symbols, key=lambda s: s.name)
+            f = sp.lambdify(free, expr, modules="numpy")
+            return np.broadcast_to(np.asarray(f(*[env[s] for s in free]), dtype=float), (n,))
+
+        for step in self.steps:
+            if step.kind == "let":
+                for t, e in zip(step.targets, step.exprs):
+                    env[t] = ev(e)
+            else:
+                m = step.A.shape[0]
+                A = np.stack([np.stack([ev(step.A[r, c]) for c in range(m)], -1)
+                              for r in range(m)], -2)
+                b = np.stack([ev(v) for v in step.b], -1)
+                x = np.linalg.solve(A, b[..., None])[..., 0]
+                for k, t in enumerate(step.targets):
+                    env[t] = x[:, k]
+        return {name: np.stack([ev(v) for v in mat], -1) for name, mat in outputs.items()}
+
+
+def _entry_name(base: str, r: int, c: int, rows: int, cols: int) -> str:
+    """LaTeX-friendly name of one entry: ``R_{E1}`` -> ``R_{E1,x}``; ``I`` -> ``I_{12}``."""
+    if rows * cols == 1:
+        return base
+    if cols == 1:
+        suffix = "xyz"[r] if rows == 3 else str(r + 1)
+    else:
+        suffix = f"{r + 1}{c + 1}"
+    if base.endswith("}") and "_{" in base:
+        return f"{base[:-1]},{suffix}}}"
+    return f"{base}_{{{suffix}}}"
+
+
+class _CasadiConverter:
+    """SymPy expression -> CasADi SX, sharing the nodes of repeated subexpressions."""
+
+    def __init__(self, env: dict) -> None:
+        import casadi as ca
+
+        self.ca = ca
+        self.env = env
+        self.memo: dict = {}
+
+    def __call__(self, expr):
+        expr = sp.sympify(expr)
+        hit = self.memo.get(expr)
+        if hit is not None:
+            return hit
+        out = self._convert(expr)
+        self.memo[expr] = out
+        return out
+
+    def _convert(self, e):
+        ca = self.ca
+        if e.is_Symbol:
+            try:
+                return self.env[e]
+            except KeyError:
+                raise KeyError(f"symbol {e} used before it is defined") from None
+        if e.is_Number:
+            return ca.SX(float(e))
+        if e.is_Add:
+            args = [self(a) for a in e.args]
+            out = args[0]
+            for a in args[1:]:
+                out = out + a
+            return out
+        if e.is_Mul:
+            args = [self(a) for a in e.args]
+            out = args[0]
+            for a in args[1:]:
+                out = out * a
+            return out
+        if e.is_Pow:
+            base, ex = e.args
+            b = self(base)
+            if ex == sp.Rational(1, 2):
+                return ca.sqrt(b)
+            if ex == -sp.Rational(1, 2):
+                return 1 / ca.sqrt(b)
+            if ex.is_Integer:
+                k = int(ex)
+                if k == -1:
+                    return 1 / b
+                if k == 2:
+                    return b * b
+                if k == -2:
+                    return 1 / (b * b)
+                return ca.constpow(b, k)
+            return ca.power(b, self(ex))
+        funcs = {sp.sin: ca.sin, sp.cos: ca.cos, sp.exp: ca.exp, sp.tanh: ca.tanh,
+                 sp.Abs: ca.fabs, sp.sign: ca.sign, sp.atan2: ca.atan2}
+        if e.func in funcs:
+            return funcs[e.func](*[self(a) for a in e.args])
+        if isinstance(e, sp.Piecewise):
+            (val, cond), rest = e.args[0], e.args[1:]
+            other = self(sp.Piecewise(*rest)) if rest and rest[0][1] is not sp.true else \
+                self(rest[0][0])
+            return ca.if_else(self._condition(cond), self(val), other)
+        raise TypeError(f"no CasADi translation for {e.func.__name__}: {e}")
+
+    def _condition(self, c):
+        rel = {sp.StrictGreaterThan: lambda a, b: a > b, sp.GreaterThan: lambda a, b: a >= b,
+               sp.StrictLessThan: lambda a, b: a < b, sp.LessThan: lambda a, b: a <= b}
+        return rel[type(c)](self(c.lhs), self(c.rhs))

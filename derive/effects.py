@@ -1,0 +1,102 @@
+"""The catalog of optional physical effects, each a symbolic term with its parameters as inputs.
+
+Every effect is always present in the generated functions; its parameters switch it on (all
+defaults leave the model unchanged). The names are a contract (see SPEC); the parameters are
+documented here and in docs/effects.md.
+
+Prismatic-joint friction effects add to the friction force on the upper part ``F_fr`` (along u,
+opposing the sliding speed v, with the regularised sign of friction.py):
+
+* ``stribeck``: ``-sgn(v) static exp(-(v / velocity)^2)``: a friction peak at low speed.
+* ``seal_friction``: ``-sgn(v) force``: load-independent Coulomb friction of the seals.
+* ``quadratic_drag``: ``-coefficient v |v|``.
+* ``stroke_friction``: ``-sgn(v) slope (D - reference)``: friction varying along the stroke.
+* ``bushing_friction``: ``-sgn(v) coefficient 2 |u x M_3| / spacing``: the bending moment M_3 of the
+  prismatic joint presses its two bushings, ``spacing`` apart, with forces ``|M_3,perp| / spacing``
+  each; ``coefficient`` is their friction coefficient.
+
+Effects on the loads:
+
+* ``payload_offset``: the payload's centre of mass moves by (x, y, z) in the platform frame.
+* ``leg_weight``: gravity on the leg parts with masses (lower_mass, upper_mass), for a model with
+  ``[legs] weight = false``.
+* ``joint_friction_coupling``: the friction moments of the spherical and universal joints enter
+  the equilibrium of legs and platform (scaled by ``scale``; 1 = fully), so the actuators carry
+  them.
+
+And on the reading: ``sensor_bias``: a constant offset b_i in each force reading F_i.
+"""
+
+from dataclasses import dataclass
+
+import sympy as sp
+
+
+@dataclass(frozen=True)
+class Parameter:
+    name: str
+    default: float
+    unit: str
+    description: str
+
+
+@dataclass(frozen=True)
+class Effect:
+    name: str
+    description: str
+    parameters: tuple[Parameter, ...]
+
+
+CATALOG: tuple[Effect, ...] = (
+    Effect("stribeck", "low-speed friction peak in the prismatic joints", (
+        Parameter("static", 0.0, "N", "height of the friction peak at zero speed"),
+        Parameter("velocity", 0.01, "m/s", "Stribeck velocity: speed at which the peak decays by 1/e"),
+    )),
+    Effect("seal_friction", "load-independent Coulomb friction in the prismatic joints", (
+        Parameter("force", 0.0, "N", "Coulomb force of the seals"),
+    )),
+    Effect("quadratic_drag", "prismatic friction growing with v|v|", (
+        Parameter("coefficient", 0.0, "N s^2/m^2", "drag coefficient"),
+    )),
+    Effect("stroke_friction", "prismatic friction varying along the stroke", (
+        Parameter("slope", 0.0, "N/m", "change of Coulomb force per metre of leg length"),
+        Parameter("reference", 0.0, "m", "leg length at which the change is zero"),
+    )),
+    Effect("payload_offset", "payload centre of mass away from its nominal position", (
+        Parameter("x", 0.0, "m", "offset along the platform's x axis"),
+        Parameter("y", 0.0, "m", "offset along the platform's y axis"),
+        Parameter("z", 0.0, "m", "offset along the platform's z axis"),
+    )),
+    Effect("sensor_bias", "constant offset in each force reading", tuple(
+        Parameter(f"b{i}", 0.0, "N", f"offset of F{i}") for i in range(1, 7)
+    )),
+    Effect("joint_friction_coupling",
+           "friction moments of the spherical and universal joints carried by the actuators", (
+               Parameter("scale", 0.0, "1", "fraction of the joint friction moments included"),
+           )),
+    Effect("leg_weight", "weight of the leg parts, for a model without it", (
+        Parameter("lower_mass", 0.0, "kg", "mass whose weight acts at the lower part's centre"),
+        Parameter("upper_mass", 0.0, "kg", "mass whose weight acts at the upper part's centre"),
+    )),
+    Effect("bushing_friction", "prismatic friction from the bushing forces of the moment M_3", (
+        Parameter("coefficient", 0.0, "1", "friction coefficient of the bushings"),
+        Parameter("spacing", 0.1, "m", "distance between the two bushings"),
+    )),
+)
+
+
+def parameter_names() -> list[str]:
+    """Flat names ``effect.parameter`` in the order of the effect-parameter input Q."""
+    return [f"{e.name}.{p.name}" for e in CATALOG for p in e.parameters]
+
+
+def prismatic_effects_force(q: dict, v, sgn_v, D, u, M_3):
+    """Sum of the catalog's friction forces on the upper part along u (the terms above)."""
+    from .vectors import cross, norm
+
+    coulomb = (q["stribeck.static"] * sp.exp(-(v / q["stribeck.velocity"]) ** 2)
+               + q["seal_friction.force"]
+               + q["stroke_friction.slope"] * (D - q["stroke_friction.reference"])
+               + q["bushing_friction.coefficient"] * 2 * norm(cross(u, M_3))
+               / q["bushing_friction.spacing"])
+    return -sgn_v * coulomb - q["quadratic_drag.coefficient"] * v * sp.Abs(v)
