@@ -1,0 +1,117 @@
+"""Validation helpers shared by the platform, trajectory and I/O modules (private)."""
+
+from __future__ import annotations
+
+import dataclasses
+import difflib
+import math
+from collections.abc import Iterable
+
+import numpy as np
+
+from gsfric.errors import InputError
+
+
+def short(value: object, limit: int = 40) -> str:
+    """``repr(value)``, cut to ``limit`` characters."""
+    text = repr(value)
+    return text if len(text) <= limit else text[: limit - 3] + "..."
+
+
+def suggest(name: str, choices: Iterable[str]) -> str:
+    """`` (did you mean 'x'?)`` for the closest of ``choices`` (case-insensitive), or ``""``."""
+    choices = list(choices)
+    lowered = {c.lower(): c for c in choices}
+    match = difflib.get_close_matches(str(name).lower(), list(lowered), n=1, cutoff=0.6)
+    return f" (did you mean {lowered[match[0]]!r}?)" if match else ""
+
+
+def is_number(value: object) -> bool:
+    """True for a real number (int, float, NumPy integer or floating), False for bool and the rest."""
+    if isinstance(value, (bool, np.bool_)):
+        return False
+    return isinstance(value, (int, float, np.integer, np.floating))
+
+
+def as_float(value: object, name: str, *, minimum: float | None = None) -> float:
+    """A finite float from ``value``; ``InputError`` naming ``name`` otherwise.
+
+    ``minimum``, if given, is an inclusive lower bound.
+    """
+    if isinstance(value, np.ndarray) and value.shape == ():
+        value = value[()]
+    if not is_number(value):
+        raise InputError(f"{name}: expected a number, got {short(value)}")
+    try:
+        result = float(value)
+    except OverflowError:
+        raise InputError(f"{name}: number too large: {short(value)}") from None
+    if not math.isfinite(result):
+        raise InputError(f"{name}: must be finite, got {result}")
+    if minimum is not None and result < minimum:
+        raise InputError(f"{name}: must be >= {minimum:g}, got {result:g}")
+    return result
+
+
+def _shape_text(shape: tuple[int | None, ...]) -> str:
+    parts = ["N" if n is None else str(n) for n in shape]
+    return "(" + ", ".join(parts) + ("," if len(parts) == 1 else "") + ")"
+
+
+def _check_leaves(value: object, depth: int, ndim: int, name: str, shape_text: str) -> None:
+    if isinstance(value, (list, tuple)):
+        if depth >= ndim:
+            raise InputError(f"{name}: expected an array of shape {shape_text}, nested too deeply")
+        for item in value:
+            _check_leaves(item, depth + 1, ndim, name, shape_text)
+    elif not is_number(value):
+        raise InputError(f"{name}: expected an array of shape {shape_text} of numbers, "
+                         f"found {short(value)}")
+
+
+def as_array(value: object, shape: tuple[int | None, ...], name: str) -> np.ndarray:
+    """A read-only float64 array of ``shape`` (``None`` matches any length) with finite entries.
+
+    Accepts NumPy arrays of integer or floating type and nested lists or tuples of numbers;
+    anything else, a different shape or a non-finite entry raises an ``InputError`` naming
+    ``name``.
+    """
+    shape_text = _shape_text(shape)
+    if isinstance(value, np.ndarray):
+        if value.dtype.kind not in "iuf":
+            raise InputError(f"{name}: expected an array of numbers, got dtype {value.dtype}")
+        array = np.array(value, dtype=float)
+    else:
+        _check_leaves(value, 0, len(shape), name, shape_text)
+        try:
+            array = np.array(value, dtype=float)
+        except OverflowError:
+            raise InputError(f"{name}: number too large") from None
+        except (ValueError, TypeError):
+            raise InputError(f"{name}: expected an array of shape {shape_text}, "
+                             "got rows of different lengths") from None
+    if array.ndim != len(shape) or any(
+        want is not None and got != want for got, want in zip(array.shape, shape)
+    ):
+        raise InputError(f"{name}: expected an array of shape {shape_text}, got {array.shape}")
+    bad = np.argwhere(~np.isfinite(array))
+    if len(bad):
+        index = "".join(f"[{i}]" for i in bad[0])
+        raise InputError(f"{name}{index}: must be finite, got {array[tuple(bad[0])]}")
+    array.setflags(write=False)
+    return array
+
+
+def fields_equal(a: object, b: object) -> bool:
+    """Field-by-field equality of two dataclass instances, arrays compared with array_equal."""
+    if type(a) is not type(b):
+        return False
+    for f in dataclasses.fields(a):
+        x, y = getattr(a, f.name), getattr(b, f.name)
+        if isinstance(x, np.ndarray) or isinstance(y, np.ndarray):
+            if not (isinstance(x, np.ndarray) and isinstance(y, np.ndarray)
+                    and x.shape == y.shape and np.array_equal(x, y)):
+                return False
+        elif x != y:
+            return False
+    return True

@@ -1,0 +1,372 @@
+"""Reading and writing files: tables (CSV or Parquet), trajectories, measured data.
+
+The format follows the extension: ``.csv`` or ``.parquet`` / ``.pq`` (case-insensitive). Every
+problem with an input file raises an ``InputError`` with a one-line message naming the file and,
+where it applies, the row and the column, e.g. ``trajectory.csv: row 17: column 'x' is NaN``.
+Rows are data rows counted from 1 (the CSV header is not counted).
+
+Trajectory files hold ``t, x, y, z`` (s, m; platform frame origin in the base frame) and either
+the ZXZ angles ``alpha, beta, gamma`` (rad) or a unit quaternion ``qw, qx, qy, qz`` (platform
+frame to base frame). When both sets are present the quaternion is used. Measured-data files add
+``F1..F6`` (actuator forces, N, all six required) and optionally ``D1..D6`` (leg lengths, m, all
+six or none). No other columns are accepted.
+
+Writes are atomic (``atomic_write``): a reader never sees a partly written file.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import os
+import re
+import tempfile
+from collections.abc import Iterator
+from pathlib import Path
+from typing import IO, TYPE_CHECKING, Any
+
+import numpy as np
+
+from gsfric._checks import short, suggest
+from gsfric.errors import InputError
+from gsfric.trajectory import DEFAULT_POLYORDER, MIN_SAMPLES, Motion
+
+if TYPE_CHECKING:
+    import pandas as pd
+
+TIME_POSITION = ("t", "x", "y", "z")
+EULER = ("alpha", "beta", "gamma")
+QUATERNION = ("qw", "qx", "qy", "qz")
+FORCES = tuple(f"F{i}" for i in range(1, 7))
+LENGTHS = tuple(f"D{i}" for i in range(1, 7))
+
+_CSV = (".csv",)
+_PARQUET = (".parquet", ".pq")
+
+
+# -- atomic writes ------------------------------------------------------------------------------
+
+
+def _current_umask() -> int:
+    mask = os.umask(0)
+    os.umask(mask)
+    return mask
+
+
+@contextlib.contextmanager
+def atomic_write(path: str | os.PathLike[str], mode: str = "w", *,
+                 encoding: str = "utf-8", newline: str | None = None) -> Iterator[IO[Any]]:
+    """Open a temporary file next to ``path`` and move it onto ``path`` when the block ends.
+
+    The temporary file lives in the same directory (so ``os.replace`` is atomic), is flushed
+    and fsync'ed before the move, and is removed if the block raises; ``path`` is then left as
+    it was. A new file gets the usual permissions (0666 less the umask), a replaced file keeps
+    its own.
+
+    Parameters
+    ----------
+    path : path-like
+        The file to write.
+    mode : {"w", "wt", "wb"}
+        Text or binary.
+    encoding, newline :
+        As for ``open``, text mode only.
+
+    Yields
+    ------
+    file object
+    """
+    if mode not in ("w", "wt", "wb"):
+        raise ValueError(f"atomic_write: mode must be 'w', 'wt' or 'wb', got {mode!r}")
+    path = Path(path)
+    directory = path.parent
+    try:
+        fd, tmp_name = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=directory)
+    except FileNotFoundError:
+        raise InputError(f"{path}: directory {str(directory)!r} does not exist") from None
+    except OSError as error:
+        raise InputError(f"{path}: cannot write ({error.strerror})") from None
+    try:
+        text_options = {} if "b" in mode else {"encoding": encoding, "newline": newline}
+        with os.fdopen(fd, mode, **text_options) as handle:
+            yield handle
+            handle.flush()
+            os.fsync(handle.fileno())
+        try:
+            permissions = path.stat().st_mode & 0o7777
+        except FileNotFoundError:
+            permissions = 0o666 & ~_current_umask()
+        os.chmod(tmp_name, permissions)
+        os.replace(tmp_name, path)
+    except BaseException:
+        with contextlib.suppress(FileNotFoundError):
+            os.unlink(tmp_name)
+        raise
+    with contextlib.suppress(OSError):
+        dir_fd = os.open(directory, os.O_RDONLY)
+        try:
+            os.fsync(dir_fd)
+        finally:
+            os.close(dir_fd)
+
+
+# -- tables -------------------------------------------------------------------------------------
+
+
+def _table_kind(path: Path) -> str:
+    suffix = path.suffix.lower()
+    if suffix in _CSV:
+        return "csv"
+    if suffix in _PARQUET:
+        return "parquet"
+    raise InputError(f"{path}: unknown extension {suffix or '(none)'!r}; "
+                     "use .csv, .parquet or .pq")
+
+
+def read_table(path: str | os.PathLike[str]) -> pd.DataFrame:
+    """Read a CSV or Parquet file (chosen by extension) into a DataFrame.
+
+    CSV floats are read back exactly as ``write_table`` wrote them. Column names are strings;
+    a CSV column name that appears twice is an error.
+
+    Raises
+    ------
+    InputError
+        Missing file, unknown extension, empty file, unparsable content, duplicate columns.
+    """
+    import pandas as pd
+
+    path = Path(path)
+    kind = _table_kind(path)
+    if not path.exists():
+        raise InputError(f"{path}: file not found")
+    if path.is_dir():
+        raise InputError(f"{path}: is a directory, not a file")
+    try:
+        size = path.stat().st_size
+    except OSError as error:
+        raise InputError(f"{path}: cannot read ({error.strerror})") from None
+    if size == 0:
+        raise InputError(f"{path}: file is empty")
+
+    if kind == "csv":
+        options: dict[str, Any] = {"index_col": False, "skipinitialspace": True}
+        if int(pd.__version__.split(".")[0]) < 3:
+            options["float_precision"] = "round_trip"
+        try:
+            frame = pd.read_csv(path, **options)
+        except pd.errors.EmptyDataError:
+            raise InputError(f"{path}: file is empty (no header line)") from None
+        except UnicodeDecodeError as error:
+            raise InputError(f"{path}: not UTF-8 text (byte {error.start})") from None
+        except (ValueError, OverflowError, pd.errors.ParserError) as error:
+            raise InputError(f"{path}: cannot parse as CSV: {error}") from None
+        except OSError as error:
+            raise InputError(f"{path}: cannot read ({error.strerror})") from None
+        names = [str(c) for c in frame.columns]
+        for name in names:
+            match = re.fullmatch(r"(.*)\.[0-9]+", name)
+            if match and match.group(1) in names:
+                raise InputError(f"{path}: column {match.group(1)!r} appears more than once")
+    else:
+        import pyarrow
+
+        try:
+            frame = pd.read_parquet(path)
+        except (pyarrow.ArrowException, ValueError, TypeError, OSError,
+                NotImplementedError) as error:
+            raise InputError(f"{path}: cannot read as Parquet: {error}") from None
+        names = [str(c) for c in frame.columns]
+        if len(set(names)) != len(names):
+            raise InputError(f"{path}: a column name appears more than once")
+    frame.columns = names
+    return frame
+
+
+def write_table(frame: pd.DataFrame, path: str | os.PathLike[str]) -> None:
+    """Write a DataFrame as CSV or Parquet (chosen by extension), atomically, without index.
+
+    CSV floats are written with full precision, so ``read_table`` gives them back exactly.
+    """
+    path = Path(path)
+    if _table_kind(path) == "csv":
+        with atomic_write(path, "w", newline="") as handle:
+            frame.to_csv(handle, index=False)
+    else:
+        with atomic_write(path, "wb") as handle:
+            frame.to_parquet(handle, index=False)
+
+
+# -- trajectories and measured data -------------------------------------------------------------
+
+
+def _check_columns(path: Path, names: list[str], measured: bool) -> tuple[str, ...]:
+    """Validate column names; return the orientation columns to use."""
+    allowed = TIME_POSITION + EULER + QUATERNION + ((FORCES + LENGTHS) if measured else ())
+    for name in names:
+        if name not in allowed:
+            if name in FORCES + LENGTHS:
+                raise InputError(f"{path}: column {name!r} belongs in a measured-data file, "
+                                 "not in a trajectory")
+            raise InputError(f"{path}: unknown column {short(name)}{suggest(name, allowed)}")
+    for name in TIME_POSITION:
+        if name not in names:
+            raise InputError(f"{path}: missing column {name!r}")
+    has_euler = [n for n in EULER if n in names]
+    has_quaternion = [n for n in QUATERNION if n in names]
+    for group, present in ((EULER, has_euler), (QUATERNION, has_quaternion)):
+        if present:
+            for name in group:
+                if name not in names:
+                    raise InputError(f"{path}: missing column {name!r} "
+                                     f"(columns {', '.join(group)} go together)")
+    if not has_euler and not has_quaternion:
+        raise InputError(f"{path}: missing orientation: give columns alpha, beta, gamma "
+                         "or qw, qx, qy, qz")
+    if measured:
+        for name in FORCES:
+            if name not in names:
+                raise InputError(f"{path}: missing column {name!r} (measured data need F1..F6)")
+        lengths = [n for n in LENGTHS if n in names]
+        if lengths and len(lengths) < 6:
+            missing = [n for n in LENGTHS if n not in names]
+            raise InputError(f"{path}: missing column {missing[0]!r} "
+                             "(give all of D1..D6 or none)")
+    return QUATERNION if has_quaternion else EULER
+
+
+def _column_values(series: pd.Series, name: str) -> tuple[np.ndarray, tuple[int, str] | None]:
+    """The column as floats and the first problem as (0-based row, message), or None."""
+    import pandas as pd
+
+    kind = series.dtype.kind
+    if kind == "b":
+        return np.empty(0), (0, f"column {name!r} holds true/false values, not numbers")
+    if kind in "iuf":
+        values = series.to_numpy(dtype=float, na_value=np.nan)
+    elif kind in "OUS":
+        try:
+            numeric = pd.to_numeric(series, errors="coerce")
+        except (TypeError, ValueError):
+            return np.empty(0), (0, f"column {name!r} holds values that are not numbers")
+        bad = np.flatnonzero(numeric.isna().to_numpy() & series.notna().to_numpy())
+        if len(bad):
+            value = series.iloc[bad[0]]
+            return np.empty(0), (int(bad[0]), f"column {name!r} is not a number: {short(value)}")
+        values = numeric.to_numpy(dtype=float, na_value=np.nan)
+    else:
+        return np.empty(0), (0, f"column {name!r} has type {series.dtype}, not numbers")
+    bad = np.flatnonzero(~np.isfinite(values))
+    if len(bad):
+        row = int(bad[0])
+        problem = "is empty or NaN" if np.isnan(values[row]) else "is infinite"
+        return values, (row, f"column {name!r} {problem}")
+    return values, None
+
+
+def _read_samples(path: str | os.PathLike[str], measured: bool
+                  ) -> tuple[Path, dict[str, np.ndarray], tuple[str, ...]]:
+    path = Path(path)
+    frame = read_table(path)
+    names = [name.strip() for name in frame.columns]
+    if len(set(names)) != len(names):
+        duplicate = next(n for n in names if names.count(n) > 1)
+        raise InputError(f"{path}: column {duplicate!r} appears more than once")
+    orientation = _check_columns(path, names, measured)
+    if len(frame) == 0:
+        raise InputError(f"{path}: no data rows")
+
+    columns: dict[str, np.ndarray] = {}
+    problems = []
+    for original, name in zip(frame.columns, names):
+        values, problem = _column_values(frame[original], name)
+        columns[name] = values
+        if problem is not None:
+            problems.append(problem)
+    if problems:
+        row, message = min(problems, key=lambda p: p[0])
+        raise InputError(f"{path}: row {row + 1}: {message}")
+
+    t = columns["t"]
+    steps = np.diff(t)
+    bad = np.flatnonzero(steps <= 0)
+    if len(bad):
+        i = int(bad[0]) + 1
+        if steps[i - 1] == 0:
+            raise InputError(f"{path}: row {i + 1}: duplicate time t = {t[i]!r} "
+                             f"(same as row {i})")
+        raise InputError(f"{path}: row {i + 1}: t = {t[i]!r} is less than t = {t[i - 1]!r} "
+                         f"in row {i}; t must increase")
+    if len(t) < MIN_SAMPLES:
+        raise InputError(f"{path}: {len(t)} data rows; at least {MIN_SAMPLES} are needed "
+                         "to differentiate the motion")
+    if measured and "D1" in columns:
+        lengths = np.stack([columns[n] for n in LENGTHS], axis=1)
+        bad_rows, bad_legs = np.nonzero(lengths <= 0)
+        if len(bad_rows):
+            raise InputError(f"{path}: row {bad_rows[0] + 1}: column "
+                             f"'D{bad_legs[0] + 1}' must be positive (a leg length)")
+    return path, columns, orientation
+
+
+def _motion(path: Path, columns: dict[str, np.ndarray], orientation: tuple[str, ...],
+            window: int | None, polyorder: int) -> Motion:
+    position = np.stack([columns[n] for n in ("x", "y", "z")], axis=1)
+    angles = np.stack([columns[n] for n in orientation], axis=1)
+    key = "quaternion" if orientation == QUATERNION else "euler"
+    return Motion.from_samples(columns["t"], position, window=window, polyorder=polyorder,
+                               source=str(path), **{key: angles})
+
+
+def read_trajectory(path: str | os.PathLike[str], *, window: int | None = None,
+                    polyorder: int = DEFAULT_POLYORDER) -> Motion:
+    """Read a trajectory file and differentiate it into a ``Motion``.
+
+    Parameters
+    ----------
+    path : path-like
+        CSV or Parquet with ``t, x, y, z`` and ``alpha, beta, gamma`` or ``qw, qx, qy, qz``.
+    window, polyorder :
+        Smoothing of the differentiation, see ``Motion.from_samples``.
+
+    Returns
+    -------
+    Motion
+        N steps, N the number of data rows (at least ``MIN_SAMPLES``).
+
+    Raises
+    ------
+    InputError
+        Unknown or missing columns, values that are not numbers, NaN or infinite values, times
+        that do not increase, too few rows. Warnings (``GsfricWarning``) flag angles that look
+        like degrees and jumps of the ZXZ angles near beta = 0.
+    """
+    path, columns, orientation = _read_samples(path, measured=False)
+    return _motion(path, columns, orientation, window, polyorder)
+
+
+def read_measured(path: str | os.PathLike[str], *, window: int | None = None,
+                  polyorder: int = DEFAULT_POLYORDER
+                  ) -> tuple[Motion, np.ndarray, np.ndarray | None]:
+    """Read a measured-data file: the trajectory columns plus ``F1..F6`` and optional ``D1..D6``.
+
+    Returns
+    -------
+    motion : Motion
+        The differentiated trajectory, N steps.
+    forces : ndarray, shape (N, 6)
+        Actuator forces F1..F6 as read (not smoothed), N, positive pushing the platform away
+        from the base.
+    lengths : ndarray, shape (N, 6), or None
+        Leg lengths D1..D6, m, when the file has them.
+
+    Raises
+    ------
+    InputError
+        As ``read_trajectory``, and for missing F columns, an incomplete D1..D6 set or a
+        non-positive leg length.
+    """
+    path, columns, orientation = _read_samples(path, measured=True)
+    motion = _motion(path, columns, orientation, window, polyorder)
+    forces = np.stack([columns[n] for n in FORCES], axis=1)
+    lengths = np.stack([columns[n] for n in LENGTHS], axis=1) if "D1" in columns else None
+    return motion, forces, lengths

@@ -1,0 +1,49 @@
+"""The manifest of generated/: functions, their inputs and outputs, the effect catalog.
+
+Read once, on first use. ``GSFRIC_GENERATED`` points to another generated/ directory.
+"""
+
+from __future__ import annotations
+
+import functools
+import json
+import os
+from pathlib import Path
+
+from gsfric.errors import GsfricError
+
+BASENAME = "gsfric_model"
+
+
+def generated_dir() -> Path:
+    """The generated/ directory: ``$GSFRIC_GENERATED`` or the one beside the package."""
+    env = os.environ.get("GSFRIC_GENERATED")
+    return Path(env) if env else Path(__file__).resolve().parent.parent / "generated"
+
+
+@functools.lru_cache(maxsize=None)
+def manifest() -> dict:
+    path = generated_dir() / "manifest.json"
+    try:
+        return json.loads(path.read_text())
+    except FileNotFoundError:
+        raise GsfricError(f"{path} is missing: run `gsfric derive` to generate the model") from None
+    except json.JSONDecodeError as exc:
+        raise GsfricError(f"{path} is not valid JSON ({exc}); run `gsfric derive`") from None
+
+
+def function(name: str) -> dict:
+    """The manifest entry of generated function ``gsfric_model_<name>``."""
+    full = f"{BASENAME}_{name}"
+    for f in manifest()["functions"]:
+        if f["name"] == full:
+            return f
+    raise GsfricError(f"generated/ has no function {full}; run `gsfric derive`")
+
+
+def layout(function_name: str, input_name: str) -> list[dict]:
+    """Blocks (name, offset, shape, unit, description) of one flat input vector."""
+    for item in function(function_name)["inputs"]:
+        if item["name"] == input_name:
+            return item["layout"]
+    raise GsfricError(f"function {function_name} has no input {input_name}")

@@ -1,0 +1,180 @@
+"""Reference platforms and motions, shared by the CLI, tests, notebooks and benchmarks.
+
+The paper's figures 6-7 (the dimensions) are not in its text, so the reference geometry is the
+project's own, documented in docs/reference.md: a three-fold symmetric hexapod, base joints on a
+circle of radius 0.5 m in pairs 30 degrees apart, platform joints on a circle of radius 0.3 m in
+pairs 30 degrees apart (the pairs turned by 60 degrees against the base's), home height 0.7 m.
+
+The paper's motion: the platform starts from rest at the home pose and moves with the constant
+acceleration a = (0.07, 0.05, 0.04) m/s^2 and angular acceleration
+alpha = (0.005, 0.003, 0.0025) rad/s^2 (base frame); its 40 steps are t_j = j dt, j = 1..40,
+with dt = 0.05 s.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from gsfric.platform import Body, Friction, Geometry, Legs, Platform
+from gsfric.trajectory import Motion
+
+BASE_RADIUS = 0.5
+PLATFORM_RADIUS = 0.3
+HALF_SPACING = np.radians(15.0)
+HOME_HEIGHT = 0.7
+STROKE = (0.5, 1.1)
+
+PAPER_ACCELERATION = (0.07, 0.05, 0.04)
+PAPER_ANGULAR_ACCELERATION = (0.005, 0.003, 0.0025)
+PAPER_LEG_ACCELERATION = (0.055, 0.042, 0.027)
+PAPER_LEG_ANGULAR_ACCELERATION = (0.0032, 0.0021, 0.0017)
+PAPER_JOINT_SPEED = 0.02
+PAPER_STEPS = 40
+PAPER_DT = 0.05
+
+
+def hexagon_joints(radius: float, centre_deg: float, half_spacing: float = HALF_SPACING,
+                   z: float = 0.0) -> np.ndarray:
+    """Six points in pairs around ``centre_deg + 120 k`` degrees, (6, 3), m."""
+    angles = []
+    for k in range(3):
+        c = np.radians(centre_deg + 120.0 * k)
+        angles += [c - half_spacing, c + half_spacing]
+    a = np.array(angles)
+    return np.column_stack([radius * np.cos(a), radius * np.sin(a), np.full(6, z)])
+
+
+def reference_geometry() -> Geometry:
+    """The reference hexapod's joints (base pairs at 0, 120, 240 deg; platform pairs at 60, ...).
+
+    Base joint 2k+1 and platform joint 2k+1 are joined by leg 2k+1; each platform pair sits between
+    two base pairs, so the legs cross over as in most Gough-Stewart platforms.
+    """
+    base = hexagon_joints(BASE_RADIUS, 0.0)
+    top = hexagon_joints(PLATFORM_RADIUS, 60.0)
+    # leg i joins base joint i with the nearest platform joint of the neighbouring pair
+    top = np.roll(top, 1, axis=0)
+    return Geometry(base_joints=base, platform_joints=top, stroke=STROKE)
+
+
+def reference_platform() -> Platform:
+    """The built-in platform: the paper's masses and coefficients on the reference geometry.
+
+    Platform 10 kg with inertia 0.07 kg m^2 (times identity), payload 3 kg, leg parts 0.5 kg
+    with inertia 0.035 kg m^2, rigid leg model with centres 0.2 m from C_i and from E_i,
+    friction c_s = 0.02 N m s/rad, mu = 0.04, r = 0.05 m, prismatic 0.02 N s/m and 0.04.
+    """
+    return Platform(
+        gravity=9.81,
+        geometry=reference_geometry(),
+        platform=Body(mass=10.0, inertia=np.eye(3) * 0.07, payload_mass=3.0),
+        legs=Legs(),
+        friction=Friction(),
+        effects={},
+    )
+
+
+def paper_platform() -> Platform:
+    """The reference platform with the paper's leg model (zone centres at 0.25 D and 0.75 D)."""
+    return reference_platform().with_legs(model="paper")
+
+
+def paper_constants() -> np.ndarray:
+    """The paper's RESULTS constants in the order of the paper-mode input K, shape (13,)."""
+    return np.concatenate([PAPER_ACCELERATION, PAPER_ANGULAR_ACCELERATION,
+                           PAPER_LEG_ACCELERATION, PAPER_LEG_ANGULAR_ACCELERATION,
+                           [PAPER_JOINT_SPEED]]).astype(float)
+
+
+def _axis_angle(axis_angle: np.ndarray) -> np.ndarray:
+    """Rotation matrices (N, 3, 3) of rotation vectors (N, 3) (Rodrigues)."""
+    from scipy.spatial.transform import Rotation
+
+    return Rotation.from_rotvec(axis_angle).as_matrix()
+
+
+def constant_acceleration(t: np.ndarray, acceleration=PAPER_ACCELERATION,
+                          angular_acceleration=PAPER_ANGULAR_ACCELERATION,
+                          start=(0.0, 0.0, HOME_HEIGHT)) -> Motion:
+    """Motion from rest at ``start`` (level) with constant linear and angular accelerations.
+
+    The angular velocity ``alpha t`` keeps its direction, so the orientation is the rotation
+    about that fixed axis by ``|alpha| t^2 / 2``: the motion is exact, not integrated.
+    """
+    t = np.asarray(t, dtype=float)
+    a = np.broadcast_to(np.asarray(acceleration, float), (t.size, 3))
+    al = np.broadcast_to(np.asarray(angular_acceleration, float), (t.size, 3))
+    tt = t[:, None]
+    return Motion.from_arrays(
+        t=t,
+        position=np.asarray(start, float) + 0.5 * a * tt**2,
+        rotation=_axis_angle(0.5 * al * tt**2),
+        velocity=a * tt,
+        omega=al * tt,
+        acceleration=a.copy(),
+        alpha=al.copy(),
+    )
+
+
+def paper_motion(steps: int = PAPER_STEPS, dt: float = PAPER_DT) -> Motion:
+    """The paper's 40-step motion: constant accelerations from rest, t_j = j dt, j = 1..steps."""
+    return constant_acceleration(dt * np.arange(1, steps + 1))
+
+
+def _rot(axis: int, angle: np.ndarray) -> np.ndarray:
+    c, s = np.cos(angle), np.sin(angle)
+    out = np.zeros(angle.shape + (3, 3))
+    i, j = [(1, 2), (2, 0), (0, 1)][axis]
+    out[..., axis, axis] = 1.0
+    out[..., i, i] = c
+    out[..., j, j] = c
+    out[..., i, j] = -s
+    out[..., j, i] = s
+    return out
+
+
+def sinusoidal(t: np.ndarray, amplitude=(0.05, 0.05, 0.04, 0.08, 0.08, 0.1),
+               frequency=(0.5, 0.7, 0.9, 0.6, 0.8, 0.4), phase=None,
+               centre=(0.0, 0.0, HOME_HEIGHT)) -> Motion:
+    """A smooth 6-DoF motion with exact velocities and accelerations.
+
+    Position ``centre + A_k sin(2 pi f_k t + phi_k)`` (k = x, y, z); orientation
+    ``Rz(psi) Ry(theta) Rx(phi)`` with each angle ``A sin(2 pi f t + phi)``. Angular velocity
+    and acceleration follow analytically from the angle rates.
+
+    Parameters
+    ----------
+    t : ndarray (N,), s
+    amplitude, frequency, phase : 6 values each (x, y, z in m; psi, theta, phi in rad), Hz, rad
+    """
+    t = np.asarray(t, dtype=float)
+    A = np.asarray(amplitude, float)
+    w = 2 * np.pi * np.asarray(frequency, float)
+    ph = np.zeros(6) if phase is None else np.asarray(phase, float)
+    arg = w * t[:, None] + ph
+    q = A * np.sin(arg)
+    qd = A * w * np.cos(arg)
+    qdd = -A * w**2 * np.sin(arg)
+    psi, theta, phi = q[:, 3], q[:, 4], q[:, 5]
+    Rz, Ry, Rx = _rot(2, psi), _rot(1, theta), _rot(0, phi)
+    Rzy = Rz @ Ry
+    ez = np.array([0.0, 0.0, 1.0])
+    ey_ = Rz[:, :, 1]
+    ex_ = Rzy[:, :, 0]
+    w1 = qd[:, 3:4] * ez
+    w2 = qd[:, 4:5] * ey_
+    w3 = qd[:, 5:6] * ex_
+    omega = w1 + w2 + w3
+    alpha = (qdd[:, 3:4] * ez + qdd[:, 4:5] * ey_ + np.cross(w1, w2)
+             + qdd[:, 5:6] * ex_ + np.cross(w1 + w2, w3))
+    return Motion.from_arrays(t=t, position=np.asarray(centre, float) + q[:, :3],
+                              rotation=Rzy @ Rx, velocity=qd[:, :3], omega=omega,
+                              acceleration=qdd[:, :3], alpha=alpha)
+
+
+def random_motion(rng: np.random.Generator, t: np.ndarray, scale: float = 1.0) -> Motion:
+    """A ``sinusoidal`` motion with random amplitudes, frequencies and phases (workspace-safe)."""
+    amp = rng.uniform(0.2, 1.0, 6) * np.array([0.06, 0.06, 0.05, 0.1, 0.1, 0.12]) * scale
+    freq = rng.uniform(0.2, 1.2, 6)
+    phase = rng.uniform(0, 2 * np.pi, 6)
+    return sinusoidal(t, amp, freq, phase)

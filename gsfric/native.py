@@ -1,0 +1,259 @@
+"""Compiled evaluation of the generated functions over batches of steps.
+
+The C code in generated/ and the batch driver ``_native/batch.c`` are compiled once into a
+shared library, cached under ``$GSFRIC_CACHE`` (default: the user cache directory) in a folder
+named after the hash of the sources and the compiler command, and loaded with ctypes. The
+driver loops over steps in C, reading and writing NumPy buffers directly (no CasADi objects on
+the hot path), optionally on several OpenMP threads.
+
+Without a working C compiler, the functions are evaluated by CasADi itself from the serialized
+copy in generated/, with a warning: the same numbers, much slower.
+
+Environment: ``CC`` (compiler, default ``cc``), ``GSFRIC_CACHE`` (cache directory),
+``GSFRIC_NO_COMPILE=1`` (force the CasADi fallback).
+"""
+
+from __future__ import annotations
+
+import ctypes
+import functools
+import hashlib
+import os
+import shlex
+import subprocess
+import sys
+import warnings
+from pathlib import Path
+
+import numpy as np
+
+from gsfric.errors import GsfricError
+from gsfric.manifest import BASENAME, function, generated_dir, manifest
+
+DRIVER = Path(__file__).resolve().parent / "_native" / "batch.c"
+CFLAGS = ("-O3", "-march=native", "-fPIC", "-shared", "-fopenmp")
+
+
+class BuildError(GsfricError):
+    """The generated C code could not be compiled."""
+
+
+def cache_dir() -> Path:
+    env = os.environ.get("GSFRIC_CACHE")
+    if env:
+        return Path(env)
+    from platformdirs import user_cache_dir
+
+    return Path(user_cache_dir("gsfric"))
+
+
+def _compiler() -> list[str]:
+    return shlex.split(os.environ.get("CC", "cc"))
+
+
+def _build_key(sources: list[Path], cmd: list[str]) -> str:
+    h = hashlib.sha256()
+    for s in sources:
+        h.update(s.read_bytes())
+    h.update(" ".join(cmd).encode())
+    h.update(sys.platform.encode())
+    return h.hexdigest()[:20]
+
+
+def build_library() -> Path:
+    """Compile (or find in the cache) the shared library; returns its path."""
+    src = generated_dir() / f"{BASENAME}.c"
+    if not src.exists():
+        raise BuildError(f"{src} is missing: run `gsfric derive` to generate it")
+    cc = _compiler()
+    key = _build_key([src, DRIVER], cc + list(CFLAGS))
+    folder = cache_dir() / f"build-{key}"
+    lib = folder / "libgsfric.so"
+    if lib.exists():
+        return lib
+    folder.mkdir(parents=True, exist_ok=True)
+    import fcntl
+
+    with open(folder / ".lock", "w") as lock:
+        fcntl.flock(lock, fcntl.LOCK_EX)
+        if lib.exists():
+            return lib
+        tmp = folder / f".libgsfric.{os.getpid()}.so"
+        print(f"gsfric: compiling the generated model (once, about 15 s) into {folder}",
+              file=sys.stderr)
+        errors = ""
+        for flags in (CFLAGS, tuple(f for f in CFLAGS if f != "-fopenmp"),
+                      ("-O2", "-fPIC", "-shared")):
+            cmd = cc + list(flags) + [str(DRIVER), str(src), "-o", str(tmp), "-lm"]
+            try:
+                run = subprocess.run(cmd, capture_output=True, text=True)
+            except FileNotFoundError:
+                raise BuildError(f"no C compiler: {cc[0]!r} was not found (set CC to one)") \
+                    from None
+            if run.returncode == 0:
+                tmp.replace(lib)
+                return lib
+            errors = run.stderr.strip().splitlines()[-1:] or ["(no message)"]
+        raise BuildError(f"compiling {src.name} failed: {errors[0]}; check the compiler "
+                         "(CC) or regenerate with `gsfric derive`")
+
+
+class CompiledFunction:
+    """One generated function, evaluated step by step in C over NumPy buffers.
+
+    Inputs are arrays of shape (N, size) (one block per step) or (size,) (the same block for
+    every step); outputs are (N, size) arrays, C-contiguous float64.
+    """
+
+    def __init__(self, lib: ctypes.CDLL, name: str) -> None:
+        meta = function(name)
+        self.name = name
+        self.inputs = [(i["name"], i["size"]) for i in meta["inputs"]]
+        self.outputs = [(o["name"], o["size"], tuple(o["shape"])) for o in meta["outputs"]]
+        full = f"{BASENAME}_{name}"
+        self._eval = ctypes.cast(getattr(lib, full), ctypes.c_void_p)
+        self._work = ctypes.cast(getattr(lib, f"{full}_work"), ctypes.c_void_p)
+        self._batch = lib.gsfric_batch
+        self._in_ptrs = (ctypes.c_void_p * len(self.inputs))()
+        self._in_strides = (ctypes.c_longlong * len(self.inputs))()
+        self._out_ptrs = (ctypes.c_void_p * len(self.outputs))()
+        self._out_strides = (ctypes.c_longlong * len(self.outputs))(
+            *[size for _, size, _ in self.outputs])
+
+    def __call__(self, inputs, outputs=None, n_threads: int = 1, select=None) -> dict:
+        """Evaluate over N steps.
+
+        Parameters
+        ----------
+        inputs : sequence of ndarray
+            One per input, (N, size) or (size,).
+        outputs : dict of name -> ndarray (N, size), optional
+            Preallocated output buffers (C-contiguous float64); others are allocated.
+        n_threads : int
+            OpenMP threads.
+        select : iterable of str, optional
+            Outputs to compute (default all); the others are skipped.
+
+        Returns
+        -------
+        dict of output name -> ndarray (N, size).
+        """
+        arrays, n = [], None
+        for (name, size), value in zip(self.inputs, inputs):
+            a = np.ascontiguousarray(value, dtype=np.float64)
+            if a.ndim == 1:
+                if a.shape[0] != size:
+                    raise GsfricError(f"{self.name}: input {name} has {a.shape[0]} values, "
+                                      f"expected {size}")
+            elif a.ndim == 2 and a.shape[1] == size:
+                if n is not None and a.shape[0] != n:
+                    raise GsfricError(f"{self.name}: input {name} has {a.shape[0]} steps, "
+                                      f"expected {n}")
+                n = a.shape[0]
+            else:
+                raise GsfricError(f"{self.name}: input {name} has shape {a.shape}, expected "
+                                  f"(N, {size}) or ({size},)")
+            arrays.append(a)
+        n = 1 if n is None else n
+        for k, a in enumerate(arrays):
+            self._in_ptrs[k] = a.ctypes.data
+            self._in_strides[k] = a.shape[1] if a.ndim == 2 else 0
+        wanted = None if select is None else set(select)
+        result = {}
+        outputs = outputs or {}
+        for k, (name, size, _) in enumerate(self.outputs):
+            if wanted is not None and name not in wanted:
+                self._out_ptrs[k] = None
+                continue
+            buf = outputs.get(name)
+            if buf is None:
+                buf = np.empty((n, size))
+            elif buf.shape != (n, size) or buf.dtype != np.float64 or \
+                    not buf.flags.c_contiguous:
+                raise GsfricError(f"{self.name}: output buffer {name} must be a C-contiguous "
+                                  f"float64 array of shape ({n}, {size})")
+            self._out_ptrs[k] = buf.ctypes.data
+            result[name] = buf
+        failed = self._batch(self._eval, self._work, len(arrays), len(self.outputs),
+                             self._in_ptrs, self._in_strides, self._out_ptrs,
+                             self._out_strides, n, int(n_threads))
+        if failed:
+            raise GsfricError(f"{self.name}: evaluation failed at {failed} steps")
+        return result
+
+
+class CasadiFunction:
+    """The same interface, evaluated by CasADi from the serialized functions (no compiler)."""
+
+    def __init__(self, f, name: str) -> None:
+        meta = function(name)
+        self.name = name
+        self.inputs = [(i["name"], i["size"]) for i in meta["inputs"]]
+        self.outputs = [(o["name"], o["size"], tuple(o["shape"])) for o in meta["outputs"]]
+        self._f = f
+
+    def __call__(self, inputs, outputs=None, n_threads: int = 1, select=None) -> dict:
+        arrays = [np.asarray(a, dtype=np.float64) for a in inputs]
+        n = max([a.shape[0] for a in arrays if a.ndim == 2] or [1])
+        cols = [a.T if a.ndim == 2 else np.broadcast_to(a[:, None], (a.shape[0], n))
+                for a in arrays]
+        mapped = self._f.map(n, "thread", max(1, int(n_threads)))
+        res = mapped(*cols)
+        res = res if isinstance(res, tuple) else (res,)
+        out = {}
+        for (name, size, _), value in zip(self.outputs, res):
+            if select is not None and name not in select:
+                continue
+            arr = np.array(value).reshape(size, n).T.copy()
+            if outputs and name in outputs:
+                outputs[name][...] = arr
+                arr = outputs[name]
+            out[name] = arr
+        return out
+
+
+@functools.lru_cache(maxsize=None)
+def _library():
+    if os.environ.get("GSFRIC_NO_COMPILE") == "1":
+        return None
+    try:
+        path = build_library()
+    except BuildError as exc:
+        warnings.warn(f"{exc}; falling back to CasADi's own evaluation (much slower)",
+                      stacklevel=3)
+        return None
+    lib = ctypes.CDLL(str(path))
+    lib.gsfric_batch.restype = ctypes.c_longlong
+    lib.gsfric_batch.argtypes = [ctypes.c_void_p, ctypes.c_void_p, ctypes.c_int, ctypes.c_int,
+                                 ctypes.c_void_p, ctypes.c_void_p, ctypes.c_void_p,
+                                 ctypes.c_void_p, ctypes.c_longlong, ctypes.c_int]
+    return lib
+
+
+@functools.lru_cache(maxsize=None)
+def _serialized() -> dict:
+    import casadi as ca
+
+    path = generated_dir() / f"{BASENAME}.casadi"
+    if not path.exists():
+        raise GsfricError(f"{path} is missing: run `gsfric derive`")
+    des = ca.FileDeserializer(str(path))
+    out = {}
+    for _ in manifest()["functions"]:
+        f = des.unpack()
+        out[f.name()] = f
+    return out
+
+
+@functools.lru_cache(maxsize=None)
+def get(name: str):
+    """The evaluator of generated function ``name`` (e.g. "eval", "actuator", "jacobian")."""
+    lib = _library()
+    if lib is not None:
+        return CompiledFunction(lib, name)
+    return CasadiFunction(_serialized()[f"{BASENAME}_{name}"], name)
+
+
+def is_compiled() -> bool:
+    """True when the compiled library is in use (False: CasADi fallback)."""
+    return _library() is not None

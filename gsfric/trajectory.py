@@ -1,0 +1,492 @@
+"""Platform motions: poses with their velocities and accelerations, and rotation helpers.
+
+Conventions (see docs/architecture.md): SI units, radians, the step as the leading axis.
+The orientation ``R`` maps platform-frame vectors to the base frame. In ZXZ angles,
+``R = Rz(gamma) Rx(beta) Rz(alpha)``, whose entries are the paper's b_ij; this is
+``scipy.spatial.transform.Rotation.from_euler("zxz", [alpha, beta, gamma])`` (extrinsic).
+Quaternions are unit and scalar-first, ``(qw, qx, qy, qz)``, Hamilton product, mapping the
+platform frame to the base frame. Angular velocity ``omega`` and acceleration ``alpha`` are
+expressed in the base frame: ``dR/dt = [omega]x R``.
+"""
+
+from __future__ import annotations
+
+import warnings
+from dataclasses import dataclass
+from typing import TYPE_CHECKING
+
+import numpy as np
+
+from gsfric._checks import as_array, fields_equal
+from gsfric.errors import GsfricWarning, InputError
+
+if TYPE_CHECKING:
+    import pandas as pd
+
+MIN_SAMPLES = 7
+"""Fewest samples ``Motion.from_samples`` (and the trajectory readers) accept."""
+
+DEFAULT_POLYORDER = 3
+"""Polynomial order of the Savitzky-Golay filter."""
+
+MAX_AUTO_WINDOW = 101
+"""Longest Savitzky-Golay window the automatic choice considers, samples."""
+
+UNIFORM_RTOL = 1e-4
+"""Sampling counts as uniform when every time step is within this fraction of the mean step."""
+
+GIMBAL_SIN_BETA = 1e-3
+GIMBAL_JUMP = 0.5
+"""A ZXZ sample with |sin(beta)| < GIMBAL_SIN_BETA whose alpha or gamma jumps by more than
+GIMBAL_JUMP rad from its neighbour triggers a warning."""
+
+_ROTATION_TOL = 1e-6
+
+
+# -- rotations ----------------------------------------------------------------------------------
+
+
+def rotation_from_euler(alpha: np.ndarray | float, beta: np.ndarray | float,
+                        gamma: np.ndarray | float) -> np.ndarray:
+    """Rotation matrices ``Rz(gamma) Rx(beta) Rz(alpha)`` from ZXZ angles.
+
+    Parameters
+    ----------
+    alpha, beta, gamma : array_like, shape (N,) (or broadcastable, or scalars)
+        rad.
+
+    Returns
+    -------
+    ndarray, shape (N, 3, 3)
+        Entries are the paper's b_ij, e.g. ``b11 = cos(a)cos(g) - cos(b)sin(a)sin(g)``,
+        ``b13 = sin(b)sin(g)``, ``b31 = sin(b)sin(a)``, ``b33 = cos(b)``.
+    """
+    a, b, g = np.broadcast_arrays(*(np.asarray(v, dtype=float) for v in (alpha, beta, gamma)))
+    ca, sa, cb, sb, cg, sg = np.cos(a), np.sin(a), np.cos(b), np.sin(b), np.cos(g), np.sin(g)
+    rows = [
+        [ca * cg - cb * sa * sg, -sa * cg - cb * ca * sg, sb * sg],
+        [ca * sg + cb * sa * cg, -sa * sg + cb * ca * cg, -sb * cg],
+        [sb * sa, sb * ca, cb],
+    ]
+    return np.stack([np.stack(row, axis=-1) for row in rows], axis=-2)
+
+
+def euler_from_rotation(rotation: np.ndarray) -> np.ndarray:
+    """ZXZ angles ``(alpha, beta, gamma)`` of rotation matrices.
+
+    Parameters
+    ----------
+    rotation : array_like, shape (N, 3, 3)
+
+    Returns
+    -------
+    ndarray, shape (N, 3)
+        alpha, gamma in (-pi, pi], beta in [0, pi], rad. Where sin(beta) vanishes (the level
+        pose) only alpha + gamma (or alpha - gamma) is defined; there gamma = 0.
+    """
+    r = np.asarray(rotation, dtype=float)
+    sin_beta = np.hypot(r[..., 0, 2], r[..., 1, 2])
+    beta = np.arctan2(sin_beta, r[..., 2, 2])
+    regular = sin_beta > 1e-12
+    alpha = np.where(regular, np.arctan2(r[..., 2, 0], r[..., 2, 1]),
+                     np.arctan2(np.sign(r[..., 2, 2]) * r[..., 1, 0], r[..., 0, 0]))
+    gamma = np.where(regular, np.arctan2(r[..., 0, 2], -r[..., 1, 2]), 0.0)
+    return np.stack([alpha, beta, gamma], axis=-1)
+
+
+def quaternion_from_euler(alpha: np.ndarray | float, beta: np.ndarray | float,
+                          gamma: np.ndarray | float) -> np.ndarray:
+    """Unit quaternions ``(qw, qx, qy, qz)`` of ``Rz(gamma) Rx(beta) Rz(alpha)``, shape (N, 4)."""
+    a, b, g = np.broadcast_arrays(*(np.asarray(v, dtype=float) / 2 for v in (alpha, beta, gamma)))
+    zero = np.zeros_like(a)
+    qa = np.stack([np.cos(a), zero, zero, np.sin(a)], axis=-1)
+    qb = np.stack([np.cos(b), np.sin(b), zero, zero], axis=-1)
+    qg = np.stack([np.cos(g), zero, zero, np.sin(g)], axis=-1)
+    return quaternion_multiply(qg, quaternion_multiply(qb, qa))
+
+
+def quaternion_from_rotation(rotation: np.ndarray) -> np.ndarray:
+    """Unit quaternions ``(qw, qx, qy, qz)`` with qw >= 0 of rotation matrices.
+
+    Parameters
+    ----------
+    rotation : array_like, shape (N, 3, 3)
+
+    Returns
+    -------
+    ndarray, shape (N, 4)
+    """
+    from scipy.spatial.transform import Rotation
+
+    r = np.asarray(rotation, dtype=float)
+    xyzw = Rotation.from_matrix(r.reshape(-1, 3, 3)).as_quat()
+    q = np.concatenate([xyzw[:, 3:], xyzw[:, :3]], axis=1)
+    q *= np.where(q[:, :1] < 0, -1.0, 1.0)
+    return q.reshape(r.shape[:-2] + (4,))
+
+
+def rotation_from_quaternion(quaternion: np.ndarray) -> np.ndarray:
+    """Rotation matrices of quaternions ``(qw, qx, qy, qz)`` (normalized first).
+
+    Parameters
+    ----------
+    quaternion : array_like, shape (N, 4)
+
+    Returns
+    -------
+    ndarray, shape (N, 3, 3)
+    """
+    q = np.asarray(quaternion, dtype=float)
+    w, x, y, z = np.moveaxis(q / np.linalg.norm(q, axis=-1, keepdims=True), -1, 0)
+    rows = [
+        [1 - 2 * (y * y + z * z), 2 * (x * y - w * z), 2 * (x * z + w * y)],
+        [2 * (x * y + w * z), 1 - 2 * (x * x + z * z), 2 * (y * z - w * x)],
+        [2 * (x * z - w * y), 2 * (y * z + w * x), 1 - 2 * (x * x + y * y)],
+    ]
+    return np.stack([np.stack(row, axis=-1) for row in rows], axis=-2)
+
+
+def quaternion_multiply(p: np.ndarray, q: np.ndarray) -> np.ndarray:
+    """Hamilton product ``p q`` of scalar-first quaternions, shape (N, 4)."""
+    pw, pv = p[..., :1], p[..., 1:]
+    qw, qv = q[..., :1], q[..., 1:]
+    w = pw * qw - np.sum(pv * qv, axis=-1, keepdims=True)
+    v = pw * qv + qw * pv + np.cross(pv, qv)
+    return np.concatenate([w, v], axis=-1)
+
+
+def _conjugate(q: np.ndarray) -> np.ndarray:
+    return q * np.array([1.0, -1.0, -1.0, -1.0])
+
+
+def _continuous(q: np.ndarray) -> np.ndarray:
+    """Flip signs so that consecutive quaternions have a non-negative dot product."""
+    dots = np.sum(q[1:] * q[:-1], axis=1)
+    signs = np.concatenate([[1.0], np.cumprod(np.where(dots < 0, -1.0, 1.0))])
+    return q * signs[:, None]
+
+
+# -- differentiation ----------------------------------------------------------------------------
+
+
+def _where(source: str | None, indices: np.ndarray | list[int]) -> str:
+    """'rows 3, 4' (1-based, file given) or 'samples 2, 3' (0-based)."""
+    indices = [int(i) for i in indices]
+    numbers = [i + 1 for i in indices] if source else indices
+    word = "row" if source else "sample"
+    shown = ", ".join(str(n) for n in numbers[:10])
+    more = f" and {len(numbers) - 10} more" if len(numbers) > 10 else ""
+    return f"{word}{'s' if len(numbers) > 1 else ''} {shown}{more}"
+
+
+def _check_euler(euler: np.ndarray, source: str | None) -> None:
+    prefix = f"{source}: " if source else ""
+    largest = np.abs(euler).max(axis=0)
+    big = [f"|{name}| up to {value:.4g}"
+           for name, value in zip(("alpha", "beta", "gamma"), largest) if value > 2 * np.pi]
+    if big:
+        warnings.warn(f"{prefix}angles look like degrees ({', '.join(big)} > 2*pi); "
+                      "angles must be in radians", GsfricWarning, stacklevel=3)
+    near_lock = np.abs(np.sin(euler[:, 1])) < GIMBAL_SIN_BETA
+    near_lock = near_lock[1:] | near_lock[:-1]
+    steps = np.abs((np.diff(euler[:, [0, 2]], axis=0) + np.pi) % (2 * np.pi) - np.pi)
+    jumps = np.flatnonzero(near_lock & (steps.max(axis=1) > GIMBAL_JUMP)) + 1
+    if len(jumps):
+        warnings.warn(f"{prefix}ZXZ angles near beta = 0 (where alpha and gamma are ill-defined) "
+                      f"jump by more than {GIMBAL_JUMP} rad in alpha or gamma at "
+                      f"{_where(source, jumps)}; give the orientation as a quaternion "
+                      "(qw, qx, qy, qz) instead", GsfricWarning, stacklevel=3)
+
+
+def _candidate_windows(n: int, polyorder: int) -> list[int]:
+    smallest = polyorder + 2 if polyorder % 2 else polyorder + 3
+    largest = min(n, MAX_AUTO_WINDOW)
+    windows = []
+    w = smallest
+    while w <= largest:
+        windows.append(w)
+        w = max(w + 2, int(w * 1.25) | 1)
+    return windows
+
+
+def _gcv_window(y: np.ndarray, polyorder: int) -> int:
+    """The Savitzky-Golay window minimizing the generalized cross-validation score.
+
+    ``GCV(w) = RSS(w) / (1 - h(w))^2`` with RSS the squared residual of the smoothed signal and
+    h the filter's central weight (the hat matrix's diagonal).
+    """
+    from scipy.signal import savgol_coeffs, savgol_filter
+
+    windows = _candidate_windows(len(y), polyorder)
+    scores = []
+    for w in windows:
+        smooth = savgol_filter(y, w, polyorder, axis=0, mode="interp")
+        centre = savgol_coeffs(w, polyorder)[w // 2]
+        scores.append(np.sum((y - smooth) ** 2) / (1.0 - centre) ** 2)
+    return windows[int(np.argmin(scores))]
+
+
+def _savgol(y: np.ndarray, window: int, polyorder: int, step: float) -> list[np.ndarray]:
+    from scipy.signal import savgol_filter
+
+    return [savgol_filter(y, window, polyorder, deriv=k, delta=step, axis=0, mode="interp")
+            for k in (0, 1, 2)]
+
+
+def _spline(t: np.ndarray, y: np.ndarray, lam: float | None) -> list[np.ndarray]:
+    from scipy.interpolate import make_smoothing_spline
+
+    columns = [make_smoothing_spline(t, y[:, j], lam=lam) for j in range(y.shape[1])]
+    return [np.stack([c.derivative(k)(t) if k else c(t) for c in columns], axis=1)
+            for k in (0, 1, 2)]
+
+
+# -- Motion -------------------------------------------------------------------------------------
+
+
+@dataclass(frozen=True, eq=False)
+class Motion:
+    """A platform motion sampled at N steps; all arrays read-only float64.
+
+    Attributes
+    ----------
+    t : ndarray, shape (N,)
+        Time, s.
+    position : ndarray, shape (N, 3)
+        Platform frame origin in the base frame, m.
+    rotation : ndarray, shape (N, 3, 3)
+        Orientation: maps platform-frame vectors to the base frame.
+    velocity : ndarray, shape (N, 3)
+        Of the platform frame origin, base frame, m/s.
+    omega : ndarray, shape (N, 3)
+        Angular velocity, base frame, rad/s.
+    acceleration : ndarray, shape (N, 3)
+        Of the platform frame origin, base frame, m/s^2.
+    alpha : ndarray, shape (N, 3)
+        Angular acceleration, base frame, rad/s^2.
+
+    Every array must be finite and ``rotation`` orthonormal with determinant +1 (to 1e-6).
+    ``t`` need not increase (a set of unrelated poses is a valid Motion); ``from_samples``
+    requires it to.
+    """
+
+    t: np.ndarray
+    position: np.ndarray
+    rotation: np.ndarray
+    velocity: np.ndarray
+    omega: np.ndarray
+    acceleration: np.ndarray
+    alpha: np.ndarray
+
+    def __post_init__(self) -> None:
+        t = as_array(self.t, (None,), "Motion.t")
+        n = len(t)
+        if n == 0:
+            raise InputError("Motion.t: a motion needs at least one step")
+        object.__setattr__(self, "t", t)
+        for name in ("position", "velocity", "omega", "acceleration", "alpha"):
+            object.__setattr__(self, name, as_array(getattr(self, name), (n, 3), f"Motion.{name}"))
+        rotation = as_array(self.rotation, (n, 3, 3), "Motion.rotation")
+        error = np.abs(np.einsum("nji,njk->nik", rotation, rotation) - np.eye(3)).max(axis=(1, 2))
+        bad = np.flatnonzero((error > _ROTATION_TOL) | (np.linalg.det(rotation) < 0))
+        if len(bad):
+            raise InputError(f"Motion.rotation[{bad[0]}]: not a rotation matrix "
+                             f"(|R^T R - I| = {error[bad[0]]:.3g}, det = "
+                             f"{np.linalg.det(rotation[bad[0]]):.3g})")
+        object.__setattr__(self, "rotation", rotation)
+
+    __eq__ = fields_equal
+    __hash__ = None  # type: ignore[assignment]
+
+    def __len__(self) -> int:
+        return len(self.t)
+
+    @classmethod
+    def from_arrays(cls, t: np.ndarray, position: np.ndarray, rotation: np.ndarray,
+                    velocity: np.ndarray, omega: np.ndarray, acceleration: np.ndarray,
+                    alpha: np.ndarray) -> Motion:
+        """A motion from its arrays (shapes as the attributes), validated."""
+        return cls(t, position, rotation, velocity, omega, acceleration, alpha)
+
+    @classmethod
+    def from_samples(cls, t: np.ndarray, position: np.ndarray, *,
+                     euler: np.ndarray | None = None, quaternion: np.ndarray | None = None,
+                     window: int | None = None, polyorder: int = DEFAULT_POLYORDER,
+                     lam: float | None = None, source: str | None = None) -> Motion:
+        """A motion from sampled poses, by smoothing differentiation.
+
+        The orientation is converted to unit quaternions (never are angles differentiated),
+        made sign-continuous, and position and quaternion are smoothed and differentiated
+        twice:
+
+        * Uniform sampling (every step within ``UNIFORM_RTOL`` of the mean step): a
+          Savitzky-Golay filter (``scipy.signal.savgol_filter``, ``mode="interp"``, orders 0,
+          1 and 2) of ``window`` samples and polynomial order ``polyorder``. With
+          ``window=None`` the window is chosen separately for position and quaternion by
+          generalized cross-validation among odd windows up to ``MAX_AUTO_WINDOW`` samples:
+          the shortest window for noise-free data, longer ones as noise grows.
+        * Non-uniform sampling: a cubic smoothing spline of every component
+          (``scipy.interpolate.make_smoothing_spline``) with penalty ``lam``, chosen by
+          generalized cross-validation when None. Being natural splines, their second
+          derivative vanishes at both ends, so the accelerations of the first and last few
+          samples are biased towards zero.
+
+        With p the smoothed (not exactly unit) quaternion and dots time derivatives,
+        ``omega = 2 vec(pdot p*) / |p|^2`` and
+        ``alpha = 2 vec(pddot p*) / |p|^2 - omega 2 (p . pdot) / |p|^2``, which for a unit
+        quaternion are ``omega = 2 vec(qdot q*)`` and ``alpha = 2 vec(qddot q*)``, in the base
+        frame. Position and rotation of the result are the smoothed ones.
+
+        Parameters
+        ----------
+        t : array_like, shape (N,)
+            Strictly increasing times, s; N >= ``MIN_SAMPLES``.
+        position : array_like, shape (N, 3)
+            Platform frame origin in the base frame, m.
+        euler : array_like, shape (N, 3), optional
+            ZXZ angles (alpha, beta, gamma), rad. Warns (``GsfricWarning``) if any exceeds
+            2 pi in magnitude (degrees?) or if, where |sin(beta)| < ``GIMBAL_SIN_BETA``, alpha
+            or gamma jump by more than ``GIMBAL_JUMP`` between samples.
+        quaternion : array_like, shape (N, 4), optional
+            ``(qw, qx, qy, qz)``, platform frame to base frame; normalized here. Give exactly
+            one of ``euler`` and ``quaternion``.
+        window : int, optional
+            Odd Savitzky-Golay window, ``polyorder < window <= N`` (uniform sampling only).
+        polyorder : int
+            Savitzky-Golay polynomial order, >= 2.
+        lam : float, optional
+            Smoothing-spline penalty (non-uniform sampling only).
+        source : str, optional
+            File name for messages; when given, messages start with it and name 1-based rows,
+            otherwise they name 0-based sample indices.
+
+        Returns
+        -------
+        Motion
+
+        Raises
+        ------
+        InputError
+            Bad shapes, non-finite values, times that do not increase, a zero quaternion, too
+            few samples, an invalid window or polyorder.
+        """
+        prefix = f"{source}: " if source else ""
+        try:
+            return cls._from_samples(t, position, euler, quaternion, window, polyorder, lam,
+                                     source)
+        except InputError as error:
+            if prefix and not str(error).startswith(prefix):
+                raise InputError(prefix + str(error)) from None
+            raise
+
+    @classmethod
+    def _from_samples(cls, t, position, euler, quaternion, window, polyorder, lam,
+                      source) -> Motion:
+        t = as_array(t, (None,), "t")
+        n = len(t)
+        if n < MIN_SAMPLES:
+            raise InputError(f"{n} samples; at least {MIN_SAMPLES} are needed to differentiate")
+        position = as_array(position, (n, 3), "position")
+        if (euler is None) == (quaternion is None):
+            raise InputError("give the orientation as exactly one of euler= or quaternion=")
+        steps = np.diff(t)
+        bad = np.flatnonzero(steps <= 0)
+        if len(bad):
+            raise InputError(f"t does not increase at {_where(source, bad[:1] + 1)}")
+
+        if euler is not None:
+            euler = as_array(euler, (n, 3), "euler")
+            _check_euler(euler, source)
+            q = quaternion_from_euler(euler[:, 0], euler[:, 1], euler[:, 2])
+        else:
+            q = as_array(quaternion, (n, 4), "quaternion")
+            norms = np.linalg.norm(q, axis=1)
+            zero = np.flatnonzero(norms < 1e-12)
+            if len(zero):
+                raise InputError(f"quaternion of zero length at {_where(source, zero[:1])}")
+            q = q / norms[:, None]
+        q = _continuous(q)
+
+        if isinstance(polyorder, bool) or not isinstance(polyorder, (int, np.integer)) \
+                or polyorder < 2:
+            raise InputError(f"polyorder must be an integer >= 2, got {polyorder!r}")
+        mean_step = (t[-1] - t[0]) / (n - 1)
+        uniform = np.all(np.abs(steps - mean_step) <= UNIFORM_RTOL * mean_step)
+        with np.errstate(all="ignore"):
+            if uniform:
+                if window is None:
+                    position_window = _gcv_window(position, polyorder)
+                    quaternion_window = _gcv_window(q, polyorder)
+                else:
+                    _check_window(window, polyorder, n)
+                    position_window = quaternion_window = window
+                p0, p1, p2 = _savgol(position, position_window, polyorder, mean_step)
+                q0, q1, q2 = _savgol(q, quaternion_window, polyorder, mean_step)
+            else:
+                if window is not None:
+                    warnings.warn(f"{source + ': ' if source else ''}t is not uniformly "
+                                  "sampled: window is ignored, a smoothing spline is used",
+                                  GsfricWarning, stacklevel=3)
+                try:
+                    p0, p1, p2 = _spline(t, position, lam)
+                    q0, q1, q2 = _spline(t, q, lam)
+                except ValueError as error:
+                    raise InputError(f"smoothing spline failed: {error}") from None
+            squared = np.sum(q0 * q0, axis=1, keepdims=True)
+            omega = 2 * quaternion_multiply(q1, _conjugate(q0))[:, 1:] / squared
+            alpha = (2 * quaternion_multiply(q2, _conjugate(q0))[:, 1:] / squared
+                     - omega * 2 * np.sum(q0 * q1, axis=1, keepdims=True) / squared)
+            rotation = rotation_from_quaternion(q0)
+        results = (p0, p1, p2, rotation, omega, alpha)
+        if not all(np.isfinite(r).all() for r in results):
+            raise InputError("differentiation gave non-finite values (values or time steps "
+                             "out of range)")
+        return cls(t, p0, rotation, p1, omega, p2, alpha)
+
+    def slice(self, start: int | None = None, stop: int | None = None) -> Motion:
+        """Steps ``start:stop`` (Python slice semantics) as a new Motion (at least one step)."""
+        part = slice(start, stop)
+        if len(self.t[part]) == 0:
+            raise InputError(f"Motion.slice({start}, {stop}): no steps in a motion of {len(self)}")
+        return Motion(self.t[part], self.position[part], self.rotation[part],
+                      self.velocity[part], self.omega[part], self.acceleration[part],
+                      self.alpha[part])
+
+    def quaternion(self) -> np.ndarray:
+        """The orientation as sign-continuous unit quaternions ``(qw, qx, qy, qz)``, (N, 4)."""
+        return _continuous(quaternion_from_rotation(self.rotation))
+
+    def euler(self) -> np.ndarray:
+        """The orientation as ZXZ angles ``(alpha, beta, gamma)``, (N, 3), rad."""
+        return euler_from_rotation(self.rotation)
+
+    def to_frame(self, derivatives: bool = False) -> pd.DataFrame:
+        """The motion as a table.
+
+        Columns ``t, x, y, z, qw, qx, qy, qz, alpha, beta, gamma`` (a valid trajectory file:
+        the reader uses the quaternion when both orientations are present); with
+        ``derivatives``, also ``vx, vy, vz, omega_x, omega_y, omega_z, ax, ay, az,
+        alpha_x, alpha_y, alpha_z``.
+        """
+        import pandas as pd
+
+        columns: dict[str, np.ndarray] = {"t": self.t}
+        columns.update(zip(("x", "y", "z"), self.position.T))
+        columns.update(zip(("qw", "qx", "qy", "qz"), self.quaternion().T))
+        columns.update(zip(("alpha", "beta", "gamma"), self.euler().T))
+        if derivatives:
+            for prefix, values in (("v", self.velocity), ("omega_", self.omega),
+                                   ("a", self.acceleration), ("alpha_", self.alpha)):
+                columns.update(zip((prefix + c for c in "xyz"), values.T))
+        return pd.DataFrame(columns)
+
+
+def _check_window(window: object, polyorder: int, n: int) -> None:
+    if isinstance(window, bool) or not isinstance(window, (int, np.integer)):
+        raise InputError(f"window must be an odd integer, got {window!r}")
+    if window % 2 == 0:
+        raise InputError(f"window must be odd, got {window}")
+    if window <= polyorder:
+        raise InputError(f"window = {window} must exceed polyorder = {polyorder}")
+    if window > n:
+        raise InputError(f"window = {window} is longer than the {n} samples")
