@@ -116,7 +116,7 @@ def _functions():
                     [fric_out[n] for n in FRICTION_OUTPUTS],
                     list(fric_in) + ["P", "Q"], list(FRICTION_OUTPUTS)),
         ca.Function(f"{BASENAME}_jacobian", [x, P, Q],
-                    [kin["F"], ca.jacobian(kin["F"], theta)], ["x", "P", "Q"], ["F", "dF"]),
+                    [kin["F"], ca.densify(ca.jacobian(kin["F"], theta))], ["x", "P", "Q"], ["F", "dF"]),
     ]
     shapes = {n: list(s) for n, s, *_ in mdl.OUTPUTS}
     units = {n: u for n, _, u, _ in mdl.OUTPUTS}
@@ -161,7 +161,7 @@ def generate(out_dir: Path = GENERATED) -> dict[str, bytes]:
 
     def io(f, kind):
         names = f.name_in() if kind == "in" else f.name_out()
-        sizes = [f.size1_in(i) if kind == "in" else f.size1_out(i) for i in range(len(names))]
+        sizes = [f.numel_in(i) if kind == "in" else f.numel_out(i) for i in range(len(names))]
         items = []
         for name, size in zip(names, sizes):
             item = dict(name=name, size=size)

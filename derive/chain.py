@@ -45,23 +45,27 @@ class Chain:
         self.steps: list[Step] = []
         self._names: set[str] = set()
         self._symbol_names: set[str] = set()
+        self._numpy_body = None
 
     def _claim(self, name: str, base: str | None = None) -> None:
-        """Reserve a quantity's name and the base name of its symbols (both must be unique)."""
+        """Reserve a quantity's name (it must be unique)."""
         if name in self._names:
             raise ValueError(f"chain: {name!r} is defined twice")
-        base = base or name
-        if base in self._symbol_names:
-            raise ValueError(f"chain: symbol name {base!r} of {name!r} is already taken")
         self._names.add(name)
-        self._symbol_names.add(base)
+
+    def _symbol(self, name: str) -> sp.Symbol:
+        """A new real symbol; two quantities never share a symbol name."""
+        if name in self._symbol_names:
+            raise ValueError(f"chain: symbol name {name!r} is already taken")
+        self._symbol_names.add(name)
+        return sp.Symbol(name, real=True)
 
     def input(self, name: str, rows: int, cols: int = 1, latex: str | None = None) -> sp.Matrix:
         """Declare an input block of shape (rows, cols); returns a Matrix of real symbols."""
         base = latex or name
         self._claim(name, base)
         syms = [
-            [sp.Symbol(_entry_name(base, r, c, rows, cols), real=True) for c in range(cols)]
+            [self._symbol(_entry_name(base, r, c, rows, cols)) for c in range(cols)]
             for r in range(rows)
         ]
         m = sp.Matrix(syms)
@@ -75,13 +79,13 @@ class Chain:
         if isinstance(expr, sp.MatrixBase):
             rows, cols = expr.shape
             targets = [
-                sp.Symbol(_entry_name(base, r, c, rows, cols), real=True)
+                self._symbol(_entry_name(base, r, c, rows, cols))
                 for r in range(rows)
                 for c in range(cols)
             ]
             self.steps.append(Step("let", name, targets, list(expr), equation=equation))
             return sp.Matrix(rows, cols, targets)
-        target = sp.Symbol(base, real=True)
+        target = self._symbol(base)
         self.steps.append(Step("let", name, [target], [sp.sympify(expr)], equation=equation))
         return target
 
@@ -91,7 +95,7 @@ class Chain:
         base = latex or name
         self._claim(name, base)
         n = A.shape[0]
-        targets = [sp.Symbol(_entry_name(base, r, 0, n, 1), real=True) for r in range(n)]
+        targets = [self._symbol(_entry_name(base, r, 0, n, 1)) for r in range(n)]
         self.steps.append(Step("solve", name, targets, A=sp.Matrix(A), b=sp.Matrix(b),
                                equation=equation))
         return sp.Matrix(targets)
@@ -110,6 +114,53 @@ class Chain:
                 out.append((step.name, r"%s = \left(%s\right)^{-1} %s" % (
                     sp.latex(sp.Matrix(step.targets)), sp.latex(step.A), sp.latex(step.b))))
         return out
+
+    def _print_numpy_body(self):
+        """Python source lines computing every step, shared by all ``numpy_function`` calls."""
+        from sympy.printing.numpy import NumPyPrinter
+
+        names: dict[sp.Symbol, str] = {}
+
+        class Printer(NumPyPrinter):
+            def _print_Symbol(self, expr):
+                return names[expr]
+
+        printer = Printer({"fully_qualified_modules": False, "inline": True,
+                           "allow_unknown_functions": False})
+        lines = ["def chain(values):", "    n = 1",
+                 "    for v in values.values():",
+                 "        v = asarray(v)",
+                 "        if v.ndim == 2:",
+                 "            n = max(n, v.shape[0])"]
+        for name, mat in self.inputs.items():
+            var = f"in_{len(names)}"
+            lines.append(f"    {var} = broadcast_to(asarray(values[{name!r}], dtype=float)"
+                         f".reshape(-1, {len(mat)}), (n, {len(mat)}))")
+            for k, sym in enumerate(mat):
+                names[sym] = f"{var}[:, {k}]"
+
+        def new(sym):
+            names[sym] = f"s{len(names)}"
+            return names[sym]
+
+        def full(expr):
+            return f"broadcast_to(1.0 * ({printer.doprint(expr)}), (n,))"
+
+        for step in self.steps:
+            if step.kind == "let":
+                for t, e in zip(step.targets, step.exprs):
+                    lines.append(f"    {new(t)} = {full(e)}")
+            else:
+                m = step.A.shape[0]
+                rows = ", ".join("stack([" + ", ".join(full(step.A[r, c]) for c in range(m))
+                                 + "], -1)" for r in range(m))
+                rhs = ", ".join(full(v) for v in step.b)
+                sol = f"x{len(names)}"
+                lines.append(f"    {sol} = solve(stack([{rows}], -2), "
+                             f"stack([{rhs}], -1)[..., None])[..., 0]")
+                for k, t in enumerate(step.targets):
+                    lines.append(f"    {new(t)} = {sol}[:, {k}]")
+        return names, lines, printer
 
     # ----------------------------------------------------------------- back ends
     def to_casadi(self, inputs: dict, outputs: dict[str, sp.Matrix]) -> dict:
@@ -158,45 +209,40 @@ class Chain:
         values : dict
             input name -> array of shape (N, size) or (size,), entries row-major.
         outputs : dict
-            output name -> Matrix of chain symbols.
+            output name -> Matrix of chain symbols (or expressions in them).
 
         Returns
         -------
         dict of output name -> ndarray of shape (N, size).
         """
+        return self.numpy_function(outputs)(values)
+
+    def numpy_function(self, outputs: dict[str, sp.Matrix]):
+        """One Python function evaluating the whole chain with NumPy (printed by SymPy).
+
+        The function takes the dict of input blocks described in ``evaluate``.
+        """
+        import builtins
+
         import numpy as np
 
-        env: dict[sp.Symbol, object] = {}
-        n = 1
-        for name, mat in self.inputs.items():
-            arr = np.asarray(values[name], dtype=float)
-            if arr.ndim == 2:
-                n = max(n, arr.shape[0])
-        for name, mat in self.inputs.items():
-            arr = np.asarray(values[name], dtype=float)
-            arr = np.broadcast_to(arr.reshape(-1, len(mat)) if arr.ndim == 2 else arr, (n, len(mat)))
-            for k, s in enumerate(mat):
-                env[s] = arr[:, k]
+        if self._numpy_body is None or self._numpy_body[0] != len(self.steps):
+            self._numpy_body = (len(self.steps),) + self._print_numpy_body()
+        _, names, lines, printer = self._numpy_body
+        lines = list(lines)
 
-        def ev(expr):
-            expr = sp.sympify(expr)
-            free = sorted(expr.free_symbols, key=lambda s: s.name)
-            f = sp.lambdify(free, expr, modules="numpy")
-            return np.broadcast_to(np.asarray(f(*[env[s] for s in free]), dtype=float), (n,))
+        def full(expr):
+            return f"broadcast_to(1.0 * ({printer.doprint(expr)}), (n,))"
 
-        for step in self.steps:
-            if step.kind == "let":
-                for t, e in zip(step.targets, step.exprs):
-                    env[t] = ev(e)
-            else:
-                m = step.A.shape[0]
-                A = np.stack([np.stack([ev(step.A[r, c]) for c in range(m)], -1)
-                              for r in range(m)], -2)
-                b = np.stack([ev(v) for v in step.b], -1)
-                x = np.linalg.solve(A, b[..., None])[..., 0]
-                for k, t in enumerate(step.targets):
-                    env[t] = x[:, k]
-        return {name: np.stack([ev(v) for v in mat], -1) for name, mat in outputs.items()}
+        lines.append("    return {")
+        for name, mat in outputs.items():
+            lines.append(f"        {name!r}: stack([{', '.join(full(v) for v in mat)}], -1),")
+        lines.append("    }")
+        env = {k: getattr(np, k) for k in dir(np)
+               if not k.startswith("_") and not hasattr(builtins, k)}
+        env["solve"] = np.linalg.solve
+        exec(compile("\n".join(lines), "<chain>", "exec"), env)
+        return env["chain"]
 
 
 def _entry_name(base: str, r: int, c: int, rows: int, cols: int) -> str:

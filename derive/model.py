@@ -157,7 +157,7 @@ def build(mode: str = "kinematic") -> Model:
                   "prismatic_eps": r"\varepsilon_{v}"}
     P = {n: _block(ch, n, s, plat_latex.get(n)) for n, s, _, _ in PARAMETERS}
     q_names = fx.parameter_names()
-    Qm = ch.input("effects", len(q_names), 1, "q")
+    Qm = ch.input("effects", len(q_names), 1, "Q")
     Q = {n: Qm[k] for k, n in enumerate(q_names)}
     inputs = {"x": STATE, "P": PARAMETERS,
               "Q": tuple((n, (), "", "") for n in q_names)}
@@ -370,7 +370,7 @@ def build_friction() -> Model:
     blocks = {n: _block(ch, n, s) for n, s, *_ in FRICTION_INPUTS}
     P = {n: _block(ch, n, s) for n, s, _, _ in PARAMETERS}
     q_names = fx.parameter_names()
-    Qm = ch.input("effects", len(q_names), 1, "q")
+    Qm = ch.input("effects", len(q_names), 1, "Q")
     Q = {n: Qm[j] for j, n in enumerate(q_names)}
     out = {n: [] for n in ("MfrE", "MfrC", "Ffr", "MfrE_s", "MfrC_s", "Ffr_s")}
     for i in range(N_LEGS):

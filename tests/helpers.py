@@ -1,0 +1,53 @@
+"""Helpers shared by the tests: perturbed platforms, random states, the chain's inputs."""
+
+from __future__ import annotations
+
+import numpy as np
+
+import gsfric
+from gsfric import models
+from gsfric.evaluation import effect_vector, parameter_vector, state_array
+from gsfric.manifest import layout
+
+
+def perturbed_platform(rng: np.random.Generator, legs_model: str = "rigid") -> gsfric.Platform:
+    """The reference platform with moved joints, tilted axes, full inertias and a payload offset."""
+    base = models.reference_platform()
+    g = base.geometry
+    axes = g.universal_axes + rng.uniform(-0.3, 0.3, (6, 3))
+
+    def inertia(scale):
+        a = rng.normal(size=(3, 3)) * scale
+        return a @ a.T + np.eye(3) * scale
+
+    return (base.with_geometry(base_joints=g.base_joints + rng.uniform(-0.03, 0.03, (6, 3)),
+                               platform_joints=g.platform_joints
+                               + rng.uniform(-0.03, 0.03, (6, 3)),
+                               universal_axes=axes / np.linalg.norm(axes, axis=1)[:, None])
+            .with_body(inertia=inertia(0.1), com=rng.uniform(-0.03, 0.03, 3),
+                       payload_mass=rng.uniform(1, 5), payload_inertia=inertia(0.02),
+                       payload_com=rng.uniform(-0.05, 0.05, 3))
+            .with_legs(model=legs_model, lower_inertia=inertia(0.01),
+                       upper_inertia=inertia(0.01), lower_mass=rng.uniform(0.3, 2),
+                       upper_mass=rng.uniform(0.3, 2)))
+
+
+def random_states(rng: np.random.Generator, n: int) -> np.ndarray:
+    """States (n, 24) sampled from a random smooth motion about the home pose."""
+    t = np.sort(rng.uniform(0, 5, n))
+    return state_array(models.random_motion(rng, t))
+
+
+def chain_values(platform, x: np.ndarray, Q=None, K=None) -> dict:
+    """The chain's named input blocks for a platform and states x (N, 24)."""
+    values = {}
+    for vec, name in ((x, "x"), (parameter_vector(platform), "P")):
+        for b in layout("eval", name):
+            size = int(np.prod(b["shape"]))
+            values[b["name"]] = vec[..., b["offset"]:b["offset"] + size]
+    values["effects"] = effect_vector(platform) if Q is None else Q
+    if K is not None:
+        for b in layout("eval_paper", "K"):
+            size = int(np.prod(b["shape"]))
+            values[b["name"]] = K[b["offset"]:b["offset"] + size]
+    return values

@@ -1,0 +1,193 @@
+"""The compiled functions against the lambdified SymPy chain, Jacobians, staleness, fallback."""
+
+from __future__ import annotations
+
+import json
+import os
+import subprocess
+import sys
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from derive import build as dbuild
+from derive import model as mdl
+from gsfric import models, native
+from gsfric.evaluation import Evaluator, effect_vector, jacobian_parameters
+from helpers import chain_values, perturbed_platform, random_states
+
+ROOT = Path(__file__).resolve().parents[1]
+
+
+def _random_effects(rng, platform):
+    """Every effect switched on with a random plausible parameter."""
+    return platform.with_effects({
+        "stribeck": {"static": rng.uniform(0.5, 3), "velocity": rng.uniform(0.005, 0.05)},
+        "seal_friction": {"force": rng.uniform(0.5, 3)},
+        "quadratic_drag": {"coefficient": rng.uniform(1, 20)},
+        "stroke_friction": {"slope": rng.uniform(-5, 5), "reference": 0.8},
+        "payload_offset": {"x": 0.02, "y": -0.03, "z": 0.01},
+        "sensor_bias": {f"b{i}": rng.uniform(-1, 1) for i in range(1, 7)},
+        "joint_friction_coupling": {"scale": 1.0},
+        "leg_weight": {"lower_mass": 0.3, "upper_mass": 0.2},
+        "bushing_friction": {"coefficient": 0.1, "spacing": 0.08},
+    })
+
+
+def _relative_error(a, b):
+    scale = max(np.max(np.abs(b)), 1e-300)
+    return np.max(np.abs(a - b)) / scale
+
+
+@pytest.mark.parametrize("mode", ["kinematic", "paper"])
+def test_compiled_equals_lambdified_sympy_at_random_states(rng, mode):
+    platform = _random_effects(rng, perturbed_platform(rng, "paper" if mode == "paper"
+                                                       else "rigid"))
+    x = random_states(rng, 40)
+    model = mdl.build(mode)
+    K = models.paper_constants() if mode == "paper" else None
+    expected = model.chain.evaluate(chain_values(platform, x, K=K), model.outputs)
+    ev = Evaluator(platform, mode=mode)
+    got = ev._full([x, ev.P, ev.Q] + ([ev.K] if K is not None else []))
+    assert set(got) == set(expected)
+    for name in expected:
+        assert _relative_error(got[name], expected[name]) < 1e-10, name
+
+
+def test_friction_map_equals_the_friction_of_the_full_map(rng):
+    platform = _random_effects(rng, perturbed_platform(rng))
+    x = random_states(rng, 30)
+    ev = Evaluator(platform)
+    full = ev._full([x, ev.P, ev.Q])
+    names = ["R_E", "R_C", "R_3", "M_3", "omega_rel", "omega_leg", "D_dot", "D", "u"]
+    fric = native.get("friction")([full[n] for n in names] + [ev.P, ev.Q])
+    for name in ("MfrE", "MfrC", "Ffr", "MfrE_s", "MfrC_s", "Ffr_s"):
+        assert _relative_error(fric[name], full[name]) < 1e-12, name
+    reactions = native.get("reactions")([x, ev.P, ev.Q])
+    for name, value in reactions.items():
+        assert _relative_error(value, full[name]) < 1e-12, name
+
+
+def test_actuator_map_equals_the_full_map_also_on_two_threads(rng):
+    platform = _random_effects(rng, perturbed_platform(rng))
+    x = random_states(rng, 1001)
+    ev = Evaluator(platform, n_threads=2)
+    full = ev._full([x, ev.P, ev.Q])
+    np.testing.assert_array_equal(ev.actuator_forces(x), full["F"])
+    out = np.empty((x.shape[0], 6))
+    assert ev.actuator_forces(x, out=out) is out
+
+
+def test_parameter_jacobian_equals_finite_differences(rng):
+    platform = _random_effects(rng, perturbed_platform(rng))
+    x = random_states(rng, 20)
+    ev = Evaluator(platform)
+    F, dF = ev.jacobian(x)
+    names = jacobian_parameters()
+    assert dF.shape == (20, 6, len(names))
+    np.testing.assert_array_equal(F, ev.actuator_forces(x))
+    p_layout = {b["name"]: b["offset"] for b in
+                json.loads((ROOT / "generated" / "manifest.json").read_text())
+                ["functions"][0]["inputs"][1]["layout"]}
+    q_names = [n for n in names if "." in n]
+    for k, name in enumerate(names):
+        P, Q = ev.P.copy(), ev.Q.copy()
+        if "." in name:
+            vec, idx = Q, q_names.index(name)
+        else:
+            vec, idx = P, p_layout[name]
+        h = 1e-6 * max(1.0, abs(vec[idx]))
+        vec[idx] += h
+        Fp = ev.actuator_forces(x, P=P, Q=Q)
+        vec[idx] -= 2 * h
+        Fm = ev.actuator_forces(x, P=P, Q=Q)
+        fd = (Fp - Fm) / (2 * h)
+        scale = max(np.max(np.abs(fd)), np.max(np.abs(dF[:, :, k])), 1e-8)
+        assert np.max(np.abs(fd - dF[:, :, k])) < 1e-5 * scale + 1e-9, name
+
+
+def test_parameters_vary_per_step(rng):
+    platform = perturbed_platform(rng)
+    x = random_states(rng, 10)
+    ev = Evaluator(platform)
+    P = np.tile(ev.P, (10, 1))
+    P[5:, 0] *= 2.0  # gravity doubled on the second half
+    F = ev.actuator_forces(x, P=P)
+    F_ref = Evaluator(platform.replace(gravity=2 * platform.gravity)).actuator_forces(x[5:])
+    np.testing.assert_allclose(F[5:], F_ref, rtol=1e-13)
+    np.testing.assert_allclose(F[:5], ev.actuator_forces(x[:5]), rtol=1e-13)
+
+
+def test_import_gsfric_works_with_sympy_blocked():
+    code = ("import sys; sys.modules['sympy'] = None\n"
+            "import numpy as np, gsfric\n"
+            "r = gsfric.evaluate(gsfric.reference_platform(), gsfric.models.paper_motion())\n"
+            "assert r.F.shape == (40, 6) and np.isfinite(r.F).all()\n"
+            "assert 'sympy' not in [m.split('.')[0] for m in sys.modules if sys.modules[m]]\n"
+            "print('ok')")
+    run = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True)
+    assert run.returncode == 0, run.stderr
+    assert run.stdout.strip() == "ok"
+
+
+def test_generated_is_up_to_date_with_derive():
+    assert dbuild.is_stale() is None, "generated/ is stale: run `gsfric derive`"
+
+
+def test_check_detects_a_changed_derive_source(tmp_path, monkeypatch):
+    files = {p.name: p.read_bytes() for p in (ROOT / "generated").iterdir() if p.is_file()}
+    for name, data in files.items():
+        (tmp_path / name).write_bytes(data)
+    assert dbuild.is_stale(tmp_path) is None
+    manifest = json.loads((tmp_path / "manifest.json").read_text())
+    manifest["source_hash"] = "0" * 64
+    (tmp_path / "manifest.json").write_text(json.dumps(manifest))
+    assert "derive/ changed" in dbuild.is_stale(tmp_path)
+    (tmp_path / "manifest.json").write_bytes(files["manifest.json"])
+    (tmp_path / "gsfric_model.c").write_bytes(files["gsfric_model.c"] + b"\n")
+    assert "gsfric_model.c" in dbuild.is_stale(tmp_path)
+
+
+def test_regeneration_is_byte_identical():
+    fresh = dbuild.generate()
+    for name, data in fresh.items():
+        assert (ROOT / "generated" / name).read_bytes() == data, name
+
+
+def test_cli_derive_check_exits_zero_when_fresh():
+    from click.testing import CliRunner
+
+    from gsfric.cli import main
+
+    result = CliRunner().invoke(main, ["derive", "--check"])
+    assert result.exit_code == 0, result.output
+
+
+def test_without_a_compiler_casadi_evaluates_the_same_numbers(tmp_path):
+    code = ("import warnings, numpy as np, gsfric\n"
+            "from gsfric import native\n"
+            "with warnings.catch_warnings(record=True) as w:\n"
+            "    warnings.simplefilter('always')\n"
+            "    r = gsfric.evaluate(gsfric.reference_platform(), gsfric.models.paper_motion())\n"
+            "assert not native.is_compiled()\n"
+            "assert any('no C compiler' in str(x.message) for x in w), [str(x.message) for x in w]\n"
+            "np.save(r'%s', r.F)\n" % (tmp_path / "F.npy"))
+    env = dict(os.environ, CC="no-such-compiler-gsfric", GSFRIC_CACHE=str(tmp_path / "cache"))
+    run = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, env=env)
+    assert run.returncode == 0, run.stderr
+    import gsfric
+
+    expected = gsfric.evaluate(gsfric.reference_platform(), models.paper_motion()).F
+    np.testing.assert_allclose(np.load(tmp_path / "F.npy"), expected, rtol=1e-12)
+
+
+def test_effect_vector_follows_the_catalog_order(platform):
+    from gsfric.catalog import parameter_names
+
+    p = platform.with_effect("seal_friction", force=2.5).with_effect("sensor_bias", b3=0.7)
+    q = effect_vector(p)
+    names = parameter_names()
+    assert q[names.index("seal_friction.force")] == 2.5
+    assert q[names.index("sensor_bias.b3")] == 0.7
+    assert q[names.index("stribeck.velocity")] > 0
