@@ -27,7 +27,7 @@ def suggest(name: str, choices: Iterable[str]) -> str:
 
 
 def is_number(value: object) -> bool:
-    """True for a real number (int, float, NumPy integer or floating), False for bool and the rest."""
+    """True for a real number (int, float, NumPy integer or floating); False for bool."""
     if isinstance(value, (bool, np.bool_)):
         return False
     return isinstance(value, (int, float, np.integer, np.floating))

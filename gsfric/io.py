@@ -17,9 +17,11 @@ Writes are atomic (``atomic_write``): a reader never sees a partly written file.
 from __future__ import annotations
 
 import contextlib
+import csv
 import os
 import re
 import tempfile
+import warnings
 from collections.abc import Iterator
 from pathlib import Path
 from typing import IO, TYPE_CHECKING, Any
@@ -39,6 +41,7 @@ QUATERNION = ("qw", "qx", "qy", "qz")
 FORCES = tuple(f"F{i}" for i in range(1, 7))
 LENGTHS = tuple(f"D{i}" for i in range(1, 7))
 
+_NAN_WORDS = ("nan", "-nan", "+nan")
 _CSV = (".csv",)
 _PARQUET = (".parquet", ".pq")
 
@@ -122,6 +125,23 @@ def _table_kind(path: Path) -> str:
                      "use .csv, .parquet or .pq")
 
 
+def _field_count_problem(path: Path) -> str | None:
+    """'row N has K fields but the header has M' for the first such data row, or None."""
+    try:
+        with open(path, newline="", encoding="utf-8") as handle:
+            lines = (line for line in csv.reader(handle, skipinitialspace=True) if line)
+            header = next(lines, None)
+            if header is None:
+                return None
+            for row, fields in enumerate(lines, start=1):
+                if len(fields) > len(header):
+                    return (f"row {row} has {len(fields)} fields but the header has "
+                            f"{len(header)}")
+    except (OSError, ValueError, csv.Error):
+        return None
+    return None
+
+
 def read_table(path: str | os.PathLike[str]) -> pd.DataFrame:
     """Read a CSV or Parquet file (chosen by extension) into a DataFrame.
 
@@ -149,17 +169,22 @@ def read_table(path: str | os.PathLike[str]) -> pd.DataFrame:
         raise InputError(f"{path}: file is empty")
 
     if kind == "csv":
-        options: dict[str, Any] = {"index_col": False, "skipinitialspace": True}
+        options: dict[str, Any] = {"index_col": False, "skipinitialspace": True,
+                                   "keep_default_na": False, "na_values": [""]}
         if int(pd.__version__.split(".")[0]) < 3:
             options["float_precision"] = "round_trip"
         try:
-            frame = pd.read_csv(path, **options)
+            with warnings.catch_warnings():
+                warnings.simplefilter("error", pd.errors.ParserWarning)
+                frame = pd.read_csv(path, **options)
         except pd.errors.EmptyDataError:
             raise InputError(f"{path}: file is empty (no header line)") from None
         except UnicodeDecodeError as error:
             raise InputError(f"{path}: not UTF-8 text (byte {error.start})") from None
-        except (ValueError, OverflowError, pd.errors.ParserError) as error:
-            raise InputError(f"{path}: cannot parse as CSV: {error}") from None
+        except (ValueError, OverflowError, pd.errors.ParserError,
+                pd.errors.ParserWarning) as error:
+            reason = _field_count_problem(path) or str(error)
+            raise InputError(f"{path}: cannot parse as CSV: {reason}") from None
         except OSError as error:
             raise InputError(f"{path}: cannot read ({error.strerror})") from None
         names = [str(c) for c in frame.columns]
@@ -248,7 +273,10 @@ def _column_values(series: pd.Series, name: str) -> tuple[np.ndarray, tuple[int,
             numeric = pd.to_numeric(series, errors="coerce")
         except (TypeError, ValueError):
             return np.empty(0), (0, f"column {name!r} holds values that are not numbers")
-        bad = np.flatnonzero(numeric.isna().to_numpy() & series.notna().to_numpy())
+        unparsed = numeric.isna().to_numpy() & series.notna().to_numpy()
+        spelled_nan = np.array([isinstance(v, str) and v.strip().lower() in _NAN_WORDS
+                                for v in series], dtype=bool)
+        bad = np.flatnonzero(unparsed & ~spelled_nan)
         if len(bad):
             value = series.iloc[bad[0]]
             return np.empty(0), (int(bad[0]), f"column {name!r} is not a number: {short(value)}")
@@ -287,15 +315,16 @@ def _read_samples(path: str | os.PathLike[str], measured: bool
         raise InputError(f"{path}: row {row + 1}: {message}")
 
     t = columns["t"]
-    steps = np.diff(t)
+    with np.errstate(over="ignore", invalid="ignore"):
+        steps = np.diff(t)
     bad = np.flatnonzero(steps <= 0)
     if len(bad):
         i = int(bad[0]) + 1
         if steps[i - 1] == 0:
-            raise InputError(f"{path}: row {i + 1}: duplicate time t = {t[i]!r} "
+            raise InputError(f"{path}: row {i + 1}: duplicate time t = {float(t[i])!r} "
                              f"(same as row {i})")
-        raise InputError(f"{path}: row {i + 1}: t = {t[i]!r} is less than t = {t[i - 1]!r} "
-                         f"in row {i}; t must increase")
+        raise InputError(f"{path}: row {i + 1}: t = {float(t[i])!r} is less than "
+                         f"t = {float(t[i - 1])!r} in row {i}; t must increase")
     if len(t) < MIN_SAMPLES:
         raise InputError(f"{path}: {len(t)} data rows; at least {MIN_SAMPLES} are needed "
                          "to differentiate the motion")

@@ -462,19 +462,19 @@ class Platform:
         return dataclasses.replace(self, **changes)
 
     def with_geometry(self, **changes: Any) -> Platform:
-        """A copy with fields of ``geometry`` replaced, e.g. ``with_geometry(stroke=(0.5, 0.9))``."""
+        """A copy with fields of ``geometry`` replaced, e.g. ``stroke=(0.5, 0.9)``."""
         return self.replace(geometry=dataclasses.replace(self.geometry, **changes))
 
     def with_body(self, **changes: Any) -> Platform:
-        """A copy with fields of ``platform`` (the Body) replaced, e.g. ``with_body(payload_mass=5)``."""
+        """A copy with fields of ``platform`` (the Body) replaced, e.g. ``payload_mass=5``."""
         return self.replace(platform=dataclasses.replace(self.platform, **changes))
 
     def with_legs(self, **changes: Any) -> Platform:
-        """A copy with fields of ``legs`` replaced, e.g. ``with_legs(weight=False)``."""
+        """A copy with fields of ``legs`` replaced, e.g. ``weight=False``."""
         return self.replace(legs=dataclasses.replace(self.legs, **changes))
 
     def with_friction(self, **changes: Any) -> Platform:
-        """A copy with fields of ``friction`` replaced, e.g. ``with_friction(joint_coulomb=0.1)``."""
+        """A copy with fields of ``friction`` replaced, e.g. ``joint_coulomb=0.1``."""
         return self.replace(friction=dataclasses.replace(self.friction, **changes))
 
     def with_effects(self, effects: Mapping[str, Mapping[str, float]]) -> Platform:

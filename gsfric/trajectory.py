@@ -26,10 +26,10 @@ if TYPE_CHECKING:
 MIN_SAMPLES = 7
 """Fewest samples ``Motion.from_samples`` (and the trajectory readers) accept."""
 
-DEFAULT_POLYORDER = 3
+DEFAULT_POLYORDER = 4
 """Polynomial order of the Savitzky-Golay filter."""
 
-MAX_AUTO_WINDOW = 101
+MAX_AUTO_WINDOW = 201
 """Longest Savitzky-Golay window the automatic choice considers, samples."""
 
 UNIFORM_RTOL = 1e-4
@@ -186,7 +186,7 @@ def _check_euler(euler: np.ndarray, source: str | None) -> None:
            for name, value in zip(("alpha", "beta", "gamma"), largest) if value > 2 * np.pi]
     if big:
         warnings.warn(f"{prefix}angles look like degrees ({', '.join(big)} > 2*pi); "
-                      "angles must be in radians", GsfricWarning, stacklevel=3)
+                      "angles must be in radians", GsfricWarning, stacklevel=4)
     near_lock = np.abs(np.sin(euler[:, 1])) < GIMBAL_SIN_BETA
     near_lock = near_lock[1:] | near_lock[:-1]
     steps = np.abs((np.diff(euler[:, [0, 2]], axis=0) + np.pi) % (2 * np.pi) - np.pi)
@@ -195,7 +195,7 @@ def _check_euler(euler: np.ndarray, source: str | None) -> None:
         warnings.warn(f"{prefix}ZXZ angles near beta = 0 (where alpha and gamma are ill-defined) "
                       f"jump by more than {GIMBAL_JUMP} rad in alpha or gamma at "
                       f"{_where(source, jumps)}; give the orientation as a quaternion "
-                      "(qw, qx, qy, qz) instead", GsfricWarning, stacklevel=3)
+                      "(qw, qx, qy, qz) instead", GsfricWarning, stacklevel=4)
 
 
 def _candidate_windows(n: int, polyorder: int) -> list[int]:
@@ -229,7 +229,7 @@ def _gcv_window(y: np.ndarray, polyorder: int) -> int:
 def _savgol(y: np.ndarray, window: int, polyorder: int, step: float) -> list[np.ndarray]:
     from scipy.signal import savgol_filter
 
-    return [savgol_filter(y, window, polyorder, deriv=k, delta=step, axis=0, mode="interp")
+    return [savgol_filter(y, window, polyorder, deriv=k, axis=0, mode="interp") / step**k
             for k in (0, 1, 2)]
 
 
@@ -372,8 +372,9 @@ class Motion:
         """
         prefix = f"{source}: " if source else ""
         try:
-            return cls._from_samples(t, position, euler, quaternion, window, polyorder, lam,
-                                     source)
+            with np.errstate(all="ignore"):
+                return cls._from_samples(t, position, euler, quaternion, window, polyorder,
+                                         lam, source)
         except InputError as error:
             if prefix and not str(error).startswith(prefix):
                 raise InputError(prefix + str(error)) from None
@@ -392,7 +393,9 @@ class Motion:
         steps = np.diff(t)
         bad = np.flatnonzero(steps <= 0)
         if len(bad):
-            raise InputError(f"t does not increase at {_where(source, bad[:1] + 1)}")
+            raise InputError(f"{_where(source, bad[:1] + 1)}: t does not increase")
+        if not np.isfinite(t[-1] - t[0]):
+            raise InputError("t spans too large a range")
 
         if euler is not None:
             euler = as_array(euler, (n, 3), "euler")
@@ -403,40 +406,44 @@ class Motion:
             norms = np.linalg.norm(q, axis=1)
             zero = np.flatnonzero(norms < 1e-12)
             if len(zero):
-                raise InputError(f"quaternion of zero length at {_where(source, zero[:1])}")
+                raise InputError(f"{_where(source, zero[:1])}: quaternion of zero length")
             q = q / norms[:, None]
         q = _continuous(q)
 
         if isinstance(polyorder, bool) or not isinstance(polyorder, (int, np.integer)) \
                 or polyorder < 2:
             raise InputError(f"polyorder must be an integer >= 2, got {polyorder!r}")
+        if polyorder + 1 >= n:
+            raise InputError(f"polyorder = {polyorder} needs more than {polyorder + 1} samples, "
+                             f"got {n}")
+        if lam is not None:
+            lam = as_float(lam, "lam", minimum=0.0)
         mean_step = (t[-1] - t[0]) / (n - 1)
         uniform = np.all(np.abs(steps - mean_step) <= UNIFORM_RTOL * mean_step)
-        with np.errstate(all="ignore"):
-            if uniform:
-                if window is None:
-                    position_window = _gcv_window(position, polyorder)
-                    quaternion_window = _gcv_window(q, polyorder)
-                else:
-                    _check_window(window, polyorder, n)
-                    position_window = quaternion_window = window
-                p0, p1, p2 = _savgol(position, position_window, polyorder, mean_step)
-                q0, q1, q2 = _savgol(q, quaternion_window, polyorder, mean_step)
+        if uniform:
+            if window is None:
+                position_window = _gcv_window(position, polyorder)
+                quaternion_window = _gcv_window(q, polyorder)
             else:
-                if window is not None:
-                    warnings.warn(f"{source + ': ' if source else ''}t is not uniformly "
-                                  "sampled: window is ignored, a smoothing spline is used",
-                                  GsfricWarning, stacklevel=3)
-                try:
-                    p0, p1, p2 = _spline(t, position, lam)
-                    q0, q1, q2 = _spline(t, q, lam)
-                except ValueError as error:
-                    raise InputError(f"smoothing spline failed: {error}") from None
-            squared = np.sum(q0 * q0, axis=1, keepdims=True)
-            omega = 2 * quaternion_multiply(q1, _conjugate(q0))[:, 1:] / squared
-            alpha = (2 * quaternion_multiply(q2, _conjugate(q0))[:, 1:] / squared
-                     - omega * 2 * np.sum(q0 * q1, axis=1, keepdims=True) / squared)
-            rotation = rotation_from_quaternion(q0)
+                _check_window(window, polyorder, n)
+                position_window = quaternion_window = window
+            p0, p1, p2 = _savgol(position, position_window, polyorder, mean_step)
+            q0, q1, q2 = _savgol(q, quaternion_window, polyorder, mean_step)
+        else:
+            if window is not None:
+                warnings.warn(f"{source + ': ' if source else ''}t is not uniformly "
+                              "sampled: window is ignored, a smoothing spline is used",
+                              GsfricWarning, stacklevel=3)
+            try:
+                p0, p1, p2 = _spline(t, position, lam)
+                q0, q1, q2 = _spline(t, q, lam)
+            except ValueError as error:
+                raise InputError(f"smoothing spline failed: {error}") from None
+        squared = np.sum(q0 * q0, axis=1, keepdims=True)
+        omega = 2 * quaternion_multiply(q1, _conjugate(q0))[:, 1:] / squared
+        alpha = (2 * quaternion_multiply(q2, _conjugate(q0))[:, 1:] / squared
+                 - omega * 2 * np.sum(q0 * q1, axis=1, keepdims=True) / squared)
+        rotation = rotation_from_quaternion(q0)
         results = (p0, p1, p2, rotation, omega, alpha)
         if not all(np.isfinite(r).all() for r in results):
             raise InputError("differentiation gave non-finite values (values or time steps "
