@@ -21,6 +21,7 @@ from pathlib import Path
 
 from . import effects as fx
 from . import model as mdl
+from .sources import source_hash
 
 ROOT = Path(__file__).resolve().parent.parent
 GENERATED = ROOT / "generated"
@@ -34,17 +35,6 @@ JACOBIAN_P = ("joint_viscous", "joint_coulomb", "prismatic_viscous", "prismatic_
 REACTION_OUTPUTS = ("F0", "R_E", "R_C", "M_C", "R_3", "M_3", "D", "D_dot", "u", "omega_leg",
                     "omega_rel", "s2")
 FRICTION_OUTPUTS = ("MfrE", "MfrC", "Ffr", "MfrE_s", "MfrC_s", "Ffr_s")
-
-
-def source_hash() -> str:
-    """SHA-256 over the derive/ sources (names and contents, sorted by name)."""
-    h = hashlib.sha256()
-    for path in sorted(DERIVE.glob("*.py")):
-        h.update(path.name.encode())
-        h.update(b"\0")
-        h.update(path.read_bytes().replace(b"\r\n", b"\n"))
-        h.update(b"\0")
-    return h.hexdigest()
 
 
 def _layout(specs) -> list[dict]:

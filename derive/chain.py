@@ -241,6 +241,7 @@ class Chain:
         env = {k: getattr(np, k) for k in dir(np)
                if not k.startswith("_") and not hasattr(builtins, k)}
         env["solve"] = np.linalg.solve
+        env["reduce"] = __import__("functools").reduce
         exec(compile("\n".join(lines), "<chain>", "exec"), env)
         return env["chain"]
 
@@ -319,6 +320,13 @@ class _CasadiConverter:
                  sp.Abs: ca.fabs, sp.sign: ca.sign, sp.atan2: ca.atan2}
         if e.func in funcs:
             return funcs[e.func](*[self(a) for a in e.args])
+        if isinstance(e, (sp.Max, sp.Min)):
+            op = ca.fmax if isinstance(e, sp.Max) else ca.fmin
+            args = [self(a) for a in e.args]
+            out = args[0]
+            for a in args[1:]:
+                out = op(out, a)
+            return out
         if isinstance(e, sp.Piecewise):
             (val, cond), rest = e.args[0], e.args[1:]
             other = self(sp.Piecewise(*rest)) if rest and rest[0][1] is not sp.true else \

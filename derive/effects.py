@@ -11,6 +11,9 @@ opposing the sliding speed v, with the regularised sign of friction.py):
 * ``seal_friction``: ``-sgn(v) force``: load-independent Coulomb friction of the seals.
 * ``quadratic_drag``: ``-coefficient v |v|``.
 * ``stroke_friction``: ``-sgn(v) slope (D - reference)``: friction varying along the stroke.
+
+The Coulomb parts of these effects are summed and the sum is kept non-negative (friction never
+pushes), so ``stroke_friction`` alone is clamped at zero where ``slope (D - reference) < 0``.
 * ``bushing_friction``: ``-sgn(v) coefficient 2 |u x M_3| / spacing``: the bending moment M_3 of the
   prismatic joint presses its two bushings, ``spacing`` apart, with forces ``|M_3,perp| / spacing``
   each; ``coefficient`` is their friction coefficient.
@@ -94,7 +97,7 @@ def prismatic_effects_force(q: dict, v, sgn_v, D, u, M_3):
     """Sum of the catalog's friction forces on the upper part along u (the terms above)."""
     from .vectors import cross, norm
 
-    coulomb = (q["stribeck.static"] * sp.exp(-(v / q["stribeck.velocity"]) ** 2)
+    coulomb = sp.Max(0, q["stribeck.static"] * sp.exp(-(v / q["stribeck.velocity"]) ** 2)
                + q["seal_friction.force"]
                + q["stroke_friction.slope"] * (D - q["stroke_friction.reference"])
                + q["bushing_friction.coefficient"] * 2 * norm(cross(u, M_3))

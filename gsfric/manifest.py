@@ -47,3 +47,27 @@ def layout(function_name: str, input_name: str) -> list[dict]:
         if item["name"] == input_name:
             return item["layout"]
     raise GsfricError(f"function {function_name} has no input {input_name}")
+
+
+def staleness() -> str | None:
+    """Why generated/ does not match what it was generated from, or None.
+
+    Checks the generated files against the hashes in the manifest and, when the derive/
+    sources are beside generated/ (a source checkout), their hash against the manifest's.
+    """
+    import hashlib
+    import importlib.util
+
+    folder = generated_dir()
+    for name, digest in manifest().get("files", {}).items():
+        path = folder / name
+        if not path.exists() or hashlib.sha256(path.read_bytes()).hexdigest() != digest:
+            return f"generated/{name} does not match generated/manifest.json"
+    sources = folder.parent / "derive" / "sources.py"
+    if sources.exists():
+        spec = importlib.util.spec_from_file_location("_gsfric_derive_sources", sources)
+        module = importlib.util.module_from_spec(spec)
+        spec.loader.exec_module(module)
+        if module.source_hash(sources.parent) != manifest().get("source_hash"):
+            return "derive/ changed since generated/ was written"
+    return None

@@ -212,8 +212,24 @@ class CasadiFunction:
         return out
 
 
+def check_generated() -> None:
+    """Warn when generated/ is stale against derive/; fail when its files were altered."""
+    from gsfric.manifest import staleness
+
+    reason = staleness()
+    if reason is None:
+        return
+    if reason.startswith("derive/"):
+        warnings.warn(f"generated/ is stale: {reason}; run `gsfric derive` to regenerate it",
+                      stacklevel=4)
+    else:
+        raise GsfricError(f"{reason}; regenerate it with `gsfric derive` "
+                          "(or restore it with `git checkout generated/`)")
+
+
 @functools.lru_cache(maxsize=None)
 def _library():
+    check_generated()
     if os.environ.get("GSFRIC_NO_COMPILE") == "1":
         return None
     try:
