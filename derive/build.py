@@ -21,6 +21,7 @@ from pathlib import Path
 
 from . import effects as fx
 from . import model as mdl
+from . import simd
 from .sources import source_hash
 
 ROOT = Path(__file__).resolve().parent.parent
@@ -35,6 +36,9 @@ JACOBIAN_P = ("joint_viscous", "joint_coulomb", "prismatic_viscous", "prismatic_
 REACTION_OUTPUTS = ("F0", "R_E", "R_C", "M_C", "R_3", "M_3", "D", "D_dot", "u", "omega_leg",
                     "omega_rel", "s2")
 FRICTION_OUTPUTS = ("MfrE", "MfrC", "Ffr", "MfrE_s", "MfrC_s", "Ffr_s")
+
+# Functions that also get a SIMD-over-steps version (derive/simd.py): the batch hot paths.
+SIMD_FUNCTIONS = ("actuator", "eval")
 
 
 def _layout(specs) -> list[dict]:
@@ -144,6 +148,9 @@ def generate(out_dir: Path = GENERATED) -> dict[str, bytes]:
             ser.pack(f)
         del ser
         files[f"{BASENAME}.casadi"] = (tmp / f"{BASENAME}.casadi").read_bytes()
+        files[f"{BASENAME}_batch.c"] = simd.batch_file(
+            [f for f in funcs if f.name() in {f"{BASENAME}_{n}" for n in SIMD_FUNCTIONS}]
+        ).encode()
     finally:
         for p in tmp.glob("*"):
             p.unlink()
@@ -171,7 +178,10 @@ def generate(out_dir: Path = GENERATED) -> dict[str, bytes]:
                    python=".".join(map(str, sys.version_info[:2]))),
         files={n: hashlib.sha256(b).hexdigest() for n, b in sorted(files.items())},
         functions=[dict(name=f.name(), inputs=io(f, "in"), outputs=io(f, "out"),
-                        n_instructions=f.n_instructions()) for f in funcs],
+                        n_instructions=f.n_instructions(),
+                        simd=f.name() in {f"{BASENAME}_{n}" for n in SIMD_FUNCTIONS})
+                   for f in funcs],
+        simd_lanes=simd.LANES,
         jacobian_parameters=meta["theta"],
         effects=[dict(name=e.name, description=e.description,
                       parameters=[dict(name=p.name, default=p.default, unit=p.unit,

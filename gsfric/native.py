@@ -31,7 +31,7 @@ from gsfric.errors import GsfricError
 from gsfric.manifest import BASENAME, function, generated_dir, manifest
 
 DRIVER = Path(__file__).resolve().parent / "_native" / "batch.c"
-CFLAGS = ("-O3", "-march=native", "-fPIC", "-shared", "-fopenmp")
+CFLAGS = ("-O2", "-march=native", "-fno-math-errno", "-fPIC", "-fopenmp")
 
 
 class BuildError(GsfricError):
@@ -60,13 +60,42 @@ def _build_key(sources: list[Path], cmd: list[str]) -> str:
     return h.hexdigest()[:20]
 
 
+def _sources() -> list[Path]:
+    folder = generated_dir()
+    return [DRIVER, folder / f"{BASENAME}.c", folder / f"{BASENAME}_batch.c"]
+
+
+def _compile(cc: list[str], flags, sources: list[Path], target: Path) -> str | None:
+    """Compile every source to an object in parallel and link them; an error line or None."""
+    objects = [target.with_name(f"{target.stem}.{k}.o") for k in range(len(sources))]
+    try:
+        procs = [subprocess.Popen(cc + list(flags) + ["-c", str(src), "-o", str(obj)],
+                                  stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+                 for src, obj in zip(sources, objects)]
+    except FileNotFoundError:
+        raise BuildError(f"no C compiler: {cc[0]!r} was not found (set CC to one)") from None
+    errors = [p.communicate()[1] for p in procs]
+    failed = [e for p, e in zip(procs, errors) if p.returncode]
+    if not failed:
+        link = subprocess.run(cc + list(flags) + ["-shared"] + [str(o) for o in objects]
+                              + ["-o", str(target), "-lm"], capture_output=True, text=True)
+        failed = [link.stderr] if link.returncode else []
+    for obj in objects:
+        obj.unlink(missing_ok=True)
+    if not failed:
+        return None
+    lines = [line for e in failed for line in e.strip().splitlines()]
+    return lines[-1] if lines else "(no message)"
+
+
 def build_library() -> Path:
     """Compile (or find in the cache) the shared library; returns its path."""
-    src = generated_dir() / f"{BASENAME}.c"
-    if not src.exists():
-        raise BuildError(f"{src} is missing: run `gsfric derive` to generate it")
+    sources = _sources()
+    for src in sources[1:]:
+        if not src.exists():
+            raise BuildError(f"{src} is missing: run `gsfric derive` to generate it")
     cc = _compiler()
-    key = _build_key([src, DRIVER], cc + list(CFLAGS))
+    key = _build_key(sources, cc + list(CFLAGS))
     folder = cache_dir() / f"build-{key}"
     lib = folder / "libgsfric.so"
     if lib.exists():
@@ -79,23 +108,17 @@ def build_library() -> Path:
         if lib.exists():
             return lib
         tmp = folder / f".libgsfric.{os.getpid()}.so"
-        print(f"gsfric: compiling the generated model (once, about 15 s) into {folder}",
+        print(f"gsfric: compiling the generated model (once, about 30 s) into {folder}",
               file=sys.stderr)
-        errors = ""
-        for flags in (CFLAGS, tuple(f for f in CFLAGS if f != "-fopenmp"),
-                      ("-O2", "-fPIC", "-shared")):
-            cmd = cc + list(flags) + [str(DRIVER), str(src), "-o", str(tmp), "-lm"]
-            try:
-                run = subprocess.run(cmd, capture_output=True, text=True)
-            except FileNotFoundError:
-                raise BuildError(f"no C compiler: {cc[0]!r} was not found (set CC to one)") \
-                    from None
-            if run.returncode == 0:
+        error = "(no message)"
+        for flags in (CFLAGS, tuple(f for f in CFLAGS if f not in ("-fopenmp", "-march=native")),
+                      ("-O1", "-fPIC")):
+            error = _compile(cc, flags, sources, tmp)
+            if error is None:
                 tmp.replace(lib)
                 return lib
-            errors = run.stderr.strip().splitlines()[-1:] or ["(no message)"]
-        raise BuildError(f"compiling {src.name} failed: {errors[0]}; check the compiler "
-                         "(CC) or regenerate with `gsfric derive`")
+        raise BuildError(f"compiling the generated model failed: {error}; check the compiler "
+                         "(CC) or regenerate generated/ with `gsfric derive`")
 
 
 class CompiledFunction:
@@ -111,9 +134,14 @@ class CompiledFunction:
         self.inputs = [(i["name"], i["size"]) for i in meta["inputs"]]
         self.outputs = [(o["name"], o["size"], tuple(o["shape"])) for o in meta["outputs"]]
         full = f"{BASENAME}_{name}"
+        self._lib = lib
         self._eval = ctypes.cast(getattr(lib, full), ctypes.c_void_p)
         self._work = ctypes.cast(getattr(lib, f"{full}_work"), ctypes.c_void_p)
         self._batch = lib.gsfric_batch
+        try:
+            self._simd = ctypes.cast(getattr(lib, f"{full}_batch"), ctypes.c_void_p)
+        except AttributeError:
+            self._simd = None
         self._in_ptrs = (ctypes.c_void_p * len(self.inputs))()
         self._in_strides = (ctypes.c_longlong * len(self.inputs))()
         self._out_ptrs = (ctypes.c_void_p * len(self.outputs))()
@@ -174,9 +202,15 @@ class CompiledFunction:
                                   f"float64 array of shape ({n}, {size})")
             self._out_ptrs[k] = buf.ctypes.data
             result[name] = buf
-        failed = self._batch(self._eval, self._work, len(arrays), len(self.outputs),
-                             self._in_ptrs, self._in_strides, self._out_ptrs,
-                             self._out_strides, n, int(n_threads))
+        if self._simd is not None:
+            failed = self._lib.gsfric_batch_simd(self._simd, len(arrays), len(self.outputs),
+                                                 self._in_ptrs, self._in_strides,
+                                                 self._out_ptrs, self._out_strides, n,
+                                                 int(n_threads))
+        else:
+            failed = self._batch(self._eval, self._work, len(arrays), len(self.outputs),
+                                 self._in_ptrs, self._in_strides, self._out_ptrs,
+                                 self._out_strides, n, int(n_threads))
         if failed:
             raise GsfricError(f"{self.name}: evaluation failed at {failed} steps")
         return result
@@ -243,6 +277,10 @@ def _library():
     lib.gsfric_batch.argtypes = [ctypes.c_void_p, ctypes.c_void_p, ctypes.c_int, ctypes.c_int,
                                  ctypes.c_void_p, ctypes.c_void_p, ctypes.c_void_p,
                                  ctypes.c_void_p, ctypes.c_longlong, ctypes.c_int]
+    lib.gsfric_batch_simd.restype = ctypes.c_longlong
+    lib.gsfric_batch_simd.argtypes = [ctypes.c_void_p, ctypes.c_int, ctypes.c_int,
+                                      ctypes.c_void_p, ctypes.c_void_p, ctypes.c_void_p,
+                                      ctypes.c_void_p, ctypes.c_longlong, ctypes.c_int]
     return lib
 
 

@@ -74,7 +74,7 @@ def test_actuator_map_equals_the_full_map_also_on_two_threads(rng):
     x = random_states(rng, 1001)
     ev = Evaluator(platform, n_threads=2)
     full = ev._full([x, ev.P, ev.Q])
-    np.testing.assert_array_equal(ev.actuator_forces(x), full["F"])
+    np.testing.assert_allclose(ev.actuator_forces(x), full["F"], rtol=1e-12, atol=1e-12)
     out = np.empty((x.shape[0], 6))
     assert ev.actuator_forces(x, out=out) is out
 
@@ -86,7 +86,7 @@ def test_parameter_jacobian_equals_finite_differences(rng):
     F, dF = ev.jacobian(x)
     names = jacobian_parameters()
     assert dF.shape == (20, 6, len(names))
-    np.testing.assert_array_equal(F, ev.actuator_forces(x))
+    np.testing.assert_allclose(F, ev.actuator_forces(x), rtol=1e-12, atol=1e-12)
     p_layout = {b["name"]: b["offset"] for b in
                 json.loads((ROOT / "generated" / "manifest.json").read_text())
                 ["functions"][0]["inputs"][1]["layout"]}

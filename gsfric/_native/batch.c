@@ -6,6 +6,9 @@
  * its own work arrays. Returns the number of steps whose evaluation reported an error.
  */
 #include <stdlib.h>
+#ifdef _OPENMP
+#include <omp.h>
+#endif
 
 typedef long long int casadi_int;
 typedef int (*casadi_eval_t)(const double **arg, double **res, casadi_int *iw, double *w,
@@ -48,4 +51,35 @@ long long gsfric_batch(casadi_eval_t eval, casadi_work_t work, int n_in, int n_o
         free(w);
     }
     return failed;
+}
+
+/* The same contract for a SIMD-over-steps function of derive/simd.py, whose own loop walks the
+ * steps several at a time: the steps are split into one contiguous range per thread. */
+typedef void (*batch_eval_t)(const double **in, const long long *in_stride, double **out,
+                             const long long *out_stride, long long n);
+
+#define MAX_ARGS 64
+
+long long gsfric_batch_simd(batch_eval_t eval, int n_in, int n_out, const double **in,
+                            const long long *in_stride, double **out,
+                            const long long *out_stride, long long n, int n_threads)
+{
+    if (n_in > MAX_ARGS || n_out > MAX_ARGS) return n;
+    if (n_threads < 1) n_threads = 1;
+    if (n < 64 * n_threads) n_threads = 1;
+#pragma omp parallel num_threads(n_threads)
+    {
+        int t = 0, nt = 1;
+#ifdef _OPENMP
+        t = omp_get_thread_num();
+        nt = omp_get_num_threads();
+#endif
+        long long start = n * t / nt, stop = n * (t + 1) / nt;
+        const double *my_in[MAX_ARGS];
+        double *my_out[MAX_ARGS];
+        for (int k = 0; k < n_in; ++k) my_in[k] = in[k] + start * in_stride[k];
+        for (int k = 0; k < n_out; ++k) my_out[k] = out[k] ? out[k] + start * out_stride[k] : 0;
+        if (stop > start) eval(my_in, in_stride, my_out, out_stride, stop - start);
+    }
+    return 0;
 }
