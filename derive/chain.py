@@ -8,8 +8,9 @@ shared quantities are computed once, and the same chain is translated three ways
 * to NumPy (``evaluate``), the lambdified reference the compiled code is tested against;
 * to LaTeX (``definitions``), to read in a notebook.
 
-A step is either a definition ``symbol := expression`` or a linear solve ``x := solve(A, b)``
-(the 6x6 system in the legs' axial forces), which each back end performs in its own way.
+Every step is a definition ``symbol := expression``; the 6x6 system in the legs' axial forces is
+solved by a QR factorisation written out as such steps (``factor``, ``solve``), so that a second
+right-hand side reuses the factor.
 """
 
 from __future__ import annotations
@@ -21,23 +22,31 @@ import sympy as sp
 
 @dataclass
 class Step:
-    """One step of a chain: ``targets := exprs`` (``kind == "let"``) or ``targets := A^-1 b``."""
+    """One step of a chain: ``targets := exprs``."""
 
-    kind: str
     name: str
     targets: list[sp.Symbol]
     exprs: list[sp.Expr] = field(default_factory=list)
-    A: sp.Matrix | None = None
-    b: sp.Matrix | None = None
     equation: str = ""
+
+
+@dataclass
+class Factor:
+    """A QR factor defined in a chain: unit columns q, upper entries R, reciprocal diagonal."""
+
+    name: str
+    latex: str
+    q: list[sp.Matrix]
+    R: dict
+    inv: list[sp.Symbol]
 
 
 class Chain:
     """Ordered definitions in terms of named inputs.
 
     ``input`` declares an input block (a vector, or a matrix stored row-major);
-    ``let`` defines a scalar, vector or matrix quantity; ``solve`` defines the solution of a
-    linear system. Each returns SymPy symbols that later expressions use.
+    ``let`` defines a scalar, vector or matrix quantity; ``factor`` and ``solve`` define the
+    solution of a linear system. Each returns SymPy symbols that later expressions use.
     """
 
     def __init__(self) -> None:
@@ -83,22 +92,47 @@ class Chain:
                 for r in range(rows)
                 for c in range(cols)
             ]
-            self.steps.append(Step("let", name, targets, list(expr), equation=equation))
+            self.steps.append(Step(name, targets, list(expr), equation=equation))
             return sp.Matrix(rows, cols, targets)
         target = self._symbol(base)
-        self.steps.append(Step("let", name, [target], [sp.sympify(expr)], equation=equation))
+        self.steps.append(Step(name, [target], [sp.sympify(expr)], equation=equation))
         return target
 
-    def solve(self, name: str, A: sp.Matrix, b: sp.Matrix, latex: str | None = None,
-              equation: str = "") -> sp.Matrix:
-        """Define ``name := A^-1 b`` for a square A; returns a column Matrix of symbols."""
+    def factor(self, name: str, A: sp.Matrix, latex: str | None = None,
+               equation: str = "") -> "Factor":
+        """QR factorisation of a square A by modified Gram-Schmidt, as chain steps.
+
+        Each column ``a_j`` is reduced against the earlier unit columns ``q_i``
+        (``r_ij = q_i . v``, ``v -= r_ij q_i``) and normalised, ``q_j = v / r_jj``; the
+        reciprocals ``1 / r_jj`` are kept, so solving with the factor needs no division.
+        """
         base = latex or name
-        self._claim(name, base)
         n = A.shape[0]
-        targets = [self._symbol(_entry_name(base, r, 0, n, 1)) for r in range(n)]
-        self.steps.append(Step("solve", name, targets, A=sp.Matrix(A), b=sp.Matrix(b),
-                               equation=equation))
-        return sp.Matrix(targets)
+        q, R, inv = [], {}, []
+        for j in range(n):
+            v = A[:, j]
+            for i in range(j):
+                R[i, j] = self.let(f"{name}_R{i}{j}", (q[i].T * v)[0, 0],
+                                   f"{base}_{{R{i + 1}{j + 1}}}", equation)
+                v = self.let(f"{name}_v{i}{j}", v - R[i, j] * q[i],
+                             f"{base}_{{v{i + 1}{j + 1}}}", equation)
+            inv.append(self.let(f"{name}_inv{j}", 1 / sp.sqrt((v.T * v)[0, 0]),
+                                f"{base}_{{r{j + 1}}}^{{-1}}", equation))
+            q.append(self.let(f"{name}_q{j}", v * inv[j], f"{base}_{{q{j + 1}}}", equation))
+        return Factor(name, base, q, R, inv)
+
+    def solve(self, name: str, factor: "Factor", b: sp.Matrix, latex: str | None = None,
+              equation: str = "") -> sp.Matrix:
+        """Define ``name := A^-1 b`` with the QR factor of A: ``R x = Q^T b``."""
+        base = latex or name
+        n = len(factor.q)
+        y = [(factor.q[j].T * b)[0, 0] for j in range(n)]
+        x = [None] * n
+        for j in reversed(range(n)):
+            rest = sum((factor.R[j, k] * x[k] for k in range(j + 1, n)), sp.S.Zero)
+            x[j] = self.let(f"{name}{j}", (y[j] - rest) * factor.inv[j],
+                            f"{base}_{{{j + 1}}}", equation)
+        return sp.Matrix(x)
 
     def definitions(self, equation: str | None = None):
         """The ``let`` steps (optionally of one equation group) as (name, LaTeX) pairs."""
@@ -106,13 +140,9 @@ class Chain:
         for step in self.steps:
             if equation is not None and step.equation != equation:
                 continue
-            if step.kind == "let":
-                lhs = sp.Matrix(step.targets) if len(step.targets) > 1 else step.targets[0]
-                rhs = sp.Matrix(step.exprs) if len(step.exprs) > 1 else step.exprs[0]
-                out.append((step.name, sp.latex(sp.Eq(lhs, rhs, evaluate=False))))
-            else:
-                out.append((step.name, r"%s = \left(%s\right)^{-1} %s" % (
-                    sp.latex(sp.Matrix(step.targets)), sp.latex(step.A), sp.latex(step.b))))
+            lhs = sp.Matrix(step.targets) if len(step.targets) > 1 else step.targets[0]
+            rhs = sp.Matrix(step.exprs) if len(step.exprs) > 1 else step.exprs[0]
+            out.append((step.name, sp.latex(sp.Eq(lhs, rhs, evaluate=False))))
         return out
 
     def _print_numpy_body(self):
@@ -147,19 +177,8 @@ class Chain:
             return f"broadcast_to(1.0 * ({printer.doprint(expr)}), (n,))"
 
         for step in self.steps:
-            if step.kind == "let":
-                for t, e in zip(step.targets, step.exprs):
-                    lines.append(f"    {new(t)} = {full(e)}")
-            else:
-                m = step.A.shape[0]
-                rows = ", ".join("stack([" + ", ".join(full(step.A[r, c]) for c in range(m))
-                                 + "], -1)" for r in range(m))
-                rhs = ", ".join(full(v) for v in step.b)
-                sol = f"x{len(names)}"
-                lines.append(f"    {sol} = solve(stack([{rows}], -2), "
-                             f"stack([{rhs}], -1)[..., None])[..., 0]")
-                for k, t in enumerate(step.targets):
-                    lines.append(f"    {new(t)} = {sol}[:, {k}]")
+            for t, e in zip(step.targets, step.exprs):
+                lines.append(f"    {new(t)} = {full(e)}")
         return names, lines, printer
 
     # ----------------------------------------------------------------- back ends
@@ -186,19 +205,8 @@ class Chain:
                 env[s] = col[k]
         conv = _CasadiConverter(env)
         for step in self.steps:
-            if step.kind == "let":
-                for t, e in zip(step.targets, step.exprs):
-                    env[t] = conv(e)
-            else:
-                n = step.A.shape[0]
-                A = ca.SX(n, n)
-                for r in range(n):
-                    for c in range(n):
-                        A[r, c] = conv(step.A[r, c])
-                b = ca.vertcat(*[conv(v) for v in step.b])
-                x = ca.solve(A, b)
-                for k, t in enumerate(step.targets):
-                    env[t] = x[k]
+            for t, e in zip(step.targets, step.exprs):
+                env[t] = conv(e)
         return {name: ca.vertcat(*[conv(v) for v in mat]) for name, mat in outputs.items()}
 
     def evaluate(self, values: dict, outputs: dict[str, sp.Matrix]) -> dict:
@@ -240,7 +248,6 @@ class Chain:
         lines.append("    }")
         env = {k: getattr(np, k) for k in dir(np)
                if not k.startswith("_") and not hasattr(builtins, k)}
-        env["solve"] = np.linalg.solve
         env["reduce"] = __import__("functools").reduce
         exec(compile("\n".join(lines), "<chain>", "exec"), env)
         return env["chain"]

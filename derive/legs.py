@@ -26,15 +26,15 @@ from .vectors import cross, dot
 def leg_required(parts, C, g_vec):
     """Force and moment about C that the two parts of a leg need (right-hand sides above).
 
-    ``parts`` is a list of dicts with keys m, m_weight, J (base frame), c (centre), a_c, alpha,
-    omega.
+    ``parts`` is a list of dicts with keys m, m_weight, c (centre), a_c and moment (the
+    moment about the centre that the part's rotation needs, ``platform.inertial_moment``).
     """
     force = sp.zeros(3, 1)
     moment = sp.zeros(3, 1)
     for k in parts:
         f = k["m"] * k["a_c"] - k["m_weight"] * g_vec
         force += f
-        moment += cross(k["c"] - C, f) + k["J"] * k["alpha"] + cross(k["omega"], k["J"] * k["omega"])
+        moment += cross(k["c"] - C, f) + k["moment"]
     return force, moment
 
 

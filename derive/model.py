@@ -178,8 +178,8 @@ def build(mode: str = "kinematic") -> Model:
     offset = sp.Matrix([Q["payload_offset.x"], Q["payload_offset.y"], Q["payload_offset.z"]])
     r_M = ch.let("r_M", T * P["platform_com"], "r_{M}", "1")
     r_L = ch.let("r_L", T * (P["payload_com"] + offset), "r_{L}", "1")
-    J_M = ch.let("J_M", T * P["platform_inertia"] * T.T, "J_{M}", "2-7")
-    J_L = ch.let("J_L", T * P["payload_inertia"] * T.T, "J_{L}", "2-7")
+    J_M = T * P["platform_inertia"] * T.T
+    J_L = T * P["payload_inertia"] * T.T
     if mode == "kinematic":
         a_M = ch.let("a_M", kin.point_acceleration(a, al, w, r_M), "a_{M}", eq_kin)
         a_L = ch.let("a_L", kin.point_acceleration(a, al, w, r_L), "a_{L}", eq_kin)
@@ -188,8 +188,10 @@ def build(mode: str = "kinematic") -> Model:
         a_M = a_L = K["platform_acc"]
         al_P, w_in = K["platform_alpha"], sp.zeros(3, 1)
     m_M, m_L = P["platform_mass"], P["payload_mass"]
-    F_Mr, M_Mr = pf.body_required_wrench(m_M, m_M, J_M, r_M, a_M, al_P, w_in, g_vec)
-    F_Lr, M_Lr = pf.body_required_wrench(m_L, m_L, J_L, r_L, a_L, al_P, w_in, g_vec)
+    turn = ch.let("M_rot", pf.inertial_moment(T, P["platform_inertia"] + P["payload_inertia"],
+                                              al_P, w_in), "M_{rot}", "2-7")
+    F_Mr, M_Mr = pf.body_required_wrench(m_M, m_M, r_M, a_M, g_vec, turn)
+    F_Lr, M_Lr = pf.body_required_wrench(m_L, m_L, r_L, a_L, g_vec, sp.zeros(3, 1))
     F_req = ch.let("F_req", F_Mr + F_Lr, "F_{req}", "2-7")
     M_req = ch.let("M_req", M_Mr + M_Lr, "M_{req}", "2-7")
 
@@ -215,8 +217,6 @@ def build(mode: str = "kinematic") -> Model:
         lam = ch.let(f"lam{k}", c * q / s2, rf"\lambda_{{{k}}}", eq_kin)
         w_L = ch.let(f"omega_L{k}", cross(u, u_dot) + lam * u, rf"\omega_{{L{k}}}", eq_kin)
         B = sp.Matrix.hstack(a2, cross(u, a2), u)
-        J4 = ch.let(f"J4_{k}", B * P["lower_inertia"] * B.T, f"J_{{4,{k}}}", "17")
-        J2 = ch.let(f"J2_{k}", B * P["upper_inertia"] * B.T, f"J_{{2,{k}}}", "17")
         s4 = P["lower_com"] + P["lower_frac"] * D
         s2E = P["upper_com"] + P["upper_frac"] * D
         c4 = C + s4 * u
@@ -241,10 +241,15 @@ def build(mode: str = "kinematic") -> Model:
             al_L, w_Lin = K["leg_alpha"], sp.zeros(3, 1)
         mg4 = P["leg_weight"] * P["lower_mass"] + Q["leg_weight.lower_mass"]
         mg2 = P["leg_weight"] * P["upper_mass"] + Q["leg_weight.upper_mass"]
-        parts = [dict(m=P["lower_mass"], m_weight=mg4, J=J4, c=c4, a_c=a4, alpha=al_L,
-                      omega=w_Lin),
-                 dict(m=P["upper_mass"], m_weight=mg2, J=J2, c=c2, a_c=a2c, alpha=al_L,
-                      omega=w_Lin)]
+        turn4 = ch.let(f"M_rot4_{k}", pf.inertial_moment(B, P["lower_inertia"], al_L, w_Lin),
+                       f"M_{{rot4,{k}}}", "17")
+        turn2 = ch.let(f"M_rot2_{k}", pf.inertial_moment(B, P["upper_inertia"], al_L, w_Lin),
+                       f"M_{{rot2,{k}}}", "17")
+        # J: the parts' inertias in base axes, for reading and for the tests (not computed)
+        parts = [dict(m=P["lower_mass"], m_weight=mg4, J=B * P["lower_inertia"] * B.T, c=c4,
+                      a_c=a4, alpha=al_L, omega=w_Lin, moment=turn4),
+                 dict(m=P["upper_mass"], m_weight=mg2, J=B * P["upper_inertia"] * B.T, c=c2,
+                      a_c=a2c, alpha=al_L, omega=w_Lin, moment=turn2)]
         F_leg_e, K_leg_e = lg.leg_required(parts, C, g_vec)
         F_leg = ch.let(f"F_leg{k}", F_leg_e, f"F_{{leg,{k}}}", "11-17")
         K_leg = ch.let(f"K{k}", K_leg_e, f"K_{{{k}}}", "11-17")
@@ -252,7 +257,7 @@ def build(mode: str = "kinematic") -> Model:
         t_E = ch.let(f"t_E{k}", lg.transverse_end_force(K_leg, M_C, u, n, D),
                      rf"R_{{E{k}}}^{{\perp}}", "11-17")
         legs.append(dict(k=k, C=C, e=e, a1=a1, E=E, D=D, u=u, n=n, D_dot=D_dot, w_L=w_L,
-                         w_Lin=w_Lin, al_L=al_L, s2=s2, J2=J2, c2=c2, a2c=a2c, mg2=mg2,
+                         w_Lin=w_Lin, al_L=al_L, s2=s2, turn2=turn2, c2=c2, a2c=a2c, mg2=mg2,
                          F_leg=F_leg, K=K_leg, M_C=M_C, t_E=t_E, parts=parts))
 
     # ---- the 6x6 system in the axial forces, from (2)-(7)
@@ -263,7 +268,8 @@ def build(mode: str = "kinematic") -> Model:
         A[3:, i] = cross(L["E"] - p, L["u"])
         rhs_F -= L["t_E"]
         rhs_M -= cross(L["E"] - p, L["t_E"])
-    f = ch.solve("f", A, sp.Matrix.vstack(rhs_F, rhs_M), "f", "2-7")
+    A_qr = ch.factor("A", A, "A", "2-7")
+    f = ch.solve("f", A_qr, sp.Matrix.vstack(rhs_F, rhs_M), "f", "2-7")
 
     P3 = P["prismatic_point"]
     for i, L in enumerate(legs):
@@ -273,7 +279,7 @@ def build(mode: str = "kinematic") -> Model:
         L["P3"] = L["C"] + P3 * L["D"] * L["u"]
         F_ax, R_3, M_3 = pr.upper_part_loads(L["R_E"], L["u"], L["E"], L["P3"],
                                              P["upper_mass"], L["mg2"], L["a2c"], L["c2"],
-                                             L["J2"], L["al_L"], L["w_Lin"], g_vec)
+                                             L["turn2"], g_vec)
         L["F0"] = ch.let(f"F0_{k}", F_ax, f"F_{{0,{k}}}", "28-32")
         L["R_3"] = ch.let(f"R_3{k}", R_3, f"R_{{3,{k}}}", "28-32")
         L["M_3"] = ch.let(f"M_3{k}", M_3, f"M_{{3,{k}}}", "28-32")
@@ -308,7 +314,7 @@ def build(mode: str = "kinematic") -> Model:
                     rf"\Delta R_{{E{L['k']}}}^{{\perp}}", "effects")
         dF_rhs -= dt
         dM_rhs -= cross(L["E"] - p, dt) + L["MfrE"]
-    df = ch.solve("df", A, sp.Matrix.vstack(dF_rhs, dM_rhs), r"\Delta f", "effects")
+    df = ch.solve("df", A_qr, sp.Matrix.vstack(dF_rhs, dM_rhs), r"\Delta f", "effects")
 
     bias = [Q[f"sensor_bias.b{k}"] for k in range(1, 7)]
     out = {name: [] for name, *_ in OUTPUTS}

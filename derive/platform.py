@@ -17,17 +17,28 @@ import sympy as sp
 from .vectors import cross
 
 
-def body_required_wrench(m, m_weight, J, r_c, a_c, alpha, omega, g_vec):
+def inertial_moment(R, I, alpha, omega):
+    """``J alpha + omega x J omega`` with ``J = R I R^T``, computed in the body frame.
+
+    ``R`` turns body axes into base axes, ``I`` is the inertia about the centre of mass in
+    body axes; ``alpha`` and ``omega`` are in base axes. Working in body axes,
+    ``R (I a_b + w_b x I w_b)`` with ``a_b = R^T alpha`` and ``w_b = R^T omega``, avoids forming J.
+    """
+    a_b = R.T * alpha
+    w_b = R.T * omega
+    return R * (I * a_b + cross(w_b, I * w_b))
+
+
+def body_required_wrench(m, m_weight, r_c, a_c, g_vec, moment_c):
     """Force and moment (about the point from which ``r_c`` is measured) a body needs.
 
     Parameters: ``m`` inertial mass, ``m_weight`` gravitational mass (the same for a real body),
-    ``J`` inertia about the centre of mass in the base frame, ``r_c`` centre of mass relative to
-    the reference point, ``a_c`` its acceleration, ``alpha``, ``omega`` the body's angular
-    acceleration and velocity.
+    ``r_c`` centre of mass relative to the reference point, ``a_c`` its acceleration,
+    ``moment_c`` the moment about the centre of mass that the body's rotation needs
+    (``inertial_moment``).
     """
     force = m * a_c - m_weight * g_vec
-    moment = cross(r_c, force) + J * alpha + cross(omega, J * omega)
-    return force, moment
+    return force, cross(r_c, force) + moment_c
 
 
 def platform_residual(R_E, E, p, F_req, M_req, M_joint=None):

@@ -18,18 +18,18 @@ force.
 from .vectors import cross, dot
 
 
-def upper_part_loads(R_E, u, E, P3, m2, m2_weight, a2, c2, J2, alpha_L, omega_L, g_vec,
-                     M_joint_E=None):
+def upper_part_loads(R_E, u, E, P3, m2, m2_weight, a2, c2, moment2, g_vec, M_joint_E=None):
     """Axial force F_ax, transverse force R_3 and moment M_3 of the prismatic joint.
 
-    ``M_joint_E`` is a moment that the platform's joint puts on the upper part besides R_E
-    (the spherical joint's friction moment, with the sign it has on the leg).
+    ``moment2`` is the moment about its centre that the part's rotation needs
+    (``J_2 alpha_L + omega_L x J_2 omega_L``). ``M_joint_E`` is a moment that the platform's
+    joint puts on the upper part besides R_E (the spherical joint's friction moment, with the sign
+    it has on the leg).
     """
     total = R_E + m2 * a2 - m2_weight * g_vec
     F_ax = dot(u, total)
     R_3 = total - F_ax * u
-    M_3 = (cross(E - P3, R_E) + cross(c2 - P3, m2 * a2 - m2_weight * g_vec)
-           + J2 * alpha_L + cross(omega_L, J2 * omega_L))
+    M_3 = cross(E - P3, R_E) + cross(c2 - P3, m2 * a2 - m2_weight * g_vec) + moment2
     if M_joint_E is not None:
         M_3 = M_3 - M_joint_E
     return F_ax, R_3, M_3

@@ -31,7 +31,7 @@ from gsfric.errors import GsfricError
 from gsfric.manifest import BASENAME, function, generated_dir, manifest
 
 DRIVER = Path(__file__).resolve().parent / "_native" / "batch.c"
-CFLAGS = ("-O2", "-march=native", "-fno-math-errno", "-fPIC", "-fopenmp")
+CFLAGS = ("-O2", "-march=native", "-fno-math-errno", "-freciprocal-math", "-fPIC", "-fopenmp")
 
 
 class BuildError(GsfricError):
