@@ -181,6 +181,7 @@ class Evaluator:
             self.K = np.asarray(pc() if paper_constants is None else paper_constants, float)
         self._full = native.get("eval_paper" if mode == "paper" else "eval")
         self._stroke = platform.geometry.stroke
+        self._actuator = None
 
     # -- hot paths -------------------------------------------------------------
     def actuator_forces(self, x: np.ndarray, out: np.ndarray | None = None, P=None,
@@ -192,6 +193,10 @@ class Evaluator:
         """
         if self.mode != "kinematic":
             raise GsfricError("actuator_forces is the kinematic mode's hot path")
+        if P is None and Q is None and out is not None and self.n_threads == 1:
+            if self._actuator is None:
+                self._actuator = native.get("actuator").bound([self.P, self.Q], "F")
+            return self._actuator(x, out)
         f = native.get("actuator")
         res = f([x, self.P if P is None else P, self.Q if Q is None else Q],
                 None if out is None else {"F": out}, self.n_threads)
@@ -254,10 +259,8 @@ class Evaluator:
         finite = np.isfinite(x).all(axis=1)
         for v in arrays.values():
             finite &= np.isfinite(v.reshape(n, -1)).all(axis=1)
-        flag[~finite] |= FLAG_NONFINITE
-        if (~finite).any():
-            for v in arrays.values():
-                v[~finite] = np.nan
+        # the geometric causes first, on the values as computed (a NaN compares False), so
+        # that a step made non-finite by one of them still names it
         D = arrays["D"]
         if self._stroke is not None:
             lo, hi = self._stroke
@@ -267,9 +270,14 @@ class Evaluator:
         u = arrays["u"]
         arm = np.einsum("nij,kj->nki", motion.rotation, self.platform.geometry.platform_joints)
         A = np.concatenate([u, np.cross(arm, u)], axis=2)  # (N, 6 legs, 6)
-        with np.errstate(invalid="ignore"):
-            cond = np.linalg.cond(np.where(np.isfinite(A), A, 0.0))
-        flag[~(cond < COND_LIMIT)] |= FLAG_SINGULAR
+        known = np.isfinite(A).all(axis=(1, 2))  # otherwise FLAG_NONFINITE says it
+        with np.errstate(invalid="ignore", divide="ignore"):
+            cond = np.linalg.cond(np.where(known[:, None, None], A, np.eye(6)))
+        flag[known & ~(cond < COND_LIMIT)] |= FLAG_SINGULAR
+        flag[~finite] |= FLAG_NONFINITE
+        if (~finite).any():
+            for v in arrays.values():
+                v[~finite] = np.nan
         return flag
 
 

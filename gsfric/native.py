@@ -216,6 +216,44 @@ class CompiledFunction:
         return result
 
 
+    def bound(self, constants: list[np.ndarray], output: str):
+        """A lean callable ``f(x, out)`` for the control loop's repeated calls.
+
+        Input 0 varies (``x``, C-contiguous float64 of shape (N, size)); the other inputs are
+        fixed to ``constants`` (one block each, broadcast to every step); only ``output`` is
+        computed, into ``out`` (C-contiguous float64, (N, size)). Shapes are checked, nothing
+        is copied or allocated.
+        """
+        fixed = [np.ascontiguousarray(c, dtype=np.float64) for c in constants]
+        n_in, n_out = len(self.inputs), len(self.outputs)
+        in_ptrs = (ctypes.c_void_p * n_in)(0, *[c.ctypes.data for c in fixed])
+        in_strides = (ctypes.c_longlong * n_in)(self.inputs[0][1], *([0] * (n_in - 1)))
+        out_ptrs = (ctypes.c_void_p * n_out)()
+        index = [name for name, _, _ in self.outputs].index(output)
+        size_x, size_out = self.inputs[0][1], self.outputs[index][1]
+        lib, simd, batch = self._lib, self._simd, self._batch
+        ev, work = self._eval, self._work
+
+        def call(x: np.ndarray, out: np.ndarray) -> np.ndarray:
+            if (x.dtype != np.float64 or x.ndim != 2 or x.shape[1] != size_x
+                    or not x.flags.c_contiguous or out.dtype != np.float64
+                    or out.shape != (x.shape[0], size_out) or not out.flags.c_contiguous):
+                raise GsfricError(f"{self.name}: x must be C-contiguous float64 (N, {size_x}) "
+                                  f"and out (N, {size_out})")
+            in_ptrs[0] = x.ctypes.data
+            out_ptrs[index] = out.ctypes.data
+            if simd is not None:
+                lib.gsfric_batch_simd(simd, n_in, n_out, in_ptrs, in_strides, out_ptrs,
+                                      self._out_strides, x.shape[0], 1)
+            else:
+                batch(ev, work, n_in, n_out, in_ptrs, in_strides, out_ptrs, self._out_strides,
+                      x.shape[0], 1)
+            return out
+
+        call.keep = fixed  # the constants' buffers live as long as the callable
+        return call
+
+
 class CasadiFunction:
     """The same interface, evaluated by CasADi from the serialized functions (no compiler)."""
 
@@ -244,6 +282,14 @@ class CasadiFunction:
                 arr = outputs[name]
             out[name] = arr
         return out
+
+    def bound(self, constants: list[np.ndarray], output: str):
+        """``CompiledFunction.bound``'s interface, evaluated by CasADi."""
+        def call(x, out):
+            out[...] = self([x] + list(constants), select=(output,))[output]
+            return out
+
+        return call
 
 
 def check_generated() -> None:

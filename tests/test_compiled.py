@@ -191,3 +191,18 @@ def test_effect_vector_follows_the_catalog_order(platform):
     assert q[names.index("seal_friction.force")] == 2.5
     assert q[names.index("sensor_bias.b3")] == 0.7
     assert q[names.index("stribeck.velocity")] > 0
+
+
+def test_bound_hot_path_equals_the_general_call_and_checks_its_buffers(rng):
+    from gsfric.errors import GsfricError
+
+    platform = perturbed_platform(rng)
+    x = random_states(rng, 13)
+    ev = Evaluator(platform)
+    out = np.empty((13, 6))
+    assert ev.actuator_forces(x, out=out) is out
+    np.testing.assert_array_equal(out, native.get("actuator")([x, ev.P, ev.Q])["F"])
+    with pytest.raises(GsfricError, match="C-contiguous float64"):
+        ev.actuator_forces(np.asfortranarray(x), out=out)
+    with pytest.raises(GsfricError, match="C-contiguous float64"):
+        ev.actuator_forces(x, out=np.empty((12, 6)))

@@ -67,6 +67,10 @@ long long gsfric_batch_simd(batch_eval_t eval, int n_in, int n_out, const double
     if (n_in > MAX_ARGS || n_out > MAX_ARGS) return n;
     if (n_threads < 1) n_threads = 1;
     if (n < 64 * n_threads) n_threads = 1;
+    if (n_threads == 1) {
+        eval(in, in_stride, out, out_stride, n);
+        return 0;
+    }
 #pragma omp parallel num_threads(n_threads)
     {
         int t = 0, nt = 1;
