@@ -193,9 +193,10 @@ class Evaluator:
         """
         if self.mode != "kinematic":
             raise GsfricError("actuator_forces is the kinematic mode's hot path")
-        if P is None and Q is None and out is not None and self.n_threads == 1:
+        if P is None and Q is None and out is not None:
             if self._actuator is None:
-                self._actuator = native.get("actuator").bound([self.P, self.Q], "F")
+                self._actuator = native.get("actuator").bound([self.P, self.Q], "F",
+                                                              self.n_threads)
             return self._actuator(x, out)
         f = native.get("actuator")
         res = f([x, self.P if P is None else P, self.Q if Q is None else Q],

@@ -31,7 +31,8 @@ from gsfric.errors import GsfricError
 from gsfric.manifest import BASENAME, function, generated_dir, manifest
 
 DRIVER = Path(__file__).resolve().parent / "_native" / "batch.c"
-CFLAGS = ("-O2", "-march=native", "-fno-math-errno", "-freciprocal-math", "-fPIC", "-fopenmp")
+CFLAGS = ("-O2", "-march=native", "-fno-math-errno", "-freciprocal-math", "-fPIC",
+          "-fno-semantic-interposition", "-fopenmp")
 
 
 class BuildError(GsfricError):
@@ -216,7 +217,7 @@ class CompiledFunction:
         return result
 
 
-    def bound(self, constants: list[np.ndarray], output: str):
+    def bound(self, constants: list[np.ndarray], output: str, n_threads: int = 1):
         """A lean callable ``f(x, out)`` for the control loop's repeated calls.
 
         Input 0 varies (``x``, C-contiguous float64 of shape (N, size)); the other inputs are
@@ -244,10 +245,10 @@ class CompiledFunction:
             out_ptrs[index] = out.ctypes.data
             if simd is not None:
                 lib.gsfric_batch_simd(simd, n_in, n_out, in_ptrs, in_strides, out_ptrs,
-                                      self._out_strides, x.shape[0], 1)
+                                      self._out_strides, x.shape[0], n_threads)
             else:
                 batch(ev, work, n_in, n_out, in_ptrs, in_strides, out_ptrs, self._out_strides,
-                      x.shape[0], 1)
+                      x.shape[0], n_threads)
             return out
 
         call.keep = fixed  # the constants' buffers live as long as the callable
@@ -283,10 +284,11 @@ class CasadiFunction:
             out[name] = arr
         return out
 
-    def bound(self, constants: list[np.ndarray], output: str):
+    def bound(self, constants: list[np.ndarray], output: str, n_threads: int = 1):
         """``CompiledFunction.bound``'s interface, evaluated by CasADi."""
         def call(x, out):
-            out[...] = self([x] + list(constants), select=(output,))[output]
+            out[...] = self([x] + list(constants), n_threads=n_threads,
+                            select=(output,))[output]
             return out
 
         return call

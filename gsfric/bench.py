@@ -1,0 +1,521 @@
+"""Throughput of the compiled combined map against two NumPy implementations (``gsfric bench``).
+
+The compiled map ``Evaluator.actuator_forces`` (actuator forces with friction, NumPy in to NumPy
+out, preallocated output) is timed on one and on two threads against the same physics written
+in NumPy (``gsfric.reference``): vectorised over steps, and a per-step loop that solves the
+dense 42x42 system of (2)-(16) at every step. Every case runs on the reference platform over a
+smooth random motion.
+
+For each case: steps per second (from the fastest call; for one-thread cases also per second of
+the calling thread's CPU time, which other load on the machine disturbs less), the latency of
+one call (fastest and median), and the peak memory the call adds, measured in a fresh subprocess
+per case as the rise of the peak resident set size over the call (Linux: ``/proc/self/status``
+after resetting the peak; elsewhere ``resource.getrusage``), and for the NumPy implementations
+also as the peak of ``tracemalloc``. The per-step loop is timed up to ``LOOP_MAX_STEPS`` steps;
+above that its time is extrapolated from its per-step time (marked).
+
+Before and after the cases, ``parallel_capacity`` checks how many cores the machine actually
+gives two CPU-bound processes (2.0 when two cores are idle): on a shared machine the two-thread
+figures cannot exceed it.
+
+``run_bench`` prints the table, the ratios and the targets; with ``out`` it writes them as JSON.
+"""
+
+from __future__ import annotations
+
+import json
+import os
+import platform as _platform
+import statistics
+import subprocess
+import sys
+import tempfile
+import time
+from dataclasses import asdict, dataclass, field
+from pathlib import Path
+
+import numpy as np
+
+SIZES = (40, 1_000, 100_000, 1_000_000)
+QUICK_SIZES = (40, 1_000)
+LOOP_MAX_STEPS = 1_000
+DT = 1e-3
+SEED = 20261122
+
+IMPLEMENTATIONS = {
+    "compiled": "compiled C (Evaluator.actuator_forces)",
+    "numpy": "vectorised NumPy (reference.actuator_forces_numpy)",
+    "loop": "per-step loop, 42x42 solve (reference.actuator_forces_loop)",
+}
+
+TARGETS = {
+    "compiled_1e5_steps_per_s": ("compiled map, one core, N = 1e5", ">=", 1e6, "steps/s"),
+    "speedup_vs_numpy": ("compiled (one core) / vectorised NumPy, N = 1e5", ">=", 10.0, "x"),
+    "speedup_vs_loop": ("compiled (one core) / per-step loop, N = 1e5", ">=", 500.0, "x"),
+    "latency_40_us": ("one call of 40 steps (median)", "<=", 50.0, "us"),
+    "two_core_speedup_1e6": ("two cores / one core, N = 1e6", ">=", 1.7, "x"),
+    "import_s": ("import gsfric, fresh interpreter (median)", "<=", 0.3, "s"),
+}
+
+
+@dataclass
+class Case:
+    """One timed case: an implementation on ``threads`` threads over ``steps`` steps.
+
+    Times are seconds per call; ``extrapolated`` marks a per-step loop case computed from its
+    per-step time at a smaller size rather than run.
+    """
+
+    implementation: str
+    threads: int
+    steps: int
+    calls: int = 0
+    best: float = float("nan")
+    median: float = float("nan")
+    cpu_best: float | None = None
+    extrapolated: bool = False
+    memory_rss_mib: float | None = None
+    memory_tracemalloc_mib: float | None = None
+
+    @property
+    def steps_per_second(self) -> float:
+        return self.steps / self.best
+
+    @property
+    def steps_per_cpu_second(self) -> float | None:
+        """Steps per second of CPU time (one-thread cases only)."""
+        return None if self.cpu_best is None else self.steps / self.cpu_best
+
+    def as_dict(self) -> dict:
+        out = asdict(self)
+        out["steps_per_second"] = self.steps_per_second
+        out["steps_per_cpu_second"] = self.steps_per_cpu_second
+        return out
+
+
+@dataclass
+class Report:
+    """Everything one run measured, with the machine and the command."""
+
+    command: str
+    machine: dict
+    cases: list[Case] = field(default_factory=list)
+    import_time: dict = field(default_factory=dict)
+    ratios: dict = field(default_factory=dict)
+    targets: dict = field(default_factory=dict)
+
+    def case(self, implementation: str, threads: int, steps: int) -> Case | None:
+        for c in self.cases:
+            if (c.implementation, c.threads, c.steps) == (implementation, threads, steps):
+                return c
+        return None
+
+    def as_dict(self) -> dict:
+        return dict(command=self.command, machine=self.machine,
+                    cases=[c.as_dict() for c in self.cases], import_time=self.import_time,
+                    ratios=self.ratios, targets=self.targets)
+
+
+# --------------------------------------------------------------------------------- inputs
+def states(n: int) -> np.ndarray:
+    """States (n, 24) of a smooth random motion sampled every ``DT`` seconds."""
+    from gsfric import models
+    from gsfric.evaluation import state_array
+
+    rng = np.random.default_rng(SEED)
+    return state_array(models.random_motion(rng, DT * np.arange(n)))
+
+
+def _callable(implementation: str, threads: int, x: np.ndarray):
+    """A function of no arguments that evaluates x with one implementation."""
+    from gsfric import models, reference
+    from gsfric.evaluation import Evaluator
+
+    platform = models.reference_platform()
+    if implementation == "compiled":
+        evaluator = Evaluator(platform, n_threads=threads)
+        out = np.empty((x.shape[0], 6))
+        out.fill(0.0)
+        return lambda: evaluator.actuator_forces(x, out=out)
+    if implementation == "numpy":
+        return lambda: reference.actuator_forces_numpy(platform, x)
+    if implementation == "loop":
+        return lambda: reference.actuator_forces_loop(platform, x)
+    raise ValueError(f"unknown implementation {implementation!r}")
+
+
+def _time_calls(fn, budget: float, min_calls: int, max_calls: int,
+                cpu: list | None = None) -> list[float]:
+    """Wall-clock seconds of successive calls, until ``budget`` seconds have passed.
+
+    With ``cpu``, the CPU seconds of the calling thread for each call are appended to it (the
+    whole cost of a call that runs on one thread).
+    """
+    times: list[float] = []
+    start = time.perf_counter()
+    while len(times) < max_calls and (len(times) < min_calls
+                                      or time.perf_counter() - start < budget):
+        c0 = time.thread_time()
+        t0 = time.perf_counter()
+        fn()
+        times.append(time.perf_counter() - t0)
+        if cpu is not None:
+            cpu.append(time.thread_time() - c0)
+    return times
+
+
+def time_case(implementation: str, threads: int, x: np.ndarray, budget: float = 2.0) -> Case:
+    """Time one case after a warm-up call (the loop's large cases: a single call, no warm-up)."""
+    fn = _callable(implementation, threads, x)
+    n = x.shape[0]
+    slow = implementation == "loop" and n > 100
+    if not slow:
+        fn()
+    cpu: list[float] = []
+    times = _time_calls(fn, budget, 1 if slow else 3, 1 if slow else 100_000, cpu)
+    return Case(implementation, threads, n, calls=len(times), best=min(times),
+                median=statistics.median(times), cpu_best=min(cpu) if threads == 1 else None)
+
+
+# --------------------------------------------------------------------------------- memory
+def _status_kib(key: str) -> int | None:
+    """A ``/proc/self/status`` figure in KiB (VmRSS, VmHWM), None where there is none."""
+    try:
+        with open("/proc/self/status") as f:
+            for line in f:
+                if line.startswith(key + ":"):
+                    return int(line.split()[1])
+    except OSError:
+        pass
+    return None
+
+
+def _reset_peak_rss() -> bool:
+    """Reset this process's peak resident set size to the current one (Linux); True if done."""
+    try:
+        with open("/proc/self/clear_refs", "w") as f:
+            f.write("5")
+    except OSError:
+        return False
+    return _status_kib("VmHWM") is not None
+
+
+def _max_rss_kib() -> int:
+    import resource
+
+    rss = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss
+    return rss // 1024 if sys.platform == "darwin" else rss
+
+
+def memory_child(implementation: str, threads: int, path: str) -> dict:
+    """In a fresh process: the memory one call adds, in MiB (run by ``memory_case``).
+
+    The states are read from ``path``; the evaluator, its output buffer and the compiled library
+    are set up before the baseline. On Linux the peak resident set size is reset to the current
+    one first, so the figure is the call's own peak above what was resident before it;
+    elsewhere it is the rise of ``getrusage``'s maximum resident set size (a lower bound).
+    """
+    import tracemalloc
+
+    x = np.load(path)
+    fn = _callable(implementation, threads, x)
+    _callable(implementation, threads, x[:2])()
+    if _reset_peak_rss():
+        before = _status_kib("VmRSS")
+        fn()
+        rise = _status_kib("VmHWM") - before
+    else:
+        before = _max_rss_kib()
+        fn()
+        rise = _max_rss_kib() - before
+    result = {"rss_mib": rise / 1024, "tracemalloc_mib": None}
+    if implementation != "compiled":
+        tracemalloc.start()
+        fn()
+        result["tracemalloc_mib"] = tracemalloc.get_traced_memory()[1] / 2**20
+        tracemalloc.stop()
+    return result
+
+
+def memory_case(implementation: str, threads: int, x: np.ndarray, folder: Path) -> dict:
+    """Run ``memory_child`` for one case in a subprocess; returns its result."""
+    path = folder / f"x{x.shape[0]}.npy"
+    if not path.exists():
+        np.save(path, x)
+    code = ("import json, sys; from gsfric.bench import memory_child; "
+            f"print(json.dumps(memory_child({implementation!r}, {threads}, {str(path)!r})))")
+    run = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True)
+    if run.returncode != 0:
+        raise RuntimeError(f"memory case {implementation} N={x.shape[0]} failed: "
+                           f"{run.stderr.strip().splitlines()[-1:]}")
+    return json.loads(run.stdout.strip().splitlines()[-1])
+
+
+# ---------------------------------------------------------------------------------- import
+def import_time(runs: int = 7) -> dict:
+    """Seconds to ``import gsfric`` in fresh interpreters (and -X importtime's own figure)."""
+    code = ("import time; t = time.perf_counter(); import gsfric; "
+            "print(time.perf_counter() - t)")
+    wall = []
+    for _ in range(runs):
+        run = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
+                             check=True)
+        wall.append(float(run.stdout.strip()))
+    run = subprocess.run([sys.executable, "-X", "importtime", "-c", "import gsfric"],
+                         capture_output=True, text=True, check=True)
+    cumulative = None
+    for line in run.stderr.splitlines():
+        parts = [s.strip() for s in line.split("|")]
+        if len(parts) == 3 and parts[2] == "gsfric":
+            cumulative = int(parts[1]) * 1e-6
+    first = ("import time; t = time.perf_counter(); import numpy as np, gsfric; "
+             "from gsfric.evaluation import Evaluator, state_array; "
+             "ev = Evaluator(gsfric.reference_platform()); "
+             "ev.actuator_forces(np.tile(np.r_[0, 0, 0.7, 1, 0, 0, 0, 1, 0, 0, 0, 1, "
+             "np.zeros(12)], (40, 1))); print(time.perf_counter() - t)")
+    run = subprocess.run([sys.executable, "-c", first], capture_output=True, text=True,
+                         check=True)
+    return {"median_s": statistics.median(wall), "best_s": min(wall), "runs": runs,
+            "importtime_cumulative_s": cumulative,
+            "first_call_s": float(run.stdout.strip().splitlines()[-1])}
+
+
+# ------------------------------------------------------------------------- machine check
+def parallel_capacity(iterations: int = 3_000_000) -> float:
+    """How many cores two CPU-bound processes get together: 2.0 with two idle cores.
+
+    The wall time of one pure-Python loop alone, over that of two copies started together,
+    times two. Other load on the machine lowers it; two-thread figures are bounded by it.
+    """
+    code = f"s = 0\nfor i in range({iterations}): s += i"
+
+    def wall(copies: int) -> float:
+        start = time.perf_counter()
+        procs = [subprocess.Popen([sys.executable, "-c", code]) for _ in range(copies)]
+        for proc in procs:
+            proc.wait()
+        return time.perf_counter() - start
+
+    wall(1)
+    return 2 * wall(1) / wall(2)
+
+
+# ------------------------------------------------------------------------------------ run
+def _machine() -> dict:
+    from gsfric import native
+
+    model = _platform.processor() or _platform.machine()
+    try:
+        for line in Path("/proc/cpuinfo").read_text().splitlines():
+            if line.startswith("model name"):
+                model = line.split(":", 1)[1].strip()
+                break
+    except OSError:
+        pass
+    from gsfric.manifest import function, manifest
+
+    compiled = native.is_compiled()
+    simd = bool(function("actuator").get("simd", False))
+    return {"cpu": model, "cores": os.cpu_count(), "python": _platform.python_version(),
+            "numpy": np.__version__, "os": _platform.platform(),
+            "compiled": compiled,
+            "compiler": " ".join(native._compiler() + list(native.CFLAGS)) if compiled
+            else "none (CasADi fallback)",
+            "actuator_entry": (f"SIMD over steps, {manifest().get('simd_lanes')} lanes" if simd
+                               else "one step per call"),
+            "source": _source_version(),
+            "load_average_start": _load_average()}
+
+
+def _source_version() -> str | None:
+    """``git describe`` of the source tree (``-dirty`` with uncommitted changes), if any."""
+    try:
+        run = subprocess.run(["git", "describe", "--always", "--dirty"], capture_output=True,
+                             text=True, cwd=Path(__file__).resolve().parent, timeout=10)
+    except (OSError, subprocess.SubprocessError):
+        return None
+    return run.stdout.strip() or None if run.returncode == 0 else None
+
+
+def _load_average() -> list[float] | None:
+    try:
+        return [round(v, 2) for v in os.getloadavg()]
+    except OSError:
+        return None
+
+
+def _ratios(report: Report, sizes) -> dict:
+    out = {}
+    for n in sizes:
+        c1 = report.case("compiled", 1, n)
+        c2 = report.case("compiled", 2, n)
+        npy = report.case("numpy", 1, n)
+        loop = report.case("loop", 1, n)
+        out[str(n)] = {
+            "compiled_vs_numpy": npy.best / c1.best,
+            "compiled_vs_loop": loop.best / c1.best,
+            "two_vs_one_core": c1.best / c2.best,
+            "compiled_vs_numpy_cpu": npy.cpu_best / c1.cpu_best,
+        }
+    return out
+
+
+def _targets(report: Report) -> dict:
+    values = {}
+    big = report.case("compiled", 1, 100_000)
+    notes = {}
+    if big is not None:
+        values["compiled_1e5_steps_per_s"] = big.steps_per_second
+        notes["compiled_1e5_steps_per_s"] = (f"{big.steps_per_cpu_second:.3g} per CPU "
+                                             "second")
+        notes["speedup_vs_numpy"] = (f"{report.ratios['100000']['compiled_vs_numpy_cpu']:.3g}"
+                                     " in CPU time")
+        values["speedup_vs_numpy"] = report.ratios["100000"]["compiled_vs_numpy"]
+        values["speedup_vs_loop"] = report.ratios["100000"]["compiled_vs_loop"]
+    small = report.case("compiled", 1, 40)
+    if small is not None:
+        values["latency_40_us"] = small.median * 1e6
+    if "1000000" in report.ratios:
+        values["two_core_speedup_1e6"] = report.ratios["1000000"]["two_vs_one_core"]
+        free = min(report.machine.get("parallel_capacity_start", float("nan")),
+                   report.machine.get("parallel_capacity_end", float("nan")))
+        notes["two_core_speedup_1e6"] = f"cores free for the run: {free:.2f} of 2"
+    values["import_s"] = report.import_time["median_s"]
+    out = {}
+    for key, value in values.items():
+        label, op, target, unit = TARGETS[key]
+        met = value >= target if op == ">=" else value <= target
+        out[key] = {"label": label, "value": value, "target": f"{op} {target:g} {unit}",
+                    "met": bool(met), "note": notes.get(key, "")}
+    return out
+
+
+def _command() -> str:
+    """The command line of this run, as typed."""
+    if not sys.argv or not sys.argv[0]:
+        return "run_bench()"
+    name = Path(sys.argv[0]).name
+    prefix = ["python", sys.argv[0]] if name.endswith(".py") else [name]
+    return " ".join(prefix + sys.argv[1:])
+
+
+def measure(sizes=SIZES, threads=(1, 2), budget: float = 2.0, memory: bool = True,
+            progress=print) -> Report:
+    """Run every case and return the report (``run_bench`` prints and writes it)."""
+    report = Report(command=_command(), machine=_machine())
+    report.machine["parallel_capacity_start"] = parallel_capacity()
+    x_all = states(max(sizes))
+    with tempfile.TemporaryDirectory(prefix="gsfric-bench-") as tmp:
+        for n in sizes:
+            x = np.ascontiguousarray(x_all[:n])
+            plan = [("compiled", t) for t in threads] + [("numpy", 1)]
+            if n <= LOOP_MAX_STEPS:
+                plan.append(("loop", 1))
+            for implementation, t in plan:
+                progress(f"  {implementation:8s} threads={t} N={n:,}")
+                case = time_case(implementation, t, x, budget)
+                if memory:
+                    mem = memory_case(implementation, t, x, Path(tmp))
+                    case.memory_rss_mib = mem["rss_mib"]
+                    case.memory_tracemalloc_mib = mem["tracemalloc_mib"]
+                report.cases.append(case)
+        measured = [c for c in report.cases if c.implementation == "loop"]
+        per_step = min(c.best / c.steps for c in measured) if measured else float("nan")
+        for n in sizes:
+            if report.case("loop", 1, n) is None:
+                report.cases.append(Case("loop", 1, n, calls=0, best=per_step * n,
+                                         median=per_step * n, extrapolated=True))
+    progress("  import gsfric (fresh interpreters)")
+    report.import_time = import_time()
+    report.ratios = _ratios(report, sizes)
+    report.targets = _targets(report)
+    report.machine["load_average_end"] = _load_average()
+    report.machine["parallel_capacity_end"] = parallel_capacity()
+    return report
+
+
+# ---------------------------------------------------------------------------------- table
+def _seconds(t: float) -> str:
+    for unit, scale in (("s", 1.0), ("ms", 1e-3), ("us", 1e-6)):
+        if t >= scale:
+            return f"{t / scale:.3g} {unit}"
+    return f"{t * 1e9:.3g} ns"
+
+
+def _mib(value: float | None) -> str:
+    return "-" if value is None else f"{max(value, 0.0):.1f}"
+
+
+def format_report(report: Report) -> str:
+    """The report as a plain-text table, ratios and targets."""
+    m = report.machine
+    lines = [f"gsfric bench: actuator forces with friction, reference platform "
+             f"(NumPy in, NumPy out)",
+             f"machine: {m['cpu']}, {m['cores']} cores; Python {m['python']}, "
+             f"NumPy {m['numpy']}; compiled with: {m['compiler']}; actuator map: "
+             f"{m['actuator_entry']}",
+             f"source: {m.get('source')}; load average (1, 5, 15 min): start "
+             f"{m['load_average_start']}, end {m.get('load_average_end')}",
+             f"cores free for this run (two CPU-bound processes together, 2.0 = two idle "
+             f"cores): start {m.get('parallel_capacity_start', float('nan')):.2f}, end "
+             f"{m.get('parallel_capacity_end', float('nan')):.2f}", ""]
+    head = (f"{'implementation':<12} {'threads':>7} {'N':>9} {'steps/s':>10} "
+            f"{'(CPU time)':>10} {'latency best':>13} {'median':>10} {'calls':>6} "
+            f"{'mem RSS MiB':>12} {'tracemalloc':>12}")
+    lines += [head, "-" * len(head)]
+    order = {"compiled": 0, "numpy": 1, "loop": 2}
+    for c in sorted(report.cases, key=lambda c: (c.steps, order[c.implementation],
+                                                  c.threads)):
+        mark = " (extrapolated)" if c.extrapolated else ""
+        cpu = "-" if c.steps_per_cpu_second is None else f"{c.steps_per_cpu_second:.3g}"
+        lines.append(f"{c.implementation:<12} {c.threads:>7} {c.steps:>9,} "
+                     f"{c.steps_per_second:>10.3g} {cpu:>10} {_seconds(c.best):>13} "
+                     f"{_seconds(c.median):>10} {c.calls:>6} {_mib(c.memory_rss_mib):>12} "
+                     f"{_mib(c.memory_tracemalloc_mib):>12}{mark}")
+    lines += ["", "ratios of the fastest calls: compiled on one core vs vectorised NumPy (wall "
+              "clock; CPU time), vs the per-step loop; compiled on two cores vs one"]
+    for n, r in report.ratios.items():
+        lines.append(f"  N = {int(n):>9,}: {r['compiled_vs_numpy']:6.1f}x "
+                     f"({r['compiled_vs_numpy_cpu']:5.1f}x) NumPy  "
+                     f"{r['compiled_vs_loop']:8.0f}x loop  {r['two_vs_one_core']:5.2f}x on two "
+                     "cores")
+    it = report.import_time
+    lines += ["", f"import gsfric: median {it['median_s'] * 1e3:.0f} ms, best "
+              f"{it['best_s'] * 1e3:.0f} ms over {it['runs']} fresh interpreters "
+              f"(-X importtime: {it['importtime_cumulative_s'] * 1e3:.0f} ms); import + "
+              f"Evaluator + first 40-step call: {it['first_call_s'] * 1e3:.0f} ms", "",
+              "targets:"]
+    for t in report.targets.values():
+        value = t["value"]
+        shown = f"{value:.3g}"
+        note = f"; {t['note']}" if t.get("note") else ""
+        lines.append(f"  [{'met' if t['met'] else 'MISSED':>6}] {t['label']}: {shown} "
+                     f"(target {t['target']}{note})")
+    return "\n".join(lines)
+
+
+def run_bench(quick: bool = False, out: Path | None = None) -> Report:
+    """Measure, print the table and, with ``out``, write the report as JSON.
+
+    Parameters
+    ----------
+    quick : bool
+        Only N = 40 and 1e3 (and shorter timing budgets); targets at 1e5 and 1e6 are then not
+        judged.
+    out : Path, optional
+        JSON file for the report (cases, ratios, targets, machine, command).
+
+    Returns
+    -------
+    Report
+    """
+    sizes = QUICK_SIZES if quick else SIZES
+    report = measure(sizes=sizes, budget=0.5 if quick else 2.0,
+                     progress=lambda s: print(s, file=sys.stderr, flush=True))
+    print(format_report(report))
+    if out is not None:
+        out = Path(out)
+        out.parent.mkdir(parents=True, exist_ok=True)
+        out.write_text(json.dumps(report.as_dict(), indent=2) + "\n")
+        print(f"wrote {out}")
+    return report
