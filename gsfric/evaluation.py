@@ -65,11 +65,11 @@ def _pack(blocks: list[dict], values: dict) -> np.ndarray:
     return out
 
 
-def parameter_vector(platform: Platform) -> np.ndarray:
-    """The platform packed into the generated functions' parameter input P."""
+def parameter_values(platform: Platform) -> dict[str, object]:
+    """The platform as the named blocks of the parameter input P (see the manifest's layout)."""
     g, b, legs, fr = platform.geometry, platform.platform, platform.legs, platform.friction
     l4, k4, l2, k2 = legs.com_placement()
-    values = dict(
+    return dict(
         gravity=platform.gravity, base_joints=g.base_joints, platform_joints=g.platform_joints,
         universal_axes=g.universal_axes, platform_mass=b.mass, platform_inertia=b.inertia,
         platform_com=b.com, payload_mass=b.payload_mass, payload_inertia=b.payload_inertia,
@@ -80,7 +80,11 @@ def parameter_vector(platform: Platform) -> np.ndarray:
         joint_coulomb=fr.joint_coulomb, joint_radius=fr.joint_radius,
         prismatic_viscous=fr.prismatic_viscous, prismatic_coulomb=fr.prismatic_coulomb,
         joint_eps=JOINT_EPS, prismatic_eps=PRISMATIC_EPS)
-    return _pack(layout("eval", "P"), values)
+
+
+def parameter_vector(platform: Platform) -> np.ndarray:
+    """The platform packed into the generated functions' parameter input P."""
+    return _pack(layout("eval", "P"), parameter_values(platform))
 
 
 def effect_vector(platform: Platform) -> np.ndarray:

@@ -51,3 +51,18 @@ def chain_values(platform, x: np.ndarray, Q=None, K=None) -> dict:
             size = int(np.prod(b["shape"]))
             values[b["name"]] = K[b["offset"]:b["offset"] + size]
     return values
+
+
+def with_every_effect(rng: np.random.Generator, platform: gsfric.Platform) -> gsfric.Platform:
+    """Every catalog effect switched on with a random plausible parameter."""
+    return platform.with_effects({
+        "stribeck": {"static": rng.uniform(0.5, 3), "velocity": rng.uniform(0.005, 0.05)},
+        "seal_friction": {"force": rng.uniform(0.5, 3)},
+        "quadratic_drag": {"coefficient": rng.uniform(1, 20)},
+        "stroke_friction": {"slope": rng.uniform(-5, 5), "reference": 0.8},
+        "payload_offset": {"x": 0.02, "y": -0.03, "z": 0.01},
+        "sensor_bias": {f"b{i}": rng.uniform(-1, 1) for i in range(1, 7)},
+        "joint_friction_coupling": {"scale": 1.0},
+        "leg_weight": {"lower_mass": 0.3, "upper_mass": 0.2},
+        "bushing_friction": {"coefficient": 0.1, "spacing": 0.08},
+    })

@@ -15,24 +15,9 @@ from derive import build as dbuild
 from derive import model as mdl
 from gsfric import models, native
 from gsfric.evaluation import Evaluator, effect_vector, jacobian_parameters
-from helpers import chain_values, perturbed_platform, random_states
+from helpers import chain_values, perturbed_platform, random_states, with_every_effect
 
 ROOT = Path(__file__).resolve().parents[1]
-
-
-def _random_effects(rng, platform):
-    """Every effect switched on with a random plausible parameter."""
-    return platform.with_effects({
-        "stribeck": {"static": rng.uniform(0.5, 3), "velocity": rng.uniform(0.005, 0.05)},
-        "seal_friction": {"force": rng.uniform(0.5, 3)},
-        "quadratic_drag": {"coefficient": rng.uniform(1, 20)},
-        "stroke_friction": {"slope": rng.uniform(-5, 5), "reference": 0.8},
-        "payload_offset": {"x": 0.02, "y": -0.03, "z": 0.01},
-        "sensor_bias": {f"b{i}": rng.uniform(-1, 1) for i in range(1, 7)},
-        "joint_friction_coupling": {"scale": 1.0},
-        "leg_weight": {"lower_mass": 0.3, "upper_mass": 0.2},
-        "bushing_friction": {"coefficient": 0.1, "spacing": 0.08},
-    })
 
 
 def _relative_error(a, b):
@@ -42,7 +27,7 @@ def _relative_error(a, b):
 
 @pytest.mark.parametrize("mode", ["kinematic", "paper"])
 def test_compiled_equals_lambdified_sympy_at_random_states(rng, mode):
-    platform = _random_effects(rng, perturbed_platform(rng, "paper" if mode == "paper"
+    platform = with_every_effect(rng, perturbed_platform(rng, "paper" if mode == "paper"
                                                        else "rigid"))
     x = random_states(rng, 40)
     model = mdl.build(mode)
@@ -56,7 +41,7 @@ def test_compiled_equals_lambdified_sympy_at_random_states(rng, mode):
 
 
 def test_friction_map_equals_the_friction_of_the_full_map(rng):
-    platform = _random_effects(rng, perturbed_platform(rng))
+    platform = with_every_effect(rng, perturbed_platform(rng))
     x = random_states(rng, 30)
     ev = Evaluator(platform)
     full = ev._full([x, ev.P, ev.Q])
@@ -70,7 +55,7 @@ def test_friction_map_equals_the_friction_of_the_full_map(rng):
 
 
 def test_actuator_map_equals_the_full_map_also_on_two_threads(rng):
-    platform = _random_effects(rng, perturbed_platform(rng))
+    platform = with_every_effect(rng, perturbed_platform(rng))
     x = random_states(rng, 1001)
     ev = Evaluator(platform, n_threads=2)
     full = ev._full([x, ev.P, ev.Q])
@@ -80,7 +65,7 @@ def test_actuator_map_equals_the_full_map_also_on_two_threads(rng):
 
 
 def test_parameter_jacobian_equals_finite_differences(rng):
-    platform = _random_effects(rng, perturbed_platform(rng))
+    platform = with_every_effect(rng, perturbed_platform(rng))
     x = random_states(rng, 20)
     ev = Evaluator(platform)
     F, dF = ev.jacobian(x)

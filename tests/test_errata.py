@@ -33,7 +33,7 @@ from derive import kinematics as kin
 from derive import model as dm
 from derive import printed as pr
 from gsfric import models
-from gsfric.evaluation import JOINT_EPS, PRISMATIC_EPS, PRISMATIC_POINT, state_array
+from gsfric.evaluation import parameter_values, state_array
 from gsfric.trajectory import Motion
 
 PAPER = Path(__file__).resolve().parents[2] / "shared" / "paper"
@@ -89,21 +89,9 @@ def _compiled():
 
 
 def _parameters(platform) -> dict:
-    """The chain's parameter blocks for ``platform``."""
-    g, b, legs, fr = platform.geometry, platform.platform, platform.legs, platform.friction
-    l4, k4, l2, k2 = legs.com_placement()
-    return dict(
-        gravity=platform.gravity, base_joints=g.base_joints, platform_joints=g.platform_joints,
-        universal_axes=g.universal_axes, platform_mass=b.mass, platform_inertia=b.inertia,
-        platform_com=b.com, payload_mass=b.payload_mass, payload_inertia=b.payload_inertia,
-        payload_com=b.payload_com, lower_mass=legs.lower_mass, lower_com=l4, lower_frac=k4,
-        lower_inertia=legs.lower_inertia, upper_mass=legs.upper_mass, upper_com=l2,
-        upper_frac=k2, upper_inertia=legs.upper_inertia, leg_weight=float(legs.weight),
-        prismatic_point=PRISMATIC_POINT, joint_viscous=fr.joint_viscous,
-        joint_coulomb=fr.joint_coulomb, joint_radius=fr.joint_radius,
-        prismatic_viscous=fr.prismatic_viscous, prismatic_coulomb=fr.prismatic_coulomb,
-        joint_eps=JOINT_EPS, prismatic_eps=PRISMATIC_EPS,
-        effects=[p.default for e in fx.CATALOG for p in e.parameters])
+    """The chain's parameter blocks for ``platform``, effects at their defaults."""
+    return dict(parameter_values(platform),
+                effects=[p.default for e in fx.CATALOG for p in e.parameters])
 
 
 def _evaluate(platform, motion) -> dict:

@@ -14,31 +14,16 @@ import pytest
 import gsfric
 from gsfric import models, reference
 from gsfric.evaluation import Evaluator, state_array
-from helpers import perturbed_platform, random_states
+from helpers import perturbed_platform, random_states, with_every_effect
 
 RTOL = 1e-9
-
-
-def _with_every_effect(rng, platform):
-    """Every catalog effect switched on with a random plausible parameter."""
-    return platform.with_effects({
-        "stribeck": {"static": rng.uniform(0.5, 3), "velocity": rng.uniform(0.005, 0.05)},
-        "seal_friction": {"force": rng.uniform(0.5, 3)},
-        "quadratic_drag": {"coefficient": rng.uniform(1, 20)},
-        "stroke_friction": {"slope": rng.uniform(-5, 5), "reference": 0.8},
-        "payload_offset": {"x": 0.02, "y": -0.03, "z": 0.01},
-        "sensor_bias": {f"b{i}": rng.uniform(-1, 1) for i in range(1, 7)},
-        "joint_friction_coupling": {"scale": 1.0},
-        "leg_weight": {"lower_mass": 0.3, "upper_mass": 0.2},
-        "bushing_friction": {"coefficient": 0.1, "spacing": 0.08},
-    })
 
 
 def _platforms(rng):
     return {
         "reference": models.reference_platform(),
-        "perturbed rigid, every effect": _with_every_effect(rng, perturbed_platform(rng)),
-        "perturbed paper legs, every effect": _with_every_effect(
+        "perturbed rigid, every effect": with_every_effect(rng, perturbed_platform(rng)),
+        "perturbed paper legs, every effect": with_every_effect(
             rng, perturbed_platform(rng, "paper")),
     }
 
@@ -66,7 +51,7 @@ def test_per_step_loop_equals_compiled_at_random_states(rng, case):
 
 
 def test_the_42x42_system_holds_the_compiled_reactions(rng):
-    platform = _with_every_effect(rng, perturbed_platform(rng))
+    platform = with_every_effect(rng, perturbed_platform(rng))
     motion = models.random_motion(rng, np.sort(rng.uniform(0, 5, 5)))
     result = gsfric.evaluate(platform, motion)
     x = state_array(motion)
