@@ -39,6 +39,24 @@ class _Group(click.Group):
         except KeyboardInterrupt:
             _fail("interrupted; no output was left half-written", 130)
 
+    def main(self, args=None, prog_name=None, **kwargs):
+        """Usage errors (unknown option, missing argument) as one line too, exit 2."""
+        try:
+            return super().main(args, prog_name, standalone_mode=False, **kwargs)
+        except click.exceptions.NoArgsIsHelpError as exc:
+            click.echo(exc.ctx.get_help(), err=True)
+            sys.exit(EXIT_INPUT)
+        except click.UsageError as exc:
+            hint = f" (see `gsfric {exc.ctx.info_name} --help`)" if exc.ctx and \
+                exc.ctx.parent else " (see `gsfric --help`)"
+            _fail(exc.format_message().replace("\n", " ") + hint, EXIT_INPUT)
+        except click.exceptions.Exit as exc:
+            sys.exit(exc.exit_code)
+        except click.Abort:
+            _fail("aborted", EXIT_CHECK)
+        except click.ClickException as exc:
+            _fail(exc.format_message(), EXIT_INPUT)
+
 
 def _platform(path):
     from gsfric.models import reference_platform
@@ -92,34 +110,49 @@ def paper(out_dir, mode, platform_file, no_plots):
 
 
 @main.command()
-@click.option("--trajectory", type=click.Path(dir_okay=False, exists=True), required=True,
+@click.option("--trajectory", type=click.Path(path_type=Path), required=True,
               help="Trajectory file (CSV or Parquet): t,x,y,z,alpha,beta,gamma or "
                    "t,x,y,z,qw,qx,qy,qz.")
-@click.option("--platform", "platform_file", type=click.Path(dir_okay=False, exists=True),
+@click.option("--platform", "platform_file", type=click.Path(path_type=Path),
               help="Platform TOML (default: the reference platform).")
-@click.option("--out", type=click.Path(dir_okay=False, path_type=Path), required=True,
-              help="Output file, CSV or Parquet by extension.")
+@click.option("--out", type=click.Path(path_type=Path), required=True,
+              help="Output file, CSV or Parquet by extension; written to a temporary file "
+                   "and renamed when complete.")
 @click.option("--mode", type=click.Choice(["kinematic", "paper"]), default="kinematic",
               show_default=True)
-@click.option("--strict", is_flag=True, help="Fail (exit 1) when any step is flagged.")
+@click.option("--strict", is_flag=True,
+              help="Fail (exit 1, no output) at the first chunk with a flagged step.")
 @click.option("--threads", type=click.IntRange(1, 64), default=1, show_default=True)
-def simulate(trajectory, platform_file, out, mode, strict, threads):
-    """Evaluate a motion: actuator forces, reactions and friction at every step."""
+@click.option("--chunk", type=int, default=100_000, show_default=True,
+              help="Steps read, differentiated and evaluated at a time (memory grows with "
+                   "it); a file of at most this many rows is read whole.")
+@click.option("--window", type=int, default=None,
+              help="Savitzky-Golay window, odd, samples [default: chosen by cross-validation "
+                   "on the first chunk].")
+@click.option("--progress/--no-progress", default=None,
+              help="Progress bar on stderr [default: when stderr is a terminal].")
+def simulate(trajectory, platform_file, out, mode, strict, threads, chunk, window, progress):
+    """Evaluate a motion: actuator forces, reactions and friction at every step.
+
+    Long files are streamed: read, differentiated and evaluated chunk by chunk in bounded
+    memory. Flagged steps (see the flag column) are reported with their indices in one
+    warning at the end, or make the run fail with --strict.
+    """
     import warnings
 
-    from gsfric.evaluation import Evaluator
-    from gsfric.io import read_trajectory, write_table
+    from gsfric.stream import simulate_file
 
-    platform = _platform(platform_file)
-    motion = read_trajectory(trajectory)
-    with warnings.catch_warnings(record=True) as caught:
-        warnings.simplefilter("always")
-        result = Evaluator(platform, mode=mode, n_threads=threads).evaluate(
-            motion, strict=strict, progress=True)
-    for w in caught:
-        click.echo(f"gsfric: warning: {w.message}", err=True)
-    write_table(result.to_frame(), out)
-    click.echo(f"wrote {out} ({len(result)} steps, {len(result.flagged())} flagged)")
+    def show(message, category, filename, lineno, file=None, line=None):
+        click.echo(f"gsfric: warning: {message}", err=True)
+
+    with warnings.catch_warnings():
+        warnings.simplefilter("always", UserWarning)   # GsfricWarning, flags, build, staleness
+        warnings.showwarning = show
+        platform = _platform(platform_file)
+        summary = simulate_file(trajectory, out, platform, mode=mode, strict=strict,
+                                chunk=chunk, window=window, n_threads=threads,
+                                progress=progress)
+    click.echo(f"wrote {out} ({summary.steps} steps, {summary.flagged} flagged)")
 
 
 @main.command()

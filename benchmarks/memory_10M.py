@@ -1,0 +1,145 @@
+"""Peak memory and time of `gsfric simulate` on a 10-million-step trajectory.
+
+Writes a long Parquet trajectory (a smooth 6-DoF motion sampled at 1 kHz, quaternion
+orientation, written row group by row group, in a child process), then runs
+``gsfric simulate`` on it in a subprocess and reports that child's peak resident set size
+(``ru_maxrss``, from ``os.wait4``; ``resource.getrusage(RUSAGE_CHILDREN).ru_maxrss`` is printed
+too) and the wall time::
+
+    .venv/bin/python benchmarks/memory_10M.py                       # 10M steps, chunk 100000
+    .venv/bin/python benchmarks/memory_10M.py --steps 200000 --chunk 5000
+
+The figures of a run are in docs/robustness.md. Not part of the test suite (it takes minutes
+and several GB of disk); tests/test_robustness.py runs the same functions on 200k steps.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import resource
+import subprocess
+import sys
+import tempfile
+import time
+from pathlib import Path
+
+import numpy as np
+
+RATE = 1000.0            # Hz
+ROWS_PER_GROUP = 250_000
+
+
+def write_trajectory(path: Path, steps: int, rate: float = RATE,
+                     rows_per_group: int = ROWS_PER_GROUP) -> None:
+    """A ``models.sinusoidal`` motion of ``steps`` samples as a Parquet trajectory file.
+
+    Columns ``t, x, y, z, qw, qx, qy, qz``; written in row groups of ``rows_per_group``.
+    """
+    import pyarrow as pa
+    import pyarrow.parquet as pq
+
+    from gsfric import models
+
+    writer = None
+    try:
+        for start in range(0, steps, rows_per_group):
+            t = np.arange(start, min(steps, start + rows_per_group)) / rate
+            motion = models.sinusoidal(t)
+            q = motion.quaternion()          # unit, qw > 0 here (small angles)
+            columns = {"t": t, "x": motion.position[:, 0], "y": motion.position[:, 1],
+                       "z": motion.position[:, 2], "qw": q[:, 0], "qx": q[:, 1],
+                       "qy": q[:, 2], "qz": q[:, 3]}
+            table = pa.table(columns)
+            if writer is None:
+                writer = pq.ParquetWriter(path, table.schema)
+            writer.write_table(table)
+    finally:
+        if writer is not None:
+            writer.close()
+
+
+def run_simulate(trajectory: Path, out: Path, chunk: int, threads: int = 1,
+                 extra: tuple[str, ...] = ()) -> dict:
+    """Run ``gsfric simulate`` in a subprocess; its exit code, wall time and peak RSS.
+
+    ``peak_rss_mb`` is the child's own ``ru_maxrss`` (from ``os.wait4``: the figure that
+    ``getrusage(RUSAGE_CHILDREN)`` gives for a lone child); ``children_max_rss_mb`` is
+    ``getrusage(RUSAGE_CHILDREN).ru_maxrss`` of this process afterwards, the largest of all
+    its waited-for children (the trajectory generator too) and of their forked-off RSS.
+    """
+    cmd = [sys.executable, "-m", "gsfric.cli", "simulate", "--trajectory", str(trajectory),
+           "--out", str(out), "--chunk", str(chunk), "--threads", str(threads),
+           "--no-progress", *extra]
+    start = time.perf_counter()
+    with tempfile.TemporaryFile("w+") as stdout, tempfile.TemporaryFile("w+") as stderr:
+        child = subprocess.Popen(cmd, stdout=stdout, stderr=stderr, text=True)
+        _, status, usage = os.wait4(child.pid, 0)
+        child.returncode = os.waitstatus_to_exitcode(status)
+        wall = time.perf_counter() - start
+        stdout.seek(0)
+        stderr.seek(0)
+        out_text, err_text = stdout.read(), stderr.read()
+    children = resource.getrusage(resource.RUSAGE_CHILDREN).ru_maxrss   # kB on Linux
+    return {"command": " ".join(["gsfric", *cmd[3:]]), "returncode": child.returncode,
+            "stdout": out_text.strip(), "stderr": err_text.strip(), "wall_s": wall,
+            "peak_rss_mb": usage.ru_maxrss / 1024.0, "children_max_rss_mb": children / 1024.0,
+            "cpu_s": usage.ru_utime + usage.ru_stime}
+
+
+def main(argv: list[str] | None = None) -> int:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--steps", type=int, default=10_000_000)
+    parser.add_argument("--chunk", type=int, default=100_000)
+    parser.add_argument("--threads", type=int, default=1)
+    parser.add_argument("--dir", type=Path, default=None,
+                        help="Working directory (default: a temporary one, removed after).")
+    parser.add_argument("--keep", action="store_true", help="Keep the files.")
+    parser.add_argument("--json", type=Path, help="Also write the figures as JSON.")
+    parser.add_argument("--generate", type=Path, help=argparse.SUPPRESS)
+    args = parser.parse_args(argv)
+    if args.generate:
+        write_trajectory(args.generate, args.steps)
+        return 0
+
+    folder = args.dir or Path(tempfile.mkdtemp(prefix="gsfric-mem-"))
+    folder.mkdir(parents=True, exist_ok=True)
+    trajectory = folder / f"trajectory_{args.steps}.parquet"
+    out = folder / f"forces_{args.steps}.parquet"
+    try:
+        start = time.perf_counter()
+        if not trajectory.exists():
+            # in a child process: this process stays small, so that the simulate child (whose
+            # RSS starts as a copy of this one's when forked) is measured alone
+            subprocess.run([sys.executable, __file__, "--generate", str(trajectory),
+                            "--steps", str(args.steps)], check=True)
+        written = time.perf_counter() - start
+        figures = run_simulate(trajectory, out, args.chunk, args.threads)
+        if figures["returncode"] != 0:
+            print(figures["stderr"], file=sys.stderr)
+            return 1
+        import pyarrow.parquet as pq
+
+        rows = pq.ParquetFile(out).metadata.num_rows
+        figures.update(steps=args.steps, chunk=args.chunk, threads=args.threads,
+                       rows_written=rows, trajectory_mb=trajectory.stat().st_size / 2**20,
+                       output_mb=out.stat().st_size / 2**20, generate_s=written,
+                       steps_per_s=args.steps / figures["wall_s"], cpus=os.cpu_count())
+        for key in ("command", "steps", "chunk", "threads", "rows_written", "peak_rss_mb",
+                    "children_max_rss_mb", "wall_s", "cpu_s", "steps_per_s", "trajectory_mb",
+                    "output_mb", "cpus"):
+            value = figures[key]
+            print(f"{key:20s} {value:.1f}" if isinstance(value, float) else f"{key:20s} {value}")
+        if args.json:
+            args.json.write_text(json.dumps(figures, indent=2))
+        return 0 if rows == args.steps else 1
+    finally:
+        if not args.keep and args.dir is None:
+            for path in (trajectory, out):
+                path.unlink(missing_ok=True)
+            folder.rmdir()
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -1,0 +1,29 @@
+"""Discrepancy discovery: where model and measurement disagree, and which effect is missing.
+
+>>> from gsfric.discovery import discover, run_discover
+>>> result = discover(motion, forces, platform)        # doctest: +SKIP
+>>> result.names, result.rms_before, result.rms_after  # doctest: +SKIP
+
+``run_discover(measured, platform_file, out_dir, seed=0)`` is ``gsfric discover``: it reads a
+measured-data file, runs ``discover`` and writes ``summary.json``, ``report.md`` and plots.
+Modules: ``model`` (the compiled model as a function of its parameters), ``candidates`` (what
+may change), ``statistics`` (prewhitening, block cross-validation, block bootstrap),
+``regimes`` (where the residuals concentrate), ``workflow`` (the rounds), ``report``.
+"""
+
+from gsfric.discovery.candidates import CANDIDATE_NAMES, CANDIDATES, REFIT
+from gsfric.discovery.workflow import Discovery, Finding, Settings, discover
+
+__all__ = ["CANDIDATES", "CANDIDATE_NAMES", "REFIT", "Discovery", "Finding", "Settings",
+           "discover", "run_discover"]
+
+
+def run_discover(measured, platform_file=None, out_dir=".", *, seed: int = 0,
+                 progress: bool = True, **options):
+    """``gsfric discover``: read measured data, run the workflow, write the report.
+
+    See ``gsfric.discovery.report.run_discover``.
+    """
+    from gsfric.discovery.report import run_discover as run
+
+    return run(measured, platform_file, out_dir, seed=seed, progress=progress, **options)

@@ -1,0 +1,180 @@
+"""What the workflow may change: the model's own parameters and the catalog's candidate effects.
+
+The model's own parameters (``REFIT``) are refitted first, each within a *plausible* range: a
+wrong friction coefficient or payload mass is a wrong number, not a missing effect. Where the
+refit can only explain the data with a value outside its range (a Coulomb coefficient of 1.5 in
+a lubricated joint), the refit is held at the range's edge and the remaining gap is left to the
+candidate effects.
+
+Each candidate (``CANDIDATES``, one per catalog effect, names fixed in SPEC) lists the
+parameters fitted (with physical bounds), the parameters held fixed (set from the data or the
+platform: the stroke reference is the data's mean leg length, the bushing spacing is the
+platform's or the catalog's), and, for the one parameter on which the model is strongly
+nonlinear (``stribeck.velocity``), a grid of starting values.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable, Mapping
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from gsfric.platform import Platform
+
+INF = np.inf
+
+
+@dataclass(frozen=True)
+class Refit:
+    """One of the model's own parameters and its plausible range.
+
+    Attributes
+    ----------
+    name : str
+        Jacobian parameter name (``prismatic_coulomb``, ``payload_mass``, ...).
+    lower, upper : float
+        Plausible range, in the parameter's unit; ``relative`` ranges are multiples of the
+        model's value.
+    relative : bool
+        Whether ``lower`` and ``upper`` multiply the model's value.
+    unit, reason : str
+        For the report.
+    """
+
+    name: str
+    lower: float
+    upper: float
+    relative: bool = False
+    unit: str = ""
+    reason: str = ""
+
+    def bounds(self, value: float) -> tuple[float, float]:
+        """The plausible range for a model whose value is ``value``."""
+        if self.relative:
+            return (self.lower * value, self.upper * value)
+        return (self.lower, self.upper)
+
+
+REFIT: tuple[Refit, ...] = (
+    Refit("prismatic_viscous", 0.0, 50.0, unit="N s/m",
+          reason="viscous friction of a lubricated actuator of this size"),
+    Refit("prismatic_coulomb", 0.0, 0.3, unit="1",
+          reason="Coulomb coefficient of a lubricated sliding joint"),
+    Refit("payload_mass", 0.5, 1.5, relative=True, unit="kg",
+          reason="payload known to within 50%"),
+)
+"""Default plausible ranges of the refitted model parameters (override with ``plausible=``)."""
+
+
+@dataclass(frozen=True)
+class Candidate:
+    """A catalog effect as a candidate explanation of the gap.
+
+    Attributes
+    ----------
+    name : str
+        Catalog (SPEC) effect name.
+    fitted : tuple[str, ...]
+        Parameters fitted, short names.
+    lower, upper : tuple[float, ...]
+        Physical bounds of the fitted parameters.
+    grid : Mapping[str, tuple[float, ...]]
+        Starting values tried for parameters on which F is strongly nonlinear.
+    coulomb : bool
+        Whether the amplitude (the first fitted parameter) enters the non-negative Coulomb sum
+        of the prismatic friction effects (columns by one-sided steps).
+    signs : tuple of float
+        Signs the amplitude may take (stroke_friction: both).
+    fixed : Callable[[Platform, dict], dict]
+        Values of the parameters that are not fitted, from the platform and the data context
+        (``{"mean_length": float}``).
+    applies : Callable[[Platform], str | None]
+        None if the candidate applies to the platform, else the reason why not.
+    signature : str
+        Where the effect shows in the residuals (for the report).
+    """
+
+    name: str
+    fitted: tuple[str, ...]
+    lower: tuple[float, ...]
+    upper: tuple[float, ...]
+    signature: str
+    grid: Mapping[str, tuple[float, ...]] = field(default_factory=dict)
+    coulomb: bool = False
+    signs: tuple[float, ...] = (1.0,)
+    fixed: Callable[[Platform, dict], dict] = lambda platform, context: {}
+    applies: Callable[[Platform], str | None] = lambda platform: None
+
+    @property
+    def columns(self) -> list[str]:
+        """Jacobian names of the fitted parameters."""
+        return [f"{self.name}.{p}" for p in self.fitted]
+
+    @property
+    def stepped(self) -> bool:
+        """Whether the screening column comes from one-sided steps (see the module docstring)."""
+        return self.coulomb or bool(self.grid)
+
+    @property
+    def amplitude(self) -> str:
+        """The fitted parameter that scales the effect."""
+        return self.fitted[0]
+
+
+def _stroke_reference(platform: Platform, context: dict) -> dict:
+    return {"reference": float(context["mean_length"])}
+
+
+def _bushing_spacing(platform: Platform, context: dict) -> dict:
+    from gsfric.catalog import EFFECTS
+
+    own = platform.effects.get("bushing_friction", {})
+    return {"spacing": float(own.get("spacing", EFFECTS["bushing_friction"]["spacing"]))}
+
+
+def _leg_weight_applies(platform: Platform) -> str | None:
+    if platform.legs.weight:
+        return "the model already has the legs' weight ([legs] weight = true)"
+    return None
+
+
+STRIBECK_VELOCITIES = tuple(float(v) for v in np.geomspace(0.002, 0.1, 6))
+"""Starting values of the Stribeck velocity, m/s."""
+
+CANDIDATES: tuple[Candidate, ...] = (
+    Candidate("stribeck", ("static", "velocity"), (0.0, 5e-4), (INF, 0.5),
+              "friction-like (opposing the leg speed), concentrated at speed reversals",
+              grid={"velocity": STRIBECK_VELOCITIES}, coulomb=True),
+    Candidate("seal_friction", ("force",), (0.0,), (INF,),
+              "friction-like, the same at every speed and load", coulomb=True),
+    Candidate("quadratic_drag", ("coefficient",), (0.0,), (INF,),
+              "friction-like, growing with the square of the leg speed"),
+    Candidate("stroke_friction", ("slope",), (-INF,), (INF,),
+              "friction-like, varying along the stroke", fixed=_stroke_reference,
+              coulomb=True, signs=(1.0, -1.0)),
+    Candidate("payload_offset", ("x", "y", "z"), (-0.5, -0.5, -0.5), (0.5, 0.5, 0.5),
+              "load-like, varying with the pose (moment of the payload's weight)"),
+    Candidate("sensor_bias", tuple(f"b{i}" for i in range(1, 7)), (-INF,) * 6, (INF,) * 6,
+              "a constant offset per leg, in every regime"),
+    Candidate("joint_friction_coupling", ("scale",), (0.0,), (INF,),
+              "friction-like, from the joints' friction moments, largest at high load"),
+    Candidate("leg_weight", ("lower_mass", "upper_mass"), (0.0, 0.0), (INF, INF),
+              "load-like, varying with the legs' inclination", applies=_leg_weight_applies),
+    Candidate("bushing_friction", ("coefficient",), (0.0,), (INF,),
+              "friction-like, growing with the bending moment in the prismatic joint",
+              fixed=_bushing_spacing, coulomb=True),
+)
+
+CANDIDATE_NAMES = tuple(c.name for c in CANDIDATES)
+
+
+def candidate(name: str) -> Candidate:
+    """The candidate of a catalog effect name."""
+    for c in CANDIDATES:
+        if c.name == name:
+            return c
+    from gsfric._checks import suggest
+    from gsfric.errors import InputError
+
+    raise InputError(f"effect {name!r}: not a candidate{suggest(name, CANDIDATE_NAMES)}")

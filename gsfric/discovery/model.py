@@ -1,0 +1,168 @@
+"""The current model as a function of its adjustable parameters, evaluated by the compiled code.
+
+The adjustable parameters are those of the generated Jacobian (``jacobian_parameters()``): the
+friction coefficients and masses of the platform (``joint_viscous``, ..., ``platform_mass``)
+and every catalog effect's parameter (``effect.parameter``). A parameter vector ``theta`` holds
+all of them, in that order; ``ParametricModel`` evaluates the actuator forces F(theta) and their
+derivatives dF/dtheta over the measured motion with the compiled functions (never SymPy).
+
+Derivatives come from the compiled Jacobian function when its layout in the manifest is the
+dense (6, n_theta) block per step; otherwise from central differences of the compiled actuator
+map (two evaluations per parameter), which gives the same numbers to about 1e-8 relative.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+
+import numpy as np
+
+from gsfric.evaluation import Evaluator, Result, jacobian_parameters, parameter_vector, \
+    state_array
+from gsfric.manifest import layout
+from gsfric.platform import Platform
+from gsfric.trajectory import Motion
+
+BASE_PARAMETERS = ("joint_viscous", "joint_coulomb", "prismatic_viscous", "prismatic_coulomb",
+                   "payload_mass", "platform_mass")
+"""Parameters of the platform description among the Jacobian's parameters."""
+
+_FRICTION = ("joint_viscous", "joint_coulomb", "prismatic_viscous", "prismatic_coulomb")
+_BODY = ("payload_mass", "platform_mass")
+
+
+def _compiled_jacobian_is_dense() -> bool:
+    from gsfric.manifest import function
+
+    n_theta = len(jacobian_parameters())
+    try:
+        outputs = {o["name"]: o["size"] for o in function("jacobian")["outputs"]}
+    except Exception:
+        return False
+    return outputs.get("dF") == 6 * n_theta
+
+
+class ParametricModel:
+    """Actuator forces of a platform along a motion, as a function of the parameters theta.
+
+    Parameters
+    ----------
+    platform : Platform
+        The model; its values give the starting parameters ``theta0``.
+    motion : Motion
+        The (measured) motion, N steps.
+    n_threads : int
+        Threads of the compiled evaluation.
+
+    Attributes
+    ----------
+    names : list[str]
+        Names of theta's entries (``jacobian_parameters()``).
+    theta0 : ndarray, shape (n_theta,)
+        The platform's own values.
+    """
+
+    def __init__(self, platform: Platform, motion: Motion, n_threads: int = 1) -> None:
+        from gsfric.evaluation import effect_vector
+
+        self.platform = platform
+        self.motion = motion
+        self.n_threads = int(n_threads)
+        self.x = state_array(motion)
+        self.names = jacobian_parameters()
+        self.index = {n: k for k, n in enumerate(self.names)}
+        self.n_base = len(BASE_PARAMETERS)
+        f, b = platform.friction, platform.platform
+        base = [getattr(f, n) for n in _FRICTION] + [b.payload_mass, b.mass]
+        self.theta0 = np.concatenate([base, effect_vector(platform)]).astype(float)
+        self._evaluator = Evaluator(platform, n_threads=self.n_threads)
+        self._P0 = parameter_vector(platform)
+        offsets = {b["name"]: b["offset"] for b in layout("eval", "P")}
+        self._P_index = np.array([offsets[n] for n in BASE_PARAMETERS])
+        self._dense = _compiled_jacobian_is_dense()
+        self.evaluations = 0
+
+    def __len__(self) -> int:
+        return self.x.shape[0]
+
+    # -- parameters -----------------------------------------------------------------------
+    def platform_at(self, theta: np.ndarray, effects: Sequence[str] = ()) -> Platform:
+        """The platform with the base parameters of ``theta`` and the named effects switched on
+        with theta's values."""
+        theta = np.asarray(theta, float)
+        i = self.index
+        p = self.platform.with_friction(**{n: float(theta[i[n]]) for n in _FRICTION})
+        p = p.with_body(payload_mass=float(theta[i["payload_mass"]]),
+                        mass=float(theta[i["platform_mass"]]))
+        for name in effects:
+            params = {k.split(".", 1)[1]: float(theta[j]) for k, j in i.items()
+                      if k.startswith(name + ".")}
+            p = p.with_effect(name, **params)
+        return p
+
+    def vectors(self, theta: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """The compiled functions' inputs P and Q for parameters theta."""
+        theta = np.asarray(theta, float)
+        P = self._P0.copy()
+        P[self._P_index] = theta[:self.n_base]
+        return P, theta[self.n_base:].copy()
+
+    def effect_names(self, theta: np.ndarray) -> list[str]:
+        """Effects whose parameters in theta differ from the catalog defaults."""
+        from gsfric.catalog import EFFECTS
+
+        out = []
+        for name, params in EFFECTS.items():
+            if any(theta[self.index[f"{name}.{p}"]] != d for p, d in params.items()):
+                out.append(name)
+        return out
+
+    # -- evaluations ----------------------------------------------------------------------
+    def forces(self, theta: np.ndarray) -> np.ndarray:
+        """F(theta), (N, 6) N."""
+        P, Q = self.vectors(theta)
+        self.evaluations += 1
+        return self._evaluator.actuator_forces(self.x, P=P, Q=Q)
+
+    def forces_batch(self, thetas: np.ndarray) -> np.ndarray:
+        """F at several parameter vectors, (G, N, 6) for thetas (G, n_theta)."""
+        thetas = np.atleast_2d(np.asarray(thetas, float))
+        out = np.empty((thetas.shape[0], len(self), 6))
+        for g, theta in enumerate(thetas):
+            P, Q = self.vectors(theta)
+            self._evaluator.actuator_forces(self.x, out=out[g], P=P, Q=Q)
+        self.evaluations += thetas.shape[0]
+        return out
+
+    def jacobian(self, theta: np.ndarray, columns: Sequence[str]) -> tuple[np.ndarray,
+                                                                          np.ndarray]:
+        """F(theta) (N, 6) and dF/dtheta for the named parameters, (N, 6, len(columns))."""
+        theta = np.asarray(theta, float)
+        cols = [self.index[c] for c in columns]
+        if self._dense:
+            evaluator = Evaluator(self.platform_at(theta), n_threads=self.n_threads)
+            F, J = evaluator.jacobian(self.x, Q=theta[self.n_base:])
+            self.evaluations += 1
+            return F, np.ascontiguousarray(J[:, :, cols])
+        steps = np.maximum(np.abs(theta[cols]), 1.0) * 1e-6
+        plus = np.repeat(theta[None], len(cols), axis=0)
+        minus = plus.copy()
+        for k, (j, h) in enumerate(zip(cols, steps)):
+            plus[k, j] += h
+            minus[k, j] -= h
+        values = self.forces_batch(np.concatenate([theta[None], plus, minus]))
+        F = values[0]
+        m = len(cols)
+        J = (values[1:1 + m] - values[1 + m:]) / (2 * steps[:, None, None])
+        return F, np.ascontiguousarray(J.transpose(1, 2, 0))
+
+    def evaluate(self, theta: np.ndarray) -> Result:
+        """Every output of the full evaluation at theta (reactions, leg lengths, speeds)."""
+        import warnings
+
+        evaluator = Evaluator(self.platform_at(theta, self.effect_names(theta)),
+                              n_threads=self.n_threads)
+        self.evaluations += 1
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore")
+            return evaluator.evaluate(self.motion)

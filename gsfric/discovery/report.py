@@ -1,0 +1,412 @@
+"""Outputs of ``gsfric discover``: summary.json (SPEC), a readable report, plots.
+
+Files written in the output directory, each atomically:
+
+* ``summary.json``: ``effects`` (name, parameters, evidence), ``rms_before``, ``rms_after``,
+  ``noise_rms_estimate`` (SPEC), plus the refit, the rounds, the gap per leg and per regime;
+* ``report.md``: the same for a reader, with the decisions explained;
+* ``residuals_time.png``, ``residuals_speed.png``, ``regimes.png``: residuals before and after
+  over time, against the leg speed, and per regime.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+import os
+from pathlib import Path
+
+import numpy as np
+
+from gsfric.discovery.regimes import hotspots
+from gsfric.discovery.workflow import Discovery, discover
+from gsfric.errors import InputError
+from gsfric.io import atomic_write
+
+PLOTS = ("residuals_time.png", "residuals_speed.png", "regimes.png")
+
+
+# -- summary.json ------------------------------------------------------------------------------
+
+
+def _clean(value):
+    """JSON-safe copy: NumPy scalars to Python, non-finite floats to None, tuples to lists."""
+    if isinstance(value, dict):
+        return {str(k): _clean(v) for k, v in value.items()}
+    if isinstance(value, (list, tuple)):
+        return [_clean(v) for v in value]
+    if isinstance(value, np.ndarray):
+        return _clean(value.tolist())
+    if isinstance(value, (np.bool_, bool)):
+        return bool(value)
+    if isinstance(value, (np.integer,)):
+        return int(value)
+    if isinstance(value, (float, np.floating)):
+        value = float(value)
+        return value if math.isfinite(value) else None
+    return value
+
+
+def _per_leg(r: np.ndarray) -> list[float]:
+    return [float(v) for v in np.sqrt(np.mean(r ** 2, axis=0))]
+
+
+def summary(d: Discovery) -> dict:
+    """The content of summary.json (see the module docstring)."""
+    effects = []
+    for f in d.effects:
+        evidence = dict(f.evidence)
+        evidence["interval_95"] = {k: list(v) for k, v in f.interval.items()}
+        effects.append({"name": f.name, "parameters": dict(f.parameters),
+                        "evidence": evidence})
+    ambiguous = []
+    for rnd in d.rounds:
+        if rnd.winner and rnd.indistinguishable:
+            ambiguous.append({
+                "round": rnd.index, "effects": [rnd.winner] + list(rnd.indistinguishable),
+                "message": f"the data cannot tell {rnd.winner} apart from "
+                           f"{', '.join(rnd.indistinguishable)}: either explains the same "
+                           f"part of the gap; {rnd.winner} was added (largest held-out gain)"})
+    for name, entry in d.refit.get("parameters", {}).items():
+        for alt in entry.get("alternatives", []):
+            ambiguous.append({"round": 0, "effects": [f"refit:{name}", alt],
+                              "message": f"the change of {name} could equally be {alt}"})
+    rounds = []
+    for rnd in d.rounds:
+        rounds.append({
+            "round": rnd.index, "winner": rnd.winner, "level": rnd.level,
+            "indistinguishable": rnd.indistinguishable,
+            "bootstrap_share": rnd.bootstrap_share, "noise_model": rnd.noise_model,
+            "rms_before": rnd.rms_before, "rms_after": rnd.rms_after,
+            "tests": [{"name": t.name, "F": t.F, "p_value": t.p_value, "dof": t.dof,
+                       "cv_gain": t.cv_gain, "fold_share": t.fold_share,
+                       "sse_gain": t.sse_gain, "gap": t.gap, "significant": t.significant,
+                       "reason": t.reason, "parameters": t.parameters} for t in rnd.tests]})
+    n = d.used.stop - d.used.start
+    duration = float(d.t[-1] - d.t[0]) if len(d.t) > 1 else 0.0
+    s = d.settings
+    out = {
+        "effects": effects,
+        "rms_before": d.rms_before,
+        "rms_after": d.rms_after,
+        "noise_rms_estimate": d.noise_rms_estimate,
+        "rms_after_refit": d.rms_refit,
+        "per_leg": {"rms_before": _per_leg(d.residual_before),
+                    "rms_after": _per_leg(d.residual_after)},
+        "refit": d.refit,
+        "ambiguous": ambiguous,
+        "rounds": rounds,
+        "regimes": [vars(b) for b in d.regimes],
+        "hotspots": [f"{b.regime}: {b.name}" for b in hotspots(d.regimes)],
+        "noise_model": d.noise_model,
+        "data": {"samples_used": n, "first_used": d.used.start,
+                 "duration": duration, "rate": (n - 1) / duration if duration > 0 else None},
+        "settings": {"alpha": s.alpha, "min_fold_share": s.min_fold_share,
+                     "min_gap": s.min_gap, "n_blocks": s.n_blocks, "n_folds": s.n_folds,
+                     "n_bootstrap": s.n_bootstrap, "candidates": list(s.candidates),
+                     "refit": list(s.refit)},
+        "notes": d.notes,
+        "evaluations": d.evaluations,
+    }
+    return _clean(out)
+
+
+# -- report.md ---------------------------------------------------------------------------------
+
+
+def _g(x, digits: int = 4) -> str:
+    if x is None:
+        return "-"
+    if isinstance(x, (float, np.floating)):
+        if not math.isfinite(x):
+            return "-" if math.isnan(x) else ("inf" if x > 0 else "-inf")
+        return f"{x:.{digits}g}"
+    return str(x)
+
+
+def _table(header: list[str], rows: list[list]) -> list[str]:
+    lines = ["| " + " | ".join(header) + " |", "|" + "---|" * len(header)]
+    lines += ["| " + " | ".join(_g(c) for c in row) + " |" for row in rows]
+    return lines + [""]
+
+
+def report(d: Discovery, source: str = "", platform_source: str = "") -> str:
+    """The readable report (Markdown)."""
+    L = ["# Discrepancy discovery", ""]
+    n = d.used.stop - d.used.start
+    model = platform_source or "reference platform"
+    L += [f"Measured data: `{source or '(arrays)'}`; model: `{model}`.",
+          f"Samples used: {n} ({d.used.start} left out at each end, where the pose's "
+          f"differentiation is least accurate), {d.t[-1] - d.t[0]:.4g} s.", ""]
+    L += ["## Result", ""]
+    if d.effects:
+        for f in d.effects:
+            params = ", ".join(f"{k} = {_g(v)}" for k, v in f.parameters.items())
+            twins = f.evidence["indistinguishable_from"]
+            L.append(f"- **{f.name}** ({params}): effect size {_g(f.evidence['effect_size'], 3)}"
+                     f" x noise, found in round {f.evidence['round']}"
+                     + (f"; cannot be told apart from {', '.join(twins)}" if twins else ""))
+    else:
+        L.append("- No missing effect: after refitting the model's own parameters, no candidate "
+                 "explains a significant part of the gap.")
+    L += ["", f"Gap (RMS of the residual, all legs): **{_g(d.rms_before)} N** with the model as "
+          f"given, {_g(d.rms_refit)} N after refitting its own parameters, **{_g(d.rms_after)} N**"
+          f" with the effects found. Noise level estimated from the final residual: "
+          f"{_g(d.noise_rms_estimate)} N.", ""]
+    for note in d.notes:
+        L.append(f"- Note: {note}")
+    if d.notes:
+        L.append("")
+
+    L += ["## Where model and measurement disagreed", ""]
+    spots = hotspots(d.regimes)
+    if spots:
+        L.append("Bands where the residual of the model as given was largest "
+                 "(concentration = band RMS / overall RMS):")
+        L.append("")
+        L += _table(["regime", "band", "share", "RMS before (N)", "concentration",
+                     "friction-like part (N)"],
+                    [[b.regime, b.name, b.share, b.rms_before, b.concentration_before,
+                      b.friction_before] for b in spots])
+    else:
+        L += ["The residual is spread evenly over every regime.", ""]
+
+    L += ["## The model's own parameters", ""]
+    rows = []
+    for name, e in d.refit.get("parameters", {}).items():
+        lo, hi = e["plausible"]
+        rows.append([name, e["model"], e["refit"], e.get("final"), e["unbounded"],
+                     f"[{_g(lo)}, {_g(hi)}]", "yes" if e["plausible_refit"] else "**no**"])
+    if rows:
+        L.append("Refitted first, within plausible ranges (a wrong coefficient is not a missing "
+                 "effect), with the parameters of the effects the model already has (within "
+                 "their physical bounds). *Unbounded* is the value a refit without limits would "
+                 "need; where it is implausible, the gap it would close is left to the "
+                 "candidate effects.")
+        L.append("")
+        L += _table(["parameter", "model", "refit", "final", "unbounded", "plausible range",
+                     "plausible"], rows)
+
+    L += ["## Rounds", ""]
+    for rnd in d.rounds:
+        L.append(f"### Round {rnd.index}: "
+                 + (f"**{rnd.winner}** added" if rnd.winner else "nothing significant; stop"))
+        L.append("")
+        L.append(f"Test level per candidate {_g(rnd.level, 3)} (alpha / number of candidates); "
+                 f"residual AR orders {rnd.noise_model.get('ar_order')}, lag-1 "
+                 f"autocorrelations {rnd.noise_model.get('lag1_autocorrelation')}.")
+        L.append("")
+        L += _table(["candidate", "F", "p", "held-out gain", "folds improved", "gap closed",
+                     "decision"],
+                    [[t.name, t.F, t.p_value, t.cv_gain, t.fold_share, t.gap, t.reason]
+                     for t in sorted(rnd.tests, key=lambda t: -t.cv_gain)])
+        if rnd.winner:
+            if rnd.indistinguishable:
+                L += [f"The data cannot tell {rnd.winner} apart from "
+                      f"{', '.join(rnd.indistinguishable)}.", ""]
+            if rnd.bootstrap_share:
+                shares = ", ".join(f"{k} {v:.0%}" for k, v in rnd.bootstrap_share.items())
+                L += [f"Block bootstrap, share of draws won: {shares}.", ""]
+            L += [f"RMS residual {_g(rnd.rms_before)} N -> {_g(rnd.rms_after)} N.", ""]
+
+    if d.effects:
+        L += ["## Effects found", ""]
+        for f in d.effects:
+            L.append(f"### {f.name}")
+            L.append("")
+            L.append(f.evidence.get("signature", ""))
+            L.append("")
+            L += _table(["parameter", "value", "95% interval (block bootstrap)"],
+                        [[k, v, ("[" + ", ".join(_g(x) for x in f.interval[k]) + "]")
+                          if k in f.interval else "fixed"] for k, v in f.parameters.items()])
+            ev = f.evidence
+            L.append(f"F = {_g(ev['F'])}, p = {_g(ev['p_value'], 3)} (level {_g(ev['level'], 3)}),"
+                     f" held-out gain {_g(ev['cv_gain'], 3)}, folds improved "
+                     f"{ev['fold_share']:.0%}, bootstrap share {ev['bootstrap_share']:.0%}, "
+                     f"contribution {_g(ev['contribution_rms'])} N RMS.")
+            L.append("")
+
+    L += ["## Gap per leg", ""]
+    before, after = _per_leg(d.residual_before), _per_leg(d.residual_after)
+    L += _table(["leg", "RMS before (N)", "RMS after (N)"],
+                [[i + 1, b, a] for i, (b, a) in enumerate(zip(before, after))])
+    L += ["## Gap per regime", ""]
+    L += _table(["regime", "band", "share", "RMS before (N)", "RMS after (N)",
+                 "friction-like before (N)", "friction-like after (N)"],
+                [[b.regime, b.name, b.share, b.rms_before, b.rms_after, b.friction_before,
+                  b.friction_after] for b in d.regimes])
+    L += ["## Plots", "",
+          "- `residuals_time.png`: residual of each leg over time, before and after.",
+          "- `residuals_speed.png`: residual against the leg's sliding speed (friction shows "
+          "as a step or peak at zero speed).",
+          "- `regimes.png`: RMS residual per band of each regime, before and after.", "",
+          "## How the decisions are made", "",
+          "Each candidate is fitted together with the refitted model parameters on a "
+          "linearisation of the compiled model. The residual is prewhitened with an AR model "
+          "per leg; a candidate is accepted when (1) the nested F-test on the prewhitened data "
+          "gives p below alpha / K (Bonferroni over the K candidates), (2) block "
+          "cross-validation over contiguous stretches of time shows a lower held-out error in "
+          f"total and in at least {d.settings.min_fold_share:.0%} of the folds, and (3) it "
+          f"closes a gap of at least {d.settings.min_gap:g} x the noise level. The accepted "
+          "candidate with the largest held-out gain is added, refined by Gauss-Newton on the "
+          "compiled model, and the next round starts; the workflow stops when no candidate is "
+          "accepted. See docs/discovery.md.", ""]
+    return "\n".join(L)
+
+
+# -- plots ------------------------------------------------------------------------------------
+
+
+def _thin(n: int, most: int = 2000) -> slice:
+    return slice(None, None, max(1, n // most))
+
+
+def plots(d: Discovery, out_dir: Path) -> list[Path]:
+    """Write the three figures; returns their paths."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    out_dir = Path(out_dir)
+    written = []
+
+    def save(fig, name):
+        path = out_dir / name
+        with atomic_write(path, "wb") as handle:
+            fig.savefig(handle, format="png", dpi=75)
+        plt.close(fig)
+        written.append(path)
+
+    t, rb, ra = d.t, d.residual_before, d.residual_after
+    k = _thin(len(t))
+    fig, axes = plt.subplots(6, 1, figsize=(9, 10), sharex=True)
+    for i, ax in enumerate(axes):
+        ax.plot(t[k], rb[k, i], color="0.6", lw=0.6, label="before")
+        ax.plot(t[k], ra[k, i], color="C0", lw=0.6, label="after")
+        ax.set_ylabel(f"leg {i + 1}\nN")
+    axes[0].legend(loc="upper right", ncol=2, fontsize=8)
+    axes[0].set_title("Residual F_measured - F_model")
+    axes[-1].set_xlabel("t (s)")
+    fig.subplots_adjust(left=0.1, right=0.98, top=0.96, bottom=0.05, hspace=0.15)
+    save(fig, PLOTS[0])
+
+    speed = d.result_before.D_dot[d.used]
+    fig, axes = plt.subplots(2, 3, figsize=(10, 6), sharex=True)
+    for i, ax in enumerate(axes.ravel()):
+        v = speed[:, i]
+        order = np.argsort(v)
+        edges = np.quantile(v, np.linspace(0, 1, 41))
+        idx = np.clip(np.searchsorted(edges[1:-1], v[order]), 0, 39)
+        centres = np.array([v[order][idx == j].mean() for j in range(40) if (idx == j).any()])
+        for r, colour, label in ((rb, "0.5", "before"), (ra, "C0", "after")):
+            means = np.array([r[order, i][idx == j].mean() for j in range(40) if (idx == j).any()])
+            ax.plot(v[k], r[k, i], ".", ms=1, color=colour, alpha=0.25)
+            ax.plot(centres, means, "-", color=colour, lw=1.5, label=label)
+        ax.axvline(0, color="k", lw=0.5)
+        ax.set_title(f"leg {i + 1}", fontsize=9)
+    axes[0, 0].legend(fontsize=8)
+    for ax in axes[1]:
+        ax.set_xlabel("leg speed dD/dt (m/s)")
+    for ax in axes[:, 0]:
+        ax.set_ylabel("residual (N)")
+    fig.suptitle("Residual against leg speed (binned means)")
+    fig.subplots_adjust(left=0.08, right=0.98, top=0.9, bottom=0.1, wspace=0.25, hspace=0.25)
+    save(fig, PLOTS[1])
+
+    bands = d.regimes
+    fig, ax = plt.subplots(figsize=(10, 4))
+    x = np.arange(len(bands))
+    ax.bar(x - 0.2, [b.rms_before for b in bands], 0.4, color="0.6", label="before")
+    ax.bar(x + 0.2, [b.rms_after for b in bands], 0.4, color="C0", label="after")
+    ax.set_xticks(x, [f"{b.regime}\n{b.name}" for b in bands], fontsize=7, rotation=90)
+    ax.set_ylabel("RMS residual (N)")
+    ax.legend(fontsize=8)
+    ax.set_title("Gap per regime")
+    fig.subplots_adjust(left=0.07, right=0.99, top=0.92, bottom=0.3)
+    save(fig, PLOTS[2])
+    return written
+
+
+# -- gsfric discover --------------------------------------------------------------------------
+
+
+def _output_dir(out_dir: str | os.PathLike[str]) -> Path:
+    out = Path(out_dir)
+    if out.exists() and not out.is_dir():
+        raise InputError(f"{out}: exists and is not a directory")
+    try:
+        out.mkdir(parents=True, exist_ok=True)
+    except OSError as error:
+        raise InputError(f"{out}: cannot create the directory ({error.strerror})") from None
+    return out
+
+
+def write(d: Discovery, out_dir: str | os.PathLike[str], *, source: str = "",
+          platform_source: str = "", figures: bool = True) -> list[Path]:
+    """Write summary.json, report.md and (with ``figures``) the plots."""
+    out = _output_dir(out_dir)
+    written = []
+    path = out / "summary.json"
+    data = summary(d)
+    data["data"]["file"] = source or None
+    with atomic_write(path) as handle:
+        json.dump(data, handle, indent=2, allow_nan=False)
+        handle.write("\n")
+    written.append(path)
+    path = out / "report.md"
+    with atomic_write(path) as handle:
+        handle.write(report(d, source, platform_source))
+    written.append(path)
+    if figures:
+        written += plots(d, out)
+    return written
+
+
+def run_discover(measured: str | os.PathLike[str],
+                 platform_file: str | os.PathLike[str] | None = None,
+                 out_dir: str | os.PathLike[str] = ".", *, seed: int = 0,
+                 progress: bool = True, figures: bool = True, **options) -> list[Path]:
+    """``gsfric discover``: read measured data, run the workflow, write its outputs.
+
+    Parameters
+    ----------
+    measured : path-like
+        Measured-data file (CSV or Parquet; SPEC's columns, read by
+        ``gsfric.io.read_measured``: bad files raise a one-line ``InputError``).
+    platform_file : path-like, optional
+        Platform TOML of the current model (default: the reference platform).
+    out_dir : path-like
+        Output directory (created if needed).
+    seed : int
+        Seed of the block bootstrap.
+    progress : bool
+        Progress on stderr.
+    figures : bool
+        Write the plots.
+    **options
+        ``Settings`` fields.
+
+    Returns
+    -------
+    list of Path
+        The files written.
+    """
+    from gsfric.io import read_measured
+    from gsfric.models import reference_platform
+    from gsfric.platform import Platform
+
+    platform = reference_platform() if platform_file is None else Platform.from_toml(
+        platform_file)
+    motion, forces, lengths = read_measured(measured)
+    result = discover(motion, forces, platform, seed=seed, progress=progress, **options)
+    if lengths is not None:
+        model_lengths = result.result_before.D
+        gap = float(np.sqrt(np.mean((lengths - model_lengths) ** 2)))
+        if gap > 1e-3:
+            result.notes.append(
+                f"the leg lengths D1..D6 in the file differ from those of the recorded pose by "
+                f"{gap * 1e3:.3g} mm RMS: check the platform's geometry")
+    return write(result, out_dir, source=str(measured),
+                 platform_source=str(platform_file) if platform_file else "",
+                 figures=figures)

@@ -1,0 +1,229 @@
+"""The measured data against the model: residuals, the samples used, what may change.
+
+``Problem`` holds the measured forces of the samples used (the first and last few, where the
+differentiation of the recorded pose is least accurate, are left out), the compiled model
+(``ParametricModel``), the candidates to test and the bounds of every parameter. Its
+``linearise`` gives a ``Design``: the residual ``r = F_measured - F_model`` per leg at the
+current parameters and the columns of dF/dtheta for the refitted parameters and the
+candidates, on which every statistic of a round works.
+"""
+
+from __future__ import annotations
+
+import os
+import warnings
+from collections.abc import Sequence
+from dataclasses import dataclass
+from typing import TYPE_CHECKING
+
+import numpy as np
+
+from gsfric.discovery.candidates import CANDIDATE_NAMES, CANDIDATES, REFIT, Candidate
+from gsfric.discovery.model import BASE_PARAMETERS, ParametricModel
+from gsfric.errors import InputError
+from gsfric.platform import Platform
+from gsfric.trajectory import MAX_AUTO_WINDOW, Motion
+
+if TYPE_CHECKING:
+    from gsfric.discovery.workflow import Settings
+
+
+@dataclass
+class Design:
+    """The model linearised at theta: residual and derivative columns over the used samples.
+
+    Columns are Jacobian parameters (``names``; a candidate with variants has one column per
+    variant); ``lower``/``upper`` bound each column's coefficient (a step of the parameter
+    from theta, times ``signs``); ``refit`` lists the refitted parameters' columns and
+    ``variants`` each candidate's column sets.
+    """
+
+    theta: np.ndarray
+    r: np.ndarray                 # (M, 6) residual at theta
+    X: np.ndarray                 # (M, 6, k) derivative columns
+    names: list[str]              # Jacobian parameter of each column
+    lower: np.ndarray             # bounds of the step from theta, per column
+    upper: np.ndarray
+    refit: list[int]              # columns of the refitted parameters
+    variants: dict[str, list[list[int]]]   # candidate -> column sets (one per variant)
+    grid: dict[str, list[dict]]   # candidate -> parameter values set for each variant
+    signs: np.ndarray = None      # parameter step per unit coefficient of each column (+-1)
+    XtX: np.ndarray = None        # unwhitened cross-products, for the gap closed
+    Xtr: np.ndarray = None
+    rtr: float = 0.0
+
+    def __post_init__(self) -> None:
+        if self.signs is None:
+            self.signs = np.ones(len(self.names))
+        X = self.X.reshape(-1, self.X.shape[2])
+        r = self.r.reshape(-1)
+        self.XtX = np.einsum("ik,il->kl", X, X)
+        self.Xtr = np.einsum("ik,i->k", X, r)
+        self.rtr = float(r @ r)
+
+
+class Problem:
+    """The data, the model, what may change and within which bounds.
+
+    ``y`` holds the measured forces of the used samples (``used``), ``model`` the compiled
+    model over the whole motion, ``candidates`` the catalog effects to test (those the model
+    does not have yet and that apply to it), ``own_effects`` those it has (refitted with its
+    own parameters), ``plausible`` the plausible ranges of the refitted parameters.
+    """
+
+    def __init__(self, motion: Motion, forces: np.ndarray, platform: Platform,
+                 settings: Settings) -> None:
+        n = len(motion)
+        forces = np.asarray(forces, float)
+        if forces.shape != (n, 6):
+            raise InputError(f"forces: expected shape ({n}, 6), got {forces.shape}")
+        if not np.isfinite(forces).all():
+            row = int(np.flatnonzero(~np.isfinite(forces).all(axis=1))[0])
+            raise InputError(f"forces: row {row + 1} is not finite")
+        trim = settings.trim
+        if trim is None:
+            trim = min(MAX_AUTO_WINDOW // 2, n // 20)
+        trim = int(trim)
+        used = n - 2 * trim
+        needed = 20 * settings.n_blocks
+        if used < needed:
+            raise InputError(f"measured data: {n} samples ({used} after leaving out {trim} at "
+                             f"each end); the workflow needs at least {needed + 2 * trim}")
+        for name in settings.candidates:
+            if name not in CANDIDATE_NAMES:
+                from gsfric._checks import suggest
+
+                raise InputError(f"candidates: unknown effect {name!r}"
+                                 f"{suggest(name, CANDIDATE_NAMES)}")
+        self.settings = settings
+        self.used = slice(trim, n - trim)
+        threads = settings.n_threads or os.cpu_count() or 1
+        self.model = ParametricModel(platform, motion, n_threads=threads)
+        self.y = forces[self.used]
+        self.platform = platform
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore")
+            self.result = self.model.evaluate(self.model.theta0)
+        self.context = {"mean_length": float(self.result.D[self.used].mean())}
+        self.candidates = [c for c in CANDIDATES if c.name in settings.candidates
+                           and c.name not in platform.effects]
+        self.skipped = {c.name: c.applies(platform) for c in self.candidates
+                        if c.applies(platform)}
+        self.candidates = [c for c in self.candidates if c.name not in self.skipped]
+        self.own_effects = [c for c in CANDIDATES if c.name in platform.effects]
+        self.plausible = self._plausible(settings)
+
+    def _plausible(self, settings: Settings) -> dict[str, tuple[float, float]]:
+        out = {}
+        specs = {r.name: r for r in REFIT}
+        given = dict(settings.plausible or {})
+        for name in settings.refit:
+            if name not in BASE_PARAMETERS:
+                raise InputError(f"refit: {name!r} is not one of {', '.join(BASE_PARAMETERS)}")
+            value = self.model.theta0[self.model.index[name]]
+            if name in given:
+                lo, hi = (float(v) for v in given[name])
+            elif name in specs:
+                lo, hi = specs[name].bounds(value)
+            else:
+                lo, hi = 0.0, np.inf
+            if not lo <= value <= hi:
+                lo, hi = min(lo, value), max(hi, value)
+            if hi > lo:
+                out[name] = (lo, hi)
+        return out
+
+    # -- parameters ---------------------------------------------------------------------
+    def bounds(self, name: str) -> tuple[float, float]:
+        """Absolute bounds of a Jacobian parameter: plausible (refit) or physical (effects)."""
+        if name in self.plausible:
+            return self.plausible[name]
+        effect, _, param = name.partition(".")
+        for c in CANDIDATES:
+            if c.name == effect and param in c.fitted:
+                k = c.fitted.index(param)
+                return (c.lower[k], c.upper[k])
+        return (-np.inf, np.inf)
+
+    def refit_names(self, active: Sequence[str]) -> list[str]:
+        names = list(self.plausible)
+        for c in self.own_effects + [c for c in CANDIDATES if c.name in active]:
+            names += [col for col in c.columns if col not in names]
+        return names
+
+    def with_fixed(self, theta: np.ndarray, candidates: Sequence[Candidate]) -> np.ndarray:
+        theta = theta.copy()
+        for c in candidates:
+            for p, v in c.fixed(self.platform, self.context).items():
+                theta[self.model.index[f"{c.name}.{p}"]] = v
+        return theta
+
+    def residual(self, theta: np.ndarray) -> np.ndarray:
+        return self.y - self.model.forces(theta)[self.used]
+
+    # -- linearisation ------------------------------------------------------------------
+    def linearise(self, theta: np.ndarray, active: Sequence[str],
+                  candidates: Sequence[Candidate]) -> Design:
+        """Residual and columns at theta for the refit and the candidates' parameters.
+
+        Refitted parameters and smooth candidates: columns of the compiled Jacobian.
+        Candidates whose amplitude enters the non-negative Coulomb sum, or that have a grid
+        (see ``candidates``): one variant per sign of the amplitude and grid value, each the
+        one-sided step ``F(amplitude + sign) - F``, evaluated by the compiled model; a
+        variant's coefficient is the amplitude's distance from zero (non-negative).
+        """
+        theta = self.with_fixed(theta, candidates)
+        index = self.model.index
+        refit = self.refit_names(active)
+        plain = [c for c in candidates if not c.stepped]
+        columns = refit + [col for c in plain for col in c.columns]
+        F, J = self.model.jacobian(theta, columns)
+        blocks = [J[self.used]]
+        names = list(columns)
+        signs = [1.0] * len(columns)
+        variants: dict[str, list[list[int]]] = {}
+        grid: dict[str, list[dict]] = {}
+        k = len(refit)
+        for c in plain:
+            variants[c.name] = [list(range(k, k + len(c.columns)))]
+            grid[c.name] = [{}]
+            k += len(c.columns)
+        steps, owners = [], []
+        for c in candidates:
+            if not c.stepped:
+                continue
+            amp = f"{c.name}.{c.amplitude}"
+            settings = [{}]
+            for gname, values in c.grid.items():
+                settings = [{**s_, gname: v} for s_ in settings for v in values]
+            variants[c.name], grid[c.name] = [], []
+            for sign in c.signs:
+                for values in settings:
+                    step = theta.copy()
+                    for gname, v in values.items():
+                        step[index[f"{c.name}.{gname}"]] = v
+                    step[index[amp]] += sign
+                    steps.append(step)
+                    variants[c.name].append([k])
+                    grid[c.name].append(values)
+                    names.append(amp)
+                    signs.append(sign)
+                    owners.append(c.name)
+                    k += 1
+        if steps:
+            cols = (self.model.forces_batch(np.stack(steps)) - F[None])[:, self.used]
+            blocks.append(cols.transpose(1, 2, 0))
+        X = np.concatenate(blocks, axis=2)
+        signs = np.array(signs)
+        lower = np.empty(len(names))
+        upper = np.empty(len(names))
+        for j, name in enumerate(names):
+            lo, hi = self.bounds(name)
+            lo, hi = lo - theta[index[name]], hi - theta[index[name]]
+            if j >= len(columns):
+                # coefficient = signed distance of the amplitude from its value, >= 0
+                lo, hi = (lo, hi) if signs[j] > 0 else (-hi, -lo)
+                lo = max(lo, 0.0)
+            lower[j], upper[j] = lo, hi
+        return Design(theta, self.y - F[self.used], X, names, lower, upper,
+                       list(range(len(refit))), variants, grid, signs)

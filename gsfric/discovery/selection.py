@@ -1,0 +1,319 @@
+"""Testing the candidates of a round and choosing among them.
+
+``screen_candidates`` fits every candidate with the refitted parameters on the prewhitened
+linearised model and decides (F-test at alpha / K, block cross-validation, smallest gap);
+``winner_of`` picks the accepted candidate with the largest held-out gain;
+``indistinguishable`` and ``refit_alternatives`` find the explanations the data cannot tell
+apart; ``bootstrap_share`` measures how stable the choice is; ``refine`` fits the chosen model
+by Gauss-Newton on the compiled model.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from dataclasses import dataclass
+
+import numpy as np
+
+from gsfric.discovery import statistics as st
+from gsfric.discovery.candidates import Candidate
+from gsfric.discovery.residuals import Design, Problem
+
+
+@dataclass
+class CandidateTest:
+    """One candidate's test in one round.
+
+    Attributes
+    ----------
+    name : str
+    parameters : dict[str, float]
+        The candidate's parameters fitted together with the refitted model (linearised).
+    F, p_value : float
+        Nested F-test on the prewhitened data against the refitted model.
+    dof : int
+        Number of parameters tested.
+    cv_gain : float
+        Relative reduction of the held-out prewhitened squared error (block cross-validation).
+    fold_share : float
+        Share of the folds in which the held-out error went down.
+    sse_gain : float
+        Relative reduction of the prewhitened squared error on all data.
+    gap : float
+        RMS change of the fitted residual when the candidate is added (the gap it closes
+        beyond the refitted model), divided by the RMS of the residual left.
+    significant : bool
+    reason : str
+        Why the candidate was or was not accepted.
+    """
+
+    name: str
+    parameters: dict[str, float]
+    F: float
+    p_value: float
+    dof: int
+    cv_gain: float
+    fold_share: float
+    sse_gain: float
+    gap: float = 0.0
+    significant: bool = False
+    reason: str = ""
+
+
+def noise_model(w: st.Whitener) -> dict:
+    """The AR model of each leg's residual, for the report."""
+    return {"ar_order": [len(c) for c in w.coefficients],
+            "lag1_autocorrelation": [round(float(v), 4) for v in w.phi1()],
+            "innovation_std": [float(v) for v in w.innovation_std],
+            "residual_std": [float(v) for v in w.marginal_std]}
+
+
+def profile_cv(blocks: st.Blocks, null: list[int], variants: list[list[int]],
+               lower: np.ndarray, upper: np.ndarray, n_folds: int) -> np.ndarray:
+    """Held-out SSE per fold, the variant chosen on each fold's training blocks."""
+    n = len(blocks.ztz)
+    groups = np.array_split(np.arange(n), n_folds)
+    A, b, c, _ = blocks.total()
+    out = np.empty(len(groups))
+    for f, g in enumerate(groups):
+        Af, bf, cf = blocks.XtX[g].sum(0), blocks.Xtz[g].sum(0), float(blocks.ztz[g].sum())
+        At, bt, ct = A - Af, b - bf, c - cf
+        best = None
+        for v in variants:
+            cols = null + v
+            idx = np.ix_(cols, cols)
+            t = st.solve(At[idx], bt[cols], lower[cols], upper[cols])
+            train = st.sse(At[idx], bt[cols], ct, t)
+            if best is None or train < best[0]:
+                best = (train, st.sse(Af[idx], bf[cols], cf, t))
+        out[f] = best[1]
+    return out
+
+
+@dataclass
+class Screen:
+    """The tests of one round: per candidate its test, its best fit and the variant chosen;
+    the refitted model's fit (``null``), the block cross-products and the null's held-out
+    errors per fold."""
+
+    tests: dict[str, CandidateTest]
+    fits: dict[str, st.Fit]
+    variant: dict[str, int]
+    null: st.Fit
+    blocks: st.Blocks
+    cv_null: np.ndarray
+
+
+def screen_candidates(problem: Problem, design: Design, whitener: st.Whitener,
+                      candidates: Sequence[Candidate]) -> Screen:
+    """Fit and test every candidate against the refitted model (prewhitened by ``whitener``).
+
+    A candidate is accepted when (a) its F-test gives p < alpha / K, (b) it lowers the
+    held-out error of the block cross-validation in total and in at least ``min_fold_share``
+    of the folds, (c) the gap it closes reaches ``min_gap``.
+    """
+    s = problem.settings
+    X = whitener.apply(design.X)
+    z = whitener.apply(design.r)
+    blocks = st.Blocks.build(X, z, s.n_blocks)
+    null_cols = design.refit
+    null = st.fit(blocks, null_cols, design.lower, design.upper)
+    cv_null = st.cross_validate(blocks, null_cols, design.lower, design.upper, s.n_folds)
+    level = s.alpha / max(len(candidates), 1)
+    tests, fits, chosen = {}, {}, {}
+    for c in candidates:
+        options = [st.fit(blocks, null_cols + v, design.lower, design.upper)
+                   for v in design.variants[c.name]]
+        j = int(np.argmin([o.sse for o in options]))
+        best = options[j]
+        F, p, k = st.f_test(null, best, k=len(c.fitted))
+        cv = profile_cv(blocks, null_cols, design.variants[c.name], design.lower,
+                         design.upper, s.n_folds)
+        cv_gain = float((cv_null.sum() - cv.sum()) / cv_null.sum())
+        share = float(np.mean(cv < cv_null))
+        params = candidate_values(problem, design, c, best, j)
+        gap = gap_closed(design, null, best)
+        test = CandidateTest(c.name, params, float(F), p, k, cv_gain, share,
+                             float((null.sse - best.sse) / null.sse), gap)
+        if p >= level:
+            test.reason = f"not significant (p = {p:.2g} >= {level:.2g})"
+        elif cv_gain <= 0:
+            test.reason = "does not lower the held-out error (block cross-validation)"
+        elif share < s.min_fold_share:
+            test.reason = (f"lowers the held-out error in only {share:.0%} of the folds "
+                           f"(needs {s.min_fold_share:.0%})")
+        elif gap < s.min_gap:
+            test.reason = (f"closes a gap of only {gap:.2f} x the noise level "
+                           f"(needs {s.min_gap:g})")
+        else:
+            test.significant = True
+            test.reason = "significant"
+        tests[c.name], fits[c.name], chosen[c.name] = test, best, j
+    return Screen(tests, fits, chosen, null, blocks, cv_null)
+
+
+def gap_closed(design: Design, null: st.Fit, alternative: st.Fit) -> float:
+    """RMS change of the fitted residual from null to alternative over the RMS residual left
+    (unwhitened, from the design's cross-products)."""
+    k = design.XtX.shape[0]
+    a = np.zeros(k)
+    a[alternative.columns] = alternative.coef
+    change = a.copy()
+    change[null.columns] -= null.coef
+    closed = change @ design.XtX @ change
+    left = design.rtr - 2 * a @ design.Xtr + a @ design.XtX @ a
+    return float(np.sqrt(max(closed, 0.0) / max(left, 1e-300)))
+
+
+def candidate_values(problem: Problem, design: Design, c: Candidate, fit: st.Fit,
+                     variant: int) -> dict[str, float]:
+    """The candidate's parameter values of a fit (fixed and grid values included)."""
+    index = problem.model.index
+    values = {}
+    for col, step in zip(fit.columns, fit.coef):
+        name = design.names[col]
+        if name.startswith(c.name + "."):
+            values[name.split(".", 1)[1]] = float(design.theta[index[name]]
+                                                   + design.signs[col] * step)
+    for p, v in c.fixed(problem.platform, problem.context).items():
+        values[p] = float(v)
+    values.update({p: float(v) for p, v in design.grid[c.name][variant].items()})
+    return {p: values[p] for p in list(c.fitted) + [p for p in values if p not in c.fitted]}
+
+
+def winner_of(screen: Screen) -> str | None:
+    """The accepted candidate with the largest held-out gain, or None."""
+    significant = [t for t in screen.tests.values() if t.significant]
+    if not significant:
+        return None
+    return max(significant, key=lambda t: t.cv_gain).name
+
+
+def indistinguishable(problem: Problem, design: Design, screen: Screen, winner: str
+                       ) -> tuple[list[str], dict[str, float]]:
+    """Significant candidates such that the winner adds nothing significant to them."""
+    s = problem.settings
+    blocks = screen.blocks
+    out, p_values = [], {}
+    wv = design.variants[winner][screen.variant[winner]]
+    for name, test in screen.tests.items():
+        if name == winner or not test.significant:
+            continue
+        cv = design.variants[name][screen.variant[name]]
+        alone = st.fit(blocks, design.refit + cv, design.lower, design.upper)
+        both = st.fit(blocks, design.refit + cv + wv, design.lower, design.upper)
+        _, p, _ = st.f_test(alone, both)
+        p_values[name] = p
+        if p >= s.alpha:
+            out.append(name)
+    return out, p_values
+
+
+def refit_alternatives(problem: Problem, design: Design, screen: Screen,
+                       theta0: np.ndarray) -> dict[str, list[str]]:
+    """Refitted changes that a candidate could explain just as well.
+
+    For a refitted parameter q whose change from the model's value is significant, a
+    candidate c that is not accepted is an alternative when, with q held at the model's value,
+    c explains the gap (significant) and q's change is no longer significant with c present:
+    the data cannot tell the two explanations apart.
+    """
+    s = problem.settings
+    out: dict[str, list[str]] = {}
+    index = problem.model.index
+    for col in design.refit:
+        name = design.names[col]
+        if name not in problem.plausible:
+            continue
+        pinned_lo, pinned_hi = design.lower.copy(), design.upper.copy()
+        pinned_lo[col] = pinned_hi[col] = theta0[index[name]] - design.theta[index[name]]
+        fixed = st.fit(screen.blocks, design.refit, pinned_lo, pinned_hi)
+        _, p, _ = st.f_test(as_reduced(fixed), screen.null)
+        if p >= s.alpha:
+            continue
+        for c, test in screen.tests.items():
+            if test.significant:
+                continue
+            cols = design.refit + design.variants[c][screen.variant[c]]
+            with_c = st.fit(screen.blocks, cols, design.lower, design.upper)
+            pinned_c = st.fit(screen.blocks, cols, pinned_lo, pinned_hi)
+            _, p_c, _ = st.f_test(as_reduced(fixed), as_reduced(pinned_c))
+            _, p_q, _ = st.f_test(as_reduced(pinned_c), with_c)
+            if p_c < s.alpha and p_q >= s.alpha:
+                out.setdefault(name, []).append(c)
+    return out
+
+
+def as_reduced(f: st.Fit) -> st.Fit:
+    """A fit with one parameter pinned, counted as a model with one parameter fewer."""
+    return st.Fit(f.columns[:-1], f.coef, f.sse, f.rows)
+
+
+def bootstrap_share(problem: Problem, design: Design, screen: Screen,
+                    rng: np.random.Generator) -> dict[str, float]:
+    """Share of block-bootstrap draws (``n_bootstrap // 2``) in which each accepted candidate
+    reduces the error most."""
+    s = problem.settings
+    names = [n for n, t in screen.tests.items() if t.significant]
+    if not names:
+        return {}
+    weights = st.bootstrap_weights(rng, len(screen.blocks.ztz), max(s.n_bootstrap // 2, 1))
+    wins = np.zeros(len(names))
+    for w in weights:
+        null = st.fit(screen.blocks, design.refit, design.lower, design.upper, w)
+        gains = []
+        for n in names:
+            cols = design.refit + design.variants[n][screen.variant[n]]
+            f = st.fit(screen.blocks, cols, design.lower, design.upper, w)
+            gains.append(null.sse - f.sse)
+        wins[int(np.argmax(gains))] += 1
+    return {n: float(v / len(weights)) for n, v in zip(names, wins)}
+
+
+# -- Gauss-Newton refinement on the compiled model ---------------------------------------------
+
+
+def refine(problem: Problem, theta: np.ndarray, names: list[str], whitener: st.Whitener,
+           start: tuple[np.ndarray, np.ndarray] | None = None
+           ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Gauss-Newton on the named parameters within their bounds (prewhitened objective).
+
+    ``start``, if given, is the residual (M, 6) and Jacobian (M, 6, k) at theta (which must
+    lie within the bounds). Returns theta, the residual and the Jacobian at the result.
+    """
+    model = problem.model
+    cols = [model.index[n] for n in names]
+    lo = np.array([problem.bounds(n)[0] for n in names])
+    hi = np.array([problem.bounds(n)[1] for n in names])
+    theta = theta.copy()
+    inside = bool(np.all((theta[cols] >= lo) & (theta[cols] <= hi)))
+    theta[cols] = np.clip(theta[cols], lo, hi)
+
+    def at(th):
+        F, J = model.jacobian(th, names)
+        r = problem.y - F[problem.used]
+        return r, J[problem.used], float(np.sum(whitener.apply(r) ** 2))
+
+    if start is not None and inside:
+        r, J = start
+        current = float(np.sum(whitener.apply(r) ** 2))
+    else:
+        r, J, current = at(theta)
+    for _ in range(problem.settings.gauss_newton):
+        X = whitener.apply(J).reshape(-1, len(names))
+        z = whitener.apply(r).reshape(-1)
+        step = st.solve(np.einsum("ik,il->kl", X, X), np.einsum("ik,i->k", X, z),
+                        lo - theta[cols], hi - theta[cols])
+        for scale in (1.0, 0.5, 0.25):
+            trial = theta.copy()
+            trial[cols] = np.clip(theta[cols] + scale * step, lo, hi)
+            r_t, J_t, value = at(trial)
+            if value <= current:
+                break
+        else:
+            break
+        gain = (current - value) / max(current, 1e-300)
+        theta, r, J, current = trial, r_t, J_t, value
+        if gain < 1e-5:
+            break
+    return theta, r, J

@@ -1,0 +1,337 @@
+"""Decisions that hold under autocorrelated residuals.
+
+Measurement residuals are never white: force noise is coloured, and so are the errors of a
+motion differentiated from noisy poses. A least-squares fit and an F-test or BIC that assume
+white noise count every sample as new information and find "effects" everywhere. The workflow
+uses three tools instead, each on a linearised model (the columns of dF/dtheta):
+
+* **Prewhitening** (``Whitener``): an AR(p) model is fitted to each leg's residual
+  (Yule-Walker via Levinson-Durbin, order by BIC up to ``MAX_ORDER``), and residuals and design
+  columns are filtered by ``1 - sum phi_j L^j``. Generalised least squares then becomes ordinary
+  least squares on filtered data, and nested F-tests on the filtered data are approximately
+  valid.
+* **Block cross-validation** (``cross_validate``): the samples are cut into contiguous stretches
+  of time; each fold leaves out a stretch, fits on the rest and scores the one-step prediction
+  error (the prewhitened residual) of the stretch left out. Autocorrelated noise cannot leak
+  between folds much further than its correlation time, which is far shorter than a stretch.
+* **Block bootstrap** (``bootstrap``): stretches are drawn with replacement to measure how
+  stable the choice of effect is and how uncertain its parameters are.
+
+All three work on cross-products of the prewhitened design per block of time (``Blocks``), so
+a fit is a small (k x k) solve whatever the number of samples.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from dataclasses import dataclass
+
+import numpy as np
+
+MAX_ORDER = 12
+"""Largest AR order considered for the residual of each leg."""
+
+RIDGE = 1e-10
+"""Ridge added to the scaled normal equations (unit diagonal) of every fit."""
+
+
+# -- AR noise model ---------------------------------------------------------------------------
+
+
+def _autocovariance(e: np.ndarray, max_lag: int) -> np.ndarray:
+    """Autocovariances (max_lag + 1, k) of the columns of e (N, k) (biased estimator)."""
+    n = e.shape[0]
+    e = e - e.mean(axis=0)
+    size = 1 << int(np.ceil(np.log2(2 * n)))
+    f = np.fft.rfft(e, size, axis=0)
+    acov = np.fft.irfft(f * np.conj(f), size, axis=0)[:max_lag + 1] / n
+    return acov
+
+
+def _levinson(r: np.ndarray, order: int) -> tuple[list[np.ndarray], np.ndarray]:
+    """AR coefficients of every order up to ``order`` and their innovation variances."""
+    phis = [np.zeros(0)]
+    variances = [r[0]]
+    phi = np.zeros(0)
+    v = r[0]
+    for p in range(1, order + 1):
+        if v <= 0:
+            break
+        k = (r[p] - phi @ r[p - 1:0:-1]) / v if p > 1 else r[1] / v
+        phi = np.concatenate([phi - k * phi[::-1], [k]])
+        v = v * (1 - k * k)
+        phis.append(phi.copy())
+        variances.append(v)
+    return phis, np.array(variances)
+
+
+@dataclass
+class Whitener:
+    """Per-leg AR(p) prewhitening filters.
+
+    Attributes
+    ----------
+    coefficients : list of ndarray
+        ``phi`` of each leg (length its order).
+    innovation_std : ndarray, shape (6,)
+        Standard deviation of each leg's innovations, N.
+    marginal_std : ndarray, shape (6,)
+        Standard deviation of each leg's residual, N.
+    """
+
+    coefficients: list[np.ndarray]
+    innovation_std: np.ndarray
+    marginal_std: np.ndarray
+
+    @property
+    def order(self) -> int:
+        """Largest order over the legs: the number of leading samples the filter drops."""
+        return max(len(c) for c in self.coefficients)
+
+    @classmethod
+    def fit(cls, residual: np.ndarray, max_order: int = MAX_ORDER) -> Whitener:
+        """AR models of each leg's residual (N, 6), orders by BIC.
+
+        Parameters
+        ----------
+        residual : ndarray, shape (N, 6)
+        max_order : int
+        """
+        n, legs = residual.shape
+        max_order = int(min(max_order, max(1, n // 10)))
+        acov = _autocovariance(residual, max_order)
+        coefs, innov = [], []
+        for i in range(legs):
+            phis, var = _levinson(acov[:, i], max_order)
+            bic = [n * np.log(max(v, 1e-300)) + p * np.log(n) for p, v in enumerate(var)]
+            p = int(np.argmin(bic))
+            coefs.append(phis[p])
+            innov.append(np.sqrt(max(var[p], 0.0)))
+        return cls(coefs, np.array(innov), np.sqrt(np.maximum(acov[0], 0.0)))
+
+    @classmethod
+    def identity(cls, legs: int = 6) -> Whitener:
+        """No filtering (white noise)."""
+        return cls([np.zeros(0)] * legs, np.ones(legs), np.ones(legs))
+
+    def apply(self, a: np.ndarray) -> np.ndarray:
+        """Filter ``a`` (N, 6, ...) along time; returns (N - order, 6, ...)."""
+        from scipy.signal import lfilter
+
+        p = self.order
+        out = np.empty((a.shape[0] - p,) + a.shape[1:])
+        for i, phi in enumerate(self.coefficients):
+            if len(phi) == 0:
+                out[:, i] = a[p:, i]
+            else:
+                out[:, i] = lfilter(np.concatenate([[1.0], -phi]), [1.0], a[:, i], axis=0)[p:]
+        return out
+
+    def phi1(self) -> np.ndarray:
+        """Lag-one autocorrelation implied by each leg's model, (6,)."""
+        out = []
+        for phi in self.coefficients:
+            if len(phi) == 0:
+                out.append(0.0)
+                continue
+            # autocorrelation at lag 1 from the Yule-Walker equations of the fitted model
+            p = len(phi)
+            M = np.eye(p)
+            for k in range(1, p + 1):
+                for j in range(1, p + 1):
+                    lag = abs(k - j)
+                    if lag:
+                        M[k - 1, lag - 1] -= phi[j - 1]
+            rho = np.linalg.solve(M, phi)
+            out.append(float(rho[0]))
+        return np.array(out)
+
+
+# -- cross-products by blocks of time ---------------------------------------------------------
+
+
+@dataclass
+class Blocks:
+    """Cross-products of a prewhitened design per contiguous block of time.
+
+    Attributes
+    ----------
+    XtX : ndarray, shape (B, k, k)
+    Xtz : ndarray, shape (B, k)
+    ztz : ndarray, shape (B,)
+    rows : ndarray, shape (B,)
+        Number of scalar observations (samples x legs) in each block.
+    """
+
+    XtX: np.ndarray
+    Xtz: np.ndarray
+    ztz: np.ndarray
+    rows: np.ndarray
+
+    @classmethod
+    def build(cls, X: np.ndarray, z: np.ndarray, n_blocks: int) -> Blocks:
+        """Blocks of a design X (M, 6, k) and target z (M, 6), cut into ``n_blocks`` stretches
+        of equal length (the last one takes the remainder)."""
+        m, legs, k = X.shape
+        length = m // n_blocks
+        cut = length * n_blocks
+        Xb = np.ascontiguousarray(X[:cut]).reshape(n_blocks, length * legs, k)
+        zb = np.ascontiguousarray(z[:cut]).reshape(n_blocks, length * legs, 1)
+        XtX = np.einsum("bik,bil->bkl", Xb, Xb)
+        Xtz = np.einsum("bik,bi->bk", Xb, zb[:, :, 0])
+        ztz = np.einsum("bi,bi->b", zb[:, :, 0], zb[:, :, 0])
+        rows = np.full(n_blocks, float(length * legs))
+        if cut < m:
+            Xr = X[cut:].reshape(-1, k)
+            zr = z[cut:].reshape(-1)
+            XtX[-1] += np.einsum("ik,il->kl", Xr, Xr)
+            Xtz[-1] += np.einsum("ik,i->k", Xr, zr)
+            ztz[-1] += zr @ zr
+            rows[-1] += zr.size
+        return cls(XtX, Xtz, ztz, rows)
+
+    def total(self, weights: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray, float,
+                                                               float]:
+        """Summed (XtX, Xtz, ztz, rows), blocks weighted by ``weights`` (counts) if given."""
+        if weights is None:
+            return self.XtX.sum(0), self.Xtz.sum(0), float(self.ztz.sum()), float(
+                self.rows.sum())
+        w = np.asarray(weights, float)
+        return (np.tensordot(w, self.XtX, 1), w @ self.Xtz, float(w @ self.ztz),
+                float(w @ self.rows))
+
+
+# -- bounded least squares on cross-products ---------------------------------------------------
+
+
+def solve(A: np.ndarray, b: np.ndarray, lower: np.ndarray | None = None,
+          upper: np.ndarray | None = None) -> np.ndarray:
+    """argmin ``t' A t - 2 b' t`` within bounds (A symmetric positive semi-definite).
+
+    Columns are scaled to unit diagonal and a tiny ridge keeps confounded columns solvable.
+    The bounds are handled by a primal active-set method (exact for this convex problem; a
+    few small solves, as the problems have at most a few dozen parameters).
+    """
+    k = len(b)
+    if k == 0:
+        return np.zeros(0)
+    d = np.sqrt(np.maximum(np.diag(A), 1e-300))
+    As = A / np.outer(d, d) + RIDGE * np.eye(k)
+    bs = b / d
+    lo = np.full(k, -np.inf) if lower is None else np.asarray(lower, float) * d
+    hi = np.full(k, np.inf) if upper is None else np.asarray(upper, float) * d
+    t = np.linalg.solve(As, bs)
+    if np.all(t >= lo) and np.all(t <= hi):
+        return t / d
+    return _active_set(As, bs, lo, hi, np.clip(t, lo, hi)) / d
+
+
+def _active_set(A: np.ndarray, b: np.ndarray, lo: np.ndarray, hi: np.ndarray,
+                x: np.ndarray) -> np.ndarray:
+    """Box-constrained convex QP ``min t'At - 2b't``, ``lo <= t <= hi``, by active sets,
+    from the feasible point x (its entries on a bound start in the working set)."""
+    k = len(b)
+    at_bound = (x == lo) | (x == hi)
+    for _ in range(10 * k + 10):
+        free = ~at_bound
+        target = x.copy()
+        if free.any():
+            rhs = b[free] - A[np.ix_(free, ~free)] @ x[~free]
+            target[free] = np.linalg.solve(A[np.ix_(free, free)], rhs)
+        if np.all(target >= lo - 1e-12) and np.all(target <= hi + 1e-12):
+            x = np.clip(target, lo, hi)
+            g = A @ x - b
+            wrong = at_bound & (((x <= lo) & (g < 0)) | ((x >= hi) & (g > 0)))
+            if not wrong.any():
+                return x
+            j = int(np.argmax(np.where(wrong, np.abs(g), -1.0)))
+            at_bound[j] = False
+            continue
+        step = target - x
+        with np.errstate(divide="ignore", invalid="ignore"):
+            reach = np.where(step < 0, (lo - x) / step, np.where(step > 0, (hi - x) / step,
+                                                                  np.inf))
+        reach = np.where(free, reach, np.inf)
+        j = int(np.argmin(reach))
+        alpha = float(np.clip(reach[j], 0.0, 1.0))
+        x = np.clip(x + alpha * step, lo, hi)
+        x[j] = lo[j] if step[j] < 0 else hi[j]
+        at_bound[j] = True
+    return x
+
+
+def sse(A: np.ndarray, b: np.ndarray, c: float, t: np.ndarray) -> float:
+    """Residual sum of squares ``c - 2 b't + t'A t`` of coefficients t."""
+    return float(c - 2 * b @ t + t @ A @ t)
+
+
+@dataclass
+class Fit:
+    """A linearised least-squares fit on a subset of the design's columns.
+
+    Attributes
+    ----------
+    columns : list[int]
+        Indices of the design columns used.
+    coef : ndarray, shape (k,)
+        Parameter steps from the linearisation point.
+    sse : float
+        Residual sum of squares of the prewhitened data.
+    rows : float
+        Number of scalar observations.
+    """
+
+    columns: list[int]
+    coef: np.ndarray
+    sse: float
+    rows: float
+
+
+def fit(blocks: Blocks, columns: Sequence[int], lower: np.ndarray, upper: np.ndarray,
+        weights: np.ndarray | None = None) -> Fit:
+    """Bounded fit of the named columns on (weighted) blocks; bounds are per design column."""
+    A, b, c, rows = blocks.total(weights)
+    cols = list(columns)
+    idx = np.ix_(cols, cols)
+    t = solve(A[idx], b[cols], lower[cols], upper[cols])
+    return Fit(cols, t, sse(A[idx], b[cols], c, t), rows)
+
+
+def f_test(null: Fit, alternative: Fit, k: int | None = None) -> tuple[float, float, int]:
+    """Nested F-test on prewhitened data: (F, p-value, numerator degrees of freedom).
+
+    ``k``, the number of parameters tested, defaults to the difference in columns.
+    """
+    from scipy.special import fdtrc
+
+    if k is None:
+        k = len(alternative.columns) - len(null.columns)
+    dof = alternative.rows - len(null.columns) - k
+    if k <= 0 or alternative.sse <= 0 or dof <= 0:
+        return 0.0, 1.0, max(k, 0)
+    F = max(null.sse - alternative.sse, 0.0) / k / (alternative.sse / dof)
+    return float(F), float(fdtrc(k, dof, F)), k
+
+
+def cross_validate(blocks: Blocks, columns: Sequence[int], lower: np.ndarray,
+                   upper: np.ndarray, n_folds: int) -> np.ndarray:
+    """Held-out prewhitened SSE of each fold (contiguous groups of blocks), shape (n_folds,)."""
+    n = len(blocks.ztz)
+    groups = np.array_split(np.arange(n), n_folds)
+    A, b, c, _ = blocks.total()
+    cols = list(columns)
+    idx = np.ix_(cols, cols)
+    out = np.empty(len(groups))
+    for f, g in enumerate(groups):
+        Af, bf, cf = blocks.XtX[g].sum(0), blocks.Xtz[g].sum(0), float(blocks.ztz[g].sum())
+        t = solve((A - Af)[idx], (b - bf)[cols], lower[cols], upper[cols])
+        out[f] = sse(Af[idx], bf[cols], cf, t)
+    return out
+
+
+def bootstrap_weights(rng: np.random.Generator, n_blocks: int, n_draws: int) -> np.ndarray:
+    """Counts (n_draws, n_blocks) of blocks drawn with replacement (block bootstrap)."""
+    draws = rng.integers(0, n_blocks, size=(n_draws, n_blocks))
+    counts = np.zeros((n_draws, n_blocks))
+    np.add.at(counts, (np.arange(n_draws)[:, None], draws), 1.0)
+    return counts

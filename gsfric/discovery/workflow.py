@@ -1,0 +1,490 @@
+"""The discrepancy workflow: refit the model, test the candidate effects, add the winner, repeat.
+
+Steps (docs/discovery.md explains each decision):
+
+1. Simulate the measured motion with the current model; residuals ``r = F_measured - F_model``
+   per leg. The first and last ``trim`` samples, where the differentiation of the recorded pose
+   is least accurate, are left out of every fit and statistic.
+2. Refit the model's own parameters (``REFIT``: prismatic friction coefficients, payload mass,
+   plus the parameters of any effect the model already has) within their plausible ranges. A
+   refit that would need an implausible value is reported as such; it is held at the range's
+   edge and the rest of the gap is left to the candidates.
+3. Round after round: linearise the model at the current parameters (compiled Jacobian),
+   prewhiten with an AR model of the residual, and test every candidate effect against the
+   refitted model with (a) a nested F-test on the prewhitened data at level ``alpha / K`` (K
+   candidates: Bonferroni), (b) block cross-validation: the held-out prewhitened error must
+   shrink, in total and in most folds, and (c) the gap it closes must reach ``min_gap`` times
+   the noise level. The accepted candidate with the largest held-out gain wins; accepted
+   candidates to which the winner adds nothing significant are reported as "cannot be told
+   apart". The AR model is re-estimated from the winner's residual and the round repeated
+   until the winner is stable (Cochrane-Orcutt).
+4. Refine the winner and the refitted parameters by Gauss-Newton on the compiled model, add
+   the winner, and start the next round; stop when no candidate is significant.
+5. Block bootstrap of the final fit: how often each effect wins, and parameter intervals.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from gsfric.discovery import statistics as st
+from gsfric.discovery.candidates import CANDIDATE_NAMES, CANDIDATES, REFIT
+from gsfric.discovery.regimes import bands as regime_bands
+from gsfric.discovery.residuals import Problem
+from gsfric.discovery.selection import (CandidateTest, bootstrap_share, indistinguishable,
+                                        noise_model, refine, refit_alternatives,
+                                        screen_candidates, winner_of)
+from gsfric.platform import Platform
+from gsfric.trajectory import Motion
+
+
+@dataclass(frozen=True)
+class Settings:
+    """Settings of the workflow.
+
+    Attributes
+    ----------
+    alpha : float
+        Family-wise level of each round's tests (Bonferroni over the candidates).
+    max_effects : int
+        Most effects added.
+    n_blocks : int
+        Contiguous blocks of time: the unit of cross-validation folds and bootstrap draws.
+    n_folds : int
+        Cross-validation folds (contiguous groups of blocks).
+    min_fold_share : float
+        Share of folds in which a candidate must lower the held-out error.
+    min_gap : float
+        Smallest gap a candidate must close beyond the refitted model: the RMS change of the
+        fitted residual, as a multiple of the RMS of the residual left (the noise level).
+    n_bootstrap : int
+        Block-bootstrap draws of the parameter intervals (half as many for the share of draws
+        each accepted candidate wins).
+    trim : int or None
+        Samples left out at each end (None: ``min(MAX_AUTO_WINDOW // 2, N // 20)``).
+    candidates : tuple of str
+        Candidate effects tested (default: the whole catalog).
+    refit : tuple of str
+        Model parameters refitted (see ``candidates.REFIT``).
+    plausible : mapping or None
+        Plausible ranges ``{name: (lower, upper)}`` replacing the defaults of ``REFIT``.
+    gauss_newton : int
+        Most Gauss-Newton iterations of a refinement.
+    n_threads : int
+        Threads of the compiled evaluation (0: every core).
+    """
+
+    alpha: float = 0.01
+    max_effects: int = 4
+    n_blocks: int = 40
+    n_folds: int = 8
+    min_fold_share: float = 0.75
+    min_gap: float = 0.3
+    n_bootstrap: int = 200
+    trim: int | None = None
+    candidates: tuple[str, ...] = CANDIDATE_NAMES
+    refit: tuple[str, ...] = tuple(r.name for r in REFIT)
+    plausible: Mapping[str, tuple[float, float]] | None = None
+    gauss_newton: int = 4
+    n_threads: int = 0
+
+
+@dataclass
+class Round:
+    """One round: the tests, the winner and its competitors.
+
+    Attributes
+    ----------
+    index : int
+    tests : list[CandidateTest]
+    winner : str or None
+    indistinguishable : list[str]
+        Significant candidates that the data cannot tell apart from the winner.
+    bootstrap_share : dict[str, float]
+        Share of block-bootstrap draws in which each significant candidate reduced the error
+        most.
+    level : float
+        The per-candidate test level ``alpha / K``.
+    noise_model : dict
+        AR orders and lag-one autocorrelations of the residual of each leg.
+    rms_before, rms_after : float
+        RMS of the residual (N) before and after the round.
+    """
+
+    index: int
+    tests: list[CandidateTest]
+    winner: str | None
+    indistinguishable: list[str] = field(default_factory=list)
+    bootstrap_share: dict[str, float] = field(default_factory=dict)
+    level: float = 0.0
+    noise_model: dict = field(default_factory=dict)
+    rms_before: float = 0.0
+    rms_after: float = 0.0
+
+
+@dataclass
+class Finding:
+    """An effect named by the workflow.
+
+    Attributes
+    ----------
+    name : str
+        Catalog effect name.
+    parameters : dict[str, float]
+        Fitted values (fixed parameters included).
+    interval : dict[str, tuple[float, float]]
+        95% block-bootstrap intervals of the fitted parameters.
+    evidence : dict
+        Test statistics, cross-validation, bootstrap share, effect size, the round it was found
+        in, the candidates it cannot be told apart from, where it shows.
+    """
+
+    name: str
+    parameters: dict[str, float]
+    interval: dict[str, tuple[float, float]]
+    evidence: dict
+
+
+@dataclass
+class Discovery:
+    """Everything the workflow found.
+
+    Attributes
+    ----------
+    effects : list[Finding]
+        Effects named, in the order found (empty: nothing significant is missing).
+    refit : dict
+        The model's own parameters: model value, refitted value, plausible range, the value an
+        unbounded refit would need, and alternative explanations.
+    rounds : list[Round]
+    rms_before, rms_refit, rms_after : float
+        RMS residual (N, all legs, trimmed samples) of the model as given, after the refit
+        alone, and of the final model.
+    noise_rms_estimate : float
+        RMS of the final residual corrected for the parameters fitted: the noise level, if the
+        final model is right.
+    t : ndarray, shape (M,)
+        Times of the samples used, s.
+    residual_before, residual_after : ndarray, shape (M, 6)
+        Residuals of the model as given and of the final model, N.
+    used : slice
+        The samples used, of the data's N.
+    model : Platform
+        The model as given.
+    platform : Platform
+        The final model: refitted parameters, named effects switched on.
+    result_before : gsfric.Result
+        Full evaluation of the given model over the used samples (speeds, lengths, loads).
+    noise_model : dict
+        AR model of the final residual.
+    regimes : list[gsfric.discovery.regimes.Band]
+        The residual before and after per band of speed, load, stroke, pose and time.
+    settings : Settings
+    evaluations : int
+        Calls of the compiled model.
+    notes : list[str]
+        Remarks for the report (implausible refits, flagged steps, ...).
+    """
+
+    effects: list[Finding]
+    refit: dict
+    rounds: list[Round]
+    rms_before: float
+    rms_refit: float
+    rms_after: float
+    noise_rms_estimate: float
+    t: np.ndarray
+    residual_before: np.ndarray
+    residual_after: np.ndarray
+    used: slice
+    model: Platform
+    platform: Platform
+    result_before: object
+    noise_model: dict
+    regimes: list = field(default_factory=list)
+    settings: Settings = field(default_factory=Settings)
+    evaluations: int = 0
+    notes: list[str] = field(default_factory=list)
+
+    @property
+    def names(self) -> list[str]:
+        """Names of the effects found."""
+        return [f.name for f in self.effects]
+
+    def summary(self) -> dict:
+        """The summary.json content (SPEC), plus the refit, rounds and per-leg gaps."""
+        from gsfric.discovery.report import summary
+
+        return summary(self)
+
+
+# -- the workflow -------------------------------------------------------------------------------
+
+
+def _rms(r: np.ndarray) -> float:
+    return float(np.sqrt(np.mean(r ** 2)))
+
+
+def discover(motion: Motion, forces: np.ndarray, platform: Platform | None = None, *,
+             settings: Settings | None = None, seed: int = 0, progress: bool = False,
+             **options) -> Discovery:
+    """Find which effects the model misses, fit them, and measure how much of the gap closes.
+
+    Parameters
+    ----------
+    motion : Motion
+        The measured motion (N steps), e.g. from ``gsfric.io.read_measured``.
+    forces : ndarray, shape (N, 6)
+        Measured actuator forces F1..F6, N (friction included).
+    platform : Platform, optional
+        The current model (default: the reference platform).
+    settings : Settings, optional
+    seed : int
+        Seed of the block bootstrap.
+    progress : bool
+        Show progress on stderr.
+    **options
+        Fields of ``Settings`` overriding ``settings``.
+
+    Returns
+    -------
+    Discovery
+    """
+    import dataclasses
+
+    from gsfric.models import reference_platform
+
+    settings = dataclasses.replace(settings or Settings(), **options)
+    platform = reference_platform() if platform is None else platform
+    bar = _Progress(progress, settings.max_effects + 3)
+    bar.step("simulating the model along the measured motion")
+    problem = Problem(motion, forces, platform, settings)
+    model = problem.model
+    rng = np.random.default_rng(seed)
+    theta0 = model.theta0.copy()
+    notes = [f"candidate {n} not tested: {why}" for n, why in problem.skipped.items()]
+
+    # -- refit of the model's own parameters
+    bar.step("refitting the model's own parameters")
+    names = problem.refit_names([])
+    F0, J0 = model.jacobian(theta0, names)
+    residual_before = problem.y - F0[problem.used]
+    whitener = st.Whitener.fit(residual_before)
+    refit = _refit_report(problem, theta0, J0[problem.used], whitener, residual_before)
+    theta, r, J = refine(problem, theta0, names, whitener,
+                          start=(residual_before, J0[problem.used]))
+    rms_refit = _rms(r)
+    for name in names:
+        if name not in refit["parameters"]:
+            refit["parameters"][name] = {
+                "model": float(theta0[model.index[name]]), "unbounded": None,
+                "plausible": list(problem.bounds(name)), "plausible_refit": True}
+        refit["parameters"][name]["refit"] = float(theta[model.index[name]])
+    notes += refit.pop("notes")
+
+    active: list[str] = []
+    rounds: list[Round] = []
+    findings_evidence: dict[str, dict] = {}
+    while len(active) < settings.max_effects:
+        candidates = [c for c in problem.candidates if c.name not in active]
+        if not candidates:
+            break
+        bar.step(f"round {len(rounds) + 1}: testing {len(candidates)} candidate effects")
+        design = problem.linearise(theta, active, candidates)
+        whitener = st.Whitener.fit(design.r)
+        screen = screen_candidates(problem, design, whitener, candidates)
+        if not rounds:
+            for name, alts in refit_alternatives(problem, design, screen, theta0).items():
+                refit["parameters"][name]["alternatives"] = alts
+                notes.append(f"the refitted change of {name} could equally be explained by "
+                             f"{', '.join(alts)}: the data cannot tell them apart")
+        winner = winner_of(screen)
+        seen = [winner]
+        for _ in range(3):
+            if winner is None:
+                break
+            fit = screen.fits[winner]
+            r_alt = design.r - design.X[:, :, fit.columns] @ fit.coef
+            whitener = st.Whitener.fit(r_alt)
+            screen = screen_candidates(problem, design, whitener, candidates)
+            new = winner_of(screen)
+            if new == winner:
+                break
+            winner = new
+            if winner in seen:
+                break
+            seen.append(winner)
+        level = settings.alpha / len(candidates)
+        rnd = Round(len(rounds) + 1, list(screen.tests.values()), winner, level=level,
+                    noise_model=noise_model(whitener), rms_before=_rms(design.r))
+        rounds.append(rnd)
+        if winner is None:
+            rnd.rms_after = rnd.rms_before
+            break
+        rnd.indistinguishable, p_alone = indistinguishable(problem, design, screen, winner)
+        rnd.bootstrap_share = bootstrap_share(problem, design, screen, rng)
+        c = next(c for c in candidates if c.name == winner)
+        start = design.theta.copy()
+        values = screen.tests[winner].parameters
+        for p in c.fitted:
+            start[model.index[f"{winner}.{p}"]] = values[p]
+        step_fit = screen.fits[winner]
+        for col, step in zip(step_fit.columns, step_fit.coef):
+            if col in design.refit:
+                start[model.index[design.names[col]]] += design.signs[col] * step
+        names = problem.refit_names(active + [winner])
+        theta, r, J = refine(problem, start, names, whitener)
+        rnd.rms_after = _rms(r)
+        active.append(winner)
+        test = screen.tests[winner]
+        findings_evidence[winner] = {
+            "round": rnd.index, "F": test.F, "p_value": test.p_value, "dof": test.dof,
+            "level": level, "cv_gain": test.cv_gain, "fold_share": test.fold_share,
+            "bootstrap_share": rnd.bootstrap_share.get(winner, 0.0),
+            "indistinguishable_from": list(rnd.indistinguishable),
+            "p_value_beyond": {k: v for k, v in p_alone.items()},
+            "rms_before": rnd.rms_before, "rms_after": rnd.rms_after,
+            "signature": c.signature,
+        }
+
+    bar.step("bootstrap of the final fit")
+    residual_after = r
+    whitener = st.Whitener.fit(residual_after)
+    intervals = _intervals(problem, J, names, whitener, residual_after, rng, theta)
+    n_fitted = len(names)
+    rows = residual_after.size
+    noise = float(np.sqrt(np.sum(residual_after ** 2) / max(rows - n_fitted, 1)))
+    final = model.platform_at(theta, list(dict.fromkeys(
+        [c.name for c in problem.own_effects] + active)))
+    contributions = _contributions(problem, theta, active)
+    findings = []
+    for name in active:
+        c = next(c for c in CANDIDATES if c.name == name)
+        params = {p: float(v) for p, v in final.effects[name].items()}
+        ev = findings_evidence[name]
+        ev["effect_size"] = _rms(contributions[name]) / noise if noise > 0 else float("inf")
+        ev["contribution_rms"] = _rms(contributions[name])
+        findings.append(Finding(name, params,
+                                {p: intervals[f"{name}.{p}"] for p in c.fitted}, ev))
+    for name in list(refit["parameters"]):
+        refit["parameters"][name]["final"] = float(theta[model.index[name]])
+        refit["parameters"][name]["interval"] = intervals.get(name)
+    if len(active) == settings.max_effects and rounds and rounds[-1].winner is not None:
+        notes.append(f"stopped after {settings.max_effects} effects (max_effects)")
+    flagged = int(np.count_nonzero(problem.result.flag[problem.used]))
+    if flagged:
+        notes.append(f"{flagged} of {len(residual_before)} samples are flagged by the model "
+                     "(see gsfric.evaluation: stroke, near-singular poses); they are kept")
+    used = problem.used
+    table = regime_bands(np.asarray(motion.t[used]), problem.result.D_dot[used],
+                         problem.result.D[used], problem.result.F[used],
+                         motion.rotation[used], residual_before, residual_after)
+    bar.close()
+    return Discovery(
+        effects=findings, refit=refit, rounds=rounds, rms_before=_rms(residual_before),
+        rms_refit=rms_refit, rms_after=_rms(residual_after), noise_rms_estimate=noise,
+        t=np.asarray(motion.t[problem.used]), residual_before=residual_before,
+        residual_after=residual_after, used=problem.used, model=platform, platform=final,
+        result_before=problem.result, noise_model=noise_model(whitener), regimes=table,
+        settings=settings, evaluations=model.evaluations, notes=notes)
+
+
+def _contributions(problem: Problem, theta: np.ndarray, active: Sequence[str]
+                   ) -> dict[str, np.ndarray]:
+    """Each named effect's contribution to F at theta (F minus F with it switched off)."""
+    if not active:
+        return {}
+    from gsfric.catalog import EFFECTS
+
+    model = problem.model
+    thetas = [theta]
+    for name in active:
+        off = theta.copy()
+        for p, d in EFFECTS[name].items():
+            off[model.index[f"{name}.{p}"]] = d
+        thetas.append(off)
+    F = model.forces_batch(np.stack(thetas))[:, problem.used]
+    return {name: F[0] - F[k + 1] for k, name in enumerate(active)}
+
+
+def _intervals(problem: Problem, J: np.ndarray, names: list[str], whitener: st.Whitener,
+               residual: np.ndarray, rng: np.random.Generator, theta: np.ndarray
+               ) -> dict[str, tuple[float, float]]:
+    """95% block-bootstrap intervals of the fitted parameters, linearised at theta.
+
+    J (M, 6, k) holds the derivatives of F with respect to ``names`` at theta, used samples.
+    """
+    if not names:
+        return {}
+    model = problem.model
+    s = problem.settings
+    X = whitener.apply(J)
+    z = whitener.apply(residual)
+    blocks = st.Blocks.build(X, z, s.n_blocks)
+    cols = [model.index[n] for n in names]
+    lo = np.array([problem.bounds(n)[0] for n in names]) - theta[cols]
+    hi = np.array([problem.bounds(n)[1] for n in names]) - theta[cols]
+    draws = []
+    for w in st.bootstrap_weights(rng, s.n_blocks, s.n_bootstrap):
+        draws.append(st.fit(blocks, list(range(len(names))), lo, hi, w).coef)
+    draws = np.array(draws) + theta[cols]
+    q = np.percentile(draws, [2.5, 97.5], axis=0)
+    return {n: (float(q[0, k]), float(q[1, k])) for k, n in enumerate(names)}
+
+
+def _refit_report(problem: Problem, theta0: np.ndarray, J: np.ndarray,
+                  whitener: st.Whitener, residual0: np.ndarray) -> dict:
+    """The unbounded values a refit would need, and their plausibility.
+
+    J (M, 6, k) holds the derivatives of F at theta0 for the refitted parameters (the
+    plausible ones first).
+    """
+    model = problem.model
+    names = list(problem.plausible)
+    out = {"parameters": {}, "implausible": [], "notes": []}
+    if not names:
+        return out
+    X = whitener.apply(J[:, :, :len(names)]).reshape(-1, len(names))
+    z = whitener.apply(residual0).reshape(-1)
+    free = st.solve(np.einsum("ik,il->kl", X, X), np.einsum("ik,i->k", X, z))
+    free += theta0[[model.index[n] for n in names]]
+    for k, name in enumerate(names):
+        lo, hi = problem.plausible[name]
+        value0 = float(theta0[model.index[name]])
+        entry = {"model": value0, "refit": value0, "unbounded": float(free[k]),
+                 "plausible": [lo, hi]}
+        if not lo <= free[k] <= hi:
+            entry["plausible_refit"] = False
+            out["implausible"].append(name)
+            out["notes"].append(
+                f"an unbounded refit of the model's parameters would need {name} = "
+                f"{free[k]:.4g}, outside its plausible range [{lo:.4g}, {hi:.4g}]: not a wrong "
+                "value but a missing effect is the likely cause; the refit is held within the "
+                "range and the rest of the gap is left to the candidate effects")
+        else:
+            entry["plausible_refit"] = True
+        out["parameters"][name] = entry
+    return out
+
+
+class _Progress:
+    """A tqdm progress bar on stderr over the workflow's stages (or nothing)."""
+
+    def __init__(self, enabled: bool, total: int) -> None:
+        self.bar = None
+        if enabled:
+            from tqdm import tqdm
+
+            self.bar = tqdm(total=total, unit="stage", desc="discover", leave=False)
+
+    def step(self, text: str) -> None:
+        if self.bar is not None:
+            self.bar.set_postfix_str(text, refresh=False)
+            self.bar.update(1)
+
+    def close(self) -> None:
+        if self.bar is not None:
+            self.bar.close()

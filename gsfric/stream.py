@@ -1,0 +1,679 @@
+"""Streamed evaluation of trajectory files of any length, in bounded memory.
+
+``simulate_file`` reads a trajectory file (CSV or Parquet) in chunks of ``chunk`` rows,
+differentiates each chunk, evaluates it, and appends its rows to the output, so that memory
+stays bounded by the chunk size however long the file is (10 million steps in well under 2 GB,
+see docs/robustness.md). It is what ``gsfric simulate`` runs.
+
+Exactness. A file of at most ``chunk`` rows is read and differentiated whole, exactly as
+``gsfric.io.read_trajectory`` does. A longer file must be uniformly sampled (every time step
+within ``UNIFORM_RTOL`` of the first chunk's mean step) and is differentiated with a
+Savitzky-Golay filter of one fixed window per signal (position, quaternion): the ``window``
+given, or the one chosen by generalized cross-validation on the first chunk (as
+``Motion.from_samples`` chooses it on a whole file). Each chunk is filtered together with its
+neighbours' samples within the window (an overlap of half a window on each side, a whole
+window at the ends of the file), so every step gets the value that filtering the whole file at
+once with that window gives (to rounding). Quaternion signs are made continuous across
+chunk boundaries.
+
+Checks. Every row is checked as ``read_trajectory`` checks it (numbers, finite, increasing
+times), with the file's 1-based data row in the message. Euler input is checked for angles
+that look like degrees (a warning when first seen) and for jumps of alpha or gamma near
+beta = 0 (one warning at the end naming the rows); the angles are never differentiated, the
+quaternions are. Step flags (``gsfric.evaluation``) are gathered over the whole file with
+their global step indices and reported at the end as one warning, or, with ``strict``, as a
+``StepFlagError`` at the first chunk with a flagged step.
+
+Output. Rows are appended to a temporary file in the output's directory (a Parquet row group
+or a CSV block per chunk) that is renamed onto the output only when every chunk succeeded;
+on any error or a KeyboardInterrupt it is removed and an existing output is left untouched.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import os
+import re
+import sys
+import warnings
+from collections.abc import Iterator
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from gsfric import io as gio
+from gsfric.errors import GsfricWarning, InputError, StepFlagError
+from gsfric.evaluation import FLAG_NAMES, Evaluator
+from gsfric.trajectory import (DEFAULT_POLYORDER, GIMBAL_JUMP, GIMBAL_SIN_BETA, MIN_SAMPLES,
+                               UNIFORM_RTOL, Motion, _check_window, _conjugate, _continuous,
+                               _gcv_window, _savgol, quaternion_from_euler, quaternion_multiply,
+                               rotation_from_quaternion)
+
+DEFAULT_CHUNK = 100_000
+"""Steps per chunk of ``simulate_file`` (about 0.5 GB of working memory)."""
+
+MAX_REPORTED = 10_000
+"""Flagged step indices kept for the summary (the count is always exact)."""
+
+_FLAG_WARNING = r"[0-9]+ of [0-9]+ steps flagged"
+
+
+# -- reading in blocks --------------------------------------------------------------------------
+
+
+def _csv_options() -> dict[str, Any]:
+    import pandas as pd
+
+    options: dict[str, Any] = {"index_col": False, "skipinitialspace": True,
+                               "keep_default_na": False, "na_values": [""]}
+    if int(pd.__version__.split(".")[0]) < 3:
+        options["float_precision"] = "round_trip"
+    return options
+
+
+def _check_file(path: Path) -> str:
+    kind = gio._table_kind(path)
+    if not path.exists():
+        raise InputError(f"{path}: file not found")
+    if path.is_dir():
+        raise InputError(f"{path}: is a directory, not a file")
+    try:
+        size = path.stat().st_size
+    except OSError as error:
+        raise InputError(f"{path}: cannot read ({error.strerror})") from None
+    if size == 0:
+        raise InputError(f"{path}: file is empty")
+    return kind
+
+
+def _csv_blocks(path: Path, rows: int):
+    """DataFrames of at most ``rows`` rows; errors as ``read_table`` gives them."""
+    import pandas as pd
+
+    def parse_error(error: Exception) -> InputError:
+        reason = gio._field_count_problem(path) or str(error)
+        return InputError(f"{path}: cannot parse as CSV: {reason}")
+
+    try:
+        with warnings.catch_warnings():
+            warnings.simplefilter("error", pd.errors.ParserWarning)
+            reader = pd.read_csv(path, chunksize=rows, **_csv_options())
+    except pd.errors.EmptyDataError:
+        raise InputError(f"{path}: file is empty (no header line)") from None
+    except UnicodeDecodeError as error:
+        raise InputError(f"{path}: not UTF-8 text (byte {error.start})") from None
+    except (ValueError, OverflowError, pd.errors.ParserError, pd.errors.ParserWarning) as error:
+        raise parse_error(error) from None
+    except OSError as error:
+        raise InputError(f"{path}: cannot read ({error.strerror})") from None
+    with reader:
+        while True:
+            try:
+                with warnings.catch_warnings():
+                    warnings.simplefilter("error", pd.errors.ParserWarning)
+                    frame = next(reader)
+            except StopIteration:
+                return
+            except UnicodeDecodeError as error:
+                raise InputError(f"{path}: not UTF-8 text (byte {error.start})") from None
+            except (ValueError, OverflowError, pd.errors.ParserError,
+                    pd.errors.ParserWarning) as error:
+                raise parse_error(error) from None
+            except OSError as error:
+                raise InputError(f"{path}: cannot read ({error.strerror})") from None
+            names = [str(c) for c in frame.columns]
+            for name in names:
+                match = re.fullmatch(r"(.*)\.[0-9]+", name)
+                if match and match.group(1) in names:
+                    raise InputError(f"{path}: column {match.group(1)!r} appears more than once")
+            frame.columns = names
+            yield frame
+
+
+def _parquet_blocks(path: Path, rows: int):
+    import pyarrow
+    import pyarrow.parquet as pq
+
+    errors = (pyarrow.ArrowException, ValueError, TypeError, OSError, NotImplementedError)
+    try:
+        # without pre-buffering: pre-buffered row groups stay cached in the reader, so memory
+        # would grow by a row group for every row group read
+        source = pq.ParquetFile(path, pre_buffer=False)
+        names = [str(n) for n in source.schema_arrow.names]
+    except errors as error:
+        raise InputError(f"{path}: cannot read as Parquet: {error}") from None
+    if len(set(names)) != len(names):
+        raise InputError(f"{path}: a column name appears more than once")
+    if source.metadata.num_rows == 0:
+        import pandas as pd
+
+        yield pd.DataFrame({n: [] for n in names})
+        return
+    batches = source.iter_batches(batch_size=rows)
+    while True:
+        try:
+            batch = next(batches)
+            frame = batch.to_pandas()
+        except StopIteration:
+            return
+        except errors as error:
+            raise InputError(f"{path}: cannot read as Parquet: {error}") from None
+        frame.columns = [str(c) for c in frame.columns]
+        yield frame
+
+
+def parquet_rows(path: str | os.PathLike[str]) -> int | None:
+    """Number of data rows of a Parquet file from its metadata, or None (CSV, unreadable)."""
+    path = Path(path)
+    if path.suffix.lower() not in gio._PARQUET:
+        return None
+    try:
+        import pyarrow.parquet as pq
+
+        return int(pq.ParquetFile(path).metadata.num_rows)
+    except Exception:  # noqa: BLE001 - the reader reports the problem properly
+        return None
+
+
+@dataclass
+class _Block:
+    """Validated samples of consecutive data rows starting at global row ``start`` (0-based)."""
+
+    start: int
+    t: np.ndarray
+    position: np.ndarray
+    quaternion: np.ndarray       # normalized, not yet sign-continuous
+    euler: np.ndarray | None     # when the orientation is given as ZXZ angles
+    columns: dict[str, np.ndarray]
+
+
+def _blocks(path: Path, rows: int) -> Iterator[_Block]:
+    """Validated blocks of the trajectory file; messages name 1-based data rows."""
+    kind = _check_file(path)
+    frames = _csv_blocks(path, rows) if kind == "csv" else _parquet_blocks(path, rows)
+    start = 0
+    last_t = None
+    orientation = None
+    for frame in frames:
+        names = [name.strip() for name in frame.columns]
+        if orientation is None:
+            if len(set(names)) != len(names):
+                duplicate = next(n for n in names if names.count(n) > 1)
+                raise InputError(f"{path}: column {duplicate!r} appears more than once")
+            orientation = gio._check_columns(path, names, measured=False)
+        if len(frame) == 0:
+            continue
+        columns: dict[str, np.ndarray] = {}
+        problems = []
+        for original, name in zip(frame.columns, names):
+            values, problem = gio._column_values(frame[original], name)
+            columns[name] = values
+            if problem is not None:
+                problems.append(problem)
+        if problems:
+            row, message = min(problems, key=lambda p: p[0])
+            raise InputError(f"{path}: row {start + row + 1}: {message}")
+        t = columns["t"]
+        with np.errstate(over="ignore", invalid="ignore"):
+            steps = np.diff(t if last_t is None else np.concatenate([[last_t], t]))
+        bad = np.flatnonzero(steps <= 0)
+        if len(bad):
+            local = int(bad[0]) + (1 if last_t is None else 0)   # index in t of the bad row
+            previous = t[local - 1] if local > 0 else last_t
+            row = start + local + 1
+            if steps[bad[0]] == 0:
+                raise InputError(f"{path}: row {row}: duplicate time t = {float(t[local])!r} "
+                                 f"(same as row {row - 1})")
+            raise InputError(f"{path}: row {row}: t = {float(t[local])!r} is less than "
+                             f"t = {float(previous)!r} in row {row - 1}; t must increase")
+        position = np.stack([columns[n] for n in ("x", "y", "z")], axis=1)
+        angles = np.stack([columns[n] for n in orientation], axis=1)
+        if orientation == gio.QUATERNION:
+            norms = np.linalg.norm(angles, axis=1)
+            zero = np.flatnonzero(norms < 1e-12)
+            if len(zero):
+                raise InputError(f"{path}: row {start + int(zero[0]) + 1}: quaternion of "
+                                 "zero length")
+            q, euler = angles / norms[:, None], None
+        else:
+            q, euler = quaternion_from_euler(*angles.T), angles
+        yield _Block(start, t, position, q, euler, columns)
+        start += len(t)
+        last_t = t[-1]
+    if orientation is None or start == 0:
+        raise InputError(f"{path}: no data rows")
+
+
+# -- Euler checks across blocks -----------------------------------------------------------------
+
+
+class _EulerWatch:
+    """The checks of ``Motion.from_samples`` on ZXZ angles, gathered over blocks."""
+
+    def __init__(self, path: Path) -> None:
+        self.path = path
+        self.warned_degrees = False
+        self.previous: np.ndarray | None = None
+        self.jumps: list[int] = []
+        self.jump_count = 0
+
+    def add(self, block: _Block) -> None:
+        euler = block.euler
+        if euler is None:
+            return
+        largest = np.abs(euler).max(axis=0)
+        if not self.warned_degrees and (largest > 2 * np.pi).any():
+            self.warned_degrees = True
+            big = [f"|{name}| up to {value:.4g}"
+                   for name, value in zip(("alpha", "beta", "gamma"), largest)
+                   if value > 2 * np.pi]
+            warnings.warn(f"{self.path}: angles look like degrees ({', '.join(big)} > 2*pi, "
+                          f"first seen in rows {block.start + 1}-{block.start + len(euler)}); "
+                          "angles must be in radians", GsfricWarning, stacklevel=2)
+        joined = euler if self.previous is None else np.vstack([self.previous, euler])
+        offset = block.start - (0 if self.previous is None else 1)
+        near = np.abs(np.sin(joined[:, 1])) < GIMBAL_SIN_BETA
+        near = near[1:] | near[:-1]
+        steps = np.abs((np.diff(joined[:, [0, 2]], axis=0) + np.pi) % (2 * np.pi) - np.pi)
+        jumps = np.flatnonzero(near & (steps.max(axis=1) > GIMBAL_JUMP)) + 1 + offset
+        self.jump_count += len(jumps)
+        self.jumps.extend(int(j) for j in jumps[:max(0, 10 - len(self.jumps))])
+        self.previous = euler[-1:].copy()
+
+    def finish(self) -> None:
+        if self.jump_count:
+            rows = ", ".join(str(j + 1) for j in self.jumps)
+            more = f" and {self.jump_count - len(self.jumps)} more" \
+                if self.jump_count > len(self.jumps) else ""
+            word = "rows" if self.jump_count > 1 else "row"
+            warnings.warn(f"{self.path}: ZXZ angles near beta = 0 (where alpha and gamma are "
+                          f"ill-defined) jump by more than {GIMBAL_JUMP} rad in alpha or gamma "
+                          f"at {word} {rows}{more}; give the orientation as a quaternion "
+                          "(qw, qx, qy, qz) instead", GsfricWarning, stacklevel=2)
+
+
+# -- chunked differentiation --------------------------------------------------------------------
+
+
+def _whole(path: Path, blocks: list[_Block], window, polyorder) -> Motion:
+    """The file as ``read_trajectory`` reads it (it fits in one chunk)."""
+    n = sum(len(b.t) for b in blocks)
+    if n < MIN_SAMPLES:
+        raise InputError(f"{path}: {n} data rows; at least {MIN_SAMPLES} are needed "
+                         "to differentiate the motion")
+    names = blocks[0].columns.keys()
+    columns = {name: np.concatenate([b.columns[name] for b in blocks]) for name in names}
+    orientation = gio.QUATERNION if "qw" in columns else gio.EULER
+    return gio._motion(path, columns, orientation, window, polyorder)
+
+
+def _differentiate(t, position, q, windows, polyorder, step, core: slice,
+                   where: tuple[Path, int]) -> Motion:
+    """Savitzky-Golay smoothing and derivatives as ``Motion.from_samples``; the core steps."""
+    wp, wq = windows
+    p0, p1, p2 = (a[core] for a in _savgol(position, wp, polyorder, step))
+    q0, q1, q2 = (a[core] for a in _savgol(q, wq, polyorder, step))
+    squared = np.sum(q0 * q0, axis=1, keepdims=True)
+    omega = 2 * quaternion_multiply(q1, _conjugate(q0))[:, 1:] / squared
+    alpha = (2 * quaternion_multiply(q2, _conjugate(q0))[:, 1:] / squared
+             - omega * 2 * np.sum(q0 * q1, axis=1, keepdims=True) / squared)
+    finite = np.ones(len(q0), dtype=bool)
+    for a in (p0, p1, p2, q0, omega, alpha):
+        finite &= np.isfinite(a).all(axis=1)
+    if not finite.all():
+        bad = np.flatnonzero(~finite)
+        raise InputError(f"{where[0]}: rows {where[1] + bad[0] + 1}-{where[1] + bad[-1] + 1}: "
+                         "differentiation gave non-finite values (values or time steps out "
+                         "of range)")
+    return Motion(t[core], p0, rotation_from_quaternion(q0), p1, omega, p2, alpha)
+
+
+def iter_motions(path: str | os.PathLike[str], *, chunk: int = DEFAULT_CHUNK,
+                 window: int | None = None, polyorder: int = DEFAULT_POLYORDER,
+                 info: dict | None = None) -> Iterator[tuple[int, Motion]]:
+    """The trajectory file as consecutive Motions of at most ``chunk`` steps.
+
+    Parameters
+    ----------
+    path : path-like
+        Trajectory file, CSV or Parquet (columns as for ``gsfric.io.read_trajectory``).
+    chunk : int
+        Steps per Motion (>= ``MIN_SAMPLES``); memory is proportional to it.
+    window, polyorder :
+        Savitzky-Golay window (odd, samples; None: chosen on the first chunk) and order.
+    info : dict, optional
+        Filled with ``"rows"`` (data rows read so far) and ``"windows"``: the position and
+        quaternion windows of a streamed file; ``"whole"`` for a file read in one piece with a
+        Savitzky-Golay filter (windows as ``Motion.from_samples`` chose them), None for one
+        read in one piece with a smoothing spline (non-uniform sampling).
+
+    Yields
+    ------
+    (start, Motion)
+        ``start`` is the 0-based index of the Motion's first step in the file (= its data row
+        minus 1). Concatenated, the Motions are the whole file's differentiation (see the
+        module's docstring).
+
+    Raises
+    ------
+    InputError
+        As ``read_trajectory``, with the file's rows; also a non-uniform time step in a file
+        longer than one chunk, or a window longer than the chunk.
+    """
+    path = Path(path)
+    info = {} if info is None else info
+    if isinstance(chunk, bool) or not isinstance(chunk, (int, np.integer)) \
+            or chunk < MIN_SAMPLES:
+        raise InputError(f"chunk: must be an integer >= {MIN_SAMPLES}, got {chunk!r}")
+    chunk = int(chunk)
+    if window is not None and isinstance(window, (int, np.integer)) \
+            and not isinstance(window, bool) and window > chunk:
+        raise InputError(f"window = {window} is longer than the chunk of {chunk} steps; "
+                         "use a larger chunk")
+    blocks = _blocks(path, chunk)
+
+    # the first chunk, and whether there is more
+    first: list[_Block] = []
+    count = 0
+    for block in blocks:
+        first.append(block)
+        count += len(block.t)
+        if count > chunk:
+            break
+    info["rows"] = count
+    if count <= chunk:
+        motion = _whole(path, first, window, polyorder)
+        info["windows"] = "whole" if _uniform(motion.t) else None
+        yield 0, motion
+        return
+
+    # streamed: fixed step and windows from the first chunk
+    watch = _EulerWatch(path)
+    for block in first:
+        watch.add(block)
+    t = np.concatenate([b.t for b in first])
+    position = np.concatenate([b.position for b in first])
+    q = _continuous(np.concatenate([b.quaternion for b in first]))
+    step = (t[chunk - 1] - t[0]) / (chunk - 1)
+    if not np.isfinite(step) or step <= 0:
+        raise InputError(f"{path}: t spans too large a range")
+    _check_uniform(path, t, step, 0, chunk)
+    if isinstance(polyorder, bool) or not isinstance(polyorder, (int, np.integer)) \
+            or polyorder < 2:
+        raise InputError(f"polyorder must be an integer >= 2, got {polyorder!r}")
+    if polyorder + 1 >= chunk:
+        raise InputError(f"polyorder = {polyorder} needs a chunk of more than "
+                         f"{polyorder + 1} steps")
+    if window is None:
+        with np.errstate(all="ignore"):
+            windows = (_gcv_window(position[:chunk], polyorder),
+                       _gcv_window(q[:chunk], polyorder))
+    else:
+        try:
+            _check_window(window, polyorder, chunk)
+        except InputError as error:
+            raise InputError(f"{path}: {error}") from None
+        windows = (int(window), int(window))
+    info["windows"] = windows
+    width = max(windows)          # samples the filter needs at an end of the file
+    half = width // 2             # overlap on each side of an interior chunk
+
+    buf_start = 0                 # global index of buf_t[0]
+    done = 0                      # global index of the next core's first step
+
+    def emit(stop: int, end_of_file: bool):
+        nonlocal buf_t, buf_p, buf_q, buf_start, done
+        total = buf_start + len(buf_t)
+        lo = max(0, done - half)
+        if end_of_file:
+            lo = max(0, min(lo, total - width))
+        hi = min(total, max(stop + half, width)) if not end_of_file else total
+        a, b = lo - buf_start, hi - buf_start
+        core = slice(done - lo, stop - lo)
+        with np.errstate(all="ignore"):
+            motion = _differentiate(buf_t[a:b], buf_p[a:b], buf_q[a:b], windows, polyorder,
+                                    step, core, (path, done))
+        start = done
+        done = stop
+        keep = max(0, done - width) - buf_start
+        if keep > 0:
+            buf_t, buf_p, buf_q = buf_t[keep:], buf_p[keep:], buf_q[keep:]
+            buf_start += keep
+        return start, motion
+
+    buf_t, buf_p, buf_q = t, position, q
+    del t, position, q, first
+    while True:
+        while done + chunk + half <= buf_start + len(buf_t):
+            yield emit(done + chunk, False)
+        block = next(blocks, None)
+        if block is None:
+            break
+        watch.add(block)
+        _check_uniform(path, np.concatenate([buf_t[-1:], block.t]), step, block.start - 1,
+                       chunk)
+        q_new = _continuous(np.vstack([buf_q[-1:], block.quaternion]))[1:]
+        buf_t = np.concatenate([buf_t, block.t])
+        buf_p = np.concatenate([buf_p, block.position])
+        buf_q = np.concatenate([buf_q, q_new])
+        info["rows"] = buf_start + len(buf_t)
+    total = buf_start + len(buf_t)
+    watch.finish()
+    if done < total:
+        yield emit(total, True)
+
+
+def _uniform(t: np.ndarray) -> bool:
+    steps = np.diff(t)
+    mean = (t[-1] - t[0]) / (len(t) - 1)
+    return bool(np.all(np.abs(steps - mean) <= UNIFORM_RTOL * mean))
+
+
+def _check_uniform(path: Path, t: np.ndarray, step: float, start: int, chunk: int) -> None:
+    """Every step of ``t`` (first sample at global index ``start``) within tolerance of ``step``."""
+    steps = np.diff(t)
+    bad = np.flatnonzero(~(np.abs(steps - step) <= UNIFORM_RTOL * step))
+    if len(bad):
+        i = int(bad[0])
+        raise InputError(f"{path}: row {start + i + 2}: time step {steps[i]:.6g} s differs from "
+                         f"the first {chunk} rows' mean step {step:.6g} s; a file longer than "
+                         "one chunk must be uniformly sampled: resample it, or give a chunk "
+                         "larger than the file to evaluate it whole")
+
+
+# -- the streamed evaluation --------------------------------------------------------------------
+
+
+@dataclass
+class Summary:
+    """What ``simulate_file`` did.
+
+    Attributes
+    ----------
+    out : Path
+    steps : int
+        Steps evaluated (= data rows of the trajectory = rows written).
+    chunks : int
+    windows : tuple (position, quaternion) of int, "whole" or None
+        Savitzky-Golay windows of a streamed file; "whole" for a file read in one piece with a
+        Savitzky-Golay filter, None for a non-uniform file (smoothing spline).
+    flagged : int
+        Number of flagged steps.
+    flag_counts : dict of str -> int
+        Flagged steps per kind (``FLAG_NAMES``).
+    flagged_steps : ndarray
+        0-based indices of flagged steps (the first ``MAX_REPORTED``).
+    """
+
+    out: Path
+    steps: int = 0
+    chunks: int = 0
+    windows: Any = None
+    flagged: int = 0
+    flag_counts: dict[str, int] = field(default_factory=dict)
+    flagged_steps: np.ndarray = field(default_factory=lambda: np.zeros(0, dtype=np.int64))
+
+    def flag_message(self, trajectory: Path) -> str:
+        kinds = "; ".join(f"{name}: {count}" for name, count in self.flag_counts.items()
+                          if count)
+        return (f"{trajectory}: {self.flagged} of {self.steps} steps flagged ({kinds}): "
+                f"{_steps_text(self.flagged_steps, self.flagged)}")
+
+
+def _steps_text(indices: np.ndarray, total: int, limit: int = 10) -> str:
+    shown = indices[:limit]
+    more = f", ... ({total - len(shown)} more)" if total > len(shown) else ""
+    steps = ", ".join(str(int(i)) for i in shown)
+    rows = ", ".join(str(int(i) + 1) for i in shown)
+    return f"steps {steps}{more} (data rows {rows})"
+
+
+class _Writer:
+    """Appends DataFrames to an open binary (Parquet) or text (CSV) handle."""
+
+    def __init__(self, handle, kind: str) -> None:
+        self.handle, self.kind = handle, kind
+        self.parquet = None
+        self.header = True
+
+    def write(self, frame) -> None:
+        if self.kind == "csv":
+            frame.to_csv(self.handle, index=False, header=self.header)
+            self.header = False
+            return
+        import pyarrow as pa
+        import pyarrow.parquet as pq
+
+        table = pa.Table.from_pandas(frame, preserve_index=False)
+        if self.parquet is None:
+            self.parquet = pq.ParquetWriter(self.handle, table.schema)
+        self.parquet.write_table(table)
+
+    def close(self) -> None:
+        if self.parquet is not None:
+            writer, self.parquet = self.parquet, None
+            writer.close()
+
+    def abandon(self) -> None:
+        with contextlib.suppress(Exception):
+            self.close()
+
+
+def simulate_file(trajectory: str | os.PathLike[str], out: str | os.PathLike[str],
+                  platform=None, *, mode: str = "kinematic", strict: bool = False,
+                  chunk: int = DEFAULT_CHUNK, window: int | None = None,
+                  polyorder: int = DEFAULT_POLYORDER, n_threads: int = 1,
+                  progress: bool | None = None) -> Summary:
+    """Evaluate a trajectory file chunk by chunk and write every step's outputs.
+
+    Parameters
+    ----------
+    trajectory : path-like
+        CSV or Parquet trajectory file (see ``gsfric.io.read_trajectory``).
+    out : path-like
+        Output file, CSV or Parquet by extension; columns of ``Result.to_frame``.
+    platform : Platform, optional
+        Default: the reference platform.
+    mode : {"kinematic", "paper"}
+    strict : bool
+        Raise ``StepFlagError`` at the first chunk with a flagged step (no output is written).
+    chunk : int
+        Steps per chunk; memory grows with it (about 5 kB per step).
+    window, polyorder :
+        Smoothing of the differentiation, see ``iter_motions``.
+    n_threads : int
+        Threads of the compiled evaluation.
+    progress : bool or None
+        Progress bar on stderr (tqdm); None: only when stderr is a terminal.
+
+    Returns
+    -------
+    Summary
+        Flags are also reported as one warning (``GsfricWarning``) when not strict.
+
+    Raises
+    ------
+    InputError
+        Bad trajectory (naming the row and column), bad output path.
+    StepFlagError
+        ``strict`` and a flagged step.
+    """
+    from tqdm import tqdm
+
+    trajectory, out = Path(trajectory), Path(out)
+    kind = gio._table_kind(out)
+    _check_file(trajectory)
+    if out.exists() and out.is_dir():
+        raise InputError(f"{out}: is a directory; give a file name")
+    if not out.parent.is_dir():
+        raise InputError(f"{out}: directory {str(out.parent)!r} does not exist")
+    with contextlib.suppress(OSError):
+        if out.exists() and os.path.samefile(out, trajectory):
+            raise InputError(f"{out}: is the trajectory file itself; choose another output")
+    if platform is None:
+        from gsfric.models import reference_platform
+
+        platform = reference_platform()
+
+    summary = Summary(out=out)
+    info: dict = {}
+    motions = iter_motions(trajectory, chunk=chunk, window=window, polyorder=polyorder,
+                           info=info)
+    kept: list[np.ndarray] = []
+    counts = dict.fromkeys(FLAG_NAMES, 0)
+    evaluator = None
+    bar = tqdm(total=parquet_rows(trajectory), unit="step", unit_scale=True, desc="simulate",
+               file=sys.stderr, disable=None if progress is None else not progress,
+               dynamic_ncols=True, leave=False)
+    mode_text = "wb" if kind == "parquet" else "w"
+    options = {"newline": ""} if kind == "csv" else {}
+    try:
+        with gio.atomic_write(out, mode_text, **options) as handle:
+            writer = _Writer(handle, kind)
+            try:
+                for start, motion in motions:
+                    if evaluator is None:
+                        evaluator = Evaluator(platform, mode=mode, n_threads=n_threads)
+                    with warnings.catch_warnings():
+                        warnings.filterwarnings("ignore", message=_FLAG_WARNING)
+                        result = evaluator.evaluate(motion, strict=False, progress=False,
+                                                    chunk=min(len(motion), DEFAULT_CHUNK))
+                    bad = result.flagged()
+                    if bad.size:
+                        summary.flagged += int(bad.size)
+                        for bit in FLAG_NAMES:
+                            counts[bit] += int(np.count_nonzero(result.flag & bit))
+                        room = MAX_REPORTED - sum(len(k) for k in kept)
+                        if room > 0:
+                            kept.append(bad[:room] + start)
+                        if strict:
+                            summary.steps = start + len(motion)
+                            _finish(summary, kept, counts)
+                            raise StepFlagError(
+                                summary.flag_message(trajectory)
+                                + " (--strict: stopped at the first chunk with flagged steps; "
+                                "no output written)")
+                    writer.write(result.to_frame())
+                    del result
+                    summary.steps = start + len(motion)
+                    summary.chunks += 1
+                    bar.update(len(motion))
+            except BaseException:
+                writer.abandon()
+                raise
+            writer.close()
+    finally:
+        bar.close()
+    summary.windows = info.get("windows")
+    _finish(summary, kept, counts)
+    if summary.flagged:
+        warnings.warn(summary.flag_message(trajectory) + f"; see the flag column of {out}",
+                      GsfricWarning, stacklevel=2)
+    return summary
+
+
+def _finish(summary: Summary, kept: list[np.ndarray], counts: dict[int, int]) -> None:
+    summary.flagged_steps = np.concatenate(kept) if kept else np.zeros(0, dtype=np.int64)
+    summary.flag_counts = {FLAG_NAMES[bit]: n for bit, n in counts.items()}

@@ -1,0 +1,336 @@
+"""Synthetic measured data: a platform with hidden effects, driven along a motion, with noise.
+
+The true system is a platform (a TOML file or a ``Platform``) with hidden effects switched on
+(``Platform.with_effect``). It is evaluated along an analytic motion (by default
+``excitation_motion``: six sinusoids with random amplitudes, frequencies up to 2 Hz and
+phases, so every leg reverses many times and inertial loads differ from static ones), and what
+a rig would record is written:
+
+* ``t, x, y, z, qw, qx, qy, qz``: the pose, optionally with pose noise (independent Gaussian
+  noise of standard deviation ``pose_noise`` on x, y, z in m, and a random rotation with
+  components of the same standard deviation in rad applied to the orientation);
+* ``F1..F6``: the actuator forces of the true system (friction and hidden effects included, as
+  a load cell in series with the actuator reads them) plus force noise of standard deviation
+  ``noise``, white or AR(1) with coefficient ``noise_correlation`` (stationary from the first
+  sample: ``e_t = phi e_(t-1) + sqrt(1 - phi^2) noise w_t``);
+* ``D1..D6``: the true leg lengths (encoders are taken as exact).
+
+Everything random comes from ``numpy.random.default_rng(seed)``: the same arguments give the
+same file.
+
+A hidden effect is given as ``"name:param=value,..."`` (parameters left out take the catalog's
+defaults, except ``stroke_friction.reference``, which defaults to the motion's mean leg length)
+or as a mapping ``{name: {param: value}}``.
+"""
+
+from __future__ import annotations
+
+import os
+from collections.abc import Iterable, Mapping
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+
+from gsfric._checks import short, suggest
+from gsfric.errors import InputError
+from gsfric.platform import Platform
+from gsfric.trajectory import Motion, quaternion_multiply
+
+__all__ = ["SyntheticData", "parse_effect", "synthesize", "run_synth", "effect_contributions",
+           "ar1_noise", "excitation_motion"]
+
+EXCITATION_FREQUENCY = (0.3, 2.0)
+"""Range of the excitation motion's frequencies, Hz."""
+
+
+def excitation_motion(rng: np.random.Generator, t: np.ndarray, scale: float = 1.0,
+                      frequency: tuple[float, float] = EXCITATION_FREQUENCY) -> Motion:
+    """A random six-axis motion that excites the effects the workflow looks for.
+
+    Like ``gsfric.models.random_motion`` (amplitudes within its workspace-safe range: 30% to
+    100% of (0.06, 0.06, 0.05) m and (0.1, 0.1, 0.12) rad, times ``scale``), with frequencies
+    drawn in ``frequency`` (Hz): every leg reverses several times a second, so Coulomb-like
+    friction is seen in both directions and at every speed, and the accelerations are large
+    enough for the inertial loads to differ from the static ones (payload mass against leg
+    weight or sensor offsets).
+
+    Parameters
+    ----------
+    rng : numpy.random.Generator
+    t : ndarray, shape (N,)
+        Times, s.
+    scale : float
+        Multiplies every amplitude.
+    frequency : (float, float)
+        Range of the frequencies, Hz.
+
+    Returns
+    -------
+    Motion
+    """
+    from gsfric.models import sinusoidal
+
+    amplitude = rng.uniform(0.3, 1.0, 6) * np.array([0.06, 0.06, 0.05, 0.1, 0.1, 0.12]) * scale
+    freq = rng.uniform(frequency[0], frequency[1], 6)
+    phase = rng.uniform(0.0, 2 * np.pi, 6)
+    return sinusoidal(np.asarray(t, float), amplitude, freq, phase)
+
+
+@dataclass
+class SyntheticData:
+    """Synthetic measured data and the truth behind it.
+
+    Attributes
+    ----------
+    frame : pandas.DataFrame
+        The measured-data table: ``t, x, y, z, qw, qx, qy, qz, F1..F6, D1..D6``.
+    platform : Platform
+        The true system, hidden effects included.
+    model : Platform
+        The same platform without the hidden effects given to ``synthesize`` (the model a
+        researcher would start from).
+    motion : Motion
+        The exact motion (before pose noise).
+    forces : ndarray, shape (N, 6)
+        Noise-free actuator forces of the true system, N.
+    noise : ndarray, shape (N, 6)
+        The force noise added, N.
+    effects : dict[str, dict[str, float]]
+        The hidden effects with every parameter resolved.
+    contributions : dict[str, ndarray]
+        Each hidden effect's contribution to F, (N, 6), N: F with all hidden effects minus F
+        with that one switched off.
+    sizes : dict[str, float]
+        Effect size of each hidden effect: RMS of its contribution over all legs and samples
+        divided by the noise standard deviation (``inf`` without noise).
+    """
+
+    frame: object
+    platform: Platform
+    model: Platform
+    motion: Motion
+    forces: np.ndarray
+    noise: np.ndarray
+    effects: dict[str, dict[str, float]]
+    contributions: dict[str, np.ndarray] = field(default_factory=dict)
+    sizes: dict[str, float] = field(default_factory=dict)
+
+
+def parse_effect(text: str) -> tuple[str, dict[str, float]]:
+    """Parse ``"name:param=value,param=value"`` (or just ``"name"``) into (name, parameters).
+
+    Raises
+    ------
+    InputError
+        Unknown effect or parameter, or a value that is not a number.
+    """
+    from gsfric.catalog import EFFECTS
+
+    name, _, rest = str(text).strip().partition(":")
+    name = name.strip()
+    if name not in EFFECTS:
+        raise InputError(f"effect {short(name)}: unknown effect{suggest(name, EFFECTS)}; "
+                         f"known: {', '.join(EFFECTS)}")
+    params: dict[str, float] = {}
+    for item in filter(None, (s.strip() for s in rest.split(","))):
+        key, eq, value = item.partition("=")
+        key = key.strip()
+        if not eq:
+            raise InputError(f"effect {name}: expected param=value, got {short(item)}")
+        if key not in EFFECTS[name]:
+            raise InputError(f"effect {name}: unknown parameter {short(key)}"
+                             f"{suggest(key, EFFECTS[name])}; known: {', '.join(EFFECTS[name])}")
+        try:
+            params[key] = float(value)
+        except ValueError:
+            raise InputError(f"effect {name}: parameter {key} = {short(value.strip())} "
+                             "is not a number") from None
+        if not np.isfinite(params[key]):
+            raise InputError(f"effect {name}: parameter {key} must be finite")
+    return name, params
+
+
+def _effects(effects) -> dict[str, dict[str, float]]:
+    if effects is None:
+        return {}
+    if isinstance(effects, Mapping):
+        out = {}
+        for name, params in effects.items():
+            parsed, _ = parse_effect(name)
+            out[parsed] = {str(k): float(v) for k, v in dict(params or {}).items()}
+            parse_effect(f"{parsed}:" + ",".join(f"{k}={v}" for k, v in out[parsed].items()))
+        return out
+    if isinstance(effects, str):
+        effects = [effects]
+    out = {}
+    for text in effects:
+        name, params = parse_effect(text)
+        if name in out:
+            raise InputError(f"effect {name}: given twice")
+        out[name] = params
+    return out
+
+
+def ar1_noise(rng: np.random.Generator, shape: tuple[int, int], sigma: float,
+              phi: float) -> np.ndarray:
+    """Stationary AR(1) noise along axis 0 with marginal standard deviation ``sigma``.
+
+    Parameters
+    ----------
+    rng : numpy.random.Generator
+    shape : (N, k)
+    sigma : float
+        Marginal standard deviation.
+    phi : float
+        AR(1) coefficient, ``0 <= phi < 1`` (0: white noise).
+
+    Returns
+    -------
+    ndarray, shape (N, k)
+    """
+    from scipy.signal import lfilter
+
+    if not 0.0 <= phi < 1.0:
+        raise InputError(f"noise_correlation: must be in [0, 1), got {phi:g}")
+    w = rng.standard_normal(shape)
+    if phi == 0.0:
+        return sigma * w
+    scale = np.sqrt(1.0 - phi * phi)
+    w[1:] *= scale
+    # w[0] keeps unit variance: the stationary start
+    return sigma * lfilter([1.0], [1.0, -phi], w, axis=0, zi=np.zeros((1, shape[1])))[0]
+
+
+def _rotation_noise(rng: np.random.Generator, n: int, sigma: float) -> np.ndarray:
+    """Quaternions (n, 4) of small random rotations, rotation-vector components N(0, sigma^2)."""
+    rv = rng.normal(0.0, sigma, (n, 3))
+    angle = np.linalg.norm(rv, axis=1, keepdims=True)
+    half = 0.5 * angle
+    with np.errstate(invalid="ignore", divide="ignore"):
+        axis = np.where(angle > 0, rv / np.where(angle > 0, angle, 1.0), 0.0)
+    return np.concatenate([np.cos(half), np.sin(half) * axis], axis=1)
+
+
+def effect_contributions(platform: Platform, motion: Motion,
+                         names: Iterable[str]) -> dict[str, np.ndarray]:
+    """Each named effect's contribution to the actuator forces, (N, 6) N.
+
+    The contribution of effect e is ``F(platform) - F(platform without e)``.
+    """
+    from gsfric.evaluation import Evaluator, state_array
+
+    x = state_array(motion)
+    full = Evaluator(platform).actuator_forces(x)
+    out = {}
+    for name in names:
+        out[name] = full - Evaluator(platform.without_effects(name)).actuator_forces(x)
+    return out
+
+
+def synthesize(platform: Platform | None = None, effects=(), *, motion: Motion | None = None,
+               samples: int = 4000, rate: float = 200.0, noise: float = 0.1,
+               noise_correlation: float = 0.0, pose_noise: float = 0.0,
+               seed: int = 0) -> SyntheticData:
+    """Synthetic measured data with hidden effects and noise (see the module docstring).
+
+    Parameters
+    ----------
+    platform : Platform, optional
+        The model (default ``reference_platform()``); its own ``effects`` stay on and are
+        hidden as well.
+    effects : iterable of str, or mapping
+        Hidden effects, ``"name:param=value,..."`` or ``{name: {param: value}}``.
+    motion : Motion, optional
+        The motion to drive (its own times are used; ``samples`` and ``rate`` are then
+        ignored). Default: ``excitation_motion(rng, t)`` with ``t = arange(samples) / rate``.
+    samples : int
+        Number of samples (>= 20).
+    rate : float
+        Sampling rate, Hz.
+    noise : float
+        Force noise standard deviation, N (>= 0).
+    noise_correlation : float
+        AR(1) coefficient of the force noise, in [0, 1).
+    pose_noise : float
+        Standard deviation of the position noise, m, and of the orientation noise, rad.
+    seed : int
+        Seed of every random draw.
+
+    Returns
+    -------
+    SyntheticData
+    """
+    import pandas as pd
+
+    from gsfric.evaluation import Evaluator, state_array
+    from gsfric.models import reference_platform
+
+    if int(samples) < 20:
+        raise InputError(f"samples: at least 20 are needed, got {samples}")
+    if not (np.isfinite(rate) and rate > 0):
+        raise InputError(f"rate: must be a positive number of Hz, got {rate!r}")
+    if not (np.isfinite(noise) and noise >= 0):
+        raise InputError(f"noise: must be >= 0, got {noise!r}")
+    if not (np.isfinite(pose_noise) and pose_noise >= 0):
+        raise InputError(f"pose_noise: must be >= 0, got {pose_noise!r}")
+    if not 0.0 <= noise_correlation < 1.0:
+        raise InputError(f"noise_correlation: must be in [0, 1), got {noise_correlation!r}")
+    model = reference_platform() if platform is None else platform
+    rng = np.random.default_rng(seed)
+    if motion is None:
+        t = np.arange(int(samples)) / float(rate)
+        motion = excitation_motion(rng, t)
+    hidden = _effects(effects)
+    x = state_array(motion)
+    if "stroke_friction" in hidden and "reference" not in hidden["stroke_friction"]:
+        lengths = Evaluator(model).evaluate(motion).D
+        hidden["stroke_friction"]["reference"] = float(lengths.mean())
+    true = model
+    for name, params in hidden.items():
+        true = true.with_effect(name, **params)
+    forces = Evaluator(true).actuator_forces(x)
+    lengths = Evaluator(true).evaluate(motion).D
+    n = len(motion)
+    e = ar1_noise(rng, (n, 6), float(noise), float(noise_correlation))
+
+    position = motion.position.copy()
+    quaternion = motion.quaternion()
+    if pose_noise > 0:
+        position = position + rng.normal(0.0, pose_noise, position.shape)
+        quaternion = quaternion_multiply(_rotation_noise(rng, n, pose_noise), quaternion)
+        quaternion *= np.where(quaternion[:, :1] < 0, -1.0, 1.0)
+
+    columns = {"t": motion.t}
+    columns.update(zip(("x", "y", "z"), position.T))
+    columns.update(zip(("qw", "qx", "qy", "qz"), quaternion.T))
+    columns.update((f"F{i + 1}", forces[:, i] + e[:, i]) for i in range(6))
+    columns.update((f"D{i + 1}", lengths[:, i]) for i in range(6))
+    frame = pd.DataFrame(columns)
+
+    resolved = {name: dict(true.effects[name]) for name in hidden}
+    contributions = effect_contributions(true, motion, hidden)
+    sizes = {name: (float(np.sqrt(np.mean(c**2))) / noise if noise > 0 else float("inf"))
+             for name, c in contributions.items()}
+    return SyntheticData(frame=frame, platform=true, model=model, motion=motion,
+                         forces=forces, noise=e, effects=resolved,
+                         contributions=contributions, sizes=sizes)
+
+
+def run_synth(out: str | os.PathLike[str], platform_file: str | os.PathLike[str] | None = None,
+              effects=(), samples: int = 4000, rate: float = 200.0, noise: float = 0.1,
+              noise_correlation: float = 0.0, pose_noise: float = 0.0, seed: int = 0) -> Path:
+    """``gsfric synth``: write synthetic measured data to ``out`` (CSV or Parquet).
+
+    Parameters are those of ``synthesize``; ``platform_file`` is a platform TOML (default the
+    reference platform). Returns the path written (atomically).
+    """
+    from gsfric.io import _table_kind, write_table
+
+    out = Path(out)
+    _table_kind(out)
+    platform = None if platform_file is None else Platform.from_toml(platform_file)
+    data = synthesize(platform, effects, samples=samples, rate=rate, noise=noise,
+                      noise_correlation=noise_correlation, pose_noise=pose_noise, seed=seed)
+    write_table(data.frame, out)
+    return out

@@ -1,0 +1,129 @@
+"""Synthetic measured data (``gsfric synth``): format, hidden effects, noise, reproducibility."""
+
+from __future__ import annotations
+
+import numpy as np
+import pandas as pd
+import pytest
+from click.testing import CliRunner
+
+from gsfric.cli import main
+from gsfric.errors import InputError
+from gsfric.evaluation import Evaluator, state_array
+from gsfric.io import read_measured
+from gsfric.models import reference_platform
+from gsfric.synth import ar1_noise, excitation_motion, parse_effect, run_synth, synthesize
+
+COLUMNS = ["t", "x", "y", "z", "qw", "qx", "qy", "qz"] + [f"F{i}" for i in range(1, 7)] \
+    + [f"D{i}" for i in range(1, 7)]
+
+
+def test_noise_free_forces_are_the_true_platforms():
+    data = synthesize(effects=["seal_friction:force=2"], samples=300, noise=0.0, seed=1)
+    assert list(data.frame.columns) == COLUMNS
+    true = reference_platform().with_effect("seal_friction", force=2.0)
+    F = Evaluator(true).actuator_forces(state_array(data.motion))
+    measured = data.frame[[f"F{i}" for i in range(1, 7)]].to_numpy()
+    np.testing.assert_allclose(measured, F, atol=1e-12)
+    assert data.effects == {"seal_friction": {"force": 2.0}}
+    # seal friction opposes the leg speed: its contribution has the sign of the speed (F reads it)
+    speed = Evaluator(true).evaluate(data.motion).D_dot
+    moving = np.abs(speed) > 1e-3
+    np.testing.assert_allclose(data.contributions["seal_friction"][moving],
+                               2.0 * np.sign(speed[moving]), atol=2e-4)  # regularised sign
+
+
+def test_same_seed_same_data_other_seed_other_data():
+    a = synthesize(effects=["stribeck:static=1,velocity=0.02"], samples=200, noise=0.1,
+                   noise_correlation=0.5, pose_noise=1e-5, seed=7)
+    b = synthesize(effects=["stribeck:static=1,velocity=0.02"], samples=200, noise=0.1,
+                   noise_correlation=0.5, pose_noise=1e-5, seed=7)
+    c = synthesize(effects=["stribeck:static=1,velocity=0.02"], samples=200, noise=0.1,
+                   noise_correlation=0.5, pose_noise=1e-5, seed=8)
+    pd.testing.assert_frame_equal(a.frame, b.frame)
+    assert not np.allclose(a.frame["F1"], c.frame["F1"])
+
+
+@pytest.mark.parametrize("phi", [0.0, 0.9])
+def test_ar1_noise_has_the_requested_std_and_correlation(phi):
+    e = ar1_noise(np.random.default_rng(3), (200_000, 2), 0.5, phi)
+    assert e.std() == pytest.approx(0.5, rel=0.03)
+    lag1 = np.mean(e[1:] * e[:-1]) / np.mean(e * e)
+    assert lag1 == pytest.approx(phi, abs=0.01)
+
+
+def test_pose_noise_moves_the_recorded_pose_only():
+    clean = synthesize(samples=400, noise=0.0, pose_noise=0.0, seed=2)
+    noisy = synthesize(samples=400, noise=0.0, pose_noise=1e-4, seed=2)
+    dx = noisy.frame[["x", "y", "z"]].to_numpy() - clean.frame[["x", "y", "z"]].to_numpy()
+    assert dx.std() == pytest.approx(1e-4, rel=0.15)
+    q = noisy.frame[["qw", "qx", "qy", "qz"]].to_numpy()
+    np.testing.assert_allclose(np.linalg.norm(q, axis=1), 1.0, atol=1e-12)
+    angle = 2 * np.arccos(np.clip(np.abs(np.sum(
+        q * clean.frame[["qw", "qx", "qy", "qz"]].to_numpy(), axis=1)), 0, 1))
+    assert np.sqrt(np.mean(angle ** 2)) == pytest.approx(np.sqrt(3) * 1e-4, rel=0.15)
+    # the forces are those of the true (noise-free) motion
+    np.testing.assert_allclose(noisy.frame["F1"], clean.frame["F1"])
+
+
+def test_stroke_reference_defaults_to_the_mean_leg_length():
+    data = synthesize(effects=["stroke_friction:slope=20"], samples=300, noise=0.0, seed=4)
+    D = Evaluator(data.model).evaluate(data.motion).D
+    assert data.effects["stroke_friction"]["reference"] == pytest.approx(D.mean())
+
+
+def test_effect_size_is_rms_contribution_over_noise():
+    data = synthesize(effects=["quadratic_drag:coefficient=20"], samples=500, noise=0.25,
+                      seed=5)
+    rms = np.sqrt(np.mean(data.contributions["quadratic_drag"] ** 2))
+    assert data.sizes["quadratic_drag"] == pytest.approx(rms / 0.25)
+
+
+def test_excitation_motion_reverses_every_leg():
+    t = np.arange(2000) / 200.0
+    motion = excitation_motion(np.random.default_rng(0), t)
+    speed = Evaluator(reference_platform()).evaluate(motion).D_dot
+    reversals = np.sum(np.diff(np.sign(speed), axis=0) != 0, axis=0)
+    assert np.all(reversals >= 6)
+
+
+@pytest.mark.parametrize("text, message", [
+    ("stribek:static=1", "unknown effect"),
+    ("stribeck:statc=1", "unknown parameter"),
+    ("stribeck:static=abc", "not a number"),
+    ("stribeck:static", "expected param=value"),
+])
+def test_bad_effect_text(text, message):
+    with pytest.raises(InputError, match=message):
+        parse_effect(text)
+
+
+def test_parse_effect():
+    assert parse_effect("payload_offset:x=0.01, y=-0.02") == (
+        "payload_offset", {"x": 0.01, "y": -0.02})
+    assert parse_effect("seal_friction") == ("seal_friction", {})
+
+
+def test_run_synth_writes_a_measured_data_file(tmp_path):
+    path = run_synth(tmp_path / "m.parquet", effects=("sensor_bias:b1=1",), samples=100,
+                     noise=0.05, seed=3)
+    motion, forces, lengths = read_measured(path)
+    assert forces.shape == (100, 6) and lengths.shape == (100, 6)
+
+
+def test_cli_synth(tmp_path):
+    out = tmp_path / "m.csv"
+    result = CliRunner().invoke(main, ["synth", "--out", str(out), "--effect",
+                                       "stribeck:static=2,velocity=0.01", "--samples", "200",
+                                       "--noise", "0.1", "--noise-correlation", "0.8",
+                                       "--pose-noise", "1e-5", "--seed", "4"])
+    assert result.exit_code == 0, result.output
+    assert list(pd.read_csv(out).columns) == COLUMNS
+
+
+def test_cli_synth_rejects_an_unknown_effect(tmp_path):
+    result = CliRunner().invoke(main, ["synth", "--out", str(tmp_path / "m.csv"), "--effect",
+                                       "friction:force=1"])
+    assert result.exit_code == 2
+    assert "unknown effect" in result.output
+    assert len(result.output.strip().splitlines()) == 1
