@@ -142,6 +142,33 @@ def _field_count_problem(path: Path) -> str | None:
     return None
 
 
+def check_file(path: Path) -> str:
+    """The table kind ("csv" or "parquet") of an existing, non-empty file; InputError if not."""
+    kind = _table_kind(path)
+    if not path.exists():
+        raise InputError(f"{path}: file not found")
+    if path.is_dir():
+        raise InputError(f"{path}: is a directory, not a file")
+    try:
+        size = path.stat().st_size
+    except OSError as error:
+        raise InputError(f"{path}: cannot read ({error.strerror})") from None
+    if size == 0:
+        raise InputError(f"{path}: file is empty")
+    return kind
+
+
+def csv_options() -> dict[str, Any]:
+    """pandas.read_csv options: only an empty cell is missing; floats read back exactly."""
+    import pandas as pd
+
+    options: dict[str, Any] = {"index_col": False, "skipinitialspace": True,
+                               "keep_default_na": False, "na_values": [""]}
+    if int(pd.__version__.split(".")[0]) < 3:
+        options["float_precision"] = "round_trip"
+    return options
+
+
 def read_table(path: str | os.PathLike[str]) -> pd.DataFrame:
     """Read a CSV or Parquet file (chosen by extension) into a DataFrame.
 
@@ -156,23 +183,9 @@ def read_table(path: str | os.PathLike[str]) -> pd.DataFrame:
     import pandas as pd
 
     path = Path(path)
-    kind = _table_kind(path)
-    if not path.exists():
-        raise InputError(f"{path}: file not found")
-    if path.is_dir():
-        raise InputError(f"{path}: is a directory, not a file")
-    try:
-        size = path.stat().st_size
-    except OSError as error:
-        raise InputError(f"{path}: cannot read ({error.strerror})") from None
-    if size == 0:
-        raise InputError(f"{path}: file is empty")
-
+    kind = check_file(path)
     if kind == "csv":
-        options: dict[str, Any] = {"index_col": False, "skipinitialspace": True,
-                                   "keep_default_na": False, "na_values": [""]}
-        if int(pd.__version__.split(".")[0]) < 3:
-            options["float_precision"] = "round_trip"
+        options = csv_options()
         try:
             with warnings.catch_warnings():
                 warnings.simplefilter("error", pd.errors.ParserWarning)

@@ -63,31 +63,6 @@ _FLAG_WARNING = r"[0-9]+ of [0-9]+ steps flagged"
 # -- reading in blocks --------------------------------------------------------------------------
 
 
-def _csv_options() -> dict[str, Any]:
-    import pandas as pd
-
-    options: dict[str, Any] = {"index_col": False, "skipinitialspace": True,
-                               "keep_default_na": False, "na_values": [""]}
-    if int(pd.__version__.split(".")[0]) < 3:
-        options["float_precision"] = "round_trip"
-    return options
-
-
-def _check_file(path: Path) -> str:
-    kind = gio._table_kind(path)
-    if not path.exists():
-        raise InputError(f"{path}: file not found")
-    if path.is_dir():
-        raise InputError(f"{path}: is a directory, not a file")
-    try:
-        size = path.stat().st_size
-    except OSError as error:
-        raise InputError(f"{path}: cannot read ({error.strerror})") from None
-    if size == 0:
-        raise InputError(f"{path}: file is empty")
-    return kind
-
-
 def _csv_blocks(path: Path, rows: int):
     """DataFrames of at most ``rows`` rows; errors as ``read_table`` gives them."""
     import pandas as pd
@@ -99,7 +74,7 @@ def _csv_blocks(path: Path, rows: int):
     try:
         with warnings.catch_warnings():
             warnings.simplefilter("error", pd.errors.ParserWarning)
-            reader = pd.read_csv(path, chunksize=rows, **_csv_options())
+            reader = pd.read_csv(path, chunksize=rows, **gio.csv_options())
     except pd.errors.EmptyDataError:
         raise InputError(f"{path}: file is empty (no header line)") from None
     except UnicodeDecodeError as error:
@@ -191,7 +166,7 @@ class _Block:
 
 def _blocks(path: Path, rows: int) -> Iterator[_Block]:
     """Validated blocks of the trajectory file; messages name 1-based data rows."""
-    kind = _check_file(path)
+    kind = gio.check_file(path)
     frames = _csv_blocks(path, rows) if kind == "csv" else _parquet_blocks(path, rows)
     start = 0
     last_t = None
@@ -604,7 +579,7 @@ def simulate_file(trajectory: str | os.PathLike[str], out: str | os.PathLike[str
 
     trajectory, out = Path(trajectory), Path(out)
     kind = gio._table_kind(out)
-    _check_file(trajectory)
+    gio.check_file(trajectory)
     if out.exists() and out.is_dir():
         raise InputError(f"{out}: is a directory; give a file name")
     if not out.parent.is_dir():
