@@ -169,6 +169,24 @@ def csv_options() -> dict[str, Any]:
     return options
 
 
+def numeric_columns(path: Path, frame, names: list[str], first_row: int = 0) -> dict:
+    """The frame's columns as float arrays under ``names``; InputError naming the first bad row.
+
+    ``first_row`` is the 0-based data row of the frame's first row in the file (for blocks).
+    """
+    columns: dict[str, np.ndarray] = {}
+    problems = []
+    for original, name in zip(frame.columns, names):
+        values, problem = _column_values(frame[original], name)
+        columns[name] = values
+        if problem is not None:
+            problems.append(problem)
+    if problems:
+        row, message = min(problems, key=lambda p: p[0])
+        raise InputError(f"{path}: row {first_row + row + 1}: {message}")
+    return columns
+
+
 def read_table(path: str | os.PathLike[str]) -> pd.DataFrame:
     """Read a CSV or Parquet file (chosen by extension) into a DataFrame.
 
@@ -316,17 +334,7 @@ def _read_samples(path: str | os.PathLike[str], measured: bool
     if len(frame) == 0:
         raise InputError(f"{path}: no data rows")
 
-    columns: dict[str, np.ndarray] = {}
-    problems = []
-    for original, name in zip(frame.columns, names):
-        values, problem = _column_values(frame[original], name)
-        columns[name] = values
-        if problem is not None:
-            problems.append(problem)
-    if problems:
-        row, message = min(problems, key=lambda p: p[0])
-        raise InputError(f"{path}: row {row + 1}: {message}")
-
+    columns = numeric_columns(path, frame, names)
     t = columns["t"]
     with np.errstate(over="ignore", invalid="ignore"):
         steps = np.diff(t)

@@ -180,16 +180,7 @@ def _blocks(path: Path, rows: int) -> Iterator[_Block]:
             orientation = gio._check_columns(path, names, measured=False)
         if len(frame) == 0:
             continue
-        columns: dict[str, np.ndarray] = {}
-        problems = []
-        for original, name in zip(frame.columns, names):
-            values, problem = gio._column_values(frame[original], name)
-            columns[name] = values
-            if problem is not None:
-                problems.append(problem)
-        if problems:
-            row, message = min(problems, key=lambda p: p[0])
-            raise InputError(f"{path}: row {start + row + 1}: {message}")
+        columns = gio.numeric_columns(path, frame, names, first_row=start)
         t = columns["t"]
         with np.errstate(over="ignore", invalid="ignore"):
             steps = np.diff(t if last_t is None else np.concatenate([[last_t], t]))
