@@ -51,7 +51,7 @@ def _layout(specs) -> list[dict]:
     return out
 
 
-def _split(sx, specs, ch_inputs, env):
+def _split(sx, specs, env):
     """Map the chain's input blocks onto slices of the flat CasADi symbol ``sx``."""
     offset = 0
     for name, shape, *_ in specs:
@@ -77,11 +77,11 @@ def _functions():
 
     def translate(model):
         env = {}
-        _split(x, mdl.STATE, None, env)
-        _split(P, mdl.PARAMETERS, None, env)
+        _split(x, mdl.STATE, env)
+        _split(P, mdl.PARAMETERS, env)
         env["effects"] = Q
         if model.mode == "paper":
-            _split(K, mdl.PAPER_CONSTANTS, None, env)
+            _split(K, mdl.PAPER_CONSTANTS, env)
         return model.chain.to_casadi(env, model.outputs)
 
     out_names = [n for n, *_ in mdl.OUTPUTS]
@@ -90,7 +90,7 @@ def _functions():
     fric = mdl.build_friction()
     fric_in = {n: ca.SX.sym(n, mdl._size(s)) for n, s, *_ in mdl.FRICTION_INPUTS}
     env = dict(fric_in)
-    _split(P, mdl.PARAMETERS, None, env)
+    _split(P, mdl.PARAMETERS, env)
     env["effects"] = Q
     fric_out = fric.chain.to_casadi(env, fric.outputs)
 

@@ -169,6 +169,14 @@ def csv_options() -> dict[str, Any]:
     return options
 
 
+def check_unique_columns(path: Path, names: list[str]) -> None:
+    """InputError when pandas renamed a repeated CSV column ``x`` to ``x.1``."""
+    for name in names:
+        match = re.fullmatch(r"(.*)\.[0-9]+", name)
+        if match and match.group(1) in names:
+            raise InputError(f"{path}: column {match.group(1)!r} appears more than once")
+
+
 def numeric_columns(path: Path, frame, names: list[str], first_row: int = 0) -> dict:
     """The frame's columns as float arrays under ``names``; InputError naming the first bad row.
 
@@ -219,10 +227,7 @@ def read_table(path: str | os.PathLike[str]) -> pd.DataFrame:
         except OSError as error:
             raise InputError(f"{path}: cannot read ({error.strerror})") from None
         names = [str(c) for c in frame.columns]
-        for name in names:
-            match = re.fullmatch(r"(.*)\.[0-9]+", name)
-            if match and match.group(1) in names:
-                raise InputError(f"{path}: column {match.group(1)!r} appears more than once")
+        check_unique_columns(path, names)
     else:
         import pyarrow
 

@@ -33,7 +33,6 @@ from __future__ import annotations
 
 import contextlib
 import os
-import re
 import sys
 import warnings
 from collections.abc import Iterator
@@ -99,10 +98,7 @@ def _csv_blocks(path: Path, rows: int):
             except OSError as error:
                 raise InputError(f"{path}: cannot read ({error.strerror})") from None
             names = [str(c) for c in frame.columns]
-            for name in names:
-                match = re.fullmatch(r"(.*)\.[0-9]+", name)
-                if match and match.group(1) in names:
-                    raise InputError(f"{path}: column {match.group(1)!r} appears more than once")
+            gio.check_unique_columns(path, names)
             frame.columns = names
             yield frame
 
