@@ -194,9 +194,10 @@ class Leg:
     alpha_leg: sp.Matrix
     lower: Body
     upper: Body
-    upper_need: Wrench             # the upper part's required wrench
+    upper_need: Wrench             # the upper part's required wrench (about its centre)
+    s_upper: sp.Expr               # distance of the upper part's centre from C
     F_leg: sp.Matrix
-    K: sp.Matrix
+    K: sp.Matrix                   # base frame (computed in the leg's axes)
     M_C: sp.Expr
     t_E: sp.Matrix                 # R_E's part perpendicular to u
     out: dict = field(default_factory=dict)   # reactions and friction, by output name
@@ -331,7 +332,7 @@ def _leg(ch: Chain, inp: Inputs, platform: PlatformPart, i: int) -> Leg:
     joint = kin.universal_joint_axes(u, a1, motion)
     v_E = motion("v_E", kin.point_velocity(X["velocity"], X["omega"], r_E), "v_{E}")
     D_dot, u_dot = kin.leg_rates(u, D, v_E, motion)
-    omega_leg, lam, q = kin.leg_angular_velocity(u, u_dot, a1, joint, motion)
+    spin = kin.leg_angular_velocity(u, u_dot, joint, motion)
     # the parts' centres, as distances from C along the leg
     k_low, k_up = P["lower_frac"], 1 - P["upper_frac"]
     s_low = P["lower_com"] + k_low * D
@@ -340,15 +341,18 @@ def _leg(ch: Chain, inp: Inputs, platform: PlatformPart, i: int) -> Leg:
         a_E = motion("a_E", kin.point_acceleration(X["acceleration"], X["alpha"], X["omega"],
                                                    r_E), "a_{E}")
         D_ddot, u_ddot = kin.leg_second_rates(u, u_dot, D, D_dot, v_E, a_E, motion)
-        alpha_leg = kin.leg_angular_acceleration(u, u_dot, u_ddot, a1, joint, lam, q, motion)
+        alpha_body, alpha_leg = kin.leg_angular_acceleration(u_dot, u_ddot, a1, joint, spin,
+                                                             motion)
         a_low = motion("a_lower", kin.point_on_leg_acceleration(
             s_low, k_low * D_dot, k_low * D_ddot, u, u_dot, u_ddot), "a_{4}")
         a_up = motion("a_upper", kin.point_on_leg_acceleration(
             s_up, k_up * D_dot, k_up * D_ddot, u, u_dot, u_ddot), "a_{c2}")
-        omega_in = omega_leg
+        omega_in = spin.omega
+        rates = (alpha_body, spin.omega_body)
     else:
         a_low = a_up = inp.K["leg_acc"]
         alpha_leg, omega_in = inp.K["leg_alpha"], sp.zeros(3, 1)
+        rates = None
     weight = P["leg_weight"]
     lower = Body(P["lower_mass"], weight * P["lower_mass"] + Q["leg_weight.lower_mass"],
                  Inertia(P["lower_inertia"], joint.frame, C + s_low * u), a_low, alpha_leg,
@@ -357,18 +361,23 @@ def _leg(ch: Chain, inp: Inputs, platform: PlatformPart, i: int) -> Leg:
                  Inertia(P["upper_inertia"], joint.frame, C + s_up * u), a_up, alpha_leg,
                  omega_in)
     rotation = ch.scope("17", k)
-    rates = lower.inertia.body_rates(alpha_leg, omega_in, rotation, "leg_body")
-    lower_need = lower.required_wrench(inp.g_vec, lower.inertia.rotation_moment(
-        alpha_leg, omega_in, rotation, "M_rot4", "M_{rot4}", rates))
-    upper_need = upper.required_wrench(inp.g_vec, upper.inertia.rotation_moment(
-        alpha_leg, omega_in, rotation, "M_rot2", "M_{rot2}", rates))
-    total = lg.leg_required([lower_need, upper_need], C)
-    F_leg = need("F_leg", total.force, "F_{leg}")
-    K = need("K", total.moment, "K")
-    M_C = need("M_C", lg.torsion_moment(K, u, joint.n_dot_u), "M_{C}")
-    t_E = need("t_E", lg.transverse_end_force(K, M_C, u, joint.n, D), r"R_{E}^{\perp}")
-    return Leg(k, C, a1, E, r_E, D, u, joint, D_dot, omega_leg, alpha_leg, lower, upper,
-               upper_need, F_leg, K, M_C, t_E)
+    if rates is None:
+        rates = lower.inertia.body_rates(alpha_leg, omega_in, rotation, "leg_body")
+    turn_low = rotation("M_rot4_leg", lower.inertia.rotation_moment_in_body(*rates),
+                        "M^{leg}_{rot4}")
+    turn_up = rotation("M_rot2_leg", upper.inertia.rotation_moment_in_body(*rates),
+                       "M^{leg}_{rot2}")
+    force_low = need("F_lower", lower.required_force(inp.g_vec), "F_{4}")
+    force_up = need("F_upper", upper.required_force(inp.g_vec), "F_{2}")
+    F_leg = need("F_leg", force_low + force_up, "F_{leg}")
+    K_leg = need("K_leg", lg.leg_moment([s_low, s_up], [force_low, force_up],
+                                        [turn_low, turn_up], joint), "K^{leg}")
+    M_C = need("M_C", lg.torsion_moment(K_leg, joint), "M_{C}")
+    t_E = need("t_E", lg.transverse_end_force(K_leg, M_C, joint, D), r"R_{E}^{\perp}")
+    upper_need = Wrench(force_up, rotation("M_rot2", joint.frame * turn_up, "M_{rot2}"),
+                        upper.centre)
+    return Leg(k, C, a1, E, r_E, D, u, joint, D_dot, spin.omega, alpha_leg, lower, upper,
+               upper_need, s_up, F_leg, joint.frame * K_leg, M_C, t_E)
 
 
 def _on_platform(platform: PlatformPart, leg: Leg, force, moment=None) -> Wrench:
@@ -395,8 +404,10 @@ def _reactions(ch: Chain, inp: Inputs, leg: Leg, f_axial, next_leg: Leg) -> None
     need, prismatic = ch.scope("11-17", leg.k), ch.scope("28-32", leg.k)
     R_E = need("R_E", f_axial * leg.u + leg.t_E, "R_{E}")
     R_C = need("R_C", R_E + leg.F_leg, "R_{C}")
-    P3 = leg.C + inp.P["prismatic_point"] * leg.D * leg.u
-    F_ax, R_3, M_3 = pr.upper_part_loads(Wrench.force_at(R_E, leg.E), leg.upper_need, leg.u, P3)
+    s_3 = inp.P["prismatic_point"] * leg.D
+    P3 = leg.C + s_3 * leg.u
+    F_ax, R_3, M_3 = pr.upper_part_loads(R_E, leg.upper_need.force, leg.upper_need.moment,
+                                         leg.u, leg.D, leg.s_upper, s_3)
     frame = lf.leg_frame(leg.E, leg.C, next_leg.E)
     R_3 = prismatic("R_3", R_3, "R_{3}")
     M_3 = prismatic("M_3", M_3, "M_{3}")
@@ -433,10 +444,10 @@ def _coupling(ch: Chain, platform: PlatformPart, legs: list[Leg], A_qr):
     rest = Wrench(sp.zeros(3, 1), sp.zeros(3, 1), platform.p)
     for leg in legs:
         let = ch.scope("effects", leg.k)
-        dK = leg.out["MfrE"] - leg.out["MfrC"]
-        dM_C = lg.torsion_moment(dK, leg.u, leg.joint.n_dot_u)
-        dt = let("dt_E", lg.transverse_end_force(dK, dM_C, leg.u, leg.n, leg.D),
-                 r"\Delta R_{E}^{\perp}")
+        dK = let("dK_leg", leg.joint.frame.T * (leg.out["MfrE"] - leg.out["MfrC"]),
+                 r"\Delta K^{leg}")
+        dt = let("dt_E", lg.transverse_end_force(dK, lg.torsion_moment(dK, leg.joint),
+                                                 leg.joint, leg.D), r"\Delta R_{E}^{\perp}")
         rest = rest - _on_platform(platform, leg, dt, leg.out["MfrE"])
     return ch.solve("df", A_qr, sp.Matrix.vstack(rest.force, rest.moment), r"\Delta f",
                     "effects")
@@ -472,8 +483,10 @@ def _leg_friction(let, P, Q, R_E, R_C, R_3, M_3, w_rel, w_C, v, D, u) -> dict:
     c_p, mu_p = P["prismatic_viscous"], P["prismatic_coulomb"]
     sign_v = let("sgn_v", fr.smooth_sign(v, eps_v), r"\sigma")
     return dict(
-        MfrE=let("MfrE", fr.joint_friction_moment(w_rel, R_E, c_s, mu, r, eps_w), "M_{frE}"),
-        MfrC=let("MfrC", fr.joint_friction_moment(w_C, R_C, c_s, mu, r, eps_w), "M_{frC}"),
+        MfrE=let("MfrE", fr.joint_friction_moment(w_rel, R_E, c_s, mu, r, eps_w, let, "MfrE"),
+                 "M_{frE}"),
+        MfrC=let("MfrC", fr.joint_friction_moment(w_C, R_C, c_s, mu, r, eps_w, let, "MfrC"),
+                 "M_{frC}"),
         MfrE_s=fr.joint_friction_scalar(w_rel, R_E, c_s, mu, r, eps_w),
         MfrC_s=fr.joint_friction_scalar(w_C, R_C, c_s, mu, r, eps_w),
         Ffr_s=fr.prismatic_friction_scalar(v, R_3, c_p, mu_p, eps_v),
