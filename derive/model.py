@@ -33,6 +33,7 @@ from . import friction as fr
 from . import kinematics as kin
 from . import leg_frames as lf
 from . import legs as lg
+from . import platform as pf
 from . import prismatic as pr
 from .chain import Chain
 from .mechanics import Body, Inertia, Wrench
@@ -313,8 +314,7 @@ def _platform(ch: Chain, inp: Inputs) -> PlatformPart:
     # One rotation moment for both: they turn together, in the same axes.
     both = Inertia(P["platform_inertia"] + P["payload_inertia"], T, p)
     turn = both.rotation_moment(alpha, omega, need, "M_rot", "M_{rot}")
-    required = (platform.required_wrench(inp.g_vec, turn)
-                + payload.required_wrench(inp.g_vec, sp.zeros(3, 1))).about(p)
+    required = pf.required_wrench([(platform, turn), (payload, sp.zeros(3, 1))], p, inp.g_vec)
     required = Wrench(need("F_req", required.force, "F_{req}"),
                       need("M_req", required.moment, "M_{req}"), p)
     return PlatformPart(p, T, platform, payload, alpha, omega, required)

@@ -42,6 +42,30 @@ def inertial_moment(R, I, alpha, omega):
     return Inertia(I, R, sp.zeros(3, 1)).rotation_moment(alpha, omega)
 
 
+def required_wrench(parts, p, g_vec) -> Wrench:
+    """The right-hand sides of (2)-(7): the wrench about p that platform and payload need.
+
+    Parameters
+    ----------
+    parts : sequence of (mechanics.Body, sympy.Matrix of shape (3, 1))
+        Each body with its rotation moment ``J alpha + omega x J omega`` (N m, base frame);
+        bodies turning together may carry their summed rotation moment on one of them.
+    p : sympy.Matrix, shape (3, 1)
+        Platform frame origin, base frame, m.
+    g_vec : sympy.Matrix, shape (3, 1)
+        Gravitational acceleration, base frame, m/s^2.
+
+    Returns
+    -------
+    mechanics.Wrench
+        ``F_req`` (N) and ``M_req`` (N m, about p), base frame.
+    """
+    total = Wrench(sp.zeros(3, 1), sp.zeros(3, 1), p)
+    for body, rotation in parts:
+        total = total + body.required_wrench(g_vec, rotation)
+    return total
+
+
 def platform_residual(R_E, E, p, F_req, M_req, M_joint=None):
     """Residual of (2)-(7) for forces R_E[i] at points E[i]; zero at equilibrium.
 

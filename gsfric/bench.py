@@ -2,7 +2,7 @@
 
 The compiled map ``Evaluator.actuator_forces`` (actuator forces with friction, NumPy in to NumPy
 out, preallocated output) is timed on one and on two threads against the same physics written
-in NumPy (``gsfric.reference``): vectorised over steps, and a per-step loop that solves the
+in NumPy (``gsfric.numpy_model``): vectorised over steps, and a per-step loop that solves the
 dense 42x42 system of (2)-(16) at every step. Every case runs on the reference platform over a
 smooth random motion.
 
@@ -44,8 +44,8 @@ SEED = 20261122
 
 IMPLEMENTATIONS = {
     "compiled": "compiled C (Evaluator.actuator_forces)",
-    "numpy": "vectorised NumPy (reference.actuator_forces_numpy)",
-    "loop": "per-step loop, 42x42 solve (reference.actuator_forces_loop)",
+    "numpy": "vectorised NumPy (numpy_model.actuator_forces_numpy)",
+    "loop": "per-step loop, 42x42 solve (numpy_model.actuator_forces_loop)",
 }
 
 TARGETS = {
@@ -128,7 +128,7 @@ def states(n: int) -> np.ndarray:
 
 def _callable(implementation: str, threads: int, x: np.ndarray):
     """A function of no arguments that evaluates x with one implementation."""
-    from gsfric import models, reference
+    from gsfric import models, numpy_model
     from gsfric.evaluation import Evaluator
 
     platform = models.reference_platform()
@@ -138,9 +138,9 @@ def _callable(implementation: str, threads: int, x: np.ndarray):
         out.fill(0.0)
         return lambda: evaluator.actuator_forces(x, out=out)
     if implementation == "numpy":
-        return lambda: reference.actuator_forces_numpy(platform, x)
+        return lambda: numpy_model.actuator_forces_numpy(platform, x)
     if implementation == "loop":
-        return lambda: reference.actuator_forces_loop(platform, x)
+        return lambda: numpy_model.actuator_forces_loop(platform, x)
     raise ValueError(f"unknown implementation {implementation!r}")
 
 
@@ -324,6 +324,8 @@ def _machine() -> dict:
             "actuator_entry": (f"SIMD over steps, {manifest().get('simd_lanes')} lanes" if simd
                                else "one step per call"),
             "source": _source_version(),
+            "instructions": {f["name"].removeprefix("gsfric_model_"): f.get("n_instructions")
+                             for f in manifest()["functions"]},
             "load_average_start": _load_average()}
 
 
@@ -454,6 +456,8 @@ def format_report(report: Report) -> str:
              f"machine: {m['cpu']}, {m['cores']} cores; Python {m['python']}, "
              f"NumPy {m['numpy']}; compiled with: {m['compiler']}; actuator map: "
              f"{m['actuator_entry']}",
+             "CasADi instructions per step (generated/manifest.json): " + ", ".join(
+                 f"{name} {n}" for name, n in m.get("instructions", {}).items()),
              f"source: {m.get('source')}; load average (1, 5, 15 min): start "
              f"{m['load_average_start']}, end {m.get('load_average_end')}",
              f"cores free for this run (two CPU-bound processes together, 2.0 = two idle "

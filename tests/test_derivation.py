@@ -165,3 +165,27 @@ def test_leg_angular_velocity_and_acceleration_match_finite_differences(kinemati
         dw = (w[2 * n:] - w[:n]) / (2 * h)
         np.testing.assert_allclose(np.cross(w[n:2 * n], u[n:2 * n]), du, atol=1e-8)
         np.testing.assert_allclose(al[n:2 * n], dw, atol=1e-6 * max(1.0, np.abs(al).max()))
+
+
+def test_staleness_hash_covers_exactly_the_modules_that_generate_code(tmp_path):
+    """derive/sources.py hashes the modules derive.build imports, and nothing else."""
+    import shutil
+    import subprocess
+    import sys
+    from pathlib import Path
+
+    from derive import sources
+
+    root = Path(sources.__file__).resolve().parent
+    code = ("import sys, derive.build; print(' '.join(sorted(m.split('.', 1)[1] + '.py' "
+            "for m in sys.modules if m.startswith('derive.'))))")
+    imported = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
+                              check=True, cwd=root.parent).stdout.split()
+    assert sorted(imported) == sorted(sources.GENERATING)
+    copy = tmp_path / "derive"
+    shutil.copytree(root, copy, ignore=shutil.ignore_patterns("__pycache__"))
+    assert sources.source_hash(copy) == sources.source_hash(root)
+    (copy / "printed.py").write_text((copy / "printed.py").read_text() + "\n# edited\n")
+    assert sources.source_hash(copy) == sources.source_hash(root)
+    (copy / "legs.py").write_text((copy / "legs.py").read_text() + "\n# edited\n")
+    assert sources.source_hash(copy) != sources.source_hash(root)
