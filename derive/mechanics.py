@@ -38,7 +38,7 @@ class Wrench:
 
     @classmethod
     def force_at(cls, force, point) -> "Wrench":
-        """A pure force (zero moment about its point of application)."""
+        """A pure force: ``force`` (3, 1) N at ``point`` (3, 1) m, base frame; zero moment."""
         return cls(force, sp.zeros(3, 1), point)
 
     def about(self, point) -> "Wrench":
