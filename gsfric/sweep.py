@@ -971,14 +971,13 @@ def load(out: str | os.PathLike) -> SweepResult:
 
 def plot(envelopes, summary, folder: Path, limits: Mapping, workspace: dict | None) -> None:
     """``envelope.png`` (each quantity per leg, all cases, limits) and ``locations.png``."""
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
+    from matplotlib.figure import Figure        # no pyplot: leaves the caller's backend alone
+    from matplotlib.patches import Rectangle
 
     shown = ["R_E", "R_C", "M_C", "R_3", "M_3", "F_max", "Ffr", "P_C", "W_C"]
     limit_of = {q: k for k, q in LIMIT_QUANTITY.items()}
-    fig, axes = plt.subplots(3, 3, figsize=(12, 9), constrained_layout=True)
+    fig = Figure(figsize=(12, 9), layout="constrained")
+    axes = fig.subplots(3, 3)
     legs = np.arange(1, 7)
     for ax, q in zip(axes.flat, shown):
         sub = envelopes[envelopes.quantity == q]
@@ -996,20 +995,20 @@ def plot(envelopes, summary, folder: Path, limits: Mapping, workspace: dict | No
                 for v in limits["actuator_force"]:
                     ax.axhline(v, color="C3", ls="--")
         else:
-            ax.set_title(meaning, fontsize=9)
+            ax.set_title(meaning.replace(" (motions only)", ""), fontsize=9)
         if q in limit_of and limit_of[q] in limits:
             ax.axhline(limits[limit_of[q]], color="C3", ls="--", label="limit")
         ax.set_xlabel("leg")
         ax.set_ylabel(f"{q} [{unit}]")
     fig.suptitle("Load envelope per joint: bars = over all cases, grey = each case")
     fig.savefig(folder / "envelope.png", dpi=90)
-    plt.close(fig)
 
-    fig, axes = plt.subplots(1, 2, figsize=(11, 4.5), constrained_layout=True)
+    fig = Figure(figsize=(11, 4.5), layout="constrained")
+    axes = fig.subplots(1, 2)
     for ax, (i, j) in zip(axes, (("x", "y"), ("x", "z"))):
         if workspace is not None:
             (x0, x1), (y0, y1) = workspace["pose"][i], workspace["pose"][j]
-            ax.add_patch(plt.Rectangle((x0, y0), x1 - x0, y1 - y0, fill=False, ls=":",
+            ax.add_patch(Rectangle((x0, y0), x1 - x0, y1 - y0, fill=False, ls=":",
                                        color="0.4", label="workspace"))
         for k, q in enumerate(["R_E", "R_C", "M_C", "R_3", "M_3", "F_max"]):
             best = summary[summary.quantity == q]
@@ -1022,7 +1021,6 @@ def plot(envelopes, summary, folder: Path, limits: Mapping, workspace: dict | No
     axes[0].legend(fontsize=7)
     fig.suptitle("Where each joint's largest load occurs (numbers: legs)")
     fig.savefig(folder / "locations.png", dpi=90)
-    plt.close(fig)
 
 
 class _CallableModule(type(sys)):
