@@ -620,7 +620,9 @@ def plan(trajectories=None, workspace: Workspace | str | os.PathLike | None = No
             or chunk_steps < 1:
         raise InputError(f"chunk_steps: expected an integer >= 1, got {short(chunk_steps)}")
     files = _trajectory_files(trajectories)
+    source = "workspace"
     if workspace is not None and not isinstance(workspace, Workspace):
+        source = str(workspace)
         workspace = Workspace.from_toml(workspace)
     if not files and workspace is None:
         raise InputError("sweep: give trajectories (a glob) and/or a workspace")
@@ -641,7 +643,7 @@ def plan(trajectories=None, workspace: Workspace | str | os.PathLike | None = No
     if workspace is not None:
         poses = workspace.poses()
         n_poses = len(poses)
-        check_reachable(platform, poses, "workspace")
+        check_reachable(platform, poses, source)
         block = max(1, min(n_poses, -(-chunk_steps // workspace.states)))
         per = max(1, chunk_steps // (block * workspace.states))
         for b, p0 in enumerate(range(0, n_poses, block)):
