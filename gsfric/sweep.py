@@ -41,7 +41,7 @@ import sys
 import time
 import tomllib
 import warnings
-from collections.abc import Callable, Mapping, Sequence
+from collections.abc import Callable, Mapping
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
@@ -49,7 +49,7 @@ from typing import Any
 import numpy as np
 
 from gsfric._checks import as_float, short, suggest
-from gsfric.errors import GsfricError, InputError
+from gsfric.errors import InputError
 from gsfric.platform import Platform
 
 # -- what an envelope holds -----------------------------------------------------------------
@@ -442,7 +442,6 @@ class Task:
     path: str | None = None
     poses: np.ndarray | None = None   # (n, 6) workspace block
     first_pose: int = 0
-    block: int = 0
     workspace: Workspace | None = None
 
 
@@ -646,13 +645,13 @@ def plan(trajectories=None, workspace: Workspace | str | os.PathLike | None = No
         check_reachable(platform, poses, source)
         block = max(1, min(n_poses, -(-chunk_steps // workspace.states)))
         per = max(1, chunk_steps // (block * workspace.states))
-        for b, p0 in enumerate(range(0, n_poses, block)):
+        for p0 in range(0, n_poses, block):
             part = poses[p0:p0 + block]
             for lo in range(0, nv, per):
                 vs = list(range(lo, min(nv, lo + per)))
                 tasks.append(Task(len(tasks), "workspace", vs, [platforms[v] for v in vs],
                                   len(part) * workspace.states * len(vs), poses=part,
-                                  first_pose=p0, block=b, workspace=workspace))
+                                  first_pose=p0, workspace=workspace))
     inputs = {"gsfric": __version__, "files": [str(f) for f in files],
               "workspace": workspace.to_dict() if workspace is not None else None,
               "platform": platform.to_dict(), "vary": {k: list(v) for k, v in

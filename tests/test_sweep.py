@@ -250,3 +250,20 @@ def test_gsfric_sweep_is_callable():
     import gsfric
 
     assert gsfric.sweep.Workspace is sw.Workspace and callable(gsfric.sweep)
+
+
+def test_platform_limits_round_trip_and_one_line_errors(tmp_path):
+    from gsfric.platform import Platform
+
+    platform = models.reference_platform().replace(
+        limits={"actuator_force": 200.0, "universal_load": 300.0})
+    assert platform.limits["actuator_force"] == (-200.0, 200.0)
+    platform.to_toml(tmp_path / "p.toml")
+    assert Platform.from_toml(tmp_path / "p.toml") == platform
+    base = models.reference_platform().to_dict()
+    for limits, words in (({"universal_lod": 1.0}, "did you mean 'universal_load'"),
+                          ({"spherical_load": 0.0}, "must be positive"),
+                          ({"actuator_force": [5.0, -5.0]}, "min = 5 must be less than")):
+        with pytest.raises(InputError, match=words) as info:
+            Platform.from_dict({**base, "limits": limits}, source="p.toml")
+        assert "\n" not in str(info.value) and str(info.value).startswith("p.toml: limits.")
