@@ -665,12 +665,21 @@ def plan(trajectories=None, workspace: Workspace | str | os.PathLike | None = No
 # -- merging ----------------------------------------------------------------------------------
 
 
-def merge(chunks) -> Any:
-    """Per-case envelopes from task envelopes (any order in, the same result out)."""
+MERGE_EVERY = 64
+"""Task envelopes held before they are folded into the running merge (bounds client memory)."""
+
+
+def _reduce(frames) -> Any:
+    """Fold task envelopes (and earlier folds) into one row per case, quantity and leg.
+
+    The result does not depend on the order of ``frames`` or of their rows: an extreme is
+    chosen by (value, then the lowest task index), the counts are integer sums, and an energy
+    has at most one term per case (a motion's variant is one task: files are never split;
+    the workspace has no energy). Rows keep the winning ``task``.
+    """
     import pandas as pd
 
-    frame = pd.concat(chunks, ignore_index=True).sort_values(
-        ["task", "motion", "variant", "quantity", "leg"], kind="stable", ignore_index=True)
+    frame = pd.concat(frames, ignore_index=True)
     key = ["motion", "variant", "quantity", "leg"]
     counts = (frame[(frame.quantity == "R_E") & (frame.leg == 1)]
               .groupby(["motion", "variant"], sort=True)[["steps", "flagged"]].sum())
@@ -678,18 +687,25 @@ def merge(chunks) -> Any:
     for q, (kind, _, _) in QUANTITIES.items():
         sub = frame[frame.quantity == q]
         if kind == "sum":
-            agg = sub.groupby(key, sort=True, as_index=False).agg(
+            sub = sub.sort_values(["task", "motion", "variant", "leg"], kind="stable")
+            parts.append(sub.groupby(key, sort=True, as_index=False).agg(
+                task=("task", "min"),
                 value=("value", lambda v: math.fsum(v) if v.notna().all() else math.nan),
-                step=("step", "first"), t=("t", "first"),
-                **{p: (p, "first") for p in POSE})
-            parts.append(agg)
+                step=("step", "first"), t=("t", "first"), **{c: (c, "first") for c in POSE}))
             continue
-        ordered = sub.sort_values("value", ascending=(kind == "min"), kind="stable",
-                                  na_position="last")
+        ordered = sub.sort_values(["value", "task"], ascending=[kind == "min", True],
+                                  kind="stable", na_position="last")
         parts.append(ordered.drop_duplicates(key, keep="first"))
-    out = pd.concat(parts, ignore_index=True).drop(columns=["task", "steps", "flagged"],
+    out = pd.concat(parts, ignore_index=True).drop(columns=["steps", "flagged"],
                                                    errors="ignore")
-    out = out.join(counts, on=["motion", "variant"])
+    return out.join(counts, on=["motion", "variant"])
+
+
+def merge(chunks) -> Any:
+    """Per-case envelopes (``ENVELOPE_COLUMNS``) from task envelopes, in any order."""
+    import pandas as pd
+
+    out = _reduce(list(chunks))
     out["quantity"] = pd.Categorical(out["quantity"], categories=list(QUANTITIES))
     out = out.sort_values(["motion", "variant", "quantity", "leg"], ignore_index=True)
     out["quantity"] = out["quantity"].astype(str)
@@ -796,9 +812,8 @@ def _store(partial: Path, task_id: int, frame) -> None:
         frame.to_parquet(handle, index=False)
 
 
-def _finished(partial: Path, fingerprint: str) -> dict[int, Any]:
-    import pandas as pd
-
+def _finished(partial: Path, fingerprint: str):
+    """(task index, chunk file) of the tasks an unfinished sweep of these inputs stored."""
     plan_file = partial / "plan.json"
     if not plan_file.exists():
         return {}
@@ -809,10 +824,7 @@ def _finished(partial: Path, fingerprint: str) -> dict[int, Any]:
     if stored != fingerprint:
         raise InputError(f"{partial}: holds an unfinished sweep of other inputs; remove it "
                          "or choose another output folder")
-    done = {}
-    for f in sorted((partial / "chunks").glob("*.parquet")):
-        done[int(f.stem)] = pd.read_parquet(f)
-    return done
+    return [(int(f.stem), f) for f in sorted((partial / "chunks").glob("*.parquet"))]
 
 
 def sweep(out: str | os.PathLike, trajectories=None,
@@ -875,7 +887,18 @@ def sweep(out: str | os.PathLike, trajectories=None,
         raise InputError(f"{out}: directory {str(out.parent)!r} does not exist")
     partial = out.with_name(out.name + ".partial")
     (partial / "chunks").mkdir(parents=True, exist_ok=True)
-    done = {k: v for k, v in _finished(partial, p.fingerprint).items() if k < len(p.tasks)}
+    merged: list = []          # the running fold, then the task envelopes not yet folded in
+    done: set[int] = set()
+
+    def absorb(frame) -> None:
+        merged.append(frame)
+        if len(merged) > MERGE_EVERY:
+            merged[:] = [_reduce(merged)]
+
+    for k, f in _finished(partial, p.fingerprint):
+        if k < len(p.tasks):
+            absorb(pd.read_parquet(f))
+            done.add(k)
     (partial / "plan.json").write_text(json.dumps({"fingerprint": p.fingerprint,
                                                    "tasks": len(p.tasks)}))
     todo = [t for t in p.tasks if t.id not in done]
@@ -894,7 +917,8 @@ def sweep(out: str | os.PathLike, trajectories=None,
 
     def finish(task, frame):
         _store(partial, task.id, frame)
-        done[task.id] = frame
+        absorb(frame)
+        done.add(task.id)
         bar.update(task.steps)
         if on_chunk is not None:
             on_chunk(len(done), len(p.tasks))
@@ -924,7 +948,7 @@ def sweep(out: str | os.PathLike, trajectories=None,
     finally:
         bar.close()
     elapsed = time.perf_counter() - started
-    envelopes = merge([done[t.id] for t in p.tasks])
+    envelopes = merge(merged)
     summary = summarize(envelopes)
     variants_table = pd.DataFrame(p.variants)
     base = platform if isinstance(platform, Platform) else (

@@ -129,7 +129,9 @@ def cluster():
         yield client
 
 
-def test_local_cluster_of_two_workers_equals_serial(serial, inputs, cluster, tmp_path):
+def test_local_cluster_of_two_workers_equals_serial(serial, inputs, cluster, tmp_path,
+                                                    monkeypatch):
+    monkeypatch.setattr(sw, "MERGE_EVERY", 2)   # fold envelopes as they arrive, in any order
     result = sw.sweep(tmp_path / "out", scheduler=cluster, plots=False, **inputs)
     assert len(cluster.scheduler_info()["workers"]) == 2
     _same(result, serial)
@@ -151,7 +153,8 @@ def test_killing_a_worker_mid_sweep_gives_the_same_envelopes(serial, inputs, clu
     _same(result, serial)
 
 
-def test_resumed_sweep_equals_an_uninterrupted_one(serial, inputs, tmp_path):
+def test_resumed_sweep_equals_an_uninterrupted_one(serial, inputs, tmp_path, monkeypatch):
+    monkeypatch.setattr(sw, "MERGE_EVERY", 2)
     out = tmp_path / "out"
 
     class Stop(Exception):
@@ -267,3 +270,14 @@ def test_platform_limits_round_trip_and_one_line_errors(tmp_path):
         with pytest.raises(InputError, match=words) as info:
             Platform.from_dict({**base, "limits": limits}, source="p.toml")
         assert "\n" not in str(info.value) and str(info.value).startswith("p.toml: limits.")
+
+
+def test_merge_is_independent_of_arrival_order_and_folding(serial, inputs):
+    """Task envelopes folded in a shuffled order, in steps, give the serial envelopes."""
+    p = sw.plan(**inputs)
+    frames = [sw.run_task(t) for t in p.tasks]
+    order = np.random.default_rng(5).permutation(len(frames))
+    shuffled = [frames[i].sample(frac=1.0, random_state=1) for i in order]
+    folded = sw._reduce(shuffled[:3])
+    pd.testing.assert_frame_equal(sw.merge([folded, *shuffled[3:]]), serial.envelopes,
+                                  check_exact=True)
