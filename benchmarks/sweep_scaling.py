@@ -26,12 +26,18 @@ from __future__ import annotations
 import argparse
 import json
 import logging
+import os
 import tempfile
 import time
 import warnings
 from pathlib import Path
 
-import numpy as np
+# one core per path, as Dask's workers have (they set these to 1): otherwise numpy's LAPACK
+# (the flags' condition numbers) would use every core in this process and not in the workers
+for _name in ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS"):
+    os.environ[_name] = "1"
+
+import numpy as np  # noqa: E402
 
 
 def workspace(steps: int, states: int = 8):

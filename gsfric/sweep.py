@@ -33,6 +33,7 @@ from __future__ import annotations
 
 import glob as globmod
 import hashlib
+import itertools
 import json
 import math
 import os
@@ -932,15 +933,25 @@ def sweep(out: str | os.PathLike, trajectories=None,
 
             client, cluster = _client(chosen, workers)
             try:
+                # a bounded window of tasks in flight: the tasks' inputs (pose blocks,
+                # platforms) are pickled as they are submitted, not all at once
+                window = max(8, 4 * max(1, len(client.scheduler_info().get("workers", {}))))
+                pending = iter(todo)
                 by_key = {}
-                futures = []
-                for task in todo:
+
+                def submit(task):
                     fut = client.submit(run_task, task, key=f"gsfric-sweep-{p.fingerprint}-"
                                         f"{task.id}", pure=False)
                     by_key[fut.key] = task
-                    futures.append(fut)
-                for fut, frame in as_completed(futures, with_results=True):
-                    finish(by_key[fut.key], frame)
+                    return fut
+
+                queue = as_completed([submit(t) for t in itertools.islice(pending, window)],
+                                     with_results=True)
+                for fut, frame in queue:
+                    finish(by_key.pop(fut.key), frame)
+                    nxt = next(pending, None)
+                    if nxt is not None:
+                        queue.add(submit(nxt))
             finally:
                 if cluster is not None:
                     client.close()
