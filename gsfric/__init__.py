@@ -26,7 +26,7 @@ _LAZY = {
     "InputError": ("gsfric.errors", "InputError"),
 }
 
-__all__ = sorted(_LAZY) + ["models", "io"]
+__all__ = sorted(_LAZY) + ["models", "io", "sweep"]
 
 
 def __getattr__(name):
@@ -35,7 +35,7 @@ def __getattr__(name):
 
         module, attr = _LAZY[name]
         return getattr(importlib.import_module(module), attr)
-    if name in ("models", "io", "trajectory", "platform", "native", "catalog"):
+    if name in ("models", "io", "trajectory", "platform", "native", "catalog", "sweep"):
         import importlib
 
         return importlib.import_module(f"gsfric.{name}")

@@ -14,6 +14,7 @@ Units are SI: m, kg, kg m^2, N, s. The TOML layout (see SPEC.md)::
     [friction]       joint_viscous, joint_coulomb, joint_radius, prismatic_viscous,
                      prismatic_coulomb
     [effects]        name = { parameter = value, ... }
+    [limits]         optional ratings for ``gsfric sweep``'s check (see ``LIMITS``)
 
 Every problem raises an ``InputError`` with a one-line message naming the file and the dotted
 key, e.g. ``platform.toml: geometry.base_joints: expected an array of shape (6, 3), got (5, 3)``.
@@ -42,6 +43,16 @@ PAPER_LEG_FRACTION = 0.25
 """Fraction of the leg length at which the paper model places the lower and upper centres."""
 
 DEFAULT_GRAVITY = 9.81
+
+LIMITS = {
+    "actuator_force": "N, actuator force: a number (|F| <= value) or [min, max]",
+    "spherical_load": "N, rating of the spherical joints, |R_E|",
+    "universal_load": "N, rating of the universal joints, |R_C|",
+    "universal_moment": "N m, torsion moment the universal joints carry, |M_C|",
+    "prismatic_load": "N, transverse load rating of the prismatic joints, |R_3|",
+    "prismatic_moment": "N m, moment rating of the prismatic joints, |M_3|",
+}
+"""Keys of the optional ``[limits]`` table: the ratings ``gsfric sweep`` checks loads against."""
 
 _set = object.__setattr__
 _SYMMETRY_TOL = 1e-9
@@ -321,6 +332,32 @@ def _effects(value: object) -> dict[str, dict[str, float]]:
     return result
 
 
+def _limits(value: object) -> dict[str, object]:
+    """Validated ``[limits]``: positive ratings; ``actuator_force`` as (min, max)."""
+    if not isinstance(value, Mapping):
+        raise InputError(f"limits: expected a table, got {short(value)}")
+    result: dict[str, object] = {}
+    for key, given in value.items():
+        if key not in LIMITS:
+            raise InputError(f"limits.{key}: unknown limit{suggest(str(key), LIMITS)}")
+        if key == "actuator_force" and isinstance(given, (list, tuple)):
+            if len(given) != 2:
+                raise InputError(f"limits.actuator_force: expected a number or [min, max], "
+                                 f"got {short(given)}")
+            lo = as_float(given[0], "limits.actuator_force[0]")
+            hi = as_float(given[1], "limits.actuator_force[1]")
+            if lo >= hi:
+                raise InputError(f"limits.actuator_force: min = {lo:g} must be less than "
+                                 f"max = {hi:g}")
+            result[key] = (lo, hi)
+            continue
+        rating = as_float(given, f"limits.{key}", minimum=0.0)
+        if rating <= 0:
+            raise InputError(f"limits.{key}: must be positive, got {rating:g}")
+        result[key] = (-rating, rating) if key == "actuator_force" else rating
+    return result
+
+
 @dataclass(frozen=True, eq=False, kw_only=True)
 class Platform:
     """A Gough-Stewart platform: everything the mechanics needs besides the motion.
@@ -336,6 +373,9 @@ class Platform:
     effects : dict[str, dict[str, float]]
         Optional effects switched on, name -> parameters (every parameter present), validated
         against ``gsfric.catalog.EFFECTS``.
+    limits : dict[str, float | tuple[float, float]]
+        Optional ratings (TOML ``[limits]``, keys in ``LIMITS``) that ``gsfric sweep`` checks
+        the load envelopes against; ``actuator_force`` is kept as (min, max), N.
 
     Instances are immutable; derive variants with ``replace``, ``with_geometry``, ``with_body``,
     ``with_legs``, ``with_friction``, ``with_effects``, ``with_effect`` and ``without_effects``.
@@ -347,6 +387,7 @@ class Platform:
     legs: Legs = field(default_factory=Legs)
     friction: Friction = field(default_factory=Friction)
     effects: dict[str, dict[str, float]] = field(default_factory=dict)
+    limits: dict[str, object] = field(default_factory=dict)
 
     def __post_init__(self) -> None:
         _set(self, "gravity", as_float(self.gravity, "gravity", minimum=0.0))
@@ -356,6 +397,7 @@ class Platform:
                 raise InputError(f"{name}: expected a {kind.__name__}, "
                                  f"got {type(getattr(self, name)).__name__}")
         _set(self, "effects", _effects(self.effects))
+        _set(self, "limits", _limits(self.limits))
 
     __eq__ = fields_equal
     __hash__ = None  # type: ignore[assignment]
@@ -420,6 +462,8 @@ class Platform:
         }
         if g.stroke is not None:
             geometry["stroke"] = list(g.stroke)
+        limits = {key: list(value) if isinstance(value, tuple) else value
+                  for key, value in self.limits.items()}
         return {
             "gravity": self.gravity,
             "geometry": geometry,
@@ -443,6 +487,7 @@ class Platform:
             },
             "friction": dataclasses.asdict(self.friction),
             "effects": {name: dict(params) for name, params in self.effects.items()},
+            **({"limits": limits} if limits else {}),
         }
 
     def to_toml(self, path: str | os.PathLike[str]) -> None:
@@ -509,7 +554,7 @@ _REQUIRED = {
     "geometry": ("base_joints", "platform_joints"),
     "platform": ("mass", "inertia"),
 }
-_TOP_KEYS = ("gravity", *_SECTIONS, "effects")
+_TOP_KEYS = ("gravity", *_SECTIONS, "effects", "limits")
 
 
 def _check_keys(table: Mapping[str, Any], allowed: tuple[str, ...], prefix: str) -> None:
@@ -536,4 +581,4 @@ def _from_dict(data: object) -> Platform:
                 raise InputError(f"{section}.{key}: missing")
         parts[section] = kind(**table)
     return Platform(gravity=data.get("gravity", DEFAULT_GRAVITY),
-                    effects=data.get("effects", {}), **parts)
+                    effects=data.get("effects", {}), limits=data.get("limits", {}), **parts)

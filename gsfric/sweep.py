@@ -1,0 +1,1069 @@
+"""Joint sizing at scale: load envelopes per joint over motions, a workspace and platform variants.
+
+``sweep`` evaluates every *case* (a motion or the workspace, on one platform variant) and
+reduces it, where it is evaluated, to a **load envelope per joint**: the largest |R_E|, |R_C|,
+|M_C|, |R_3|, |M_3|, the actuator force range, the peak friction force and moments, the peak
+friction power and the dissipated friction energy of each leg's three joints, each extreme with
+the motion, step, time and pose where it occurs. Only these envelopes leave a worker.
+
+Work is cut into *tasks* of about ``chunk_steps`` evaluated steps (a few seconds each): one
+trajectory file or one block of workspace poses, on a range of variants. Tasks run in this
+process (``scheduler="serial"``), on a Dask ``LocalCluster`` of one single-threaded worker
+process per core (``"local"``), or on a running Dask cluster (``"tcp://host:port"`` or the
+``DASK_SCHEDULER_ADDRESS`` variable). The result does not depend on where a task runs: a task's
+envelope is a deterministic function of its inputs, and envelopes are merged in task order.
+
+Output folder ``OUT`` (built in ``OUT.partial`` and renamed when complete):
+
+* ``envelopes.parquet``: one row per case, quantity and leg (``ENVELOPE_COLUMNS``);
+* ``summary.csv``: the extreme of each quantity and leg over all cases, with where it occurs;
+* ``variants.csv``: each variant's parameter values (variant 0 is the nominal platform);
+* ``limits.csv``: the cases whose envelope exceeds the platform's ``[limits]`` (if any given);
+* ``sweep.json``: the inputs' fingerprint, totals, timing; ``envelope.png``, ``locations.png``.
+
+Finished tasks are kept in ``OUT.partial/chunks/`` as they arrive; a sweep interrupted and
+started again with the same inputs and output folder computes only the missing tasks.
+
+Threads: the compiled evaluator is not yet safe to call from two threads of one process (they
+share the compiled function's argument buffers), so every task builds its own ``Evaluator``,
+tasks never share one, and Dask workers are processes with one thread each.
+"""
+
+from __future__ import annotations
+
+import glob as globmod
+import hashlib
+import itertools
+import json
+import math
+import os
+import shutil
+import sys
+import time
+import tomllib
+import warnings
+from collections.abc import Callable, Mapping
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from gsfric._checks import as_float, short, suggest
+from gsfric.errors import InputError
+from gsfric.platform import Platform
+
+# -- what an envelope holds -----------------------------------------------------------------
+
+QUANTITIES: dict[str, tuple[str, str, str]] = {
+    "R_E": ("max", "N", "spherical joint load |R_E|"),
+    "R_C": ("max", "N", "universal joint load |R_C|"),
+    "M_C": ("max", "N m", "universal joint torsion moment |M_C|"),
+    "R_3": ("max", "N", "prismatic joint transverse force |R_3|"),
+    "M_3": ("max", "N m", "prismatic joint moment |M_3|"),
+    "F_max": ("max", "N", "largest actuator force (pushing)"),
+    "F_min": ("min", "N", "smallest actuator force (pulling when negative)"),
+    "Ffr": ("max", "N", "prismatic friction force |Ffr|"),
+    "MfrE": ("max", "N m", "spherical joint friction moment |MfrE|"),
+    "MfrC": ("max", "N m", "universal joint friction moment |MfrC|"),
+    "P_E": ("max", "W", "friction power dissipated in the spherical joint"),
+    "P_C": ("max", "W", "friction power dissipated in the universal joint"),
+    "P_3": ("max", "W", "friction power dissipated in the prismatic joint"),
+    "W_E": ("sum", "J", "friction energy dissipated in the spherical joint (motions only)"),
+    "W_C": ("sum", "J", "friction energy dissipated in the universal joint (motions only)"),
+    "W_3": ("sum", "J", "friction energy dissipated in the prismatic joint (motions only)"),
+}
+"""Envelope quantities: name -> (reduction, unit, meaning). Loads and moments are magnitudes;
+powers are dissipated (positive), ``-MfrE . omega_rel``, ``-MfrC . omega_leg``, ``-Ffr D_dot``;
+energies are their trapezoidal time integrals (NaN for workspace samples, which are no motion)."""
+
+POSE = ("x", "y", "z", "roll", "pitch", "yaw")
+"""Pose columns of a location: platform origin (m) and ``R = Rz(yaw) Ry(pitch) Rx(roll)`` (rad)."""
+
+ENVELOPE_COLUMNS = ("motion", "variant", "quantity", "leg", "value", "step", "t", *POSE,
+                    "steps", "flagged")
+"""Columns of ``envelopes.parquet``: ``step`` is the 0-based step of the motion (for the
+workspace, ``pose * states + state``), -1 for sums; ``steps`` and ``flagged`` count the
+case's evaluated and flagged steps (flagged steps are left out of the envelope)."""
+
+LIMIT_QUANTITY = {"spherical_load": "R_E", "universal_load": "R_C", "universal_moment": "M_C",
+                  "prismatic_load": "R_3", "prismatic_moment": "M_3"}
+
+SCALAR_PARAMETERS = (
+    "gravity", "platform.mass", "platform.payload_mass", "legs.lower_mass", "legs.upper_mass",
+    "friction.joint_viscous", "friction.joint_coulomb", "friction.joint_radius",
+    "friction.prismatic_viscous", "friction.prismatic_coulomb",
+    "geometry.base_scale", "geometry.platform_scale")
+"""Parameters a variant may change: ranges (uniform, Latin hypercube) or tolerances (normal).
+``geometry.*_scale`` scale the joints' horizontal positions (the joint circles' radii)."""
+
+JOINT_TOLERANCES = ("geometry.base_joints", "geometry.platform_joints")
+"""Tolerances only: a normal error of this standard deviation (m) on every joint coordinate."""
+
+CHUNK_STEPS = 100_000
+"""Default evaluated steps per task: a few seconds of one core."""
+
+SERIAL_BELOW = 300_000
+"""``scheduler="auto"`` runs sweeps of fewer steps in this process: starting a LocalCluster
+(about 3 s here) costs more than it saves below this size (docs/sizing.md)."""
+
+STREAM_CHUNK = 50_000
+"""Steps of a trajectory file read and evaluated at a time inside a task (bounds memory)."""
+
+
+# -- workspace ------------------------------------------------------------------------------
+
+_WORKSPACE_KEYS = ("sampling", "samples", "points", "states", "seed", "pose", "bounds")
+_BOUNDS = ("velocity", "omega", "acceleration", "alpha")
+
+
+@dataclass(frozen=True)
+class Workspace:
+    """A set of poses with velocity and acceleration bounds: the worst-case-over-workspace study.
+
+    Attributes
+    ----------
+    ranges : dict[str, (float, float)]
+        For each of ``POSE`` the interval (min, max) (m, rad); a missing angle or horizontal
+        coordinate is 0, ``z`` is required.
+    sampling : {"grid", "lhs"}
+        A grid of ``points`` per varying coordinate, or ``samples`` Latin-hypercube poses.
+    states : int
+        Dynamic states per pose: state 0 is static, states 1.. take every component of the
+        velocity, angular velocity, acceleration and angular acceleration at +-its bound (random
+        vertices of the bounds' box, where loads linear in the accelerations are largest).
+    bounds : dict[str, ndarray (3,)]
+        ``velocity`` m/s, ``omega`` rad/s, ``acceleration`` m/s^2, ``alpha`` rad/s^2 (base
+        frame, per component; default 0).
+    seed : int
+    """
+
+    ranges: dict
+    sampling: str = "lhs"
+    samples: int = 1000
+    points: int = 5
+    states: int = 8
+    bounds: dict = field(default_factory=dict)
+    seed: int = 0
+
+    @classmethod
+    def from_dict(cls, data: Mapping, source: str = "workspace") -> Workspace:
+        """Build from the TOML layout (docs/sizing.md); ``InputError`` naming the key."""
+        def fail(msg):
+            raise InputError(f"{source}: {msg}")
+
+        for key in data:
+            if key not in _WORKSPACE_KEYS:
+                fail(f"{key}: unknown key{suggest(str(key), _WORKSPACE_KEYS)}")
+        sampling = data.get("sampling", "lhs")
+        if sampling not in ("grid", "lhs"):
+            fail(f"sampling: expected 'grid' or 'lhs', got {short(sampling)}")
+        ints = {}
+        for key, default, low in (("samples", 1000, 1), ("points", 5, 1), ("states", 8, 1),
+                                  ("seed", 0, 0)):
+            value = data.get(key, default)
+            if isinstance(value, bool) or not isinstance(value, int) or value < low:
+                fail(f"{key}: expected an integer >= {low}, got {short(value)}")
+            ints[key] = value
+        pose = data.get("pose", {})
+        if not isinstance(pose, Mapping):
+            fail(f"pose: expected a table, got {short(pose)}")
+        if "z" not in pose:
+            fail("pose.z: missing (the platform height range, m)")
+        ranges = {}
+        for key in pose:
+            if key not in POSE:
+                fail(f"pose.{key}: unknown coordinate{suggest(str(key), POSE)}")
+        for key in POSE:
+            ranges[key] = _interval(pose.get(key, [0.0, 0.0]), f"{source}: pose.{key}")
+        bounds_in = data.get("bounds", {})
+        if not isinstance(bounds_in, Mapping):
+            fail(f"bounds: expected a table, got {short(bounds_in)}")
+        bounds = {}
+        for key in bounds_in:
+            if key not in _BOUNDS:
+                fail(f"bounds.{key}: unknown bound{suggest(str(key), _BOUNDS)}")
+        for key in _BOUNDS:
+            value = bounds_in.get(key, [0.0, 0.0, 0.0])
+            if isinstance(value, (int, float)) and not isinstance(value, bool):
+                value = [value] * 3
+            if not isinstance(value, (list, tuple)) or len(value) != 3:
+                fail(f"bounds.{key}: expected 3 non-negative numbers, got {short(value)}")
+            bounds[key] = np.array([as_float(v, f"{source}: bounds.{key}", minimum=0.0)
+                                    for v in value])
+        return cls(ranges=ranges, sampling=sampling, bounds=bounds, **ints)
+
+    @classmethod
+    def from_toml(cls, path: str | os.PathLike) -> Workspace:
+        """Read a workspace TOML file (layout in docs/sizing.md)."""
+        path = Path(path)
+        try:
+            data = tomllib.loads(path.read_text(encoding="utf-8"))
+        except FileNotFoundError:
+            raise InputError(f"{path}: file not found") from None
+        except (OSError, UnicodeDecodeError) as error:
+            raise InputError(f"{path}: cannot read ({error})") from None
+        except tomllib.TOMLDecodeError as error:
+            raise InputError(f"{path}: invalid TOML: {error}") from None
+        return cls.from_dict(data, source=str(path))
+
+    def to_dict(self) -> dict:
+        return {"sampling": self.sampling, "samples": self.samples, "points": self.points,
+                "states": self.states, "seed": self.seed,
+                "pose": {k: list(v) for k, v in self.ranges.items()},
+                "bounds": {k: np.asarray(self.bounds.get(k, np.zeros(3)), float).tolist()
+                           for k in _BOUNDS}}
+
+    def poses(self) -> np.ndarray:
+        """The sampled poses, (n, 6): ``x, y, z`` m and ``roll, pitch, yaw`` rad."""
+        lo = np.array([self.ranges[k][0] for k in POSE])
+        hi = np.array([self.ranges[k][1] for k in POSE])
+        varying = np.flatnonzero(hi > lo)
+        if self.sampling == "grid":
+            axes = [np.linspace(lo[i], hi[i], self.points) if i in varying else [lo[i]]
+                    for i in range(6)]
+            mesh = np.meshgrid(*axes, indexing="ij")
+            return np.stack([m.ravel() for m in mesh], axis=1)
+        from scipy.stats import qmc
+
+        out = np.tile(lo, (self.samples, 1))
+        if varying.size:
+            unit = qmc.LatinHypercube(d=varying.size, seed=self.seed).random(self.samples)
+            out[:, varying] = lo[varying] + unit * (hi[varying] - lo[varying])
+        return out
+
+    def states_of(self, poses: np.ndarray, first: int) -> np.ndarray:
+        """The ``states`` dynamic states of poses ``first, first + 1, ...``, (n * states, 24).
+
+        Laid out as ``gsfric.evaluation.state_array``. The signs come from a counter-based
+        generator (Philox) positioned at the first pose, so each pose's states depend on the
+        seed and its index only: the same on every worker, in every run, for any chunking.
+        """
+        n, s = len(poses), self.states
+        bits = np.random.Philox(key=self.seed)
+        bits.advance(first * s * 3)          # 4 doubles per counter step, 12 per state
+        rng = np.random.Generator(bits)
+        bound = np.concatenate([np.asarray(self.bounds.get(k, np.zeros(3)), float)
+                                for k in _BOUNDS])                       # (12,)
+        signs = np.where(rng.random((n, s, 12)) < 0.5, -1.0, 1.0)
+        signs[:, 0, :] = 0.0                                             # the static state
+        dyn = (signs * bound).reshape(n * s, 12)
+        rot = _rotation(poses)
+        x = np.empty((n * s, 24))
+        x[:, 0:3] = np.repeat(poses[:, :3], s, axis=0)
+        x[:, 3:12] = np.repeat(rot.reshape(n, 9), s, axis=0)
+        x[:, 12:24] = dyn
+        return x
+
+
+def _interval(value, name: str) -> tuple[float, float]:
+    if isinstance(value, (int, float)) and not isinstance(value, bool):
+        value = [value, value]
+    if not isinstance(value, (list, tuple)) or len(value) != 2:
+        raise InputError(f"{name}: expected [min, max], got {short(value)}")
+    lo, hi = as_float(value[0], f"{name}[0]"), as_float(value[1], f"{name}[1]")
+    if lo > hi:
+        raise InputError(f"{name}: min {lo:g} > max {hi:g}")
+    return (lo, hi)
+
+
+def _rotation(poses: np.ndarray) -> np.ndarray:
+    from scipy.spatial.transform import Rotation
+
+    return Rotation.from_euler("ZYX", poses[:, [5, 4, 3]]).as_matrix()
+
+
+def _angles(rotation: np.ndarray) -> np.ndarray:
+    """(roll, pitch, yaw) of rotations (N, 3, 3), ``R = Rz(yaw) Ry(pitch) Rx(roll)``."""
+    from scipy.spatial.transform import Rotation
+
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", UserWarning)   # gimbal lock at pitch = +-90 deg
+        return Rotation.from_matrix(rotation).as_euler("ZYX")[:, ::-1]
+
+
+def leg_lengths(platform: Platform, poses: np.ndarray) -> np.ndarray:
+    """Leg lengths (n, 6), m, of poses (n, 6) (``POSE`` columns)."""
+    g = platform.geometry
+    E = np.einsum("nij,kj->nki", _rotation(poses), g.platform_joints) + poses[:, None, :3]
+    return np.linalg.norm(E - g.base_joints, axis=2)
+
+
+def check_reachable(platform: Platform, poses: np.ndarray, source: str = "workspace") -> None:
+    """``InputError`` (one line) when a pose puts a leg outside the platform's stroke."""
+    stroke = platform.geometry.stroke
+    if stroke is None:
+        return
+    D = leg_lengths(platform, poses)
+    bad = ((D < stroke[0]) | (D > stroke[1])).any(axis=1)
+    if bad.any():
+        k = int(np.flatnonzero(bad)[0])
+        leg = int(np.flatnonzero((D[k] < stroke[0]) | (D[k] > stroke[1]))[0])
+        pose = ", ".join(f"{n}={v:.4g}" for n, v in zip(POSE, poses[k]))
+        raise InputError(f"{source}: unreachable: {int(bad.sum())} of {len(poses)} poses put a "
+                         f"leg outside the stroke [{stroke[0]:g}, {stroke[1]:g}] m; first: pose "
+                         f"{k} ({pose}), leg {leg + 1} length {D[k, leg]:.4g} m")
+
+
+# -- platform variants ----------------------------------------------------------------------
+
+
+def _parse_vary(vary: Mapping | None, tolerances: Mapping | None):
+    vary = dict(vary or {})
+    tolerances = dict(tolerances or {})
+    ranges = {}
+    for name, value in vary.items():
+        if name not in SCALAR_PARAMETERS:
+            raise InputError(f"vary: {name}: unknown parameter"
+                             f"{suggest(str(name), SCALAR_PARAMETERS)}; one of "
+                             f"{', '.join(SCALAR_PARAMETERS)}")
+        ranges[name] = _interval(value, f"vary: {name}")
+        if ranges[name][0] < 0:
+            raise InputError(f"vary: {name}: min {ranges[name][0]:g} is negative")
+    sds = {}
+    for name, value in tolerances.items():
+        if name not in SCALAR_PARAMETERS + JOINT_TOLERANCES:
+            raise InputError(f"tolerance: {name}: unknown parameter"
+                             f"{suggest(str(name), SCALAR_PARAMETERS + JOINT_TOLERANCES)}")
+        sds[name] = as_float(value, f"tolerance: {name}", minimum=0.0)
+    return ranges, sds
+
+
+def _value(platform: Platform, name: str) -> float:
+    if name == "gravity":
+        return platform.gravity
+    section, key = name.split(".")
+    if key.endswith("_scale"):
+        return 1.0
+    return getattr({"platform": platform.platform, "legs": platform.legs,
+                    "friction": platform.friction}[section], key)
+
+
+def _apply(platform: Platform, values: Mapping[str, Any]) -> Platform:
+    body, legs, friction, geometry = {}, {}, {}, {}
+    gravity = platform.gravity
+    g = platform.geometry
+    for name, value in values.items():
+        if name == "gravity":
+            gravity = float(value)
+            continue
+        section, key = name.split(".")
+        if key == "base_scale":
+            geometry["base_joints"] = geometry.get("base_joints", g.base_joints) * \
+                np.array([value, value, 1.0])
+        elif key == "platform_scale":
+            geometry["platform_joints"] = geometry.get("platform_joints", g.platform_joints) * \
+                np.array([value, value, 1.0])
+        elif key in ("base_joints", "platform_joints"):
+            geometry[key] = geometry.get(key, getattr(g, key)) + np.asarray(value)
+        else:
+            {"platform": body, "legs": legs, "friction": friction}[section][key] = float(value)
+    out = platform.replace(gravity=gravity)
+    if body:
+        out = out.with_body(**body)
+    if legs:
+        out = out.with_legs(**legs)
+    if friction:
+        out = out.with_friction(**friction)
+    if geometry:
+        out = out.with_geometry(**geometry)
+    return out
+
+
+def make_variants(platform: Platform, vary: Mapping | None = None,
+                  tolerances: Mapping | None = None, samples: int = 16,
+                  seed: int = 0) -> tuple[list[Platform], list[dict]]:
+    """Platform variants: the nominal one, then ``samples`` drawn ones.
+
+    Parameters
+    ----------
+    platform : Platform
+        The nominal platform (variant 0).
+    vary : dict name -> (min, max)
+        Uniform ranges (Latin hypercube over all of them); names in ``SCALAR_PARAMETERS``.
+    tolerances : dict name -> standard deviation
+        Normal errors added to the nominal (or ranged) value: scalars in their unit, joints
+        (``JOINT_TOLERANCES``) in m on every coordinate. Values are truncated at 0.
+    samples : int
+        Drawn variants (ignored without ``vary`` and ``tolerances``).
+    seed : int
+
+    Returns
+    -------
+    platforms : list of Platform, length 1 + samples (1 without ranges or tolerances)
+    table : list of dict
+        Each variant's parameter values (joint errors as their largest magnitude, m).
+    """
+    ranges, sds = _parse_vary(vary, tolerances)
+    names = list(dict.fromkeys([*ranges, *sds]))
+    nominal = {n: (_value(platform, n) if n not in JOINT_TOLERANCES else 0.0) for n in names}
+    platforms, table = [platform], [{"variant": 0, **nominal}]
+    if not names:
+        return platforms, table
+    if isinstance(samples, bool) or not isinstance(samples, (int, np.integer)) or samples < 1:
+        raise InputError(f"variants: expected an integer >= 1, got {short(samples)}")
+    from scipy.stats import qmc
+
+    rng = np.random.default_rng(seed)
+    unit = (qmc.LatinHypercube(d=len(ranges), seed=seed).random(samples) if ranges
+            else np.zeros((samples, 0)))
+    for k in range(samples):
+        values: dict[str, Any] = {}
+        row: dict[str, Any] = {"variant": k + 1}
+        for j, (name, (lo, hi)) in enumerate(ranges.items()):
+            values[name] = lo + unit[k, j] * (hi - lo)
+        for name, sd in sds.items():
+            if name in JOINT_TOLERANCES:
+                values[name] = rng.normal(0.0, sd, (6, 3))
+            else:
+                values[name] = max(0.0, values.get(name, nominal[name]) + rng.normal(0.0, sd))
+        for name in names:
+            v = values[name]
+            row[name] = float(np.abs(v).max()) if name in JOINT_TOLERANCES else float(v)
+        try:
+            platforms.append(_apply(platform, values))
+        except InputError as error:
+            raise InputError(f"variant {k + 1}: {error}") from None
+        table.append(row)
+    return platforms, table
+
+
+# -- tasks and their reduction (runs on the workers) ----------------------------------------
+
+
+@dataclass
+class Task:
+    """One unit of work: a trajectory file or a block of workspace poses, on some variants."""
+
+    id: int
+    motion: str                       # case name: the file's name or "workspace"
+    variants: list[int]
+    platforms: list[Platform]
+    steps: int                        # evaluated steps (all variants)
+    path: str | None = None
+    poses: np.ndarray | None = None   # (n, 6) workspace block
+    first_pose: int = 0
+    workspace: Workspace | None = None
+
+
+class _Envelope:
+    """Running extremes of one case; merged chunk by chunk in order (deterministic)."""
+
+    def __init__(self) -> None:
+        self.value = {q: np.full(6, -np.inf if QUANTITIES[q][0] != "min" else np.inf)
+                      for q in QUANTITIES if QUANTITIES[q][0] != "sum"}
+        self.where = {q: np.full((6, 8), np.nan) for q in self.value}    # step, t, pose
+        self.sums = {q: np.zeros(6) for q in QUANTITIES if QUANTITIES[q][0] == "sum"}
+        self.steps = 0
+        self.flagged = 0
+        self.last = None      # (t, powers (3, 6)) of the motion's previous step
+
+    def add(self, result, x: np.ndarray, step0: int, timed: bool) -> None:
+        a = result.arrays
+        n = len(result.t)
+        ok = result.flag == 0
+        self.steps += n
+        self.flagged += int((~ok).sum())
+        P = np.stack([-np.einsum("nij,nij->ni", a["MfrE"], a["omega_rel"]),
+                      -np.einsum("nij,nij->ni", a["MfrC"], a["omega_leg"]),
+                      -a["Ffr"] * a["D_dot"]])                          # (3, N, 6)
+        series = {
+            "R_E": np.linalg.norm(a["R_E"], axis=2), "R_C": np.linalg.norm(a["R_C"], axis=2),
+            "M_C": np.abs(a["M_C"]), "R_3": np.linalg.norm(a["R_3"], axis=2),
+            "M_3": np.linalg.norm(a["M_3"], axis=2), "F_max": a["F"], "F_min": a["F"],
+            "Ffr": np.abs(a["Ffr"]), "MfrE": np.linalg.norm(a["MfrE"], axis=2),
+            "MfrC": np.linalg.norm(a["MfrC"], axis=2), "P_E": P[0], "P_C": P[1], "P_3": P[2]}
+        if ok.any():
+            idx_ok = np.flatnonzero(ok)
+            rot = x[:, 3:12].reshape(-1, 3, 3)
+            for q, s in series.items():
+                s = s[idx_ok]
+                k = np.argmin(s, axis=0) if QUANTITIES[q][0] == "min" else np.argmax(s, axis=0)
+                v = s[k, np.arange(6)]
+                better = v < self.value[q] if QUANTITIES[q][0] == "min" else v > self.value[q]
+                if better.any():
+                    steps = idx_ok[k[better]]
+                    self.value[q][better] = v[better]
+                    self.where[q][better, 0] = step0 + steps
+                    self.where[q][better, 1] = result.t[steps] if timed else np.nan
+                    self.where[q][better, 2:5] = x[steps, 0:3]
+                    self.where[q][better, 5:8] = _angles(rot[steps])
+        if timed:   # trapezoid over the motion's time, across chunk boundaries
+            t = result.t
+            Pz = np.where(ok[None, :, None], P, 0.0)
+            if self.last is not None:
+                t = np.concatenate([[self.last[0]], t])
+                Pz = np.concatenate([self.last[1][:, None, :], Pz], axis=1)
+            dt = np.diff(t)
+            W = 0.5 * np.einsum("n,knl->kl", dt, Pz[:, 1:] + Pz[:, :-1])
+            for q, w in zip(("W_E", "W_C", "W_3"), W):
+                self.sums[q] += w
+            self.last = (t[-1], Pz[:, -1, :])
+
+    def rows(self, motion: str, variant: int, timed: bool) -> list[tuple]:
+        out = []
+        for q in QUANTITIES:
+            for leg in range(6):
+                if q in self.sums:
+                    value = float(self.sums[q][leg]) if timed else math.nan
+                    where = [-1] + [math.nan] * 7
+                else:
+                    value = float(self.value[q][leg])
+                    if not math.isfinite(value):
+                        value = math.nan
+                    where = self.where[q][leg].tolist()
+                    where[0] = -1 if math.isnan(where[0]) else int(where[0])
+                out.append((motion, variant, q, leg + 1, value, *where, self.steps,
+                            self.flagged))
+        return out
+
+
+def run_task(task: Task):
+    """Evaluate one task and reduce it to envelope rows (a DataFrame of ``ENVELOPE_COLUMNS``).
+
+    Runs on a worker. One ``Evaluator`` per variant, built here and used by this task only:
+    the evaluator must not be shared between threads until it is thread-safe.
+    """
+    import pandas as pd
+
+    from gsfric.evaluation import Evaluator
+    from gsfric.trajectory import Motion
+
+    evaluators = [Evaluator(p) for p in task.platforms]
+    envelopes = [_Envelope() for _ in task.platforms]
+    timed = task.path is not None
+    if timed:
+        from gsfric.evaluation import state_array
+        from gsfric.stream import iter_motions
+
+        pieces = ((start, m, state_array(m)) for start, m in
+                  iter_motions(task.path, chunk=STREAM_CHUNK))
+    else:
+        ws = task.workspace
+        x = ws.states_of(task.poses, task.first_pose)
+        n = len(x)
+        motion = Motion(np.zeros(n), x[:, 0:3], x[:, 3:12].reshape(n, 3, 3), x[:, 12:15],
+                        x[:, 15:18], x[:, 18:21], x[:, 21:24])
+        pieces = iter([(task.first_pose * ws.states, motion, x)])
+    for start, motion, x in pieces:
+        for ev, env in zip(evaluators, envelopes):
+            with warnings.catch_warnings():
+                warnings.simplefilter("ignore")        # flagged steps are counted instead
+                result = ev.evaluate(motion)
+            env.add(result, x, start, timed)
+    rows = []
+    for v, env in zip(task.variants, envelopes):
+        rows += env.rows(task.motion, v, timed)
+    frame = pd.DataFrame(rows, columns=list(ENVELOPE_COLUMNS))
+    frame.insert(0, "task", task.id)
+    return frame
+
+
+# -- planning ---------------------------------------------------------------------------------
+
+
+def _file_rows(path: Path) -> int:
+    from gsfric.stream import parquet_rows
+
+    rows = parquet_rows(path)
+    if rows is not None:
+        return rows
+    with open(path, "rb") as handle:
+        return max(0, sum(1 for _ in handle) - 1)
+
+
+def _trajectory_files(trajectories) -> list[Path]:
+    if trajectories is None:
+        return []
+    patterns = [trajectories] if isinstance(trajectories, (str, os.PathLike)) else \
+        list(trajectories)
+    files: list[Path] = []
+    for pattern in patterns:
+        matched = sorted(globmod.glob(os.fspath(pattern), recursive=True))
+        matched = [m for m in matched if Path(m).is_file()]
+        if not matched:
+            raise InputError(f"trajectories: {os.fspath(pattern)!r} matches no file")
+        files += [Path(m) for m in matched]
+    names = [f.name for f in files]
+    for name in names:
+        if names.count(name) > 1:
+            raise InputError(f"trajectories: two files are named {name!r}; motions are "
+                             "named by file name")
+    return files
+
+
+@dataclass
+class Plan:
+    tasks: list[Task]
+    fingerprint: str
+    inputs: dict
+    variants: list[dict]
+    workspace_poses: int = 0
+
+    @property
+    def steps(self) -> int:
+        return sum(t.steps for t in self.tasks)
+
+
+def plan(trajectories=None, workspace: Workspace | str | os.PathLike | None = None,
+         platform: Platform | str | os.PathLike | None = None, vary=None, tolerances=None,
+         variants: int = 16, seed: int = 0, chunk_steps: int = CHUNK_STEPS) -> Plan:
+    """Cut a sweep into tasks (see ``sweep`` for the parameters); checks every input."""
+    from gsfric import __version__
+    from gsfric.models import reference_platform
+
+    if platform is None:
+        platform = reference_platform()
+    elif not isinstance(platform, Platform):
+        platform = Platform.from_toml(platform)
+    if isinstance(chunk_steps, bool) or not isinstance(chunk_steps, (int, np.integer)) \
+            or chunk_steps < 1:
+        raise InputError(f"chunk_steps: expected an integer >= 1, got {short(chunk_steps)}")
+    files = _trajectory_files(trajectories)
+    source = "workspace"
+    if workspace is not None and not isinstance(workspace, Workspace):
+        source = str(workspace)
+        workspace = Workspace.from_toml(workspace)
+    if not files and workspace is None:
+        raise InputError("sweep: give trajectories (a glob) and/or a workspace")
+    platforms, table = make_variants(platform, vary, tolerances, variants, seed)
+    nv = len(platforms)
+    tasks: list[Task] = []
+    hasher = hashlib.sha256()
+    for f in files:
+        st = f.stat()
+        hasher.update(f"{f.resolve()}|{st.st_size}|{st.st_mtime_ns}".encode())
+        n = _file_rows(f)
+        per = max(1, chunk_steps // max(n, 1))
+        for lo in range(0, nv, per):
+            vs = list(range(lo, min(nv, lo + per)))
+            tasks.append(Task(len(tasks), f.name, vs, [platforms[v] for v in vs],
+                              n * len(vs), path=str(f)))
+    n_poses = 0
+    if workspace is not None:
+        poses = workspace.poses()
+        n_poses = len(poses)
+        check_reachable(platform, poses, source)
+        block = max(1, min(n_poses, -(-chunk_steps // workspace.states)))
+        per = max(1, chunk_steps // (block * workspace.states))
+        for p0 in range(0, n_poses, block):
+            part = poses[p0:p0 + block]
+            for lo in range(0, nv, per):
+                vs = list(range(lo, min(nv, lo + per)))
+                tasks.append(Task(len(tasks), "workspace", vs, [platforms[v] for v in vs],
+                                  len(part) * workspace.states * len(vs), poses=part,
+                                  first_pose=p0, workspace=workspace))
+    inputs = {"gsfric": __version__, "files": [str(f) for f in files],
+              "workspace": workspace.to_dict() if workspace is not None else None,
+              "platform": platform.to_dict(), "vary": {k: list(v) for k, v in
+                                                      _parse_vary(vary, tolerances)[0].items()},
+              "tolerances": dict(tolerances or {}), "variants": nv - 1, "seed": seed,
+              "chunk_steps": int(chunk_steps)}
+    hasher.update(json.dumps(inputs, sort_keys=True, default=str).encode())
+    return Plan(tasks, hasher.hexdigest()[:16], inputs, table, n_poses)
+
+
+# -- merging ----------------------------------------------------------------------------------
+
+
+MERGE_EVERY = 64
+"""Task envelopes held before they are folded into the running merge (bounds client memory)."""
+
+
+def _reduce(frames) -> Any:
+    """Fold task envelopes (and earlier folds) into one row per case, quantity and leg.
+
+    The result does not depend on the order of ``frames`` or of their rows: an extreme is
+    chosen by (value, then the lowest task index), the counts are integer sums, and an energy
+    has at most one term per case (a motion's variant is one task: files are never split;
+    the workspace has no energy). Rows keep the winning ``task``.
+    """
+    import pandas as pd
+
+    frame = pd.concat(frames, ignore_index=True)
+    key = ["motion", "variant", "quantity", "leg"]
+    counts = (frame[(frame.quantity == "R_E") & (frame.leg == 1)]
+              .groupby(["motion", "variant"], sort=True)[["steps", "flagged"]].sum())
+    parts = []
+    for q, (kind, _, _) in QUANTITIES.items():
+        sub = frame[frame.quantity == q]
+        if kind == "sum":
+            sub = sub.sort_values(["task", "motion", "variant", "leg"], kind="stable")
+            parts.append(sub.groupby(key, sort=True, as_index=False).agg(
+                task=("task", "min"),
+                value=("value", lambda v: math.fsum(v) if v.notna().all() else math.nan),
+                step=("step", "first"), t=("t", "first"), **{c: (c, "first") for c in POSE}))
+            continue
+        ordered = sub.sort_values(["value", "task"], ascending=[kind == "min", True],
+                                  kind="stable", na_position="last")
+        parts.append(ordered.drop_duplicates(key, keep="first"))
+    out = pd.concat(parts, ignore_index=True).drop(columns=["steps", "flagged"],
+                                                   errors="ignore")
+    return out.join(counts, on=["motion", "variant"])
+
+
+def merge(chunks) -> Any:
+    """Per-case envelopes (``ENVELOPE_COLUMNS``) from task envelopes, in any order."""
+    import pandas as pd
+
+    out = _reduce(list(chunks))
+    out["quantity"] = pd.Categorical(out["quantity"], categories=list(QUANTITIES))
+    out = out.sort_values(["motion", "variant", "quantity", "leg"], ignore_index=True)
+    out["quantity"] = out["quantity"].astype(str)
+    out["step"] = out["step"].astype("int64")
+    return out[list(ENVELOPE_COLUMNS)]
+
+
+def summarize(envelopes) -> Any:
+    """The extreme of each quantity and leg over all cases, with its case and location."""
+    import pandas as pd
+
+    parts = []
+    for q, (kind, unit, _) in QUANTITIES.items():
+        sub = envelopes[envelopes.quantity == q]
+        ordered = sub.sort_values("value", ascending=(kind == "min"), kind="stable",
+                                  na_position="last")
+        best = ordered.drop_duplicates("leg", keep="first").sort_values("leg").copy()
+        best.insert(best.columns.get_loc("value") + 1, "unit", unit)
+        parts.append(best)
+    out = pd.concat(parts, ignore_index=True)
+    return out[["quantity", "leg", "value", "unit", "motion", "variant", "step", "t", *POSE]]
+
+
+def check_limits(envelopes, limits: Mapping) -> Any:
+    """Rows of ``envelopes`` beyond the platform's ``[limits]``, with the limit and the ratio."""
+    import pandas as pd
+
+    parts = []
+    for key, q in LIMIT_QUANTITY.items():
+        if key in limits:
+            sub = envelopes[(envelopes.quantity == q) & (envelopes.value > limits[key])].copy()
+            sub["limit"] = float(limits[key])
+            parts.append(sub)
+    if "actuator_force" in limits:
+        lo, hi = limits["actuator_force"]
+        for q, bad, lim in (("F_max", envelopes.value > hi, hi), ("F_min", envelopes.value < lo,
+                                                                  lo)):
+            sub = envelopes[(envelopes.quantity == q) & bad].copy()
+            sub["limit"] = float(lim)
+            parts.append(sub)
+    cols = ["motion", "variant", "quantity", "leg", "value", "limit", "ratio", "step", "t",
+            *POSE]
+    if not parts:
+        return pd.DataFrame(columns=cols)
+    out = pd.concat(parts, ignore_index=True)
+    out["ratio"] = out["value"] / out["limit"]
+    return out[cols].sort_values(["motion", "variant", "quantity", "leg"], ignore_index=True)
+
+
+# -- running ------------------------------------------------------------------------------------
+
+
+@dataclass
+class SweepResult:
+    """What ``sweep`` wrote and read back: the envelopes and the paths."""
+
+    out: Path
+    envelopes: Any
+    summary: Any
+    variants: Any
+    exceeded: Any
+    info: dict
+
+    def most_loaded(self, quantity: str = "R_C") -> Any:
+        """The summary row of ``quantity`` with the largest value over the legs."""
+        sub = self.summary[self.summary.quantity == quantity]
+        return sub.loc[sub.value.idxmax()]
+
+
+def _client(scheduler, workers: int | None = None):
+    """A distributed Client and the LocalCluster we started for it (None otherwise)."""
+    from distributed import Client, LocalCluster
+
+    if not isinstance(scheduler, str):
+        return scheduler, None
+    if scheduler == "local":
+        import logging
+
+        # processes with one thread each: the compiled evaluator is not thread-safe yet
+        cluster = LocalCluster(n_workers=workers or os.cpu_count() or 1, threads_per_worker=1,
+                               processes=True, dashboard_address=None,
+                               silence_logs=logging.ERROR)
+        return Client(cluster), cluster
+    return Client(scheduler), None
+
+
+def _resolve_scheduler(scheduler, steps: int):
+    if scheduler is None or scheduler == "auto":
+        address = os.environ.get("DASK_SCHEDULER_ADDRESS")
+        if address:
+            return address
+        return "serial" if steps < SERIAL_BELOW else "local"
+    if isinstance(scheduler, str) and scheduler not in ("serial", "local") and \
+            "://" not in scheduler:
+        raise InputError(f"scheduler: expected auto, serial, local or an address such as "
+                         f"tcp://host:8786, got {scheduler!r}")
+    return scheduler
+
+
+def _store(partial: Path, task_id: int, frame) -> None:
+    from gsfric.io import atomic_write
+
+    with atomic_write(partial / "chunks" / f"{task_id:07d}.parquet", "wb") as handle:
+        frame.to_parquet(handle, index=False)
+
+
+def _finished(partial: Path, fingerprint: str):
+    """(task index, chunk file) of the tasks an unfinished sweep of these inputs stored."""
+    plan_file = partial / "plan.json"
+    if not plan_file.exists():
+        return {}
+    try:
+        stored = json.loads(plan_file.read_text())["fingerprint"]
+    except (ValueError, KeyError):
+        stored = None
+    if stored != fingerprint:
+        raise InputError(f"{partial}: holds an unfinished sweep of other inputs; remove it "
+                         "or choose another output folder")
+    return [(int(f.stem), f) for f in sorted((partial / "chunks").glob("*.parquet"))]
+
+
+def sweep(out: str | os.PathLike, trajectories=None,
+          workspace: Workspace | str | os.PathLike | None = None,
+          platform: Platform | str | os.PathLike | None = None, vary=None, tolerances=None,
+          variants: int = 16, seed: int = 0, scheduler=None, workers: int | None = None,
+          chunk_steps: int = CHUNK_STEPS,
+          progress: bool | None = None, plots: bool = True,
+          on_chunk: Callable[[int, int], None] | None = None) -> SweepResult:
+    """Load envelopes per joint over motions, a workspace and platform variants.
+
+    Parameters
+    ----------
+    out : path
+        Output folder (must not exist unless it holds this very sweep, which is then read
+        back). Built in ``out + ".partial"``; an unfinished sweep there resumes.
+    trajectories : str, path or list of them
+        Glob pattern(s) of trajectory files (CSV or Parquet); each file is one motion.
+    workspace : Workspace or path of its TOML
+        Poses and velocity/acceleration bounds (docs/sizing.md).
+    platform : Platform or path of its TOML
+        The nominal platform (default: the reference platform); its ``[limits]`` are checked.
+    vary : dict name -> (min, max)
+        Parameter ranges of the variants (``SCALAR_PARAMETERS``).
+    tolerances : dict name -> standard deviation
+        Monte-Carlo tolerances (``SCALAR_PARAMETERS`` and ``JOINT_TOLERANCES``).
+    variants : int
+        Variants drawn besides the nominal one when ``vary`` or ``tolerances`` is given.
+    seed : int
+        Seed of the variants (the workspace has its own).
+    scheduler : {"auto", "serial", "local"}, address "tcp://host:port", or a Client
+        "auto" (None): ``DASK_SCHEDULER_ADDRESS`` if set, else "serial" below
+        ``SERIAL_BELOW`` steps and "local" (a LocalCluster, one process per core) above.
+        Threads are not offered: the compiled evaluator is not yet thread-safe.
+    workers : int, optional
+        Worker processes of the "local" cluster (default: one per core).
+    chunk_steps : int
+        Evaluated steps per task (a trajectory file is never split: a longer file is a task of
+        its own per variant, streamed in ``STREAM_CHUNK`` steps).
+    progress : bool, optional
+        Progress bar with total and ETA on stderr (default: when stderr is a terminal).
+    plots : bool
+    on_chunk : callable (done, total), optional
+        Called after each finished task is stored.
+
+    Returns
+    -------
+    SweepResult
+    """
+    import pandas as pd
+
+    out = Path(out)
+    p = plan(trajectories, workspace, platform, vary, tolerances, variants, seed, chunk_steps)
+    if out.exists():
+        meta = out / "sweep.json"
+        if meta.exists() and json.loads(meta.read_text()).get("fingerprint") == p.fingerprint:
+            return load(out)
+        raise InputError(f"{out}: exists; remove it or choose another output folder")
+    if not out.parent.is_dir():
+        raise InputError(f"{out}: directory {str(out.parent)!r} does not exist")
+    partial = out.with_name(out.name + ".partial")
+    (partial / "chunks").mkdir(parents=True, exist_ok=True)
+    merged: list = []          # the running fold, then the task envelopes not yet folded in
+    done: set[int] = set()
+
+    def absorb(frame) -> None:
+        merged.append(frame)
+        if len(merged) > MERGE_EVERY:
+            merged[:] = [_reduce(merged)]
+
+    for k, f in _finished(partial, p.fingerprint):
+        if k < len(p.tasks):
+            absorb(pd.read_parquet(f))
+            done.add(k)
+    (partial / "plan.json").write_text(json.dumps({"fingerprint": p.fingerprint,
+                                                   "tasks": len(p.tasks)}))
+    todo = [t for t in p.tasks if t.id not in done]
+    steps_todo = sum(t.steps for t in todo)
+    chosen = _resolve_scheduler(scheduler, steps_todo) if todo else "serial"
+    if progress is None:
+        progress = sys.stderr.isatty()
+    from tqdm import tqdm
+
+    bar = tqdm(total=p.steps, initial=p.steps - steps_todo, unit="step", unit_scale=True,
+               desc="sweep", disable=not progress, file=sys.stderr)
+    started = time.perf_counter()
+    from gsfric import native
+
+    native.is_compiled()       # compile (or load) once here, before workers need the cache
+
+    def finish(task, frame):
+        _store(partial, task.id, frame)
+        absorb(frame)
+        done.add(task.id)
+        bar.update(task.steps)
+        if on_chunk is not None:
+            on_chunk(len(done), len(p.tasks))
+
+    try:
+        if chosen == "serial":
+            for task in todo:
+                finish(task, run_task(task))
+        elif todo:
+            from distributed import as_completed
+
+            client, cluster = _client(chosen, workers)
+            try:
+                # a bounded window of tasks in flight: the tasks' inputs (pose blocks,
+                # platforms) are pickled as they are submitted, not all at once
+                window = max(8, 4 * max(1, len(client.scheduler_info().get("workers", {}))))
+                pending = iter(todo)
+                by_key = {}
+
+                def submit(task):
+                    fut = client.submit(run_task, task, key=f"gsfric-sweep-{p.fingerprint}-"
+                                        f"{task.id}", pure=False)
+                    by_key[fut.key] = task
+                    return fut
+
+                queue = as_completed([submit(t) for t in itertools.islice(pending, window)],
+                                     with_results=True)
+                for fut, frame in queue:
+                    finish(by_key.pop(fut.key), frame)
+                    nxt = next(pending, None)
+                    if nxt is not None:
+                        queue.add(submit(nxt))
+            finally:
+                if cluster is not None:
+                    client.close()
+                    cluster.close()
+    finally:
+        bar.close()
+    elapsed = time.perf_counter() - started
+    envelopes = merge(merged)
+    summary = summarize(envelopes)
+    variants_table = pd.DataFrame(p.variants)
+    base = platform if isinstance(platform, Platform) else (
+        Platform.from_toml(platform) if platform is not None else None)
+    limits = base.limits if base is not None else {}
+    exceeded = check_limits(envelopes, limits)
+    envelopes.to_parquet(partial / "envelopes.parquet", index=False)
+    summary.to_csv(partial / "summary.csv", index=False)
+    variants_table.to_csv(partial / "variants.csv", index=False)
+    if limits:
+        exceeded.to_csv(partial / "limits.csv", index=False)
+    info = {"fingerprint": p.fingerprint, "tasks": len(p.tasks), "steps": p.steps,
+            "cases": int(envelopes.groupby(["motion", "variant"]).ngroups),
+            "flagged": int(envelopes[(envelopes.quantity == "R_E") &
+                                     (envelopes.leg == 1)].flagged.sum()),
+            "computed_tasks": len(todo), "scheduler": str(chosen) if isinstance(chosen, str)
+            else "client", "seconds": round(elapsed, 3), "limits": {k: v for k, v in
+                                                                    limits.items()},
+            "exceeding_cases": int(exceeded.groupby(["motion", "variant"]).ngroups)
+            if len(exceeded) else 0, "inputs": p.inputs}
+    if plots:
+        plot(envelopes, summary, partial, limits, p.inputs.get("workspace"))
+    shutil.rmtree(partial / "chunks")
+    (partial / "plan.json").unlink()
+    (partial / "sweep.json").write_text(json.dumps(info, indent=1, default=str))
+    os.replace(partial, out)
+    return SweepResult(out, envelopes, summary, variants_table, exceeded, info)
+
+
+def load(out: str | os.PathLike) -> SweepResult:
+    """Read a finished sweep's output folder back."""
+    import pandas as pd
+
+    out = Path(out)
+    info = json.loads((out / "sweep.json").read_text())
+    envelopes = pd.read_parquet(out / "envelopes.parquet")
+    exceeded = (pd.read_csv(out / "limits.csv") if (out / "limits.csv").exists()
+                else check_limits(envelopes, {}))
+    return SweepResult(out, envelopes, pd.read_csv(out / "summary.csv"),
+                       pd.read_csv(out / "variants.csv"), exceeded, info)
+
+
+# -- plots ------------------------------------------------------------------------------------
+
+
+def plot(envelopes, summary, folder: Path, limits: Mapping, workspace: dict | None) -> None:
+    """``envelope.png`` (each quantity per leg, all cases, limits) and ``locations.png``."""
+    from matplotlib.figure import Figure        # no pyplot: leaves the caller's backend alone
+    from matplotlib.patches import Rectangle
+
+    shown = ["R_E", "R_C", "M_C", "R_3", "M_3", "F_max", "Ffr", "P_C", "W_C"]
+    limit_of = {q: k for k, q in LIMIT_QUANTITY.items()}
+    fig = Figure(figsize=(12, 9), layout="constrained")
+    axes = fig.subplots(3, 3)
+    legs = np.arange(1, 7)
+    for ax, q in zip(axes.flat, shown):
+        sub = envelopes[envelopes.quantity == q]
+        kind, unit, meaning = QUANTITIES[q]
+        if sub.value.notna().any():
+            table = sub.pivot_table(index="leg", columns=["motion", "variant"], values="value")
+            ax.plot(legs, table.to_numpy(), color="0.7", lw=0.8, marker=".", ms=3)
+            best = summary[summary.quantity == q].sort_values("leg")
+            ax.bar(legs, best.value, alpha=0.35, color="C0")
+        if q == "F_max":
+            fmin = envelopes[envelopes.quantity == "F_min"].groupby("leg").value.min()
+            ax.bar(legs, fmin.reindex(legs), alpha=0.35, color="C1")
+            ax.set_title("actuator force range")
+            if "actuator_force" in limits:
+                for v in limits["actuator_force"]:
+                    ax.axhline(v, color="C3", ls="--")
+        else:
+            ax.set_title(meaning.replace(" (motions only)", ""), fontsize=9)
+        if q in limit_of and limit_of[q] in limits:
+            ax.axhline(limits[limit_of[q]], color="C3", ls="--", label="limit")
+        ax.set_xlabel("leg")
+        ax.set_ylabel(f"{q} [{unit}]")
+    fig.suptitle("Load envelope per joint: bars = over all cases, grey = each case")
+    fig.savefig(folder / "envelope.png", dpi=90)
+
+    fig = Figure(figsize=(11, 4.5), layout="constrained")
+    axes = fig.subplots(1, 2)
+    for ax, (i, j) in zip(axes, (("x", "y"), ("x", "z"))):
+        if workspace is not None:
+            (x0, x1), (y0, y1) = workspace["pose"][i], workspace["pose"][j]
+            ax.add_patch(Rectangle((x0, y0), x1 - x0, y1 - y0, fill=False, ls=":",
+                                       color="0.4", label="workspace"))
+        for k, q in enumerate(["R_E", "R_C", "M_C", "R_3", "M_3", "F_max"]):
+            best = summary[summary.quantity == q]
+            ax.scatter(best[i], best[j], s=40, marker="os^v<>"[k], label=q, alpha=0.8)
+            for _, r in best.iterrows():
+                ax.annotate(str(int(r.leg)), (r[i], r[j]), fontsize=7)
+        ax.set_xlabel(f"{i} [m]")
+        ax.set_ylabel(f"{j} [m]")
+        ax.autoscale()
+    axes[0].legend(fontsize=7)
+    fig.suptitle("Where each joint's largest load occurs (numbers: legs)")
+    fig.savefig(folder / "locations.png", dpi=90)
+
+
+class _CallableModule(type(sys)):
+    """Lets ``gsfric.sweep(...)`` call ``gsfric.sweep.sweep(...)``: the module is callable."""
+
+    def __call__(self, *args, **kwargs):
+        return sweep(*args, **kwargs)
+
+
+sys.modules[__name__].__class__ = _CallableModule

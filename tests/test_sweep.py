@@ -1,0 +1,283 @@
+"""gsfric sweep: envelopes against direct evaluation, identical results wherever tasks run
+(serial, a LocalCluster of 2 worker processes, a worker killed mid-sweep, an interrupted and
+resumed sweep), limits, and one-line errors on bad input."""
+
+from __future__ import annotations
+
+import os
+import signal
+import subprocess
+import sys
+
+import numpy as np
+import pandas as pd
+import pytest
+
+from gsfric import io, models
+from gsfric import sweep as sw
+from gsfric.errors import InputError
+from gsfric.evaluation import evaluate
+
+WORKSPACE = {
+    "sampling": "lhs", "samples": 60, "states": 4, "seed": 3,
+    "pose": {"x": [-0.04, 0.04], "y": [-0.04, 0.04], "z": [0.66, 0.74],
+             "roll": [-0.08, 0.08], "pitch": [-0.08, 0.08], "yaw": [-0.1, 0.1]},
+    "bounds": {"velocity": 0.2, "omega": 0.4, "acceleration": 2.0, "alpha": 4.0},
+}
+
+
+@pytest.fixture(scope="module")
+def inputs(tmp_path_factory):
+    """Two trajectory files, a workspace and payload/friction variants: a small sweep."""
+    folder = tmp_path_factory.mktemp("sweep-inputs")
+    for k in range(2):
+        motion = models.random_motion(np.random.default_rng(k), np.linspace(0, 4, 801))
+        io.write_table(motion.to_frame(), folder / f"motion{k}.csv")
+    return dict(trajectories=str(folder / "motion*.csv"),
+                workspace=sw.Workspace.from_dict(WORKSPACE),
+                vary={"platform.payload_mass": (0.0, 8.0), "friction.joint_coulomb": (0.02, 0.1)},
+                tolerances={"geometry.base_joints": 0.001}, variants=3, seed=1,
+                chunk_steps=1000)
+
+
+@pytest.fixture(scope="module")
+def serial(inputs, tmp_path_factory):
+    out = tmp_path_factory.mktemp("serial") / "out"
+    return sw.sweep(out, scheduler="serial", plots=False, **inputs)
+
+
+def _same(a, b):
+    pd.testing.assert_frame_equal(a.envelopes, b.envelopes, check_exact=True)
+
+
+def test_envelope_is_the_extreme_of_a_direct_evaluation(serial, inputs):
+    """Every extreme, its step and the dissipated energy, from evaluate() and numpy alone."""
+    import glob
+
+    path = sorted(glob.glob(inputs["trajectories"]))[0]
+    motion = io.read_trajectory(path)
+    result = evaluate(models.reference_platform(), motion)
+    env = serial.envelopes
+    env = env[(env.motion == "motion0.csv") & (env.variant == 0)].set_index(["quantity", "leg"])
+    series = {"R_E": np.linalg.norm(result.R_E, axis=2), "R_C": np.linalg.norm(result.R_C, axis=2),
+              "M_C": np.abs(result.M_C), "M_3": np.linalg.norm(result.M_3, axis=2),
+              "F_max": result.F, "F_min": -result.F, "Ffr": np.abs(result.Ffr)}
+    for q, s in series.items():
+        for leg in range(6):
+            row = env.loc[(q, leg + 1)]
+            sign = -1 if q == "F_min" else 1
+            assert sign * row.value == s[:, leg].max()
+            assert row.step == int(np.argmax(s[:, leg]))
+            assert row.t == motion.t[row.step]
+            assert row.x == motion.position[row.step, 0]
+    power = -result.Ffr * result.D_dot
+    assert np.all(power >= 0)    # friction dissipates
+    for leg in range(6):
+        expected = np.trapezoid(power[:, leg], motion.t)
+        assert env.loc[("W_3", leg + 1)].value == pytest.approx(expected, rel=1e-12)
+        assert env.loc[("W_3", leg + 1)].value > 0
+    assert (env.steps == len(motion)).all() and (env.flagged == 0).all()
+
+
+def test_workspace_location_reproduces_the_extreme(serial):
+    """Re-evaluating the reported workspace state gives the reported value."""
+    ws = sw.Workspace.from_dict(WORKSPACE)
+    poses = ws.poses()
+    row = serial.summary[(serial.summary.quantity == "R_C") &
+                         (serial.summary.motion == "workspace")].iloc[0]
+    pose_index, _ = divmod(int(row.step), ws.states)
+    x = ws.states_of(poses[pose_index:pose_index + 1], pose_index)[int(row.step) % ws.states]
+    from gsfric.trajectory import Motion
+
+    motion = Motion(np.zeros(1), x[None, 0:3], x[None, 3:12].reshape(1, 3, 3), x[None, 12:15],
+                    x[None, 15:18], x[None, 18:21], x[None, 21:24])
+    platforms, _ = sw.make_variants(models.reference_platform(),
+                                    {"platform.payload_mass": (0.0, 8.0),
+                                     "friction.joint_coulomb": (0.02, 0.1)},
+                                    {"geometry.base_joints": 0.001}, 3, 1)
+    result = evaluate(platforms[int(row.variant)], motion)
+    assert np.linalg.norm(result.R_C[0, int(row.leg) - 1]) == row.value
+    assert np.allclose([row.x, row.y, row.z], poses[pose_index, :3])
+
+
+def test_chunking_does_not_change_the_envelopes(serial, inputs, tmp_path):
+    whole = sw.sweep(tmp_path / "out", scheduler="serial", plots=False,
+                     **{**inputs, "chunk_steps": 10**7})
+    assert whole.info["tasks"] < serial.info["tasks"]
+    _same(whole, serial)
+
+
+def test_variants_heavier_payload_loads_the_actuators_more(serial):
+    """Static states: the actuators carry the weight, so a heavier payload raises sum(F_max)."""
+    env, var = serial.envelopes, serial.variants
+    ws = env[(env.motion == "workspace") & (env.quantity == "F_max")]
+    total = ws.groupby("variant").value.sum()
+    heaviest = var["platform.payload_mass"].idxmax()
+    lightest = var["platform.payload_mass"].idxmin()
+    assert total[heaviest] > total[lightest]
+    assert len(var) == 4 and var.loc[0, "platform.payload_mass"] == 3.0
+
+
+@pytest.fixture(scope="module")
+def cluster():
+    distributed = pytest.importorskip("distributed")
+    import logging
+
+    with distributed.LocalCluster(n_workers=2, threads_per_worker=1, processes=True,
+                                  dashboard_address=None, silence_logs=logging.ERROR) as c, \
+            distributed.Client(c) as client:
+        yield client
+
+
+def test_local_cluster_of_two_workers_equals_serial(serial, inputs, cluster, tmp_path,
+                                                    monkeypatch):
+    monkeypatch.setattr(sw, "MERGE_EVERY", 2)   # fold envelopes as they arrive, in any order
+    result = sw.sweep(tmp_path / "out", scheduler=cluster, plots=False, **inputs)
+    assert len(cluster.scheduler_info()["workers"]) == 2
+    _same(result, serial)
+    pd.testing.assert_frame_equal(result.summary, serial.summary, check_exact=True)
+
+
+def test_killing_a_worker_mid_sweep_gives_the_same_envelopes(serial, inputs, cluster, tmp_path):
+    pids = list(cluster.run(os.getpid).values())
+    killed = []
+
+    def kill_one(done, total):
+        if not killed and done < total:
+            os.kill(pids[0], signal.SIGKILL)
+            killed.append(done)
+
+    result = sw.sweep(tmp_path / "out", scheduler=cluster, plots=False, on_chunk=kill_one,
+                      **inputs)
+    assert killed and killed[0] < result.info["tasks"]
+    _same(result, serial)
+
+
+def test_resumed_sweep_equals_an_uninterrupted_one(serial, inputs, tmp_path, monkeypatch):
+    monkeypatch.setattr(sw, "MERGE_EVERY", 2)
+    out = tmp_path / "out"
+
+    class Stop(Exception):
+        pass
+
+    def stop_after_three(done, total):
+        if done == 3:
+            raise Stop
+
+    with pytest.raises(Stop):
+        sw.sweep(out, scheduler="serial", plots=False, on_chunk=stop_after_three, **inputs)
+    assert not out.exists()
+    assert len(list((tmp_path / "out.partial" / "chunks").glob("*.parquet"))) == 3
+    seen = []
+    resumed = sw.sweep(out, scheduler="serial", plots=False,
+                       on_chunk=lambda d, t: seen.append(d), **inputs)
+    assert resumed.info["computed_tasks"] == serial.info["tasks"] - 3
+    assert seen == list(range(4, serial.info["tasks"] + 1))
+    assert not (tmp_path / "out.partial").exists()
+    _same(resumed, serial)
+    assert resumed.info["steps"] == serial.info["steps"]
+    # the same sweep again: read back, nothing computed
+    again = sw.sweep(out, scheduler="serial", plots=False, **inputs)
+    _same(again, serial)
+
+
+def test_limits_list_exactly_the_exceeding_cases(serial, inputs, tmp_path):
+    nominal = serial.envelopes[serial.envelopes.variant == 0]
+
+    def median(q):
+        return float(nominal[nominal.quantity == q].value.median())
+
+    rating, lo, hi = median("R_E"), median("F_min"), median("F_max")
+    limits = {"spherical_load": rating, "actuator_force": [lo, hi]}
+    platform = models.reference_platform().replace(limits=limits)
+    toml = tmp_path / "platform.toml"
+    platform.to_toml(toml)
+    args = {**inputs, "vary": None, "tolerances": None}
+    result = sw.sweep(tmp_path / "out", platform=toml, scheduler="serial", **args)
+    env, bad = result.envelopes, result.exceeded
+    for q, over in (("R_E", env.value > rating), ("F_max", env.value > hi),
+                    ("F_min", env.value < lo)):
+        expected = env[(env.quantity == q) & over]
+        listed = bad[bad.quantity == q]
+        assert len(listed) == len(expected) > 0
+    assert (bad.ratio[bad.quantity != "F_min"] > 1).all()
+    assert (result.out / "limits.csv").exists() and (result.out / "envelope.png").exists()
+    cli = _cli("sweep", "--out", str(tmp_path / "cli"), "--trajectories", inputs["trajectories"],
+               "--platform", str(toml), "--scheduler", "serial", "--no-plots", "--strict")
+    assert cli.returncode == 1, cli.stderr
+    assert "case(s) exceed" in cli.stdout
+
+
+def _cli(*args):
+    return subprocess.run([sys.executable, "-m", "gsfric.cli", *args], capture_output=True,
+                          text=True, timeout=300)
+
+
+def _one_line_error(proc, *words):
+    assert proc.returncode == 2, proc.stderr
+    lines = proc.stderr.strip().splitlines()
+    assert len(lines) == 1 and lines[0].startswith("gsfric: error:"), proc.stderr
+    for w in words:
+        assert w in lines[0]
+
+
+def test_glob_matching_nothing(tmp_path):
+    _one_line_error(_cli("sweep", "--out", str(tmp_path / "o"), "--trajectories",
+                         str(tmp_path / "nothing*.csv")), "matches no file", "nothing*.csv")
+
+
+def test_variant_range_min_above_max(inputs, tmp_path):
+    _one_line_error(_cli("sweep", "--out", str(tmp_path / "o"), "--trajectories",
+                         inputs["trajectories"], "--vary", "platform.payload_mass=5:2"),
+                    "platform.payload_mass", "min 5 > max 2")
+    with pytest.raises(InputError, match="unknown parameter"):
+        sw.make_variants(models.reference_platform(), {"platform.payload": (0, 1)})
+
+
+def test_unreachable_workspace(tmp_path):
+    ws = tmp_path / "ws.toml"
+    ws.write_text('sampling = "grid"\npoints = 3\n[pose]\nz = [0.7, 1.4]\n')
+    _one_line_error(_cli("sweep", "--out", str(tmp_path / "o"), "--workspace", str(ws)),
+                    "unreachable", "outside the stroke")
+    ws.write_text('[pose]\nz = [0.8, 0.6]\n')
+    _one_line_error(_cli("sweep", "--out", str(tmp_path / "o"), "--workspace", str(ws)),
+                    "pose.z", "min 0.8 > max 0.6")
+
+
+def test_output_folder_of_another_sweep_is_not_overwritten(serial, inputs):
+    with pytest.raises(InputError, match="exists"):
+        sw.sweep(serial.out, scheduler="serial", plots=False, **{**inputs, "seed": 2})
+
+
+def test_gsfric_sweep_is_callable():
+    import gsfric
+
+    assert gsfric.sweep.Workspace is sw.Workspace and callable(gsfric.sweep)
+
+
+def test_platform_limits_round_trip_and_one_line_errors(tmp_path):
+    from gsfric.platform import Platform
+
+    platform = models.reference_platform().replace(
+        limits={"actuator_force": 200.0, "universal_load": 300.0})
+    assert platform.limits["actuator_force"] == (-200.0, 200.0)
+    platform.to_toml(tmp_path / "p.toml")
+    assert Platform.from_toml(tmp_path / "p.toml") == platform
+    base = models.reference_platform().to_dict()
+    for limits, words in (({"universal_lod": 1.0}, "did you mean 'universal_load'"),
+                          ({"spherical_load": 0.0}, "must be positive"),
+                          ({"actuator_force": [5.0, -5.0]}, "min = 5 must be less than")):
+        with pytest.raises(InputError, match=words) as info:
+            Platform.from_dict({**base, "limits": limits}, source="p.toml")
+        assert "\n" not in str(info.value) and str(info.value).startswith("p.toml: limits.")
+
+
+def test_merge_is_independent_of_arrival_order_and_folding(serial, inputs):
+    """Task envelopes folded in a shuffled order, in steps, give the serial envelopes."""
+    p = sw.plan(**inputs)
+    frames = [sw.run_task(t) for t in p.tasks]
+    order = np.random.default_rng(5).permutation(len(frames))
+    shuffled = [frames[i].sample(frac=1.0, random_state=1) for i in order]
+    folded = sw._reduce(shuffled[:3])
+    pd.testing.assert_frame_equal(sw.merge([folded, *shuffled[3:]]), serial.envelopes,
+                                  check_exact=True)
