@@ -277,5 +277,104 @@ def bench(quick, out):
     run_bench(quick=quick, out=out)
 
 
+@main.command()
+@click.option("--markdown", is_flag=True, help="As the Markdown table of the README.")
+@click.option("--no-measured", is_flag=True,
+              help="Leave out the columns added for a measured-data input.")
+def columns(markdown, no_measured):
+    """List every output column of `simulate` with its unit and sign convention."""
+    from gsfric import columns as cols
+
+    text = cols.markdown_table(not no_measured) if markdown else cols.listing(not no_measured)
+    click.echo(text)
+
+
+@main.command()
+def effects():
+    """List the catalog of optional effects, with their parameters, defaults and units.
+
+    Switch one on in a platform's [effects] table, e.g. stribeck = { static = 2.0 }, or hide it
+    in synthetic data with `gsfric synth --effect stribeck:static=2`.
+    """
+    from gsfric.catalog import describe
+
+    for effect in describe():
+        click.echo(f"{effect['name']}: {effect['description']}")
+        for p in effect["parameters"]:
+            unit = p["unit"] or "1"
+            click.echo(f"    {p['name']} = {p['default']:g} {unit}  ({p['description']})")
+
+
+@main.command()
+@click.option("--template", is_flag=True, required=True,
+              help="Write a commented, minimal platform TOML (the reference platform's "
+                   "values, units in the comments).")
+@click.option("--out", type=click.Path(dir_okay=False, path_type=Path),
+              help="File to write [default: standard output].")
+def platform(template, out):
+    """Write a platform file to start from: `gsfric platform --template --out my.toml`."""
+    text = _platform_template()
+    if out is None:
+        click.echo(text, nl=False)
+        return
+    from gsfric.io import atomic_write
+
+    with atomic_write(out, "w") as handle:
+        handle.write(text)
+    click.echo(f"wrote {out}")
+
+
+def _platform_template() -> str:
+    """The reference platform as a commented TOML: what `Platform.from_toml` needs, with units."""
+    from gsfric.models import reference_platform
+
+    p = reference_platform()
+    g = p.geometry
+
+    def rows(a):
+        return "\n".join(f"    [{', '.join(repr(float(v)) for v in row)}]," for row in a)
+
+    stroke = "" if g.stroke is None else (
+        f"stroke = [{g.stroke[0]:.6g}, {g.stroke[1]:.6g}]   # m, shortest and longest leg "
+        "(steps outside are flagged)\n")
+    b, f = p.platform, p.friction
+    return f"""# A gsfric platform (SI units, angles in rad). Read with `gsfric simulate --platform FILE`
+# or gsfric.Platform.from_toml(FILE). Required: [geometry] base_joints, platform_joints and
+# [platform] mass, inertia; everything else has the default shown. `gsfric effects` lists
+# the optional [effects].
+
+gravity = {p.gravity:g}                 # m/s^2, along -z of the base frame
+
+[geometry]
+# C_i, the universal joints, in the base frame (m), one row per leg 1..6
+base_joints = [
+{rows(g.base_joints)}
+]
+# E_i, the spherical joints, in the platform frame (m), leg i joins C_i and E_i
+platform_joints = [
+{rows(g.platform_joints)}
+]
+{stroke}
+[platform]
+mass = {b.mass:g}                     # kg, the moving platform
+inertia = [[{b.inertia[0, 0]:g}, 0, 0], [0, {b.inertia[1, 1]:g}, 0], [0, 0, {b.inertia[2, 2]:g}]]   # kg m^2, about its centre of mass, platform frame
+payload_mass = {b.payload_mass:g}              # kg, at payload_com (platform frame, m)
+
+[legs]
+model = "{p.legs.model}"                # "rigid", or "paper": the paper's zone centres at 0.25 D and 0.75 D
+lower_mass = {p.legs.lower_mass:g}               # kg, moves with the universal joint
+upper_mass = {p.legs.upper_mass:g}               # kg, moves with the spherical joint end
+
+[friction]
+joint_viscous = {f.joint_viscous:g}          # c_s, N m s/rad, spherical and universal joints
+joint_coulomb = {f.joint_coulomb:g}          # mu, 1
+joint_radius = {f.joint_radius:g}           # r, m
+prismatic_viscous = {f.prismatic_viscous:g}      # N s/m
+prismatic_coulomb = {f.prismatic_coulomb:g}      # mu, 1
+
+[effects]                       # none switched on; e.g. stribeck = {{ static = 2.0, velocity = 0.01 }}
+"""
+
+
 if __name__ == "__main__":
     main()

@@ -675,8 +675,14 @@ def _read_samples(path: str | os.PathLike[str], measured: bool,
                   log_format: LogFormat | None = None
                   ) -> tuple[Path, dict[str, np.ndarray], tuple[str, ...]]:
     path = Path(path)
-    frame = read_table(path)
-    names = [name.strip() for name in frame.columns]
+    return _samples(path, read_table(path), measured, log_format)
+
+
+def _samples(path, frame, measured: bool, log_format: LogFormat | None
+             ) -> tuple[Path, dict[str, np.ndarray], tuple[str, ...]]:
+    """The checked columns of a whole table; ``path`` names it in messages."""
+    frame = frame.copy(deep=False)
+    names = [str(name).strip() for name in frame.columns]
     if len(set(names)) != len(names):
         duplicate = next(n for n in names if names.count(n) > 1)
         raise InputError(f"{path}: column {duplicate!r} appears more than once")
@@ -717,6 +723,32 @@ def _motion(path: Path, columns: dict[str, np.ndarray], orientation: tuple[str, 
     key = "quaternion" if orientation == QUATERNION else "euler"
     return Motion.from_samples(columns["t"], position, window=window, polyorder=polyorder,
                                source=str(path), **{key: angles})
+
+
+def motion_from_frame(frame: pd.DataFrame, *, window: int | None = None,
+                      polyorder: int = DEFAULT_POLYORDER, log_format: LogFormat | None = None,
+                      name: str = "DataFrame") -> Motion:
+    """A ``Motion`` from a DataFrame with trajectory columns, as ``read_trajectory`` reads a file.
+
+    Parameters
+    ----------
+    frame : pandas.DataFrame
+        Columns ``t, x, y, z`` (s, m) and ``alpha, beta, gamma`` (rad), ``qw, qx, qy, qz`` or
+        ``roll, pitch, yaw``, or other names and units given by ``log_format``; one row per
+        sample, N >= ``MIN_SAMPLES`` rows. The index is not used.
+    window, polyorder, log_format :
+        As for ``read_trajectory``.
+    name : str
+        How messages name the frame (``"DataFrame: row 3: column 'x' is NaN"``).
+
+    Returns
+    -------
+    Motion
+        N steps.
+    """
+    path, columns, orientation = _samples(name, frame.reset_index(drop=True), False,
+                                          log_format)
+    return _motion(path, columns, orientation, window, polyorder)
 
 
 def read_trajectory(path: str | os.PathLike[str], *, window: int | None = None,

@@ -523,7 +523,9 @@ class _Writer:
         import pyarrow as pa
         import pyarrow.parquet as pq
 
-        table = pa.Table.from_pandas(frame, preserve_index=False)
+        from gsfric.columns import arrow_table   # field metadata: unit, description
+
+        table = arrow_table(frame)
         if self.parquet is None:
             self.parquet = pq.ParquetWriter(self.handle, table.schema)
         self.parquet.write_table(table)
