@@ -211,3 +211,17 @@ def test_read_measured_with_units(tmp_path):
     _, forces, lengths = read_measured(tmp_path / "m.csv", log_format=fmt)
     np.testing.assert_allclose(forces[0], 100.0 * np.arange(1, 7))
     np.testing.assert_allclose(lengths[0], 0.701 + 0.001 * np.arange(6))
+
+
+@pytest.mark.parametrize("suffix", [".csv", ".parquet"])
+def test_progress_bar_has_a_total_on_request_and_is_absent_off_a_terminal(tmp_path, capsys,
+                                                                          suffix):
+    from gsfric.stream import simulate_file
+
+    path = tmp_path / f"m{suffix}"
+    write_table(models.sinusoidal(np.arange(250) / 100.0).to_frame(), path)
+    simulate_file(path, tmp_path / "o.csv", chunk=100, window=11, progress=True)
+    shown = capsys.readouterr().err
+    assert "/250 [" in shown and "%" in shown      # a total, hence a percentage and an ETA
+    simulate_file(path, tmp_path / "o.csv", chunk=100, window=11, progress=None)
+    assert capsys.readouterr().err == ""           # stderr is not a terminal here
