@@ -58,8 +58,10 @@ class _Group(click.Group):
             _fail(exc.format_message(), EXIT_INPUT)
 
 
-def _log_options(command):
+def _log_options(command=None, *, keep=True):
     """--column-map, --units, --angles, --keep-columns: how to read a log (gsfric.io.LogFormat)."""
+    if command is None:
+        return lambda c: _log_options(c, keep=keep)
     options = [
         click.option("--column-map", metavar="FILE.toml|NAME=COLUMN,...",
                      help="The log's column for each gsfric column, e.g. "
@@ -76,7 +78,7 @@ def _log_options(command):
         click.option("--keep-columns", metavar="COLUMN,...",
                      help="Log columns to copy unchanged into the output (other columns that "
                           "are not gsfric inputs are ignored, with a note)."),
-    ]
+    ][:None if keep else 3]
     for option in reversed(options):
         command = option(command)
     return command
@@ -174,12 +176,15 @@ def paper(out_dir, mode, platform_file, no_plots):
 @click.option("--window", type=int, default=None,
               help="Savitzky-Golay window, odd, samples [default: chosen by cross-validation "
                    "on the first chunk].")
-@click.option("--progress/--quiet", " /--no-progress", default=None,
-              help="--progress: a progress bar on stderr (with total and ETA); --quiet: no "
-                   "bar and no summary line [default: the bar when stderr is a terminal].")
+@click.option("--progress/--no-progress", default=None,
+              help="A progress bar on stderr, with total and ETA [default: when stderr is a "
+                   "terminal].")
+@click.option("--quiet", is_flag=True,
+              help="No progress bar and no summary line (warnings and errors still go to "
+                   "stderr).")
 @_log_options
 def simulate(trajectory, platform_file, out, mode, strict, threads, chunk, window, progress,
-             column_map, units_map, angles, keep_columns):
+             quiet, column_map, units_map, angles, keep_columns):
     """Evaluate a motion: actuator forces, reactions and friction at every step.
 
     The trajectory may be a measured-data file: with F1..F6 the output also has
@@ -204,8 +209,9 @@ def simulate(trajectory, platform_file, out, mode, strict, threads, chunk, windo
         platform = _platform(platform_file)
         summary = simulate_file(trajectory, out, platform, mode=mode, strict=strict,
                                 chunk=chunk, window=window, n_threads=threads,
-                                progress=progress, log_format=log_format)
-    if progress is not False:
+                                progress=False if quiet else progress,
+                                log_format=log_format)
+    if not quiet:
         click.echo(f"wrote {out} ({summary.steps} steps, {summary.flagged} flagged)")
 
 
@@ -218,21 +224,23 @@ def simulate(trajectory, platform_file, out, mode, strict, threads, chunk, windo
               required=True, help="Directory for summary.json, the report and plots.")
 @click.option("--seed", type=int, default=0, show_default=True,
               help="Seed of the block bootstrap.")
-@click.option("--progress/--quiet", " /--no-progress", default=None,
-              help="--progress: a progress bar over the workflow's stages on stderr; --quiet: "
-                   "no bar and no list of written files [default: the bar when stderr is a "
-                   "terminal].")
-@_log_options
-def discover(measured, platform_file, out_dir, seed, progress, column_map, units_map, angles,
-             keep_columns):
+@click.option("--progress/--no-progress", default=None,
+              help="A progress bar over the workflow's stages on stderr [default: when stderr "
+                   "is a terminal].")
+@click.option("--quiet", is_flag=True,
+              help="No progress bar and no list of written files (warnings and errors still "
+                   "go to stderr).")
+@_log_options(keep=False)
+def discover(measured, platform_file, out_dir, seed, progress, quiet, column_map, units_map,
+             angles):
     """Find which physical effect the model is missing, fit it, and show the gap shrink."""
     from gsfric.discovery import run_discover
 
-    show = sys.stderr.isatty() if progress is None else progress
-    log_format = _log_format(column_map, units_map, angles, keep_columns)
+    show = False if quiet else sys.stderr.isatty() if progress is None else progress
+    log_format = _log_format(column_map, units_map, angles, None)
     written = run_discover(measured, platform_file, out_dir, seed=seed, progress=show,
                            **({"log_format": log_format} if log_format else {}))
-    if progress is not False:
+    if not quiet:
         for path in written:
             click.echo(f"wrote {path}")
 
