@@ -183,7 +183,7 @@ def _blocks(path: Path, rows: int, log_format=None, carry=None) -> Iterator[_Blo
             continue
         frame.columns = names
         columns = reader.read(frame, first_row=start)
-        if carry is not None:
+        if carry is not None and (reader.forces or reader.keep):
             carry.append({k: v for k, v in columns.items()
                           if k in gio.FORCES or k.startswith("keep:")})
         t = columns["t"]
