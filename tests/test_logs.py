@@ -95,8 +95,10 @@ def _raw_rotation(path, fmt):
 
     frame = read_table(path)
     reader = ColumnReader(path, fmt)
-    reader.check(list(frame.columns))
-    columns = reader.read(frame)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", GsfricWarning)    # checked elsewhere
+        reader.check(list(frame.columns))
+        columns = reader.read(frame)
     q = np.stack([columns[k] for k in ("qw", "qx", "qy", "qz")], axis=1)
     return rotation_from_quaternion(q)
 
