@@ -568,7 +568,8 @@ class ColumnReader:
             shown = ", ".join(repr(n) for n in ignored[:8])
             more = f" and {len(ignored) - 8} more" if len(ignored) > 8 else ""
             warnings.warn(f"{path}: ignored columns {shown}{more} (not gsfric inputs; map them "
-                          "with --column-map or carry them to the output with --keep-columns)",
+                          "with --column-map or carry them to the output with --keep-columns; "
+                          "in Python: LogFormat columns, keep)",
                           GsfricWarning, stacklevel=3)
         self.source = source
         self.forces = len(forces) == 6
