@@ -8,6 +8,12 @@ evaluated here over trajectories, with NumPy and the compiled functions only.
 >>> result = gsfric.evaluate(platform, gsfric.models.paper_motion())
 >>> result.F.shape
 (40, 6)
+
+Main names: ``evaluate`` (a platform over a motion -> ``Result``), ``Platform``
+(``reference_platform()``, ``paper_platform()``, ``Platform.from_toml``), ``Motion`` (and
+``gsfric.models`` for reference motions), ``read_trajectory`` / ``read_measured`` with a
+``LogFormat`` for other programs' logs, ``Evaluator`` for repeated calls, ``columns`` for the
+units and meaning of every output column. ``help(gsfric.evaluate)`` and the README tell more.
 """
 
 from __future__ import annotations
@@ -22,21 +28,34 @@ _LAZY = {
     "evaluate": ("gsfric.evaluation", "evaluate"),
     "reference_platform": ("gsfric.models", "reference_platform"),
     "paper_platform": ("gsfric.models", "paper_platform"),
+    "LogFormat": ("gsfric.io", "LogFormat"),
+    "read_trajectory": ("gsfric.io", "read_trajectory"),
+    "read_measured": ("gsfric.io", "read_measured"),
     "GsfricError": ("gsfric.errors", "GsfricError"),
     "InputError": ("gsfric.errors", "InputError"),
 }
+"""Public names, imported on first use (``import gsfric`` stays fast: no NumPy, no compiler)."""
 
-__all__ = sorted(_LAZY) + ["models", "io", "sweep"]
+_MODULES = ("models", "io", "columns", "catalog", "trajectory", "platform", "evaluation",
+            "native", "stream", "synth", "discovery", "sweep")
+"""Submodules reachable as attributes, e.g. ``gsfric.models.sinusoidal``."""
+
+__all__ = sorted(_LAZY) + ["columns", "io", "models", "sweep"]
 
 
 def __getattr__(name):
+    import importlib
+
     if name in _LAZY:
-        import importlib
-
         module, attr = _LAZY[name]
-        return getattr(importlib.import_module(module), attr)
-    if name in ("models", "io", "trajectory", "platform", "native", "catalog", "sweep"):
-        import importlib
-
+        value = getattr(importlib.import_module(module), attr)
+        globals()[name] = value          # later look-ups skip this function
+        return value
+    if name in _MODULES:
         return importlib.import_module(f"gsfric.{name}")
     raise AttributeError(f"module 'gsfric' has no attribute {name!r}")
+
+
+def __dir__():
+    """Every public name, loaded or not (for ``dir(gsfric)`` and tab completion)."""
+    return sorted(set(globals()) | set(_LAZY) | set(_MODULES))

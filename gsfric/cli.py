@@ -58,6 +58,38 @@ class _Group(click.Group):
             _fail(exc.format_message(), EXIT_INPUT)
 
 
+def _log_options(command=None, *, keep=True):
+    """--column-map, --units, --angles, --keep-columns: how to read a log (gsfric.io.LogFormat)."""
+    if command is None:
+        return lambda c: _log_options(c, keep=keep)
+    options = [
+        click.option("--column-map", metavar="FILE.toml|NAME=COLUMN,...",
+                     help="The log's column for each gsfric column, e.g. "
+                          "'t=C2H time (us),x=pos_x,roll=Roll'; or a TOML file with a "
+                          "[columns] table (and [units], angles, wrap, keep). See docs/logs.md."),
+        click.option("--units", "units_map", metavar="NAME=UNIT,...",
+                     help="Units of the log's columns, by gsfric name, e.g. "
+                          "'t=us,x=mm,y=mm,z=mm,roll=deg' (s ms us ns; m cm mm um; rad deg "
+                          "mrad; N kN) [default: SI]."),
+        click.option("--angles", type=click.Choice(["xyz", "XYZ"]), default=None,
+                     help="Convention of roll, pitch, yaw columns: xyz extrinsic "
+                          "(R = Rz(yaw) Ry(pitch) Rx(roll)) or XYZ intrinsic "
+                          "(R = Rx(roll) Ry(pitch) Rz(yaw)) [default: xyz]."),
+        click.option("--keep-columns", metavar="COLUMN,...",
+                     help="Log columns to copy unchanged into the output (other columns that "
+                          "are not gsfric inputs are ignored, with a note)."),
+    ][:None if keep else 3]
+    for option in reversed(options):
+        command = option(command)
+    return command
+
+
+def _log_format(column_map, units_map, angles, keep_columns):
+    from gsfric.io import LogFormat
+
+    return LogFormat.from_options(column_map, units_map, angles, keep_columns)
+
+
 def _platform(path):
     from gsfric.models import reference_platform
     from gsfric.platform import Platform
@@ -74,12 +106,23 @@ def main():
 @main.command()
 @click.option("--check", is_flag=True, help="Exit 1 if generated/ is stale; write nothing.")
 def derive(check):
-    """Regenerate generated/ from the SymPy derivation in derive/ (needs sympy)."""
+    """Regenerate generated/ from the SymPy derivation in derive/ (needs sympy).
+
+    derive/ is not installed with gsfric (a wheel carries only its output, generated/): this
+    command runs in a source checkout, e.g. after `pip install -e ".[derive]"` there.
+    """
+    checkout = Path(__file__).resolve().parent.parent
+    if not (checkout / "derive" / "build.py").is_file():
+        _fail("`gsfric derive` needs a source checkout of gsfric (derive/ and generated/ are "
+              "not installed, only the generated model is): clone the repository and run "
+              "`pip install -e \".[derive]\"` there")
+    if str(checkout) not in sys.path:
+        sys.path.insert(0, str(checkout))
     try:
         from derive import build
     except ImportError as exc:
-        _fail(f"the derivation needs the derive/ sources and sympy ({exc}); "
-              "install with `pip install -e .[derive]` from the repository")
+        _fail(f"the derivation needs sympy ({exc}); install it with "
+              "`pip install -e \".[derive]\"` in the checkout")
     if check:
         reason = build.is_stale()
         if reason:
@@ -111,18 +154,22 @@ def paper(out_dir, mode, platform_file, no_plots):
 
 @main.command()
 @click.option("--trajectory", type=click.Path(path_type=Path), required=True,
-              help="Trajectory file (CSV or Parquet): t,x,y,z,alpha,beta,gamma or "
-                   "t,x,y,z,qw,qx,qy,qz.")
+              help="Trajectory or measured-data file (CSV or Parquet): t,x,y,z with "
+                   "alpha,beta,gamma, qw,qx,qy,qz or roll,pitch,yaw; other names and units "
+                   "with --column-map and --units.")
 @click.option("--platform", "platform_file", type=click.Path(path_type=Path),
               help="Platform TOML (default: the reference platform).")
 @click.option("--out", type=click.Path(path_type=Path), required=True,
               help="Output file, CSV or Parquet by extension; written to a temporary file "
                    "and renamed when complete.")
 @click.option("--mode", type=click.Choice(["kinematic", "paper"]), default="kinematic",
-              show_default=True)
+              show_default=True,
+              help="kinematic: velocities and accelerations differentiated from the motion; "
+                   "paper: the paper's constant accelerations (its Tables 1-3).")
 @click.option("--strict", is_flag=True,
               help="Fail (exit 1, no output) at the first chunk with a flagged step.")
-@click.option("--threads", type=click.IntRange(1, 64), default=1, show_default=True)
+@click.option("--threads", type=click.IntRange(1, 64), default=1, show_default=True,
+              help="Threads of the compiled evaluation (OpenMP).")
 @click.option("--chunk", type=int, default=100_000, show_default=True,
               help="Steps read, differentiated and evaluated at a time (memory grows with "
                    "it); a file of at most this many rows is read whole.")
@@ -130,9 +177,19 @@ def paper(out_dir, mode, platform_file, no_plots):
               help="Savitzky-Golay window, odd, samples [default: chosen by cross-validation "
                    "on the first chunk].")
 @click.option("--progress/--no-progress", default=None,
-              help="Progress bar on stderr [default: when stderr is a terminal].")
-def simulate(trajectory, platform_file, out, mode, strict, threads, chunk, window, progress):
+              help="A progress bar on stderr, with total and ETA [default: when stderr is a "
+                   "terminal].")
+@click.option("--quiet", is_flag=True,
+              help="No progress bar and no summary line (warnings and errors still go to "
+                   "stderr).")
+@_log_options
+def simulate(trajectory, platform_file, out, mode, strict, threads, chunk, window, progress,
+             quiet, column_map, units_map, angles, keep_columns):
     """Evaluate a motion: actuator forces, reactions and friction at every step.
+
+    The trajectory may be a measured-data file: with F1..F6 the output also has
+    F1_measured..F6_measured and F1_residual..F6_residual (measured minus model).
+    `gsfric columns` lists every output column with its unit.
 
     Long files are streamed: read, differentiated and evaluated chunk by chunk in bounded
     memory. Flagged steps (see the flag column) are reported with their indices in one
@@ -148,11 +205,14 @@ def simulate(trajectory, platform_file, out, mode, strict, threads, chunk, windo
     with warnings.catch_warnings():
         warnings.simplefilter("always", UserWarning)   # GsfricWarning, flags, build, staleness
         warnings.showwarning = show
+        log_format = _log_format(column_map, units_map, angles, keep_columns)
         platform = _platform(platform_file)
         summary = simulate_file(trajectory, out, platform, mode=mode, strict=strict,
                                 chunk=chunk, window=window, n_threads=threads,
-                                progress=progress)
-    click.echo(f"wrote {out} ({summary.steps} steps, {summary.flagged} flagged)")
+                                progress=False if quiet else progress,
+                                log_format=log_format)
+    if not quiet:
+        click.echo(f"wrote {out} ({summary.steps} steps, {summary.flagged} flagged)")
 
 
 @main.command()
@@ -164,13 +224,25 @@ def simulate(trajectory, platform_file, out, mode, strict, threads, chunk, windo
               required=True, help="Directory for summary.json, the report and plots.")
 @click.option("--seed", type=int, default=0, show_default=True,
               help="Seed of the block bootstrap.")
-def discover(measured, platform_file, out_dir, seed):
+@click.option("--progress/--no-progress", default=None,
+              help="A progress bar over the workflow's stages on stderr [default: when stderr "
+                   "is a terminal].")
+@click.option("--quiet", is_flag=True,
+              help="No progress bar and no list of written files (warnings and errors still "
+                   "go to stderr).")
+@_log_options(keep=False)
+def discover(measured, platform_file, out_dir, seed, progress, quiet, column_map, units_map,
+             angles):
     """Find which physical effect the model is missing, fit it, and show the gap shrink."""
     from gsfric.discovery import run_discover
 
-    written = run_discover(measured, platform_file, out_dir, seed=seed)
-    for path in written:
-        click.echo(f"wrote {path}")
+    show = False if quiet else sys.stderr.isatty() if progress is None else progress
+    log_format = _log_format(column_map, units_map, angles, None)
+    written = run_discover(measured, platform_file, out_dir, seed=seed, progress=show,
+                           **({"log_format": log_format} if log_format else {}))
+    if not quiet:
+        for path in written:
+            click.echo(f"wrote {path}")
 
 
 @main.command()
@@ -180,7 +252,8 @@ def discover(measured, platform_file, out_dir, seed):
               help="Platform TOML of the true system (its [effects] are the hidden effects).")
 @click.option("--effect", "effects", multiple=True, metavar="NAME[:param=value,...]",
               help="Hidden effect to add, e.g. stribeck:static=2,velocity=0.01 (repeatable).")
-@click.option("--samples", type=click.IntRange(20), default=4000, show_default=True)
+@click.option("--samples", type=click.IntRange(20), default=4000, show_default=True,
+              help="Number of samples (rows) to write.")
 @click.option("--rate", type=float, default=200.0, show_default=True, help="Sampling rate, Hz.")
 @click.option("--noise", type=float, default=0.1, show_default=True,
               help="Force noise standard deviation, N.")
@@ -188,7 +261,8 @@ def discover(measured, platform_file, out_dir, seed):
               show_default=True, help="AR(1) coefficient of the force noise (0: white).")
 @click.option("--pose-noise", type=float, default=0.0, show_default=True,
               help="Position noise standard deviation, m (angles: the same number in rad).")
-@click.option("--seed", type=int, default=0, show_default=True)
+@click.option("--seed", type=int, default=0, show_default=True,
+              help="Seed of the noise (the same seed gives the same file).")
 def synth(out, platform_file, effects, samples, rate, noise, noise_correlation, pose_noise,
           seed):
     """Write synthetic measured data with hidden effects and noise (reproducible by seed)."""
@@ -289,6 +363,103 @@ def sweep(out_dir, trajectories, workspace, platform_file, vary, tolerance, vari
                                                           if n else ""))
         if n and strict:
             sys.exit(EXIT_CHECK)
+@main.command()
+@click.option("--markdown", is_flag=True, help="As the Markdown table of the README.")
+@click.option("--no-measured", is_flag=True,
+              help="Leave out the columns added for a measured-data input.")
+def columns(markdown, no_measured):
+    """List every output column of `simulate` with its unit and sign convention."""
+    from gsfric import columns as cols
+
+    text = cols.markdown_table(not no_measured) if markdown else cols.listing(not no_measured)
+    click.echo(text)
+
+
+@main.command()
+def effects():
+    """List the catalog of optional effects, with their parameters, defaults and units.
+
+    Switch one on in a platform's [effects] table, e.g. stribeck = { static = 2.0 }, or hide it
+    in synthetic data with `gsfric synth --effect stribeck:static=2`.
+    """
+    from gsfric.catalog import describe
+
+    for effect in describe():
+        click.echo(f"{effect['name']}: {effect['description']}")
+        for p in effect["parameters"]:
+            unit = p["unit"] or "1"
+            click.echo(f"    {p['name']} = {p['default']:g} {unit}  ({p['description']})")
+
+
+@main.command()
+@click.option("--template", is_flag=True, required=True,
+              help="Write a commented, minimal platform TOML (the reference platform's "
+                   "values, units in the comments).")
+@click.option("--out", type=click.Path(dir_okay=False, path_type=Path),
+              help="File to write [default: standard output].")
+def platform(template, out):
+    """Write a platform file to start from: `gsfric platform --template --out my.toml`."""
+    text = _platform_template()
+    if out is None:
+        click.echo(text, nl=False)
+        return
+    from gsfric.io import atomic_write
+
+    with atomic_write(out, "w") as handle:
+        handle.write(text)
+    click.echo(f"wrote {out}")
+
+
+def _platform_template() -> str:
+    """The reference platform as a commented TOML: what `Platform.from_toml` needs, with units."""
+    from gsfric.models import reference_platform
+
+    p = reference_platform()
+    g = p.geometry
+
+    def rows(a):
+        return "\n".join(f"    [{', '.join(repr(float(v)) for v in row)}]," for row in a)
+
+    stroke = "" if g.stroke is None else (
+        f"stroke = [{g.stroke[0]:.6g}, {g.stroke[1]:.6g}]   # m, shortest and longest leg "
+        "(steps outside are flagged)\n")
+    b, f = p.platform, p.friction
+    return f"""# A gsfric platform (SI units, angles in rad). Read with `gsfric simulate --platform FILE`
+# or gsfric.Platform.from_toml(FILE). Required: [geometry] base_joints, platform_joints and
+# [platform] mass, inertia; everything else has the default shown. `gsfric effects` lists
+# the optional [effects].
+
+gravity = {p.gravity:g}                 # m/s^2, along -z of the base frame
+
+[geometry]
+# C_i, the universal joints, in the base frame (m), one row per leg 1..6
+base_joints = [
+{rows(g.base_joints)}
+]
+# E_i, the spherical joints, in the platform frame (m), leg i joins C_i and E_i
+platform_joints = [
+{rows(g.platform_joints)}
+]
+{stroke}
+[platform]
+mass = {b.mass:g}                     # kg, the moving platform
+inertia = [[{b.inertia[0, 0]:g}, 0, 0], [0, {b.inertia[1, 1]:g}, 0], [0, 0, {b.inertia[2, 2]:g}]]   # kg m^2, about its centre of mass, platform frame
+payload_mass = {b.payload_mass:g}              # kg, at payload_com (platform frame, m)
+
+[legs]
+model = "{p.legs.model}"                # "rigid", or "paper": the paper's zone centres at 0.25 D and 0.75 D
+lower_mass = {p.legs.lower_mass:g}               # kg, moves with the universal joint
+upper_mass = {p.legs.upper_mass:g}               # kg, moves with the spherical joint end
+
+[friction]
+joint_viscous = {f.joint_viscous:g}          # c_s, N m s/rad, spherical and universal joints
+joint_coulomb = {f.joint_coulomb:g}          # mu, 1
+joint_radius = {f.joint_radius:g}           # r, m
+prismatic_viscous = {f.prismatic_viscous:g}      # N s/m
+prismatic_coulomb = {f.prismatic_coulomb:g}      # mu, 1
+
+[effects]                       # none switched on; e.g. stribeck = {{ static = 2.0, velocity = 0.01 }}
+"""
 
 
 if __name__ == "__main__":

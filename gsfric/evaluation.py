@@ -125,13 +125,82 @@ class Result:
     def __len__(self) -> int:
         return len(self.t)
 
+    def __dir__(self):
+        return sorted(set(super().__dir__()) | set(self.__dict__.get("arrays", {})))
+
+    def __repr__(self) -> str:
+        n = len(self.t)
+        span = f"t = {self.t[0]:.6g}..{self.t[-1]:.6g} s" if n else "no steps"
+        flagged = int(np.count_nonzero(self.flag))
+        names = ", ".join(sorted(self.arrays))
+        return (f"<Result: {n} steps, {span}, mode {self.mode!r}, {flagged} flagged; "
+                f"arrays {names}>")
+
     def flagged(self) -> np.ndarray:
         """Indices of the steps with a non-zero flag."""
         return np.flatnonzero(self.flag)
 
-    def to_frame(self):
-        """A pandas DataFrame with the columns of ``gsfric simulate`` (SPEC) and more."""
+    def to_legs_frame(self):
+        """Per-joint values as a DataFrame indexed by (step, leg), leg 1..6.
+
+        Columns: every per-leg array of the result, a vector ``(N, 6, 3)`` as three columns
+        ``name_x, name_y, name_z`` (base frame), a scalar ``(N, 6)`` as one column; plus ``t``.
+        ``attrs["units"]`` holds each column's unit (from the manifest).
+
+        Returns
+        -------
+        pandas.DataFrame
+            6 N rows, MultiIndex levels ``step`` (0..N-1) and ``leg`` (1..6).
+        """
         import pandas as pd
+
+        from gsfric.manifest import function
+
+        n = len(self.t)
+        index = pd.MultiIndex.from_product([np.arange(n), np.arange(1, 7)],
+                                           names=["step", "leg"])
+        known = {o["name"]: o.get("unit", "") for o in function("eval")["outputs"]}
+        cols: dict[str, np.ndarray] = {"t": np.repeat(self.t, 6)}
+        units = {"t": "s"}
+        for name, values in self.arrays.items():
+            if values.shape[1:2] != (6,):
+                continue
+            if values.ndim == 2:
+                cols[name] = values.reshape(-1)
+                units[name] = known.get(name, "")
+            elif values.ndim == 3 and values.shape[2] == 3:
+                for j, axis in enumerate("xyz"):
+                    cols[f"{name}_{axis}"] = values[:, :, j].reshape(-1)
+                    units[f"{name}_{axis}"] = known.get(name, "")
+        frame = pd.DataFrame(cols, index=index)
+        frame.attrs["units"] = units
+        return frame
+
+    def to_xarray(self):
+        """The per-joint values as an ``xarray.Dataset`` (dims ``step``, ``leg``); needs xarray.
+
+        The variables and units (``attrs["units"]`` of each) of ``to_legs_frame``.
+        """
+        try:
+            import xarray  # noqa: F401
+        except ModuleNotFoundError:
+            raise GsfricError("Result.to_xarray needs xarray (pip install xarray); "
+                              "Result.to_legs_frame gives the same as a DataFrame") from None
+        frame = self.to_legs_frame()
+        data = frame.to_xarray()
+        for name, unit in frame.attrs["units"].items():
+            data[name].attrs["units"] = unit
+        return data
+
+    def to_frame(self):
+        """A pandas DataFrame with the columns of ``gsfric simulate``, one row per step.
+
+        ``attrs["units"]`` maps every column to its unit and ``attrs["descriptions"]`` to its
+        meaning and sign convention (``gsfric.columns``; ``gsfric columns`` lists them).
+        """
+        import pandas as pd
+
+        from gsfric.columns import annotate
 
         cols = {"t": self.t}
         for i in range(6):
@@ -151,7 +220,7 @@ class Result:
             cols[f"F0_{i + 1}"] = self.F0[:, i]
             cols[f"D{i + 1}"] = self.D[:, i]
         cols["flag"] = self.flag
-        return pd.DataFrame(cols)
+        return annotate(pd.DataFrame(cols))
 
 
 class Evaluator:
@@ -298,6 +367,56 @@ def jacobian_parameters() -> list[str]:
     return list(manifest()["jacobian_parameters"])
 
 
-def evaluate(platform: Platform, motion: Motion, mode: str = "kinematic", **kwargs) -> Result:
-    """Evaluate ``platform`` over ``motion``; see ``Evaluator.evaluate``."""
+def evaluate(platform: Platform, motion, mode: str = "kinematic", **kwargs) -> Result:
+    """Reaction forces and friction in every joint of ``platform`` over a motion.
+
+    Parameters
+    ----------
+    platform : Platform
+        E.g. ``gsfric.reference_platform()`` or ``Platform.from_toml(path)``.
+    motion : Motion or pandas.DataFrame
+        N steps. A DataFrame holds samples with the columns of a trajectory file (``t, x, y,
+        z`` in s and m with ``alpha, beta, gamma`` in rad, ``qw, qx, qy, qz`` or ``roll,
+        pitch, yaw``); it is differentiated as ``gsfric.io.read_trajectory`` does.
+    mode : {"kinematic", "paper"}
+        "kinematic": accelerations from the motion; "paper": the paper's constants.
+    **kwargs
+        ``strict``, ``progress``, ``chunk`` of ``Evaluator.evaluate``; for a DataFrame also
+        ``window``, ``polyorder`` and ``log_format`` (``gsfric.io.motion_from_frame``).
+
+    Returns
+    -------
+    Result
+        Arrays with the step as the leading axis, SI units, base frame: ``F`` (N, 6) N,
+        ``R_E`` (N, 6, 3) N, ... (see ``Result``); ``result.to_frame()`` for a table with units.
+
+    Raises
+    ------
+    InputError
+        A DataFrame with missing or bad columns (one line naming the row and column); a
+        ``motion`` of another type.
+    StepFlagError
+        ``strict=True`` and a flagged step.
+
+    Examples
+    --------
+    >>> import numpy as np, gsfric
+    >>> result = gsfric.evaluate(gsfric.reference_platform(),
+    ...                          gsfric.models.sinusoidal(np.linspace(0, 1, 101)))
+    >>> result.F.shape, result.R_E.shape
+    ((101, 6), (101, 6, 3))
+    """
+    try:
+        import pandas as pd
+    except ModuleNotFoundError:  # pragma: no cover - a dependency
+        pd = None
+    if pd is not None and isinstance(motion, pd.DataFrame):
+        from gsfric.io import motion_from_frame
+
+        reading = {k: kwargs.pop(k) for k in ("window", "polyorder", "log_format")
+                   if k in kwargs}
+        motion = motion_from_frame(motion, **reading)
+    elif not isinstance(motion, Motion):
+        raise InputError(f"motion: expected a gsfric Motion or a pandas DataFrame with "
+                         f"trajectory columns (t, x, y, z, ...), got {type(motion).__name__}")
     return Evaluator(platform, mode=mode).evaluate(motion, **kwargs)

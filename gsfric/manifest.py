@@ -1,6 +1,9 @@
 """The manifest of generated/: functions, their inputs and outputs, the effect catalog.
 
-Read once, on first use. ``GSFRIC_GENERATED`` points to another generated/ directory.
+Read once, on first use. The generated files are package data of ``gsfric._generated``: the
+build maps the repository's top-level generated/ folder there (pyproject.toml), so a wheel holds
+them in ``gsfric/_generated/`` and an editable install reads the checkout's generated/; both are
+found with ``importlib.resources``. ``GSFRIC_GENERATED`` points to another generated/ directory.
 """
 
 from __future__ import annotations
@@ -15,10 +18,37 @@ from gsfric.errors import GsfricError
 BASENAME = "gsfric_model"
 
 
+PACKAGE = "gsfric._generated"
+
+
 def generated_dir() -> Path:
-    """The generated/ directory: ``$GSFRIC_GENERATED`` or the one beside the package."""
+    """The directory of the generated files.
+
+    ``$GSFRIC_GENERATED`` when set; else the resources of the ``gsfric._generated`` package
+    (``gsfric/_generated/`` of an installed wheel, found with ``importlib.resources``); else the
+    generated/ folder beside the package, which is where a source checkout and an editable
+    install keep it (setuptools' editable finder does not import a mapped folder without an
+    ``__init__.py``, so there the checkout's folder is read directly).
+    """
     env = os.environ.get("GSFRIC_GENERATED")
-    return Path(env) if env else Path(__file__).resolve().parent.parent / "generated"
+    if env:
+        return Path(env)
+    return _packaged_dir()
+
+
+@functools.lru_cache(maxsize=None)
+def _packaged_dir() -> Path:
+    import importlib.resources
+
+    try:
+        folder = importlib.resources.files(PACKAGE)
+    except ModuleNotFoundError:
+        folder = None
+    if folder is not None:
+        candidate = folder / "manifest.json"
+        if candidate.is_file():
+            return Path(str(candidate)).parent
+    return Path(__file__).resolve().parent.parent / "generated"
 
 
 @functools.lru_cache(maxsize=None)

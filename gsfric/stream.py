@@ -160,9 +160,14 @@ class _Block:
     columns: dict[str, np.ndarray]
 
 
-def _blocks(path: Path, rows: int) -> Iterator[_Block]:
-    """Validated blocks of the trajectory file; messages name 1-based data rows."""
+def _blocks(path: Path, rows: int, log_format=None, carry=None) -> Iterator[_Block]:
+    """Validated blocks of the trajectory file; messages name 1-based data rows.
+
+    ``carry``: a list to which each block's carried columns (F1..F6 of a measured-data file
+    and ``keep:NAME`` columns) are appended as a dict, in order.
+    """
     kind = gio.check_file(path)
+    reader = gio.ColumnReader(path, log_format)
     frames = _csv_blocks(path, rows) if kind == "csv" else _parquet_blocks(path, rows)
     start = 0
     last_t = None
@@ -173,10 +178,14 @@ def _blocks(path: Path, rows: int) -> Iterator[_Block]:
             if len(set(names)) != len(names):
                 duplicate = next(n for n in names if names.count(n) > 1)
                 raise InputError(f"{path}: column {duplicate!r} appears more than once")
-            orientation = gio._check_columns(path, names, measured=False)
+            orientation = reader.check(names)
         if len(frame) == 0:
             continue
-        columns = gio.numeric_columns(path, frame, names, first_row=start)
+        frame.columns = names
+        columns = reader.read(frame, first_row=start)
+        if carry is not None and (reader.forces or reader.keep):
+            carry.append({k: v for k, v in columns.items()
+                          if k in gio.FORCES or k.startswith("keep:")})
         t = columns["t"]
         with np.errstate(over="ignore", invalid="ignore"):
             steps = np.diff(t if last_t is None else np.concatenate([[last_t], t]))
@@ -294,7 +303,8 @@ def _differentiate(t, position, q, windows, polyorder, step, core: slice,
 
 def iter_motions(path: str | os.PathLike[str], *, chunk: int = DEFAULT_CHUNK,
                  window: int | None = None, polyorder: int = DEFAULT_POLYORDER,
-                 info: dict | None = None) -> Iterator[tuple[int, Motion]]:
+                 info: dict | None = None, log_format=None,
+                 carry: list | None = None) -> Iterator[tuple[int, Motion]]:
     """The trajectory file as consecutive Motions of at most ``chunk`` steps.
 
     Parameters
@@ -310,6 +320,11 @@ def iter_motions(path: str | os.PathLike[str], *, chunk: int = DEFAULT_CHUNK,
         quaternion windows of a streamed file; ``"whole"`` for a file read in one piece with a
         Savitzky-Golay filter (windows as ``Motion.from_samples`` chose them), None for one
         read in one piece with a smoothing spline (non-uniform sampling).
+    log_format : gsfric.io.LogFormat, optional
+        Column map, units and angle convention of the file.
+    carry : list, optional
+        Receives, block by block in file order, the columns carried to the output (F1..F6,
+        ``keep:NAME``) as dicts of arrays.
 
     Yields
     ------
@@ -334,7 +349,7 @@ def iter_motions(path: str | os.PathLike[str], *, chunk: int = DEFAULT_CHUNK,
             and not isinstance(window, bool) and window > chunk:
         raise InputError(f"window = {window} is longer than the chunk of {chunk} steps; "
                          "use a larger chunk")
-    blocks = _blocks(path, chunk)
+    blocks = _blocks(path, chunk, log_format, carry)
 
     # the first chunk, and whether there is more
     first: list[_Block] = []
@@ -508,7 +523,9 @@ class _Writer:
         import pyarrow as pa
         import pyarrow.parquet as pq
 
-        table = pa.Table.from_pandas(frame, preserve_index=False)
+        from gsfric.columns import arrow_table   # field metadata: unit, description
+
+        table = arrow_table(frame)
         if self.parquet is None:
             self.parquet = pq.ParquetWriter(self.handle, table.schema)
         self.parquet.write_table(table)
@@ -527,7 +544,7 @@ def simulate_file(trajectory: str | os.PathLike[str], out: str | os.PathLike[str
                   platform=None, *, mode: str = "kinematic", strict: bool = False,
                   chunk: int = DEFAULT_CHUNK, window: int | None = None,
                   polyorder: int = DEFAULT_POLYORDER, n_threads: int = 1,
-                  progress: bool | None = None) -> Summary:
+                  progress: bool | None = None, log_format=None) -> Summary:
     """Evaluate a trajectory file chunk by chunk and write every step's outputs.
 
     Parameters
@@ -549,6 +566,10 @@ def simulate_file(trajectory: str | os.PathLike[str], out: str | os.PathLike[str
         Threads of the compiled evaluation.
     progress : bool or None
         Progress bar on stderr (tqdm); None: only when stderr is a terminal.
+    log_format : gsfric.io.LogFormat, optional
+        Column map, units, angle convention and carried columns of the file. A file with
+        F1..F6 (measured data) also gets ``F1_measured..F6_measured`` and the residuals
+        ``F1_residual..F6_residual`` (measured minus model) in the output.
 
     Returns
     -------
@@ -581,13 +602,15 @@ def simulate_file(trajectory: str | os.PathLike[str], out: str | os.PathLike[str
 
     summary = Summary(out=out)
     info: dict = {}
+    carry: list[dict] = []
     motions = iter_motions(trajectory, chunk=chunk, window=window, polyorder=polyorder,
-                           info=info)
+                           info=info, log_format=log_format, carry=carry)
     kept: list[np.ndarray] = []
     counts = dict.fromkeys(FLAG_NAMES, 0)
     evaluator = None
-    bar = tqdm(total=parquet_rows(trajectory), unit="step", unit_scale=True, desc="simulate",
-               file=sys.stderr, disable=None if progress is None else not progress,
+    show = sys.stderr.isatty() if progress is None else bool(progress)
+    bar = tqdm(total=gio.count_rows(trajectory) if show else None, unit="step",
+               unit_scale=True, desc="simulate", file=sys.stderr, disable=not show,
                dynamic_ncols=True, leave=False)
     mode_text = "wb" if kind == "parquet" else "w"
     options = {"newline": ""} if kind == "csv" else {}
@@ -617,7 +640,7 @@ def simulate_file(trajectory: str | os.PathLike[str], out: str | os.PathLike[str
                                 summary.flag_message(trajectory)
                                 + " (--strict: stopped at the first chunk with flagged steps; "
                                 "no output written)")
-                    writer.write(result.to_frame())
+                    writer.write(_with_carried(result.to_frame(), _take(carry, len(motion))))
                     del result
                     summary.steps = start + len(motion)
                     summary.chunks += 1
@@ -634,6 +657,47 @@ def simulate_file(trajectory: str | os.PathLike[str], out: str | os.PathLike[str
         warnings.warn(summary.flag_message(trajectory) + f"; see the flag column of {out}",
                       GsfricWarning, stacklevel=2)
     return summary
+
+
+def _take(carry: list[dict], n: int) -> dict[str, np.ndarray]:
+    """The next ``n`` rows of the carried columns (removed from ``carry``)."""
+    parts: list[dict] = []
+    got = 0
+    while got < n and carry:
+        head = carry[0]
+        size = len(next(iter(head.values()))) if head else n - got
+        if got + size <= n:
+            parts.append(carry.pop(0))
+            got += size
+        else:
+            k = n - got
+            parts.append({key: v[:k] for key, v in head.items()})
+            carry[0] = {key: v[k:] for key, v in head.items()}
+            got = n
+    if not parts or not parts[0]:
+        return {}
+    return {key: np.concatenate([p[key] for p in parts]) for key in parts[0]}
+
+
+def _with_carried(frame, carried: dict[str, np.ndarray]):
+    """The output frame with measured forces, residuals and kept columns appended."""
+    extra = {}
+    if "F1" in carried:
+        for i in range(1, 7):
+            extra[f"F{i}_measured"] = carried[f"F{i}"]
+        for i in range(1, 7):
+            extra[f"F{i}_residual"] = carried[f"F{i}"] - frame[f"F{i}"].to_numpy()
+    for key, values in carried.items():
+        if key.startswith("keep:"):
+            name = key[5:]
+            if name in frame.columns or name in extra:
+                name = f"{name}_input"
+            extra[name] = values
+    if not extra:
+        return frame
+    import pandas as pd
+
+    return pd.concat([frame, pd.DataFrame(extra, index=frame.index)], axis=1)
 
 
 def _finish(summary: Summary, kept: list[np.ndarray], counts: dict[int, int]) -> None:

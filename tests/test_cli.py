@@ -140,9 +140,9 @@ BAD_FILES = [
     ("header.csv", "t,x,y,z,qw,qx,qy,qz\n", "no data rows"),
     ("nozcol.csv", _frame_text(T.drop(columns="z")), "missing column 'z'"),
     ("noorient.csv", _frame_text(T.drop(columns=["qw", "qx", "qy", "qz"])),
-     "missing orientation: give columns alpha, beta, gamma or qw, qx, qy, qz"),
+     "missing orientation: give columns alpha, beta, gamma, qw, qx, qy, qz or roll, pitch, yaw"),
     ("typo.csv", _frame_text(T.rename(columns={"qx": "q_x"})),
-     "unknown column 'q_x' (did you mean 'qx'?)"),
+     "missing column 'qx' (is it 'q_x'? map it with --column-map qx=q_x)"),
     ("nan.csv", _set(T, 17, "x", np.nan), "row 17: column 'x' is empty or NaN"),
     ("inf.csv", _set(T, 9, "qw", np.inf), "row 9: column 'qw' is infinite"),
     ("comma.csv", _set(T, 30, "y", "12,5"), "row 30: column 'y' is not a number: '12,5'"),
@@ -157,7 +157,7 @@ BAD_FILES = [
     ("short.csv", _frame_text(T.head(4)), "4 data rows; at least 7 are needed to differentiate "
                                           "the motion"),
     ("measured.csv", _frame_text(T.assign(F1=1.0)),
-     "column 'F1' belongs in a measured-data file, not in a trajectory"),
+     "missing column 'F2' (measured data need F1..F6)"),
     ("bad.parquet", "this is not parquet", "cannot read as Parquet"),
     ("data.txt", "t,x\n", "unknown extension '.txt'; use .csv, .parquet or .pq"),
 ]

@@ -200,8 +200,8 @@ def _with(frame, row, column, value):
 
 @pytest.mark.parametrize("change, message", [
     (lambda f: f.drop(columns="F3"), "missing column 'F3'"),
-    (lambda f: _renamed(f, "F2", "Force2"), "unknown column 'Force2'"),
-    (lambda f: _renamed(f, "qx", "q_x"), "unknown column 'q_x'"),
+    (lambda f: _renamed(f, "F2", "Force2"), "missing column 'F2' (measured data need F1..F6)"),
+    (lambda f: _renamed(f, "qx", "q_x"), "missing column 'qx' (is it 'q_x'?"),
     (lambda f: f.drop(columns=["qw", "qx", "qy", "qz"]), "missing orientation"),
     (lambda f: _with(f, 4, "F2", np.nan), "row 5: column 'F2' is empty or NaN"),
     (lambda f: _with(f, 9, "t", 0.0), "row 10: t = 0.0 is less than"),

@@ -398,7 +398,8 @@ def run_discover(measured: str | os.PathLike[str],
 
     platform = reference_platform() if platform_file is None else Platform.from_toml(
         platform_file)
-    motion, forces, lengths = read_measured(measured)
+    log_format = options.pop("log_format", None)   # column map and units of a log
+    motion, forces, lengths = read_measured(measured, log_format=log_format)
     result = discover(motion, forces, platform, seed=seed, progress=progress, **options)
     if lengths is not None:
         model_lengths = result.result_before.D

@@ -1,0 +1,130 @@
+"""The output columns of ``gsfric simulate`` and ``Result.to_frame``: names, units, meanings.
+
+One source for the units that travel with the data: ``DataFrame.attrs["units"]`` of
+``Result.to_frame``, the Parquet field metadata (``unit``, ``description``) of ``simulate``'s
+output, ``gsfric columns`` and the README's output table.
+
+Legs are numbered 1..6 in column names (index 0..5 in arrays). Frames: "base" is the fixed
+base frame. Sign conventions are stated per column; note that ``Ffr1..Ffr6``, ``MfrE1..``
+and ``MfrC1..`` are the paper's scalars (never positive: negative = opposing the motion),
+``Result.Ffr_s``, ``Result.MfrE_s`` and ``Result.MfrC_s``, while ``Result.Ffr`` is the signed
+friction force along the leg and ``Result.MfrE`` / ``Result.MfrC`` are vectors.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+
+@dataclass(frozen=True)
+class Column:
+    """One output column (or family of six, ``name`` with ``i`` = 1..6)."""
+
+    name: str
+    unit: str
+    description: str
+    group: str
+
+    @property
+    def label(self) -> str:
+        """``F1..F6``, ``REx1..REz6``, ``t``: the family as it is listed."""
+        names = self.names()
+        return names[0] if len(names) == 1 else f"{names[0]}..{names[-1]}"
+
+    def names(self) -> list[str]:
+        """The concrete column names: ``F{i}`` -> F1..F6, ``RE{a}{i}`` -> REx1..REz6."""
+        if "{a}" in self.name:
+            return [self.name.format(a=a, i=i) for i in range(1, 7) for a in "xyz"]
+        if "{i}" in self.name:
+            return [self.name.format(i=i) for i in range(1, 7)]
+        return [self.name]
+
+
+COLUMNS: tuple[Column, ...] = (
+    Column("t", "s", "time of the step (as read from the input, converted to s)", "time"),
+    Column("F{i}", "N", "actuator force of leg i with friction and effects; + pushes the "
+           "platform away from the base (Result.F)", "forces"),
+    Column("MfrE{i}", "N m", "friction moment of spherical joint E_i, the paper's scalar of "
+           "(33): <= 0, negative = opposing (Result.MfrE_s; the vector is Result.MfrE)",
+           "friction"),
+    Column("MfrC{i}", "N m", "friction moment of universal joint C_i, the paper's scalar of "
+           "(34): <= 0, negative = opposing (Result.MfrC_s; the vector is Result.MfrC)",
+           "friction"),
+    Column("Ffr{i}", "N", "friction force of prismatic joint i, the paper's scalar of (35): "
+           "<= 0, negative = opposing (Result.Ffr_s; the signed force along the leg is "
+           "Result.Ffr)", "friction"),
+    Column("RE{a}{i}", "N", "force of leg i on the platform at E_i, base frame "
+           "components x, y, z (Result.R_E)", "reactions"),
+    Column("RC{a}{i}", "N", "force of the base on leg i at C_i, base frame "
+           "components x, y, z (Result.R_C)", "reactions"),
+    Column("MC{i}", "N m", "constraint moment of universal joint i along its normal n_i "
+           "(Result.M_C)", "reactions"),
+    Column("F0_{i}", "N", "actuator force of leg i with frictionless joints; + pushes the "
+           "platform away (Result.F0)", "forces"),
+    Column("D{i}", "m", "length of leg i, C_i to E_i (Result.D)", "legs"),
+    Column("flag", "1", "0 for a sound step; else the sum of 1 (non-finite value), 2 (leg "
+           "length outside the stroke), 4 (near-singular platform Jacobian), 8 (leg near its "
+           "universal joint's first axis)", "flags"),
+)
+"""Every column of ``Result.to_frame``, in order."""
+
+MEASURED: tuple[Column, ...] = (
+    Column("F{i}_measured", "N", "actuator force of leg i as measured (the input's F1..F6, "
+           "converted to N); simulate of a measured-data file only", "measured"),
+    Column("F{i}_residual", "N", "measured minus model actuator force of leg i "
+           "(Fi_measured - Fi); simulate of a measured-data file only", "measured"),
+)
+"""The columns ``simulate`` adds for an input with measured forces F1..F6."""
+
+
+def all_columns(measured: bool = True) -> tuple[Column, ...]:
+    return COLUMNS + (MEASURED if measured else ())
+
+
+def units(measured: bool = True) -> dict[str, str]:
+    """{column name: unit} of every concrete output column (``"1"`` for a pure number)."""
+    return {name: c.unit for c in all_columns(measured) for name in c.names()}
+
+
+def descriptions(measured: bool = True) -> dict[str, str]:
+    """{column name: description} of every concrete output column."""
+    return {name: c.description for c in all_columns(measured) for name in c.names()}
+
+
+def listing(measured: bool = True) -> str:
+    """The plain-text listing of ``gsfric columns``."""
+    rows = [(c.label, c.unit, c.description) for c in all_columns(measured)]
+    width = max(len(r[0]) for r in rows)
+    uw = max(len(r[1]) for r in rows)
+    return "\n".join(f"{n:<{width}}  {u:<{uw}}  {d}" for n, u, d in rows)
+
+
+def markdown_table(measured: bool = True) -> str:
+    """The README's output table (between its ``columns`` markers)."""
+    lines = ["| Column | Unit | Meaning |", "|---|---|---|"]
+    for c in all_columns(measured):
+        lines.append(f"| `{c.label}` | {c.unit} | {c.description} |")
+    return "\n".join(lines)
+
+
+def annotate(frame):
+    """``frame`` with ``attrs["units"]`` (and ``attrs["descriptions"]``) for its known columns."""
+    known_units, known_text = units(), descriptions()
+    frame.attrs["units"] = {c: known_units[c] for c in frame.columns if c in known_units}
+    frame.attrs["descriptions"] = {c: known_text[c] for c in frame.columns if c in known_text}
+    return frame
+
+
+def arrow_table(frame):
+    """A pyarrow Table of ``frame`` with field metadata ``unit`` and ``description``."""
+    import pyarrow as pa
+
+    table = pa.Table.from_pandas(frame, preserve_index=False)
+    known_units, known_text = units(), descriptions()
+    fields = []
+    for f in table.schema:
+        if f.name in known_units:
+            f = f.with_metadata({"unit": known_units[f.name],
+                                 "description": known_text[f.name]})
+        fields.append(f)
+    return table.cast(pa.schema(fields, metadata=table.schema.metadata))
