@@ -299,5 +299,17 @@ def jacobian_parameters() -> list[str]:
 
 
 def evaluate(platform: Platform, motion: Motion, mode: str = "kinematic", **kwargs) -> Result:
-    """Evaluate ``platform`` over ``motion``; see ``Evaluator.evaluate``."""
+    """Evaluate ``platform`` over ``motion``; see ``Evaluator.evaluate``.
+
+    Raises
+    ------
+    TypeError
+        ``platform`` is not a Platform or ``motion`` not a Motion (swapped arguments, None, a
+        NumPy array), in one line saying what to give.
+    ValueError
+        ``chunk`` is not an integer >= 1 (an ``InputError``).
+    """
+    from gsfric._checks import evaluation_arguments
+
+    evaluation_arguments(platform, motion, kwargs.get("chunk", 1))
     return Evaluator(platform, mode=mode).evaluate(motion, **kwargs)

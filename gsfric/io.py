@@ -43,6 +43,10 @@ QUATERNION = ("qw", "qx", "qy", "qz")
 FORCES = tuple(f"F{i}" for i in range(1, 7))
 LENGTHS = tuple(f"D{i}" for i in range(1, 7))
 
+MAX_FORCE = 1e8
+"""Measured actuator forces beyond this magnitude, N (100 MN, far above any hexapod's), are
+refused: a wrong unit or a corrupt file."""
+
 _NAN_WORDS = ("nan", "-nan", "+nan")
 _CSV = (".csv",)
 _PARQUET = (".parquet", ".pq")
@@ -548,6 +552,14 @@ def _read_samples(path: str | os.PathLike[str], measured: bool
     if len(t) < MIN_SAMPLES:
         raise InputError(f"{path}: {len(t)} data rows; at least {MIN_SAMPLES} are needed "
                          "to differentiate the motion")
+    if measured:
+        forces = np.stack([columns[n] for n in FORCES], axis=1)
+        bad_rows, bad_legs = np.nonzero(np.abs(forces) > MAX_FORCE)
+        if len(bad_rows):
+            value = forces[bad_rows[0], bad_legs[0]]
+            raise InputError(f"{path}: row {bad_rows[0] + 1}: column 'F{bad_legs[0] + 1}' = "
+                             f"{value:.4g} N is not a plausible actuator force (|F| > "
+                             f"{MAX_FORCE:g} N); forces must be in N")
     if measured and "D1" in columns:
         lengths = np.stack([columns[n] for n in LENGTHS], axis=1)
         bad_rows, bad_legs = np.nonzero(lengths <= 0)
