@@ -51,6 +51,19 @@ def _stop_signals_as_exceptions():
                 signal.signal(number, handler)
 
 
+@contextlib.contextmanager
+def _one_line_warnings():
+    """Warnings (a rebuilt cache, implausible units, the CasADi fallback) as one line each."""
+    import warnings
+
+    def show(message, category, filename, lineno, file=None, line=None):
+        click.echo(f"gsfric: warning: {message}", err=True)
+
+    with warnings.catch_warnings():
+        warnings.showwarning = show
+        yield
+
+
 def _quiet_broken_pipe() -> None:
     """stdout's reader went away: send the rest to /dev/null and exit 141 without a word."""
     with contextlib.suppress(OSError):
@@ -71,7 +84,7 @@ class _Group(click.Group):
         from gsfric.errors import GsfricError, InputError, Interrupted, StepFlagError
 
         try:
-            with _stop_signals_as_exceptions():
+            with _stop_signals_as_exceptions(), _one_line_warnings():
                 return super().invoke(ctx)
         except Interrupted as exc:
             name = signal.Signals(exc.signum).name
