@@ -706,14 +706,14 @@ def test_200k_steps_in_small_chunks_bounded_memory(tmp_path):
 # -- implausible input: units, bodies, forces (warnings or one-line errors) ----------------------
 
 
-def _samples(t):
+def _unit_samples(t):
     motion = models.sinusoidal(np.asarray(t, float) / (t[-1] - t[0]) * 2.0)
     return motion.position, motion.quaternion()
 
 
 def test_time_in_integer_nanoseconds_warns_with_the_rate(tmp_path):
     t_ns = np.arange(0, 400) * 5_000_000                  # 200 Hz written as integer ns
-    position, q = _samples(t_ns)
+    position, q = _unit_samples(t_ns)
     frame = pd.DataFrame({"t": t_ns})
     frame[["x", "y", "z"]] = position
     frame[["qw", "qx", "qy", "qz"]] = q
@@ -729,7 +729,7 @@ def test_time_in_integer_nanoseconds_warns_with_the_rate(tmp_path):
 def test_sampling_rate_inside_the_range_does_not_warn():
     for rate in (1.5, 200.0, 9e5):
         t = np.arange(50) / rate
-        position, q = _samples(t)
+        position, q = _unit_samples(t)
         with warnings.catch_warnings():
             warnings.simplefilter("error", GsfricWarning)
             Motion.from_samples(t, position, quaternion=q)
@@ -737,7 +737,7 @@ def test_sampling_rate_inside_the_range_does_not_warn():
 
 def test_positions_in_millimetres_warn():
     t = np.arange(50) / 100.0
-    position, q = _samples(t)
+    position, q = _unit_samples(t)
     with pytest.warns(GsfricWarning, match=r"position: up to [0-9.e+]+ m from the base "
                                            r"frame's origin .*positions must be in m, not mm"):
         Motion.from_samples(t, position * 1000.0, quaternion=q)
@@ -776,7 +776,7 @@ def test_body_centre_of_mass_far_outside_warns(platform):
 
 def test_measured_forces_of_1e300_are_refused_with_the_row(tmp_path):
     t = np.arange(50) / 100.0
-    position, q = _samples(t)
+    position, q = _unit_samples(t)
     frame = pd.DataFrame({"t": t})
     frame[["x", "y", "z"]] = position
     frame[["qw", "qx", "qy", "qz"]] = q
@@ -828,7 +828,7 @@ def test_evaluate_arguments(platform):
 
 def test_from_samples_with_lam_on_non_uniform_times():
     t = np.cumsum(np.r_[0.0, np.random.default_rng(1).uniform(0.008, 0.012, 59)])
-    position, q = _samples(t)
+    position, q = _unit_samples(t)
     smooth = Motion.from_samples(t, position, quaternion=q, lam=1e-3)
     rough = Motion.from_samples(t, position, quaternion=q, lam=1e-9)
     assert np.abs(rough.position - position).max() < np.abs(smooth.position - position).max()
