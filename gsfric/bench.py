@@ -58,6 +58,13 @@ TARGETS = {
 }
 
 
+def _ratio(a: float | None, b: float | None) -> float:
+    """a / b, NaN when b is zero or unknown (a time below the clock's resolution)."""
+    if a is None or b is None or not b > 0:
+        return float("nan")
+    return a / b
+
+
 @dataclass
 class Case:
     """One timed case: an implementation on ``threads`` threads over ``steps`` steps.
@@ -79,12 +86,12 @@ class Case:
 
     @property
     def steps_per_second(self) -> float:
-        return self.steps / self.best
+        return _ratio(self.steps, self.best)
 
     @property
     def steps_per_cpu_second(self) -> float | None:
         """Steps per second of CPU time (one-thread cases only)."""
-        return None if self.cpu_best is None else self.steps / self.cpu_best
+        return None if self.cpu_best is None else _ratio(self.steps, self.cpu_best)
 
     def as_dict(self) -> dict:
         out = asdict(self)
@@ -354,10 +361,10 @@ def _ratios(report: Report, sizes) -> dict:
         npy = report.case("numpy", 1, n)
         loop = report.case("loop", 1, n)
         out[str(n)] = {
-            "compiled_vs_numpy": npy.best / c1.best,
-            "compiled_vs_loop": loop.best / c1.best,
-            "two_vs_one_core": c1.best / c2.best,
-            "compiled_vs_numpy_cpu": npy.cpu_best / c1.cpu_best,
+            "compiled_vs_numpy": _ratio(npy.best, c1.best),
+            "compiled_vs_loop": _ratio(loop.best, c1.best),
+            "two_vs_one_core": _ratio(c1.best, c2.best),
+            "compiled_vs_numpy_cpu": _ratio(npy.cpu_best, c1.cpu_best),
         }
     return out
 

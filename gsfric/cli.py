@@ -2,11 +2,17 @@
 
 Every command has ``--help``. Exit codes: 0 success; 1 a check failed (``derive --check``
 found generated/ stale, ``simulate --strict`` found flagged steps); 2 bad input or usage (a
-one-line reason on stderr); 3 an internal or build failure.
+one-line reason on stderr); 3 an internal or build failure (also a full disk); 128 + the
+signal number when stopped by SIGINT (130), SIGHUP (129) or SIGTERM (143), after removing the
+temporary outputs; 141 when the reader of stdout went away (``gsfric bench | head``), quietly.
+See docs/robustness.md.
 """
 
 from __future__ import annotations
 
+import contextlib
+import os
+import signal
 import sys
 from pathlib import Path
 
@@ -15,6 +21,55 @@ import click
 EXIT_CHECK = 1
 EXIT_INPUT = 2
 EXIT_INTERNAL = 3
+EXIT_PIPE = 128 + 13
+
+_STOP_SIGNALS = ("SIGTERM", "SIGHUP")
+
+
+def _raise_interrupted(signum, frame):
+    from gsfric.errors import Interrupted
+
+    raise Interrupted(signum)
+
+
+@contextlib.contextmanager
+def _stop_signals_as_exceptions():
+    """SIGTERM and SIGHUP raise ``Interrupted`` in the main thread, as SIGINT raises
+    KeyboardInterrupt, so that temporary outputs and compiler processes are cleaned up."""
+    previous = {}
+    for name in _STOP_SIGNALS:
+        number = getattr(signal, name, None)
+        if number is None:
+            continue
+        with contextlib.suppress(ValueError, OSError):   # not the main thread
+            previous[number] = signal.signal(number, _raise_interrupted)
+    try:
+        yield
+    finally:
+        for number, handler in previous.items():
+            with contextlib.suppress(ValueError, OSError):
+                signal.signal(number, handler)
+
+
+@contextlib.contextmanager
+def _one_line_warnings():
+    """Warnings (a rebuilt cache, implausible units, the CasADi fallback) as one line each."""
+    import warnings
+
+    def show(message, category, filename, lineno, file=None, line=None):
+        click.echo(f"gsfric: warning: {message}", err=True)
+
+    with warnings.catch_warnings():
+        warnings.showwarning = show
+        yield
+
+
+def _quiet_broken_pipe() -> None:
+    """stdout's reader went away: send the rest to /dev/null and exit 141 without a word."""
+    with contextlib.suppress(OSError):
+        devnull = os.open(os.devnull, os.O_WRONLY)
+        os.dup2(devnull, sys.stdout.fileno())
+    sys.exit(EXIT_PIPE)
 
 
 def _fail(message: str, code: int = EXIT_INPUT) -> None:
@@ -26,10 +81,16 @@ class _Group(click.Group):
     """Turns the library's errors into one-line messages and exit codes."""
 
     def invoke(self, ctx):
-        from gsfric.errors import GsfricError, InputError, StepFlagError
+        from gsfric.errors import GsfricError, InputError, Interrupted, StepFlagError
 
         try:
-            return super().invoke(ctx)
+            with _stop_signals_as_exceptions(), _one_line_warnings():
+                return super().invoke(ctx)
+        except Interrupted as exc:
+            name = signal.Signals(exc.signum).name
+            _fail(f"stopped by {name}; no output was left half-written", 128 + exc.signum)
+        except BrokenPipeError:
+            _quiet_broken_pipe()
         except InputError as exc:
             _fail(str(exc), EXIT_INPUT)
         except StepFlagError as exc:
@@ -38,11 +99,18 @@ class _Group(click.Group):
             _fail(str(exc), EXIT_INTERNAL)
         except KeyboardInterrupt:
             _fail("interrupted; no output was left half-written", 130)
+        except OSError as exc:
+            where = f"{exc.filename}: " if exc.filename else ""
+            _fail(f"{where}{exc.strerror or exc}", EXIT_INTERNAL)
 
     def main(self, args=None, prog_name=None, **kwargs):
         """Usage errors (unknown option, missing argument) as one line too, exit 2."""
         try:
-            return super().main(args, prog_name, standalone_mode=False, **kwargs)
+            result = super().main(args, prog_name, standalone_mode=False, **kwargs)
+            sys.stdout.flush()
+            return result
+        except BrokenPipeError:
+            _quiet_broken_pipe()
         except click.exceptions.NoArgsIsHelpError as exc:
             click.echo(exc.ctx.get_help(), err=True)
             sys.exit(EXIT_INPUT)
@@ -254,7 +322,8 @@ def discover(measured, platform_file, out_dir, seed, progress, quiet, column_map
               help="Hidden effect to add, e.g. stribeck:static=2,velocity=0.01 (repeatable).")
 @click.option("--samples", type=click.IntRange(20), default=4000, show_default=True,
               help="Number of samples (rows) to write.")
-@click.option("--rate", type=float, default=200.0, show_default=True, help="Sampling rate, Hz.")
+@click.option("--rate", type=click.FloatRange(1.0, 1e6), default=200.0, show_default=True,
+              help="Sampling rate, Hz (1 Hz to 1 MHz).")
 @click.option("--noise", type=float, default=0.1, show_default=True,
               help="Force noise standard deviation, N.")
 @click.option("--noise-correlation", type=click.FloatRange(0, 0.999), default=0.0,

@@ -30,3 +30,29 @@ class StepFlagError(GsfricError):
 
 class GsfricWarning(UserWarning):
     """Input that can be used but looks suspicious (angles in degrees, a gimbal-lock jump, ...)."""
+
+
+class OutputError(GsfricError):
+    """An output could not be written completely (a full disk, an I/O error).
+
+    Nothing partial is left: the temporary file or folder is removed and an earlier output of
+    the same name is unchanged. The message is one line naming the path.
+    """
+
+    def __init__(self, message: str) -> None:
+        super().__init__(" ".join(str(message).split()))
+
+
+class Interrupted(BaseException):
+    """A termination signal (SIGINT, SIGTERM, SIGHUP) arrived while a command ran.
+
+    Raised in the main thread by the handlers that ``gsfric.cli`` installs, so that ``finally``
+    blocks and ``except BaseException`` clean-ups (temporary files, compiler processes) run as
+    for Ctrl-C; the command line then exits with 128 + the signal number.
+    """
+
+    def __init__(self, signum: int) -> None:
+        import signal
+
+        self.signum = int(signum)
+        super().__init__(signal.Signals(self.signum).name)

@@ -393,8 +393,11 @@ def evaluate(platform: Platform, motion, mode: str = "kinematic", **kwargs) -> R
     Raises
     ------
     InputError
-        A DataFrame with missing or bad columns (one line naming the row and column); a
-        ``motion`` of another type.
+        A DataFrame with missing or bad columns (one line naming the row and column);
+        ``chunk`` not an integer >= 1.
+    TypeError
+        ``platform`` is not a Platform or ``motion`` not a Motion or DataFrame (swapped
+        arguments, None, a NumPy array), in one line saying what to give.
     StepFlagError
         ``strict=True`` and a flagged step.
 
@@ -416,7 +419,7 @@ def evaluate(platform: Platform, motion, mode: str = "kinematic", **kwargs) -> R
         reading = {k: kwargs.pop(k) for k in ("window", "polyorder", "log_format")
                    if k in kwargs}
         motion = motion_from_frame(motion, **reading)
-    elif not isinstance(motion, Motion):
-        raise InputError(f"motion: expected a gsfric Motion or a pandas DataFrame with "
-                         f"trajectory columns (t, x, y, z, ...), got {type(motion).__name__}")
+    from gsfric._checks import evaluation_arguments
+
+    evaluation_arguments(platform, motion, kwargs.get("chunk", 1))
     return Evaluator(platform, mode=mode).evaluate(motion, **kwargs)

@@ -400,35 +400,33 @@ def run_paper(out_dir: str | os.PathLike[str], mode: str = "paper",
     list of Path
         The files written: table1-3.csv, platform.toml, the plots, report.md.
     """
+    from gsfric.io import output_folder
+
     out = Path(out_dir)
-    try:
-        out.mkdir(parents=True, exist_ok=True)
-    except FileExistsError:
-        raise InputError(f"{out}: exists and is not a directory") from None
-    except OSError as error:
-        raise InputError(f"{out}: cannot create the directory ({error.strerror})") from None
     platform = models.paper_platform() if platform_file is None \
         else Platform.from_toml(platform_file)
     run = evaluate_paper(platform, mode=mode)
     written = []
-    for number in TABLES:
-        path = out / f"table{number}.csv"
-        _write_table(run.ours[number], path)
-        written.append(path)
-    path = out / "platform.toml"
-    platform.to_toml(path)
-    written.append(path)
-    if plots:
+    with output_folder(out, inputs=[platform_file]) as folder:
         for number in TABLES:
-            path = out / f"table{number}.png"
-            png = figure_png(plot_table(run, number))
-            with atomic_write(path, "wb") as handle:
-                handle.write(png)
+            path = folder / f"table{number}.csv"
+            _write_table(run.ours[number], path)
             written.append(path)
-    path = out / "report.md"
-    text = report_text(run, files=[p.name for p in written] + [path.name],
-                       source=None if platform_file is None else f"`{platform_file}`")
-    with atomic_write(path, "w") as handle:
-        handle.write(text)
-    written.append(path)
+        path = folder / "platform.toml"
+        platform.to_toml(path)
+        written.append(path)
+        if plots:
+            for number in TABLES:
+                path = folder / f"table{number}.png"
+                png = figure_png(plot_table(run, number))
+                with atomic_write(path, "wb") as handle:
+                    handle.write(png)
+                written.append(path)
+        path = folder / "report.md"
+        text = report_text(run, files=[p.name for p in written] + [path.name],
+                           source=None if platform_file is None else f"`{platform_file}`")
+        with atomic_write(path, "w") as handle:
+            handle.write(text)
+        written.append(path)
+    written = [out / p.name for p in written]
     return written

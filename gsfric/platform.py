@@ -25,6 +25,7 @@ from __future__ import annotations
 import dataclasses
 import os
 import tomllib
+import warnings
 from collections.abc import Mapping
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -33,7 +34,7 @@ from typing import Any
 import numpy as np
 
 from gsfric._checks import as_array, as_float, fields_equal, short, suggest
-from gsfric.errors import GsfricError, InputError
+from gsfric.errors import GsfricError, GsfricWarning, InputError
 
 LEG_MODELS = ("rigid", "paper")
 """Leg models: ``rigid`` (centres of mass at fixed distances from C_i and E_i) and ``paper``
@@ -57,6 +58,11 @@ LIMITS = {
 _set = object.__setattr__
 _SYMMETRY_TOL = 1e-9
 _UNIT_TOL = 1e-12
+_TRIANGLE_TOL = 1e-9
+
+MAX_JOINT_DISTANCE = 20.0
+"""A joint farther than this from its frame's origin, m, draws a ``GsfricWarning``: lengths
+given in millimetres rather than metres (the largest hexapods measure a few metres)."""
 
 
 def _diag(value: float) -> tuple[tuple[float, ...], ...]:
@@ -72,9 +78,16 @@ def _inertia(value: object, name: str) -> np.ndarray:
         i, j = np.unravel_index(np.argmax(asymmetry), asymmetry.shape)
         raise InputError(f"{name}: not symmetric ([{i}][{j}] = {inertia[i, j]:g} but "
                          f"[{j}][{i}] = {inertia[j, i]:g})")
-    smallest = float(np.linalg.eigvalsh(inertia).min())
+    moments = np.linalg.eigvalsh(inertia)
+    smallest = float(moments.min())
     if smallest < -_SYMMETRY_TOL * scale:
         raise InputError(f"{name}: not positive semi-definite (smallest eigenvalue {smallest:g})")
+    if moments[2] > moments[0] + moments[1] + _TRIANGLE_TOL * scale:
+        warnings.warn(f"{name}: principal moments {moments[0]:.4g}, {moments[1]:.4g}, "
+                      f"{moments[2]:.4g} kg m^2 violate the triangle inequality "
+                      f"({moments[2]:.4g} > {moments[0]:.4g} + {moments[1]:.4g}): no rigid "
+                      "body has them; check the inertia (about the centre of mass, kg m^2)",
+                      GsfricWarning, stacklevel=5)
     return inertia
 
 
@@ -247,6 +260,11 @@ class Legs:
             mass, com, inertia = f"{part}_mass", f"{part}_com", f"{part}_inertia"
             _set(self, mass, as_float(getattr(self, mass), f"legs.{mass}", minimum=0.0))
             _set(self, com, as_float(getattr(self, com), f"legs.{com}"))
+            if getattr(self, com) < 0:
+                joint = "C_i" if part == "lower" else "E_i"
+                raise InputError(f"legs.{com}: {getattr(self, com):g} m puts the {part} part's "
+                                 f"centre of mass beyond its joint {joint}, outside the leg; "
+                                 f"give its distance from {joint} along the leg, >= 0 m")
             _set(self, inertia, _inertia(getattr(self, inertia), f"legs.{inertia}"))
 
     def com_placement(self) -> tuple[float, float, float, float]:
@@ -295,6 +313,37 @@ class Friction:
 
     __eq__ = fields_equal
     __hash__ = None  # type: ignore[assignment]
+
+
+def _check_plausible(p: Platform) -> None:
+    """Warnings (``GsfricWarning``) for values that are possible but most likely in the wrong
+    unit or place: joints beyond ``MAX_JOINT_DISTANCE`` (mm given as m), leg centres of mass
+    beyond the longest leg, the body's centre of mass far outside the platform."""
+    g = p.geometry
+    for name, joints in (("geometry.base_joints", g.base_joints),
+                         ("geometry.platform_joints", g.platform_joints)):
+        far = float(np.linalg.norm(joints, axis=1).max())
+        if far > MAX_JOINT_DISTANCE:
+            warnings.warn(f"{name}: a joint is {far:.4g} m from the origin (more than "
+                          f"{MAX_JOINT_DISTANCE:g} m); lengths must be in m, not mm",
+                          GsfricWarning, stacklevel=4)
+    radius = float(np.linalg.norm(g.platform_joints, axis=1).max())
+    reach = radius + float(np.linalg.norm(g.base_joints, axis=1).max())
+    longest = g.stroke[1] if g.stroke is not None else None
+    if longest is not None and p.legs.model == "rigid":
+        for com in ("lower_com", "upper_com"):
+            value = getattr(p.legs, com)
+            if value > longest:
+                warnings.warn(f"legs.{com}: {value:g} m is longer than the longest leg "
+                              f"(geometry.stroke d_max = {longest:g} m): the centre of mass "
+                              "lies outside the leg", GsfricWarning, stacklevel=4)
+    for name, com in (("platform.com", p.platform.com),
+                      ("platform.payload_com", p.platform.payload_com)):
+        distance = float(np.linalg.norm(com))
+        if reach > 0 and distance > 2 * reach:
+            warnings.warn(f"{name}: {distance:.4g} m from the platform frame origin, more "
+                          f"than twice the hexapod's size ({reach:.4g} m): a centre of mass "
+                          "outside the body (or lengths in mm)?", GsfricWarning, stacklevel=4)
 
 
 def _effects_catalog() -> Mapping[str, Mapping[str, float]]:
@@ -398,6 +447,7 @@ class Platform:
                                  f"got {type(getattr(self, name)).__name__}")
         _set(self, "effects", _effects(self.effects))
         _set(self, "limits", _limits(self.limits))
+        _check_plausible(self)
 
     __eq__ = fields_equal
     __hash__ = None  # type: ignore[assignment]

@@ -17,7 +17,7 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
-from gsfric._checks import as_array, fields_equal
+from gsfric._checks import as_array, as_float, fields_equal
 from gsfric.errors import GsfricWarning, InputError
 
 if TYPE_CHECKING:
@@ -41,6 +41,13 @@ GIMBAL_JUMP = 0.5
 GIMBAL_JUMP rad from its neighbour triggers a warning."""
 
 _ROTATION_TOL = 1e-6
+
+SAMPLING_RATE_RANGE = (1.0, 1e6)
+"""Sampling rates, Hz, outside which ``Motion.from_samples`` warns that t is probably not in
+seconds (integer nanoseconds or milliseconds)."""
+
+MAX_POSITION = 100.0
+"""Positions farther than this from the base frame's origin, m, draw a warning (mm given as m)."""
 
 
 # -- rotations ----------------------------------------------------------------------------------
@@ -198,6 +205,39 @@ def _check_euler(euler: np.ndarray, source: str | None) -> None:
                       "(qw, qx, qy, qz) instead", GsfricWarning, stacklevel=4)
 
 
+def check_units(t: np.ndarray, position: np.ndarray, source: str | None = None,
+                stacklevel: int = 4) -> None:
+    """Warn (``GsfricWarning``) when times or positions look like the wrong unit.
+
+    A mean time step outside 1 us .. 1 s (a sampling rate outside ``SAMPLING_RATE_RANGE``,
+    1 Hz .. 1 MHz) suggests t in ns or ms rather than s; a position beyond ``MAX_POSITION``
+    (100 m) suggests mm rather than m. Warnings, not errors: silence them with
+    ``warnings.filterwarnings("ignore", category=GsfricWarning)`` where such values are meant.
+
+    Parameters
+    ----------
+    t : ndarray, shape (N,)
+        Increasing times, s.
+    position : ndarray, shape (N, 3)
+        m.
+    source : str, optional
+        File name to start the message with.
+    """
+    prefix = f"{source}: " if source else ""
+    if len(t) > 1 and np.isfinite(t[-1] - t[0]):
+        step = (t[-1] - t[0]) / (len(t) - 1)
+        low, high = SAMPLING_RATE_RANGE
+        if step > 0 and not low <= 1.0 / step <= high:
+            warnings.warn(f"{prefix}t: mean time step {step:.4g} s, a sampling rate of "
+                          f"{1.0 / step:.4g} Hz, outside {low:g} Hz .. {high:g} Hz; t must be "
+                          "in s (not ns or ms)", GsfricWarning, stacklevel=stacklevel)
+    far = float(np.abs(position).max()) if len(position) else 0.0
+    if far > MAX_POSITION:
+        warnings.warn(f"{prefix}position: up to {far:.4g} m from the base frame's origin (more "
+                      f"than {MAX_POSITION:g} m); positions must be in m, not mm",
+                      GsfricWarning, stacklevel=stacklevel)
+
+
 def _candidate_windows(n: int, polyorder: int) -> list[int]:
     smallest = polyorder + 2 if polyorder % 2 else polyorder + 3
     largest = min(n, MAX_AUTO_WINDOW)
@@ -233,9 +273,95 @@ def _savgol(y: np.ndarray, window: int, polyorder: int, step: float) -> list[np.
             for k in (0, 1, 2)]
 
 
+SPLINE_GCV_ROWS = 500
+"""Longer non-uniform motions choose each component's smoothing-spline penalty by generalized
+cross-validation on their middle ``SPLINE_GCV_ROWS`` samples only (the penalty balances the
+squared residual per sample against the curvature per unit time, so a block of the same
+sampling gives the same choice), then fit every sample with it: time linear in the rows."""
+
+
+def _divided_difference_coefficients(x: np.ndarray, width: int) -> np.ndarray:
+    """1 / prod_{k != i} (x_i - x_k) over every window of ``width`` consecutive samples."""
+    from numpy.lib.stride_tricks import sliding_window_view
+
+    windows = sliding_window_view(x, width)
+    diffs = windows[:, :, None] - windows[:, None, :]
+    diffs[:, np.arange(width), np.arange(width)] = 1.0
+    return 1.0 / diffs.prod(axis=2)
+
+
+def _natural_spline_system(x: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """The banded design matrix X and penalty E (5, n) of ``make_smoothing_spline`` (unit
+    weights) in the basis of natural cubic splines, built without a loop over samples."""
+    from scipy.interpolate import BSpline
+
+    n = len(x)
+    knots = np.r_[[x[0]] * 3, x, [x[-1]] * 3]
+    b = BSpline.design_matrix(x, knots, 3)
+    X = np.zeros((5, n))
+    for i in range(1, 4):
+        X[i, 2:-2] = b[i: i - 4, 3: -3][np.diag_indices(n - 4)]
+    X[1, 1] = b[0, 0]
+    X[2, :2] = ((x[2] + x[1] - 2 * x[0]) * b[0, 0], b[1, 1] + b[1, 2])
+    X[3, :2] = ((x[2] - x[0]) * b[1, 1], b[2, 2])
+    X[1, -2:] = (b[-3, -3], (x[-1] - x[-3]) * b[-2, -2])
+    X[2, -2:] = (b[-2, -3] + b[-2, -2], (2 * x[-1] - x[-2] - x[-3]) * b[-1, -1])
+    X[3, -2] = b[-1, -1]
+    E = np.zeros((5, n))
+    E[2:, 0] = _divided_difference_coefficients(x[:3], 3)[0]
+    E[1:, 1] = _divided_difference_coefficients(x[:4], 4)[0]
+    E[:, 2:-2] = ((x[4:] - x[:-4])[:, None] * _divided_difference_coefficients(x, 5)).T
+    E[:-1, -2] = -_divided_difference_coefficients(x[-4:], 4)[0]
+    E[:-2, -1] = _divided_difference_coefficients(x[-3:], 3)[0]
+    return X, 6 * E
+
+
+def _gcv_penalty(t: np.ndarray, y: np.ndarray) -> float | None:
+    """The penalty ``make_smoothing_spline(t, y)`` chooses by GCV, or None when SciPy's
+    internal GCV search is not available."""
+    try:
+        from scipy.interpolate._bsplines import _compute_optimal_gcv_parameter
+    except ImportError:
+        return None
+    X, E = _natural_spline_system(t)
+    try:
+        lam = float(_compute_optimal_gcv_parameter(X, E, y, np.ones(len(t))))
+    except (TypeError, ValueError):
+        return None
+    return lam if np.isfinite(lam) and lam >= 0 else None
+
+
+def _smoothing_splines(t: np.ndarray, y: np.ndarray, penalties: list[float]):
+    """``make_smoothing_spline(t, y[:, j], lam=penalties[j])`` for every column at once (one
+    set-up of the banded system), as one BSpline with a trailing axis of columns."""
+    from scipy.interpolate import BSpline
+    from scipy.linalg import solve_banded
+
+    X, E = _natural_spline_system(t)
+    c = np.stack([solve_banded((2, 2), X + lam * E, y[:, j])
+                  for j, lam in enumerate(penalties)], axis=1)
+    k = np.r_[[t[0]] * 3, t, [t[-1]] * 3]
+    c0, c1, cm0, cm1 = c[0:1], c[1:2], c[-1:], c[-2:-1]
+    coefficients = np.r_[c0 * (k[5] + k[4] - 2 * k[3]) + c1, c0 * (k[5] - k[3]) + c1,
+                         c[1:-1], cm0 * (k[-4] - k[-6]) + cm1,
+                         cm0 * (2 * k[-4] - k[-5] - k[-6]) + cm1]
+    return BSpline.construct_fast(k, coefficients, 3, axis=0)
+
+
 def _spline(t: np.ndarray, y: np.ndarray, lam: float | None) -> list[np.ndarray]:
     from scipy.interpolate import make_smoothing_spline
 
+    n = len(t)
+    if n > SPLINE_GCV_ROWS:
+        if lam is None:
+            start = (n - SPLINE_GCV_ROWS) // 2
+            block = slice(start, start + SPLINE_GCV_ROWS)
+            penalties = [_gcv_penalty(t[block], y[block, j]) for j in range(y.shape[1])]
+        else:
+            penalties = [lam] * y.shape[1]
+        if all(p is not None for p in penalties):
+            spline = _smoothing_splines(t, y, penalties)
+            return [spline.derivative(k)(t) if k else spline(t) for k in (0, 1, 2)]
     columns = [make_smoothing_spline(t, y[:, j], lam=lam) for j in range(y.shape[1])]
     return [np.stack([c.derivative(k)(t) if k else c(t) for c in columns], axis=1)
             for k in (0, 1, 2)]
@@ -396,6 +522,7 @@ class Motion:
             raise InputError(f"{_where(source, bad[:1] + 1)}: t does not increase")
         if not np.isfinite(t[-1] - t[0]):
             raise InputError("t spans too large a range")
+        check_units(t, position, source, stacklevel=5)
 
         if euler is not None:
             euler = as_array(euler, (n, 3), "euler")

@@ -54,7 +54,7 @@ def test_evaluate_rejects_a_bad_frame_in_one_line(platform):
     frame.loc[7, "y"] = np.nan
     with pytest.raises(InputError, match=r"^DataFrame: row 8: column 'y' is empty or NaN$"):
         gsfric.evaluate(platform, frame)
-    with pytest.raises(InputError, match="expected a gsfric Motion or a pandas DataFrame"):
+    with pytest.raises(TypeError, match="motion must be a gsfric.Motion or a pandas DataFrame"):
         gsfric.evaluate(platform, frame.to_numpy())
 
 

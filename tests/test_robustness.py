@@ -701,3 +701,170 @@ def test_200k_steps_in_small_chunks_bounded_memory(tmp_path):
     np.testing.assert_array_equal(t["t"].to_numpy(), np.arange(200_000) / 1000.0)
     assert np.isfinite(t["F1"]).all() and not t["flag"].any()
     assert figures["peak_rss_mb"] < 600, figures
+
+
+# -- implausible input: units, bodies, forces (warnings or one-line errors) ----------------------
+
+
+def _unit_samples(t):
+    motion = models.sinusoidal(np.asarray(t, float) / (t[-1] - t[0]) * 2.0)
+    return motion.position, motion.quaternion()
+
+
+def test_time_in_integer_nanoseconds_warns_with_the_rate(tmp_path):
+    t_ns = np.arange(0, 400) * 5_000_000                  # 200 Hz written as integer ns
+    position, q = _unit_samples(t_ns)
+    frame = pd.DataFrame({"t": t_ns})
+    frame[["x", "y", "z"]] = position
+    frame[["qw", "qx", "qy", "qz"]] = q
+    path = tmp_path / "ns.csv"
+    write_table(frame, path)
+    with pytest.warns(GsfricWarning) as record:
+        read_trajectory(path)
+    messages = [str(w.message) for w in record]
+    assert f"{path}: t: mean time step 5e+06 s, a sampling rate of 2e-07 Hz, outside 1 Hz .. " \
+           "1e+06 Hz; t must be in s (not ns or ms)" in messages
+
+
+def test_sampling_rate_inside_the_range_does_not_warn():
+    for rate in (1.5, 200.0, 9e5):
+        t = np.arange(50) / rate
+        position, q = _unit_samples(t)
+        with warnings.catch_warnings():
+            warnings.simplefilter("error", GsfricWarning)
+            Motion.from_samples(t, position, quaternion=q)
+
+
+def test_positions_in_millimetres_warn():
+    t = np.arange(50) / 100.0
+    position, q = _unit_samples(t)
+    with pytest.warns(GsfricWarning, match=r"position: up to [0-9.e+]+ m from the base "
+                                           r"frame's origin .*positions must be in m, not mm"):
+        Motion.from_samples(t, position * 1000.0, quaternion=q)
+
+
+def test_platform_in_millimetres_warns(platform):
+    geometry = platform.geometry
+    with pytest.warns(GsfricWarning, match=r"geometry\.base_joints: a joint is \d+(\.\d+)? m "
+                                           r"from the origin .*lengths must be in m, not mm"):
+        platform.with_geometry(base_joints=geometry.base_joints * 1000.0,
+                               platform_joints=geometry.platform_joints * 1000.0, stroke=None)
+
+
+def test_inertia_violating_the_triangle_inequality_warns(platform):
+    with pytest.warns(GsfricWarning, match=r"platform\.inertia: principal moments 1, 1, 5 kg "
+                                           r"m\^2 violate the triangle inequality \(5 > 1 \+ 1"):
+        platform.with_body(inertia=np.diag([1.0, 1.0, 5.0]))
+    with warnings.catch_warnings():                        # a thin rod is the limit: fine
+        warnings.simplefilter("error", GsfricWarning)
+        platform.with_body(inertia=np.diag([1.0, 1.0, 0.0]))
+
+
+def test_leg_centre_of_mass_outside_the_leg(platform):
+    with pytest.raises(InputError, match=r"^legs\.lower_com: -5 m puts the lower part's centre "
+                                         r"of mass beyond its joint C_i, outside the leg"):
+        platform.with_legs(lower_com=-5)
+    with pytest.warns(GsfricWarning, match=r"legs\.upper_com: 3 m is longer than the longest "
+                                           r"leg \(geometry\.stroke d_max = 1\.1 m\)"):
+        platform.with_legs(upper_com=3.0)
+
+
+def test_body_centre_of_mass_far_outside_warns(platform):
+    with pytest.warns(GsfricWarning, match=r"platform\.com: 50 m from the platform frame origin"):
+        platform.with_body(com=[0.0, 0.0, 50.0])
+
+
+def test_measured_forces_of_1e300_are_refused_with_the_row(tmp_path):
+    t = np.arange(50) / 100.0
+    position, q = _unit_samples(t)
+    frame = pd.DataFrame({"t": t})
+    frame[["x", "y", "z"]] = position
+    frame[["qw", "qx", "qy", "qz"]] = q
+    for i in range(1, 7):
+        frame[f"F{i}"] = 10.0
+    frame.loc[7, "F3"] = 1e300
+    path = tmp_path / "m.csv"
+    write_table(frame, path)
+    from gsfric.io import read_measured
+
+    with pytest.raises(InputError, match=r"m\.csv: row 8: column 'F3' = 1e\+300 N is not a "
+                                         r"plausible actuator force \(\|F\| > 1e\+08 N\)"):
+        read_measured(path)
+
+
+def test_synth_rate_outside_the_range_exit_2(tmp_path):
+    from click.testing import CliRunner
+
+    from gsfric.cli import main
+
+    result = CliRunner().invoke(main, ["synth", "--out", str(tmp_path / "m.csv"), "--rate",
+                                       "1e-300"])
+    assert result.exit_code == 2
+    assert "Invalid value for '--rate': 1e-300 is not in the range 1.0<=x<=1000000.0" in \
+        result.stderr
+    assert not (tmp_path / "m.csv").exists()
+
+
+# -- API misuse: one-line TypeError / ValueError ---------------------------------------------
+
+
+def test_evaluate_arguments(platform):
+    motion = models.sinusoidal(np.linspace(0.0, 1.0, 11))
+    with pytest.raises(TypeError, match=r"^evaluate\(platform, motion\): the arguments are "
+                                        r"swapped; give the Platform first, then the Motion$"):
+        gsfric.evaluate(motion, platform)
+    with pytest.raises(TypeError, match=r"^evaluate: platform must be a gsfric\.Platform, "
+                                        r"got None"):
+        gsfric.evaluate(None, motion)
+    with pytest.raises(TypeError, match=r"^evaluate: motion must be a gsfric\.Motion or a pandas "
+                                        r"DataFrame of trajectory columns, got a NumPy array of shape \(3, 24\); for states"):
+        gsfric.evaluate(platform, np.zeros((3, 24)))
+    with pytest.raises(ValueError, match=r"^chunk: must be an integer >= 1 \(steps per call\), "
+                                         r"got 0$"):
+        gsfric.evaluate(platform, motion, chunk=0)
+    np.testing.assert_array_equal(gsfric.evaluate(platform, motion, chunk=4).F,
+                                  gsfric.evaluate(platform, motion).F)
+
+
+def test_from_samples_with_lam_on_non_uniform_times():
+    t = np.cumsum(np.r_[0.0, np.random.default_rng(1).uniform(0.008, 0.012, 59)])
+    position, q = _unit_samples(t)
+    smooth = Motion.from_samples(t, position, quaternion=q, lam=1e-3)
+    rough = Motion.from_samples(t, position, quaternion=q, lam=1e-9)
+    assert np.abs(rough.position - position).max() < np.abs(smooth.position - position).max()
+    with pytest.raises(InputError, match=r"^lam: must be >= 0, got -1$"):
+        Motion.from_samples(t, position, quaternion=q, lam=-1.0)
+
+
+def test_long_non_uniform_spline_equals_scipy_with_the_block_penalties():
+    """Above SPLINE_GCV_ROWS, the penalty comes from the middle block and the fit of every
+    sample is make_smoothing_spline's with it (same numbers, one banded set-up)."""
+    from scipy.interpolate import make_smoothing_spline
+
+    from gsfric import trajectory as tr
+
+    rng = np.random.default_rng(3)
+    n = tr.SPLINE_GCV_ROWS + 700
+    t = np.cumsum(rng.uniform(0.5, 1.5, n)) * 0.01
+    y = np.stack([np.sin(t * (j + 1)) + 1e-3 * rng.standard_normal(n) for j in range(3)], 1)
+    got = tr._spline(t, y, None)
+    start = (n - tr.SPLINE_GCV_ROWS) // 2
+    block = slice(start, start + tr.SPLINE_GCV_ROWS)
+    for j in range(3):
+        lam = tr._gcv_penalty(t[block], y[block, j])
+        whole_block = make_smoothing_spline(t[block], y[block, j])   # GCV inside SciPy
+        np.testing.assert_allclose(make_smoothing_spline(t[block], y[block, j], lam=lam)(t[block]),
+                                   whole_block(t[block]), rtol=0, atol=1e-12)
+        reference = make_smoothing_spline(t, y[:, j], lam=lam)
+        for k in range(3):
+            expected = reference.derivative(k)(t) if k else reference(t)
+            np.testing.assert_allclose(got[k][:, j], expected, rtol=1e-9,
+                                       atol=1e-9 * np.abs(expected).max())
+
+
+def test_bench_ratio_of_a_zero_time_is_nan():
+    from gsfric.bench import Case, _ratio
+
+    assert np.isnan(_ratio(1.0, 0.0)) and np.isnan(_ratio(None, 1.0)) and _ratio(6.0, 2.0) == 3
+    case = Case("compiled", 1, 40, best=0.0, cpu_best=0.0)
+    assert np.isnan(case.steps_per_second) and np.isnan(case.steps_per_cpu_second)

@@ -345,22 +345,24 @@ def _output_dir(out_dir: str | os.PathLike[str]) -> Path:
 def write(d: Discovery, out_dir: str | os.PathLike[str], *, source: str = "",
           platform_source: str = "", figures: bool = True) -> list[Path]:
     """Write summary.json, report.md and (with ``figures``) the plots."""
-    out = _output_dir(out_dir)
+    from gsfric.io import output_folder
+
     written = []
-    path = out / "summary.json"
-    data = summary(d)
-    data["data"]["file"] = source or None
-    with atomic_write(path) as handle:
-        json.dump(data, handle, indent=2, allow_nan=False)
-        handle.write("\n")
-    written.append(path)
-    path = out / "report.md"
-    with atomic_write(path) as handle:
-        handle.write(report(d, source, platform_source))
-    written.append(path)
-    if figures:
-        written += plots(d, out)
-    return written
+    with output_folder(out_dir, inputs=[source or None, platform_source or None]) as out:
+        path = out / "summary.json"
+        data = summary(d)
+        data["data"]["file"] = source or None
+        with atomic_write(path) as handle:
+            json.dump(data, handle, indent=2, allow_nan=False)
+            handle.write("\n")
+        written.append(path)
+        path = out / "report.md"
+        with atomic_write(path) as handle:
+            handle.write(report(d, source, platform_source))
+        written.append(path)
+        if figures:
+            written += plots(d, out)
+    return [Path(out_dir) / p.name for p in written]
 
 
 def run_discover(measured: str | os.PathLike[str],

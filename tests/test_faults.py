@@ -1,0 +1,521 @@
+"""Fault injection: full disks, signals, a damaged compiled-library cache, broken compilers.
+
+Each test provokes one failure and checks what the user gets (one line, the documented exit
+code) and what is left on disk (nothing partial, earlier outputs unchanged, no temporary file,
+no compiler process). Faults that would disturb the session's own compiled library (its
+``functools.lru_cache``) run in fresh processes with their own ``GSFRIC_CACHE``.
+See docs/robustness.md, section 8.
+"""
+
+from __future__ import annotations
+
+import errno
+import json
+import os
+import shutil
+import signal
+import stat
+import subprocess
+import sys
+import textwrap
+import time
+from pathlib import Path
+
+import numpy as np
+import pandas as pd
+import pytest
+from click.testing import CliRunner
+
+from gsfric import models, native
+from gsfric.cli import main
+from gsfric.errors import InputError, OutputError
+from gsfric.io import (atomic_write, output_folder, read_table, read_trajectory,
+                       remove_stale_temporaries, write_table)
+
+ROOT = Path(__file__).resolve().parent.parent
+
+
+def run(*args):
+    return CliRunner().invoke(main, [str(a) for a in args], catch_exceptions=False)
+
+
+def one_error(stderr: str, code: int, result_code: int) -> str:
+    assert result_code == code, (result_code, stderr)
+    got = [line for line in stderr.splitlines()
+           if line and not line.startswith(("gsfric: warning: generated/ is stale",
+                                            "gsfric: compiling"))]
+    assert len(got) == 1, stderr
+    assert got[0].startswith("gsfric: error: "), got[0]
+    return got[0][len("gsfric: error: "):]
+
+
+def leftovers(folder: Path) -> list[str]:
+    return sorted(p.name for p in folder.rglob("*") if ".gsfric-" in p.name)
+
+
+def trajectory_frame(n: int = 400, rate: float = 100.0) -> pd.DataFrame:
+    t = np.arange(n) / rate
+    motion = models.sinusoidal(t)
+    frame = pd.DataFrame({"t": t})
+    frame[["x", "y", "z"]] = motion.position
+    frame[["qw", "qx", "qy", "qz"]] = motion.quaternion()
+    return frame
+
+
+def env(**changes) -> dict:
+    out = dict(os.environ)
+    for key, value in changes.items():
+        if value is None:
+            out.pop(key, None)
+        else:
+            out[key] = str(value)
+    return out
+
+
+def gone(pid: int) -> bool:
+    """The process has exited (a zombie waiting for a parent that is not gsfric counts)."""
+    try:
+        status = Path(f"/proc/{pid}/status").read_text()
+    except FileNotFoundError:
+        return True
+    return "State:\tZ" in status or "State:\tX" in status
+
+
+def all_gone(pids, wait: float = 20.0) -> bool:
+    """Every process has exited, allowing a killed one ``wait`` s to be scheduled and exit (on
+    a loaded machine a SIGKILLed process needs CPU time to finish)."""
+    deadline = time.monotonic() + wait
+    while not all(gone(int(p)) for p in pids):
+        if time.monotonic() > deadline:
+            return False
+        time.sleep(0.05)
+    return True
+
+
+# -- a full disk: injected ENOSPC ---------------------------------------------------------------
+
+
+@pytest.fixture
+def disk_full(monkeypatch):
+    """Every fsync fails with ENOSPC, as on a full disk (data written, then not flushable)."""
+    def fsync(fd):
+        raise OSError(errno.ENOSPC, os.strerror(errno.ENOSPC))
+
+    monkeypatch.setattr(os, "fsync", fsync)
+
+
+def test_full_disk_table_one_line_old_file_kept(tmp_path, disk_full):
+    out = tmp_path / "o.csv"
+    out.write_text("earlier\n")
+    with pytest.raises(OutputError) as info:
+        write_table(trajectory_frame(20), out)
+    assert str(info.value) == (f"{out}: cannot write (No space left on device); nothing was "
+                               "written, an earlier file of that name is unchanged")
+    assert out.read_text() == "earlier\n" and leftovers(tmp_path) == []
+
+
+def _trajectory_file(tmp_path: Path, n: int = 400) -> Path:
+    path = tmp_path / "t.csv"
+    trajectory_frame(n).to_csv(path, index=False)
+    return path
+
+
+@pytest.mark.parametrize("suffix", [".csv", ".parquet"])
+def test_full_disk_simulate_exit_3(tmp_path, monkeypatch, suffix):
+    path = _trajectory_file(tmp_path)
+    out = tmp_path / f"o{suffix}"
+    def fsync(fd):
+        raise OSError(errno.ENOSPC, os.strerror(errno.ENOSPC))
+
+    monkeypatch.setattr(os, "fsync", fsync)
+    result = run("simulate", "--trajectory", path, "--out", out, "--chunk", "100")
+    message = one_error(result.stderr, 3, result.exit_code)
+    assert message.startswith(f"{out}: cannot write (No space left on device)")
+    assert not out.exists() and leftovers(tmp_path) == []
+
+
+def test_full_disk_synth_exit_3(tmp_path, disk_full):
+    out = tmp_path / "m.csv"
+    result = run("synth", "--out", out, "--samples", "50")
+    assert one_error(result.stderr, 3, result.exit_code).startswith(f"{out}: cannot write")
+    assert not out.exists() and leftovers(tmp_path) == []
+
+
+def test_full_disk_paper_leaves_no_partial_set(tmp_path, monkeypatch):
+    """A later file fails: neither the earlier ones nor the folder appear."""
+    out = tmp_path / "pp"
+    real, calls = os.fsync, []
+
+    def fsync(fd):
+        calls.append(fd)
+        if len(calls) == 3:
+            raise OSError(errno.ENOSPC, os.strerror(errno.ENOSPC))
+        real(fd)
+
+    monkeypatch.setattr(os, "fsync", fsync)
+    result = run("paper", "--out", out, "--no-plots")
+    message = one_error(result.stderr, 3, result.exit_code)
+    assert message.startswith(f"{out}/table2.csv: cannot write (No space left on device)")
+    assert not out.exists() and leftovers(tmp_path) == []
+
+
+def test_full_disk_paper_into_existing_folder_keeps_earlier_set(tmp_path, monkeypatch):
+    out = tmp_path / "pp"
+    assert run("paper", "--out", out, "--no-plots").exit_code == 0
+    before = {p.name: p.read_bytes() for p in out.iterdir()}
+    (out / "notes.txt").write_text("mine")
+    real, calls = os.fsync, []
+
+    def fsync(fd):
+        if stat.S_ISREG(os.fstat(fd).st_mode):
+            calls.append(fd)
+            if len(calls) == 3:                    # the third file of the set
+                raise OSError(errno.ENOSPC, os.strerror(errno.ENOSPC))
+        real(fd)
+
+    monkeypatch.setattr(os, "fsync", fsync)
+    result = run("paper", "--out", out, "--no-plots", "--mode", "kinematic")
+    one_error(result.stderr, 3, result.exit_code)
+    assert {p.name: p.read_bytes() for p in out.iterdir() if p.name != "notes.txt"} == before
+    assert (out / "notes.txt").read_text() == "mine" and leftovers(tmp_path) == []
+
+
+def test_output_folder_moves_the_whole_set_or_nothing(tmp_path):
+    out = tmp_path / "set"
+    with pytest.raises(RuntimeError):
+        with output_folder(out) as folder:
+            (folder / "a.txt").write_text("a")
+            raise RuntimeError("stop")
+    assert not out.exists() and leftovers(tmp_path) == []
+    with output_folder(out) as folder:
+        (folder / "a.txt").write_text("a")
+        (folder / "b.txt").write_text("b")
+    assert sorted(p.name for p in out.iterdir()) == ["a.txt", "b.txt"]
+    assert leftovers(tmp_path) == []
+
+
+def test_small_filesystem_really_full(tmp_path):
+    """A 64 kB tmpfs (needs the right to mount; skipped otherwise)."""
+    mount = tmp_path / "small"
+    mount.mkdir()
+    made = subprocess.run(["mount", "-t", "tmpfs", "-o", "size=64k", "tmpfs", str(mount)],
+                          capture_output=True)
+    if made.returncode:
+        pytest.skip("cannot mount a small tmpfs here")
+    try:
+        path = _trajectory_file(tmp_path, 3000)
+        out = mount / "o.csv"
+        result = run("simulate", "--trajectory", path, "--out", out)
+        message = one_error(result.stderr, 3, result.exit_code)
+        assert message.startswith(f"{out}: cannot write (No space left on device)")
+        assert list(mount.iterdir()) == []
+    finally:
+        subprocess.run(["umount", str(mount)], check=False)
+
+
+# -- unwritable paths, links, inputs as outputs -------------------------------------------------
+
+
+def test_paper_refuses_to_overwrite_its_platform_input(tmp_path):
+    out = tmp_path / "pp"
+    out.mkdir()
+    source = out / "platform.toml"
+    models.reference_platform().to_toml(source)
+    text = source.read_text() + "# my comment\n"
+    source.write_text(text)
+    result = run("paper", "--out", out, "--platform", source, "--no-plots")
+    message = one_error(result.stderr, 2, result.exit_code)
+    assert message == (f"{out}: writing platform.toml would replace the input file {source}; "
+                       "choose another output directory")
+    assert source.read_text() == text
+    assert sorted(p.name for p in out.iterdir()) == ["platform.toml"]
+    assert leftovers(tmp_path) == []
+
+
+def test_out_link_writes_the_target_and_keeps_the_link(tmp_path):
+    target = tmp_path / "real.csv"
+    target.write_text("old\n")
+    link = tmp_path / "link.csv"
+    link.symlink_to(target)
+    write_table(trajectory_frame(10), link)
+    assert link.is_symlink() and os.readlink(link) == str(target)
+    assert len(read_table(target)) == 10
+
+
+def test_symlink_loop_is_named(tmp_path):
+    a, b = tmp_path / "a.csv", tmp_path / "b.csv"
+    a.symlink_to(b)
+    b.symlink_to(a)
+    with pytest.raises(InputError, match=r"a\.csv: symbolic link loop"):
+        read_trajectory(a)
+    with pytest.raises(InputError, match=r"a\.csv: symbolic link loop"):
+        write_table(trajectory_frame(10), a)
+
+
+def test_out_in_a_file_not_a_directory(tmp_path):
+    (tmp_path / "file").write_text("x")
+    with pytest.raises(InputError, match="is not a directory"):
+        write_table(trajectory_frame(10), tmp_path / "file" / "o.csv")
+
+
+# -- temporary files of dead processes ----------------------------------------------------------
+
+
+def _dead_pid() -> int:
+    proc = subprocess.Popen([sys.executable, "-c", "pass"])
+    proc.wait()
+    return proc.pid
+
+
+def test_stale_temporaries_of_dead_runs_are_removed(tmp_path):
+    out = tmp_path / "o.csv"
+    dead = tmp_path / f".o.csv.gsfric-{_dead_pid()}-abc123.tmp"
+    dead.write_text("partial")
+    dead_folder = tmp_path / f".o.csv.gsfric-{_dead_pid()}-def456.tmp"
+    dead_folder.mkdir()
+    (dead_folder / "x").write_text("partial")
+    alive = tmp_path / f".o.csv.gsfric-{os.getpid()}-zzz999.tmp"
+    alive.write_text("a run still writing")
+    other = tmp_path / f".p.csv.gsfric-{_dead_pid()}-abc123.tmp"
+    other.write_text("another output's")
+    write_table(trajectory_frame(10), out)
+    assert not dead.exists() and not dead_folder.exists()
+    assert alive.exists() and other.exists()
+    assert remove_stale_temporaries(tmp_path / "p.csv") == [other]
+
+
+# -- signals to a running command ---------------------------------------------------------------
+
+SLOW_SIMULATE = textwrap.dedent("""
+    import sys, time
+    from gsfric.evaluation import Evaluator
+    original = Evaluator.evaluate
+    def slow(self, motion, **kwargs):
+        time.sleep(0.3)
+        return original(self, motion, **kwargs)
+    Evaluator.evaluate = slow
+    from gsfric.cli import main
+    main(sys.argv[1:])
+""")
+
+
+def _start_slow_simulate(tmp_path: Path) -> tuple[subprocess.Popen, Path]:
+    path = _trajectory_file(tmp_path, 3000)
+    out = tmp_path / "o.csv"
+    out.write_text("earlier output\n")
+    proc = subprocess.Popen([sys.executable, "-c", SLOW_SIMULATE, "simulate", "--trajectory",
+                             str(path), "--out", str(out), "--chunk", "100", "--no-progress"],
+                            stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    deadline = time.monotonic() + 120
+    while not leftovers(tmp_path):
+        assert proc.poll() is None, proc.communicate()
+        assert time.monotonic() < deadline, "no temporary output appeared"
+        time.sleep(0.05)
+    return proc, out
+
+
+@pytest.mark.parametrize("sig, code, name", [(signal.SIGTERM, 143, "SIGTERM"),
+                                             (signal.SIGHUP, 129, "SIGHUP"),
+                                             (signal.SIGINT, 130, None)])
+def test_signal_removes_the_temporary_and_keeps_the_old_output(tmp_path, sig, code, name):
+    proc, out = _start_slow_simulate(tmp_path)
+    proc.send_signal(sig)
+    _, stderr = proc.communicate(timeout=60)
+    message = one_error(stderr, code, proc.returncode)
+    if name:
+        assert message == f"stopped by {name}; no output was left half-written"
+    assert out.read_text() == "earlier output\n"
+    assert leftovers(tmp_path) == []
+
+
+def test_sigkill_leaves_a_temporary_that_the_next_run_removes(tmp_path):
+    proc, out = _start_slow_simulate(tmp_path)
+    proc.kill()
+    proc.communicate(timeout=60)
+    assert len(leftovers(tmp_path)) == 1          # unavoidable: nothing runs on SIGKILL
+    result = run("simulate", "--trajectory", tmp_path / "t.csv", "--out", out)
+    assert result.exit_code == 0, result.output
+    assert leftovers(tmp_path) == [] and len(read_table(out)) == 3000
+
+
+def test_closed_stdout_exits_quietly(tmp_path):
+    proc = subprocess.Popen([sys.executable, "-m", "gsfric.cli", "derive", "--check"],
+                            stdout=subprocess.PIPE, stderr=subprocess.PIPE, cwd=ROOT)
+    proc.stdout.close()                            # the reader went away (`| head -c 0`)
+    stderr = proc.stderr.read().decode()
+    proc.wait(timeout=120)
+    if proc.returncode == 1:                       # generated/ stale while derive/ is edited
+        pytest.skip("generated/ is stale in this checkout")
+    assert proc.returncode == 141 and stderr == ""
+
+
+# -- the compiled-library cache -----------------------------------------------------------------
+
+
+def _fake_compiler(tmp_path: Path, library: Path | None, body: str = "") -> Path:
+    """A 'compiler' that copies ``library`` to the link's -o target (and touches objects)."""
+    script = tmp_path / "fakecc"
+    script.write_text(textwrap.dedent(f"""\
+        #!/bin/sh
+        {body}
+        out=""; shared=0
+        while [ $# -gt 0 ]; do
+            case "$1" in -o) out="$2"; shift;; -shared) shared=1;; esac
+            shift
+        done
+        if [ $shared = 1 ] && [ -n "{library or ''}" ]; then cp "{library}" "$out"
+        else echo "not a library" > "$out"; fi
+    """))
+    script.chmod(0o755)
+    return script
+
+
+def _cache_folder(monkeypatch, cache: Path, cc: Path) -> Path:
+    monkeypatch.setenv("GSFRIC_CACHE", str(cache))
+    monkeypatch.setenv("CC", str(cc))
+    key = native._build_key(native._sources(), native._compiler() + list(native.CFLAGS))
+    return cache / f"build-{key}"
+
+
+@pytest.fixture(scope="module")
+def real_library() -> Path:
+    if not native.is_compiled():
+        pytest.skip("no compiled library (no C compiler)")
+    return native.build_library()
+
+
+CHECK = ("import numpy as np, gsfric; from gsfric import native, models; "
+         "r = gsfric.evaluate(gsfric.reference_platform(), "
+         "models.sinusoidal(np.linspace(0, 1, 11))); "
+         "print(native.is_compiled(), repr(float(r.F.sum())))")
+
+
+@pytest.mark.parametrize("size", [0, 4096])
+def test_damaged_cached_library_is_rebuilt_never_loaded(tmp_path, monkeypatch, real_library,
+                                                        size):
+    cache = tmp_path / "cache"
+    cc = _fake_compiler(tmp_path, real_library)
+    folder = _cache_folder(monkeypatch, cache, cc)
+    first = subprocess.run([sys.executable, "-c", CHECK], capture_output=True, text=True,
+                           env=env(GSFRIC_CACHE=cache, CC=cc))
+    assert first.returncode == 0, first.stderr
+    assert first.stdout.startswith("True")
+    record = json.loads((folder / "libgsfric.json").read_text())
+    assert record["size"] == real_library.stat().st_size
+    with open(folder / "libgsfric.so", "r+b") as handle:     # a crash mid-copy, a bad sector
+        handle.truncate(size)
+    second = subprocess.run([sys.executable, "-c", CHECK], capture_output=True, text=True,
+                            env=env(GSFRIC_CACHE=cache, CC=cc))
+    assert second.returncode == 0, second.stderr             # not -7 (SIGBUS) nor an OSError
+    assert second.stdout == first.stdout
+    assert f"{folder / 'libgsfric.so'}: the cached compiled library is damaged (its size is " \
+           f"{size} bytes" in second.stderr
+    assert (folder / "libgsfric.so").stat().st_size == record["size"]
+
+
+def test_verification_detects_same_size_changes(tmp_path, monkeypatch):
+    folder = tmp_path / "build"
+    folder.mkdir()
+    lib, record = folder / "libgsfric.so", folder / "libgsfric.json"
+    lib.write_bytes(b"\x7fELF" + bytes(100))
+    size, digest = native._digest(lib)
+    record.write_text(json.dumps({"size": size, "sha256": digest}))
+    assert native._damage(lib, record) is None
+    lib.write_bytes(b"\x7fELF" + bytes(99) + b"\x01")
+    assert native._damage(lib, record) == "its SHA-256 differs from the one recorded at build time"
+    record.unlink()
+    assert native._damage(lib, record) == "libgsfric.json is missing"
+    lib.unlink()
+    assert native._damage(lib, record) == "missing"
+
+
+def test_compiler_output_not_a_library_exit_3(tmp_path):
+    cc = _fake_compiler(tmp_path, None)
+    result = subprocess.run([sys.executable, "-m", "gsfric.cli", "paper", "--out",
+                             tmp_path / "pp", "--no-plots"], capture_output=True, text=True,
+                            env=env(GSFRIC_CACHE=tmp_path / "cache", CC=cc), cwd=tmp_path)
+    message = one_error(result.stderr, 3, result.returncode)
+    assert message.endswith(f"the compiler (CC={cc}) did not produce a shared library; check CC")
+    assert not (tmp_path / "pp").exists()
+    assert not list((tmp_path / "cache").rglob("libgsfric.so"))
+
+
+@pytest.mark.parametrize("setting, expected", [
+    ("", "CC is set but empty; unset it or name a C compiler (e.g. CC=cc)"),
+    ("'unclosed", "CC=\"'unclosed\" cannot be parsed as a command (No closing quotation)"),
+])
+def test_unusable_cc_exit_3(tmp_path, setting, expected):
+    result = subprocess.run([sys.executable, "-m", "gsfric.cli", "paper", "--out",
+                             tmp_path / "pp", "--no-plots"], capture_output=True, text=True,
+                            env=env(GSFRIC_CACHE=tmp_path / "cache", CC=setting), cwd=tmp_path)
+    assert one_error(result.stderr, 3, result.returncode) == expected
+
+
+def test_cache_path_is_a_file_exit_3(tmp_path):
+    cache = tmp_path / "cache"
+    cache.write_text("not a directory")
+    result = subprocess.run([sys.executable, "-m", "gsfric.cli", "paper", "--out",
+                             tmp_path / "pp", "--no-plots"], capture_output=True, text=True,
+                            env=env(GSFRIC_CACHE=cache), cwd=tmp_path)
+    assert one_error(result.stderr, 3, result.returncode) == (
+        f"{cache}: the compiled-library cache (GSFRIC_CACHE) is not a directory; set "
+        "GSFRIC_CACHE to a writable directory")
+
+
+def test_read_only_cache_is_named(tmp_path, monkeypatch):
+    monkeypatch.setenv("GSFRIC_CACHE", str(tmp_path / "cache"))
+    monkeypatch.setenv("CC", "cc")
+    real_access = os.access
+    monkeypatch.setattr(native.os, "access",
+                        lambda p, mode: False if "cache" in str(p) else real_access(p, mode))
+    with pytest.raises(native.LibraryError, match=r"cache/build-[0-9a-f]+: the compiled-library "
+                                                  r"cache \(GSFRIC_CACHE\) is not writable"):
+        native.build_library()
+
+
+def test_cpu_features_are_part_of_the_key(monkeypatch):
+    sources = native._sources()
+    key = native._build_key(sources, ["cc"])
+    monkeypatch.setattr(native, "cpu_features", lambda: "x86_64 | sse2")
+    other = native._build_key(sources, ["cc"])
+    monkeypatch.setattr(native, "cpu_features", lambda: "x86_64 | sse2 avx2")
+    assert len({key, other, native._build_key(sources, ["cc"])}) == 3
+
+
+HANGING = 'echo $$ >> "{pids}"; sleep 300 & echo $! >> "{pids}"; wait'
+
+
+def test_hanging_compiler_times_out_and_leaves_no_process(tmp_path, monkeypatch):
+    pids = tmp_path / "pids"
+    cc = _fake_compiler(tmp_path, None, HANGING.format(pids=pids))
+    monkeypatch.setenv("GSFRIC_CACHE", str(tmp_path / "cache"))
+    monkeypatch.setenv("CC", str(cc))
+    monkeypatch.setenv("GSFRIC_CC_TIMEOUT", "1")
+    with pytest.raises(native.BuildError, match=r"did not finish within 1 s "
+                                                r"\(GSFRIC_CC_TIMEOUT\); it was stopped"):
+        native.build_library()
+    started = [int(p) for p in pids.read_text().split()]
+    assert len(started) == 6                       # three compilers, each with a child
+    assert all_gone(started)
+    assert not list((tmp_path / "cache").rglob("*.so")) and not list(
+        (tmp_path / "cache").rglob("*.o"))
+
+
+def test_sigterm_while_compiling_kills_the_compilers(tmp_path):
+    pids = tmp_path / "pids"
+    cc = _fake_compiler(tmp_path, None, HANGING.format(pids=pids))
+    proc = subprocess.Popen([sys.executable, "-m", "gsfric.cli", "paper", "--out",
+                             str(tmp_path / "pp"), "--no-plots"], stdout=subprocess.PIPE,
+                            stderr=subprocess.PIPE, text=True, cwd=tmp_path,
+                            env=env(GSFRIC_CACHE=tmp_path / "cache", CC=cc))
+    deadline = time.monotonic() + 120
+    while not pids.exists() or len(pids.read_text().split()) < 6:
+        assert proc.poll() is None, proc.communicate()
+        assert time.monotonic() < deadline
+        time.sleep(0.05)
+    proc.terminate()
+    _, stderr = proc.communicate(timeout=60)
+    assert one_error(stderr, 143, proc.returncode) == ("stopped by SIGTERM; no output was "
+                                                      "left half-written")
+    assert all_gone(pids.read_text().split())
+    assert not (tmp_path / "pp").exists()
