@@ -22,6 +22,7 @@ from dataclasses import dataclass
 
 import sympy as sp
 
+from . import conditioning
 from . import effects as fx
 from . import friction as fr
 from . import kinematics as kin
@@ -103,6 +104,7 @@ OUTPUTS = (
     ("s2", (6,), "1", "1 - (u.a1)^2: zero where the universal joint's moment is undefined"),
     ("R_3_leg", (6, 3), "N", "R_3 in the paper's leg frame (18)-(27)"),
     ("M_3_leg", (6, 3), "N m", "M_3 in the paper's leg frame (18)-(27)"),
+    ("h", (), "1", "singularity measure of the force Jacobian, 0 = singular (conditioning.py)"),
 )
 
 
@@ -270,6 +272,7 @@ def build(mode: str = "kinematic") -> Model:
         rhs_M -= cross(L["E"] - p, L["t_E"])
     A_qr = ch.factor("A", A, "A", "2-7")
     f = ch.solve("f", A_qr, sp.Matrix.vstack(rhs_F, rhs_M), "f", "2-7")
+    h = conditioning.singularity_measure(ch, A, A_qr, P["platform_joints"])
 
     P3 = P["prismatic_point"]
     for i, L in enumerate(legs):
@@ -330,6 +333,7 @@ def build(mode: str = "kinematic") -> Model:
                     M_3_leg=list(L["M_3_leg"]))
         for name, vlist in vals.items():
             out[name].extend(vlist)
+    out["h"] = [h]
     outputs = {name: sp.Matrix(v) for name, v in out.items()}
     symbols = dict(legs=legs, f=f, df=df, A=A, F_req=F_req, M_req=M_req, p=p, T=T, X=X, P=P,
                    Q=Q, K=K, g_vec=g_vec, r_M=r_M, r_L=r_L, a_M=a_M, a_L=a_L, J_M=J_M, J_L=J_L,
