@@ -19,11 +19,15 @@ the loop cannot overwrite it).
 Generated function, for CasADi function ``f`` with inputs k and outputs j:
 
     void <prefix>_batch(const double **in, const long long *in_stride,
-                        double **out, const long long *out_stride, long long n)
+                        double **out, const long long *out_stride, long long n,
+                        long long *bad)
 
 Step s reads input 0 at ``in[0] + s * in_stride[0]`` and every other input k at ``in[k]``
 (its stride must be 0: the caller uses CasADi's per-step function otherwise), and writes
-output j at ``out[j] + s * out_stride[j]`` (a NULL output is skipped).
+output j at ``out[j] + s * out_stride[j]`` (a NULL output is skipped). A group of steps is
+read into, and its outputs written from, small transposed arrays (one vector per entry) by
+short loops, which keeps the loop body's code small. Unless ``bad`` is NULL, ``bad[s]`` is set
+to 1 where some output of step s is infinite or NaN, else 0.
 """
 
 from __future__ import annotations
@@ -133,6 +137,18 @@ def _header() -> str:
         "",
         "typedef double vd __attribute__((vector_size(8 * GSFRIC_LANES)));",
         "typedef long long vl __attribute__((vector_size(8 * GSFRIC_LANES)));",
+        "",
+        "/* Long batches write their outputs past the caches (non-temporal stores: no read of",
+        " * the lines first); short ones, a control loop's, leave them in the cache. */",
+        "#define STREAM_STEPS 4096",
+        "#if defined(__SSE2__) && defined(__x86_64__)",
+        "#include <immintrin.h>",
+        "#define STREAM(p, v) _mm_stream_si64((long long *)(p), (union { double d; long long i; }){v}.i)",
+        "#define STREAM_FENCE() _mm_sfence()",
+        "#else",
+        "#define STREAM(p, v) (*(p) = (v))",
+        "#define STREAM_FENCE() ((void)0)",
+        "#endif",
     ]
     lines.append(_VECTOR)
     for name, body in _LANEWISE.items():
@@ -169,6 +185,8 @@ def batch_source(f, prefix: str) -> str:
     """C source of ``<prefix>_batch`` for the CasADi SX function ``f``."""
     names = _opnames()
     n_x = f.numel_in(0)
+    sizes = [f.numel_out(j) for j in range(f.n_out())]
+    base = [sum(sizes[:j]) for j in range(len(sizes))]
     hoisted, body = [], []
     current: dict[int, tuple[str, bool]] = {}   # work slot -> (C name, loop invariant)
     for k in range(f.n_instructions()):
@@ -177,8 +195,7 @@ def batch_source(f, prefix: str) -> str:
         o = f.instruction_output(k)
         if op == "OP_OUTPUT":
             src, _ = current[i[0]]
-            body.append(f"        if (out[{o[0]}]) for (int l = 0; l < m; ++l) "
-                        f"out[{o[0]}][(s0 + l) * out_stride[{o[0]}] + {o[1]}] = {src}[l];")
+            body.append(f"        *(vd *)yt[{base[o[0]] + o[1]}] = {src};")
             continue
         if op == "OP_INPUT":
             if i[0] == 0:
@@ -205,11 +222,15 @@ def batch_source(f, prefix: str) -> str:
                     if line.lstrip().startswith("w")})
     lines = [
         f"void {prefix}_batch(const double **in, const long long *in_stride,",
-        "                    double **out, const long long *out_stride, long long n)",
+        "                    double **out, const long long *out_stride, long long n,",
+        "                    long long *bad)",
         "{",
         *hoisted,
         "    " + " ".join(f"vd w{s};" for s in slots),
+        f"    static const int size[{len(sizes)}] = {{{', '.join(map(str, sizes))}}};",
         f"    double xt[{n_x}][GSFRIC_LANES] __attribute__((aligned(8 * GSFRIC_LANES)));",
+        f"    double yt[{sum(sizes)}][GSFRIC_LANES] __attribute__((aligned(8 * GSFRIC_LANES)));",
+        "    int stream = n >= STREAM_STEPS;",
         "    for (long long s0 = 0; s0 < n; s0 += GSFRIC_LANES) {",
         "        int m = (int)(n - s0 < GSFRIC_LANES ? n - s0 : GSFRIC_LANES);",
         "        for (int l = 0; l < GSFRIC_LANES; ++l) {",
@@ -217,7 +238,27 @@ def batch_source(f, prefix: str) -> str:
         f"            for (int j = 0; j < {n_x}; ++j) xt[j][l] = row[j];",
         "        }",
         *body,
+        "        if (bad) {  /* 1 where some output is infinite or NaN (v - v is NaN) */",
+        "            vl b = (vl)v_splat(0.0);",
+        f"            for (int k = 0; k < {sum(sizes)}; ++k) {{",
+        "                vd v = *(const vd *)yt[k], z = v - v;",
+        "                b |= (vl)(z != z);",
+        "            }",
+        "            for (int l = 0; l < m; ++l) bad[s0 + l] = b[l] != 0;",
+        "        }",
+        "        /* outputs: one loop, rows of each step written whole */",
+        f"        for (int j = 0, b = 0; j < {len(sizes)}; b += size[j], ++j) {{",
+        "            if (!out[j]) continue;",
+        "            for (int l = 0; l < m; ++l) {",
+        "                double *row = out[j] + (s0 + l) * out_stride[j];",
+        "                if (stream)",
+        "                    for (int o = 0; o < size[j]; ++o) STREAM(row + o, yt[b + o][l]);",
+        "                else",
+        "                    for (int o = 0; o < size[j]; ++o) row[o] = yt[b + o][l];",
+        "            }",
+        "        }",
         "    }",
+        "    if (stream) STREAM_FENCE();",
         "}",
         "",
     ]

@@ -14,6 +14,18 @@
 typedef double vd __attribute__((vector_size(8 * GSFRIC_LANES)));
 typedef long long vl __attribute__((vector_size(8 * GSFRIC_LANES)));
 
+/* Long batches write their outputs past the caches (non-temporal stores: no read of
+ * the lines first); short ones, a control loop's, leave them in the cache. */
+#define STREAM_STEPS 4096
+#if defined(__SSE2__) && defined(__x86_64__)
+#include <immintrin.h>
+#define STREAM(p, v) _mm_stream_si64((long long *)(p), (union { double d; long long i; }){v}.i)
+#define STREAM_FENCE() _mm_sfence()
+#else
+#define STREAM(p, v) (*(p) = (v))
+#define STREAM_FENCE() ((void)0)
+#endif
+
 #define ONE_BITS ((vl)v_splat(1.0))
 static inline vd v_splat(double c) { vd r; for (int i = 0; i < GSFRIC_LANES; ++i) r[i] = c; return r; }
 static inline vd v_mask(vl m) { return (vd)(m & ONE_BITS); }
@@ -91,7 +103,8 @@ void gsfric_simd_exp(const double *x, double *y, long long n)
 }
 
 void gsfric_model_eval_batch(const double **in, const long long *in_stride,
-                    double **out, const long long *out_stride, long long n)
+                    double **out, const long long *out_stride, long long n,
+                    long long *bad)
 {
     const vd h2 = v_splat(in[1][19]);
     const vd h5 = v_splat(in[1][20]);
@@ -334,7 +347,10 @@ void gsfric_model_eval_batch(const double **in, const long long *in_stride,
     const vd h6796 = h6795 * h6795;
     const vd h6797 = h6795 * h6796;
     vd w0; vd w1; vd w3; vd w4; vd w6; vd w8; vd w9; vd w10; vd w11; vd w12; vd w13; vd w14; vd w15; vd w16; vd w17; vd w18; vd w19; vd w20; vd w21; vd w22; vd w23; vd w24; vd w25; vd w26; vd w27; vd w28; vd w29; vd w30; vd w31; vd w32; vd w33; vd w34; vd w35; vd w36; vd w37; vd w38; vd w39; vd w40; vd w41; vd w42; vd w43; vd w44; vd w45; vd w46; vd w47; vd w48; vd w49; vd w50; vd w51; vd w52; vd w53; vd w54; vd w55; vd w56; vd w57; vd w58; vd w59; vd w60; vd w61; vd w62; vd w63; vd w64; vd w65; vd w66; vd w67; vd w68; vd w69; vd w70; vd w71; vd w72; vd w73; vd w74; vd w75; vd w76; vd w77; vd w78; vd w79; vd w80; vd w81; vd w82; vd w83; vd w84; vd w85; vd w86; vd w87; vd w88; vd w89; vd w90; vd w91; vd w92; vd w93; vd w94; vd w95; vd w96; vd w97; vd w98; vd w99; vd w100; vd w101; vd w102; vd w103; vd w104; vd w105; vd w106; vd w107; vd w108; vd w109; vd w110; vd w111; vd w112; vd w113; vd w114; vd w115; vd w116; vd w117; vd w118; vd w119; vd w120; vd w121; vd w122; vd w123; vd w125; vd w126; vd w127; vd w128; vd w129; vd w130; vd w131; vd w132; vd w133; vd w134; vd w135; vd w136; vd w137; vd w138; vd w139; vd w140; vd w141; vd w142; vd w143; vd w144; vd w145; vd w146; vd w147; vd w148; vd w149; vd w150; vd w151; vd w152; vd w153; vd w154; vd w155; vd w156; vd w157; vd w158; vd w159; vd w160; vd w161; vd w162; vd w163; vd w164; vd w165; vd w166; vd w167; vd w168; vd w169; vd w170; vd w171; vd w172; vd w173; vd w174; vd w175; vd w176; vd w177; vd w178; vd w179; vd w180; vd w181; vd w182; vd w183; vd w184; vd w185; vd w186; vd w187; vd w188; vd w189; vd w190; vd w191; vd w192; vd w193; vd w194; vd w195; vd w196; vd w197; vd w198; vd w199; vd w200; vd w201; vd w202; vd w203; vd w204; vd w205; vd w206; vd w207; vd w208; vd w209; vd w210; vd w211; vd w212; vd w213; vd w214; vd w215; vd w216; vd w217; vd w218; vd w219; vd w220; vd w221; vd w222; vd w223; vd w224; vd w225; vd w226; vd w227; vd w228; vd w229; vd w230; vd w231; vd w232; vd w233; vd w234; vd w235; vd w236; vd w237; vd w238; vd w239; vd w240; vd w241; vd w242; vd w243; vd w244; vd w245; vd w246; vd w247; vd w248; vd w249; vd w250; vd w251; vd w252; vd w253; vd w254; vd w255; vd w256; vd w257; vd w258; vd w259; vd w260; vd w261; vd w262; vd w263; vd w264; vd w265; vd w266; vd w267; vd w268; vd w269; vd w270; vd w271; vd w272; vd w273; vd w274; vd w275; vd w276; vd w277; vd w278; vd w279; vd w280; vd w281; vd w282; vd w283; vd w284; vd w285; vd w286; vd w287; vd w288; vd w289; vd w290; vd w291; vd w292; vd w293; vd w294; vd w295; vd w296; vd w297; vd w298; vd w299; vd w300; vd w301; vd w302; vd w303; vd w304; vd w305; vd w306; vd w307; vd w308; vd w309; vd w310; vd w311; vd w312; vd w313; vd w314; vd w315; vd w316; vd w317; vd w318; vd w319; vd w320; vd w321; vd w322; vd w323; vd w324; vd w325; vd w326; vd w327; vd w328; vd w329; vd w330; vd w331; vd w332; vd w333; vd w334; vd w335; vd w336; vd w337; vd w338; vd w339; vd w340; vd w341; vd w342; vd w343; vd w344; vd w345; vd w346; vd w347; vd w348; vd w349; vd w350; vd w351; vd w352; vd w353; vd w354; vd w356; vd w357; vd w358; vd w359; vd w360; vd w361; vd w362; vd w363; vd w364; vd w365; vd w366; vd w367; vd w368; vd w369; vd w370; vd w371; vd w372; vd w373; vd w374; vd w375; vd w376; vd w377; vd w378; vd w379; vd w380; vd w381; vd w382; vd w383; vd w384; vd w385; vd w386; vd w387; vd w388; vd w389; vd w390; vd w391; vd w392; vd w393; vd w394; vd w395; vd w396; vd w397; vd w398; vd w399; vd w400; vd w401; vd w402; vd w403; vd w404; vd w405; vd w406; vd w407; vd w408; vd w409; vd w410; vd w411; vd w412; vd w413; vd w414; vd w415; vd w416; vd w417; vd w418; vd w419; vd w420; vd w421; vd w422; vd w423; vd w424; vd w425; vd w426; vd w427; vd w428; vd w429; vd w430; vd w431; vd w432; vd w433; vd w434; vd w435; vd w436; vd w437; vd w438; vd w439; vd w440; vd w441; vd w442; vd w443; vd w444; vd w445; vd w446; vd w447; vd w448; vd w449; vd w450; vd w451; vd w452; vd w453; vd w454; vd w455; vd w456; vd w457; vd w458; vd w459; vd w460; vd w461; vd w462; vd w463; vd w464; vd w465; vd w466; vd w467; vd w468; vd w469; vd w470; vd w471; vd w472; vd w473; vd w474; vd w475; vd w476; vd w477; vd w478; vd w479; vd w480; vd w481; vd w482; vd w483; vd w484; vd w485; vd w486; vd w487; vd w488;
+    static const int size[22] = {6, 6, 18, 18, 6, 18, 18, 18, 18, 6, 6, 6, 6, 6, 6, 18, 18, 18, 6, 18, 18, 1};
     double xt[24][GSFRIC_LANES] __attribute__((aligned(8 * GSFRIC_LANES)));
+    double yt[259][GSFRIC_LANES] __attribute__((aligned(8 * GSFRIC_LANES)));
+    int stream = n >= STREAM_STEPS;
     for (long long s0 = 0; s0 < n; s0 += GSFRIC_LANES) {
         int m = (int)(n - s0 < GSFRIC_LANES ? n - s0 : GSFRIC_LANES);
         for (int l = 0; l < GSFRIC_LANES; ++l) {
@@ -5325,7 +5341,7 @@ void gsfric_model_eval_batch(const double **in, const long long *in_stride,
         w88 = w88 / w104;
         w88 = h4247 * w88;
         w310 = w310 + w88;
-        if (out[0]) for (int l = 0; l < m; ++l) out[0][(s0 + l) * out_stride[0] + 0] = w310[l];
+        *(vd *)yt[0] = w310;
         w310 = w145 + w423;
         w310 = w132 * w310;
         w88 = w29 + w425;
@@ -5444,7 +5460,7 @@ void gsfric_model_eval_batch(const double **in, const long long *in_stride,
         w88 = w88 + w80;
         w120 = h4247 * w120;
         w88 = w88 + w120;
-        if (out[0]) for (int l = 0; l < m; ++l) out[0][(s0 + l) * out_stride[0] + 1] = w88[l];
+        *(vd *)yt[1] = w88;
         w88 = w188 + w437;
         w88 = w155 * w88;
         w120 = w139 + w439;
@@ -5563,7 +5579,7 @@ void gsfric_model_eval_batch(const double **in, const long long *in_stride,
         w120 = w120 + w109;
         w117 = h4247 * w117;
         w120 = w120 + w117;
-        if (out[0]) for (int l = 0; l < m; ++l) out[0][(s0 + l) * out_stride[0] + 2] = w120[l];
+        *(vd *)yt[2] = w120;
         w120 = w231 + w451;
         w120 = w198 * w120;
         w117 = w182 + w453;
@@ -5682,7 +5698,7 @@ void gsfric_model_eval_batch(const double **in, const long long *in_stride,
         w117 = w117 + w341;
         w101 = h4247 * w101;
         w117 = w117 + w101;
-        if (out[0]) for (int l = 0; l < m; ++l) out[0][(s0 + l) * out_stride[0] + 3] = w117[l];
+        *(vd *)yt[3] = w117;
         w117 = w274 + w465;
         w117 = w241 * w117;
         w101 = w225 + w467;
@@ -5801,7 +5817,7 @@ void gsfric_model_eval_batch(const double **in, const long long *in_stride,
         w101 = w101 + w71;
         w318 = h4247 * w318;
         w101 = w101 + w318;
-        if (out[0]) for (int l = 0; l < m; ++l) out[0][(s0 + l) * out_stride[0] + 4] = w101[l];
+        *(vd *)yt[4] = w101;
         w101 = w313 + w479;
         w101 = w304 * w101;
         w318 = w268 + w103;
@@ -5920,175 +5936,175 @@ void gsfric_model_eval_batch(const double **in, const long long *in_stride,
         w318 = w318 + w85;
         w351 = h4247 * w60;
         w318 = w318 + w351;
-        if (out[0]) for (int l = 0; l < m; ++l) out[0][(s0 + l) * out_stride[0] + 5] = w318[l];
-        if (out[1]) for (int l = 0; l < m; ++l) out[1][(s0 + l) * out_stride[1] + 0] = w13[l];
-        if (out[1]) for (int l = 0; l < m; ++l) out[1][(s0 + l) * out_stride[1] + 1] = w310[l];
-        if (out[1]) for (int l = 0; l < m; ++l) out[1][(s0 + l) * out_stride[1] + 2] = w88[l];
-        if (out[1]) for (int l = 0; l < m; ++l) out[1][(s0 + l) * out_stride[1] + 3] = w120[l];
-        if (out[1]) for (int l = 0; l < m; ++l) out[1][(s0 + l) * out_stride[1] + 4] = w117[l];
-        if (out[1]) for (int l = 0; l < m; ++l) out[1][(s0 + l) * out_stride[1] + 5] = w101[l];
-        if (out[2]) for (int l = 0; l < m; ++l) out[2][(s0 + l) * out_stride[2] + 0] = w36[l];
-        if (out[2]) for (int l = 0; l < m; ++l) out[2][(s0 + l) * out_stride[2] + 1] = w121[l];
-        if (out[2]) for (int l = 0; l < m; ++l) out[2][(s0 + l) * out_stride[2] + 2] = w74[l];
-        if (out[2]) for (int l = 0; l < m; ++l) out[2][(s0 + l) * out_stride[2] + 3] = w145[l];
-        if (out[2]) for (int l = 0; l < m; ++l) out[2][(s0 + l) * out_stride[2] + 4] = w29[l];
-        if (out[2]) for (int l = 0; l < m; ++l) out[2][(s0 + l) * out_stride[2] + 5] = w169[l];
-        if (out[2]) for (int l = 0; l < m; ++l) out[2][(s0 + l) * out_stride[2] + 6] = w188[l];
-        if (out[2]) for (int l = 0; l < m; ++l) out[2][(s0 + l) * out_stride[2] + 7] = w139[l];
-        if (out[2]) for (int l = 0; l < m; ++l) out[2][(s0 + l) * out_stride[2] + 8] = w212[l];
-        if (out[2]) for (int l = 0; l < m; ++l) out[2][(s0 + l) * out_stride[2] + 9] = w231[l];
-        if (out[2]) for (int l = 0; l < m; ++l) out[2][(s0 + l) * out_stride[2] + 10] = w182[l];
-        if (out[2]) for (int l = 0; l < m; ++l) out[2][(s0 + l) * out_stride[2] + 11] = w255[l];
-        if (out[2]) for (int l = 0; l < m; ++l) out[2][(s0 + l) * out_stride[2] + 12] = w274[l];
-        if (out[2]) for (int l = 0; l < m; ++l) out[2][(s0 + l) * out_stride[2] + 13] = w225[l];
-        if (out[2]) for (int l = 0; l < m; ++l) out[2][(s0 + l) * out_stride[2] + 14] = w298[l];
-        if (out[2]) for (int l = 0; l < m; ++l) out[2][(s0 + l) * out_stride[2] + 15] = w313[l];
-        if (out[2]) for (int l = 0; l < m; ++l) out[2][(s0 + l) * out_stride[2] + 16] = w268[l];
-        if (out[2]) for (int l = 0; l < m; ++l) out[2][(s0 + l) * out_stride[2] + 17] = w333[l];
-        if (out[3]) for (int l = 0; l < m; ++l) out[3][(s0 + l) * out_stride[3] + 0] = w72[l];
-        if (out[3]) for (int l = 0; l < m; ++l) out[3][(s0 + l) * out_stride[3] + 1] = w70[l];
-        if (out[3]) for (int l = 0; l < m; ++l) out[3][(s0 + l) * out_stride[3] + 2] = w53[l];
-        if (out[3]) for (int l = 0; l < m; ++l) out[3][(s0 + l) * out_stride[3] + 3] = w167[l];
-        if (out[3]) for (int l = 0; l < m; ++l) out[3][(s0 + l) * out_stride[3] + 4] = w165[l];
-        if (out[3]) for (int l = 0; l < m; ++l) out[3][(s0 + l) * out_stride[3] + 5] = w148[l];
-        if (out[3]) for (int l = 0; l < m; ++l) out[3][(s0 + l) * out_stride[3] + 6] = w210[l];
-        if (out[3]) for (int l = 0; l < m; ++l) out[3][(s0 + l) * out_stride[3] + 7] = w208[l];
-        if (out[3]) for (int l = 0; l < m; ++l) out[3][(s0 + l) * out_stride[3] + 8] = w191[l];
-        if (out[3]) for (int l = 0; l < m; ++l) out[3][(s0 + l) * out_stride[3] + 9] = w253[l];
-        if (out[3]) for (int l = 0; l < m; ++l) out[3][(s0 + l) * out_stride[3] + 10] = w251[l];
-        if (out[3]) for (int l = 0; l < m; ++l) out[3][(s0 + l) * out_stride[3] + 11] = w234[l];
-        if (out[3]) for (int l = 0; l < m; ++l) out[3][(s0 + l) * out_stride[3] + 12] = w296[l];
-        if (out[3]) for (int l = 0; l < m; ++l) out[3][(s0 + l) * out_stride[3] + 13] = w294[l];
-        if (out[3]) for (int l = 0; l < m; ++l) out[3][(s0 + l) * out_stride[3] + 14] = w277[l];
-        if (out[3]) for (int l = 0; l < m; ++l) out[3][(s0 + l) * out_stride[3] + 15] = w331[l];
-        if (out[3]) for (int l = 0; l < m; ++l) out[3][(s0 + l) * out_stride[3] + 16] = w329[l];
-        if (out[3]) for (int l = 0; l < m; ++l) out[3][(s0 + l) * out_stride[3] + 17] = w316[l];
-        if (out[4]) for (int l = 0; l < m; ++l) out[4][(s0 + l) * out_stride[4] + 0] = w65[l];
-        if (out[4]) for (int l = 0; l < m; ++l) out[4][(s0 + l) * out_stride[4] + 1] = w160[l];
-        if (out[4]) for (int l = 0; l < m; ++l) out[4][(s0 + l) * out_stride[4] + 2] = w203[l];
-        if (out[4]) for (int l = 0; l < m; ++l) out[4][(s0 + l) * out_stride[4] + 3] = w246[l];
-        if (out[4]) for (int l = 0; l < m; ++l) out[4][(s0 + l) * out_stride[4] + 4] = w289[l];
-        if (out[4]) for (int l = 0; l < m; ++l) out[4][(s0 + l) * out_stride[4] + 5] = w67[l];
-        if (out[5]) for (int l = 0; l < m; ++l) out[5][(s0 + l) * out_stride[5] + 0] = w58[l];
-        if (out[5]) for (int l = 0; l < m; ++l) out[5][(s0 + l) * out_stride[5] + 1] = w105[l];
-        if (out[5]) for (int l = 0; l < m; ++l) out[5][(s0 + l) * out_stride[5] + 2] = w361[l];
-        if (out[5]) for (int l = 0; l < m; ++l) out[5][(s0 + l) * out_stride[5] + 3] = w423[l];
-        if (out[5]) for (int l = 0; l < m; ++l) out[5][(s0 + l) * out_stride[5] + 4] = w425[l];
-        if (out[5]) for (int l = 0; l < m; ++l) out[5][(s0 + l) * out_stride[5] + 5] = w146[l];
-        if (out[5]) for (int l = 0; l < m; ++l) out[5][(s0 + l) * out_stride[5] + 6] = w437[l];
-        if (out[5]) for (int l = 0; l < m; ++l) out[5][(s0 + l) * out_stride[5] + 7] = w439[l];
-        if (out[5]) for (int l = 0; l < m; ++l) out[5][(s0 + l) * out_stride[5] + 8] = w189[l];
-        if (out[5]) for (int l = 0; l < m; ++l) out[5][(s0 + l) * out_stride[5] + 9] = w451[l];
-        if (out[5]) for (int l = 0; l < m; ++l) out[5][(s0 + l) * out_stride[5] + 10] = w453[l];
-        if (out[5]) for (int l = 0; l < m; ++l) out[5][(s0 + l) * out_stride[5] + 11] = w232[l];
-        if (out[5]) for (int l = 0; l < m; ++l) out[5][(s0 + l) * out_stride[5] + 12] = w465[l];
-        if (out[5]) for (int l = 0; l < m; ++l) out[5][(s0 + l) * out_stride[5] + 13] = w467[l];
-        if (out[5]) for (int l = 0; l < m; ++l) out[5][(s0 + l) * out_stride[5] + 14] = w275[l];
-        if (out[5]) for (int l = 0; l < m; ++l) out[5][(s0 + l) * out_stride[5] + 15] = w479[l];
-        if (out[5]) for (int l = 0; l < m; ++l) out[5][(s0 + l) * out_stride[5] + 16] = w103[l];
-        if (out[5]) for (int l = 0; l < m; ++l) out[5][(s0 + l) * out_stride[5] + 17] = w314[l];
-        if (out[6]) for (int l = 0; l < m; ++l) out[6][(s0 + l) * out_stride[6] + 0] = w57[l];
-        if (out[6]) for (int l = 0; l < m; ++l) out[6][(s0 + l) * out_stride[6] + 1] = w76[l];
-        if (out[6]) for (int l = 0; l < m; ++l) out[6][(s0 + l) * out_stride[6] + 2] = w86[l];
-        if (out[6]) for (int l = 0; l < m; ++l) out[6][(s0 + l) * out_stride[6] + 3] = w172[l];
-        if (out[6]) for (int l = 0; l < m; ++l) out[6][(s0 + l) * out_stride[6] + 4] = w171[l];
-        if (out[6]) for (int l = 0; l < m; ++l) out[6][(s0 + l) * out_stride[6] + 5] = w168[l];
-        if (out[6]) for (int l = 0; l < m; ++l) out[6][(s0 + l) * out_stride[6] + 6] = w215[l];
-        if (out[6]) for (int l = 0; l < m; ++l) out[6][(s0 + l) * out_stride[6] + 7] = w214[l];
-        if (out[6]) for (int l = 0; l < m; ++l) out[6][(s0 + l) * out_stride[6] + 8] = w211[l];
-        if (out[6]) for (int l = 0; l < m; ++l) out[6][(s0 + l) * out_stride[6] + 9] = w258[l];
-        if (out[6]) for (int l = 0; l < m; ++l) out[6][(s0 + l) * out_stride[6] + 10] = w257[l];
-        if (out[6]) for (int l = 0; l < m; ++l) out[6][(s0 + l) * out_stride[6] + 11] = w254[l];
-        if (out[6]) for (int l = 0; l < m; ++l) out[6][(s0 + l) * out_stride[6] + 12] = w301[l];
-        if (out[6]) for (int l = 0; l < m; ++l) out[6][(s0 + l) * out_stride[6] + 13] = w300[l];
-        if (out[6]) for (int l = 0; l < m; ++l) out[6][(s0 + l) * out_stride[6] + 14] = w297[l];
-        if (out[6]) for (int l = 0; l < m; ++l) out[6][(s0 + l) * out_stride[6] + 15] = w337[l];
-        if (out[6]) for (int l = 0; l < m; ++l) out[6][(s0 + l) * out_stride[6] + 16] = w335[l];
-        if (out[6]) for (int l = 0; l < m; ++l) out[6][(s0 + l) * out_stride[6] + 17] = w332[l];
+        *(vd *)yt[5] = w318;
+        *(vd *)yt[6] = w13;
+        *(vd *)yt[7] = w310;
+        *(vd *)yt[8] = w88;
+        *(vd *)yt[9] = w120;
+        *(vd *)yt[10] = w117;
+        *(vd *)yt[11] = w101;
+        *(vd *)yt[12] = w36;
+        *(vd *)yt[13] = w121;
+        *(vd *)yt[14] = w74;
+        *(vd *)yt[15] = w145;
+        *(vd *)yt[16] = w29;
+        *(vd *)yt[17] = w169;
+        *(vd *)yt[18] = w188;
+        *(vd *)yt[19] = w139;
+        *(vd *)yt[20] = w212;
+        *(vd *)yt[21] = w231;
+        *(vd *)yt[22] = w182;
+        *(vd *)yt[23] = w255;
+        *(vd *)yt[24] = w274;
+        *(vd *)yt[25] = w225;
+        *(vd *)yt[26] = w298;
+        *(vd *)yt[27] = w313;
+        *(vd *)yt[28] = w268;
+        *(vd *)yt[29] = w333;
+        *(vd *)yt[30] = w72;
+        *(vd *)yt[31] = w70;
+        *(vd *)yt[32] = w53;
+        *(vd *)yt[33] = w167;
+        *(vd *)yt[34] = w165;
+        *(vd *)yt[35] = w148;
+        *(vd *)yt[36] = w210;
+        *(vd *)yt[37] = w208;
+        *(vd *)yt[38] = w191;
+        *(vd *)yt[39] = w253;
+        *(vd *)yt[40] = w251;
+        *(vd *)yt[41] = w234;
+        *(vd *)yt[42] = w296;
+        *(vd *)yt[43] = w294;
+        *(vd *)yt[44] = w277;
+        *(vd *)yt[45] = w331;
+        *(vd *)yt[46] = w329;
+        *(vd *)yt[47] = w316;
+        *(vd *)yt[48] = w65;
+        *(vd *)yt[49] = w160;
+        *(vd *)yt[50] = w203;
+        *(vd *)yt[51] = w246;
+        *(vd *)yt[52] = w289;
+        *(vd *)yt[53] = w67;
+        *(vd *)yt[54] = w58;
+        *(vd *)yt[55] = w105;
+        *(vd *)yt[56] = w361;
+        *(vd *)yt[57] = w423;
+        *(vd *)yt[58] = w425;
+        *(vd *)yt[59] = w146;
+        *(vd *)yt[60] = w437;
+        *(vd *)yt[61] = w439;
+        *(vd *)yt[62] = w189;
+        *(vd *)yt[63] = w451;
+        *(vd *)yt[64] = w453;
+        *(vd *)yt[65] = w232;
+        *(vd *)yt[66] = w465;
+        *(vd *)yt[67] = w467;
+        *(vd *)yt[68] = w275;
+        *(vd *)yt[69] = w479;
+        *(vd *)yt[70] = w103;
+        *(vd *)yt[71] = w314;
+        *(vd *)yt[72] = w57;
+        *(vd *)yt[73] = w76;
+        *(vd *)yt[74] = w86;
+        *(vd *)yt[75] = w172;
+        *(vd *)yt[76] = w171;
+        *(vd *)yt[77] = w168;
+        *(vd *)yt[78] = w215;
+        *(vd *)yt[79] = w214;
+        *(vd *)yt[80] = w211;
+        *(vd *)yt[81] = w258;
+        *(vd *)yt[82] = w257;
+        *(vd *)yt[83] = w254;
+        *(vd *)yt[84] = w301;
+        *(vd *)yt[85] = w300;
+        *(vd *)yt[86] = w297;
+        *(vd *)yt[87] = w337;
+        *(vd *)yt[88] = w335;
+        *(vd *)yt[89] = w332;
         w59 = -w59;
-        if (out[7]) for (int l = 0; l < m; ++l) out[7][(s0 + l) * out_stride[7] + 0] = w59[l];
+        *(vd *)yt[90] = w59;
         w418 = -w418;
-        if (out[7]) for (int l = 0; l < m; ++l) out[7][(s0 + l) * out_stride[7] + 1] = w418[l];
+        *(vd *)yt[91] = w418;
         w420 = -w420;
-        if (out[7]) for (int l = 0; l < m; ++l) out[7][(s0 + l) * out_stride[7] + 2] = w420[l];
+        *(vd *)yt[92] = w420;
         w375 = -w375;
-        if (out[7]) for (int l = 0; l < m; ++l) out[7][(s0 + l) * out_stride[7] + 3] = w375[l];
+        *(vd *)yt[93] = w375;
         w432 = -w432;
-        if (out[7]) for (int l = 0; l < m; ++l) out[7][(s0 + l) * out_stride[7] + 4] = w432[l];
+        *(vd *)yt[94] = w432;
         w434 = -w434;
-        if (out[7]) for (int l = 0; l < m; ++l) out[7][(s0 + l) * out_stride[7] + 5] = w434[l];
+        *(vd *)yt[95] = w434;
         w384 = -w384;
-        if (out[7]) for (int l = 0; l < m; ++l) out[7][(s0 + l) * out_stride[7] + 6] = w384[l];
+        *(vd *)yt[96] = w384;
         w446 = -w446;
-        if (out[7]) for (int l = 0; l < m; ++l) out[7][(s0 + l) * out_stride[7] + 7] = w446[l];
+        *(vd *)yt[97] = w446;
         w448 = -w448;
-        if (out[7]) for (int l = 0; l < m; ++l) out[7][(s0 + l) * out_stride[7] + 8] = w448[l];
+        *(vd *)yt[98] = w448;
         w392 = -w392;
-        if (out[7]) for (int l = 0; l < m; ++l) out[7][(s0 + l) * out_stride[7] + 9] = w392[l];
+        *(vd *)yt[99] = w392;
         w460 = -w460;
-        if (out[7]) for (int l = 0; l < m; ++l) out[7][(s0 + l) * out_stride[7] + 10] = w460[l];
+        *(vd *)yt[100] = w460;
         w462 = -w462;
-        if (out[7]) for (int l = 0; l < m; ++l) out[7][(s0 + l) * out_stride[7] + 11] = w462[l];
+        *(vd *)yt[101] = w462;
         w400 = -w400;
-        if (out[7]) for (int l = 0; l < m; ++l) out[7][(s0 + l) * out_stride[7] + 12] = w400[l];
+        *(vd *)yt[102] = w400;
         w474 = -w474;
-        if (out[7]) for (int l = 0; l < m; ++l) out[7][(s0 + l) * out_stride[7] + 13] = w474[l];
+        *(vd *)yt[103] = w474;
         w476 = -w476;
-        if (out[7]) for (int l = 0; l < m; ++l) out[7][(s0 + l) * out_stride[7] + 14] = w476[l];
+        *(vd *)yt[104] = w476;
         w401 = -w401;
-        if (out[7]) for (int l = 0; l < m; ++l) out[7][(s0 + l) * out_stride[7] + 15] = w401[l];
+        *(vd *)yt[105] = w401;
         w485 = -w485;
-        if (out[7]) for (int l = 0; l < m; ++l) out[7][(s0 + l) * out_stride[7] + 16] = w485[l];
+        *(vd *)yt[106] = w485;
         w487 = -w487;
-        if (out[7]) for (int l = 0; l < m; ++l) out[7][(s0 + l) * out_stride[7] + 17] = w487[l];
+        *(vd *)yt[107] = w487;
         w408 = -w408;
-        if (out[8]) for (int l = 0; l < m; ++l) out[8][(s0 + l) * out_stride[8] + 0] = w408[l];
+        *(vd *)yt[108] = w408;
         w417 = -w417;
-        if (out[8]) for (int l = 0; l < m; ++l) out[8][(s0 + l) * out_stride[8] + 1] = w417[l];
+        *(vd *)yt[109] = w417;
         w419 = -w419;
-        if (out[8]) for (int l = 0; l < m; ++l) out[8][(s0 + l) * out_stride[8] + 2] = w419[l];
+        *(vd *)yt[110] = w419;
         w33 = -w33;
-        if (out[8]) for (int l = 0; l < m; ++l) out[8][(s0 + l) * out_stride[8] + 3] = w33[l];
+        *(vd *)yt[111] = w33;
         w431 = -w431;
-        if (out[8]) for (int l = 0; l < m; ++l) out[8][(s0 + l) * out_stride[8] + 4] = w431[l];
+        *(vd *)yt[112] = w431;
         w433 = -w433;
-        if (out[8]) for (int l = 0; l < m; ++l) out[8][(s0 + l) * out_stride[8] + 5] = w433[l];
+        *(vd *)yt[113] = w433;
         w142 = -w142;
-        if (out[8]) for (int l = 0; l < m; ++l) out[8][(s0 + l) * out_stride[8] + 6] = w142[l];
+        *(vd *)yt[114] = w142;
         w445 = -w445;
-        if (out[8]) for (int l = 0; l < m; ++l) out[8][(s0 + l) * out_stride[8] + 7] = w445[l];
+        *(vd *)yt[115] = w445;
         w447 = -w447;
-        if (out[8]) for (int l = 0; l < m; ++l) out[8][(s0 + l) * out_stride[8] + 8] = w447[l];
+        *(vd *)yt[116] = w447;
         w185 = -w185;
-        if (out[8]) for (int l = 0; l < m; ++l) out[8][(s0 + l) * out_stride[8] + 9] = w185[l];
+        *(vd *)yt[117] = w185;
         w459 = -w459;
-        if (out[8]) for (int l = 0; l < m; ++l) out[8][(s0 + l) * out_stride[8] + 10] = w459[l];
+        *(vd *)yt[118] = w459;
         w461 = -w461;
-        if (out[8]) for (int l = 0; l < m; ++l) out[8][(s0 + l) * out_stride[8] + 11] = w461[l];
+        *(vd *)yt[119] = w461;
         w228 = -w228;
-        if (out[8]) for (int l = 0; l < m; ++l) out[8][(s0 + l) * out_stride[8] + 12] = w228[l];
+        *(vd *)yt[120] = w228;
         w473 = -w473;
-        if (out[8]) for (int l = 0; l < m; ++l) out[8][(s0 + l) * out_stride[8] + 13] = w473[l];
+        *(vd *)yt[121] = w473;
         w475 = -w475;
-        if (out[8]) for (int l = 0; l < m; ++l) out[8][(s0 + l) * out_stride[8] + 14] = w475[l];
+        *(vd *)yt[122] = w475;
         w271 = -w271;
-        if (out[8]) for (int l = 0; l < m; ++l) out[8][(s0 + l) * out_stride[8] + 15] = w271[l];
+        *(vd *)yt[123] = w271;
         w484 = -w484;
-        if (out[8]) for (int l = 0; l < m; ++l) out[8][(s0 + l) * out_stride[8] + 16] = w484[l];
+        *(vd *)yt[124] = w484;
         w486 = -w486;
-        if (out[8]) for (int l = 0; l < m; ++l) out[8][(s0 + l) * out_stride[8] + 17] = w486[l];
+        *(vd *)yt[125] = w486;
         w113 = -w113;
-        if (out[9]) for (int l = 0; l < m; ++l) out[9][(s0 + l) * out_stride[9] + 0] = w113[l];
+        *(vd *)yt[126] = w113;
         w80 = -w80;
-        if (out[9]) for (int l = 0; l < m; ++l) out[9][(s0 + l) * out_stride[9] + 1] = w80[l];
+        *(vd *)yt[127] = w80;
         w109 = -w109;
-        if (out[9]) for (int l = 0; l < m; ++l) out[9][(s0 + l) * out_stride[9] + 2] = w109[l];
+        *(vd *)yt[128] = w109;
         w341 = -w341;
-        if (out[9]) for (int l = 0; l < m; ++l) out[9][(s0 + l) * out_stride[9] + 3] = w341[l];
+        *(vd *)yt[129] = w341;
         w71 = -w71;
-        if (out[9]) for (int l = 0; l < m; ++l) out[9][(s0 + l) * out_stride[9] + 4] = w71[l];
+        *(vd *)yt[130] = w71;
         w85 = -w85;
-        if (out[9]) for (int l = 0; l < m; ++l) out[9][(s0 + l) * out_stride[9] + 5] = w85[l];
+        *(vd *)yt[131] = w85;
         w368 = w368 + w370;
         w368 = w368 + w373;
         w368 = v_sqrt(w368);
@@ -6098,7 +6114,7 @@ void gsfric_model_eval_batch(const double **in, const long long *in_stride,
         w370 = w370 / w371;
         w373 = w373 + w370;
         w373 = -w373;
-        if (out[10]) for (int l = 0; l < m; ++l) out[10][(s0 + l) * out_stride[10] + 0] = w373[l];
+        *(vd *)yt[132] = w373;
         w51 = w51 + w379;
         w51 = w51 + w382;
         w51 = v_sqrt(w51);
@@ -6108,7 +6124,7 @@ void gsfric_model_eval_batch(const double **in, const long long *in_stride,
         w379 = w379 / w380;
         w382 = w382 + w379;
         w382 = -w382;
-        if (out[10]) for (int l = 0; l < m; ++l) out[10][(s0 + l) * out_stride[10] + 1] = w382[l];
+        *(vd *)yt[133] = w382;
         w108 = w108 + w388;
         w108 = w108 + w391;
         w108 = v_sqrt(w108);
@@ -6118,7 +6134,7 @@ void gsfric_model_eval_batch(const double **in, const long long *in_stride,
         w388 = w388 / w389;
         w391 = w391 + w388;
         w391 = -w391;
-        if (out[10]) for (int l = 0; l < m; ++l) out[10][(s0 + l) * out_stride[10] + 2] = w391[l];
+        *(vd *)yt[134] = w391;
         w52 = w52 + w396;
         w52 = w52 + w399;
         w52 = v_sqrt(w52);
@@ -6128,7 +6144,7 @@ void gsfric_model_eval_batch(const double **in, const long long *in_stride,
         w396 = w396 / w397;
         w399 = w399 + w396;
         w399 = -w399;
-        if (out[10]) for (int l = 0; l < m; ++l) out[10][(s0 + l) * out_stride[10] + 3] = w399[l];
+        *(vd *)yt[135] = w399;
         w84 = w84 + w404;
         w84 = w84 + w407;
         w84 = v_sqrt(w84);
@@ -6138,7 +6154,7 @@ void gsfric_model_eval_batch(const double **in, const long long *in_stride,
         w404 = w404 / w405;
         w407 = w407 + w404;
         w407 = -w407;
-        if (out[10]) for (int l = 0; l < m; ++l) out[10][(s0 + l) * out_stride[10] + 4] = w407[l];
+        *(vd *)yt[136] = w407;
         w114 = w114 + w410;
         w114 = w114 + w412;
         w114 = v_sqrt(w114);
@@ -6148,7 +6164,7 @@ void gsfric_model_eval_batch(const double **in, const long long *in_stride,
         w410 = w410 / w411;
         w412 = w412 + w410;
         w412 = -w412;
-        if (out[10]) for (int l = 0; l < m; ++l) out[10][(s0 + l) * out_stride[10] + 5] = w412[l];
+        *(vd *)yt[137] = w412;
         w40 = w40 + w1;
         w40 = w40 + w415;
         w40 = v_sqrt(w40);
@@ -6158,7 +6174,7 @@ void gsfric_model_eval_batch(const double **in, const long long *in_stride,
         w1 = w1 / w414;
         w415 = w415 + w1;
         w415 = -w415;
-        if (out[11]) for (int l = 0; l < m; ++l) out[11][(s0 + l) * out_stride[11] + 0] = w415[l];
+        *(vd *)yt[138] = w415;
         w426 = w426 + w427;
         w426 = w426 + w429;
         w426 = v_sqrt(w426);
@@ -6168,7 +6184,7 @@ void gsfric_model_eval_batch(const double **in, const long long *in_stride,
         w427 = w427 / w428;
         w429 = w429 + w427;
         w429 = -w429;
-        if (out[11]) for (int l = 0; l < m; ++l) out[11][(s0 + l) * out_stride[11] + 1] = w429[l];
+        *(vd *)yt[139] = w429;
         w440 = w440 + w441;
         w440 = w440 + w443;
         w440 = v_sqrt(w440);
@@ -6178,7 +6194,7 @@ void gsfric_model_eval_batch(const double **in, const long long *in_stride,
         w441 = w441 / w442;
         w443 = w443 + w441;
         w443 = -w443;
-        if (out[11]) for (int l = 0; l < m; ++l) out[11][(s0 + l) * out_stride[11] + 2] = w443[l];
+        *(vd *)yt[140] = w443;
         w454 = w454 + w455;
         w454 = w454 + w457;
         w454 = v_sqrt(w454);
@@ -6188,7 +6204,7 @@ void gsfric_model_eval_batch(const double **in, const long long *in_stride,
         w455 = w455 / w456;
         w457 = w457 + w455;
         w457 = -w457;
-        if (out[11]) for (int l = 0; l < m; ++l) out[11][(s0 + l) * out_stride[11] + 3] = w457[l];
+        *(vd *)yt[141] = w457;
         w468 = w468 + w469;
         w468 = w468 + w471;
         w468 = v_sqrt(w468);
@@ -6198,7 +6214,7 @@ void gsfric_model_eval_batch(const double **in, const long long *in_stride,
         w469 = w469 / w470;
         w471 = w471 + w469;
         w471 = -w471;
-        if (out[11]) for (int l = 0; l < m; ++l) out[11][(s0 + l) * out_stride[11] + 4] = w471[l];
+        *(vd *)yt[142] = w471;
         w48 = w48 + w481;
         w48 = w48 + w483;
         w48 = v_sqrt(w48);
@@ -6208,121 +6224,121 @@ void gsfric_model_eval_batch(const double **in, const long long *in_stride,
         w364 = w364 / w482;
         w363 = w363 + w364;
         w363 = -w363;
-        if (out[11]) for (int l = 0; l < m; ++l) out[11][(s0 + l) * out_stride[11] + 5] = w363[l];
+        *(vd *)yt[143] = w363;
         w363 = h4124 * w365;
         w350 = h4226 / w350;
         w350 = w350 * w366;
         w350 = w350 * w365;
         w363 = w363 + w350;
         w363 = -w363;
-        if (out[12]) for (int l = 0; l < m; ++l) out[12][(s0 + l) * out_stride[12] + 0] = w363[l];
+        *(vd *)yt[144] = w363;
         w363 = h4124 * w119;
         w252 = h4226 / w252;
         w252 = w252 * w92;
         w252 = w252 * w119;
         w363 = w363 + w252;
         w363 = -w363;
-        if (out[12]) for (int l = 0; l < m; ++l) out[12][(s0 + l) * out_stride[12] + 1] = w363[l];
+        *(vd *)yt[145] = w363;
         w363 = h4124 * w152;
         w153 = h4226 / w153;
         w153 = w153 * w6;
         w153 = w153 * w152;
         w363 = w363 + w153;
         w363 = -w363;
-        if (out[12]) for (int l = 0; l < m; ++l) out[12][(s0 + l) * out_stride[12] + 2] = w363[l];
+        *(vd *)yt[146] = w363;
         w363 = h4124 * w195;
         w196 = h4226 / w196;
         w196 = w196 * w149;
         w196 = w196 * w195;
         w363 = w363 + w196;
         w363 = -w363;
-        if (out[12]) for (int l = 0; l < m; ++l) out[12][(s0 + l) * out_stride[12] + 3] = w363[l];
+        *(vd *)yt[147] = w363;
         w363 = h4124 * w238;
         w239 = h4226 / w239;
         w239 = w239 * w192;
         w239 = w239 * w238;
         w363 = w363 + w239;
         w363 = -w363;
-        if (out[12]) for (int l = 0; l < m; ++l) out[12][(s0 + l) * out_stride[12] + 4] = w363[l];
+        *(vd *)yt[148] = w363;
         w312 = h4124 * w352;
         w359 = h4226 / w349;
         w359 = w359 * w348;
         w359 = w359 * w352;
         w312 = w312 + w359;
         w312 = -w312;
-        if (out[12]) for (int l = 0; l < m; ++l) out[12][(s0 + l) * out_stride[12] + 5] = w312[l];
-        if (out[13]) for (int l = 0; l < m; ++l) out[13][(s0 + l) * out_stride[13] + 0] = w11[l];
-        if (out[13]) for (int l = 0; l < m; ++l) out[13][(s0 + l) * out_stride[13] + 1] = w133[l];
-        if (out[13]) for (int l = 0; l < m; ++l) out[13][(s0 + l) * out_stride[13] + 2] = w156[l];
-        if (out[13]) for (int l = 0; l < m; ++l) out[13][(s0 + l) * out_stride[13] + 3] = w199[l];
-        if (out[13]) for (int l = 0; l < m; ++l) out[13][(s0 + l) * out_stride[13] + 4] = w242[l];
-        if (out[13]) for (int l = 0; l < m; ++l) out[13][(s0 + l) * out_stride[13] + 5] = w303[l];
-        if (out[14]) for (int l = 0; l < m; ++l) out[14][(s0 + l) * out_stride[14] + 0] = w49[l];
-        if (out[14]) for (int l = 0; l < m; ++l) out[14][(s0 + l) * out_stride[14] + 1] = w151[l];
-        if (out[14]) for (int l = 0; l < m; ++l) out[14][(s0 + l) * out_stride[14] + 2] = w194[l];
-        if (out[14]) for (int l = 0; l < m; ++l) out[14][(s0 + l) * out_stride[14] + 3] = w237[l];
-        if (out[14]) for (int l = 0; l < m; ++l) out[14][(s0 + l) * out_stride[14] + 4] = w280[l];
-        if (out[14]) for (int l = 0; l < m; ++l) out[14][(s0 + l) * out_stride[14] + 5] = w319[l];
-        if (out[15]) for (int l = 0; l < m; ++l) out[15][(s0 + l) * out_stride[15] + 0] = w10[l];
-        if (out[15]) for (int l = 0; l < m; ++l) out[15][(s0 + l) * out_stride[15] + 1] = w19[l];
-        if (out[15]) for (int l = 0; l < m; ++l) out[15][(s0 + l) * out_stride[15] + 2] = w27[l];
-        if (out[15]) for (int l = 0; l < m; ++l) out[15][(s0 + l) * out_stride[15] + 3] = w132[l];
-        if (out[15]) for (int l = 0; l < m; ++l) out[15][(s0 + l) * out_stride[15] + 4] = w128[l];
-        if (out[15]) for (int l = 0; l < m; ++l) out[15][(s0 + l) * out_stride[15] + 5] = w137[l];
-        if (out[15]) for (int l = 0; l < m; ++l) out[15][(s0 + l) * out_stride[15] + 6] = w155[l];
-        if (out[15]) for (int l = 0; l < m; ++l) out[15][(s0 + l) * out_stride[15] + 7] = w177[l];
-        if (out[15]) for (int l = 0; l < m; ++l) out[15][(s0 + l) * out_stride[15] + 8] = w180[l];
-        if (out[15]) for (int l = 0; l < m; ++l) out[15][(s0 + l) * out_stride[15] + 9] = w198[l];
-        if (out[15]) for (int l = 0; l < m; ++l) out[15][(s0 + l) * out_stride[15] + 10] = w220[l];
-        if (out[15]) for (int l = 0; l < m; ++l) out[15][(s0 + l) * out_stride[15] + 11] = w223[l];
-        if (out[15]) for (int l = 0; l < m; ++l) out[15][(s0 + l) * out_stride[15] + 12] = w241[l];
-        if (out[15]) for (int l = 0; l < m; ++l) out[15][(s0 + l) * out_stride[15] + 13] = w263[l];
-        if (out[15]) for (int l = 0; l < m; ++l) out[15][(s0 + l) * out_stride[15] + 14] = w266[l];
-        if (out[15]) for (int l = 0; l < m; ++l) out[15][(s0 + l) * out_stride[15] + 15] = w304[l];
-        if (out[15]) for (int l = 0; l < m; ++l) out[15][(s0 + l) * out_stride[15] + 16] = w287[l];
-        if (out[15]) for (int l = 0; l < m; ++l) out[15][(s0 + l) * out_stride[15] + 17] = w292[l];
-        if (out[16]) for (int l = 0; l < m; ++l) out[16][(s0 + l) * out_stride[16] + 0] = w61[l];
-        if (out[16]) for (int l = 0; l < m; ++l) out[16][(s0 + l) * out_stride[16] + 1] = w64[l];
-        if (out[16]) for (int l = 0; l < m; ++l) out[16][(s0 + l) * out_stride[16] + 2] = w66[l];
-        if (out[16]) for (int l = 0; l < m; ++l) out[16][(s0 + l) * out_stride[16] + 3] = w154[l];
-        if (out[16]) for (int l = 0; l < m; ++l) out[16][(s0 + l) * out_stride[16] + 4] = w159[l];
-        if (out[16]) for (int l = 0; l < m; ++l) out[16][(s0 + l) * out_stride[16] + 5] = w161[l];
-        if (out[16]) for (int l = 0; l < m; ++l) out[16][(s0 + l) * out_stride[16] + 6] = w197[l];
-        if (out[16]) for (int l = 0; l < m; ++l) out[16][(s0 + l) * out_stride[16] + 7] = w202[l];
-        if (out[16]) for (int l = 0; l < m; ++l) out[16][(s0 + l) * out_stride[16] + 8] = w204[l];
-        if (out[16]) for (int l = 0; l < m; ++l) out[16][(s0 + l) * out_stride[16] + 9] = w240[l];
-        if (out[16]) for (int l = 0; l < m; ++l) out[16][(s0 + l) * out_stride[16] + 10] = w245[l];
-        if (out[16]) for (int l = 0; l < m; ++l) out[16][(s0 + l) * out_stride[16] + 11] = w247[l];
-        if (out[16]) for (int l = 0; l < m; ++l) out[16][(s0 + l) * out_stride[16] + 12] = w283[l];
-        if (out[16]) for (int l = 0; l < m; ++l) out[16][(s0 + l) * out_stride[16] + 13] = w288[l];
-        if (out[16]) for (int l = 0; l < m; ++l) out[16][(s0 + l) * out_stride[16] + 14] = w290[l];
-        if (out[16]) for (int l = 0; l < m; ++l) out[16][(s0 + l) * out_stride[16] + 15] = w315[l];
-        if (out[16]) for (int l = 0; l < m; ++l) out[16][(s0 + l) * out_stride[16] + 16] = w323[l];
-        if (out[16]) for (int l = 0; l < m; ++l) out[16][(s0 + l) * out_stride[16] + 17] = w325[l];
-        if (out[17]) for (int l = 0; l < m; ++l) out[17][(s0 + l) * out_stride[17] + 0] = w100[l];
-        if (out[17]) for (int l = 0; l < m; ++l) out[17][(s0 + l) * out_stride[17] + 1] = w369[l];
-        if (out[17]) for (int l = 0; l < m; ++l) out[17][(s0 + l) * out_stride[17] + 2] = w372[l];
-        if (out[17]) for (int l = 0; l < m; ++l) out[17][(s0 + l) * out_stride[17] + 3] = w62[l];
-        if (out[17]) for (int l = 0; l < m; ++l) out[17][(s0 + l) * out_stride[17] + 4] = w378[l];
-        if (out[17]) for (int l = 0; l < m; ++l) out[17][(s0 + l) * out_stride[17] + 5] = w381[l];
-        if (out[17]) for (int l = 0; l < m; ++l) out[17][(s0 + l) * out_stride[17] + 6] = w383[l];
-        if (out[17]) for (int l = 0; l < m; ++l) out[17][(s0 + l) * out_stride[17] + 7] = w387[l];
-        if (out[17]) for (int l = 0; l < m; ++l) out[17][(s0 + l) * out_stride[17] + 8] = w390[l];
-        if (out[17]) for (int l = 0; l < m; ++l) out[17][(s0 + l) * out_stride[17] + 9] = w385[l];
-        if (out[17]) for (int l = 0; l < m; ++l) out[17][(s0 + l) * out_stride[17] + 10] = w395[l];
-        if (out[17]) for (int l = 0; l < m; ++l) out[17][(s0 + l) * out_stride[17] + 11] = w398[l];
-        if (out[17]) for (int l = 0; l < m; ++l) out[17][(s0 + l) * out_stride[17] + 12] = w393[l];
-        if (out[17]) for (int l = 0; l < m; ++l) out[17][(s0 + l) * out_stride[17] + 13] = w403[l];
-        if (out[17]) for (int l = 0; l < m; ++l) out[17][(s0 + l) * out_stride[17] + 14] = w406[l];
-        if (out[17]) for (int l = 0; l < m; ++l) out[17][(s0 + l) * out_stride[17] + 15] = w41[l];
-        if (out[17]) for (int l = 0; l < m; ++l) out[17][(s0 + l) * out_stride[17] + 16] = w47[l];
-        if (out[17]) for (int l = 0; l < m; ++l) out[17][(s0 + l) * out_stride[17] + 17] = w42[l];
-        if (out[18]) for (int l = 0; l < m; ++l) out[18][(s0 + l) * out_stride[18] + 0] = w35[l];
-        if (out[18]) for (int l = 0; l < m; ++l) out[18][(s0 + l) * out_stride[18] + 1] = w144[l];
-        if (out[18]) for (int l = 0; l < m; ++l) out[18][(s0 + l) * out_stride[18] + 2] = w187[l];
-        if (out[18]) for (int l = 0; l < m; ++l) out[18][(s0 + l) * out_stride[18] + 3] = w230[l];
-        if (out[18]) for (int l = 0; l < m; ++l) out[18][(s0 + l) * out_stride[18] + 4] = w273[l];
-        if (out[18]) for (int l = 0; l < m; ++l) out[18][(s0 + l) * out_stride[18] + 5] = w31[l];
+        *(vd *)yt[149] = w312;
+        *(vd *)yt[150] = w11;
+        *(vd *)yt[151] = w133;
+        *(vd *)yt[152] = w156;
+        *(vd *)yt[153] = w199;
+        *(vd *)yt[154] = w242;
+        *(vd *)yt[155] = w303;
+        *(vd *)yt[156] = w49;
+        *(vd *)yt[157] = w151;
+        *(vd *)yt[158] = w194;
+        *(vd *)yt[159] = w237;
+        *(vd *)yt[160] = w280;
+        *(vd *)yt[161] = w319;
+        *(vd *)yt[162] = w10;
+        *(vd *)yt[163] = w19;
+        *(vd *)yt[164] = w27;
+        *(vd *)yt[165] = w132;
+        *(vd *)yt[166] = w128;
+        *(vd *)yt[167] = w137;
+        *(vd *)yt[168] = w155;
+        *(vd *)yt[169] = w177;
+        *(vd *)yt[170] = w180;
+        *(vd *)yt[171] = w198;
+        *(vd *)yt[172] = w220;
+        *(vd *)yt[173] = w223;
+        *(vd *)yt[174] = w241;
+        *(vd *)yt[175] = w263;
+        *(vd *)yt[176] = w266;
+        *(vd *)yt[177] = w304;
+        *(vd *)yt[178] = w287;
+        *(vd *)yt[179] = w292;
+        *(vd *)yt[180] = w61;
+        *(vd *)yt[181] = w64;
+        *(vd *)yt[182] = w66;
+        *(vd *)yt[183] = w154;
+        *(vd *)yt[184] = w159;
+        *(vd *)yt[185] = w161;
+        *(vd *)yt[186] = w197;
+        *(vd *)yt[187] = w202;
+        *(vd *)yt[188] = w204;
+        *(vd *)yt[189] = w240;
+        *(vd *)yt[190] = w245;
+        *(vd *)yt[191] = w247;
+        *(vd *)yt[192] = w283;
+        *(vd *)yt[193] = w288;
+        *(vd *)yt[194] = w290;
+        *(vd *)yt[195] = w315;
+        *(vd *)yt[196] = w323;
+        *(vd *)yt[197] = w325;
+        *(vd *)yt[198] = w100;
+        *(vd *)yt[199] = w369;
+        *(vd *)yt[200] = w372;
+        *(vd *)yt[201] = w62;
+        *(vd *)yt[202] = w378;
+        *(vd *)yt[203] = w381;
+        *(vd *)yt[204] = w383;
+        *(vd *)yt[205] = w387;
+        *(vd *)yt[206] = w390;
+        *(vd *)yt[207] = w385;
+        *(vd *)yt[208] = w395;
+        *(vd *)yt[209] = w398;
+        *(vd *)yt[210] = w393;
+        *(vd *)yt[211] = w403;
+        *(vd *)yt[212] = w406;
+        *(vd *)yt[213] = w41;
+        *(vd *)yt[214] = w47;
+        *(vd *)yt[215] = w42;
+        *(vd *)yt[216] = w35;
+        *(vd *)yt[217] = w144;
+        *(vd *)yt[218] = w187;
+        *(vd *)yt[219] = w230;
+        *(vd *)yt[220] = w273;
+        *(vd *)yt[221] = w31;
         w9 = h13 - w8;
         w31 = w126 - w17;
         w273 = w9 * w31;
@@ -6352,7 +6368,7 @@ void gsfric_model_eval_batch(const double **in, const long long *in_stride,
         w31 = w361 / w187;
         w31 = w31 * w273;
         w144 = w144 + w31;
-        if (out[19]) for (int l = 0; l < m; ++l) out[19][(s0 + l) * out_stride[19] + 0] = w144[l];
+        *(vd *)yt[222] = w144;
         w144 = w9 * w230;
         w31 = w18 * w35;
         w144 = w144 - w31;
@@ -6376,7 +6392,7 @@ void gsfric_model_eval_batch(const double **in, const long long *in_stride,
         w406 = w361 / w31;
         w406 = w406 * w144;
         w41 = w41 + w406;
-        if (out[19]) for (int l = 0; l < m; ++l) out[19][(s0 + l) * out_stride[19] + 1] = w41[l];
+        *(vd *)yt[223] = w41;
         w41 = w9 * w9;
         w406 = w18 * w18;
         w41 = w41 + w406;
@@ -6391,7 +6407,7 @@ void gsfric_model_eval_batch(const double **in, const long long *in_stride,
         w361 = w361 / w41;
         w361 = w361 * w26;
         w58 = w58 + w361;
-        if (out[19]) for (int l = 0; l < m; ++l) out[19][(s0 + l) * out_stride[19] + 2] = w58[l];
+        *(vd *)yt[224] = w58;
         w131 = h675 - w130;
         w58 = w143 - w126;
         w361 = w131 * w58;
@@ -6421,7 +6437,7 @@ void gsfric_model_eval_batch(const double **in, const long long *in_stride,
         w58 = w146 / w126;
         w58 = w58 * w361;
         w105 = w105 + w58;
-        if (out[19]) for (int l = 0; l < m; ++l) out[19][(s0 + l) * out_stride[19] + 3] = w105[l];
+        *(vd *)yt[225] = w105;
         w105 = w131 * w130;
         w58 = w127 * w406;
         w105 = w105 - w58;
@@ -6445,7 +6461,7 @@ void gsfric_model_eval_batch(const double **in, const long long *in_stride,
         w398 = w146 / w58;
         w398 = w398 * w105;
         w393 = w393 + w398;
-        if (out[19]) for (int l = 0; l < m; ++l) out[19][(s0 + l) * out_stride[19] + 4] = w393[l];
+        *(vd *)yt[226] = w393;
         w393 = w131 * w131;
         w398 = w127 * w127;
         w393 = w393 + w398;
@@ -6460,7 +6476,7 @@ void gsfric_model_eval_batch(const double **in, const long long *in_stride,
         w146 = w146 / w393;
         w146 = w146 * w136;
         w423 = w423 + w146;
-        if (out[19]) for (int l = 0; l < m; ++l) out[19][(s0 + l) * out_stride[19] + 5] = w423[l];
+        *(vd *)yt[227] = w423;
         w174 = h1176 - w175;
         w423 = w186 - w143;
         w146 = w174 * w423;
@@ -6490,7 +6506,7 @@ void gsfric_model_eval_batch(const double **in, const long long *in_stride,
         w423 = w189 / w143;
         w423 = w423 * w146;
         w425 = w425 + w423;
-        if (out[19]) for (int l = 0; l < m; ++l) out[19][(s0 + l) * out_stride[19] + 6] = w425[l];
+        *(vd *)yt[228] = w425;
         w425 = w174 * w175;
         w423 = w158 * w398;
         w425 = w425 - w423;
@@ -6514,7 +6530,7 @@ void gsfric_model_eval_batch(const double **in, const long long *in_stride,
         w390 = w189 / w423;
         w390 = w390 * w425;
         w385 = w385 + w390;
-        if (out[19]) for (int l = 0; l < m; ++l) out[19][(s0 + l) * out_stride[19] + 7] = w385[l];
+        *(vd *)yt[229] = w385;
         w385 = w174 * w174;
         w390 = w158 * w158;
         w385 = w385 + w390;
@@ -6529,7 +6545,7 @@ void gsfric_model_eval_batch(const double **in, const long long *in_stride,
         w189 = w189 / w385;
         w189 = w189 * w179;
         w437 = w437 + w189;
-        if (out[19]) for (int l = 0; l < m; ++l) out[19][(s0 + l) * out_stride[19] + 8] = w437[l];
+        *(vd *)yt[230] = w437;
         w217 = h1677 - w218;
         w437 = w229 - w186;
         w189 = w217 * w437;
@@ -6559,7 +6575,7 @@ void gsfric_model_eval_batch(const double **in, const long long *in_stride,
         w437 = w232 / w186;
         w437 = w437 * w189;
         w439 = w439 + w437;
-        if (out[19]) for (int l = 0; l < m; ++l) out[19][(s0 + l) * out_stride[19] + 9] = w439[l];
+        *(vd *)yt[231] = w439;
         w439 = w217 * w218;
         w437 = w201 * w390;
         w439 = w439 - w437;
@@ -6583,7 +6599,7 @@ void gsfric_model_eval_batch(const double **in, const long long *in_stride,
         w381 = w232 / w437;
         w381 = w381 * w439;
         w383 = w383 + w381;
-        if (out[19]) for (int l = 0; l < m; ++l) out[19][(s0 + l) * out_stride[19] + 10] = w383[l];
+        *(vd *)yt[232] = w383;
         w383 = w217 * w217;
         w381 = w201 * w201;
         w383 = w383 + w381;
@@ -6598,7 +6614,7 @@ void gsfric_model_eval_batch(const double **in, const long long *in_stride,
         w232 = w232 / w383;
         w232 = w232 * w222;
         w451 = w451 + w232;
-        if (out[19]) for (int l = 0; l < m; ++l) out[19][(s0 + l) * out_stride[19] + 11] = w451[l];
+        *(vd *)yt[233] = w451;
         w260 = h2178 - w261;
         w451 = w12 - w229;
         w232 = w260 * w451;
@@ -6628,7 +6644,7 @@ void gsfric_model_eval_batch(const double **in, const long long *in_stride,
         w451 = w275 / w229;
         w451 = w451 * w232;
         w453 = w453 + w451;
-        if (out[19]) for (int l = 0; l < m; ++l) out[19][(s0 + l) * out_stride[19] + 12] = w453[l];
+        *(vd *)yt[234] = w453;
         w453 = w260 * w261;
         w451 = w244 * w381;
         w453 = w453 - w451;
@@ -6652,7 +6668,7 @@ void gsfric_model_eval_batch(const double **in, const long long *in_stride,
         w372 = w275 / w451;
         w372 = w372 * w453;
         w62 = w62 + w372;
-        if (out[19]) for (int l = 0; l < m; ++l) out[19][(s0 + l) * out_stride[19] + 13] = w62[l];
+        *(vd *)yt[235] = w62;
         w62 = w260 * w260;
         w372 = w244 * w244;
         w62 = w62 + w372;
@@ -6667,7 +6683,7 @@ void gsfric_model_eval_batch(const double **in, const long long *in_stride,
         w275 = w275 / w62;
         w275 = w275 * w265;
         w465 = w465 + w275;
-        if (out[19]) for (int l = 0; l < m; ++l) out[19][(s0 + l) * out_stride[19] + 14] = w465[l];
+        *(vd *)yt[236] = w465;
         w291 = h2679 - w0;
         w17 = w17 - w12;
         w465 = w291 * w17;
@@ -6697,7 +6713,7 @@ void gsfric_model_eval_batch(const double **in, const long long *in_stride,
         w17 = w314 / w0;
         w17 = w17 * w465;
         w25 = w25 + w17;
-        if (out[19]) for (int l = 0; l < m; ++l) out[19][(s0 + l) * out_stride[19] + 15] = w25[l];
+        *(vd *)yt[237] = w25;
         w25 = w291 * w8;
         w17 = w272 * w12;
         w25 = w25 - w17;
@@ -6721,7 +6737,7 @@ void gsfric_model_eval_batch(const double **in, const long long *in_stride,
         w372 = w314 / w17;
         w372 = w372 * w25;
         w467 = w467 + w372;
-        if (out[19]) for (int l = 0; l < m; ++l) out[19][(s0 + l) * out_stride[19] + 16] = w467[l];
+        *(vd *)yt[238] = w467;
         w467 = w291 * w291;
         w372 = w272 * w272;
         w467 = w467 + w372;
@@ -6736,7 +6752,7 @@ void gsfric_model_eval_batch(const double **in, const long long *in_stride,
         w314 = w314 / w467;
         w314 = w314 * w285;
         w479 = w479 + w314;
-        if (out[19]) for (int l = 0; l < m; ++l) out[19][(s0 + l) * out_stride[19] + 17] = w479[l];
+        *(vd *)yt[239] = w479;
         w479 = w57 / w187;
         w479 = w479 * w35;
         w35 = w76 / w187;
@@ -6745,7 +6761,7 @@ void gsfric_model_eval_batch(const double **in, const long long *in_stride,
         w187 = w86 / w187;
         w187 = w187 * w273;
         w479 = w479 + w187;
-        if (out[20]) for (int l = 0; l < m; ++l) out[20][(s0 + l) * out_stride[20] + 0] = w479[l];
+        *(vd *)yt[240] = w479;
         w479 = w57 / w31;
         w479 = w479 * w42;
         w42 = w76 / w31;
@@ -6754,7 +6770,7 @@ void gsfric_model_eval_batch(const double **in, const long long *in_stride,
         w31 = w86 / w31;
         w31 = w31 * w144;
         w479 = w479 + w31;
-        if (out[20]) for (int l = 0; l < m; ++l) out[20][(s0 + l) * out_stride[20] + 1] = w479[l];
+        *(vd *)yt[241] = w479;
         w57 = w57 / w41;
         w57 = w57 * w9;
         w76 = w76 / w41;
@@ -6763,7 +6779,7 @@ void gsfric_model_eval_batch(const double **in, const long long *in_stride,
         w86 = w86 / w41;
         w86 = w86 * w26;
         w57 = w57 + w86;
-        if (out[20]) for (int l = 0; l < m; ++l) out[20][(s0 + l) * out_stride[20] + 2] = w57[l];
+        *(vd *)yt[242] = w57;
         w57 = w172 / w126;
         w57 = w57 * w406;
         w406 = w171 / w126;
@@ -6772,7 +6788,7 @@ void gsfric_model_eval_batch(const double **in, const long long *in_stride,
         w126 = w168 / w126;
         w126 = w126 * w361;
         w57 = w57 + w126;
-        if (out[20]) for (int l = 0; l < m; ++l) out[20][(s0 + l) * out_stride[20] + 3] = w57[l];
+        *(vd *)yt[243] = w57;
         w57 = w172 / w58;
         w57 = w57 * w135;
         w135 = w171 / w58;
@@ -6781,7 +6797,7 @@ void gsfric_model_eval_batch(const double **in, const long long *in_stride,
         w58 = w168 / w58;
         w58 = w58 * w105;
         w57 = w57 + w58;
-        if (out[20]) for (int l = 0; l < m; ++l) out[20][(s0 + l) * out_stride[20] + 4] = w57[l];
+        *(vd *)yt[244] = w57;
         w172 = w172 / w393;
         w172 = w172 * w131;
         w171 = w171 / w393;
@@ -6790,7 +6806,7 @@ void gsfric_model_eval_batch(const double **in, const long long *in_stride,
         w168 = w168 / w393;
         w168 = w168 * w136;
         w172 = w172 + w168;
-        if (out[20]) for (int l = 0; l < m; ++l) out[20][(s0 + l) * out_stride[20] + 5] = w172[l];
+        *(vd *)yt[245] = w172;
         w172 = w215 / w143;
         w172 = w172 * w398;
         w398 = w214 / w143;
@@ -6799,7 +6815,7 @@ void gsfric_model_eval_batch(const double **in, const long long *in_stride,
         w143 = w211 / w143;
         w143 = w143 * w146;
         w172 = w172 + w143;
-        if (out[20]) for (int l = 0; l < m; ++l) out[20][(s0 + l) * out_stride[20] + 6] = w172[l];
+        *(vd *)yt[246] = w172;
         w172 = w215 / w423;
         w172 = w172 * w178;
         w178 = w214 / w423;
@@ -6808,7 +6824,7 @@ void gsfric_model_eval_batch(const double **in, const long long *in_stride,
         w423 = w211 / w423;
         w423 = w423 * w425;
         w172 = w172 + w423;
-        if (out[20]) for (int l = 0; l < m; ++l) out[20][(s0 + l) * out_stride[20] + 7] = w172[l];
+        *(vd *)yt[247] = w172;
         w215 = w215 / w385;
         w215 = w215 * w174;
         w214 = w214 / w385;
@@ -6817,7 +6833,7 @@ void gsfric_model_eval_batch(const double **in, const long long *in_stride,
         w211 = w211 / w385;
         w211 = w211 * w179;
         w215 = w215 + w211;
-        if (out[20]) for (int l = 0; l < m; ++l) out[20][(s0 + l) * out_stride[20] + 8] = w215[l];
+        *(vd *)yt[248] = w215;
         w215 = w258 / w186;
         w215 = w215 * w390;
         w390 = w257 / w186;
@@ -6826,7 +6842,7 @@ void gsfric_model_eval_batch(const double **in, const long long *in_stride,
         w186 = w254 / w186;
         w186 = w186 * w189;
         w215 = w215 + w186;
-        if (out[20]) for (int l = 0; l < m; ++l) out[20][(s0 + l) * out_stride[20] + 9] = w215[l];
+        *(vd *)yt[249] = w215;
         w215 = w258 / w437;
         w215 = w215 * w221;
         w221 = w257 / w437;
@@ -6835,7 +6851,7 @@ void gsfric_model_eval_batch(const double **in, const long long *in_stride,
         w437 = w254 / w437;
         w437 = w437 * w439;
         w215 = w215 + w437;
-        if (out[20]) for (int l = 0; l < m; ++l) out[20][(s0 + l) * out_stride[20] + 10] = w215[l];
+        *(vd *)yt[250] = w215;
         w258 = w258 / w383;
         w258 = w258 * w217;
         w257 = w257 / w383;
@@ -6844,7 +6860,7 @@ void gsfric_model_eval_batch(const double **in, const long long *in_stride,
         w254 = w254 / w383;
         w254 = w254 * w222;
         w258 = w258 + w254;
-        if (out[20]) for (int l = 0; l < m; ++l) out[20][(s0 + l) * out_stride[20] + 11] = w258[l];
+        *(vd *)yt[251] = w258;
         w258 = w301 / w229;
         w258 = w258 * w381;
         w381 = w300 / w229;
@@ -6853,7 +6869,7 @@ void gsfric_model_eval_batch(const double **in, const long long *in_stride,
         w229 = w297 / w229;
         w229 = w229 * w232;
         w258 = w258 + w229;
-        if (out[20]) for (int l = 0; l < m; ++l) out[20][(s0 + l) * out_stride[20] + 12] = w258[l];
+        *(vd *)yt[252] = w258;
         w258 = w301 / w451;
         w258 = w258 * w264;
         w264 = w300 / w451;
@@ -6862,7 +6878,7 @@ void gsfric_model_eval_batch(const double **in, const long long *in_stride,
         w451 = w297 / w451;
         w451 = w451 * w453;
         w258 = w258 + w451;
-        if (out[20]) for (int l = 0; l < m; ++l) out[20][(s0 + l) * out_stride[20] + 13] = w258[l];
+        *(vd *)yt[253] = w258;
         w301 = w301 / w62;
         w301 = w301 * w260;
         w300 = w300 / w62;
@@ -6871,7 +6887,7 @@ void gsfric_model_eval_batch(const double **in, const long long *in_stride,
         w297 = w297 / w62;
         w297 = w297 * w265;
         w301 = w301 + w297;
-        if (out[20]) for (int l = 0; l < m; ++l) out[20][(s0 + l) * out_stride[20] + 14] = w301[l];
+        *(vd *)yt[254] = w301;
         w301 = w337 / w0;
         w301 = w301 * w12;
         w12 = w335 / w0;
@@ -6880,7 +6896,7 @@ void gsfric_model_eval_batch(const double **in, const long long *in_stride,
         w0 = w332 / w0;
         w0 = w0 * w465;
         w301 = w301 + w0;
-        if (out[20]) for (int l = 0; l < m; ++l) out[20][(s0 + l) * out_stride[20] + 15] = w301[l];
+        *(vd *)yt[255] = w301;
         w301 = w337 / w17;
         w301 = w301 * w20;
         w20 = w335 / w17;
@@ -6889,7 +6905,7 @@ void gsfric_model_eval_batch(const double **in, const long long *in_stride,
         w17 = w332 / w17;
         w17 = w17 * w25;
         w301 = w301 + w17;
-        if (out[20]) for (int l = 0; l < m; ++l) out[20][(s0 + l) * out_stride[20] + 16] = w301[l];
+        *(vd *)yt[256] = w301;
         w337 = w337 / w467;
         w337 = w337 * w291;
         w335 = w335 / w467;
@@ -6898,7 +6914,7 @@ void gsfric_model_eval_batch(const double **in, const long long *in_stride,
         w332 = w332 / w467;
         w332 = w332 * w285;
         w337 = w337 + w332;
-        if (out[20]) for (int l = 0; l < m; ++l) out[20][(s0 + l) * out_stride[20] + 17] = w337[l];
+        *(vd *)yt[257] = w337;
         w32 = w32 + w102;
         w32 = w32 + w43;
         w63 = w63 + w83;
@@ -6991,12 +7007,33 @@ void gsfric_model_eval_batch(const double **in, const long long *in_stride,
         w347 = v_inv(w347);
         w347 = v_fabs(w347);
         w337 = w337 / w347;
-        if (out[21]) for (int l = 0; l < m; ++l) out[21][(s0 + l) * out_stride[21] + 0] = w337[l];
+        *(vd *)yt[258] = w337;
+        if (bad) {  /* 1 where some output is infinite or NaN (v - v is NaN) */
+            vl b = (vl)v_splat(0.0);
+            for (int k = 0; k < 259; ++k) {
+                vd v = *(const vd *)yt[k], z = v - v;
+                b |= (vl)(z != z);
+            }
+            for (int l = 0; l < m; ++l) bad[s0 + l] = b[l] != 0;
+        }
+        /* outputs: one loop, rows of each step written whole */
+        for (int j = 0, b = 0; j < 22; b += size[j], ++j) {
+            if (!out[j]) continue;
+            for (int l = 0; l < m; ++l) {
+                double *row = out[j] + (s0 + l) * out_stride[j];
+                if (stream)
+                    for (int o = 0; o < size[j]; ++o) STREAM(row + o, yt[b + o][l]);
+                else
+                    for (int o = 0; o < size[j]; ++o) row[o] = yt[b + o][l];
+            }
+        }
     }
+    if (stream) STREAM_FENCE();
 }
 
 void gsfric_model_actuator_batch(const double **in, const long long *in_stride,
-                    double **out, const long long *out_stride, long long n)
+                    double **out, const long long *out_stride, long long n,
+                    long long *bad)
 {
     const vd h2 = v_splat(in[1][19]);
     const vd h5 = v_splat(in[1][20]);
@@ -7171,7 +7208,10 @@ void gsfric_model_actuator_batch(const double **in, const long long *in_stride,
     const vd h5654 = h4147 + h4147;
     const vd h5655 = h5654 / h4149;
     vd w0; vd w1; vd w2; vd w3; vd w4; vd w5; vd w6; vd w7; vd w8; vd w9; vd w10; vd w11; vd w12; vd w13; vd w14; vd w15; vd w16; vd w17; vd w18; vd w19; vd w20; vd w21; vd w22; vd w23; vd w24; vd w25; vd w26; vd w27; vd w28; vd w29; vd w30; vd w31; vd w32; vd w33; vd w34; vd w35; vd w36; vd w37; vd w38; vd w39; vd w40; vd w41; vd w42; vd w43; vd w44; vd w45; vd w46; vd w47; vd w48; vd w49; vd w50; vd w51; vd w52; vd w53; vd w54; vd w55; vd w56; vd w57; vd w58; vd w59; vd w60; vd w61; vd w62; vd w63; vd w64; vd w65; vd w66; vd w67; vd w68; vd w69; vd w70; vd w71; vd w72; vd w73; vd w74; vd w75; vd w76; vd w77; vd w78; vd w79; vd w80; vd w81; vd w82; vd w83; vd w84; vd w85; vd w86; vd w87; vd w88; vd w89; vd w90; vd w91; vd w92; vd w93; vd w94; vd w95; vd w96; vd w97; vd w98; vd w99; vd w100; vd w101; vd w102; vd w103; vd w104; vd w105; vd w106; vd w107; vd w108; vd w109; vd w110; vd w111; vd w112; vd w113; vd w114; vd w115; vd w116; vd w117; vd w118; vd w119; vd w120; vd w122; vd w123; vd w124; vd w125; vd w126; vd w127; vd w128; vd w129; vd w130; vd w131; vd w132; vd w133; vd w134; vd w135; vd w136; vd w137; vd w138; vd w139; vd w140; vd w141; vd w142; vd w143; vd w144; vd w145; vd w146; vd w147; vd w148; vd w149; vd w150; vd w151; vd w152; vd w153; vd w154; vd w155; vd w156; vd w157; vd w158; vd w159; vd w160; vd w161; vd w162; vd w163; vd w164; vd w165; vd w166; vd w167; vd w168; vd w169; vd w170; vd w171; vd w172; vd w173; vd w174; vd w175; vd w176; vd w177; vd w178; vd w179; vd w180; vd w181; vd w182; vd w183; vd w184; vd w185; vd w186; vd w187; vd w188; vd w189; vd w190; vd w191; vd w192; vd w193; vd w194; vd w195; vd w196; vd w197; vd w198; vd w199; vd w200; vd w201; vd w202; vd w203; vd w204; vd w205; vd w206; vd w207; vd w208; vd w209; vd w210; vd w211; vd w212; vd w213; vd w214; vd w215; vd w216; vd w217; vd w218; vd w219; vd w220; vd w221; vd w222; vd w223; vd w224; vd w225; vd w226; vd w227; vd w228; vd w229; vd w230; vd w231; vd w232; vd w233; vd w234; vd w235; vd w236; vd w237; vd w238; vd w239; vd w240; vd w241; vd w242; vd w243; vd w244; vd w245; vd w246; vd w247; vd w248; vd w249; vd w250; vd w251; vd w252; vd w253; vd w254; vd w255; vd w256; vd w257; vd w258; vd w259; vd w260; vd w261; vd w262; vd w263; vd w264; vd w265; vd w266; vd w267; vd w268; vd w269; vd w270; vd w271; vd w272; vd w273; vd w274; vd w275; vd w276; vd w277; vd w278; vd w279; vd w280; vd w281; vd w282; vd w283; vd w284; vd w285; vd w286; vd w287; vd w288; vd w289; vd w290; vd w291; vd w292; vd w293; vd w294; vd w295; vd w296; vd w297; vd w298; vd w299; vd w300; vd w301; vd w302; vd w303; vd w304; vd w305; vd w306; vd w307; vd w308; vd w309; vd w310; vd w311; vd w312; vd w313; vd w314; vd w315; vd w316; vd w317; vd w318; vd w319; vd w320; vd w321;
+    static const int size[1] = {6};
     double xt[24][GSFRIC_LANES] __attribute__((aligned(8 * GSFRIC_LANES)));
+    double yt[6][GSFRIC_LANES] __attribute__((aligned(8 * GSFRIC_LANES)));
+    int stream = n >= STREAM_STEPS;
     for (long long s0 = 0; s0 < n; s0 += GSFRIC_LANES) {
         int m = (int)(n - s0 < GSFRIC_LANES ? n - s0 : GSFRIC_LANES);
         for (int l = 0; l < GSFRIC_LANES; ++l) {
@@ -12162,7 +12202,7 @@ void gsfric_model_actuator_batch(const double **in, const long long *in_stride,
         w40 = w40 / w29;
         w40 = h4247 * w40;
         w281 = w281 + w40;
-        if (out[0]) for (int l = 0; l < m; ++l) out[0][(s0 + l) * out_stride[0] + 0] = w281[l];
+        *(vd *)yt[0] = w281;
         w281 = w132 + w81;
         w281 = w122 * w281;
         w40 = w147 + w55;
@@ -12281,7 +12321,7 @@ void gsfric_model_actuator_batch(const double **in, const long long *in_stride,
         w40 = w40 + w29;
         w110 = h4247 * w110;
         w40 = w40 + w110;
-        if (out[0]) for (int l = 0; l < m; ++l) out[0][(s0 + l) * out_stride[0] + 1] = w40[l];
+        *(vd *)yt[1] = w40;
         w40 = w171 + w82;
         w40 = w142 * w40;
         w110 = w186 + w311;
@@ -12400,7 +12440,7 @@ void gsfric_model_actuator_batch(const double **in, const long long *in_stride,
         w110 = w110 + w29;
         w107 = h4247 * w107;
         w110 = w110 + w107;
-        if (out[0]) for (int l = 0; l < m; ++l) out[0][(s0 + l) * out_stride[0] + 2] = w110[l];
+        *(vd *)yt[2] = w110;
         w110 = w210 + w17;
         w110 = w181 * w110;
         w107 = w225 + w9;
@@ -12519,7 +12559,7 @@ void gsfric_model_actuator_batch(const double **in, const long long *in_stride,
         w107 = w107 + w29;
         w15 = h4247 * w15;
         w107 = w107 + w15;
-        if (out[0]) for (int l = 0; l < m; ++l) out[0][(s0 + l) * out_stride[0] + 3] = w107[l];
+        *(vd *)yt[3] = w107;
         w107 = w249 + w32;
         w107 = w220 * w107;
         w15 = w264 + w313;
@@ -12638,7 +12678,7 @@ void gsfric_model_actuator_batch(const double **in, const long long *in_stride,
         w15 = w15 + w29;
         w153 = h4247 * w153;
         w15 = w15 + w153;
-        if (out[0]) for (int l = 0; l < m; ++l) out[0][(s0 + l) * out_stride[0] + 4] = w15[l];
+        *(vd *)yt[4] = w15;
         w15 = w284 + w312;
         w15 = w278 * w15;
         w153 = w64 + w99;
@@ -12757,6 +12797,26 @@ void gsfric_model_actuator_batch(const double **in, const long long *in_stride,
         w153 = w153 + w28;
         w103 = h4247 * w49;
         w153 = w153 + w103;
-        if (out[0]) for (int l = 0; l < m; ++l) out[0][(s0 + l) * out_stride[0] + 5] = w153[l];
+        *(vd *)yt[5] = w153;
+        if (bad) {  /* 1 where some output is infinite or NaN (v - v is NaN) */
+            vl b = (vl)v_splat(0.0);
+            for (int k = 0; k < 6; ++k) {
+                vd v = *(const vd *)yt[k], z = v - v;
+                b |= (vl)(z != z);
+            }
+            for (int l = 0; l < m; ++l) bad[s0 + l] = b[l] != 0;
+        }
+        /* outputs: one loop, rows of each step written whole */
+        for (int j = 0, b = 0; j < 1; b += size[j], ++j) {
+            if (!out[j]) continue;
+            for (int l = 0; l < m; ++l) {
+                double *row = out[j] + (s0 + l) * out_stride[j];
+                if (stream)
+                    for (int o = 0; o < size[j]; ++o) STREAM(row + o, yt[b + o][l]);
+                else
+                    for (int o = 0; o < size[j]; ++o) row[o] = yt[b + o][l];
+            }
+        }
     }
+    if (stream) STREAM_FENCE();
 }

@@ -19,6 +19,7 @@
 #include <math.h>
 #include <pthread.h>
 #include <stdlib.h>
+#include <string.h>
 
 typedef long long int casadi_int;
 typedef int (*casadi_eval_t)(const double **arg, double **res, casadi_int *iw, double *w,
@@ -26,12 +27,12 @@ typedef int (*casadi_eval_t)(const double **arg, double **res, casadi_int *iw, d
 typedef int (*casadi_work_t)(casadi_int *sz_arg, casadi_int *sz_res, casadi_int *sz_iw,
                              casadi_int *sz_w);
 typedef void (*batch_eval_t)(const double **in, const long long *in_stride, double **out,
-                             const long long *out_stride, long long n);
+                             const long long *out_stride, long long n, long long *bad);
 
 #define MAX_ARGS 64
 #define MAX_THREADS 64
 #define MIN_STEPS_PER_THREAD 2048  /* below this, creating a thread costs more than it saves */
-#define BLOCK 256                  /* steps evaluated before their flags (kept in cache) */
+#define BLOCK 32                   /* steps evaluated before their flags (64 KB of outputs, in cache) */
 
 /* The flags' bits: the same as gsfric/evaluation.py's FLAG_* */
 #define FLAG_NONFINITE 1
@@ -68,7 +69,23 @@ typedef struct {
     long long failed;
 } range_task;
 
-static void flag_steps(const range_task *t, long long s, long long e)
+/* 1 when none of y[0..n) is infinite or NaN (exponent bits all set), by integer operations
+ * that the compiler can vectorise */
+static int all_finite(const double *y, long long n)
+{
+    const unsigned long long exponent = 0x7ff0000000000000ULL;
+    unsigned long long bad = 0;
+    for (long long j = 0; j < n; ++j) {
+        unsigned long long bits;
+        memcpy(&bits, y + j, sizeof bits);
+        bad |= (bits & exponent) == exponent;
+    }
+    return !bad;
+}
+
+/* Flag steps s..e-1 into t->flag. With `checked`, t->flag[i] already holds 1 where some
+ * output of step i is non-finite (the SIMD function's `bad`), else the outputs are checked. */
+static void flag_steps(const range_task *t, long long s, long long e, int checked)
 {
     const gsfric_flags *fl = t->flags;
     int n_out = t->fn->n_out;
@@ -76,12 +93,13 @@ static void flag_steps(const range_task *t, long long s, long long e)
         long long f = 0;
         int finite = 1;
         const double *x = t->in[0] + i * t->in_stride[0];
-        for (long long j = 0; j < fl->x_size; ++j) finite &= isfinite(x[j]) != 0;
-        for (int k = 0; k < n_out; ++k) {
-            if (!t->out[k]) continue;
-            const double *y = t->out[k] + i * t->out_stride[k];
-            for (long long j = 0; j < t->out_stride[k]; ++j) finite &= isfinite(y[j]) != 0;
-        }
+        finite &= all_finite(x, fl->x_size);
+        if (checked)
+            finite &= t->flag[i] == 0;
+        else
+            for (int k = 0; k < n_out; ++k)
+                if (t->out[k])
+                    finite &= all_finite(t->out[k] + i * t->out_stride[k], t->out_stride[k]);
         /* the geometric causes on the values as computed (a NaN compares false), so that a
          * step made non-finite by one of them still names it */
         if (fl->d >= 0 && fl->has_stroke && t->out[fl->d]) {
@@ -132,25 +150,30 @@ static void *run_range(void *arg)
             goto done;
         }
     }
+    if (t->use_simd) {
+        /* one call over the range (long ranges stream their outputs past the caches); the
+         * non-finite outputs are found on the vectors before they are written */
+        const double *my_in[MAX_ARGS];
+        double *my_out[MAX_ARGS];
+        long long s = t->start;
+        for (int k = 0; k < n_in; ++k) my_in[k] = t->in[k] + s * t->in_stride[k];
+        for (int k = 0; k < n_out; ++k)
+            my_out[k] = t->out[k] ? t->out[k] + s * t->out_stride[k] : 0;
+        fn->simd(my_in, t->in_stride, my_out, t->out_stride, t->stop - s,
+                 t->flags ? t->flag + s : NULL);
+        if (t->flags) flag_steps(t, s, t->stop, 1);
+        goto done;
+    }
     long long block = t->flags ? BLOCK : t->stop - t->start;
     for (long long s = t->start; s < t->stop; s += block) {
         long long e = s + block < t->stop ? s + block : t->stop;
-        if (t->use_simd) {
-            const double *my_in[MAX_ARGS];
-            double *my_out[MAX_ARGS];
-            for (int k = 0; k < n_in; ++k) my_in[k] = t->in[k] + s * t->in_stride[k];
+        for (long long i = s; i < e; ++i) {
+            for (int k = 0; k < n_in; ++k) carg[k] = t->in[k] + i * t->in_stride[k];
             for (int k = 0; k < n_out; ++k)
-                my_out[k] = t->out[k] ? t->out[k] + s * t->out_stride[k] : 0;
-            fn->simd(my_in, t->in_stride, my_out, t->out_stride, e - s);
-        } else {
-            for (long long i = s; i < e; ++i) {
-                for (int k = 0; k < n_in; ++k) carg[k] = t->in[k] + i * t->in_stride[k];
-                for (int k = 0; k < n_out; ++k)
-                    cres[k] = t->out[k] ? t->out[k] + i * t->out_stride[k] : 0;
-                if (fn->eval(carg, cres, iw, w, 0)) t->failed += 1;
-            }
+                cres[k] = t->out[k] ? t->out[k] + i * t->out_stride[k] : 0;
+            if (fn->eval(carg, cres, iw, w, 0)) t->failed += 1;
         }
-        if (t->flags) flag_steps(t, s, e);
+        if (t->flags) flag_steps(t, s, e, 0);
     }
 done:
     free(carg);
