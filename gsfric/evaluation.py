@@ -32,6 +32,7 @@ from __future__ import annotations
 import functools
 import math
 import warnings
+import weakref
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -81,11 +82,26 @@ def _slots(function_name: str, input_name: str) -> tuple:
 
 def _pack(slots: tuple, values: dict) -> np.ndarray:
     size, where = slots
-    out = np.zeros(size)
+    flat: list[float] = []
     for name, start, stop in where:
         value = values[name]
-        out[start:stop] = np.ravel(value) if stop - start > 1 else value
-    return out
+        if stop - start == 1:
+            flat.append(float(value))
+        else:
+            flat.extend(np.ravel(value).tolist())
+    if len(flat) != size:  # the layout has gaps or a block has the wrong size
+        out = np.zeros(size)
+        for name, start, stop in where:
+            out[start:stop] = np.ravel(values[name])
+        return out
+    return np.array(flat)
+
+
+@functools.lru_cache(maxsize=None)
+def _effect_defaults() -> tuple:
+    from gsfric.catalog import EFFECTS
+
+    return tuple((name, tuple(params.items())) for name, params in EFFECTS.items())
 
 
 def state_into(out: np.ndarray, position, rotation, velocity, omega, acceleration,
@@ -124,13 +140,36 @@ def parameter_vector(platform: Platform) -> np.ndarray:
 
 def effect_vector(platform: Platform) -> np.ndarray:
     """The platform's effects packed into the effect-parameter input Q (defaults elsewhere)."""
-    from gsfric.catalog import EFFECTS
-
     values = []
-    for name, params in EFFECTS.items():
-        given = platform.effects.get(name, {})
-        values += [float(given.get(p, default)) for p, default in params.items()]
+    effects = platform.effects
+    for name, params in _effect_defaults():
+        given = effects.get(name)
+        if given:
+            values += [float(given.get(p, default)) for p, default in params]
+        else:
+            values += [default for _, default in params]
     return np.array(values)
+
+
+_PACKED: dict[int, tuple] = {}
+
+
+def _packed(platform: Platform) -> tuple[np.ndarray, np.ndarray]:
+    """P and Q of a platform, read-only, packed once per platform object (platforms are
+    immutable) and shared by its Evaluators."""
+    hit = _PACKED.get(id(platform))
+    if hit is not None and hit[0]() is platform:
+        return hit[1], hit[2]
+    P, Q = parameter_vector(platform), effect_vector(platform)
+    P.flags.writeable = False
+    Q.flags.writeable = False
+    key = id(platform)
+    try:
+        ref = weakref.ref(platform, lambda _, key=key: _PACKED.pop(key, None))
+    except TypeError:  # not weakly referable: not cached
+        return P, Q
+    _PACKED[key] = (ref, P, Q)
+    return P, Q
 
 
 @dataclass
@@ -211,16 +250,13 @@ class Evaluator:
         self.platform = platform
         self.mode = mode
         self.n_threads = int(n_threads)
-        self.P = parameter_vector(platform)
-        self.Q = effect_vector(platform)
+        self.P, self.Q = _packed(platform)
         self.K = None
         if mode == "paper":
             from gsfric.models import paper_constants as pc
 
             self.K = np.array(pc() if paper_constants is None else paper_constants, float)
             self.K.flags.writeable = False
-        self.P.flags.writeable = False
-        self.Q.flags.writeable = False
         self._full = native.get("eval_paper" if mode == "paper" else "eval")
         self._stroke = platform.geometry.stroke
         self._actuator = None
