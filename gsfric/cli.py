@@ -131,7 +131,13 @@ def paper(out_dir, mode, platform_file, no_plots):
                    "on the first chunk].")
 @click.option("--progress/--no-progress", default=None,
               help="Progress bar on stderr [default: when stderr is a terminal].")
-def simulate(trajectory, platform_file, out, mode, strict, threads, chunk, window, progress):
+@click.option("--columns", default=None, metavar="GROUP[,GROUP...]",
+              help="Output groups: forces, friction, reactions, frictionless, lengths "
+                   "[default: all]; t and flag are always written.")
+@click.option("--float32", is_flag=True,
+              help="Write the outputs as float32 (relative error up to 6e-8, half the size).")
+def simulate(trajectory, platform_file, out, mode, strict, threads, chunk, window, progress,
+             columns, float32):
     """Evaluate a motion: actuator forces, reactions and friction at every step.
 
     Long files are streamed: read, differentiated and evaluated chunk by chunk in bounded
@@ -140,7 +146,7 @@ def simulate(trajectory, platform_file, out, mode, strict, threads, chunk, windo
     """
     import warnings
 
-    from gsfric.stream import simulate_file
+    from gsfric.stream import parse_columns, simulate_file
 
     def show(message, category, filename, lineno, file=None, line=None):
         click.echo(f"gsfric: warning: {message}", err=True)
@@ -151,7 +157,8 @@ def simulate(trajectory, platform_file, out, mode, strict, threads, chunk, windo
         platform = _platform(platform_file)
         summary = simulate_file(trajectory, out, platform, mode=mode, strict=strict,
                                 chunk=chunk, window=window, n_threads=threads,
-                                progress=progress)
+                                progress=progress, columns=parse_columns(columns),
+                                float32=float32)
     click.echo(f"wrote {out} ({summary.steps} steps, {summary.flagged} flagged)")
 
 

@@ -329,6 +329,21 @@ class Evaluator:
         chunk : int
             Steps per call to the compiled code (bounds the temporary memory).
         """
+        result = self.evaluate_quiet(motion, progress=progress, chunk=chunk)
+        n, flag = len(result), result.flag
+        bad = result.flagged()
+        if bad.size:
+            kinds = sorted({FLAG_NAMES[b] for b in FLAG_NAMES if np.any(flag & b)})
+            msg = (f"{bad.size} of {n} steps flagged ({'; '.join(kinds)}): steps "
+                   f"{_index_list(bad)}")
+            if strict:
+                raise StepFlagError(msg)
+            warnings.warn(msg, stacklevel=2)
+        return result
+
+    def evaluate_quiet(self, motion: Motion, progress: bool = False,
+                       chunk: int = CHUNK) -> Result:
+        """``evaluate`` without reporting the flagged steps (no warning, no error)."""
         n = len(motion)
         if int(chunk) < 1:
             raise InputError(f"chunk: must be a positive number of steps, got {chunk!r}")
@@ -356,16 +371,7 @@ class Evaluator:
                 flag[s:e] = self._flags(xs, view)
         shapes = {name: shape for name, _, shape in self._full.outputs}
         arrays = {k: v.reshape((n,) + tuple(shapes[k])) for k, v in outs.items()}
-        result = Result(t=np.asarray(motion.t, float), arrays=arrays, flag=flag, mode=self.mode)
-        bad = result.flagged()
-        if bad.size:
-            kinds = sorted({FLAG_NAMES[b] for b in FLAG_NAMES if np.any(flag & b)})
-            msg = (f"{bad.size} of {n} steps flagged ({'; '.join(kinds)}): steps "
-                   f"{_index_list(bad)}")
-            if strict:
-                raise StepFlagError(msg)
-            warnings.warn(msg, stacklevel=2)
-        return result
+        return Result(t=np.asarray(motion.t, float), arrays=arrays, flag=flag, mode=self.mode)
 
     def flag_spec(self) -> "native.FlagSpec":
         """The settings of the step flags computed in C (read-only, shared by calls)."""

@@ -635,7 +635,7 @@ def test_interrupted_run_leaves_no_partial_file(tmp_path, monkeypatch):
     out = tmp_path / "out.parquet"
     out.write_bytes(b"the previous result")
     calls = []
-    original = Evaluator.evaluate
+    original = Evaluator.evaluate_quiet
 
     def interrupted(self, motion, **kwargs):
         calls.append(len(motion))
@@ -643,7 +643,7 @@ def test_interrupted_run_leaves_no_partial_file(tmp_path, monkeypatch):
             raise KeyboardInterrupt
         return original(self, motion, **kwargs)
 
-    monkeypatch.setattr(Evaluator, "evaluate", interrupted)
+    monkeypatch.setattr(Evaluator, "evaluate_quiet", interrupted)
     with pytest.raises(KeyboardInterrupt):
         stream.simulate_file(path, out, chunk=100, window=9)
     assert len(calls) == 3
@@ -669,8 +669,8 @@ def test_strict_stops_at_the_first_flagged_chunk(tmp_path, monkeypatch):
     write_table(frame, path)
     out = tmp_path / "out.csv"
     seen = []
-    original = Evaluator.evaluate
-    monkeypatch.setattr(Evaluator, "evaluate",
+    original = Evaluator.evaluate_quiet
+    monkeypatch.setattr(Evaluator, "evaluate_quiet",
                         lambda self, motion, **kw: seen.append(motion.t[0])
                         or original(self, motion, **kw))
     with pytest.raises(StepFlagError, match=r"^.*t.csv: 1 of 300 steps flagged .*steps 250 "
