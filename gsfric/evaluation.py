@@ -341,13 +341,26 @@ class Evaluator:
             warnings.warn(msg, stacklevel=2)
         return result
 
-    def evaluate_quiet(self, motion: Motion, progress: bool = False,
-                       chunk: int = CHUNK) -> Result:
-        """``evaluate`` without reporting the flagged steps (no warning, no error)."""
+    def evaluate_quiet(self, motion: Motion, progress: bool = False, chunk: int = CHUNK,
+                       buffers: dict | None = None) -> Result:
+        """``evaluate`` without reporting the flagged steps (no warning, no error).
+
+        ``buffers`` (a dict, filled on first use) lends the output arrays: a caller that
+        evaluates chunk after chunk passes the same dict and reuses the memory; the Result's
+        arrays are then views into it, valid until the next call with it.
+        """
         n = len(motion)
         if int(chunk) < 1:
             raise InputError(f"chunk: must be a positive number of steps, got {chunk!r}")
-        outs = {name: np.empty((n, size)) for name, size, _ in self._full.outputs}
+        if buffers is None:
+            outs = {name: np.empty((n, size)) for name, size, _ in self._full.outputs}
+        else:
+            outs = {}
+            for name, size, _ in self._full.outputs:
+                buf = buffers.get(name)
+                if buf is None or buf.shape[0] < n:
+                    buf = buffers[name] = np.empty((n, size))
+                outs[name] = buf[:n]
         flag = np.empty(n, dtype=np.int64)
         inputs = [self.P, self.Q] + ([self.K] if self.K is not None else [])
         spec = self.flag_spec()
