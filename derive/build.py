@@ -29,7 +29,8 @@ GENERATED = ROOT / "generated"
 DERIVE = Path(__file__).resolve().parent
 BASENAME = "gsfric_model"
 
-# Parameters of P whose Jacobian the identification needs, followed by all of Q.
+# Parameters of P whose Jacobian the identification needs, followed by all of Q. The one list:
+# written into the manifest (``jacobian_platform_parameters``), read by the runtime from there.
 JACOBIAN_P = ("joint_viscous", "joint_coulomb", "prismatic_viscous", "prismatic_coulomb",
               "payload_mass", "platform_mass")
 
@@ -183,6 +184,7 @@ def generate(out_dir: Path = GENERATED) -> dict[str, bytes]:
                    for f in funcs],
         simd_lanes=simd.LANES,
         jacobian_parameters=meta["theta"],
+        jacobian_platform_parameters=list(JACOBIAN_P),
         effects=[dict(name=e.name, description=e.description,
                       parameters=[dict(name=p.name, default=p.default, unit=p.unit,
                                        description=p.description) for p in e.parameters])

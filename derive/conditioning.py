@@ -14,9 +14,11 @@ Measure (``h``, dimensionless, in [0, 1]): the Hadamard ratio of ``S A``, where
 
 the volume spanned by the six scaled unit wrenches relative to the volume they would span if
 they were mutually orthogonal. ``h = 1`` for orthogonal wrenches, ``h = 0`` at a singular pose.
-Scaling a platform (every length times c) leaves ``h`` unchanged. With modified Gram-Schmidt,
-``|det A| = prod r_jj`` (the factor keeps ``1 / r_jj``) and ``det(S A) = det(A) / L^3``, so
-``h`` costs six column norms and one square root per step: no further factorisation.
+Scaling a platform (every length times c) leaves ``h`` unchanged. The solve's factor is
+``A = V U`` (modified Gram-Schmidt, ``U`` unit upper-triangular, ``V``'s columns orthogonal,
+the factor keeps ``1 / (v_j . v_j)``), so ``|det A| = prod |v_j|``, and
+``det(S A) = det(A) / L^3``: ``h`` costs six column norms and one square root per step, no
+further factorisation.
 
 Bound: the columns of ``S A`` scaled to unit length have a 2-norm condition number below
 ``2 / h`` (Guggenheimer, Edelman and Johnson, 1995), so a limit ``h >= 2 / kappa_max``
@@ -38,7 +40,7 @@ def singularity_measure(ch, A: sp.Matrix, factor, platform_joints: sp.Matrix):
     A : Matrix (6, 6)
         Columns ``(u_i, (E_i - p) x u_i)``, as factored.
     factor : Factor
-        ``ch.factor`` of ``A`` (its ``inv`` are the reciprocals of R's diagonal).
+        ``ch.factor`` of ``A`` (its ``inv`` are ``1 / (v_j . v_j)``).
     platform_joints : Matrix (6, 3)
         The joints ``e_i`` in the platform frame, m.
     """
@@ -48,5 +50,5 @@ def singularity_measure(ch, A: sp.Matrix, factor, platform_joints: sp.Matrix):
     for j in range(6):
         col = A[:, j]
         norm2 = sum(col[r] ** 2 for r in range(3)) + sum(col[r] ** 2 for r in range(3, 6)) / L2
-        product *= factor.inv[j] ** 2 * norm2
+        product *= factor.inv[j] * norm2
     return ch.let("h_A", 1 / sp.sqrt(L2 ** 3 * product), "h_{A}", "conditioning")

@@ -43,7 +43,6 @@ from __future__ import annotations
 
 import csv
 from dataclasses import dataclass
-from pathlib import Path
 
 import numpy as np
 import sympy as sp
@@ -763,83 +762,26 @@ def eq35(c_s, v, mu, R_3):
 # ----------------------------------------------------------------------------- the tables
 
 
-@dataclass(frozen=True)
-class TableMisprint:
-    """A cell of the paper's Tables 1-3 that is misprinted.
-
-    Attributes
-    ----------
-    table : str
-        The CSV's file name.
-    pos : int
-        Row (step), 1..40.
-    column : str
-    printed : str
-        The cell as printed.
-    kinds : tuple of str
-        ``digits``: more decimals than the rest of its column; ``small``: below half the
-        table's 10th percentile in magnitude, a decade off; ``large``: more than ``LARGE``
-        times every other value of the table.
-    """
-
-    table: str
-    pos: int
-    column: str
-    printed: str
-    kinds: tuple[str, ...]
-
-
-SMALL = 0.5
-"""A value below this fraction of its table's 10th percentile (in magnitude) is a decade off."""
-LARGE = 1.2
-"""A value above this factor times every other value of its table (in magnitude) is an outlier."""
-
-
 def read_table(path) -> tuple[list[str], list[list[str]]]:
-    """One of the paper's tables (paper/table*.csv) as printed strings: header and rows."""
-    with open(path, newline="") as handle:
-        rows = list(csv.reader(handle))
-    return rows[0], rows[1:]
+    """One of the paper's tables (paper/table*.csv) as printed strings.
 
-
-def table_misprints(path) -> list[TableMisprint]:
-    """The misprinted cells of one of the paper's tables, in row order, then column order.
-
-    Three rules, each on the table alone: a cell printed with more decimals than most of its
-    column (``digits``); a magnitude below ``SMALL`` times the table's 10th percentile
-    (``small``: the paper's values of a table span a factor of about five, so a value ten times
-    smaller than its neighbours lost a digit); a magnitude above ``LARGE`` times the largest
-    other value of the table (``large``).
+    The misprinted cells of the tables are found by ``gsfric.paper.find_misprints`` (the one
+    detector; derive/ does not import the runtime, the errata tests call it).
 
     Parameters
     ----------
     path : path-like
         A CSV with a ``pos`` column and six value columns.
+
+    Returns
+    -------
+    header : list of str
+    rows : list of list of str
+        40 rows of 7 printed cells.
     """
-    header, rows = read_table(path)
-    cells = [row[1:] for row in rows]
-    values = np.abs(np.array([[float(c) for c in row] for row in cells]))
-    decimals = np.array([[len(c.split(".", 1)[1]) if "." in c else 0 for c in row]
-                         for row in cells])
-    usual = [np.bincount(decimals[:, j]).argmax() for j in range(decimals.shape[1])]
-    low = np.percentile(values, 10)
-    ordered = np.sort(values.ravel())
-    found = []
-    for r, row in enumerate(rows):
-        for j, text in enumerate(row[1:]):
-            v = values[r, j]
-            kinds = []
-            if decimals[r, j] > usual[j]:
-                kinds.append("digits")
-            if v < SMALL * low:
-                kinds.append("small")
-            largest_other = ordered[-2] if v == ordered[-1] else ordered[-1]
-            if v > LARGE * largest_other:
-                kinds.append("large")
-            if kinds:
-                found.append(TableMisprint(Path(path).name, int(row[0]), header[j + 1], text,
-                                           tuple(kinds)))
-    return found
+    with open(path, newline="") as handle:
+        rows = list(csv.reader(handle))
+    return rows[0], rows[1:]
 
 
 # ----------------------------------------------------------------------------- display

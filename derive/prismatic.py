@@ -18,18 +18,36 @@ force.
 from .vectors import cross, dot
 
 
-def upper_part_loads(R_E, u, E, P3, m2, m2_weight, a2, c2, moment2, g_vec, M_joint_E=None):
+def upper_part_loads(R_E, force2, rotation2, u, s_E, s_2, s_3):
     """Axial force F_ax, transverse force R_3 and moment M_3 of the prismatic joint.
 
-    ``moment2`` is the moment about its centre that the part's rotation needs
-    (``J_2 alpha_L + omega_L x J_2 omega_L``). ``M_joint_E`` is a moment that the platform's
-    joint puts on the upper part besides R_E (the spherical joint's friction moment, with the sign
-    it has on the leg).
+    The points involved lie on the leg's axis, at distances from C: E at ``s_E`` (= D), the upper
+    part's centre at ``s_2`` and the joint point P_3 at ``s_3``; so the moment arms about P_3
+    are multiples of u and ``M_3 = u x ((s_E - s_3) R_E + (s_2 - s_3) F_2) + M_rot2``.
+
+    Parameters
+    ----------
+    R_E : sympy.Matrix, shape (3, 1)
+        Force of the leg on the platform at E, base frame, N.
+    force2 : sympy.Matrix, shape (3, 1)
+        The upper part's required force ``m_2 (a_2 - g)``, base frame, N.
+    rotation2 : sympy.Matrix, shape (3, 1)
+        Its rotation moment ``J_2 alpha_L + omega_L x J_2 omega_L``, base frame, N m.
+    u : sympy.Matrix, shape (3, 1)
+        Unit leg direction, base frame, 1.
+    s_E, s_2, s_3 : sympy.Expr
+        Distances from C of E, the upper centre and P_3, m.
+
+    Returns
+    -------
+    F_ax : sympy.Expr
+        Axial force, N (positive pushes the platform away: the frictionless actuator force).
+    R_3 : sympy.Matrix, shape (3, 1)
+        Transverse force on the upper part, base frame, N.
+    M_3 : sympy.Matrix, shape (3, 1)
+        Moment on the upper part about P3, base frame, N m.
     """
-    total = R_E + m2 * a2 - m2_weight * g_vec
+    total = R_E + force2
     F_ax = dot(u, total)
-    R_3 = total - F_ax * u
-    M_3 = cross(E - P3, R_E) + cross(c2 - P3, m2 * a2 - m2_weight * g_vec) + moment2
-    if M_joint_E is not None:
-        M_3 = M_3 - M_joint_E
-    return F_ax, R_3, M_3
+    M_3 = cross(u, (s_E - s_3) * R_E + (s_2 - s_3) * force2) + rotation2
+    return F_ax, total - F_ax * u, M_3

@@ -1,17 +1,39 @@
-"""The hash of the derivation's sources (no SymPy needed, so the runtime can check staleness)."""
+"""The hash of the derivation's sources (no SymPy needed, so the runtime can check staleness).
+
+Only the modules that generate code are hashed: editing the errata module (printed.py), which
+generates nothing, leaves generated/ current. tests/test_derivation.py checks that
+``GENERATING`` is exactly the set of derive/ modules that ``derive.build`` imports.
+"""
 
 import hashlib
 from pathlib import Path
 
 DERIVE = Path(__file__).resolve().parent
 
+GENERATING = ("build.py", "chain.py", "conditioning.py", "effects.py", "friction.py",
+              "kinematics.py", "leg_frames.py", "legs.py", "mechanics.py", "model.py",
+              "platform.py", "prismatic.py", "simd.py", "sources.py", "vectors.py")
+"""The derive/ modules whose content determines generated/ (``derive.build`` and its imports)."""
+
 
 def source_hash(directory: Path = DERIVE) -> str:
-    """SHA-256 over the derive/ sources (names and contents, sorted by name)."""
+    """SHA-256 over the code-generating derive/ sources (names and contents, in name order).
+
+    Parameters
+    ----------
+    directory : Path
+        The derive/ directory.
+
+    Returns
+    -------
+    str
+        64 hexadecimal digits; line endings are normalised, so a checkout with CRLF agrees.
+    """
     h = hashlib.sha256()
-    for path in sorted(Path(directory).glob("*.py")):
-        h.update(path.name.encode())
+    for name in sorted(GENERATING):
+        path = Path(directory) / name
+        h.update(name.encode())
         h.update(b"\0")
-        h.update(path.read_bytes().replace(b"\r\n", b"\n"))
+        h.update(path.read_bytes().replace(b"\r\n", b"\n") if path.exists() else b"")
         h.update(b"\0")
     return h.hexdigest()

@@ -2,7 +2,7 @@
 
 The compiled map ``Evaluator.actuator_forces`` (actuator forces with friction, NumPy in to NumPy
 out, preallocated output) is timed on one and on two threads against the same physics written
-in NumPy (``gsfric.reference``): vectorised over steps, and a per-step loop that solves the
+in NumPy (``gsfric.numpy_model``): vectorised over steps, and a per-step loop that solves the
 dense 42x42 system of (2)-(16) at every step. Every case runs on the reference platform over a
 smooth random motion.
 
@@ -44,8 +44,8 @@ SEED = 20261122
 
 IMPLEMENTATIONS = {
     "compiled": "compiled C (Evaluator.actuator_forces)",
-    "numpy": "vectorised NumPy (reference.actuator_forces_numpy)",
-    "loop": "per-step loop, 42x42 solve (reference.actuator_forces_loop)",
+    "numpy": "vectorised NumPy (numpy_model.actuator_forces_numpy)",
+    "loop": "per-step loop, 42x42 solve (numpy_model.actuator_forces_loop)",
 }
 
 TARGETS = {
@@ -140,7 +140,7 @@ def states(n: int) -> np.ndarray:
 
 def _callable(implementation: str, threads: int, x: np.ndarray):
     """A function of no arguments that evaluates x with one implementation."""
-    from gsfric import models, reference
+    from gsfric import models, numpy_model
     from gsfric.evaluation import Evaluator
 
     platform = models.reference_platform()
@@ -150,9 +150,9 @@ def _callable(implementation: str, threads: int, x: np.ndarray):
         out.fill(0.0)
         return lambda: evaluator.actuator_forces(x, out=out)
     if implementation == "numpy":
-        return lambda: reference.actuator_forces_numpy(platform, x)
+        return lambda: numpy_model.actuator_forces_numpy(platform, x)
     if implementation == "loop":
-        return lambda: reference.actuator_forces_loop(platform, x)
+        return lambda: numpy_model.actuator_forces_loop(platform, x)
     raise ValueError(f"unknown implementation {implementation!r}")
 
 
@@ -335,21 +335,18 @@ def measure_paths(budget: float, memory: bool, progress=print) -> dict:
     """The paths around the hot path: ``evaluate`` with flags, the README's control loop,
     Evaluator construction, two threads against a busy core, evaluate's memory."""
     import gsfric
-    from gsfric import native, reference
+    from gsfric import native, numpy_model
     from gsfric.evaluation import Evaluator, state_array
-    from gsfric.manifest import manifest
 
     platform = gsfric.reference_platform()
     out: dict = {}
     lib = native._library()
     out["lanes"] = lib.gsfric_simd_lanes() if lib is not None else None
-    out["instructions"] = {f["name"].replace("gsfric_model_", ""): f.get("n_instructions")
-                           for f in manifest()["functions"]}
     progress("  evaluate (all outputs + flags) N=100,000")
     motion = _motion(100_000)
     best, median, cpu = _best_times(lambda: gsfric.evaluate(platform, motion), budget)
     x = state_array(motion)
-    nbest, _, ncpu = _best_times(lambda: reference.actuator_forces_numpy(platform, x), budget)
+    nbest, _, ncpu = _best_times(lambda: numpy_model.actuator_forces_numpy(platform, x), budget)
     out["evaluate_1e5"] = {"steps_per_s": 1e5 / best, "steps_per_cpu_s": 1e5 / cpu,
                            "numpy_steps_per_s": 1e5 / nbest, "vs_numpy": nbest / best,
                            "vs_numpy_cpu": ncpu / cpu}
@@ -431,6 +428,8 @@ def _machine() -> dict:
             "actuator_entry": (f"SIMD over steps, {_lanes()} lanes" if simd
                                else "one step per call"),
             "source": _source_version(),
+            "instructions": {f["name"].removeprefix("gsfric_model_"): f.get("n_instructions")
+                             for f in manifest()["functions"]},
             "load_average_start": _load_average()}
 
 
@@ -586,6 +585,8 @@ def format_report(report: Report) -> str:
              f"machine: {m['cpu']}, {m['cores']} cores; Python {m['python']}, "
              f"NumPy {m['numpy']}; compiled with: {m['compiler']}; actuator map: "
              f"{m['actuator_entry']}",
+             "CasADi instructions per step (generated/manifest.json): " + ", ".join(
+                 f"{name} {n}" for name, n in m.get("instructions", {}).items()),
              f"source: {m.get('source')}; load average (1, 5, 15 min): start "
              f"{m['load_average_start']}, end {m.get('load_average_end')}",
              f"cores free for this run (two CPU-bound processes together, 2.0 = two idle "
@@ -613,8 +614,7 @@ def format_report(report: Report) -> str:
                      "cores")
     p = report.paths
     if p:
-        lines += ["", f"SIMD lanes: {p.get('lanes')}; instructions per step: "
-                  + ", ".join(f"{k} {v}" for k, v in p.get("instructions", {}).items())]
+        lines += ["", f"SIMD lanes: {p.get('lanes')}"]
         if "evaluate_1e5" in p:
             e = p["evaluate_1e5"]
             lines.append(f"gsfric.evaluate (all outputs + flags), N = 100,000: "

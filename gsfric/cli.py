@@ -102,7 +102,7 @@ def derive(check):
 @click.option("--no-plots", is_flag=True, help="Skip the plots.")
 def paper(out_dir, mode, platform_file, no_plots):
     """Run the paper's 40-step motion and write Tables 1-3, a report and plots."""
-    from gsfric.paper import run_paper
+    from gsfric.paper_report import run_paper
 
     written = run_paper(out_dir, mode=mode, platform_file=platform_file, plots=not no_plots)
     for path in written:

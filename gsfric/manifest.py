@@ -71,3 +71,21 @@ def staleness() -> str | None:
         if module.source_hash(sources.parent) != manifest().get("source_hash"):
             return "derive/ changed since generated/ was written"
     return None
+
+
+def jacobian_platform_parameters() -> tuple[str, ...]:
+    """The platform parameters (of P) at the head of the generated Jacobian's theta.
+
+    The one list is ``derive/build.py: JACOBIAN_P``, written into generated/manifest.json; the
+    effect parameters follow them in theta (``jacobian_parameters`` in the manifest).
+
+    Returns
+    -------
+    tuple of str
+        Names of the ``PARAMETERS`` blocks, in theta's order.
+    """
+    try:
+        return tuple(manifest()["jacobian_platform_parameters"])
+    except KeyError:
+        raise GsfricError(f"{generated_dir() / 'manifest.json'} has no "
+                          "jacobian_platform_parameters; run `gsfric derive`") from None

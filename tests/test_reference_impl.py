@@ -1,4 +1,4 @@
-"""The NumPy implementations of gsfric.reference against the compiled map, at random states.
+"""The NumPy implementations of gsfric.numpy_model against the compiled map, at random states.
 
 The vectorised implementation reduces (2)-(16) to a 6x6 system per step; the per-step loop
 solves the dense 42x42 system. Their agreement with each other and with the compiled
@@ -12,7 +12,7 @@ import numpy as np
 import pytest
 
 import gsfric
-from gsfric import models, reference
+from gsfric import models, numpy_model
 from gsfric.evaluation import Evaluator, state_array
 from helpers import perturbed_platform, random_states, with_every_effect
 
@@ -37,7 +37,7 @@ def test_vectorised_numpy_equals_compiled_at_random_states(rng, case):
     name, platform = list(_platforms(rng).items())[case]
     x = random_states(rng, 60)
     expected = Evaluator(platform).actuator_forces(x)
-    got = reference.actuator_forces_numpy(platform, x, chunk=25)
+    got = numpy_model.actuator_forces_numpy(platform, x, chunk=25)
     assert got.shape == (60, 6)
     assert _relative_error(got, expected) < RTOL, name
 
@@ -47,7 +47,7 @@ def test_per_step_loop_equals_compiled_at_random_states(rng, case):
     name, platform = list(_platforms(rng).items())[case]
     x = random_states(rng, 8)
     expected = Evaluator(platform).actuator_forces(x)
-    assert _relative_error(reference.actuator_forces_loop(platform, x), expected) < RTOL, name
+    assert _relative_error(numpy_model.actuator_forces_loop(platform, x), expected) < RTOL, name
 
 
 def test_the_42x42_system_holds_the_compiled_reactions(rng):
@@ -56,7 +56,7 @@ def test_the_42x42_system_holds_the_compiled_reactions(rng):
     result = gsfric.evaluate(platform, motion)
     x = state_array(motion)
     for k in range(len(motion)):
-        A, b = reference.system_42(platform, x[k])
+        A, b = numpy_model.system_42(platform, x[k])
         assert A.shape == (42, 42) and b.shape == (42,)
         z = np.linalg.solve(A, b)
         # the dense solution is the compiled one, unknown by unknown

@@ -19,13 +19,12 @@ import numpy as np
 
 from gsfric.evaluation import Evaluator, Result, jacobian_parameters, parameter_vector, \
     state_array
-from gsfric.manifest import layout
+from gsfric.manifest import jacobian_platform_parameters, layout
 from gsfric.platform import Platform
 from gsfric.trajectory import Motion
 
-BASE_PARAMETERS = ("joint_viscous", "joint_coulomb", "prismatic_viscous", "prismatic_coulomb",
-                   "payload_mass", "platform_mass")
-"""Parameters of the platform description among the Jacobian's parameters."""
+BASE_PARAMETERS = jacobian_platform_parameters()
+"""Parameters of the platform description among the Jacobian's parameters (from the manifest)."""
 
 _FRICTION = ("joint_viscous", "joint_coulomb", "prismatic_viscous", "prismatic_coulomb")
 _BODY = ("payload_mass", "platform_mass")
