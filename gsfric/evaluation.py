@@ -238,7 +238,7 @@ class Evaluator:
         "kinematic": every acceleration from the motion; "paper": the paper's constant
         accelerations and joint speed (``paper_constants``) instead.
     n_threads : int
-        OpenMP threads for long evaluations.
+        Threads for long evaluations (POSIX threads created per call, at least 2048 steps each).
     paper_constants : ndarray (13,), optional
         Paper mode's constants (default ``gsfric.models.paper_constants()``).
     """
