@@ -129,7 +129,19 @@ def _functions():
 
 
 def generate(out_dir: Path = GENERATED) -> dict[str, bytes]:
-    """Derive, translate and return the generated files as {name: bytes} (nothing written)."""
+    """Derive, translate and return the generated files (nothing written).
+
+    Parameters
+    ----------
+    out_dir : Path
+        Where a temporary directory for CasADi's code generator is made (and removed).
+
+    Returns
+    -------
+    dict of str -> bytes
+        File name in generated/ -> its content (C, header, serialized functions, batch C,
+        manifest.json); identical on every run.
+    """
     import casadi as ca
     import sympy
 
@@ -195,6 +207,13 @@ def generate(out_dir: Path = GENERATED) -> dict[str, bytes]:
 
 
 def write(files: dict[str, bytes], out_dir: Path = GENERATED) -> None:
+    """Write ``generate()``'s files into ``out_dir``, each to a temporary name then renamed.
+
+    Parameters
+    ----------
+    files : dict of str -> bytes
+    out_dir : Path
+    """
     out_dir.mkdir(parents=True, exist_ok=True)
     for name, data in files.items():
         tmp = out_dir / f".{name}.tmp"
@@ -203,7 +222,17 @@ def write(files: dict[str, bytes], out_dir: Path = GENERATED) -> None:
 
 
 def is_stale(out_dir: Path = GENERATED) -> str | None:
-    """A one-line reason why generated/ does not match derive/, or None when it matches."""
+    """A one-line reason why generated/ does not match derive/, or None when it matches.
+
+    Parameters
+    ----------
+    out_dir : Path
+        The generated/ directory.
+
+    Returns
+    -------
+    str or None
+    """
     path = out_dir / "manifest.json"
     if not path.exists():
         return f"{path} is missing"
@@ -221,6 +250,7 @@ def is_stale(out_dir: Path = GENERATED) -> str | None:
 
 
 def main(argv=None) -> int:
+    """``python -m derive.build [--check]``; returns the exit status (0, or 1 when stale)."""
     parser = argparse.ArgumentParser(prog="derive.build", description=__doc__.splitlines()[0])
     parser.add_argument("--check", action="store_true",
                         help="exit 1 when generated/ is stale instead of regenerating")

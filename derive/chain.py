@@ -48,6 +48,9 @@ class Factor:
 def inline(name: str, expr, latex: str | None = None):
     """The ``let`` that defines nothing: returns ``expr`` itself (for reading and testing).
 
+    Parameters: ``name`` (str), ``expr`` (sympy.Expr or Matrix, any shape and unit), ``latex``
+    (ignored). Returns ``expr``.
+
     Every derive/ function that names intermediate quantities takes a ``let`` argument with this
     signature; the model passes ``Chain.scope(...)`` so that each quantity becomes one chain step,
     computed once and shared by every later use.
@@ -76,7 +79,16 @@ class Scope:
         return self.chain.let(name, expr, base, self.equation)
 
     def group(self, equation: str) -> "Scope":
-        """The same scope (chain, leg) for another equation group."""
+        """The same scope (chain, leg) for another equation group.
+
+        Parameters
+        ----------
+        equation : str
+
+        Returns
+        -------
+        Scope
+        """
         return Scope(self.chain, equation, self.leg)
 
 
@@ -109,7 +121,23 @@ class Chain:
         return sp.Symbol(name, real=True)
 
     def input(self, name: str, rows: int, cols: int = 1, latex: str | None = None) -> sp.Matrix:
-        """Declare an input block of shape (rows, cols); returns a Matrix of real symbols."""
+        """Declare an input block.
+
+        Parameters
+        ----------
+        name : str
+            Block name (unique in the chain); the generated functions take the blocks in
+            declaration order.
+        rows, cols : int
+            Shape; a matrix block is stored row-major in the flat input.
+        latex : str, optional
+            LaTeX base of the entries' symbols.
+
+        Returns
+        -------
+        sympy.Matrix, shape (rows, cols)
+            Real symbols.
+        """
         base = latex or name
         self._claim(name, base)
         syms = [
@@ -121,7 +149,24 @@ class Chain:
         return m
 
     def let(self, name: str, expr, latex: str | None = None, equation: str = ""):
-        """Define ``name := expr``; returns a Symbol (scalar) or a Matrix of symbols."""
+        """Define ``name := expr``, one step of the chain.
+
+        Parameters
+        ----------
+        name : str
+            Unique name of the quantity.
+        expr : sympy.Expr or sympy.Matrix
+            Its definition in earlier symbols (any shape, any unit).
+        latex : str, optional
+            LaTeX base of its symbol(s) (default ``name``).
+        equation : str
+            The equation group it belongs to (``"8-10"``, ``"kinematics"``, ...).
+
+        Returns
+        -------
+        sympy.Symbol or sympy.Matrix of the shape of expr
+            The new symbol(s), to use in later expressions.
+        """
         base = latex or name
         self._claim(name, base)
         if isinstance(expr, sp.MatrixBase):
@@ -138,7 +183,20 @@ class Chain:
         return target
 
     def scope(self, equation: str, leg: int | None = None) -> Scope:
-        """A ``let`` for the quantities of one equation group (and one leg, numbered from 1)."""
+        """A ``let`` for the quantities of one equation group (and one leg, numbered from 1).
+
+        Parameters
+        ----------
+        equation : str
+            Equation group of the quantities it defines.
+        leg : int, optional
+            Leg number 1..6, appended to names (``_k``) and LaTeX subscripts.
+
+        Returns
+        -------
+        Scope
+            Callable ``(name, expr, latex=None) -> symbol(s)``.
+        """
         return Scope(self, equation, leg)
 
     def factor(self, name: str, A: sp.Matrix, latex: str | None = None,
@@ -149,6 +207,19 @@ class Chain:
         (``U_ij = (v_i . v) / (v_i . v_i)``, ``v -= U_ij v_i``); the columns are not normalised
         (no square root) and the reciprocals ``1 / (v_j . v_j)`` are kept, so that solving with
         the factor needs no division.
+
+        Parameters
+        ----------
+        name : str
+            Prefix of the factor's steps.
+        A : sympy.Matrix, shape (n, n)
+            Nonsingular matrix in earlier symbols.
+        latex : str, optional
+        equation : str
+
+        Returns
+        -------
+        Factor
         """
         base = latex or name
         n = A.shape[0]
@@ -169,7 +240,24 @@ class Chain:
 
     def solve(self, name: str, factor: "Factor", b: sp.Matrix, latex: str | None = None,
               equation: str = "") -> sp.Matrix:
-        """Define ``name := A^-1 b`` with the factor of A: ``U x = diag(inv) V^T b``."""
+        """Define ``name := A^-1 b`` with the factor of A: ``U x = diag(inv) V^T b``.
+
+        Parameters
+        ----------
+        name : str
+            Prefix of the solution's steps (``name0`` .. ``name{n-1}``).
+        factor : Factor
+            ``factor(...)`` of A.
+        b : sympy.Matrix, shape (n, 1)
+            Right-hand side.
+        latex : str, optional
+        equation : str
+
+        Returns
+        -------
+        sympy.Matrix, shape (n, 1)
+            Symbols of the solution.
+        """
         base = latex or name
         n = len(factor.v)
         y = [(factor.v[j].T * b)[0, 0] * factor.inv[j] for j in range(n)]
@@ -180,7 +268,18 @@ class Chain:
         return sp.Matrix(x)
 
     def definitions(self, equation: str | None = None):
-        """The ``let`` steps (optionally of one equation group) as (name, LaTeX) pairs."""
+        """The ``let`` steps (optionally of one equation group) as (name, LaTeX) pairs.
+
+        Parameters
+        ----------
+        equation : str, optional
+            Keep only the steps of this group.
+
+        Returns
+        -------
+        list of (str, str)
+            Step name and ``symbol = definition`` in LaTeX, in chain order.
+        """
         out = []
         for step in self.steps:
             if equation is not None and step.equation != equation:
@@ -273,7 +372,16 @@ class Chain:
     def numpy_function(self, outputs: dict[str, sp.Matrix]):
         """One Python function evaluating the whole chain with NumPy (printed by SymPy).
 
-        The function takes the dict of input blocks described in ``evaluate``.
+        Parameters
+        ----------
+        outputs : dict
+            Output name -> Matrix of chain symbols (or expressions in them).
+
+        Returns
+        -------
+        callable
+            ``f(values) -> dict`` with ``values`` and the result as in ``evaluate``
+            (arrays (N, size), entries row-major).
         """
         import builtins
 

@@ -89,12 +89,39 @@ CATALOG: tuple[Effect, ...] = (
 
 
 def parameter_names() -> list[str]:
-    """Flat names ``effect.parameter`` in the order of the effect-parameter input Q."""
+    """Flat names ``effect.parameter`` in the order of the effect-parameter input Q.
+
+    Returns
+    -------
+    list of str
+        One name per entry of Q (``len(Q)`` names), e.g. ``"stribeck.static"``.
+    """
     return [f"{e.name}.{p.name}" for e in CATALOG for p in e.parameters]
 
 
 def prismatic_effects_force(q: dict, v, sgn_v, D, u, M_3):
-    """Sum of the catalog's friction forces on the upper part along u (the terms above)."""
+    """Sum of the catalog's friction forces on the upper part along u (the terms above).
+
+    Parameters
+    ----------
+    q : dict
+        Effect parameter name (``parameter_names``) -> symbol, in the catalog's units.
+    v : sympy.Expr
+        Sliding speed, m/s.
+    sgn_v : sympy.Expr
+        Regularised sign of v, 1.
+    D : sympy.Expr
+        Leg length, m.
+    u : sympy.Matrix, shape (3, 1)
+        Unit leg direction, base frame, 1.
+    M_3 : sympy.Matrix, shape (3, 1)
+        Moment of the prismatic joint on the upper part, base frame, N m.
+
+    Returns
+    -------
+    sympy.Expr
+        Force along u on the upper part, N (opposing v).
+    """
     from .vectors import cross, norm
 
     coulomb = sp.Max(0, q["stribeck.static"] * sp.exp(-(v / q["stribeck.velocity"]) ** 2)

@@ -13,7 +13,19 @@ from .vectors import cross, norm
 
 
 def leg_frame(E_i, C_i, E_next):
-    """The unit vectors (U_X, U_Y, U_Z) of the paper's frame of leg i, as the rows of a matrix."""
+    """The unit vectors (U_X, U_Y, U_Z) of the paper's frame of leg i, as the rows of a matrix.
+
+    Parameters
+    ----------
+    E_i, C_i, E_next : sympy.Matrix, shape (3, 1)
+        Platform joint and base joint of leg i and the platform joint of leg i + 1, base frame,
+        m.
+
+    Returns
+    -------
+    sympy.Matrix, shape (3, 3)
+        Rows U_X, U_Y, U_Z (base frame components), 1.
+    """
     Z = C_i - E_i
     V = E_next - E_i
     X = cross(Z, V)
@@ -22,5 +34,18 @@ def leg_frame(E_i, C_i, E_next):
 
 
 def to_leg_frame(L, R):
-    """Eqs. (25)-(27): components of the base-frame vector R in the leg frame with rows L."""
+    """Eqs. (25)-(27): components of the base-frame vector R in the leg frame with rows L.
+
+    Parameters
+    ----------
+    L : sympy.Matrix, shape (3, 3)
+        ``leg_frame(...)``.
+    R : sympy.Matrix, shape (3, 1)
+        A vector in the base frame (any unit).
+
+    Returns
+    -------
+    sympy.Matrix, shape (3, 1)
+        Its components along U_X, U_Y, U_Z, same unit.
+    """
     return L * R

@@ -13,10 +13,11 @@ moments about C_i:
 
 The moment equation fixes everything in R_Ei but its axial part: its component along u gives
 ``M_Ci = (K.u) / (n.u)``, and crossing with u gives the transverse part
-``R_Ei,perp = u x (K - M_Ci n) / D``. Both are cheapest in the leg's own axes ``[a2, u x a2, u]``
-(kinematics.universal_joint_axes), where u and n have constant components. So ``R_Ei = f_i u + R_Ei,perp`` with one unknown f_i per leg,
-and the platform's six equations (2)-(7) become a 6x6 linear system in f (the transpose of the
-platform's Jacobian). R_Ci then follows from (11)-(13).
+``R_Ei,perp = u x (K - M_Ci n) / D``. Both are cheapest in the leg's own axes
+``[a2, u x a2, u]`` (kinematics.universal_joint_axes), where u and n have constant components.
+So ``R_Ei = f_i u + R_Ei,perp`` with one unknown f_i per leg, and the platform's six equations
+(2)-(7) become a 6x6 linear system in f (the transpose of the platform's Jacobian). R_Ci then
+follows from (11)-(13).
 """
 
 import sympy as sp

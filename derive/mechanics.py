@@ -38,7 +38,7 @@ class Wrench:
 
     @classmethod
     def force_at(cls, force, point) -> "Wrench":
-        """A pure force (zero moment about its point of application)."""
+        """A pure force: ``force`` (3, 1) N at ``point`` (3, 1) m, base frame; zero moment."""
         return cls(force, sp.zeros(3, 1), point)
 
     def about(self, point) -> "Wrench":
@@ -56,7 +56,7 @@ class Wrench:
         return Wrench(self.force, self.moment + cross(self.point - point, self.force), point)
 
     def reaction(self) -> "Wrench":
-        """Newton's third law: the wrench the acted-on body puts back, ``(-F, -M)`` at the same point."""
+        """Newton's third law: what the acted-on body puts back, ``(-F, -M)`` at the same point."""
         return Wrench(-self.force, -self.moment, self.point)
 
     def __add__(self, other: "Wrench") -> "Wrench":
@@ -129,7 +129,7 @@ class Inertia:
         return body
 
     def rotation_moment(self, alpha, omega, let=inline, name="M_rot", latex=None, rates=None):
-        """``J alpha + omega x J omega`` about ``point``, computed in body axes (``J`` never formed).
+        """``J alpha + omega x J omega`` about ``point``, computed in body axes (J never formed).
 
         With ``a_b = R^T alpha`` and ``w_b = R^T omega`` (body axes), the moment is
         ``R (I a_b + w_b x I w_b)``.

@@ -533,5 +533,15 @@ def _with_magnitude(w, speed, fallback):
 
 
 def input_size(specs) -> int:
-    """Length of the flat vector laid out by ``specs`` ((name, shape, ...) tuples)."""
+    """Length of the flat vector laid out by ``specs``.
+
+    Parameters
+    ----------
+    specs : sequence of (name, shape, ...) tuples
+        ``STATE``, ``PARAMETERS``, ``PAPER_CONSTANTS`` or ``FRICTION_INPUTS``.
+
+    Returns
+    -------
+    int
+    """
     return sum(_size(s) for _, s, *_ in specs)

@@ -180,7 +180,17 @@ EQUATION_ERRATA: dict[str, tuple[str, ...]] = {
 
 
 def erratum(eid: str) -> Erratum:
-    """The erratum with id ``eid``."""
+    """The erratum with id ``eid``.
+
+    Parameters
+    ----------
+    eid : str
+        ``"E01"`` .. ``"E34"``.
+
+    Returns
+    -------
+    Erratum
+    """
     for e in ERRATA:
         if e.id == eid:
             return e
@@ -231,12 +241,32 @@ def inertial_moment(J, alpha, omega) -> list:
 
 
 def residual(terms: dict):
-    """Sum of an equation's terms: the left-hand side of ``... = 0``."""
+    """Sum of an equation's terms: the left-hand side of ``... = 0``.
+
+    Parameters
+    ----------
+    terms : dict
+        Term name -> value (scalars or arrays of one shape, in the equation's unit).
+
+    Returns
+    -------
+    The sum, same shape and unit.
+    """
     return sum(terms.values())
 
 
 def magnitude(terms: dict):
-    """Sum of the terms' absolute values: the scale against which a residual is small."""
+    """Sum of the terms' absolute values: the scale against which a residual is small.
+
+    Parameters
+    ----------
+    terms : dict
+        Term name -> value (scalars or arrays of one shape, in the equation's unit).
+
+    Returns
+    -------
+    The sum of magnitudes, same shape and unit.
+    """
     return sum(_abs(v) for v in terms.values())
 
 
@@ -258,7 +288,17 @@ def _need(value, name: str, eid: str):
 
 
 def rz(angle) -> sp.Matrix:
-    """The rotation about z printed beside (1) as ``Rz(gamma)``."""
+    """The rotation about z printed beside (1) as ``Rz(gamma)``.
+
+    Parameters
+    ----------
+    angle : sympy.Expr
+        rad.
+
+    Returns
+    -------
+    sympy.Matrix, shape (3, 3)
+    """
     c, s = sp.cos(angle), sp.sin(angle)
     return sp.Matrix([[c, -s, 0], [s, c, 0], [0, 0, 1]])
 
@@ -279,7 +319,18 @@ def eq1_printed_matrices(alpha, beta, gamma) -> dict[str, sp.Matrix]:
 
 
 def eq1_printed_b(alpha, beta, gamma) -> sp.Matrix:
-    """The entries b_ij of T as printed below (1)."""
+    """The entries b_ij of T as printed below (1).
+
+    Parameters
+    ----------
+    alpha, beta, gamma : sympy.Expr
+        Euler angles, rad.
+
+    Returns
+    -------
+    sympy.Matrix, shape (3, 3)
+        Platform -> base rotation, 1.
+    """
     return paper_b_entries(alpha, beta, gamma)
 
 
