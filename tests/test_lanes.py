@@ -76,3 +76,32 @@ def test_vector_exp_is_within_two_ulp_of_the_c_library():
     lib.gsfric_simd_exp(special.ctypes.data_as(ctypes.c_void_p),
                         out.ctypes.data_as(ctypes.c_void_p), ctypes.c_longlong(3))
     assert out[0] == np.inf and out[1] == 0 and np.isnan(out[2])
+
+
+@pytest.mark.skipif(not native.is_compiled(), reason="no C compiler")
+def test_flags_in_c_equal_the_fallbacks_numpy_flags():
+    """The step flags computed in C (_native/batch.c) and those of the no-compiler fallback
+    (Evaluator._flags, NumPy) on steps with every cause: stroke, singular pose, non-finite."""
+    from scipy.spatial.transform import Rotation
+
+    from gsfric import models
+    from gsfric.evaluation import state_array
+    from gsfric.trajectory import Motion
+
+    n = 40
+    angles = np.linspace(1.2, 1.9, n)
+    angles[20] = np.pi / 2                               # the singular pose
+    rotation = Rotation.from_rotvec(angles[:, None] * [0.0, 0.0, 1.0]).as_matrix()
+    position = np.tile([0.0, 0.0, models.HOME_HEIGHT], (n, 1))
+    position[5] = [0.0, 0.0, 1.4]                        # beyond the stroke
+    position[9] = [1e200, 0.0, 1e200]                    # overflowing outputs
+    zeros = np.zeros((n, 3))
+    motion = Motion(np.arange(n) * 0.01, position, rotation, zeros, zeros, zeros, zeros)
+    ev = Evaluator(models.reference_platform())
+    result = ev.evaluate_quiet(motion)
+    assert all((result.flag & bit).any() for bit in (1, 2, 4)) and (result.flag == 0).any()
+    raw = native.get("eval")([state_array(motion), ev.P, ev.Q])
+    np.testing.assert_array_equal(ev._flags(state_array(motion), raw), result.flag)
+    for name, value in raw.items():                      # NaN where flagged non-finite
+        np.testing.assert_array_equal(value.reshape(result.arrays[name].shape),
+                                      result.arrays[name])
