@@ -150,8 +150,9 @@ def build(folder: Path) -> dict[str, Path]:
 class _Batch:
     """A lean caller of one variant: ctypes arguments prepared once, no conversion per call.
 
-    ``kind``: "block" (``gsfric_actuator_block``), "per-step" (``gsfric_batch``) or "auto"
-    (``gsfric_batch_simd`` when the library has the SIMD-over-steps function, else per-step).
+    ``kind``: "block" (``gsfric_actuator_block``), "per-step" (``gsfric_run`` without the
+    SIMD function) or "auto" (``gsfric_run`` with the SIMD-over-steps function when the
+    library has one, else per-step).
     """
 
     def __init__(self, path: Path, P: np.ndarray, Q: np.ndarray, kind: str) -> None:
@@ -165,13 +166,13 @@ class _Batch:
         self.out_strides = (ctypes.c_longlong * 1)(6)
         if self.kind == "block":
             self.fn = lib.gsfric_actuator_block
-        elif self.kind == "simd":
-            self.fn = lib.gsfric_batch_simd
-            self.eval = ctypes.cast(simd, ctypes.c_void_p)
         else:
-            self.fn = lib.gsfric_batch
-            self.eval = ctypes.cast(getattr(lib, f"{BASENAME}_actuator"), ctypes.c_void_p)
-            self.work = ctypes.cast(getattr(lib, f"{BASENAME}_actuator_work"), ctypes.c_void_p)
+            self.fn = lib.gsfric_run
+            self.fn.restype = ctypes.c_longlong
+            self.desc = native._Fn(
+                ctypes.cast(simd, ctypes.c_void_p) if self.kind == "simd" else None,
+                ctypes.cast(getattr(lib, f"{BASENAME}_actuator"), ctypes.c_void_p),
+                ctypes.cast(getattr(lib, f"{BASENAME}_actuator_work"), ctypes.c_void_p), 3, 1)
 
     def __call__(self, x: np.ndarray, out: np.ndarray, threads: int) -> None:
         n = ctypes.c_longlong(x.shape[0])
@@ -182,14 +183,8 @@ class _Batch:
             return
         self.in_ptrs[0] = x.ctypes.data
         self.out_ptrs[0] = out.ctypes.data
-        if self.kind == "simd":
-            failed = self.fn(self.eval, ctypes.c_int(3), ctypes.c_int(1), self.in_ptrs,
-                             self.in_strides, self.out_ptrs, self.out_strides, n,
-                             ctypes.c_int(threads))
-        else:
-            failed = self.fn(self.eval, self.work, ctypes.c_int(3), ctypes.c_int(1),
-                             self.in_ptrs, self.in_strides, self.out_ptrs, self.out_strides, n,
-                             ctypes.c_int(threads))
+        failed = self.fn(ctypes.byref(self.desc), self.in_ptrs, self.in_strides, self.out_ptrs,
+                         self.out_strides, n, ctypes.c_int(threads), None, None)
         if failed:
             raise RuntimeError("evaluation failed")
 

@@ -28,6 +28,7 @@ from dataclasses import dataclass, field
 
 import sympy as sp
 
+from . import conditioning
 from . import effects as fx
 from . import friction as fr
 from . import kinematics as kin
@@ -110,6 +111,7 @@ OUTPUTS = (
     ("s2", (6,), "1", "1 - (u.a1)^2: zero where the universal joint's moment is undefined"),
     ("R_3_leg", (6, 3), "N", "R_3 in the paper's leg frame (18)-(27)"),
     ("M_3_leg", (6, 3), "N m", "M_3 in the paper's leg frame (18)-(27)"),
+    ("h", (), "1", "singularity measure of the force Jacobian, 0 = singular (conditioning.py)"),
 )
 
 
@@ -251,6 +253,7 @@ def build(mode: str = "kinematic") -> Model:
     platform = _platform(ch, inp)
     legs = [_leg(ch, inp, platform, i) for i in range(N_LEGS)]
     A, A_qr, f = _solve(ch, platform, legs)
+    h = conditioning.singularity_measure(ch, A, A_qr, inp.P["platform_joints"])
     for i, leg in enumerate(legs):
         _reactions(ch, inp, leg, f[i], legs[(i + 1) % N_LEGS])
     for leg in legs:
@@ -259,7 +262,8 @@ def build(mode: str = "kinematic") -> Model:
     for leg in legs:
         _actuator_force(ch, inp, leg, df[leg.k - 1])
     outputs = {name: sp.Matrix([v for leg in legs for v in _flat(leg.out[name])])
-               for name, *_ in OUTPUTS}
+               for name, *_ in OUTPUTS if name != "h"}
+    outputs["h"] = sp.Matrix([h])
     inputs = {"x": STATE, "P": PARAMETERS,
               "Q": tuple((n, (), "", "") for n in fx.parameter_names())}
     if mode == "paper":

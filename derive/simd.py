@@ -1,23 +1,39 @@
 """C code that evaluates a CasADi function on several steps at once (SIMD over steps).
 
 CasADi's own C code evaluates one step per call: a long chain of scalar operations. Here the
-same chain of operations (CasADi's instruction list, with its work-vector slots) is printed so
-that every slot holds ``LANES`` steps and every operation is a short loop over them, which the
-compiler turns into vector instructions. The result is bit-for-bit the same arithmetic as
-CasADi's code (the same operations in the same order) on ``LANES`` steps in parallel.
+same chain of operations (CasADi's instruction list) is printed so that every value holds
+``GSFRIC_LANES`` steps and every operation acts on a vector of them, which the compiler turns
+into vector instructions. Each value is the same arithmetic as CasADi's code (the same
+operations in the same order), except ``exp``, which is a vector polynomial here (within 2 ulp
+of the C library's, see ``v_exp``).
+
+The lane width is chosen when the C is compiled, for the CPU it is compiled for: 8 with
+AVX-512F, 4 with AVX, otherwise 1 (scalar vectors; ``-DGSFRIC_LANES=n`` overrides). The
+printed code does not depend on it.
+
+The parameter inputs (every input but the first) are the same for every step of a call: the
+instructions that depend only on them and on constants are hoisted out of the step loop and
+evaluated once per call (each gets a name of its own, so CasADi's reuse of work slots inside
+the loop cannot overwrite it).
 
 Generated function, for CasADi function ``f`` with inputs k and outputs j:
 
     void <prefix>_batch(const double **in, const long long *in_stride,
-                        double **out, const long long *out_stride, long long n)
+                        double **out, const long long *out_stride, long long n,
+                        long long *bad)
 
-Step s reads input k at ``in[k] + s * in_stride[k]`` (stride 0 broadcasts) and writes output j
-at ``out[j] + s * out_stride[j]`` (a NULL output is skipped).
+Step s reads input 0 at ``in[0] + s * in_stride[0]`` and every other input k at ``in[k]``
+(its stride must be 0: the caller uses CasADi's per-step function otherwise), and writes
+output j at ``out[j] + s * out_stride[j]`` (a NULL output is skipped). A group of steps is
+read into, and its outputs written from, small transposed arrays (one vector per entry) by
+short loops, which keeps the loop body's code small. Unless ``bad`` is NULL, ``bad[s]`` is set
+to 1 where some output of step s is infinite or NaN, else 0.
 """
 
 from __future__ import annotations
 
-LANES = 4
+# recorded in the manifest: the printed code is the same for every lane width
+LANES = "chosen when compiled: 8 (AVX-512F), 4 (AVX), 1"
 
 _BINARY = {
     "OP_ADD": "{a} + {b}", "OP_SUB": "{a} - {b}", "OP_MUL": "{a} * {b}",
@@ -37,32 +53,124 @@ _UNARY = {
     "OP_CEIL": "v_ceil({a})",
 }
 
+# lane by lane through the C library (rare operations)
 _LANEWISE = {
-    "v_pow": "pow(a[i], b[i])", "v_fmin": "fmin(a[i], b[i])", "v_fmax": "fmax(a[i], b[i])",
-    "v_atan2": "atan2(a[i], b[i])", "v_lt": "(double)(a[i] < b[i])",
-    "v_le": "(double)(a[i] <= b[i])", "v_eq": "(double)(a[i] == b[i])",
-    "v_ne": "(double)(a[i] != b[i])", "v_and": "(double)(a[i] && b[i])",
-    "v_or": "(double)(a[i] || b[i])", "v_if_else_zero": "(a[i] ? b[i] : 0.0)",
+    "v_pow": "pow(a[i], b[i])", "v_atan2": "atan2(a[i], b[i])",
     "v_copysign": "copysign(a[i], b[i])",
 }
 _LANEWISE_UNARY = {
-    "v_exp": "exp(a[i])", "v_log": "log(a[i])", "v_sqrt": "sqrt(a[i])", "v_sin": "sin(a[i])",
-    "v_cos": "cos(a[i])", "v_tan": "tan(a[i])", "v_fabs": "fabs(a[i])", "v_inv": "1.0 / a[i]",
-    "v_tanh": "tanh(a[i])", "v_sign": "(double)((a[i] > 0) - (a[i] < 0))",
-    "v_not": "(double)(!a[i])", "v_floor": "floor(a[i])", "v_ceil": "ceil(a[i])",
+    "v_log": "log(a[i])", "v_sqrt": "sqrt(a[i])", "v_sin": "sin(a[i])", "v_cos": "cos(a[i])",
+    "v_tan": "tan(a[i])", "v_tanh": "tanh(a[i])", "v_floor": "floor(a[i])",
+    "v_ceil": "ceil(a[i])",
 }
+
+# whole-vector operations: comparisons give masks of all ones (true) or zeros per lane
+_VECTOR = r"""
+#define ONE_BITS ((vl)v_splat(1.0))
+static inline vd v_splat(double c) { vd r; for (int i = 0; i < GSFRIC_LANES; ++i) r[i] = c; return r; }
+static inline vd v_mask(vl m) { return (vd)(m & ONE_BITS); }
+static inline vd v_lt(vd a, vd b) { return v_mask((vl)(a < b)); }
+static inline vd v_le(vd a, vd b) { return v_mask((vl)(a <= b)); }
+static inline vd v_eq(vd a, vd b) { return v_mask((vl)(a == b)); }
+static inline vd v_ne(vd a, vd b) { return v_mask((vl)(a != b)); }
+static inline vd v_and(vd a, vd b) { return v_mask((vl)(a != 0.0) & (vl)(b != 0.0)); }
+static inline vd v_or(vd a, vd b) { return v_mask((vl)(a != 0.0) | (vl)(b != 0.0)); }
+static inline vd v_not(vd a) { return v_mask((vl)(a == 0.0)); }
+static inline vd v_if_else_zero(vd a, vd b) { return (vd)((vl)(a != 0.0) & (vl)b); }
+static inline vd v_sign(vd a) { return v_mask((vl)(a > 0.0)) - v_mask((vl)(a < 0.0)); }
+static inline vd v_fabs(vd a) { return (vd)((vl)a & ~(vl)v_splat(-0.0)); }
+static inline vd v_inv(vd a) { return 1.0 / a; }
+/* fmax/fmin as the C library's: a NaN operand gives the other one */
+static inline vd v_fmax(vd a, vd b) { vl m = (vl)(a > b) | (vl)(b != b); return (vd)((m & (vl)a) | (~m & (vl)b)); }
+static inline vd v_fmin(vd a, vd b) { vl m = (vl)(a < b) | (vl)(b != b); return (vd)((m & (vl)a) | (~m & (vl)b)); }
+/* exp: x = k ln2 + r (Cody-Waite), exp(r) by its Taylor polynomial of degree 13 (|r| <= ln2/2,
+ * truncation below 2e-16 relative), times 2^k put in the exponent bits. Within 2 ulp of the C
+ * library's exp; below -708.39 (results under the smallest normal number) it gives 0. */
+static inline vd v_exp(vd x)
+{
+    const vd hi = v_splat(709.782712893384), lo = v_splat(-708.3964185322641);
+    vd xc = v_fmin(v_fmax(x, lo), hi);
+    vd k = xc * 1.4426950408889634;
+    vd kr;
+    for (int i = 0; i < GSFRIC_LANES; ++i) kr[i] = __builtin_round(k[i]);
+    vd r = (xc - kr * 0.6931471803691238) - kr * 1.9082149292705877e-10;
+    vd p = v_splat(1.0 / 6227020800.0);
+    p = p * r + 1.0 / 479001600.0;
+    p = p * r + 1.0 / 39916800.0;
+    p = p * r + 1.0 / 3628800.0;
+    p = p * r + 1.0 / 362880.0;
+    p = p * r + 1.0 / 40320.0;
+    p = p * r + 1.0 / 5040.0;
+    p = p * r + 1.0 / 720.0;
+    p = p * r + 1.0 / 120.0;
+    p = p * r + 1.0 / 24.0;
+    p = p * r + 1.0 / 6.0;
+    p = p * r + 0.5;
+    p = p * r + 1.0;
+    p = p * r + 1.0;
+    /* 2^k in two halves so that k = 1024 (near the overflow limit) stays representable */
+    vl kh = __builtin_convertvector(kr, vl) >> 1;
+    vl kl = __builtin_convertvector(kr, vl) - kh;
+    vd s1 = (vd)((kh + 1023) << 52), s2 = (vd)((kl + 1023) << 52);
+    vd y = p * s1 * s2;
+    y = (vd)(((vl)(x > hi) & (vl)v_splat(1.0 / 0.0)) | (~(vl)(x > hi) & (vl)y));
+    y = (vd)(~(vl)(x < lo) & (vl)y);
+    return (vd)(((vl)(x != x) & (vl)x) | (~(vl)(x != x) & (vl)y));
+}
+"""
 
 
 def _header() -> str:
-    lines = ["/* SIMD-over-steps evaluation of gsfric's generated functions: see derive/simd.py. */",
-             "#include <math.h>", "",
-             f"typedef double v4 __attribute__((vector_size({8 * LANES})));", ""]
+    lines = [
+        "/* SIMD-over-steps evaluation of gsfric's generated functions: see derive/simd.py. */",
+        "#include <math.h>",
+        "",
+        "#ifndef GSFRIC_LANES",
+        "#if defined(__AVX512F__)",
+        "#define GSFRIC_LANES 8",
+        "#elif defined(__AVX__)",
+        "#define GSFRIC_LANES 4",
+        "#else",
+        "#define GSFRIC_LANES 1",
+        "#endif",
+        "#endif",
+        "",
+        "typedef double vd __attribute__((vector_size(8 * GSFRIC_LANES)));",
+        "typedef long long vl __attribute__((vector_size(8 * GSFRIC_LANES)));",
+        "",
+        "/* Long batches write their outputs past the caches (non-temporal stores: no read of",
+        " * the lines first); short ones, a control loop's, leave them in the cache. */",
+        "#define STREAM_STEPS 4096",
+        "#if defined(__SSE2__) && defined(__x86_64__)",
+        "#include <immintrin.h>",
+        "#define STREAM(p, v) _mm_stream_si64((long long *)(p), (union { double d; long long i; }){v}.i)",
+        "#define STREAM_FENCE() _mm_sfence()",
+        "#else",
+        "#define STREAM(p, v) (*(p) = (v))",
+        "#define STREAM_FENCE() ((void)0)",
+        "#endif",
+    ]
+    lines.append(_VECTOR)
     for name, body in _LANEWISE.items():
-        lines.append(f"static inline v4 {name}(v4 a, v4 b) {{ v4 r; "
-                     f"for (int i = 0; i < {LANES}; ++i) r[i] = {body}; return r; }}")
+        lines.append(f"static inline vd {name}(vd a, vd b) {{ vd r; "
+                     f"for (int i = 0; i < GSFRIC_LANES; ++i) r[i] = {body}; return r; }}")
     for name, body in _LANEWISE_UNARY.items():
-        lines.append(f"static inline v4 {name}(v4 a) {{ v4 r; "
-                     f"for (int i = 0; i < {LANES}; ++i) r[i] = {body}; return r; }}")
+        lines.append(f"static inline vd {name}(vd a) {{ vd r; "
+                     f"for (int i = 0; i < GSFRIC_LANES; ++i) r[i] = {body}; return r; }}")
+    lines += [
+        "",
+        "/* The lane width this file was compiled with, and its vector exp (for the tests). */",
+        "int gsfric_simd_lanes(void) { return GSFRIC_LANES; }",
+        "void gsfric_simd_exp(const double *x, double *y, long long n)",
+        "{",
+        "    for (long long s = 0; s < n; s += GSFRIC_LANES) {",
+        "        vd a;",
+        "        for (int l = 0; l < GSFRIC_LANES; ++l) a[l] = x[s + l < n ? s + l : n - 1];",
+        "        vd r = v_exp(a);",
+        "        for (int l = 0; l < GSFRIC_LANES && s + l < n; ++l) y[s + l] = r[l];",
+        "    }",
+        "}",
+    ]
     return "\n".join(lines) + "\n"
 
 
@@ -76,40 +184,84 @@ def _opnames():
 def batch_source(f, prefix: str) -> str:
     """C source of ``<prefix>_batch`` for the CasADi SX function ``f``."""
     names = _opnames()
-    n_w = max(f.sz_w(), 1)
-    lines = [
-        f"void {prefix}_batch(const double **in, const long long *in_stride,",
-        "                    double **out, const long long *out_stride, long long n)",
-        "{",
-        "    " + " ".join(f"v4 w{k};" for k in range(n_w)),
-        f"    for (long long s0 = 0; s0 < n; s0 += {LANES}) {{",
-        f"        long long idx[{LANES}];",
-        f"        int m = (int)(n - s0 < {LANES} ? n - s0 : {LANES});",
-        f"        for (int l = 0; l < {LANES}; ++l) idx[l] = s0 + (l < m ? l : m - 1);",
-    ]
+    n_x = f.numel_in(0)
+    sizes = [f.numel_out(j) for j in range(f.n_out())]
+    base = [sum(sizes[:j]) for j in range(len(sizes))]
+    hoisted, body = [], []
+    current: dict[int, tuple[str, bool]] = {}   # work slot -> (C name, loop invariant)
     for k in range(f.n_instructions()):
         op = names[f.instruction_id(k)]
         i = f.instruction_input(k)
         o = f.instruction_output(k)
+        if op == "OP_OUTPUT":
+            src, _ = current[i[0]]
+            body.append(f"        *(vd *)yt[{base[o[0]] + o[1]}] = {src};")
+            continue
         if op == "OP_INPUT":
-            src = f"in[{i[0]}]"
-            stride = f"in_stride[{i[0]}]"
-            lanes = ", ".join(f"{src}[idx[{l}] * {stride} + {i[1]}]" for l in range(LANES))
-            lines.append(f"        w{o[0]} = (v4){{{lanes}}};")
-        elif op == "OP_OUTPUT":
-            lines.append(f"        if (out[{o[0]}]) for (int l = 0; l < m; ++l) "
-                         f"out[{o[0]}][(s0 + l) * out_stride[{o[0]}] + {o[1]}] = w{i[0]}[l];")
+            if i[0] == 0:
+                expr, invariant = f"*(const vd *)xt[{i[1]}]", False
+            else:
+                expr, invariant = f"v_splat(in[{i[0]}][{i[1]}])", True
         elif op == "OP_CONST":
-            c = repr(float(f.instruction_constant(k)))
-            lines.append(f"        w{o[0]} = (v4){{{', '.join([c] * LANES)}}};")
+            expr, invariant = f"v_splat({float(f.instruction_constant(k))!r})", True
         elif op in _BINARY:
-            lines.append(f"        w{o[0]} = " + _BINARY[op].format(a=f"w{i[0]}", b=f"w{i[1]}")
-                         + ";")
+            (a, ia), (b, ib) = current[i[0]], current[i[1]]
+            expr, invariant = _BINARY[op].format(a=a, b=b), ia and ib
         elif op in _UNARY:
-            lines.append(f"        w{o[0]} = " + _UNARY[op].format(a=f"w{i[0]}") + ";")
+            a, ia = current[i[0]]
+            expr, invariant = _UNARY[op].format(a=a), ia
         else:
             raise NotImplementedError(f"{f.name()}: no SIMD translation for {op}")
-    lines += ["    }", "}", ""]
+        if invariant:
+            hoisted.append(f"    const vd h{k} = {expr};")
+            current[o[0]] = (f"h{k}", True)
+        else:
+            body.append(f"        w{o[0]} = {expr};")
+            current[o[0]] = (f"w{o[0]}", False)
+    slots = sorted({int(line.split("=")[0].strip()[1:]) for line in body
+                    if line.lstrip().startswith("w")})
+    lines = [
+        f"void {prefix}_batch(const double **in, const long long *in_stride,",
+        "                    double **out, const long long *out_stride, long long n,",
+        "                    long long *bad)",
+        "{",
+        *hoisted,
+        "    " + " ".join(f"vd w{s};" for s in slots),
+        f"    static const int size[{len(sizes)}] = {{{', '.join(map(str, sizes))}}};",
+        f"    double xt[{n_x}][GSFRIC_LANES] __attribute__((aligned(8 * GSFRIC_LANES)));",
+        f"    double yt[{sum(sizes)}][GSFRIC_LANES] __attribute__((aligned(8 * GSFRIC_LANES)));",
+        "    int stream = n >= STREAM_STEPS;",
+        "    for (long long s0 = 0; s0 < n; s0 += GSFRIC_LANES) {",
+        "        int m = (int)(n - s0 < GSFRIC_LANES ? n - s0 : GSFRIC_LANES);",
+        "        for (int l = 0; l < GSFRIC_LANES; ++l) {",
+        "            const double *row = in[0] + (s0 + (l < m ? l : m - 1)) * in_stride[0];",
+        f"            for (int j = 0; j < {n_x}; ++j) xt[j][l] = row[j];",
+        "        }",
+        *body,
+        "        if (bad) {  /* 1 where some output is infinite or NaN (v - v is NaN) */",
+        "            vl b = (vl)v_splat(0.0);",
+        f"            for (int k = 0; k < {sum(sizes)}; ++k) {{",
+        "                vd v = *(const vd *)yt[k], z = v - v;",
+        "                b |= (vl)(z != z);",
+        "            }",
+        "            for (int l = 0; l < m; ++l) bad[s0 + l] = b[l] != 0;",
+        "        }",
+        "        /* outputs: one loop, rows of each step written whole */",
+        f"        for (int j = 0, b = 0; j < {len(sizes)}; b += size[j], ++j) {{",
+        "            if (!out[j]) continue;",
+        "            for (int l = 0; l < m; ++l) {",
+        "                double *row = out[j] + (s0 + l) * out_stride[j];",
+        "                if (stream)",
+        "                    for (int o = 0; o < size[j]; ++o) STREAM(row + o, yt[b + o][l]);",
+        "                else",
+        "                    for (int o = 0; o < size[j]; ++o) row[o] = yt[b + o][l];",
+        "            }",
+        "        }",
+        "    }",
+        "    if (stream) STREAM_FENCE();",
+        "}",
+        "",
+    ]
     return "\n".join(lines)
 
 

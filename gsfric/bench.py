@@ -55,6 +55,16 @@ TARGETS = {
     "latency_40_us": ("one call of 40 steps (median)", "<=", 50.0, "us"),
     "two_core_speedup_1e6": ("two cores / one core, N = 1e6", ">=", 1.7, "x"),
     "import_s": ("import gsfric, fresh interpreter (median)", "<=", 0.3, "s"),
+    "evaluate_1e5_steps_per_s": ("gsfric.evaluate (all outputs + flags), one core, N = 1e5",
+                                 ">=", 2e6, "steps/s"),
+    "evaluate_vs_numpy": ("gsfric.evaluate / vectorised NumPy actuator map, N = 1e5", ">=",
+                          6.0, "x"),
+    "control_loop_40_us": ("README control loop: new Evaluator + forces(), 40 steps (median)",
+                           "<=", 20.0, "us"),
+    "busy_two_vs_one": ("two threads / one thread with the other core busy, N = 1e3 and 1e5 "
+                        "(worst)", ">=", 1.0, "x"),
+    "evaluate_memory_1e6_gib": ("gsfric.evaluate at N = 1e6, peak memory added", "<=", 2.3,
+                                "GiB"),
 }
 
 
@@ -108,6 +118,7 @@ class Report:
     machine: dict
     cases: list[Case] = field(default_factory=list)
     import_time: dict = field(default_factory=dict)
+    paths: dict = field(default_factory=dict)
     ratios: dict = field(default_factory=dict)
     targets: dict = field(default_factory=dict)
 
@@ -120,6 +131,7 @@ class Report:
     def as_dict(self) -> dict:
         return dict(command=self.command, machine=self.machine,
                     cases=[c.as_dict() for c in self.cases], import_time=self.import_time,
+                    paths=self.paths,
                     ratios=self.ratios, targets=self.targets)
 
 
@@ -287,6 +299,98 @@ def import_time(runs: int = 7) -> dict:
             "first_call_s": float(run.stdout.strip().splitlines()[-1])}
 
 
+# ------------------------------------------------------------------- the other paths
+def _motion(n: int):
+    from gsfric import models
+
+    return models.random_motion(np.random.default_rng(SEED), DT * np.arange(n))
+
+
+def _best_times(fn, budget: float, min_calls: int = 3) -> tuple[float, float, float]:
+    """(best wall, median wall, best CPU of the calling thread) seconds per call."""
+    fn()
+    cpu: list[float] = []
+    times = _time_calls(fn, budget, min_calls, 100_000, cpu)
+    return min(times), statistics.median(times), min(cpu)
+
+
+def _busy_core():
+    """A process that keeps one core busy until terminated."""
+    return subprocess.Popen([sys.executable, "-c", "while True: pass"])
+
+
+def evaluate_memory_child(n: int) -> dict:
+    """In a fresh process: the peak memory ``gsfric.evaluate`` adds at n steps, in GiB."""
+    import gsfric
+
+    motion = _motion(n)
+    platform = gsfric.reference_platform()
+    gsfric.evaluate(platform, _motion(50))
+    if _reset_peak_rss():
+        before = _status_kib("VmRSS")
+        result = gsfric.evaluate(platform, motion)
+        rise = _status_kib("VmHWM") - before
+    else:
+        before = _max_rss_kib()
+        result = gsfric.evaluate(platform, motion)
+        rise = _max_rss_kib() - before
+    size = sum(v.nbytes for v in result.arrays.values()) + result.flag.nbytes
+    return {"peak_gib": rise / 2**20, "results_gib": size / 2**30}
+
+
+def measure_paths(budget: float, memory: bool, progress=print) -> dict:
+    """The paths around the hot path: ``evaluate`` with flags, the README's control loop,
+    Evaluator construction, two threads against a busy core, evaluate's memory."""
+    import gsfric
+    from gsfric import native, numpy_model
+    from gsfric.evaluation import Evaluator, state_array
+
+    platform = gsfric.reference_platform()
+    out: dict = {}
+    lib = native._library()
+    out["lanes"] = lib.gsfric_simd_lanes() if lib is not None else None
+    progress("  evaluate (all outputs + flags) N=100,000")
+    motion = _motion(100_000)
+    best, median, cpu = _best_times(lambda: gsfric.evaluate(platform, motion), budget)
+    x = state_array(motion)
+    nbest, _, ncpu = _best_times(lambda: numpy_model.actuator_forces_numpy(platform, x), budget)
+    out["evaluate_1e5"] = {"steps_per_s": 1e5 / best, "steps_per_cpu_s": 1e5 / cpu,
+                           "numpy_steps_per_s": 1e5 / nbest, "vs_numpy": nbest / best,
+                           "vs_numpy_cpu": ncpu / cpu}
+    progress("  README control loop, 40 steps")
+    m40 = _motion(40)
+    args = (m40.position, m40.rotation, m40.velocity, m40.omega, m40.acceleration, m40.alpha)
+    best, median, cpu = _best_times(lambda: Evaluator(platform).forces(*args), budget)
+    out["control_loop_40"] = {"best_us": best * 1e6, "median_us": median * 1e6,
+                              "cpu_us": cpu * 1e6}
+    best, median, cpu = _best_times(lambda: Evaluator(platform), budget)
+    out["evaluator_construct"] = {"best_us": best * 1e6, "median_us": median * 1e6}
+    busy = {}
+    worker = _busy_core()
+    try:
+        for n in (1_000, 100_000):
+            progress(f"  one and two threads, other core busy, N={n:,}")
+            xs = np.ascontiguousarray(x[:n])
+            row = {}
+            for threads in (1, 2):
+                ev, o = Evaluator(platform, n_threads=threads), np.empty((n, 6))
+                row[threads] = _best_times(lambda: ev.actuator_forces(xs, o), budget)[1]
+            busy[str(n)] = {"one_thread_ms": row[1] * 1e3, "two_threads_ms": row[2] * 1e3,
+                            "two_vs_one": row[1] / row[2]}
+    finally:
+        worker.terminate()
+        worker.wait()
+    out["busy_core"] = busy
+    if memory:
+        progress("  evaluate memory, N=1,000,000 (fresh process)")
+        code = ("import json; from gsfric.bench import evaluate_memory_child; "
+                "print(json.dumps(evaluate_memory_child(1_000_000)))")
+        run = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True)
+        if run.returncode == 0:
+            out["evaluate_memory_1e6"] = json.loads(run.stdout.strip().splitlines()[-1])
+    return out
+
+
 # ------------------------------------------------------------------------- machine check
 def parallel_capacity(iterations: int = 3_000_000) -> float:
     """How many cores two CPU-bound processes get together: 2.0 with two idle cores.
@@ -328,12 +432,19 @@ def _machine() -> dict:
             "compiled": compiled,
             "compiler": " ".join(native._compiler() + list(native.CFLAGS)) if compiled
             else "none (CasADi fallback)",
-            "actuator_entry": (f"SIMD over steps, {manifest().get('simd_lanes')} lanes" if simd
+            "actuator_entry": (f"SIMD over steps, {_lanes()} lanes" if simd
                                else "one step per call"),
             "source": _source_version(),
             "instructions": {f["name"].removeprefix("gsfric_model_"): f.get("n_instructions")
                              for f in manifest()["functions"]},
             "load_average_start": _load_average()}
+
+
+def _lanes():
+    from gsfric import native
+
+    lib = native._library()
+    return lib.gsfric_simd_lanes() if lib is not None else None
 
 
 def _source_version() -> str | None:
@@ -390,6 +501,23 @@ def _targets(report: Report) -> dict:
                    report.machine.get("parallel_capacity_end", float("nan")))
         notes["two_core_speedup_1e6"] = f"cores free for the run: {free:.2f} of 2"
     values["import_s"] = report.import_time["median_s"]
+    paths = report.paths
+    if "evaluate_1e5" in paths:
+        e = paths["evaluate_1e5"]
+        values["evaluate_1e5_steps_per_s"] = e["steps_per_s"]
+        notes["evaluate_1e5_steps_per_s"] = f"{e['steps_per_cpu_s']:.3g} per CPU second"
+        values["evaluate_vs_numpy"] = e["vs_numpy"]
+        notes["evaluate_vs_numpy"] = f"{e['vs_numpy_cpu']:.3g} in CPU time"
+    if "control_loop_40" in paths:
+        values["control_loop_40_us"] = paths["control_loop_40"]["median_us"]
+        notes["control_loop_40_us"] = (f"best {paths['control_loop_40']['best_us']:.3g} us, "
+                                       f"CPU {paths['control_loop_40']['cpu_us']:.3g} us")
+    if paths.get("busy_core"):
+        values["busy_two_vs_one"] = min(r["two_vs_one"] for r in paths["busy_core"].values())
+    if "evaluate_memory_1e6" in paths:
+        mem = paths["evaluate_memory_1e6"]
+        values["evaluate_memory_1e6_gib"] = mem["peak_gib"]
+        notes["evaluate_memory_1e6_gib"] = f"results {mem['results_gib']:.3g} GiB"
     out = {}
     for key, value in values.items():
         label, op, target, unit = TARGETS[key]
@@ -434,6 +562,7 @@ def measure(sizes=SIZES, threads=(1, 2), budget: float = 2.0, memory: bool = Tru
             if report.case("loop", 1, n) is None:
                 report.cases.append(Case("loop", 1, n, calls=0, best=per_step * n,
                                          median=per_step * n, extrapolated=True))
+    report.paths = measure_paths(budget, memory and max(sizes) >= 1_000_000, progress)
     progress("  import gsfric (fresh interpreters)")
     report.import_time = import_time()
     report.ratios = _ratios(report, sizes)
@@ -490,6 +619,28 @@ def format_report(report: Report) -> str:
                      f"({r['compiled_vs_numpy_cpu']:5.1f}x) NumPy  "
                      f"{r['compiled_vs_loop']:8.0f}x loop  {r['two_vs_one_core']:5.2f}x on two "
                      "cores")
+    p = report.paths
+    if p:
+        lines += ["", f"SIMD lanes: {p.get('lanes')}"]
+        if "evaluate_1e5" in p:
+            e = p["evaluate_1e5"]
+            lines.append(f"gsfric.evaluate (all outputs + flags), N = 100,000: "
+                         f"{e['steps_per_s']:.3g} steps/s ({e['steps_per_cpu_s']:.3g} per CPU "
+                         f"second), {e['vs_numpy']:.1f}x the vectorised NumPy actuator map "
+                         f"({e['vs_numpy_cpu']:.1f}x in CPU time)")
+        if "control_loop_40" in p:
+            c, k = p["control_loop_40"], p["evaluator_construct"]
+            lines.append(f"README control loop (new Evaluator + forces, 40 steps): median "
+                         f"{c['median_us']:.3g} us, best {c['best_us']:.3g} us; Evaluator() "
+                         f"alone: median {k['median_us']:.3g} us")
+        for n, r in p.get("busy_core", {}).items():
+            lines.append(f"other core busy, N = {int(n):,}: one thread {r['one_thread_ms']:.3g} "
+                         f"ms, two threads {r['two_threads_ms']:.3g} ms (median): "
+                         f"{r['two_vs_one']:.2f}x")
+        if "evaluate_memory_1e6" in p:
+            mem = p["evaluate_memory_1e6"]
+            lines.append(f"gsfric.evaluate at N = 1e6: peak memory added {mem['peak_gib']:.3g} "
+                         f"GiB (results {mem['results_gib']:.3g} GiB)")
     it = report.import_time
     lines += ["", f"import gsfric: median {it['median_s'] * 1e3:.0f} ms, best "
               f"{it['best_s'] * 1e3:.0f} ms over {it['runs']} fresh interpreters "

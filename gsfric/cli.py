@@ -250,9 +250,14 @@ def paper(out_dir, mode, platform_file, no_plots):
 @click.option("--quiet", is_flag=True,
               help="No progress bar and no summary line (warnings and errors still go to "
                    "stderr).")
+@click.option("--columns", default=None, metavar="GROUP[,GROUP...]",
+              help="Output groups: forces, friction, reactions, frictionless, lengths "
+                   "[default: all]; t and flag are always written.")
+@click.option("--float32", is_flag=True,
+              help="Write the outputs as float32 (relative error up to 6e-8, half the size).")
 @_log_options
 def simulate(trajectory, platform_file, out, mode, strict, threads, chunk, window, progress,
-             quiet, column_map, units_map, angles, keep_columns):
+             quiet, columns, float32, column_map, units_map, angles, keep_columns):
     """Evaluate a motion: actuator forces, reactions and friction at every step.
 
     The trajectory may be a measured-data file: with F1..F6 the output also has
@@ -265,7 +270,7 @@ def simulate(trajectory, platform_file, out, mode, strict, threads, chunk, windo
     """
     import warnings
 
-    from gsfric.stream import simulate_file
+    from gsfric.stream import parse_columns, simulate_file
 
     def show(message, category, filename, lineno, file=None, line=None):
         click.echo(f"gsfric: warning: {message}", err=True)
@@ -278,7 +283,8 @@ def simulate(trajectory, platform_file, out, mode, strict, threads, chunk, windo
         summary = simulate_file(trajectory, out, platform, mode=mode, strict=strict,
                                 chunk=chunk, window=window, n_threads=threads,
                                 progress=False if quiet else progress,
-                                log_format=log_format)
+                                log_format=log_format, columns=parse_columns(columns),
+                                float32=float32)
     if not quiet:
         click.echo(f"wrote {out} ({summary.steps} steps, {summary.flagged} flagged)")
 

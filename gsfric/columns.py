@@ -116,10 +116,12 @@ def annotate(frame):
 
 
 def arrow_table(frame):
-    """A pyarrow Table of ``frame`` with field metadata ``unit`` and ``description``."""
+    """A pyarrow Table of ``frame`` (a DataFrame or a dict of column arrays) with field metadata
+    ``unit`` and ``description``."""
     import pyarrow as pa
 
-    table = pa.Table.from_pandas(frame, preserve_index=False)
+    table = pa.table(frame) if isinstance(frame, dict) else \
+        pa.Table.from_pandas(frame, preserve_index=False)
     known_units, known_text = units(), descriptions()
     fields = []
     for f in table.schema:

@@ -9,15 +9,30 @@ Step flags (bits of ``Result.flag``; 0 = sound step):
 * 1 ``FLAG_NONFINITE``: a non-finite input or output value (outputs set to NaN);
 * 2 ``FLAG_STROKE``: a leg length outside ``geometry.stroke``;
 * 4 ``FLAG_SINGULAR``: the platform's 6x6 force Jacobian (columns ``(u_i, (E_i - p) x u_i)``)
-  has a condition number above ``COND_LIMIT``: the axial forces are ill-determined;
+  is near singular: its singularity measure ``h`` (output ``h``, derive/conditioning.py: the
+  volume spanned by the legs' unit wrenches, moments in units of the platform's size, relative
+  to orthogonal ones) is below ``SINGULAR_LIMIT = 2 / COND_LIMIT``. Unflagged steps are
+  guaranteed a condition number below ``COND_LIMIT`` for that Jacobian with its moment rows
+  divided by the platform's size and its columns scaled to unit length;
 * 8 ``FLAG_UNIVERSAL``: a leg within ``UNIVERSAL_LIMIT`` of the direction of its universal
   joint's first axis (``1 - (u.a1)^2 < UNIVERSAL_LIMIT``), where the joint's torsion moment is
   undefined.
+
+Every flag is computed in C in the same pass as the outputs (``_native/batch.c``).
+
+Concurrency: an ``Evaluator`` is immutable after construction (its parameter vectors are
+read-only arrays) and every call works on its own buffers, so one Evaluator, or several, may be
+called from any number of threads at once; the compiled code runs without the GIL. An output
+buffer passed as ``out`` belongs to the call until it returns: do not share one between
+concurrent calls.
 """
 
 from __future__ import annotations
 
+import functools
+import math
 import warnings
+import weakref
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -36,6 +51,7 @@ FLAG_NAMES = {FLAG_NONFINITE: "non-finite value", FLAG_STROKE: "leg length outsi
               FLAG_SINGULAR: "near-singular platform Jacobian",
               FLAG_UNIVERSAL: "leg near its universal joint's first axis"}
 COND_LIMIT = 1e6
+SINGULAR_LIMIT = 2.0 / COND_LIMIT
 UNIVERSAL_LIMIT = 1e-4
 
 JOINT_EPS = 1e-4       # rad/s, regularisation of the joints' sign function
@@ -56,12 +72,47 @@ def state_array(motion: Motion) -> np.ndarray:
                            motion.omega, motion.acceleration, motion.alpha], axis=1)
 
 
-def _pack(blocks: list[dict], values: dict) -> np.ndarray:
-    size = sum(int(np.prod(b["shape"])) for b in blocks)
-    out = np.zeros(size)
-    for b in blocks:
-        n = int(np.prod(b["shape"]))
-        out[b["offset"]:b["offset"] + n] = np.ravel(values[b["name"]])
+@functools.lru_cache(maxsize=None)
+def _slots(function_name: str, input_name: str) -> tuple:
+    """(size, ((name, start, stop), ...)) of an input's layout."""
+    blocks = layout(function_name, input_name)
+    slots = tuple((b["name"], b["offset"], b["offset"] + math.prod(b["shape"])) for b in blocks)
+    return max(stop for _, _, stop in slots), slots
+
+
+def _pack(slots: tuple, values: dict) -> np.ndarray:
+    size, where = slots
+    flat: list[float] = []
+    for name, start, stop in where:
+        value = values[name]
+        if stop - start == 1:
+            flat.append(float(value))
+        else:
+            flat.extend(np.ravel(value).tolist())
+    if len(flat) != size:  # the layout has gaps or a block has the wrong size
+        out = np.zeros(size)
+        for name, start, stop in where:
+            out[start:stop] = np.ravel(values[name])
+        return out
+    return np.array(flat)
+
+
+@functools.lru_cache(maxsize=None)
+def _effect_defaults() -> tuple:
+    from gsfric.catalog import EFFECTS
+
+    return tuple((name, tuple(params.items())) for name, params in EFFECTS.items())
+
+
+def state_into(out: np.ndarray, position, rotation, velocity, omega, acceleration,
+               alpha) -> np.ndarray:
+    """Lay out states into ``out`` (N, 24) as ``state_array`` does, from the motion's arrays."""
+    out[:, 0:3] = position
+    out[:, 3:12] = np.reshape(rotation, (-1, 9))
+    out[:, 12:15] = velocity
+    out[:, 15:18] = omega
+    out[:, 18:21] = acceleration
+    out[:, 21:24] = alpha
     return out
 
 
@@ -84,18 +135,41 @@ def parameter_values(platform: Platform) -> dict[str, object]:
 
 def parameter_vector(platform: Platform) -> np.ndarray:
     """The platform packed into the generated functions' parameter input P."""
-    return _pack(layout("eval", "P"), parameter_values(platform))
+    return _pack(_slots("eval", "P"), parameter_values(platform))
 
 
 def effect_vector(platform: Platform) -> np.ndarray:
     """The platform's effects packed into the effect-parameter input Q (defaults elsewhere)."""
-    from gsfric.catalog import EFFECTS
-
     values = []
-    for name, params in EFFECTS.items():
-        given = platform.effects.get(name, {})
-        values += [float(given.get(p, default)) for p, default in params.items()]
+    effects = platform.effects
+    for name, params in _effect_defaults():
+        given = effects.get(name)
+        if given:
+            values += [float(given.get(p, default)) for p, default in params]
+        else:
+            values += [default for _, default in params]
     return np.array(values)
+
+
+_PACKED: dict[int, tuple] = {}
+
+
+def _packed(platform: Platform) -> tuple[np.ndarray, np.ndarray]:
+    """P and Q of a platform, read-only, packed once per platform object (platforms are
+    immutable) and shared by its Evaluators."""
+    hit = _PACKED.get(id(platform))
+    if hit is not None and hit[0]() is platform:
+        return hit[1], hit[2]
+    P, Q = parameter_vector(platform), effect_vector(platform)
+    P.flags.writeable = False
+    Q.flags.writeable = False
+    key = id(platform)
+    try:
+        ref = weakref.ref(platform, lambda _, key=key: _PACKED.pop(key, None))
+    except TypeError:  # not weakly referable: not cached
+        return P, Q
+    _PACKED[key] = (ref, P, Q)
+    return P, Q
 
 
 @dataclass
@@ -233,7 +307,7 @@ class Evaluator:
         "kinematic": every acceleration from the motion; "paper": the paper's constant
         accelerations and joint speed (``paper_constants``) instead.
     n_threads : int
-        OpenMP threads for long evaluations.
+        Threads for long evaluations (POSIX threads created per call, at least 2048 steps each).
     paper_constants : ndarray (13,), optional
         Paper mode's constants (default ``gsfric.models.paper_constants()``).
     """
@@ -245,16 +319,17 @@ class Evaluator:
         self.platform = platform
         self.mode = mode
         self.n_threads = int(n_threads)
-        self.P = parameter_vector(platform)
-        self.Q = effect_vector(platform)
+        self.P, self.Q = _packed(platform)
         self.K = None
         if mode == "paper":
             from gsfric.models import paper_constants as pc
 
-            self.K = np.asarray(pc() if paper_constants is None else paper_constants, float)
+            self.K = np.array(pc() if paper_constants is None else paper_constants, float)
+            self.K.flags.writeable = False
         self._full = native.get("eval_paper" if mode == "paper" else "eval")
         self._stroke = platform.geometry.stroke
         self._actuator = None
+        self._flag_spec = None
 
     # -- hot paths -------------------------------------------------------------
     def actuator_forces(self, x: np.ndarray, out: np.ndarray | None = None, P=None,
@@ -267,14 +342,38 @@ class Evaluator:
         if self.mode != "kinematic":
             raise GsfricError("actuator_forces is the kinematic mode's hot path")
         if P is None and Q is None and out is not None:
-            if self._actuator is None:
-                self._actuator = native.get("actuator").bound([self.P, self.Q], "F",
-                                                              self.n_threads)
-            return self._actuator(x, out)
+            actuator = self._actuator
+            if actuator is None:  # two threads may both build one: either is right
+                actuator = self._actuator = native.get("actuator").bound([self.P, self.Q], "F",
+                                                                         self.n_threads)
+            return actuator(x, out)
         f = native.get("actuator")
         res = f([x, self.P if P is None else P, self.Q if Q is None else Q],
                 None if out is None else {"F": out}, self.n_threads)
         return res["F"]
+
+    def forces(self, position, rotation, velocity, omega, acceleration, alpha,
+               out: np.ndarray | None = None) -> np.ndarray:
+        """Actuator forces with friction, (N, 6) N, from the motion's arrays directly.
+
+        Parameters
+        ----------
+        position, velocity, acceleration : ndarray (N, 3)
+            Platform frame origin in the base frame, m, m/s, m/s^2.
+        rotation : ndarray (N, 3, 3)
+            Platform to base rotation matrices.
+        omega, alpha : ndarray (N, 3)
+            Platform angular velocity and acceleration, base frame, rad/s, rad/s^2.
+        out : ndarray (N, 6), optional
+            C-contiguous float64 buffer for the result.
+
+        The states are laid out in a buffer of this call (no ``state_array``); no flags.
+        """
+        position = np.asarray(position, dtype=np.float64)
+        n = position.shape[0] if position.ndim == 2 else 1
+        x = state_into(np.empty((n, 24)), position, rotation, velocity, omega, acceleration,
+                       alpha)
+        return self.actuator_forces(x, np.empty((n, 6)) if out is None else out)
 
     def jacobian(self, x: np.ndarray, Q=None) -> tuple[np.ndarray, np.ndarray]:
         """F (N, 6) and dF/dtheta (N, 6, n_theta); theta names in ``jacobian_parameters()``."""
@@ -299,24 +398,8 @@ class Evaluator:
         chunk : int
             Steps per call to the compiled code (bounds the temporary memory).
         """
-        x = state_array(motion)
-        n = x.shape[0]
-        outs = {name: np.empty((n, size)) for name, size, _ in self._full.outputs}
-        inputs = [self.P, self.Q] + ([self.K] if self.K is not None else [])
-        starts = range(0, n, chunk)
-        if progress and n > chunk:
-            from tqdm import tqdm
-
-            starts = tqdm(starts, total=(n + chunk - 1) // chunk, unit="chunk",
-                          desc="evaluating")
-        for s in starts:
-            e = min(n, s + chunk)
-            view = {k: v[s:e] for k, v in outs.items()}
-            self._full([x[s:e]] + inputs, view, self.n_threads)
-        shapes = {name: shape for name, _, shape in self._full.outputs}
-        arrays = {k: v.reshape((n,) + tuple(shapes[k])) for k, v in outs.items()}
-        flag = self._flags(x, motion, arrays)
-        result = Result(t=np.asarray(motion.t, float), arrays=arrays, flag=flag, mode=self.mode)
+        result = self.evaluate_quiet(motion, progress=progress, chunk=chunk)
+        n, flag = len(result), result.flag
         bad = result.flagged()
         if bad.size:
             kinds = sorted({FLAG_NAMES[b] for b in FLAG_NAMES if np.any(flag & b)})
@@ -327,31 +410,78 @@ class Evaluator:
             warnings.warn(msg, stacklevel=2)
         return result
 
-    def _flags(self, x, motion, arrays) -> np.ndarray:
+    def evaluate_quiet(self, motion: Motion, progress: bool = False, chunk: int = CHUNK,
+                       buffers: dict | None = None) -> Result:
+        """``evaluate`` without reporting the flagged steps (no warning, no error).
+
+        ``buffers`` (a dict, filled on first use) lends the output arrays: a caller that
+        evaluates chunk after chunk passes the same dict and reuses the memory; the Result's
+        arrays are then views into it, valid until the next call with it.
+        """
+        n = len(motion)
+        if int(chunk) < 1:
+            raise InputError(f"chunk: must be a positive number of steps, got {chunk!r}")
+        if buffers is None:
+            outs = {name: np.empty((n, size)) for name, size, _ in self._full.outputs}
+        else:
+            outs = {}
+            for name, size, _ in self._full.outputs:
+                buf = buffers.get(name)
+                if buf is None or buf.shape[0] < n:
+                    buf = buffers[name] = np.empty((n, size))
+                outs[name] = buf[:n]
+        flag = np.empty(n, dtype=np.int64)
+        inputs = [self.P, self.Q] + ([self.K] if self.K is not None else [])
+        spec = self.flag_spec()
+        x = np.empty((min(n, chunk), 24))
+        m = motion
+        starts = range(0, n, chunk)
+        if progress and n > chunk:
+            from tqdm import tqdm
+
+            starts = tqdm(starts, total=(n + chunk - 1) // chunk, unit="chunk",
+                          desc="evaluating")
+        for s in starts:
+            e = min(n, s + chunk)
+            xs = state_into(x[:e - s], m.position[s:e], m.rotation[s:e], m.velocity[s:e],
+                            m.omega[s:e], m.acceleration[s:e], m.alpha[s:e])
+            view = {k: v[s:e] for k, v in outs.items()}
+            if native.is_compiled():
+                self._full([xs] + inputs, view, self.n_threads, flags=spec, flag=flag[s:e])
+            else:
+                self._full([xs] + inputs, view, self.n_threads)
+                flag[s:e] = self._flags(xs, view)
+        shapes = {name: shape for name, _, shape in self._full.outputs}
+        arrays = {k: v.reshape((n,) + tuple(shapes[k])) for k, v in outs.items()}
+        return Result(t=np.asarray(motion.t, float), arrays=arrays, flag=flag, mode=self.mode)
+
+    def flag_spec(self) -> "native.FlagSpec":
+        """The settings of the step flags computed in C (read-only, shared by calls)."""
+        spec = self._flag_spec
+        if spec is None:
+            index = {name: k for k, (name, _, _) in enumerate(self._full.outputs)}
+            lo, hi = self._stroke if self._stroke is not None else (0.0, 0.0)
+            spec = self._flag_spec = native.FlagSpec(
+                index["D"], index["s2"], index["h"], self._stroke is not None, lo, hi,
+                UNIVERSAL_LIMIT, SINGULAR_LIMIT, 24)
+        return spec
+
+    def _flags(self, x, arrays) -> np.ndarray:
+        """The flags of ``_native/batch.c`` in NumPy, for the CasADi fallback (no compiler)."""
         n = x.shape[0]
         flag = np.zeros(n, dtype=np.int64)
         finite = np.isfinite(x).all(axis=1)
         for v in arrays.values():
             finite &= np.isfinite(v.reshape(n, -1)).all(axis=1)
-        # the geometric causes first, on the values as computed (a NaN compares False), so
-        # that a step made non-finite by one of them still names it
         D = arrays["D"]
         if self._stroke is not None:
             lo, hi = self._stroke
-            out = ((D < lo) | (D > hi)).any(axis=1)
-            flag[out] |= FLAG_STROKE
+            flag[((D < lo) | (D > hi)).any(axis=1)] |= FLAG_STROKE
         flag[(arrays["s2"] < UNIVERSAL_LIMIT).any(axis=1)] |= FLAG_UNIVERSAL
-        u = arrays["u"]
-        arm = np.einsum("nij,kj->nki", motion.rotation, self.platform.geometry.platform_joints)
-        A = np.concatenate([u, np.cross(arm, u)], axis=2)  # (N, 6 legs, 6)
-        known = np.isfinite(A).all(axis=(1, 2))  # otherwise FLAG_NONFINITE says it
-        with np.errstate(invalid="ignore", divide="ignore"):
-            cond = np.linalg.cond(np.where(known[:, None, None], A, np.eye(6)))
-        flag[known & ~(cond < COND_LIMIT)] |= FLAG_SINGULAR
+        flag[arrays["h"][:, 0] < SINGULAR_LIMIT] |= FLAG_SINGULAR
         flag[~finite] |= FLAG_NONFINITE
-        if (~finite).any():
-            for v in arrays.values():
-                v[~finite] = np.nan
+        for v in arrays.values():
+            v[~finite] = np.nan
         return flag
 
 

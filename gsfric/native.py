@@ -5,7 +5,8 @@ shared library, cached under ``$GSFRIC_CACHE`` (default: the user cache director
 named after the hash of the sources, the compiler command and the CPU's instruction-set
 features (``-march=native`` code is only valid on the CPU it was built for), and loaded with
 ctypes. The driver loops over steps in C, reading and writing NumPy buffers directly (no CasADi
-objects on the hot path), optionally on several OpenMP threads.
+objects on the hot path), optionally on several POSIX threads, and computes the step flags in
+the same pass.
 
 The cache is checked before every load: the library's size and SHA-256, recorded beside it when
 it was built (``libgsfric.json``), must match; a damaged library (truncated, overwritten) is
@@ -20,7 +21,9 @@ is not a shared library raises ``LibraryError`` (the CLI's exit 3) naming the pa
 
 Environment: ``CC`` (compiler, default ``cc``), ``GSFRIC_CACHE`` (cache directory),
 ``GSFRIC_CC_TIMEOUT`` (seconds per compiler run), ``GSFRIC_NO_COMPILE=1`` (force the CasADi
-fallback).
+fallback), ``GSFRIC_MARCH`` (target CPU, default ``native``; ``x86-64-v3`` for a library that
+runs on any AVX2 machine), ``GSFRIC_LANES`` (steps per vector, default from the target: 8 with
+AVX-512, 4 with AVX, else 1).
 """
 
 from __future__ import annotations
@@ -46,8 +49,22 @@ from gsfric.errors import GsfricError
 from gsfric.manifest import BASENAME, function, generated_dir, manifest
 
 DRIVER = Path(__file__).resolve().parent / "_native" / "batch.c"
-CFLAGS = ("-O2", "-march=native", "-fno-math-errno", "-freciprocal-math", "-fPIC",
-          "-fno-semantic-interposition", "-fopenmp")
+
+
+def _target_flags() -> tuple[str, ...]:
+    """The target CPU (``GSFRIC_MARCH``, default native) and lane width (``GSFRIC_LANES``,
+    default: from the target's vector width, see derive/simd.py)."""
+    flags = (f"-march={os.environ.get('GSFRIC_MARCH') or 'native'}",)
+    lanes = os.environ.get("GSFRIC_LANES")
+    if lanes:
+        if lanes not in ("1", "2", "4", "8"):
+            raise GsfricError(f"GSFRIC_LANES: {lanes!r} is not one of 1, 2, 4, 8")
+        flags += (f"-DGSFRIC_LANES={lanes}",)
+    return flags
+
+
+CFLAGS = ("-O2", *_target_flags(), "-fno-math-errno", "-freciprocal-math", "-fPIC",
+          "-fno-semantic-interposition", "-pthread")
 LIBRARY = "libgsfric.so"
 RECORD = "libgsfric.json"
 DEFAULT_CC_TIMEOUT = 600.0
@@ -323,9 +340,8 @@ def build_library() -> Path:
               file=sys.stderr)
         error = "(no message)"
         try:
-            for flags in (CFLAGS,
-                          tuple(f for f in CFLAGS if f not in ("-fopenmp", "-march=native")),
-                          ("-O1", "-fPIC")):
+            for flags in (CFLAGS, tuple(f for f in CFLAGS if not f.startswith("-march")),
+                          ("-O1", "-fPIC", "-pthread")):
                 error = _compile(cc, flags, sources, tmp)
                 if error is None:
                     _check_shared_library(tmp, cc)
@@ -342,11 +358,29 @@ def build_library() -> Path:
                          "(CC) or regenerate generated/ with `gsfric derive`")
 
 
+class _Fn(ctypes.Structure):
+    _fields_ = [("simd", ctypes.c_void_p), ("eval", ctypes.c_void_p), ("work", ctypes.c_void_p),
+                ("n_in", ctypes.c_int), ("n_out", ctypes.c_int)]
+
+
+class FlagSpec(ctypes.Structure):
+    """Settings of the step flags computed in C (``gsfric_flags`` in ``_native/batch.c``)."""
+
+    _fields_ = [("d", ctypes.c_int), ("s2", ctypes.c_int), ("h", ctypes.c_int),
+                ("has_stroke", ctypes.c_int), ("stroke_lo", ctypes.c_double),
+                ("stroke_hi", ctypes.c_double), ("universal_limit", ctypes.c_double),
+                ("singular_limit", ctypes.c_double), ("x_size", ctypes.c_longlong)]
+
+
 class CompiledFunction:
     """One generated function, evaluated step by step in C over NumPy buffers.
 
     Inputs are arrays of shape (N, size) (one block per step) or (size,) (the same block for
     every step); outputs are (N, size) arrays, C-contiguous float64.
+
+    Concurrency: an instance holds only read-only descriptions; every call builds its own
+    argument arrays, so any number of threads may call one instance at once (each with its
+    own output buffers). The C code runs without the GIL.
     """
 
     def __init__(self, lib: ctypes.CDLL, name: str) -> None:
@@ -356,20 +390,21 @@ class CompiledFunction:
         self.outputs = [(o["name"], o["size"], tuple(o["shape"])) for o in meta["outputs"]]
         full = f"{BASENAME}_{name}"
         self._lib = lib
-        self._eval = ctypes.cast(getattr(lib, full), ctypes.c_void_p)
-        self._work = ctypes.cast(getattr(lib, f"{full}_work"), ctypes.c_void_p)
-        self._batch = lib.gsfric_batch
         try:
-            self._simd = ctypes.cast(getattr(lib, f"{full}_batch"), ctypes.c_void_p)
+            simd = ctypes.cast(getattr(lib, f"{full}_batch"), ctypes.c_void_p)
         except AttributeError:
-            self._simd = None
-        self._in_ptrs = (ctypes.c_void_p * len(self.inputs))()
-        self._in_strides = (ctypes.c_longlong * len(self.inputs))()
-        self._out_ptrs = (ctypes.c_void_p * len(self.outputs))()
+            simd = None
+        self._fn = _Fn(simd, ctypes.cast(getattr(lib, full), ctypes.c_void_p),
+                       ctypes.cast(getattr(lib, f"{full}_work"), ctypes.c_void_p),
+                       len(self.inputs), len(self.outputs))
+        self.simd = simd is not None
+        # read only from here on
         self._out_strides = (ctypes.c_longlong * len(self.outputs))(
             *[size for _, size, _ in self.outputs])
+        self._index = {name: k for k, (name, _, _) in enumerate(self.outputs)}
 
-    def __call__(self, inputs, outputs=None, n_threads: int = 1, select=None) -> dict:
+    def __call__(self, inputs, outputs=None, n_threads: int = 1, select=None,
+                 flags: FlagSpec | None = None, flag: np.ndarray | None = None) -> dict:
         """Evaluate over N steps.
 
         Parameters
@@ -379,9 +414,12 @@ class CompiledFunction:
         outputs : dict of name -> ndarray (N, size), optional
             Preallocated output buffers (C-contiguous float64); others are allocated.
         n_threads : int
-            OpenMP threads.
+            Threads (POSIX threads created for the call when N is large enough).
         select : iterable of str, optional
             Outputs to compute (default all); the others are skipped.
+        flags : FlagSpec, optional
+            Compute the step flags into ``flag`` (int64 (N,)) in the same pass; a non-finite
+            step's outputs are set to NaN.
 
         Returns
         -------
@@ -404,15 +442,16 @@ class CompiledFunction:
                                   f"(N, {size}) or ({size},)")
             arrays.append(a)
         n = 1 if n is None else n
-        for k, a in enumerate(arrays):
-            self._in_ptrs[k] = a.ctypes.data
-            self._in_strides[k] = a.shape[1] if a.ndim == 2 else 0
+        # this call's own argument arrays
+        in_ptrs = (ctypes.c_void_p * len(arrays))(*[a.ctypes.data for a in arrays])
+        in_strides = (ctypes.c_longlong * len(arrays))(
+            *[a.shape[1] if a.ndim == 2 else 0 for a in arrays])
+        out_ptrs = (ctypes.c_void_p * len(self.outputs))()
         wanted = None if select is None else set(select)
         result = {}
         outputs = outputs or {}
         for k, (name, size, _) in enumerate(self.outputs):
             if wanted is not None and name not in wanted:
-                self._out_ptrs[k] = None
                 continue
             buf = outputs.get(name)
             if buf is None:
@@ -421,21 +460,21 @@ class CompiledFunction:
                     not buf.flags.c_contiguous:
                 raise GsfricError(f"{self.name}: output buffer {name} must be a C-contiguous "
                                   f"float64 array of shape ({n}, {size})")
-            self._out_ptrs[k] = buf.ctypes.data
+            out_ptrs[k] = buf.ctypes.data
             result[name] = buf
-        if self._simd is not None:
-            failed = self._lib.gsfric_batch_simd(self._simd, len(arrays), len(self.outputs),
-                                                 self._in_ptrs, self._in_strides,
-                                                 self._out_ptrs, self._out_strides, n,
-                                                 int(n_threads))
-        else:
-            failed = self._batch(self._eval, self._work, len(arrays), len(self.outputs),
-                                 self._in_ptrs, self._in_strides, self._out_ptrs,
-                                 self._out_strides, n, int(n_threads))
+        flag_ptr = None
+        if flags is not None:
+            if flag is None or flag.shape != (n,) or flag.dtype != np.int64 or \
+                    not flag.flags.c_contiguous:
+                raise GsfricError(f"{self.name}: flag must be a C-contiguous int64 array of "
+                                  f"shape ({n},)")
+            flag_ptr = flag.ctypes.data
+        failed = self._lib.gsfric_run(ctypes.byref(self._fn), in_ptrs, in_strides, out_ptrs,
+                                      self._out_strides, n, int(n_threads),
+                                      None if flags is None else ctypes.byref(flags), flag_ptr)
         if failed:
             raise GsfricError(f"{self.name}: evaluation failed at {failed} steps")
         return result
-
 
     def bound(self, constants: list[np.ndarray], output: str, n_threads: int = 1):
         """A lean callable ``f(x, out)`` for the control loop's repeated calls.
@@ -443,35 +482,29 @@ class CompiledFunction:
         Input 0 varies (``x``, C-contiguous float64 of shape (N, size)); the other inputs are
         fixed to ``constants`` (one block each, broadcast to every step); only ``output`` is
         computed, into ``out`` (C-contiguous float64, (N, size)). Shapes are checked, nothing
-        is copied or allocated.
+        is copied or allocated. The callable holds only read-only arrays (the C side builds
+        each call's own argument arrays): threads may share it.
         """
         fixed = [np.ascontiguousarray(c, dtype=np.float64) for c in constants]
-        n_in, n_out = len(self.inputs), len(self.outputs)
-        in_ptrs = (ctypes.c_void_p * n_in)(0, *[c.ctypes.data for c in fixed])
+        n_in = len(self.inputs)
+        fixed_ptrs = (ctypes.c_void_p * n_in)(0, *[c.ctypes.data for c in fixed])
         in_strides = (ctypes.c_longlong * n_in)(self.inputs[0][1], *([0] * (n_in - 1)))
-        out_ptrs = (ctypes.c_void_p * n_out)()
-        index = [name for name, _, _ in self.outputs].index(output)
+        index = self._index[output]
         size_x, size_out = self.inputs[0][1], self.outputs[index][1]
-        lib, simd, batch = self._lib, self._simd, self._batch
-        ev, work = self._eval, self._work
+        run_one, fn = self._lib.gsfric_run_one, ctypes.byref(self._fn)
+        out_strides, name, threads = self._out_strides, self.name, int(n_threads)
 
         def call(x: np.ndarray, out: np.ndarray) -> np.ndarray:
             if (x.dtype != np.float64 or x.ndim != 2 or x.shape[1] != size_x
                     or not x.flags.c_contiguous or out.dtype != np.float64
                     or out.shape != (x.shape[0], size_out) or not out.flags.c_contiguous):
-                raise GsfricError(f"{self.name}: x must be C-contiguous float64 (N, {size_x}) "
+                raise GsfricError(f"{name}: x must be C-contiguous float64 (N, {size_x}) "
                                   f"and out (N, {size_out})")
-            in_ptrs[0] = x.ctypes.data
-            out_ptrs[index] = out.ctypes.data
-            if simd is not None:
-                lib.gsfric_batch_simd(simd, n_in, n_out, in_ptrs, in_strides, out_ptrs,
-                                      self._out_strides, x.shape[0], n_threads)
-            else:
-                batch(ev, work, n_in, n_out, in_ptrs, in_strides, out_ptrs, self._out_strides,
-                      x.shape[0], n_threads)
+            run_one(fn, fixed_ptrs, in_strides, out_strides, x.ctypes.data, index,
+                    out.ctypes.data, x.shape[0], threads)
             return out
 
-        call.keep = fixed  # the constants' buffers live as long as the callable
+        call.keep = (fixed, fixed_ptrs, in_strides, self)  # alive as long as the callable
         return call
 
 
@@ -545,14 +578,15 @@ def _library():
     except OSError as exc:
         raise LibraryError(f"{path}: cannot load the compiled library ({exc}); delete "
                            f"{path.parent} to rebuild it, and check the compiler (CC)") from None
-    lib.gsfric_batch.restype = ctypes.c_longlong
-    lib.gsfric_batch.argtypes = [ctypes.c_void_p, ctypes.c_void_p, ctypes.c_int, ctypes.c_int,
-                                 ctypes.c_void_p, ctypes.c_void_p, ctypes.c_void_p,
-                                 ctypes.c_void_p, ctypes.c_longlong, ctypes.c_int]
-    lib.gsfric_batch_simd.restype = ctypes.c_longlong
-    lib.gsfric_batch_simd.argtypes = [ctypes.c_void_p, ctypes.c_int, ctypes.c_int,
-                                      ctypes.c_void_p, ctypes.c_void_p, ctypes.c_void_p,
-                                      ctypes.c_void_p, ctypes.c_longlong, ctypes.c_int]
+    lib.gsfric_run.restype = ctypes.c_longlong
+    lib.gsfric_run.argtypes = [ctypes.POINTER(_Fn), ctypes.c_void_p, ctypes.c_void_p,
+                               ctypes.c_void_p, ctypes.c_void_p, ctypes.c_longlong, ctypes.c_int,
+                               ctypes.c_void_p, ctypes.c_void_p]
+    lib.gsfric_run_one.restype = ctypes.c_longlong
+    lib.gsfric_run_one.argtypes = [ctypes.POINTER(_Fn), ctypes.c_void_p, ctypes.c_void_p,
+                                   ctypes.c_void_p, ctypes.c_void_p, ctypes.c_int,
+                                   ctypes.c_void_p, ctypes.c_longlong, ctypes.c_int]
+    lib.gsfric_simd_lanes.restype = ctypes.c_int
     return lib
 
 

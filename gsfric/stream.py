@@ -507,17 +507,83 @@ def _steps_text(indices: np.ndarray, total: int, limit: int = 10) -> str:
     return f"steps {steps}{more} (data rows {rows})"
 
 
+# -- output columns -----------------------------------------------------------------------------
+
+COLUMN_GROUPS = {
+    "forces": "F1..F6: actuator forces with friction, N",
+    "friction": "MfrE1..6, MfrC1..6 (N m), Ffr1..6 (N): the paper's signed friction scalars",
+    "reactions": "REx1..REz6, RCx1..RCz6 (N), MC1..MC6 (N m): joint reactions",
+    "frictionless": "F0_1..F0_6: actuator forces of frictionless joints, N",
+    "lengths": "D1..D6: leg lengths, m",
+}
+"""Output column groups of ``simulate`` (``--columns``); ``t`` and ``flag`` are always written."""
+
+FLOAT32_RTOL = 2.0 ** -24
+"""Relative rounding error of an output written as float32 (``--float32``): half an ulp."""
+
+
+def _column_plan(groups) -> list[tuple[str, str, int, str]]:
+    """(column, result array, flat index in its step row, group), in ``Result.to_frame``'s
+    order, for the chosen groups."""
+    plan = [(f"F{i + 1}", "F", i, "forces") for i in range(6)]
+    for name in ("MfrE", "MfrC"):
+        plan += [(f"{name}{i + 1}", f"{name}_s", i, "friction") for i in range(6)]
+    plan += [(f"Ffr{i + 1}", "Ffr_s", i, "friction") for i in range(6)]
+    for name, key in (("RE", "R_E"), ("RC", "R_C")):
+        plan += [(f"{name}{ax}{i + 1}", key, 3 * i + j, "reactions")
+                 for i in range(6) for j, ax in enumerate("xyz")]
+    plan += [(f"MC{i + 1}", "M_C", i, "reactions") for i in range(6)]
+    for i in range(6):
+        plan += [(f"F0_{i + 1}", "F0", i, "frictionless"), (f"D{i + 1}", "D", i, "lengths")]
+    return [p for p in plan if p[3] in groups]
+
+
+def parse_columns(text: str | None) -> tuple[str, ...]:
+    """Output groups from ``--columns`` ("forces,friction"; None or "all": every group)."""
+    if text is None or text.strip() == "all":
+        return tuple(COLUMN_GROUPS)
+    chosen = tuple(dict.fromkeys(g.strip() for g in text.split(",") if g.strip()))
+    unknown = [g for g in chosen if g not in COLUMN_GROUPS]
+    if unknown or not chosen:
+        raise InputError(f"--columns: unknown group {unknown[0] if unknown else text!r}; "
+                         f"choose from {', '.join(COLUMN_GROUPS)} (comma-separated) or all")
+    return chosen
+
+
+def result_columns(result, plan, float32: bool = False) -> dict[str, np.ndarray]:
+    """The output columns of one Result, each a contiguous 1-D array (one transpose per
+    output array)."""
+    n = len(result)
+    cols = {"t": np.ascontiguousarray(result.t, dtype=np.float64)}
+    rows: dict[str, np.ndarray] = {}
+    dtype = np.float32 if float32 else np.float64
+    for column, key, index, _ in plan:
+        if key not in rows:
+            rows[key] = np.ascontiguousarray(result.arrays[key].reshape(n, -1).T, dtype=dtype)
+        cols[column] = rows[key][index]
+    cols["flag"] = np.asarray(result.flag, dtype=np.int64)
+    return cols
+
+
 class _Writer:
-    """Appends DataFrames to an open binary (Parquet) or text (CSV) handle."""
+    """Appends column dicts to an open binary (Parquet) or text (CSV) handle.
+
+    Parquet: floats in plain encoding without compression (they almost never repeat: a
+    dictionary only costs time and is dropped by the writer when it grows, and general-purpose
+    compression gains a few percent at a third more time), the flag column dictionary-encoded;
+    one row group per chunk."""
 
     def __init__(self, handle, kind: str) -> None:
         self.handle, self.kind = handle, kind
         self.parquet = None
         self.header = True
 
-    def write(self, frame) -> None:
+    def write(self, columns: dict[str, np.ndarray]) -> None:
         if self.kind == "csv":
-            frame.to_csv(self.handle, index=False, header=self.header)
+            import pandas as pd
+
+            pd.DataFrame(columns, copy=False).to_csv(self.handle, index=False,
+                                                     header=self.header)
             self.header = False
             return
         import pyarrow as pa
@@ -525,9 +591,10 @@ class _Writer:
 
         from gsfric.columns import arrow_table   # field metadata: unit, description
 
-        table = arrow_table(frame)
+        table = arrow_table(columns)
         if self.parquet is None:
-            self.parquet = pq.ParquetWriter(self.handle, table.schema)
+            self.parquet = pq.ParquetWriter(self.handle, table.schema, use_dictionary=["flag"],
+                                            compression="none")
         self.parquet.write_table(table)
 
     def close(self) -> None:
@@ -544,7 +611,8 @@ def simulate_file(trajectory: str | os.PathLike[str], out: str | os.PathLike[str
                   platform=None, *, mode: str = "kinematic", strict: bool = False,
                   chunk: int = DEFAULT_CHUNK, window: int | None = None,
                   polyorder: int = DEFAULT_POLYORDER, n_threads: int = 1,
-                  progress: bool | None = None, log_format=None) -> Summary:
+                  progress: bool | None = None, log_format=None, columns=None,
+                  float32: bool = False) -> Summary:
     """Evaluate a trajectory file chunk by chunk and write every step's outputs.
 
     Parameters
@@ -570,6 +638,14 @@ def simulate_file(trajectory: str | os.PathLike[str], out: str | os.PathLike[str
         Column map, units, angle convention and carried columns of the file. A file with
         F1..F6 (measured data) also gets ``F1_measured..F6_measured`` and the residuals
         ``F1_residual..F6_residual`` (measured minus model) in the output.
+    columns : iterable of str, optional
+        Output groups (``COLUMN_GROUPS``); default all. ``t`` and ``flag`` always.
+    float32 : bool
+        Write the outputs (not ``t``) as float32: relative error up to ``FLOAT32_RTOL``
+        (6e-8) of each value, half the file.
+
+    Reading and differentiating chunk k + 1 (this thread) overlaps evaluating and writing
+    chunk k (one worker thread; the compiled code and the Parquet writer run without the GIL).
 
     Returns
     -------
@@ -600,6 +676,8 @@ def simulate_file(trajectory: str | os.PathLike[str], out: str | os.PathLike[str
 
         platform = reference_platform()
 
+    plan = _column_plan(parse_columns(None) if columns is None else
+                        parse_columns(",".join(columns)))
     summary = Summary(out=out)
     info: dict = {}
     carry: list[dict] = []
@@ -614,38 +692,54 @@ def simulate_file(trajectory: str | os.PathLike[str], out: str | os.PathLike[str
                dynamic_ncols=True, leave=False)
     mode_text = "wb" if kind == "parquet" else "w"
     options = {"newline": ""} if kind == "csv" else {}
+    from concurrent.futures import ThreadPoolExecutor
+
+    buffers: dict = {}  # output arrays reused from chunk to chunk (by the one worker)
+
+    def process(writer, start: int, motion, carried: dict[str, np.ndarray]) -> None:
+        """Evaluate, count the flags, write (in the worker thread; no warnings issued)."""
+        result = evaluator.evaluate_quiet(motion, chunk=min(len(motion), DEFAULT_CHUNK),
+                                          buffers=buffers)
+        bad = result.flagged()
+        if bad.size:
+            summary.flagged += int(bad.size)
+            for bit in FLAG_NAMES:
+                counts[bit] += int(np.count_nonzero(result.flag & bit))
+            room = MAX_REPORTED - sum(len(k) for k in kept)
+            if room > 0:
+                kept.append(bad[:room] + start)
+            if strict:
+                summary.steps = start + len(motion)
+                _finish(summary, kept, counts)
+                raise StepFlagError(
+                    summary.flag_message(trajectory)
+                    + " (--strict: stopped at the first chunk with flagged steps; "
+                    "no output written)")
+        writer.write(_with_carried(result_columns(result, plan, float32), carried))
+        summary.steps = start + len(motion)
+        summary.chunks += 1
+        bar.update(len(motion))
+
     try:
-        with gio.atomic_write(out, mode_text, **options) as handle:
+        with gio.atomic_write(out, mode_text, **options) as handle, \
+                ThreadPoolExecutor(1, thread_name_prefix="gsfric-simulate") as pool:
             writer = _Writer(handle, kind)
+            pending = None
             try:
                 for start, motion in motions:
                     if evaluator is None:
                         evaluator = Evaluator(platform, mode=mode, n_threads=n_threads)
-                    with warnings.catch_warnings():
-                        warnings.filterwarnings("ignore", message=_FLAG_WARNING)
-                        result = evaluator.evaluate(motion, strict=False, progress=False,
-                                                    chunk=min(len(motion), DEFAULT_CHUNK))
-                    bad = result.flagged()
-                    if bad.size:
-                        summary.flagged += int(bad.size)
-                        for bit in FLAG_NAMES:
-                            counts[bit] += int(np.count_nonzero(result.flag & bit))
-                        room = MAX_REPORTED - sum(len(k) for k in kept)
-                        if room > 0:
-                            kept.append(bad[:room] + start)
-                        if strict:
-                            summary.steps = start + len(motion)
-                            _finish(summary, kept, counts)
-                            raise StepFlagError(
-                                summary.flag_message(trajectory)
-                                + " (--strict: stopped at the first chunk with flagged steps; "
-                                "no output written)")
-                    writer.write(_with_carried(result.to_frame(), _take(carry, len(motion))))
-                    del result
-                    summary.steps = start + len(motion)
-                    summary.chunks += 1
-                    bar.update(len(motion))
+                    if pending is not None:
+                        pending.result()
+                    pending = pool.submit(process, writer, start, motion,
+                                          _take(carry, len(motion)))
+                    del motion
+                if pending is not None:
+                    pending.result()
             except BaseException:
+                if pending is not None:
+                    with contextlib.suppress(BaseException):
+                        pending.result()
                 writer.abandon()
                 raise
             writer.close()
@@ -679,25 +773,24 @@ def _take(carry: list[dict], n: int) -> dict[str, np.ndarray]:
     return {key: np.concatenate([p[key] for p in parts]) for key in parts[0]}
 
 
-def _with_carried(frame, carried: dict[str, np.ndarray]):
-    """The output frame with measured forces, residuals and kept columns appended."""
+def _with_carried(columns: dict[str, np.ndarray],
+                  carried: dict[str, np.ndarray]) -> dict[str, np.ndarray]:
+    """The output columns with measured forces, residuals (where the forces are written) and
+    kept input columns appended."""
     extra = {}
     if "F1" in carried:
         for i in range(1, 7):
             extra[f"F{i}_measured"] = carried[f"F{i}"]
-        for i in range(1, 7):
-            extra[f"F{i}_residual"] = carried[f"F{i}"] - frame[f"F{i}"].to_numpy()
+        if "F1" in columns:
+            for i in range(1, 7):
+                extra[f"F{i}_residual"] = carried[f"F{i}"] - columns[f"F{i}"]
     for key, values in carried.items():
         if key.startswith("keep:"):
             name = key[5:]
-            if name in frame.columns or name in extra:
+            if name in columns or name in extra:
                 name = f"{name}_input"
             extra[name] = values
-    if not extra:
-        return frame
-    import pandas as pd
-
-    return pd.concat([frame, pd.DataFrame(extra, index=frame.index)], axis=1)
+    return {**columns, **extra} if extra else columns
 
 
 def _finish(summary: Summary, kept: list[np.ndarray], counts: dict[int, int]) -> None:

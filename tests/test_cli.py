@@ -361,7 +361,7 @@ def test_keyboard_interrupt_exit_130_and_no_output(tmp_path, monkeypatch):
     path = tmp_path / "t.csv"
     write_table(trajectory(400), path)
     out = tmp_path / "o.parquet"
-    original = Evaluator.evaluate
+    original = Evaluator.evaluate_quiet
     calls = []
 
     def interrupted(self, motion, **kwargs):
@@ -370,7 +370,7 @@ def test_keyboard_interrupt_exit_130_and_no_output(tmp_path, monkeypatch):
             raise KeyboardInterrupt
         return original(self, motion, **kwargs)
 
-    monkeypatch.setattr(Evaluator, "evaluate", interrupted)
+    monkeypatch.setattr(Evaluator, "evaluate_quiet", interrupted)
     message = error_of(run("simulate", "--trajectory", path, "--out", out, "--chunk", "100"),
                        code=130)
     assert message == "interrupted; no output was left half-written"

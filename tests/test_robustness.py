@@ -18,6 +18,7 @@ import gsfric
 from gsfric import models, stream
 from gsfric.errors import GsfricWarning, InputError, StepFlagError
 from gsfric.evaluation import (COND_LIMIT, FLAG_NONFINITE, FLAG_SINGULAR, FLAG_STROKE,
+                               SINGULAR_LIMIT,
                                FLAG_UNIVERSAL, JOINT_EPS, PRISMATIC_EPS, UNIVERSAL_LIMIT,
                                Evaluator, evaluate)
 from gsfric.io import read_trajectory, write_table
@@ -72,6 +73,16 @@ def condition_numbers(platform, result, rotation) -> np.ndarray:
     """cond of the 6x6 force Jacobian, columns (u_i, (E_i - p) x u_i), computed here."""
     arm = np.einsum("nij,kj->nki", rotation, platform.geometry.platform_joints)
     return np.linalg.cond(np.concatenate([result.u, np.cross(arm, result.u)], axis=2))
+
+
+def scaled_jacobian(platform, result, rotation) -> np.ndarray:
+    """The force Jacobian with its moment rows in units of the platform's size L, columns
+    scaled to unit length, (N, 6, 6), computed here with NumPy."""
+    e = platform.geometry.platform_joints
+    size = np.sqrt(np.mean(np.sum(e * e, axis=1)))
+    arm = np.einsum("nij,kj->nki", rotation, e)
+    A = np.concatenate([result.u, np.cross(arm, result.u) / size], axis=2)  # (N, leg, 6)
+    return A / np.linalg.norm(A, axis=2, keepdims=True)
 
 
 # -- 1. step flags ------------------------------------------------------------------------------
@@ -131,20 +142,40 @@ def test_near_singular_jacobian_is_flagged(evaluator, offset):
     cond = condition_numbers(evaluator.platform, result, rotation)
     assert (cond[:2] > COND_LIMIT).all() and (cond[2:] < 100).all()
     np.testing.assert_array_equal((result.flag & FLAG_SINGULAR) != 0, cond >= COND_LIMIT)
+    np.testing.assert_array_equal((result.flag & FLAG_SINGULAR) != 0, result.h < SINGULAR_LIMIT)
     assert_flagged_where_not_finite(result)
 
 
 def test_singular_flag_follows_the_documented_threshold(evaluator):
-    """Flagged exactly where cond >= COND_LIMIT, on both sides of the threshold."""
+    """Flagged exactly where h < SINGULAR_LIMIT; h is the Hadamard ratio of the scaled
+    Jacobian (|det| over the product of column norms, here by NumPy), and every unflagged
+    step has a scaled, column-normalised condition number below COND_LIMIT (the bound 2 / h)."""
     offsets = np.geomspace(1e-9, 1e-1, 41)
     rotation = Rotation.from_rotvec((np.pi / 2 + offsets)[:, None] * [0, 0, 1.0]).as_matrix()
     result = quiet(evaluator.evaluate, poses(np.tile(HOME, (41, 1)), rotation))
-    cond = condition_numbers(evaluator.platform, result, rotation)
+    A = scaled_jacobian(evaluator.platform, result, rotation)
+    hadamard = np.abs(np.linalg.det(A))
+    np.testing.assert_allclose(result.h, hadamard, rtol=1e-6, atol=1e-12)
+    cond = np.linalg.cond(A)
     flagged = (result.flag & FLAG_SINGULAR) != 0
     assert flagged.any() and not flagged.all()
-    np.testing.assert_array_equal(flagged[np.abs(np.log10(cond / COND_LIMIT)) > 0.01],
-                                  (cond >= COND_LIMIT)[np.abs(np.log10(cond / COND_LIMIT))
-                                                       > 0.01])
+    np.testing.assert_array_equal(flagged, result.h < SINGULAR_LIMIT)
+    assert (cond[~flagged] < COND_LIMIT).all()
+    assert (cond[~flagged] <= 2 / result.h[~flagged]).all()
+
+
+def test_singularity_measure_is_independent_of_the_platform_size():
+    """Every length of platform and motion times 1000: the same h and the same flags."""
+    platform = models.reference_platform()
+    g = platform.geometry
+    big = platform.with_geometry(base_joints=1000 * g.base_joints,
+                                 platform_joints=1000 * g.platform_joints, stroke=None)
+    rotation = Rotation.from_rotvec(np.linspace(1.2, 1.7, 30)[:, None] * [0, 0, 1.0]).as_matrix()
+    small = quiet(evaluate, platform.with_geometry(stroke=None),
+                  poses(np.tile(HOME, (30, 1)), rotation))
+    large = quiet(evaluate, big, poses(np.tile(1000 * HOME, (30, 1)), rotation))
+    np.testing.assert_allclose(large.h, small.h, rtol=1e-9)
+    np.testing.assert_array_equal(large.flag & FLAG_SINGULAR, small.flag & FLAG_SINGULAR)
 
 
 def test_parallel_legs_are_singular():
@@ -604,7 +635,7 @@ def test_interrupted_run_leaves_no_partial_file(tmp_path, monkeypatch):
     out = tmp_path / "out.parquet"
     out.write_bytes(b"the previous result")
     calls = []
-    original = Evaluator.evaluate
+    original = Evaluator.evaluate_quiet
 
     def interrupted(self, motion, **kwargs):
         calls.append(len(motion))
@@ -612,7 +643,7 @@ def test_interrupted_run_leaves_no_partial_file(tmp_path, monkeypatch):
             raise KeyboardInterrupt
         return original(self, motion, **kwargs)
 
-    monkeypatch.setattr(Evaluator, "evaluate", interrupted)
+    monkeypatch.setattr(Evaluator, "evaluate_quiet", interrupted)
     with pytest.raises(KeyboardInterrupt):
         stream.simulate_file(path, out, chunk=100, window=9)
     assert len(calls) == 3
@@ -638,8 +669,8 @@ def test_strict_stops_at_the_first_flagged_chunk(tmp_path, monkeypatch):
     write_table(frame, path)
     out = tmp_path / "out.csv"
     seen = []
-    original = Evaluator.evaluate
-    monkeypatch.setattr(Evaluator, "evaluate",
+    original = Evaluator.evaluate_quiet
+    monkeypatch.setattr(Evaluator, "evaluate_quiet",
                         lambda self, motion, **kw: seen.append(motion.t[0])
                         or original(self, motion, **kw))
     with pytest.raises(StepFlagError, match=r"^.*t.csv: 1 of 300 steps flagged .*steps 250 "

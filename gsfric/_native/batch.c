@@ -1,89 +1,236 @@
-/* Evaluate a CasADi-generated function over a batch of steps, on caller-owned buffers.
+/* Evaluate a generated function over a batch of steps, on caller-owned buffers, with the step
+ * flags computed in the same pass.
  *
  * Input k of step i starts at in[k] + i * in_stride[k]; a stride of 0 broadcasts one block
- * (the parameters) to every step. Output k of step i is written at out[k] + i * out_stride[k];
- * a NULL output is not computed. Steps are split between n_threads OpenMP threads, each with
- * its own work arrays. Returns the number of steps whose evaluation reported an error.
+ * (the parameters) to every step. Output k of step i is written at out[k] + i * out_stride[k]
+ * (rows are contiguous: the stride is the output's size); a NULL output is not computed.
+ *
+ * A function is evaluated by its SIMD-over-steps version (derive/simd.py) when it has one and
+ * every input but the first is broadcast, otherwise by CasADi's per-step function.
+ *
+ * Concurrency: nothing here is shared between calls. Every call builds its own argument arrays
+ * (on the stack) and work arrays (malloc); the function description and the flag settings are
+ * only read. Several threads may call at once with different output buffers.
+ *
+ * Threads: a call on n_threads > 1 splits the steps into contiguous ranges, runs one in the
+ * calling thread and each other in a POSIX thread created for the call, and joins them. No
+ * thread ever waits by spinning: a busy core delays only its own range.
  */
+#include <math.h>
+#include <pthread.h>
 #include <stdlib.h>
-#ifdef _OPENMP
-#include <omp.h>
-#endif
+#include <string.h>
 
 typedef long long int casadi_int;
 typedef int (*casadi_eval_t)(const double **arg, double **res, casadi_int *iw, double *w,
                              int mem);
 typedef int (*casadi_work_t)(casadi_int *sz_arg, casadi_int *sz_res, casadi_int *sz_iw,
                              casadi_int *sz_w);
+typedef void (*batch_eval_t)(const double **in, const long long *in_stride, double **out,
+                             const long long *out_stride, long long n, long long *bad);
 
-long long gsfric_batch(casadi_eval_t eval, casadi_work_t work, int n_in, int n_out,
-                       const double **in, const long long *in_stride, double **out,
-                       const long long *out_stride, long long n, int n_threads)
+#define MAX_ARGS 64
+#define MAX_THREADS 64
+#define MIN_STEPS_PER_THREAD 2048  /* below this, creating a thread costs more than it saves */
+#define BLOCK 32                   /* steps evaluated before their flags (64 KB of outputs, in cache) */
+
+/* The flags' bits: the same as gsfric/evaluation.py's FLAG_* */
+#define FLAG_NONFINITE 1
+#define FLAG_STROKE 2
+#define FLAG_SINGULAR 4
+#define FLAG_UNIVERSAL 8
+
+typedef struct {
+    batch_eval_t simd;   /* NULL: none */
+    casadi_eval_t eval;
+    casadi_work_t work;
+    int n_in, n_out;
+} gsfric_fn;
+
+typedef struct {
+    int d, s2, h;        /* output indices of leg lengths (6), s2 (6), singularity measure (1) */
+    int has_stroke;
+    double stroke_lo, stroke_hi;
+    double universal_limit;   /* flag s2 < this */
+    double singular_limit;    /* flag h < this */
+    long long x_size;         /* values of input 0 per step */
+} gsfric_flags;
+
+typedef struct {
+    const gsfric_fn *fn;
+    const double **in;
+    const long long *in_stride;
+    double **out;
+    const long long *out_stride;
+    const gsfric_flags *flags;
+    long long *flag;
+    int use_simd;
+    long long start, stop;
+    long long failed;
+} range_task;
+
+/* 1 when none of y[0..n) is infinite or NaN (exponent bits all set), by integer operations
+ * that the compiler can vectorise */
+static int all_finite(const double *y, long long n)
 {
-    casadi_int sz_arg, sz_res, sz_iw, sz_w;
-    long long failed = 0;
-    work(&sz_arg, &sz_res, &sz_iw, &sz_w);
-    if (sz_arg < n_in) sz_arg = n_in;
-    if (sz_res < n_out) sz_res = n_out;
-    if (n_threads < 1) n_threads = 1;
+    const unsigned long long exponent = 0x7ff0000000000000ULL;
+    unsigned long long bad = 0;
+    for (long long j = 0; j < n; ++j) {
+        unsigned long long bits;
+        memcpy(&bits, y + j, sizeof bits);
+        bad |= (bits & exponent) == exponent;
+    }
+    return !bad;
+}
 
-#pragma omp parallel num_threads(n_threads) reduction(+ : failed)
-    {
-        const double **arg = malloc(sizeof(double *) * sz_arg);
-        double **res = malloc(sizeof(double *) * sz_res);
-        casadi_int *iw = malloc(sizeof(casadi_int) * (sz_iw > 0 ? sz_iw : 1));
-        double *w = malloc(sizeof(double) * (sz_w > 0 ? sz_w : 1));
-        if (!arg || !res || !iw || !w) {
-            failed += n;
-        } else {
-            for (casadi_int k = n_in; k < sz_arg; ++k) arg[k] = 0;
-            for (casadi_int k = n_out; k < sz_res; ++k) res[k] = 0;
-#pragma omp for schedule(static)
-            for (long long i = 0; i < n; ++i) {
-                for (int k = 0; k < n_in; ++k) arg[k] = in[k] + i * in_stride[k];
-                for (int k = 0; k < n_out; ++k) res[k] = out[k] ? out[k] + i * out_stride[k] : 0;
-                if (eval(arg, res, iw, w, 0)) failed += 1;
+/* Flag steps s..e-1 into t->flag. With `checked`, t->flag[i] already holds 1 where some
+ * output of step i is non-finite (the SIMD function's `bad`), else the outputs are checked. */
+static void flag_steps(const range_task *t, long long s, long long e, int checked)
+{
+    const gsfric_flags *fl = t->flags;
+    int n_out = t->fn->n_out;
+    for (long long i = s; i < e; ++i) {
+        long long f = 0;
+        int finite = 1;
+        const double *x = t->in[0] + i * t->in_stride[0];
+        finite &= all_finite(x, fl->x_size);
+        if (checked)
+            finite &= t->flag[i] == 0;
+        else
+            for (int k = 0; k < n_out; ++k)
+                if (t->out[k])
+                    finite &= all_finite(t->out[k] + i * t->out_stride[k], t->out_stride[k]);
+        /* the geometric causes on the values as computed (a NaN compares false), so that a
+         * step made non-finite by one of them still names it */
+        if (fl->d >= 0 && fl->has_stroke && t->out[fl->d]) {
+            const double *D = t->out[fl->d] + i * t->out_stride[fl->d];
+            for (int j = 0; j < 6; ++j)
+                if (D[j] < fl->stroke_lo || D[j] > fl->stroke_hi) f |= FLAG_STROKE;
+        }
+        if (fl->s2 >= 0 && t->out[fl->s2]) {
+            const double *s2 = t->out[fl->s2] + i * t->out_stride[fl->s2];
+            for (int j = 0; j < 6; ++j)
+                if (s2[j] < fl->universal_limit) f |= FLAG_UNIVERSAL;
+        }
+        if (fl->h >= 0 && t->out[fl->h]) {
+            if (t->out[fl->h][i * t->out_stride[fl->h]] < fl->singular_limit) f |= FLAG_SINGULAR;
+        }
+        if (!finite) {
+            f |= FLAG_NONFINITE;
+            for (int k = 0; k < n_out; ++k) {
+                if (!t->out[k]) continue;
+                double *y = t->out[k] + i * t->out_stride[k];
+                for (long long j = 0; j < t->out_stride[k]; ++j) y[j] = NAN;
             }
         }
-        free(arg);
-        free(res);
-        free(iw);
-        free(w);
+        t->flag[i] = f;
     }
+}
+
+static void *run_range(void *arg)
+{
+    range_task *t = arg;
+    const gsfric_fn *fn = t->fn;
+    int n_in = fn->n_in, n_out = fn->n_out;
+    casadi_int sz_arg = 0, sz_res = 0, sz_iw = 0, sz_w = 0;
+    const double **carg = NULL;
+    double **cres = NULL;
+    casadi_int *iw = NULL;
+    double *w = NULL;
+    if (!t->use_simd) {
+        fn->work(&sz_arg, &sz_res, &sz_iw, &sz_w);
+        if (sz_arg < n_in) sz_arg = n_in;
+        if (sz_res < n_out) sz_res = n_out;
+        carg = calloc(sz_arg, sizeof(double *));
+        cres = calloc(sz_res, sizeof(double *));
+        iw = malloc(sizeof(casadi_int) * (sz_iw > 0 ? sz_iw : 1));
+        w = malloc(sizeof(double) * (sz_w > 0 ? sz_w : 1));
+        if (!carg || !cres || !iw || !w) {
+            t->failed = t->stop - t->start;
+            goto done;
+        }
+    }
+    if (t->use_simd) {
+        /* one call over the range (long ranges stream their outputs past the caches); the
+         * non-finite outputs are found on the vectors before they are written */
+        const double *my_in[MAX_ARGS];
+        double *my_out[MAX_ARGS];
+        long long s = t->start;
+        for (int k = 0; k < n_in; ++k) my_in[k] = t->in[k] + s * t->in_stride[k];
+        for (int k = 0; k < n_out; ++k)
+            my_out[k] = t->out[k] ? t->out[k] + s * t->out_stride[k] : 0;
+        fn->simd(my_in, t->in_stride, my_out, t->out_stride, t->stop - s,
+                 t->flags ? t->flag + s : NULL);
+        if (t->flags) flag_steps(t, s, t->stop, 1);
+        goto done;
+    }
+    long long block = t->flags ? BLOCK : t->stop - t->start;
+    for (long long s = t->start; s < t->stop; s += block) {
+        long long e = s + block < t->stop ? s + block : t->stop;
+        for (long long i = s; i < e; ++i) {
+            for (int k = 0; k < n_in; ++k) carg[k] = t->in[k] + i * t->in_stride[k];
+            for (int k = 0; k < n_out; ++k)
+                cres[k] = t->out[k] ? t->out[k] + i * t->out_stride[k] : 0;
+            if (fn->eval(carg, cres, iw, w, 0)) t->failed += 1;
+        }
+        if (t->flags) flag_steps(t, s, e, 0);
+    }
+done:
+    free(carg);
+    free(cres);
+    free(iw);
+    free(w);
+    return NULL;
+}
+
+/* Evaluate fn over n steps (and flag them when flags is not NULL: flag[i] gets step i's bits).
+ * Returns the number of steps whose evaluation reported an error. */
+long long gsfric_run(const gsfric_fn *fn, const double **in, const long long *in_stride,
+                     double **out, const long long *out_stride, long long n, int n_threads,
+                     const gsfric_flags *flags, long long *flag)
+{
+    if (fn->n_in > MAX_ARGS || fn->n_out > MAX_ARGS) return n;
+    if (n <= 0) return 0;
+    int use_simd = fn->simd != NULL;
+    for (int k = 1; k < fn->n_in; ++k) use_simd &= in_stride[k] == 0;
+    long long most = n / MIN_STEPS_PER_THREAD;
+    if (n_threads > most) n_threads = (int)most;
+    if (n_threads > MAX_THREADS) n_threads = MAX_THREADS;
+    if (n_threads < 1) n_threads = 1;
+    range_task tasks[MAX_THREADS];
+    pthread_t threads[MAX_THREADS];
+    int started[MAX_THREADS] = {0};
+    for (int k = 0; k < n_threads; ++k) {
+        tasks[k] = (range_task){fn, in, in_stride, out, out_stride, flags, flag, use_simd,
+                                n * k / n_threads, n * (k + 1) / n_threads, 0};
+    }
+    for (int k = 1; k < n_threads; ++k)
+        started[k] = pthread_create(&threads[k], NULL, run_range, &tasks[k]) == 0;
+    run_range(&tasks[0]);
+    for (int k = 1; k < n_threads; ++k) {
+        if (started[k])
+            pthread_join(threads[k], NULL);
+        else
+            run_range(&tasks[k]);  /* no thread to be had: run it here */
+    }
+    long long failed = 0;
+    for (int k = 0; k < n_threads; ++k) failed += tasks[k].failed;
     return failed;
 }
 
-/* The same contract for a SIMD-over-steps function of derive/simd.py, whose own loop walks the
- * steps several at a time: the steps are split into one contiguous range per thread. */
-typedef void (*batch_eval_t)(const double **in, const long long *in_stride, double **out,
-                             const long long *out_stride, long long n);
-
-#define MAX_ARGS 64
-
-long long gsfric_batch_simd(batch_eval_t eval, int n_in, int n_out, const double **in,
-                            const long long *in_stride, double **out,
-                            const long long *out_stride, long long n, int n_threads)
+/* The control loop's call: input 0 is x, the others are fixed[k] (read only, shared); only
+ * output `index` is computed, into y. The argument arrays are this call's own. */
+long long gsfric_run_one(const gsfric_fn *fn, const double **fixed, const long long *in_stride,
+                         const long long *out_stride, const double *x, int index, double *y,
+                         long long n, int n_threads)
 {
-    if (n_in > MAX_ARGS || n_out > MAX_ARGS) return n;
-    if (n_threads < 1) n_threads = 1;
-    if (n < 64 * n_threads) n_threads = 1;
-    if (n_threads == 1) {
-        eval(in, in_stride, out, out_stride, n);
-        return 0;
-    }
-#pragma omp parallel num_threads(n_threads)
-    {
-        int t = 0, nt = 1;
-#ifdef _OPENMP
-        t = omp_get_thread_num();
-        nt = omp_get_num_threads();
-#endif
-        long long start = n * t / nt, stop = n * (t + 1) / nt;
-        const double *my_in[MAX_ARGS];
-        double *my_out[MAX_ARGS];
-        for (int k = 0; k < n_in; ++k) my_in[k] = in[k] + start * in_stride[k];
-        for (int k = 0; k < n_out; ++k) my_out[k] = out[k] ? out[k] + start * out_stride[k] : 0;
-        if (stop > start) eval(my_in, in_stride, my_out, out_stride, stop - start);
-    }
-    return 0;
+    const double *in[MAX_ARGS];
+    double *out[MAX_ARGS];
+    if (fn->n_in > MAX_ARGS || fn->n_out > MAX_ARGS || index < 0 || index >= fn->n_out)
+        return n;
+    for (int k = 0; k < fn->n_in; ++k) in[k] = fixed[k];
+    in[0] = x;
+    for (int k = 0; k < fn->n_out; ++k) out[k] = 0;
+    out[index] = y;
+    return gsfric_run(fn, in, in_stride, out, out_stride, n, n_threads, NULL, NULL);
 }

@@ -1,0 +1,107 @@
+"""The lane width and the target CPU chosen at build time change no result beyond rounding.
+
+The SIMD-over-steps code (derive/simd.py) is printed once and compiled with a lane width
+chosen for the CPU (8 with AVX-512, 4 with AVX, 1 otherwise) or forced with ``GSFRIC_LANES``;
+a portable build targets ``GSFRIC_MARCH=x86-64-v3``. Each build is made in a subprocess (the
+flags are read at import) into the usual cache, so that it is compiled once per machine.
+"""
+
+from __future__ import annotations
+
+import ctypes
+import os
+import subprocess
+import sys
+
+import numpy as np
+import pytest
+
+from gsfric import native
+from gsfric.evaluation import Evaluator
+from helpers import perturbed_platform, random_states, with_every_effect
+
+SCRIPT = """
+import sys, numpy as np
+from gsfric import native
+from gsfric.evaluation import Evaluator, parameter_vector
+x, P, Q = (np.load(sys.argv[1])[k] for k in ("x", "P", "Q"))
+lib = native._library()
+assert native.is_compiled()
+res = native.get("eval")([x, P, Q])
+np.savez(sys.argv[2], lanes=lib.gsfric_simd_lanes(), **res)
+"""
+
+
+def _variant(tmp_path, env_extra, x, P, Q):
+    np.savez(tmp_path / "in.npz", x=x, P=P, Q=Q)
+    env = dict(os.environ, **env_extra)
+    subprocess.run([sys.executable, "-c", SCRIPT, str(tmp_path / "in.npz"),
+                    str(tmp_path / "out.npz")], env=env, check=True, timeout=600)
+    return dict(np.load(tmp_path / "out.npz"))
+
+
+@pytest.mark.skipif(not native.is_compiled(), reason="no C compiler")
+@pytest.mark.parametrize("env, lanes", [({"GSFRIC_LANES": "1"}, 1), ({"GSFRIC_LANES": "4"}, 4),
+                                        ({"GSFRIC_MARCH": "x86-64-v3"}, 4)])
+def test_lane_widths_and_portable_build_agree_with_the_native_build(tmp_path, env, lanes):
+    rng = np.random.default_rng(8)
+    platform = with_every_effect(rng, perturbed_platform(rng))
+    x = random_states(rng, 203)  # not a multiple of any lane width: the last group is partial
+    ev = Evaluator(platform)
+    native_res = native.get("eval")([x, ev.P, ev.Q])
+    other = _variant(tmp_path, env, x, ev.P, ev.Q)
+    assert int(other.pop("lanes")) == lanes
+    for name, value in native_res.items():
+        scale = max(np.abs(value).max(), 1e-300)
+        np.testing.assert_allclose(other[name], value, rtol=0, atol=1e-12 * scale,
+                                   err_msg=name)
+
+
+@pytest.mark.skipif(not native.is_compiled(), reason="no C compiler")
+def test_vector_exp_is_within_two_ulp_of_the_c_library():
+    lib = native._library()
+    x = np.concatenate([np.linspace(-745, 710, 200_001), np.random.default_rng(3).normal(
+        0, 5, 100_000), [0.0, -0.0, 1e-300, -1e-300, 709.78, -708.39]])
+    y = np.empty_like(x)
+    lib.gsfric_simd_exp(x.ctypes.data_as(ctypes.c_void_p), y.ctypes.data_as(ctypes.c_void_p),
+                        ctypes.c_longlong(x.size))
+    with np.errstate(over="ignore", under="ignore"):
+        ref = np.exp(x)
+    normal = (ref >= np.finfo(float).tiny) & np.isfinite(ref)
+    ulp = np.abs(y[normal] - ref[normal]) / np.spacing(ref[normal])
+    assert ulp.max() <= 2, ulp.max()
+    assert (y[x > 709.79] == np.inf).all() and (y[x < -708.4] == 0).all()
+    special = np.array([np.inf, -np.inf, np.nan])
+    out = np.empty(3)
+    lib.gsfric_simd_exp(special.ctypes.data_as(ctypes.c_void_p),
+                        out.ctypes.data_as(ctypes.c_void_p), ctypes.c_longlong(3))
+    assert out[0] == np.inf and out[1] == 0 and np.isnan(out[2])
+
+
+@pytest.mark.skipif(not native.is_compiled(), reason="no C compiler")
+def test_flags_in_c_equal_the_fallbacks_numpy_flags():
+    """The step flags computed in C (_native/batch.c) and those of the no-compiler fallback
+    (Evaluator._flags, NumPy) on steps with every cause: stroke, singular pose, non-finite."""
+    from scipy.spatial.transform import Rotation
+
+    from gsfric import models
+    from gsfric.evaluation import state_array
+    from gsfric.trajectory import Motion
+
+    n = 40
+    angles = np.linspace(1.2, 1.9, n)
+    angles[20] = np.pi / 2                               # the singular pose
+    rotation = Rotation.from_rotvec(angles[:, None] * [0.0, 0.0, 1.0]).as_matrix()
+    position = np.tile([0.0, 0.0, models.HOME_HEIGHT], (n, 1))
+    position[5] = [0.0, 0.0, 1.4]                        # beyond the stroke
+    position[9] = [1e200, 0.0, 1e200]                    # overflowing outputs
+    zeros = np.zeros((n, 3))
+    motion = Motion(np.arange(n) * 0.01, position, rotation, zeros, zeros, zeros, zeros)
+    ev = Evaluator(models.reference_platform())
+    result = ev.evaluate_quiet(motion)
+    assert all((result.flag & bit).any() for bit in (1, 2, 4)) and (result.flag == 0).any()
+    raw = native.get("eval")([state_array(motion), ev.P, ev.Q])
+    np.testing.assert_array_equal(ev._flags(state_array(motion), raw), result.flag)
+    for name, value in raw.items():                      # NaN where flagged non-finite
+        np.testing.assert_array_equal(value.reshape(result.arrays[name].shape),
+                                      result.arrays[name])

@@ -1,0 +1,103 @@
+"""``simulate``'s output options: column groups, float32, plain Parquet encoding, overlap."""
+
+from __future__ import annotations
+
+import numpy as np
+import pandas as pd
+import pyarrow.parquet as pq
+import pytest
+from click.testing import CliRunner
+
+import gsfric
+from gsfric import models, stream
+from gsfric.cli import main
+from gsfric.io import write_table
+from gsfric.trajectory import quaternion_from_rotation
+
+
+def _trajectory(path, n=700, rate=200.0):
+    t = np.arange(n) / rate
+    motion = models.sinusoidal(t)
+    q = quaternion_from_rotation(motion.rotation)
+    frame = pd.DataFrame({"t": t, "x": motion.position[:, 0], "y": motion.position[:, 1],
+                          "z": motion.position[:, 2], "qw": q[:, 0], "qx": q[:, 1],
+                          "qy": q[:, 2], "qz": q[:, 3]})
+    write_table(frame, path)
+    return path
+
+
+def _run(*args):
+    return CliRunner().invoke(main, [str(a) for a in args], catch_exceptions=False)
+
+
+@pytest.fixture(scope="module")
+def full(tmp_path_factory):
+    folder = tmp_path_factory.mktemp("full")
+    path = _trajectory(folder / "t.csv")
+    out = folder / "all.parquet"
+    stream.simulate_file(path, out, chunk=200, window=9)
+    return path, pd.read_parquet(out), out
+
+
+def test_column_groups_select_columns_with_the_same_values(full, tmp_path):
+    path, every, _ = full
+    out = tmp_path / "some.parquet"
+    result = _run("simulate", "--trajectory", path, "--out", out, "--chunk", 200, "--window",
+                  9, "--columns", "lengths,forces")
+    assert result.exit_code == 0, result.output
+    some = pd.read_parquet(out)
+    expected = ["t"] + [f"F{i}" for i in range(1, 7)] + [f"D{i}" for i in range(1, 7)] + \
+        ["flag"]
+    assert list(some.columns) == expected
+    pd.testing.assert_frame_equal(some, every[expected])
+
+
+def test_default_columns_are_every_group_in_the_result_frame_order(full):
+    _, every, _ = full
+    frame_columns = list(gsfric.evaluate(models.reference_platform(),
+                                         models.sinusoidal(np.linspace(0, 1, 50))).to_frame())
+    assert list(every.columns) == frame_columns
+
+
+def test_float32_within_its_documented_error(full, tmp_path):
+    path, every, _ = full
+    out = tmp_path / "f32.parquet"
+    stream.simulate_file(path, out, chunk=200, window=9, float32=True)
+    small = pd.read_parquet(out)
+    assert small["t"].dtype == np.float64 and small["flag"].dtype == np.int64
+    values = [c for c in small.columns if c not in ("t", "flag")]
+    assert all(small[c].dtype == np.float32 for c in values)
+    a, b = small[values].to_numpy(np.float64), every[values].to_numpy()
+    assert np.all(np.abs(a - b) <= stream.FLOAT32_RTOL * np.abs(b))
+    np.testing.assert_array_equal(small["t"], every["t"])
+
+
+def test_parquet_floats_are_written_without_dictionary_encoding(full):
+    _, _, out = full
+    meta = pq.ParquetFile(out).metadata
+    assert meta.num_row_groups == 4                   # one per chunk of 200 steps
+    for g in range(meta.num_row_groups):
+        for c in range(meta.num_columns):
+            column = meta.row_group(g).column(c)
+            if column.path_in_schema == "flag":
+                continue
+            assert column.physical_type == "DOUBLE"
+            assert not any("DICTIONARY" in e for e in column.encodings), column.encodings
+
+
+def test_unknown_column_group_is_one_line_exit_2(tmp_path):
+    path = _trajectory(tmp_path / "t.csv", n=100)
+    result = _run("simulate", "--trajectory", path, "--out", tmp_path / "o.csv", "--columns",
+                  "forces,torques")
+    assert result.exit_code == 2
+    assert result.output.strip().splitlines() == [
+        "gsfric: error: --columns: unknown group 'torques'; choose from forces, friction, "
+        "reactions, frictionless, lengths (comma-separated) or all"]
+    assert not (tmp_path / "o.csv").exists()
+
+
+def test_streamed_chunks_are_written_in_order(full):
+    """The worker thread writes chunks in order: the rows are the file's steps in order."""
+    path, every, _ = full
+    assert np.all(np.diff(every["t"].to_numpy()) > 0)
+    assert len(every) == 700
