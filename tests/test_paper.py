@@ -146,21 +146,6 @@ def test_misprint_detector_finds_the_known_misprints_and_nothing_else():
     assert found == PAPER_MISPRINTS
 
 
-@pytest.mark.parametrize("number", [1, 2, 3])
-def test_misprint_detector_agrees_with_the_errata_module(number):
-    printed = pytest.importorskip("derive.printed")
-    if not hasattr(printed, "table_misprints"):
-        pytest.skip("derive.printed has no table_misprints")
-    path = SHARED_PAPER / SHARED_CSV[number]
-    if not path.exists():
-        pytest.skip(f"{path} not present")
-    theirs = {(m.pos, m.column, m.printed, frozenset(m.kinds))
-              for m in printed.table_misprints(path)}
-    ours = {(m.pos, m.column, m.printed, frozenset(m.kinds))
-            for m in paper.find_misprints(number)}
-    assert ours == theirs
-
-
 def test_misprints_of_an_order_of_magnitude_are_left_out(run):
     table1 = {(m.pos, m.column): m for m in run.misprints[1]}
     assert table1[(10, "MfrE5")].excluded and table1[(10, "MfrE5")].likely == "-0.133"
