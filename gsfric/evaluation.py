@@ -88,11 +88,15 @@ def parameter_vector(platform: Platform) -> np.ndarray:
 
 
 def effect_vector(platform: Platform) -> np.ndarray:
-    """The platform's effects packed into the effect-parameter input Q (defaults elsewhere)."""
-    from gsfric.catalog import EFFECTS
+    """The platform's effects packed into the effect-parameter input Q (defaults elsewhere).
+
+    Sensor effects (``gsfric.catalog.SENSOR_EFFECTS``) are not inputs of the compiled code:
+    ``Evaluator.evaluate`` applies them to F.
+    """
+    from gsfric.catalog import GENERATED_EFFECTS
 
     values = []
-    for name, params in EFFECTS.items():
+    for name, params in GENERATED_EFFECTS.items():
         given = platform.effects.get(name, {})
         values += [float(given.get(p, default)) for p, default in params.items()]
     return np.array(values)
@@ -246,6 +250,7 @@ class Evaluator:
             self._full([x[s:e]] + inputs, view, self.n_threads)
         shapes = {name: shape for name, _, shape in self._full.outputs}
         arrays = {k: v.reshape((n,) + tuple(shapes[k])) for k, v in outs.items()}
+        self._apply_sensor(np.asarray(motion.t, float), arrays)
         flag = self._flags(x, motion, arrays)
         result = Result(t=np.asarray(motion.t, float), arrays=arrays, flag=flag, mode=self.mode)
         bad = result.flagged()
@@ -257,6 +262,15 @@ class Evaluator:
                 raise StepFlagError(msg)
             warnings.warn(msg, stacklevel=2)
         return result
+
+    def _apply_sensor(self, t: np.ndarray, arrays: dict) -> None:
+        """Sensor effects (force_scale, time_offset: gsfric.catalog) on F, what a load cell
+        reads; the reactions stay those of the mechanism."""
+        from gsfric.catalog import apply_sensor, sensor_parameters
+
+        gains, delay = sensor_parameters(self.platform.effects)
+        if delay != 0.0 or np.any(gains != 0.0):
+            arrays["F"] = apply_sensor(t, arrays["F"], gains, delay)
 
     def _flags(self, x, motion, arrays) -> np.ndarray:
         n = x.shape[0]

@@ -69,12 +69,19 @@ class ParametricModel:
         self.motion = motion
         self.n_threads = int(n_threads)
         self.x = state_array(motion)
-        self.names = jacobian_parameters()
+        from gsfric.catalog import SENSOR_EFFECTS, sensor_parameters
+
+        compiled = jacobian_parameters()
+        self.n_compiled = len(compiled)
+        self.names = compiled + [f"{e}.{p}" for e, ps in SENSOR_EFFECTS.items() for p in ps]
         self.index = {n: k for k, n in enumerate(self.names)}
         self.n_base = len(BASE_PARAMETERS)
+        self.t = np.asarray(motion.t, float)
         f, b = platform.friction, platform.platform
         base = [getattr(f, n) for n in _FRICTION] + [b.payload_mass, b.mass]
-        self.theta0 = np.concatenate([base, effect_vector(platform)]).astype(float)
+        gains, delay = sensor_parameters(platform.effects)
+        self.theta0 = np.concatenate([base, effect_vector(platform), gains, [delay]]
+                                     ).astype(float)
         self._evaluator = Evaluator(platform, n_threads=self.n_threads)
         self._P0 = parameter_vector(platform)
         offsets = {b["name"]: b["offset"] for b in layout("eval", "P")}
@@ -105,7 +112,20 @@ class ParametricModel:
         theta = np.asarray(theta, float)
         P = self._P0.copy()
         P[self._P_index] = theta[:self.n_base]
-        return P, theta[self.n_base:].copy()
+        return P, theta[self.n_base:self.n_compiled].copy()
+
+    def sensor(self, theta: np.ndarray) -> tuple[np.ndarray, float]:
+        """Gains (6,) and delay (s) of the sensor effects in theta."""
+        k = self.n_compiled
+        return np.asarray(theta[k:k + 6], float), float(theta[k + 6])
+
+    def _read(self, theta: np.ndarray, F: np.ndarray) -> np.ndarray:
+        from gsfric.catalog import apply_sensor
+
+        gains, delay = self.sensor(theta)
+        if delay == 0.0 and not np.any(gains):
+            return F
+        return apply_sensor(self.t, F, gains, delay)
 
     def effect_names(self, theta: np.ndarray) -> list[str]:
         """Effects whose parameters in theta differ from the catalog defaults."""
@@ -122,7 +142,7 @@ class ParametricModel:
         """F(theta), (N, 6) N."""
         P, Q = self.vectors(theta)
         self.evaluations += 1
-        return self._evaluator.actuator_forces(self.x, P=P, Q=Q)
+        return self._read(theta, self._evaluator.actuator_forces(self.x, P=P, Q=Q))
 
     def forces_batch(self, thetas: np.ndarray) -> np.ndarray:
         """F at several parameter vectors, (G, N, 6) for thetas (G, n_theta)."""
@@ -131,19 +151,39 @@ class ParametricModel:
         for g, theta in enumerate(thetas):
             P, Q = self.vectors(theta)
             self._evaluator.actuator_forces(self.x, out=out[g], P=P, Q=Q)
+            out[g] = self._read(theta, out[g])
         self.evaluations += thetas.shape[0]
         return out
 
     def jacobian(self, theta: np.ndarray, columns: Sequence[str]) -> tuple[np.ndarray,
                                                                           np.ndarray]:
         """F(theta) (N, 6) and dF/dtheta for the named parameters, (N, 6, len(columns))."""
+        from gsfric.catalog import apply_sensor, sensor_jacobian
+
         theta = np.asarray(theta, float)
         cols = [self.index[c] for c in columns]
+        gains, delay = self.sensor(theta)
+        sensor_on = delay != 0.0 or bool(np.any(gains))
+        own = [c for c in cols if c < self.n_compiled]
         if self._dense:
             evaluator = Evaluator(self.platform_at(theta), n_threads=self.n_threads)
-            F, J = evaluator.jacobian(self.x, Q=theta[self.n_base:])
+            F0, J0 = evaluator.jacobian(self.x, Q=theta[self.n_base:self.n_compiled])
             self.evaluations += 1
-            return F, np.ascontiguousarray(J[:, :, cols])
+            J = np.zeros(F0.shape + (len(cols),))
+            for k, c in enumerate(cols):
+                if c < self.n_compiled:
+                    J[:, :, k] = (apply_sensor(self.t, J0[:, :, c], gains, delay)
+                                  if sensor_on else J0[:, :, c])
+            del J0
+            F = self._read(theta, F0)
+            if len(own) < len(cols):
+                d_gains, d_delay = sensor_jacobian(self.t, F0, gains, delay)
+                for k, c in enumerate(cols):
+                    if c >= self.n_compiled + 6:
+                        J[:, :, k] = d_delay
+                    elif c >= self.n_compiled:
+                        J[:, :, k] = d_gains[:, :, c - self.n_compiled]
+            return F, J
         steps = np.maximum(np.abs(theta[cols]), 1.0) * 1e-6
         plus = np.repeat(theta[None], len(cols), axis=0)
         minus = plus.copy()

@@ -291,8 +291,8 @@ def refine(problem: Problem, theta: np.ndarray, names: list[str], whitener: st.W
 
     def at(th):
         F, J = model.jacobian(th, names)
-        r = problem.y - F[problem.used]
-        return r, J[problem.used], float(np.sum(whitener.apply(r) ** 2))
+        r = problem.mask(problem.y - F[problem.used])
+        return r, problem.mask(J[problem.used]), float(np.sum(whitener.apply(r) ** 2))
 
     if start is not None and inside:
         r, J = start
