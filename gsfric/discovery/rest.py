@@ -24,7 +24,7 @@ from __future__ import annotations
 import numpy as np
 from scipy.signal import savgol_coeffs, savgol_filter
 
-REST_BAND = 4.0
+REST_BAND = 5.0
 """Half-width of the not-sliding band, in standard deviations of the speed estimate."""
 
 NOISE_WINDOW = 15
@@ -89,7 +89,12 @@ def speed_uncertainty(platform, t: np.ndarray, position: np.ndarray, rotation: n
     D = leg_lengths(platform, np.asarray(position, float), np.asarray(rotation, float))
     sigma_D = high_frequency_std(D)
     if window is None:
-        window = _gcv_window(np.asarray(position, float), polyorder)
+        # the shorter of the windows chosen for position and orientation: the larger gain
+        from gsfric.trajectory import _continuous, quaternion_from_rotation
+
+        q = _continuous(quaternion_from_rotation(np.asarray(rotation, float)))
+        window = min(_gcv_window(np.asarray(position, float), polyorder),
+                     _gcv_window(q, polyorder))
     step = float(np.mean(np.diff(t)))
     h = savgol_coeffs(int(window), polyorder, deriv=1, delta=step)
     return sigma_D * float(np.sqrt(np.sum(h ** 2)))
