@@ -199,3 +199,20 @@ def test_fitted_model_round_trip_through_the_cli(tmp_path):
     first, n = summary["data"]["first_used"], summary["data"]["samples_used"]
     r = data.frame[FORCES].values[first:first + n] - F_sim[first:first + n]
     assert np.sqrt(np.mean(r ** 2)) == pytest.approx(summary["rms_after_all_samples"], rel=1e-6)
+
+
+def test_whitened_blocks_equal_the_whitened_design():
+    """Blocks built block by block (bounded memory) equal those of the whitened copy."""
+    from gsfric.discovery import statistics as st
+
+    rng = np.random.default_rng(1)
+    e = np.zeros((3001, 6))
+    for i in range(1, len(e)):
+        e[i] = 0.8 * e[i - 1] - 0.1 * e[max(i - 2, 0)] + rng.normal(size=6)
+    X = rng.normal(size=(3001, 6, 5))
+    w = st.Whitener.fit(e)
+    assert w.order >= 1
+    a = st.Blocks.build(w.apply(X), w.apply(e), 40)
+    b = st.Blocks.whitened(w, X, e, 40)
+    for name in ("XtX", "Xtz", "ztz", "rows"):
+        assert np.allclose(getattr(a, name), getattr(b, name), rtol=1e-12, atol=1e-9)

@@ -68,9 +68,7 @@ def test(residual: np.ndarray, X: np.ndarray, whitener: st.Whitener, *, alpha: f
         on each leg), ``signals`` (each signal's share of the structure), ``fitted`` (M, 6).
     """
     k = X.shape[2]
-    Xw = whitener.apply(X)
-    zw = whitener.apply(residual)
-    blocks = st.Blocks.build(Xw, zw, n_blocks)
+    blocks = st.Blocks.whitened(whitener, X, residual, n_blocks)
     lo, hi = np.full(k, -np.inf), np.full(k, np.inf)
     empty = st.fit(blocks, [], lo, hi)
     full = st.fit(blocks, list(range(k)), lo, hi)

@@ -196,13 +196,33 @@ class ParametricModel:
         J = (values[1:1 + m] - values[1 + m:]) / (2 * steps[:, None, None])
         return F, np.ascontiguousarray(J.transpose(1, 2, 0))
 
-    def evaluate(self, theta: np.ndarray) -> Result:
-        """Every output of the full evaluation at theta (reactions, leg lengths, speeds)."""
+    def evaluate(self, theta: np.ndarray, keep: Sequence[str] = ("D", "D_dot"),
+                 chunk: int = 20000) -> Result:
+        """The outputs ``keep`` of the full evaluation at theta, with F (what the load cells
+        read, sensor effects applied) and the step flags; evaluated ``chunk`` steps at a time
+        so that memory stays bounded (the full evaluation has about 200 numbers a step)."""
         import warnings
 
         evaluator = Evaluator(self.platform_at(theta, self.effect_names(theta)),
                               n_threads=self.n_threads)
         self.evaluations += 1
-        with warnings.catch_warnings():
-            warnings.simplefilter("ignore")
-            return evaluator.evaluate(self.motion)
+        n = len(self)
+        arrays = {}
+        flags = np.zeros(n, dtype=np.int64)
+        for s in range(0, n, chunk):
+            e = min(n, s + chunk)
+            if 0 < n - e < 8:        # no chunk too short to evaluate on its own
+                e = n
+            with warnings.catch_warnings():
+                warnings.simplefilter("ignore")
+                part = evaluator.evaluate(self.motion.slice(s, e))
+            for k in keep:
+                value = part.arrays[k]
+                if k not in arrays:
+                    arrays[k] = np.empty((n,) + value.shape[1:])
+                arrays[k][s:e] = value
+            flags[s:e] = part.flag
+            if e == n:
+                break
+        arrays["F"] = self.forces(theta)
+        return Result(t=np.asarray(self.motion.t, float), arrays=arrays, flag=flags)

@@ -202,7 +202,7 @@ class Problem:
         plain = [c for c in candidates if not c.stepped]
         columns = refit + [col for c in plain for col in c.columns]
         F, J = self.model.jacobian(theta, columns)
-        blocks = [J[self.used]]
+        first = J[self.used]
         names = list(columns)
         signs = [1.0] * len(columns)
         variants: dict[str, list[list[int]]] = {}
@@ -234,10 +234,11 @@ class Problem:
                     signs.append(sign)
                     owners.append(c.name)
                     k += 1
-        if steps:
-            cols = (self.model.forces_batch(np.stack(steps)) - F[None])[:, self.used]
-            blocks.append(cols.transpose(1, 2, 0))
-        X = np.concatenate(blocks, axis=2)
+        X = np.empty(first.shape[:2] + (len(names),))
+        X[:, :, :first.shape[2]] = first
+        del first, J
+        for j, step in enumerate(steps):
+            X[:, :, len(columns) + j] = (self.model.forces(step) - F)[self.used]
         signs = np.array(signs)
         lower = np.empty(len(names))
         upper = np.empty(len(names))
@@ -249,6 +250,6 @@ class Problem:
                 lo, hi = (lo, hi) if signs[j] > 0 else (-hi, -lo)
                 lo = max(lo, 0.0)
             lower[j], upper[j] = lo, hi
-        X = self.mask(X)
+        X *= self.weight[:, :, None]
         return Design(theta, self.mask(self.y - F[self.used]), X, names, lower, upper,
                        list(range(len(refit))), variants, grid, signs)

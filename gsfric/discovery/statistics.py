@@ -190,6 +190,31 @@ class Blocks:
             rows[-1] += zr.size
         return cls(XtX, Xtz, ztz, rows)
 
+    @classmethod
+    def whitened(cls, whitener: "Whitener", X: np.ndarray, z: np.ndarray, n_blocks: int
+                 ) -> Blocks:
+        """``build(whitener.apply(X), whitener.apply(z), n_blocks)``, block by block: the same
+        numbers without holding a whitened copy of X (the filter is a short FIR filter, so
+        each block needs only ``order`` samples before it)."""
+        p = whitener.order
+        m, legs, k = X.shape
+        rows_w = m - p
+        length = rows_w // n_blocks
+        XtX = np.empty((n_blocks, k, k))
+        Xtz = np.empty((n_blocks, k))
+        ztz = np.empty(n_blocks)
+        rows = np.empty(n_blocks)
+        for b in range(n_blocks):
+            start = b * length
+            stop = rows_w if b == n_blocks - 1 else start + length
+            Xb = whitener.apply(X[start:stop + p]).reshape(-1, k)
+            zb = whitener.apply(z[start:stop + p]).reshape(-1)
+            XtX[b] = Xb.T @ Xb
+            Xtz[b] = Xb.T @ zb
+            ztz[b] = zb @ zb
+            rows[b] = zb.size
+        return cls(XtX, Xtz, ztz, rows)
+
     def total(self, weights: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray, float,
                                                                float]:
         """Summed (XtX, Xtz, ztz, rows), blocks weighted by ``weights`` (counts) if given."""

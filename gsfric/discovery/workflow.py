@@ -256,6 +256,7 @@ def discover(motion: Motion, forces: np.ndarray, platform: Platform | None = Non
         if not candidates:
             break
         bar.step(f"round {len(rounds) + 1}: testing {len(candidates)} candidate effects")
+        design = screen = None     # the previous round's, before the next is built
         design = problem.linearise(theta, active, candidates)
         whitener = st.Whitener.fit(design.r)
         screen = screen_candidates(problem, design, whitener, candidates)
@@ -445,9 +446,7 @@ def _intervals(problem: Problem, J: np.ndarray, names: list[str], whitener: st.W
         return {}
     model = problem.model
     s = problem.settings
-    X = whitener.apply(J)
-    z = whitener.apply(residual)
-    blocks = st.Blocks.build(X, z, s.n_blocks)
+    blocks = st.Blocks.whitened(whitener, J, residual, s.n_blocks)
     cols = [model.index[n] for n in names]
     lo = np.array([problem.bounds(n)[0] for n in names]) - theta[cols]
     hi = np.array([problem.bounds(n)[1] for n in names]) - theta[cols]
@@ -471,9 +470,9 @@ def _refit_report(problem: Problem, theta0: np.ndarray, J: np.ndarray,
     out = {"parameters": {}, "implausible": [], "notes": []}
     if not names:
         return out
-    X = whitener.apply(J[:, :, :len(names)]).reshape(-1, len(names))
-    z = whitener.apply(residual0).reshape(-1)
-    free = st.solve(np.einsum("ik,il->kl", X, X), np.einsum("ik,i->k", X, z))
+    A, b, _, _ = st.Blocks.whitened(whitener, np.ascontiguousarray(J[:, :, :len(names)]),
+                                    residual0, problem.settings.n_blocks).total()
+    free = st.solve(A, b)
     free += theta0[[model.index[n] for n in names]]
     for k, name in enumerate(names):
         lo, hi = problem.plausible[name]
