@@ -42,18 +42,20 @@ def basis(t: np.ndarray, F: np.ndarray, speed: np.ndarray, sliding: np.ndarray
           ) -> np.ndarray:
     """The generic columns (M, 6, k) of ``SIGNALS`` (drift: three columns)."""
     t = np.asarray(t, float)
-    dF = np.gradient(F, t, axis=0)
-    acc = np.gradient(speed, t, axis=0)
-    Fs = F / max(float(np.sqrt(np.mean(F ** 2))), 1e-300)
-    cols = [dF, F * np.abs(F), Fs ** 3 * np.sqrt(np.mean(F ** 2)), F,
-            np.sign(speed) * sliding, acc]
+    X = np.empty(F.shape + (9,))
+    X[:, :, 0] = np.gradient(F, t, axis=0)
+    X[:, :, 1] = F * np.abs(F)
+    X[:, :, 2] = F ** 3
+    X[:, :, 3] = F
+    X[:, :, 4] = np.sign(speed) * sliding
+    X[:, :, 5] = np.gradient(speed, t, axis=0)
     tau = 2 * (t - t[0]) / max(t[-1] - t[0], 1e-300) - 1
     for p in (1, 2, 3):
-        cols.append(np.repeat(np.polynomial.legendre.legval(tau, [0] * p + [1])[:, None], 6,
-                              axis=1))
-    X = np.stack(cols, axis=2)
-    scale = np.sqrt(np.mean(X ** 2, axis=0, keepdims=True))
-    return X / np.where(scale > 0, scale, 1.0)
+        X[:, :, 5 + p] = np.polynomial.legendre.legval(tau, [0] * p + [1])[:, None]
+    for j in range(9):     # unit RMS per leg and signal
+        scale = np.sqrt(np.mean(X[:, :, j] ** 2, axis=0))
+        X[:, :, j] /= np.where(scale > 0, scale, 1.0)
+    return X
 
 
 def test(residual: np.ndarray, X: np.ndarray, whitener: st.Whitener, *, alpha: float,

@@ -155,9 +155,13 @@ class ParametricModel:
         self.evaluations += thetas.shape[0]
         return out
 
-    def jacobian(self, theta: np.ndarray, columns: Sequence[str]) -> tuple[np.ndarray,
-                                                                          np.ndarray]:
-        """F(theta) (N, 6) and dF/dtheta for the named parameters, (N, 6, len(columns))."""
+    def jacobian(self, theta: np.ndarray, columns: Sequence[str], rows: slice | None = None,
+                 out: np.ndarray | None = None, chunk: int = 20000
+                 ) -> tuple[np.ndarray, np.ndarray]:
+        """F(theta) (N, 6) and dF/dtheta for the named parameters, (M, 6, len(columns)) over
+        ``rows`` (default all N), written into ``out`` if given. The compiled Jacobian (every
+        parameter) is evaluated ``chunk`` steps at a time, so memory grows with the columns
+        asked for only."""
         from gsfric.catalog import apply_sensor, sensor_jacobian
 
         theta = np.asarray(theta, float)
@@ -166,24 +170,40 @@ class ParametricModel:
         sensor_on = delay != 0.0 or bool(np.any(gains))
         own = [c for c in cols if c < self.n_compiled]
         if self._dense:
+            n = len(self)
+            r0, r1, _ = (slice(0, n) if rows is None else rows).indices(n)
             evaluator = Evaluator(self.platform_at(theta), n_threads=self.n_threads)
-            F0, J0 = evaluator.jacobian(self.x, Q=theta[self.n_base:self.n_compiled])
+            if out is None:
+                out = np.empty((r1 - r0, 6, len(cols)))
+            own_k = [k for k, c in enumerate(cols) if c < self.n_compiled]
+            # with a delay, a column needs all steps (shifted in time); otherwise only rows
+            J = np.empty((n, 6, len(own))) if sensor_on else None
+            F0 = np.empty((n, 6))
+            Q = theta[self.n_base:self.n_compiled]
+            for s in range(0, n, chunk):
+                e = min(n, s + chunk)
+                F0[s:e], J0 = evaluator.jacobian(self.x[s:e], Q=Q)
+                if J is not None:
+                    J[s:e] = J0[:, :, own]
+                else:
+                    a, b = max(s, r0), min(e, r1)
+                    if a < b:
+                        out[a - r0:b - r0][:, :, own_k] = J0[a - s:b - s][:, :, own]
+                del J0
             self.evaluations += 1
-            J = np.zeros(F0.shape + (len(cols),))
-            for k, c in enumerate(cols):
-                if c < self.n_compiled:
-                    J[:, :, k] = (apply_sensor(self.t, J0[:, :, c], gains, delay)
-                                  if sensor_on else J0[:, :, c])
-            del J0
+            if J is not None:
+                for j, k in enumerate(own_k):
+                    out[:, :, k] = apply_sensor(self.t, J[:, :, j], gains, delay)[r0:r1]
+                del J
             F = self._read(theta, F0)
             if len(own) < len(cols):
                 d_gains, d_delay = sensor_jacobian(self.t, F0, gains, delay)
                 for k, c in enumerate(cols):
                     if c >= self.n_compiled + 6:
-                        J[:, :, k] = d_delay
+                        out[:, :, k] = d_delay[r0:r1]
                     elif c >= self.n_compiled:
-                        J[:, :, k] = d_gains[:, :, c - self.n_compiled]
-            return F, J
+                        out[:, :, k] = d_gains[r0:r1, :, c - self.n_compiled]
+            return F, out
         steps = np.maximum(np.abs(theta[cols]), 1.0) * 1e-6
         plus = np.repeat(theta[None], len(cols), axis=0)
         minus = plus.copy()

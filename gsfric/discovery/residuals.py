@@ -201,8 +201,6 @@ class Problem:
         refit = self.refit_names(active)
         plain = [c for c in candidates if not c.stepped]
         columns = refit + [col for c in plain for col in c.columns]
-        F, J = self.model.jacobian(theta, columns)
-        first = J[self.used]
         names = list(columns)
         signs = [1.0] * len(columns)
         variants: dict[str, list[list[int]]] = {}
@@ -234,9 +232,9 @@ class Problem:
                     signs.append(sign)
                     owners.append(c.name)
                     k += 1
-        X = np.empty(first.shape[:2] + (len(names),))
-        X[:, :, :first.shape[2]] = first
-        del first, J
+        X = np.empty((len(self.y), 6, len(names)))
+        F, _ = self.model.jacobian(theta, columns, rows=self.used,
+                                   out=X[:, :, :len(columns)])
         for j, step in enumerate(steps):
             X[:, :, len(columns) + j] = (self.model.forces(step) - F)[self.used]
         signs = np.array(signs)

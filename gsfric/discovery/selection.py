@@ -288,9 +288,10 @@ def refine(problem: Problem, theta: np.ndarray, names: list[str], whitener: st.W
     theta[cols] = np.clip(theta[cols], lo, hi)
 
     def at(th):
-        F, J = model.jacobian(th, names)
+        F, J = model.jacobian(th, names, rows=problem.used)
         r = problem.mask(problem.y - F[problem.used])
-        return r, problem.mask(J[problem.used]), float(np.sum(whitener.apply(r) ** 2))
+        J *= problem.weight[:, :, None]
+        return r, J, float(np.sum(whitener.apply(r) ** 2))
 
     if start is not None and inside:
         r, J = start

@@ -231,9 +231,9 @@ def discover(motion: Motion, forces: np.ndarray, platform: Platform | None = Non
     # -- refit of the model's own parameters
     bar.step("refitting the model's own parameters")
     names = problem.refit_names([])
-    F0, J0 = model.jacobian(theta0, names)
+    F0, J0 = model.jacobian(theta0, names, rows=problem.used)
     residual_before = problem.mask(problem.y - F0[problem.used])
-    J0 = problem.mask(J0[problem.used])
+    J0 *= problem.weight[:, :, None]
     whitener = st.Whitener.fit(residual_before)
     refit = _refit_report(problem, theta0, J0, whitener, residual_before)
     theta, r, J = refine(problem, theta0, names, whitener, start=(residual_before, J0))
@@ -283,7 +283,7 @@ def discover(motion: Motion, forces: np.ndarray, platform: Platform | None = Non
             seen.append(winner)
         level = settings.alpha / len(candidates)
         rnd = Round(len(rounds) + 1, list(screen.tests.values()), winner, level=level,
-                    noise_model=noise_model(whitener), rms_before=_rms(design.r))
+                    noise_model=noise_model(whitener), rms_before=_rms(design.r[sliding]))
         rounds.append(rnd)
         if winner is None:
             rnd.rms_after = rnd.rms_before
@@ -312,10 +312,11 @@ def discover(motion: Motion, forces: np.ndarray, platform: Platform | None = Non
             if col in design.refit:
                 start[model.index[design.names[col]]] += design.signs[col] * step
         names = problem.refit_names(active + [winner])
+        test = screen.tests[winner]
+        design = screen = None     # free the round's design before the refinement
         theta, r, J = refine(problem, start, names, whitener)
         rnd.rms_after = _rms(r[sliding])
         active.append(winner)
-        test = screen.tests[winner]
         findings_evidence[winner] = {
             "round": rnd.index, "F": test.F, "p_value": test.p_value, "dof": test.dof,
             "level": level, "cv_gain": test.cv_gain, "fold_share": test.fold_share,
@@ -327,6 +328,7 @@ def discover(motion: Motion, forces: np.ndarray, platform: Platform | None = Non
             "signature": c.signature,
         }
 
+    design = screen = None     # free the last round's design before the final steps
     bar.step("bootstrap of the final fit")
     residual_after = r
     whitener = st.Whitener.fit(residual_after)
@@ -403,7 +405,8 @@ def _lack_of_fit(problem: Problem, theta: np.ndarray, residual: np.ndarray,
     used = problem.used
     F = problem.model.forces(theta)[used]
     t = np.asarray(problem.model.t[used])
-    X = problem.mask(lackfit.basis(t, F, problem.result.D_dot[used], problem.sliding))
+    X = lackfit.basis(t, F, problem.result.D_dot[used], problem.sliding)
+    X *= problem.weight[:, :, None]
     out = lackfit.test(residual, X, whitener, alpha=s.alpha, min_gap=s.min_gap,
                        n_blocks=s.n_blocks, n_folds=s.n_folds,
                        min_fold_share=s.min_fold_share)
