@@ -165,13 +165,39 @@ def cases(per_cell, sizes):
     return out
 
 
+def memory(n):
+    """Peak traced memory (NumPy arrays included) and time of one discover on n samples."""
+    import tracemalloc
+
+    data = synthesize(effects=["stribeck:static=2,velocity=0.01"], samples=n, rate=RATE,
+                      noise=0.1, pose_noise=1e-5, seed=1)
+    fr = data.frame
+    rec = Motion.from_samples(fr.t.values, fr[["x", "y", "z"]].values,
+                              quaternion=fr[["qw", "qx", "qy", "qz"]].values)
+    forces, poses, model = fr[[f"F{i}" for i in range(1, 7)]].values, poses_from_columns(fr), \
+        data.model
+    del data, fr
+    tracemalloc.start()
+    start = time.time()
+    r = discover(rec, forces, model, poses=poses, n_threads=1)
+    seconds = time.time() - start
+    peak = tracemalloc.get_traced_memory()[1]
+    print(f"{n} samples: discover {seconds:.1f} s (with tracemalloc), traced peak "
+          f"{peak / 2**20:.0f} MB = {peak / n:.0f} B/sample; named {r.names}")
+
+
 def main():
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--per-cell", type=int, default=12, help="cases per effect and size")
     ap.add_argument("--samples", type=int, default=6000)
     ap.add_argument("--sizes", type=float, nargs="+", default=[2.0, 3.0, 10.0])
     ap.add_argument("--nulls", type=int, default=None, help="null cases (default >= 50)")
+    ap.add_argument("--memory", type=int, default=None, metavar="N",
+                    help="only measure the traced memory peak and time of one discover on N "
+                         "samples")
     a = ap.parse_args()
+    if a.memory:
+        return memory(a.memory)
     todo = cases(a.per_cell, a.sizes)
     if a.nulls is not None:
         nulls = [c for c in todo if c[0] == "null"][:a.nulls]
