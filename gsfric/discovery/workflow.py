@@ -234,7 +234,7 @@ def discover(motion: Motion, forces: np.ndarray, platform: Platform | None = Non
     F0, J0 = model.jacobian(theta0, names, rows=problem.used)
     residual_before = problem.mask(problem.y - F0[problem.used])
     J0 *= problem.weight[:, :, None]
-    whitener = st.Whitener.fit(residual_before)
+    whitener = st.Whitener.fit(residual_before, valid=problem.sliding)
     refit = _refit_report(problem, theta0, J0, whitener, residual_before)
     theta, r, J = refine(problem, theta0, names, whitener, start=(residual_before, J0))
     del J0
@@ -258,7 +258,7 @@ def discover(motion: Motion, forces: np.ndarray, platform: Platform | None = Non
         bar.step(f"round {len(rounds) + 1}: testing {len(candidates)} candidate effects")
         design = screen = None     # the previous round's, before the next is built
         design = problem.linearise(theta, active, candidates)
-        whitener = st.Whitener.fit(design.r)
+        whitener = _noise_whitener(design, problem)
         screen = screen_candidates(problem, design, whitener, candidates)
         if not rounds:
             for name, alts in refit_alternatives(problem, design, screen, theta0).items():
@@ -272,7 +272,7 @@ def discover(motion: Motion, forces: np.ndarray, platform: Platform | None = Non
                 break
             fit = screen.fits[winner]
             r_alt = design.r - design.X[:, :, fit.columns] @ fit.coef
-            whitener = st.Whitener.fit(r_alt)
+            whitener = st.Whitener.fit(r_alt, valid=problem.sliding)
             screen = screen_candidates(problem, design, whitener, candidates)
             new = winner_of(screen)
             if new == winner:
@@ -331,7 +331,7 @@ def discover(motion: Motion, forces: np.ndarray, platform: Platform | None = Non
     design = screen = None     # free the last round's design before the final steps
     bar.step("bootstrap of the final fit")
     residual_after = r
-    whitener = st.Whitener.fit(residual_after)
+    whitener = st.Whitener.fit(residual_after, valid=problem.sliding)
     intervals = _intervals(problem, J, names, whitener, residual_after, rng, theta)
     n_fitted = len(names)
     rows = int(np.count_nonzero(sliding))
@@ -396,6 +396,19 @@ def discover(motion: Motion, forces: np.ndarray, platform: Platform | None = Non
         sliding=sliding)
 
 
+def _noise_whitener(design, problem: Problem) -> st.Whitener:
+    """The AR noise model of a round, fitted to the residual of the largest model (every
+    candidate's columns and the refit at once, least squares): what the candidates could
+    explain does not inflate the noise model, so a step-like effect (Coulomb friction) is not
+    whitened away before it is tested, and the noise is not under-modelled either."""
+    coef = st.solve(design.XtX, design.Xtr)
+    k = design.X.shape[2]
+    r = design.r.copy()
+    for j in range(k):
+        r -= design.X[:, :, j] * coef[j]
+    return st.Whitener.fit(r, valid=problem.sliding)
+
+
 def _lack_of_fit(problem: Problem, theta: np.ndarray, residual: np.ndarray,
                  whitener: st.Whitener) -> dict:
     """The lack-of-fit test of the final residual (``lackfit``), with where it lives."""
@@ -407,6 +420,11 @@ def _lack_of_fit(problem: Problem, theta: np.ndarray, residual: np.ndarray,
     t = np.asarray(problem.model.t[used])
     X = lackfit.basis(t, F, problem.result.D_dot[used], problem.sliding)
     X *= problem.weight[:, :, None]
+    # the noise model from the residual of the basis fit (largest model), as in each round
+    k = X.shape[2]
+    flat = X.reshape(-1, k)
+    coef = st.solve(flat.T @ flat, flat.T @ residual.reshape(-1))
+    whitener = st.Whitener.fit(residual - X @ coef, valid=problem.sliding)
     out = lackfit.test(residual, X, whitener, alpha=s.alpha, min_gap=s.min_gap,
                        n_blocks=s.n_blocks, n_folds=s.n_folds,
                        min_fold_share=s.min_fold_share)
