@@ -587,8 +587,8 @@ def _mib(value: float | None) -> str:
 def format_report(report: Report) -> str:
     """The report as a plain-text table, ratios and targets."""
     m = report.machine
-    lines = [f"gsfric bench: actuator forces with friction, reference platform "
-             f"(NumPy in, NumPy out)",
+    lines = ["gsfric bench: actuator forces with friction, reference platform "
+             "(NumPy in, NumPy out)",
              f"machine: {m['cpu']}, {m['cores']} cores; Python {m['python']}, "
              f"NumPy {m['numpy']}; compiled with: {m['compiler']}; actuator map: "
              f"{m['actuator_entry']}",

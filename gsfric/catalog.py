@@ -1,30 +1,128 @@
-"""The catalog of optional effects (names, parameters, defaults, units), from the manifest.
+"""The catalog of optional effects (names, parameters, defaults, units).
 
 ``EFFECTS`` maps effect name -> {parameter: default}; ``describe()`` gives the full entries.
-The catalog itself is defined, with its symbolic terms, in derive/effects.py.
+Two kinds of effect:
+
+* **generated** (``GENERATED_EFFECTS``): terms of the mechanics (friction, loads), defined with
+  their symbolic form in derive/effects.py and listed in the manifest; they are inputs ``Q`` of
+  the compiled functions.
+* **sensor** (``SENSOR_EFFECTS``): errors of the measuring chain, applied by the runtime as a
+  transform of the model's actuator forces F (N, 6) along a motion of times t:
+
+  - ``force_scale`` (``g1..g6``, 1): a gain error of each load cell,
+    ``F_i -> (1 + g_i) F_i``;
+  - ``time_offset`` (``delay``, s): the force channels lag the pose channels by ``delay``,
+    ``F(t) -> F(t - delay)`` (linear interpolation of the model's forces; the first samples
+    hold the first value).
+
+  Their Jacobians follow directly: ``d/dg_i = F_i(t - delay)`` and
+  ``d/d delay = -dF/dt (t - delay)`` (see ``sensor_jacobian``).
 """
 
 from __future__ import annotations
 
+from collections.abc import Mapping
+
+import numpy as np
+
 from gsfric.manifest import manifest
+
+SENSOR_EFFECTS: dict[str, dict[str, float]] = {
+    "force_scale": {f"g{i}": 0.0 for i in range(1, 7)},
+    "time_offset": {"delay": 0.0},
+}
+"""Sensor effects applied by the runtime: name -> {parameter: default}."""
+
+_SENSOR_DESCRIPTIONS = {
+    "force_scale": ("gain error of each load cell: F_i -> (1 + g_i) F_i", "1"),
+    "time_offset": ("delay of the force channels behind the pose channels: F(t) -> F(t - delay)",
+                    "s"),
+}
 
 
 def describe() -> list[dict]:
-    """Effects as listed in the manifest: name, description, parameters (name, default, unit)."""
-    return manifest()["effects"]
+    """Effects: name, description, parameters (name, default, unit); generated ones first."""
+    out = list(manifest()["effects"])
+    for name, params in SENSOR_EFFECTS.items():
+        text, unit = _SENSOR_DESCRIPTIONS[name]
+        out.append({"name": name, "description": text, "kind": "sensor",
+                    "parameters": [{"name": p, "default": d, "unit": unit}
+                                   for p, d in params.items()]})
+    return out
 
 
-def _defaults() -> dict[str, dict[str, float]]:
+def _generated() -> dict[str, dict[str, float]]:
     return {e["name"]: {p["name"]: float(p["default"]) for p in e["parameters"]}
-            for e in describe()}
+            for e in manifest()["effects"]}
 
 
 def parameter_names() -> list[str]:
-    """Flat names ``effect.parameter``, the order of the effect-parameter vector Q."""
-    return [f"{e['name']}.{p['name']}" for e in describe() for p in e["parameters"]]
+    """Flat names ``effect.parameter`` of the generated effects: the order of the vector Q."""
+    return [f"{e['name']}.{p['name']}" for e in manifest()["effects"] for p in e["parameters"]]
+
+
+def sensor_parameters(effects: Mapping[str, Mapping[str, float]]) -> tuple[np.ndarray, float]:
+    """Gains (6,) and delay (s) of a platform's ``effects`` (defaults where not switched on)."""
+    scale = effects.get("force_scale", {})
+    gains = np.array([float(scale.get(f"g{i}", 0.0)) for i in range(1, 7)])
+    delay = float(effects.get("time_offset", {}).get("delay", 0.0))
+    return gains, delay
+
+
+def _shift(t: np.ndarray, F: np.ndarray, delay: float) -> np.ndarray:
+    if delay == 0.0:
+        return F
+    out = np.empty_like(F)
+    for i in range(F.shape[1]):
+        out[:, i] = np.interp(t - delay, t, F[:, i])
+    return out
+
+
+def apply_sensor(t: np.ndarray, F: np.ndarray, gains: np.ndarray, delay: float) -> np.ndarray:
+    """The forces a load cell with gain errors and a delay reads, (N, 6) N.
+
+    Parameters
+    ----------
+    t : ndarray, shape (N,)
+        Sample times, s (increasing).
+    F : ndarray, shape (N, 6)
+        The model's actuator forces, N.
+    gains : ndarray, shape (6,)
+        ``force_scale`` g1..g6.
+    delay : float
+        ``time_offset`` delay, s.
+    """
+    return _shift(np.asarray(t, float), np.asarray(F, float), float(delay)) * (1.0 + gains)
+
+
+def sensor_jacobian(t: np.ndarray, F: np.ndarray, gains: np.ndarray, delay: float
+                    ) -> tuple[np.ndarray, np.ndarray]:
+    """Derivatives of ``apply_sensor`` with respect to the gains and the delay.
+
+    Returns
+    -------
+    d_gains : ndarray, shape (N, 6, 6)
+        ``d F_out / d g_j``: the shifted F_j on leg j, zero elsewhere.
+    d_delay : ndarray, shape (N, 6)
+        ``d F_out / d delay = -(1 + g) dF/dt (t - delay)``.
+    """
+    t = np.asarray(t, float)
+    shifted = _shift(t, np.asarray(F, float), float(delay))
+    d_gains = np.zeros(shifted.shape + (6,))
+    for j in range(6):
+        d_gains[:, j, j] = shifted[:, j]
+    d_delay = -np.gradient(shifted, t, axis=0) * (1.0 + gains)
+    return d_gains, d_delay
+
+
+def is_sensor(name: str) -> bool:
+    """Whether effect ``name`` is a sensor effect (applied by the runtime)."""
+    return name in SENSOR_EFFECTS
 
 
 def __getattr__(name):
     if name == "EFFECTS":
-        return _defaults()
+        return {**_generated(), **{k: dict(v) for k, v in SENSOR_EFFECTS.items()}}
+    if name == "GENERATED_EFFECTS":
+        return _generated()
     raise AttributeError(name)

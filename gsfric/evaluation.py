@@ -97,13 +97,6 @@ def _pack(slots: tuple, values: dict) -> np.ndarray:
     return np.array(flat)
 
 
-@functools.lru_cache(maxsize=None)
-def _effect_defaults() -> tuple:
-    from gsfric.catalog import EFFECTS
-
-    return tuple((name, tuple(params.items())) for name, params in EFFECTS.items())
-
-
 def state_into(out: np.ndarray, position, rotation, velocity, omega, acceleration,
                alpha) -> np.ndarray:
     """Lay out states into ``out`` (N, 24) as ``state_array`` does, from the motion's arrays."""
@@ -139,15 +132,17 @@ def parameter_vector(platform: Platform) -> np.ndarray:
 
 
 def effect_vector(platform: Platform) -> np.ndarray:
-    """The platform's effects packed into the effect-parameter input Q (defaults elsewhere)."""
+    """The platform's effects packed into the effect-parameter input Q (defaults elsewhere).
+
+    Sensor effects (``gsfric.catalog.SENSOR_EFFECTS``) are not inputs of the compiled code:
+    ``Evaluator.evaluate`` applies them to F.
+    """
+    from gsfric.catalog import GENERATED_EFFECTS
+
     values = []
-    effects = platform.effects
-    for name, params in _effect_defaults():
-        given = effects.get(name)
-        if given:
-            values += [float(given.get(p, default)) for p, default in params]
-        else:
-            values += [default for _, default in params]
+    for name, params in GENERATED_EFFECTS.items():
+        given = platform.effects.get(name, {})
+        values += [float(given.get(p, default)) for p, default in params.items()]
     return np.array(values)
 
 
@@ -453,6 +448,7 @@ class Evaluator:
                 flag[s:e] = self._flags(xs, view)
         shapes = {name: shape for name, _, shape in self._full.outputs}
         arrays = {k: v.reshape((n,) + tuple(shapes[k])) for k, v in outs.items()}
+        self._apply_sensor(np.asarray(motion.t, float), arrays)
         return Result(t=np.asarray(motion.t, float), arrays=arrays, flag=flag, mode=self.mode)
 
     def flag_spec(self) -> "native.FlagSpec":
@@ -465,6 +461,15 @@ class Evaluator:
                 index["D"], index["s2"], index["h"], self._stroke is not None, lo, hi,
                 UNIVERSAL_LIMIT, SINGULAR_LIMIT, 24)
         return spec
+
+    def _apply_sensor(self, t: np.ndarray, arrays: dict) -> None:
+        """Sensor effects (force_scale, time_offset: gsfric.catalog) on F, what a load cell
+        reads; the reactions stay those of the mechanism."""
+        from gsfric.catalog import apply_sensor, sensor_parameters
+
+        gains, delay = sensor_parameters(self.platform.effects)
+        if delay != 0.0 or np.any(gains != 0.0):
+            arrays["F"] = apply_sensor(t, arrays["F"], gains, delay)
 
     def _flags(self, x, arrays) -> np.ndarray:
         """The flags of ``_native/batch.c`` in NumPy, for the CasADi fallback (no compiler)."""

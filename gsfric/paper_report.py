@@ -15,7 +15,6 @@ import numpy as np
 import pandas as pd
 
 from gsfric import models
-from gsfric.errors import InputError
 from gsfric.io import atomic_write
 from gsfric.paper import (LARGE_FACTOR, PAPER_FRICTION, SMALL_FRACTION, TABLES, PaperRun,
                           evaluate_paper, format_significant, geometry_sensitivity,

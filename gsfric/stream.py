@@ -586,7 +586,6 @@ class _Writer:
                                                      header=self.header)
             self.header = False
             return
-        import pyarrow as pa
         import pyarrow.parquet as pq
 
         from gsfric.columns import arrow_table   # field metadata: unit, description

@@ -218,14 +218,22 @@ def effect_contributions(platform: Platform, motion: Motion,
 
     The contribution of effect e is ``F(platform) - F(platform without e)``.
     """
-    from gsfric.evaluation import Evaluator, state_array
-
-    x = state_array(motion)
-    full = Evaluator(platform).actuator_forces(x)
+    full = read_forces(platform, motion)
     out = {}
     for name in names:
-        out[name] = full - Evaluator(platform.without_effects(name)).actuator_forces(x)
+        out[name] = full - read_forces(platform.without_effects(name), motion)
     return out
+
+
+def read_forces(platform: Platform, motion: Motion) -> np.ndarray:
+    """What the load cells read, (N, 6) N: the actuator forces of ``platform`` along
+    ``motion`` with its sensor effects (force_scale, time_offset; gsfric.catalog) applied."""
+    from gsfric.catalog import apply_sensor, sensor_parameters
+    from gsfric.evaluation import Evaluator, state_array
+
+    F = Evaluator(platform).actuator_forces(state_array(motion))
+    gains, delay = sensor_parameters(platform.effects)
+    return apply_sensor(np.asarray(motion.t, float), F, gains, delay)
 
 
 def synthesize(platform: Platform | None = None, effects=(), *, motion: Motion | None = None,
@@ -282,14 +290,13 @@ def synthesize(platform: Platform | None = None, effects=(), *, motion: Motion |
         t = np.arange(int(samples)) / float(rate)
         motion = excitation_motion(rng, t)
     hidden = _effects(effects)
-    x = state_array(motion)
     if "stroke_friction" in hidden and "reference" not in hidden["stroke_friction"]:
         lengths = Evaluator(model).evaluate(motion).D
         hidden["stroke_friction"]["reference"] = float(lengths.mean())
     true = model
     for name, params in hidden.items():
         true = true.with_effect(name, **params)
-    forces = Evaluator(true).actuator_forces(x)
+    forces = read_forces(true, motion)
     lengths = Evaluator(true).evaluate(motion).D
     n = len(motion)
     e = ar1_noise(rng, (n, 6), float(noise), float(noise_correlation))

@@ -105,6 +105,13 @@ class Candidate:
     signs: tuple[float, ...] = (1.0,)
     fixed: Callable[[Platform, dict], dict] = lambda platform, context: {}
     applies: Callable[[Platform], str | None] = lambda platform: None
+    grid_from: Callable[[dict], dict] = lambda context: {}
+    simpler: int = 0
+    """Rank in parsimony among indistinguishable candidates (lower: simpler, preferred)."""
+
+    def grids(self, context: dict) -> dict[str, tuple[float, ...]]:
+        """Starting values of the grid parameters, the data-dependent ones included."""
+        return {**self.grid, **self.grid_from(context)}
 
     @property
     def columns(self) -> list[str]:
@@ -114,7 +121,7 @@ class Candidate:
     @property
     def stepped(self) -> bool:
         """Whether the screening column comes from one-sided steps (see the module docstring)."""
-        return self.coulomb or bool(self.grid)
+        return self.coulomb or bool(self.grid) or self.grid_from({}) is None
 
     @property
     def amplitude(self) -> str:
@@ -122,8 +129,13 @@ class Candidate:
         return self.fitted[0]
 
 
-def _stroke_reference(platform: Platform, context: dict) -> dict:
-    return {"reference": float(context["mean_length"])}
+def _stroke_ends(context: dict) -> dict | None:
+    """The reference of stroke friction at either end of the legs' stroke in the data, so that
+    a friction ``k (D - D_ref) sgn(v)`` growing from one end is one effect (k >= 0 from the
+    short end, k <= 0 from the long end). None without data (marks a data-dependent grid)."""
+    if "min_length" not in context:
+        return None
+    return {"reference": (float(context["min_length"]), float(context["max_length"]))}
 
 
 def _bushing_spacing(platform: Platform, context: dict) -> dict:
@@ -145,14 +157,14 @@ STRIBECK_VELOCITIES = tuple(float(v) for v in np.geomspace(0.002, 0.1, 6))
 CANDIDATES: tuple[Candidate, ...] = (
     Candidate("stribeck", ("static", "velocity"), (0.0, 5e-4), (INF, 0.5),
               "friction-like (opposing the leg speed), concentrated at speed reversals",
-              grid={"velocity": STRIBECK_VELOCITIES}, coulomb=True),
+              grid={"velocity": STRIBECK_VELOCITIES}, coulomb=True, simpler=2),
     Candidate("seal_friction", ("force",), (0.0,), (INF,),
-              "friction-like, the same at every speed and load", coulomb=True),
+              "friction-like, the same at every speed and load", coulomb=True, simpler=0),
     Candidate("quadratic_drag", ("coefficient",), (0.0,), (INF,),
               "friction-like, growing with the square of the leg speed"),
     Candidate("stroke_friction", ("slope",), (-INF,), (INF,),
-              "friction-like, varying along the stroke", fixed=_stroke_reference,
-              coulomb=True, signs=(1.0, -1.0)),
+              "friction-like, growing along the stroke from one end", grid_from=_stroke_ends,
+              coulomb=True, signs=(1.0, -1.0), simpler=2),
     Candidate("payload_offset", ("x", "y", "z"), (-0.5, -0.5, -0.5), (0.5, 0.5, 0.5),
               "load-like, varying with the pose (moment of the payload's weight)"),
     Candidate("sensor_bias", tuple(f"b{i}" for i in range(1, 7)), (-INF,) * 6, (INF,) * 6,
@@ -163,8 +175,38 @@ CANDIDATES: tuple[Candidate, ...] = (
               "load-like, varying with the legs' inclination", applies=_leg_weight_applies),
     Candidate("bushing_friction", ("coefficient",), (0.0,), (INF,),
               "friction-like, growing with the bending moment in the prismatic joint",
-              fixed=_bushing_spacing, coulomb=True),
+              fixed=_bushing_spacing, coulomb=True, simpler=1),
+    Candidate("force_scale", tuple(f"g{i}" for i in range(1, 7)), (-0.5,) * 6, (0.5,) * 6,
+              "proportional to the measured force on each leg (a load cell's gain error)",
+              simpler=3),
+    Candidate("time_offset", ("delay",), (-0.5,), (0.5,),
+              "proportional to the rate of change of the force (a delay between the pose and "
+              "force channels), largest where the force changes fastest", simpler=1),
 )
+
+SEPARATING_MOTION = {
+    frozenset({"stribeck", "seal_friction"}):
+        "slow moves (below the Stribeck velocity, a few mm/s) separate stribeck from "
+        "seal_friction",
+    frozenset({"seal_friction", "bushing_friction"}):
+        "moves with large and small bending loads on the legs (tilted poses, payload off "
+        "centre) separate bushing_friction from seal_friction",
+    frozenset({"seal_friction", "stroke_friction"}):
+        "moves over the whole stroke of each leg separate stroke_friction from seal_friction",
+    frozenset({"force_scale", "payload_offset"}):
+        "moves with large accelerations at one pose separate force_scale (scales inertial "
+        "forces too) from payload_offset (weight only)",
+    frozenset({"time_offset", "quadratic_drag"}):
+        "faster and slower repetitions of the same path separate a delay from a speed law",
+}
+"""What motion separates two candidates the data could not tell apart (for the report)."""
+
+
+def separating_motion(a: str, b: str) -> str:
+    """A sentence on the motion that would separate candidates a and b."""
+    return SEPARATING_MOTION.get(frozenset({a, b}),
+                                 f"a motion that changes the ratio of the {a} and {b} "
+                                 "signatures (see docs/effects.md) separates them")
 
 CANDIDATE_NAMES = tuple(c.name for c in CANDIDATES)
 

@@ -68,12 +68,19 @@ class ParametricModel:
         self.motion = motion
         self.n_threads = int(n_threads)
         self.x = state_array(motion)
-        self.names = jacobian_parameters()
+        from gsfric.catalog import SENSOR_EFFECTS, sensor_parameters
+
+        compiled = jacobian_parameters()
+        self.n_compiled = len(compiled)
+        self.names = compiled + [f"{e}.{p}" for e, ps in SENSOR_EFFECTS.items() for p in ps]
         self.index = {n: k for k, n in enumerate(self.names)}
         self.n_base = len(BASE_PARAMETERS)
+        self.t = np.asarray(motion.t, float)
         f, b = platform.friction, platform.platform
         base = [getattr(f, n) for n in _FRICTION] + [b.payload_mass, b.mass]
-        self.theta0 = np.concatenate([base, effect_vector(platform)]).astype(float)
+        gains, delay = sensor_parameters(platform.effects)
+        self.theta0 = np.concatenate([base, effect_vector(platform), gains, [delay]]
+                                     ).astype(float)
         self._evaluator = Evaluator(platform, n_threads=self.n_threads)
         self._P0 = parameter_vector(platform)
         offsets = {b["name"]: b["offset"] for b in layout("eval", "P")}
@@ -104,7 +111,20 @@ class ParametricModel:
         theta = np.asarray(theta, float)
         P = self._P0.copy()
         P[self._P_index] = theta[:self.n_base]
-        return P, theta[self.n_base:].copy()
+        return P, theta[self.n_base:self.n_compiled].copy()
+
+    def sensor(self, theta: np.ndarray) -> tuple[np.ndarray, float]:
+        """Gains (6,) and delay (s) of the sensor effects in theta."""
+        k = self.n_compiled
+        return np.asarray(theta[k:k + 6], float), float(theta[k + 6])
+
+    def _read(self, theta: np.ndarray, F: np.ndarray) -> np.ndarray:
+        from gsfric.catalog import apply_sensor
+
+        gains, delay = self.sensor(theta)
+        if delay == 0.0 and not np.any(gains):
+            return F
+        return apply_sensor(self.t, F, gains, delay)
 
     def effect_names(self, theta: np.ndarray) -> list[str]:
         """Effects whose parameters in theta differ from the catalog defaults."""
@@ -121,7 +141,7 @@ class ParametricModel:
         """F(theta), (N, 6) N."""
         P, Q = self.vectors(theta)
         self.evaluations += 1
-        return self._evaluator.actuator_forces(self.x, P=P, Q=Q)
+        return self._read(theta, self._evaluator.actuator_forces(self.x, P=P, Q=Q))
 
     def forces_batch(self, thetas: np.ndarray) -> np.ndarray:
         """F at several parameter vectors, (G, N, 6) for thetas (G, n_theta)."""
@@ -130,19 +150,59 @@ class ParametricModel:
         for g, theta in enumerate(thetas):
             P, Q = self.vectors(theta)
             self._evaluator.actuator_forces(self.x, out=out[g], P=P, Q=Q)
+            out[g] = self._read(theta, out[g])
         self.evaluations += thetas.shape[0]
         return out
 
-    def jacobian(self, theta: np.ndarray, columns: Sequence[str]) -> tuple[np.ndarray,
-                                                                          np.ndarray]:
-        """F(theta) (N, 6) and dF/dtheta for the named parameters, (N, 6, len(columns))."""
+    def jacobian(self, theta: np.ndarray, columns: Sequence[str], rows: slice | None = None,
+                 out: np.ndarray | None = None, chunk: int = 20000
+                 ) -> tuple[np.ndarray, np.ndarray]:
+        """F(theta) (N, 6) and dF/dtheta for the named parameters, (M, 6, len(columns)) over
+        ``rows`` (default all N), written into ``out`` if given. The compiled Jacobian (every
+        parameter) is evaluated ``chunk`` steps at a time, so memory grows with the columns
+        asked for only."""
+        from gsfric.catalog import apply_sensor, sensor_jacobian
+
         theta = np.asarray(theta, float)
         cols = [self.index[c] for c in columns]
+        gains, delay = self.sensor(theta)
+        sensor_on = delay != 0.0 or bool(np.any(gains))
+        own = [c for c in cols if c < self.n_compiled]
         if self._dense:
+            n = len(self)
+            r0, r1, _ = (slice(0, n) if rows is None else rows).indices(n)
             evaluator = Evaluator(self.platform_at(theta), n_threads=self.n_threads)
-            F, J = evaluator.jacobian(self.x, Q=theta[self.n_base:])
+            if out is None:
+                out = np.empty((r1 - r0, 6, len(cols)))
+            own_k = [k for k, c in enumerate(cols) if c < self.n_compiled]
+            # with a delay, a column needs all steps (shifted in time); otherwise only rows
+            J = np.empty((n, 6, len(own))) if sensor_on else None
+            F0 = np.empty((n, 6))
+            Q = theta[self.n_base:self.n_compiled]
+            for s in range(0, n, chunk):
+                e = min(n, s + chunk)
+                F0[s:e], J0 = evaluator.jacobian(self.x[s:e], Q=Q)
+                if J is not None:
+                    J[s:e] = J0[:, :, own]
+                else:
+                    a, b = max(s, r0), min(e, r1)
+                    if a < b:
+                        out[a - r0:b - r0][:, :, own_k] = J0[a - s:b - s][:, :, own]
+                del J0
             self.evaluations += 1
-            return F, np.ascontiguousarray(J[:, :, cols])
+            if J is not None:
+                for j, k in enumerate(own_k):
+                    out[:, :, k] = apply_sensor(self.t, J[:, :, j], gains, delay)[r0:r1]
+                del J
+            F = self._read(theta, F0)
+            if len(own) < len(cols):
+                d_gains, d_delay = sensor_jacobian(self.t, F0, gains, delay)
+                for k, c in enumerate(cols):
+                    if c >= self.n_compiled + 6:
+                        out[:, :, k] = d_delay[r0:r1]
+                    elif c >= self.n_compiled:
+                        out[:, :, k] = d_gains[r0:r1, :, c - self.n_compiled]
+            return F, out
         steps = np.maximum(np.abs(theta[cols]), 1.0) * 1e-6
         plus = np.repeat(theta[None], len(cols), axis=0)
         minus = plus.copy()
@@ -155,13 +215,33 @@ class ParametricModel:
         J = (values[1:1 + m] - values[1 + m:]) / (2 * steps[:, None, None])
         return F, np.ascontiguousarray(J.transpose(1, 2, 0))
 
-    def evaluate(self, theta: np.ndarray) -> Result:
-        """Every output of the full evaluation at theta (reactions, leg lengths, speeds)."""
+    def evaluate(self, theta: np.ndarray, keep: Sequence[str] = ("D", "D_dot"),
+                 chunk: int = 20000) -> Result:
+        """The outputs ``keep`` of the full evaluation at theta, with F (what the load cells
+        read, sensor effects applied) and the step flags; evaluated ``chunk`` steps at a time
+        so that memory stays bounded (the full evaluation has about 200 numbers a step)."""
         import warnings
 
         evaluator = Evaluator(self.platform_at(theta, self.effect_names(theta)),
                               n_threads=self.n_threads)
         self.evaluations += 1
-        with warnings.catch_warnings():
-            warnings.simplefilter("ignore")
-            return evaluator.evaluate(self.motion)
+        n = len(self)
+        arrays = {}
+        flags = np.zeros(n, dtype=np.int64)
+        for s in range(0, n, chunk):
+            e = min(n, s + chunk)
+            if 0 < n - e < 8:        # no chunk too short to evaluate on its own
+                e = n
+            with warnings.catch_warnings():
+                warnings.simplefilter("ignore")
+                part = evaluator.evaluate(self.motion.slice(s, e))
+            for k in keep:
+                value = part.arrays[k]
+                if k not in arrays:
+                    arrays[k] = np.empty((n,) + value.shape[1:])
+                arrays[k][s:e] = value
+            flags[s:e] = part.flag
+            if e == n:
+                break
+        arrays["F"] = self.forces(theta)
+        return Result(t=np.asarray(self.motion.t, float), arrays=arrays, flag=flags)

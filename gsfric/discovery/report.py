@@ -19,96 +19,11 @@ from pathlib import Path
 import numpy as np
 
 from gsfric.discovery.regimes import hotspots
+from gsfric.discovery.summary import _clean, _per_leg, summary  # noqa: F401
 from gsfric.discovery.workflow import Discovery, discover
-from gsfric.errors import InputError
 from gsfric.io import atomic_write
 
 PLOTS = ("residuals_time.png", "residuals_speed.png", "regimes.png")
-
-
-# -- summary.json ------------------------------------------------------------------------------
-
-
-def _clean(value):
-    """JSON-safe copy: NumPy scalars to Python, non-finite floats to None, tuples to lists."""
-    if isinstance(value, dict):
-        return {str(k): _clean(v) for k, v in value.items()}
-    if isinstance(value, (list, tuple)):
-        return [_clean(v) for v in value]
-    if isinstance(value, np.ndarray):
-        return _clean(value.tolist())
-    if isinstance(value, (np.bool_, bool)):
-        return bool(value)
-    if isinstance(value, (np.integer,)):
-        return int(value)
-    if isinstance(value, (float, np.floating)):
-        value = float(value)
-        return value if math.isfinite(value) else None
-    return value
-
-
-def _per_leg(r: np.ndarray) -> list[float]:
-    return [float(v) for v in np.sqrt(np.mean(r ** 2, axis=0))]
-
-
-def summary(d: Discovery) -> dict:
-    """The content of summary.json (see the module docstring)."""
-    effects = []
-    for f in d.effects:
-        evidence = dict(f.evidence)
-        evidence["interval_95"] = {k: list(v) for k, v in f.interval.items()}
-        effects.append({"name": f.name, "parameters": dict(f.parameters),
-                        "evidence": evidence})
-    ambiguous = []
-    for rnd in d.rounds:
-        if rnd.winner and rnd.indistinguishable:
-            ambiguous.append({
-                "round": rnd.index, "effects": [rnd.winner] + list(rnd.indistinguishable),
-                "message": f"the data cannot tell {rnd.winner} apart from "
-                           f"{', '.join(rnd.indistinguishable)}: either explains the same "
-                           f"part of the gap; {rnd.winner} was added (largest held-out gain)"})
-    for name, entry in d.refit.get("parameters", {}).items():
-        for alt in entry.get("alternatives", []):
-            ambiguous.append({"round": 0, "effects": [f"refit:{name}", alt],
-                              "message": f"the change of {name} could equally be {alt}"})
-    rounds = []
-    for rnd in d.rounds:
-        rounds.append({
-            "round": rnd.index, "winner": rnd.winner, "level": rnd.level,
-            "indistinguishable": rnd.indistinguishable,
-            "bootstrap_share": rnd.bootstrap_share, "noise_model": rnd.noise_model,
-            "rms_before": rnd.rms_before, "rms_after": rnd.rms_after,
-            "tests": [{"name": t.name, "F": t.F, "p_value": t.p_value, "dof": t.dof,
-                       "cv_gain": t.cv_gain, "fold_share": t.fold_share,
-                       "sse_gain": t.sse_gain, "gap": t.gap, "significant": t.significant,
-                       "reason": t.reason, "parameters": t.parameters} for t in rnd.tests]})
-    n = d.used.stop - d.used.start
-    duration = float(d.t[-1] - d.t[0]) if len(d.t) > 1 else 0.0
-    s = d.settings
-    out = {
-        "effects": effects,
-        "rms_before": d.rms_before,
-        "rms_after": d.rms_after,
-        "noise_rms_estimate": d.noise_rms_estimate,
-        "rms_after_refit": d.rms_refit,
-        "per_leg": {"rms_before": _per_leg(d.residual_before),
-                    "rms_after": _per_leg(d.residual_after)},
-        "refit": d.refit,
-        "ambiguous": ambiguous,
-        "rounds": rounds,
-        "regimes": [vars(b) for b in d.regimes],
-        "hotspots": [f"{b.regime}: {b.name}" for b in hotspots(d.regimes)],
-        "noise_model": d.noise_model,
-        "data": {"samples_used": n, "first_used": d.used.start,
-                 "duration": duration, "rate": (n - 1) / duration if duration > 0 else None},
-        "settings": {"alpha": s.alpha, "min_fold_share": s.min_fold_share,
-                     "min_gap": s.min_gap, "n_blocks": s.n_blocks, "n_folds": s.n_folds,
-                     "n_bootstrap": s.n_bootstrap, "candidates": list(s.candidates),
-                     "refit": list(s.refit)},
-        "notes": d.notes,
-        "evaluations": d.evaluations,
-    }
-    return _clean(out)
 
 
 # -- report.md ---------------------------------------------------------------------------------
@@ -138,7 +53,14 @@ def report(d: Discovery, source: str = "", platform_source: str = "") -> str:
     L += [f"Measured data: `{source or '(arrays)'}`; model: `{model}`.",
           f"Samples used: {n} ({d.used.start} left out at each end, where the pose's "
           f"differentiation is least accurate), {d.t[-1] - d.t[0]:.4g} s.", ""]
-    L += ["## Result", ""]
+    L += ["## Result", "", f"Verdict: **{d.verdict}**.", ""]
+    if d.verdict == "unexplained_discrepancy":
+        lof = d.lack_of_fit
+        L += [f"The catalog does not explain the data: a structured residual of "
+              f"{_g(lof.get('structure_rms'))} N RMS ({_g(lof.get('gap'), 3)} x the noise left) "
+              f"remains, {lof.get('looks_like', '')}. Per leg (N): "
+              f"{', '.join(_g(v, 3) for v in lof.get('per_leg_rms', []))}; dominant frequency "
+              f"of the residual {_g(lof.get('frequency'), 3)} Hz.", ""]
     if d.effects:
         for f in d.effects:
             params = ", ".join(f"{k} = {_g(v)}" for k, v in f.parameters.items())
@@ -151,8 +73,12 @@ def report(d: Discovery, source: str = "", platform_source: str = "") -> str:
                  "explains a significant part of the gap.")
     L += ["", f"Gap (RMS of the residual, all legs): **{_g(d.rms_before)} N** with the model as "
           f"given, {_g(d.rms_refit)} N after refitting its own parameters, **{_g(d.rms_after)} N**"
-          f" with the effects found. Noise level estimated from the final residual: "
-          f"{_g(d.noise_rms_estimate)} N.", ""]
+          f" with the effects found (RMS over the samples where the legs slide). Noise level "
+          f"estimated from the force channels alone (high-frequency part): "
+          f"{_g(d.noise_rms_estimate)} N; from the final residual: "
+          f"{_g(d.noise.get('residual_corrected'))} N. Samples not sliding (speed within "
+          f"the uncertainty of the differentiated poses): "
+          f"{_g(d.noise.get('not_sliding_share', 0.0), 3)} of the pairs.", ""]
     for note in d.notes:
         L.append(f"- Note: {note}")
     if d.notes:
@@ -331,17 +257,6 @@ def plots(d: Discovery, out_dir: Path) -> list[Path]:
 # -- gsfric discover --------------------------------------------------------------------------
 
 
-def _output_dir(out_dir: str | os.PathLike[str]) -> Path:
-    out = Path(out_dir)
-    if out.exists() and not out.is_dir():
-        raise InputError(f"{out}: exists and is not a directory")
-    try:
-        out.mkdir(parents=True, exist_ok=True)
-    except OSError as error:
-        raise InputError(f"{out}: cannot create the directory ({error.strerror})") from None
-    return out
-
-
 def write(d: Discovery, out_dir: str | os.PathLike[str], *, source: str = "",
           platform_source: str = "", figures: bool = True) -> list[Path]:
     """Write summary.json, report.md and (with ``figures``) the plots."""
@@ -355,6 +270,9 @@ def write(d: Discovery, out_dir: str | os.PathLike[str], *, source: str = "",
         with atomic_write(path) as handle:
             json.dump(data, handle, indent=2, allow_nan=False)
             handle.write("\n")
+        written.append(path)
+        path = out / "platform.toml"
+        d.platform.to_toml(path)
         written.append(path)
         path = out / "report.md"
         with atomic_write(path) as handle:
@@ -394,15 +312,21 @@ def run_discover(measured: str | os.PathLike[str],
     list of Path
         The files written.
     """
-    from gsfric.io import read_measured
+    from gsfric import io as gio
+    from gsfric.discovery.rest import poses_from_columns
     from gsfric.models import reference_platform
     from gsfric.platform import Platform
 
     platform = reference_platform() if platform_file is None else Platform.from_toml(
         platform_file)
     log_format = options.pop("log_format", None)   # column map and units of a log
-    motion, forces, lengths = read_measured(measured, log_format=log_format)
-    result = discover(motion, forces, platform, seed=seed, progress=progress, **options)
+    path, columns, orientation = gio._read_samples(measured, True, log_format)
+    motion = gio._motion(path, columns, orientation, None, gio.DEFAULT_POLYORDER)
+    forces = np.stack([columns[n] for n in gio.FORCES], axis=1)
+    lengths = (np.stack([columns[n] for n in gio.LENGTHS], axis=1) if "D1" in columns
+               else None)
+    result = discover(motion, forces, platform, seed=seed, progress=progress,
+                      poses=poses_from_columns(columns), **options)
     if lengths is not None:
         model_lengths = result.result_before.D
         gap = float(np.sqrt(np.mean((lengths - model_lengths) ** 2)))

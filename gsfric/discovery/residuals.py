@@ -14,18 +14,14 @@ import os
 import warnings
 from collections.abc import Sequence
 from dataclasses import dataclass
-from typing import TYPE_CHECKING
-
 import numpy as np
 
 from gsfric.discovery.candidates import CANDIDATE_NAMES, CANDIDATES, REFIT, Candidate
 from gsfric.discovery.model import BASE_PARAMETERS, ParametricModel
+from gsfric.discovery.settings import Settings
 from gsfric.errors import InputError
 from gsfric.platform import Platform
 from gsfric.trajectory import MAX_AUTO_WINDOW, Motion
-
-if TYPE_CHECKING:
-    from gsfric.discovery.workflow import Settings
 
 
 @dataclass
@@ -72,11 +68,19 @@ class Problem:
     """
 
     def __init__(self, motion: Motion, forces: np.ndarray, platform: Platform,
-                 settings: Settings) -> None:
+                 settings: Settings, poses: tuple[np.ndarray, np.ndarray] | None = None
+                 ) -> None:
+        from gsfric.discovery import rest
+
         n = len(motion)
         forces = np.asarray(forces, float)
         if forces.shape != (n, 6):
             raise InputError(f"forces: expected shape ({n}, 6), got {forces.shape}")
+        problems = rest.data_problems(np.asarray(motion.t, float), forces)
+        if problems:
+            more = f" (and {len(problems) - 1} more)" if len(problems) > 1 else ""
+            raise InputError(f"measured data: {problems[0]}{more}; not a model effect, "
+                             "fix or cut the data")
         if not np.isfinite(forces).all():
             row = int(np.flatnonzero(~np.isfinite(forces).all(axis=1))[0])
             raise InputError(f"forces: row {row + 1} is not finite")
@@ -104,7 +108,22 @@ class Problem:
         with warnings.catch_warnings():
             warnings.simplefilter("ignore")
             self.result = self.model.evaluate(self.model.theta0)
-        self.context = {"mean_length": float(self.result.D[self.used].mean())}
+        D = self.result.D[self.used]
+        self.context = {"mean_length": float(D.mean()), "min_length": float(D.min()),
+                        "max_length": float(D.max())}
+        # rests and reversals: pairs (sample, leg) not known to slide are left out
+        from gsfric.evaluation import PRISMATIC_EPS
+
+        t = np.asarray(motion.t, float)
+        if poses is None:
+            poses = (np.asarray(motion.position, float), np.asarray(motion.rotation, float))
+        uniform = np.ptp(np.diff(t)) <= 1e-6 * np.mean(np.diff(t))
+        self.sigma_v = (rest.speed_uncertainty(platform, t, *poses) if uniform
+                        else np.zeros(6))
+        self.sliding = rest.sliding_mask(self.result.D_dot[self.used], self.sigma_v,
+                                         3 * PRISMATIC_EPS)
+        self.weight = self.sliding.astype(float)
+        self.force_noise = rest.force_noise(forces[self.used])
         self.candidates = [c for c in CANDIDATES if c.name in settings.candidates
                            and c.name not in platform.effects]
         self.skipped = {c.name: c.applies(platform) for c in self.candidates
@@ -159,7 +178,12 @@ class Problem:
         return theta
 
     def residual(self, theta: np.ndarray) -> np.ndarray:
-        return self.y - self.model.forces(theta)[self.used]
+        return self.mask(self.y - self.model.forces(theta)[self.used])
+
+    def mask(self, a: np.ndarray) -> np.ndarray:
+        """``a`` (M, 6, ...) with the not-sliding (sample, leg) pairs set to zero."""
+        w = self.weight.reshape(self.weight.shape + (1,) * (a.ndim - 2))
+        return a * w
 
     # -- linearisation ------------------------------------------------------------------
     def linearise(self, theta: np.ndarray, active: Sequence[str],
@@ -177,8 +201,6 @@ class Problem:
         refit = self.refit_names(active)
         plain = [c for c in candidates if not c.stepped]
         columns = refit + [col for c in plain for col in c.columns]
-        F, J = self.model.jacobian(theta, columns)
-        blocks = [J[self.used]]
         names = list(columns)
         signs = [1.0] * len(columns)
         variants: dict[str, list[list[int]]] = {}
@@ -194,7 +216,7 @@ class Problem:
                 continue
             amp = f"{c.name}.{c.amplitude}"
             settings = [{}]
-            for gname, values in c.grid.items():
+            for gname, values in c.grids(self.context).items():
                 settings = [{**s_, gname: v} for s_ in settings for v in values]
             variants[c.name], grid[c.name] = [], []
             for sign in c.signs:
@@ -210,10 +232,11 @@ class Problem:
                     signs.append(sign)
                     owners.append(c.name)
                     k += 1
-        if steps:
-            cols = (self.model.forces_batch(np.stack(steps)) - F[None])[:, self.used]
-            blocks.append(cols.transpose(1, 2, 0))
-        X = np.concatenate(blocks, axis=2)
+        X = np.empty((len(self.y), 6, len(names)))
+        F, _ = self.model.jacobian(theta, columns, rows=self.used,
+                                   out=X[:, :, :len(columns)])
+        for j, step in enumerate(steps):
+            X[:, :, len(columns) + j] = (self.model.forces(step) - F)[self.used]
         signs = np.array(signs)
         lower = np.empty(len(names))
         upper = np.empty(len(names))
@@ -225,5 +248,6 @@ class Problem:
                 lo, hi = (lo, hi) if signs[j] > 0 else (-hi, -lo)
                 lo = max(lo, 0.0)
             lower[j], upper[j] = lo, hi
-        return Design(theta, self.y - F[self.used], X, names, lower, upper,
+        X *= self.weight[:, :, None]
+        return Design(theta, self.mask(self.y - F[self.used]), X, names, lower, upper,
                        list(range(len(refit))), variants, grid, signs)

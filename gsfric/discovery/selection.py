@@ -113,9 +113,7 @@ def screen_candidates(problem: Problem, design: Design, whitener: st.Whitener,
     of the folds, (c) the gap it closes reaches ``min_gap``.
     """
     s = problem.settings
-    X = whitener.apply(design.X)
-    z = whitener.apply(design.r)
-    blocks = st.Blocks.build(X, z, s.n_blocks)
+    blocks = st.Blocks.whitened(whitener, design.X, design.r, s.n_blocks)
     null_cols = design.refit
     null = st.fit(blocks, null_cols, design.lower, design.upper)
     cv_null = st.cross_validate(blocks, null_cols, design.lower, design.upper, s.n_folds)
@@ -290,9 +288,10 @@ def refine(problem: Problem, theta: np.ndarray, names: list[str], whitener: st.W
     theta[cols] = np.clip(theta[cols], lo, hi)
 
     def at(th):
-        F, J = model.jacobian(th, names)
-        r = problem.y - F[problem.used]
-        return r, J[problem.used], float(np.sum(whitener.apply(r) ** 2))
+        F, J = model.jacobian(th, names, rows=problem.used)
+        r = problem.mask(problem.y - F[problem.used])
+        J *= problem.weight[:, :, None]
+        return r, J, float(np.sum(whitener.apply(r) ** 2))
 
     if start is not None and inside:
         r, J = start
@@ -300,10 +299,8 @@ def refine(problem: Problem, theta: np.ndarray, names: list[str], whitener: st.W
     else:
         r, J, current = at(theta)
     for _ in range(problem.settings.gauss_newton):
-        X = whitener.apply(J).reshape(-1, len(names))
-        z = whitener.apply(r).reshape(-1)
-        step = st.solve(np.einsum("ik,il->kl", X, X), np.einsum("ik,i->k", X, z),
-                        lo - theta[cols], hi - theta[cols])
+        A, b, _, _ = st.Blocks.whitened(whitener, J, r, problem.settings.n_blocks).total()
+        step = st.solve(A, b, lo - theta[cols], hi - theta[cols])
         for scale in (1.0, 0.5, 0.25):
             trial = theta.copy()
             trial[cols] = np.clip(theta[cols] + scale * step, lo, hi)

@@ -38,14 +38,26 @@ RIDGE = 1e-10
 # -- AR noise model ---------------------------------------------------------------------------
 
 
-def _autocovariance(e: np.ndarray, max_lag: int) -> np.ndarray:
-    """Autocovariances (max_lag + 1, k) of the columns of e (N, k) (biased estimator)."""
+def _autocovariance(e: np.ndarray, max_lag: int, valid: np.ndarray | None = None
+                    ) -> np.ndarray:
+    """Autocovariances (max_lag + 1, k) of the columns of e (N, k) (biased estimator).
+
+    With ``valid`` (N, k) bool, only valid samples count: each lag's sum of products over the
+    valid pairs, over the number of such pairs (the estimator for series with gaps)."""
     n = e.shape[0]
-    e = e - e.mean(axis=0)
     size = 1 << int(np.ceil(np.log2(2 * n)))
+    if valid is None:
+        e = e - e.mean(axis=0)
+        f = np.fft.rfft(e, size, axis=0)
+        return np.fft.irfft(f * np.conj(f), size, axis=0)[:max_lag + 1] / n
+    w = valid.astype(float)
+    count = np.maximum(w.sum(axis=0), 1.0)
+    e = (e - (e * w).sum(axis=0) / count) * w
     f = np.fft.rfft(e, size, axis=0)
-    acov = np.fft.irfft(f * np.conj(f), size, axis=0)[:max_lag + 1] / n
-    return acov
+    g = np.fft.rfft(w, size, axis=0)
+    num = np.fft.irfft(f * np.conj(f), size, axis=0)[:max_lag + 1]
+    pairs = np.fft.irfft(g * np.conj(g), size, axis=0)[:max_lag + 1]
+    return num / np.maximum(np.round(pairs), 1.0) * (1.0 - np.arange(max_lag + 1) / n)[:, None]
 
 
 def _levinson(r: np.ndarray, order: int) -> tuple[list[np.ndarray], np.ndarray]:
@@ -82,6 +94,7 @@ class Whitener:
     coefficients: list[np.ndarray]
     innovation_std: np.ndarray
     marginal_std: np.ndarray
+    valid: np.ndarray | None = None
 
     @property
     def order(self) -> int:
@@ -89,17 +102,22 @@ class Whitener:
         return max(len(c) for c in self.coefficients)
 
     @classmethod
-    def fit(cls, residual: np.ndarray, max_order: int = MAX_ORDER) -> Whitener:
+    def fit(cls, residual: np.ndarray, max_order: int = MAX_ORDER,
+            valid: np.ndarray | None = None) -> Whitener:
         """AR models of each leg's residual (N, 6), orders by BIC.
 
         Parameters
         ----------
         residual : ndarray, shape (N, 6)
         max_order : int
+        valid : ndarray (N, 6) of bool, optional
+            The samples that count (the others are gaps: the model is fitted on the valid
+            ones, and a filtered sample whose filter window touches a gap is set to zero by
+            ``apply``, so that nothing of a gap leaks into the filtered data).
         """
         n, legs = residual.shape
         max_order = int(min(max_order, max(1, n // 10)))
-        acov = _autocovariance(residual, max_order)
+        acov = _autocovariance(residual, max_order, valid)
         coefs, innov = [], []
         for i in range(legs):
             phis, var = _levinson(acov[:, i], max_order)
@@ -107,24 +125,37 @@ class Whitener:
             p = int(np.argmin(bic))
             coefs.append(phis[p])
             innov.append(np.sqrt(max(var[p], 0.0)))
-        return cls(coefs, np.array(innov), np.sqrt(np.maximum(acov[0], 0.0)))
+        return cls(coefs, np.array(innov), np.sqrt(np.maximum(acov[0], 0.0)),
+                   None if valid is None else np.asarray(valid, bool))
 
     @classmethod
     def identity(cls, legs: int = 6) -> Whitener:
         """No filtering (white noise)."""
         return cls([np.zeros(0)] * legs, np.ones(legs), np.ones(legs))
 
-    def apply(self, a: np.ndarray) -> np.ndarray:
-        """Filter ``a`` (N, 6, ...) along time; returns (N - order, 6, ...)."""
+    def apply(self, a: np.ndarray, valid: np.ndarray | None = None) -> np.ndarray:
+        """Filter ``a`` (N, 6, ...) along time; returns (N - order, 6, ...).
+
+        Filtered samples whose window (the sample and the ``order`` before it) touches an
+        invalid one are zero: ``valid`` (N, 6) if given, else the fit's own ``valid`` when
+        ``a`` has its length."""
         from scipy.signal import lfilter
 
         p = self.order
+        if valid is None and self.valid is not None and len(self.valid) == a.shape[0]:
+            valid = self.valid
         out = np.empty((a.shape[0] - p,) + a.shape[1:])
         for i, phi in enumerate(self.coefficients):
             if len(phi) == 0:
                 out[:, i] = a[p:, i]
             else:
                 out[:, i] = lfilter(np.concatenate([[1.0], -phi]), [1.0], a[:, i], axis=0)[p:]
+        if valid is not None:
+            ok = np.asarray(valid, bool)
+            window = ok[p:].copy()
+            for lag in range(1, p + 1):
+                window &= ok[p - lag:len(ok) - lag]
+            out *= window.reshape(window.shape + (1,) * (out.ndim - 2))
         return out
 
     def phi1(self) -> np.ndarray:
@@ -188,6 +219,33 @@ class Blocks:
             Xtz[-1] += np.einsum("ik,i->k", Xr, zr)
             ztz[-1] += zr @ zr
             rows[-1] += zr.size
+        return cls(XtX, Xtz, ztz, rows)
+
+    @classmethod
+    def whitened(cls, whitener: "Whitener", X: np.ndarray, z: np.ndarray, n_blocks: int
+                 ) -> Blocks:
+        """``build(whitener.apply(X), whitener.apply(z), n_blocks)``, block by block: the same
+        numbers without holding a whitened copy of X (the filter is a short FIR filter, so
+        each block needs only ``order`` samples before it)."""
+        p = whitener.order
+        m, legs, k = X.shape
+        rows_w = m - p
+        length = rows_w // n_blocks
+        XtX = np.empty((n_blocks, k, k))
+        Xtz = np.empty((n_blocks, k))
+        ztz = np.empty(n_blocks)
+        rows = np.empty(n_blocks)
+        for b in range(n_blocks):
+            start = b * length
+            stop = rows_w if b == n_blocks - 1 else start + length
+            v = None if whitener.valid is None else whitener.valid[start:stop + p]
+            Xb = whitener.apply(X[start:stop + p], v).reshape(-1, k)
+            zb = whitener.apply(z[start:stop + p], v).reshape(-1)
+            XtX[b] = Xb.T @ Xb
+            Xtz[b] = Xb.T @ zb
+            ztz[b] = zb @ zb
+            # rows zeroed by a gap carry no observation
+            rows[b] = zb.size if v is None else np.count_nonzero(zb)
         return cls(XtX, Xtz, ztz, rows)
 
     def total(self, weights: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray, float,

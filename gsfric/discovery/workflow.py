@@ -25,71 +25,21 @@ Steps (docs/discovery.md explains each decision):
 
 from __future__ import annotations
 
-from collections.abc import Mapping, Sequence
+from collections.abc import Sequence
 from dataclasses import dataclass, field
 
 import numpy as np
 
 from gsfric.discovery import statistics as st
-from gsfric.discovery.candidates import CANDIDATE_NAMES, CANDIDATES, REFIT
+from gsfric.discovery.candidates import CANDIDATES
 from gsfric.discovery.regimes import bands as regime_bands
 from gsfric.discovery.residuals import Problem
+from gsfric.discovery.settings import Settings
 from gsfric.discovery.selection import (CandidateTest, bootstrap_share, indistinguishable,
                                         noise_model, refine, refit_alternatives,
                                         screen_candidates, winner_of)
 from gsfric.platform import Platform
 from gsfric.trajectory import Motion
-
-
-@dataclass(frozen=True)
-class Settings:
-    """Settings of the workflow.
-
-    Attributes
-    ----------
-    alpha : float
-        Family-wise level of each round's tests (Bonferroni over the candidates).
-    max_effects : int
-        Most effects added.
-    n_blocks : int
-        Contiguous blocks of time: the unit of cross-validation folds and bootstrap draws.
-    n_folds : int
-        Cross-validation folds (contiguous groups of blocks).
-    min_fold_share : float
-        Share of folds in which a candidate must lower the held-out error.
-    min_gap : float
-        Smallest gap a candidate must close beyond the refitted model: the RMS change of the
-        fitted residual, as a multiple of the RMS of the residual left (the noise level).
-    n_bootstrap : int
-        Block-bootstrap draws of the parameter intervals (half as many for the share of draws
-        each accepted candidate wins).
-    trim : int or None
-        Samples left out at each end (None: ``min(MAX_AUTO_WINDOW // 2, N // 20)``).
-    candidates : tuple of str
-        Candidate effects tested (default: the whole catalog).
-    refit : tuple of str
-        Model parameters refitted (see ``candidates.REFIT``).
-    plausible : mapping or None
-        Plausible ranges ``{name: (lower, upper)}`` replacing the defaults of ``REFIT``.
-    gauss_newton : int
-        Most Gauss-Newton iterations of a refinement.
-    n_threads : int
-        Threads of the compiled evaluation (0: every core).
-    """
-
-    alpha: float = 0.01
-    max_effects: int = 4
-    n_blocks: int = 40
-    n_folds: int = 8
-    min_fold_share: float = 0.75
-    min_gap: float = 0.3
-    n_bootstrap: int = 200
-    trim: int | None = None
-    candidates: tuple[str, ...] = CANDIDATE_NAMES
-    refit: tuple[str, ...] = tuple(r.name for r in REFIT)
-    plausible: Mapping[str, tuple[float, float]] | None = None
-    gauss_newton: int = 4
-    n_threads: int = 0
 
 
 @dataclass
@@ -123,6 +73,7 @@ class Round:
     noise_model: dict = field(default_factory=dict)
     rms_before: float = 0.0
     rms_after: float = 0.0
+    preferred_over: str | None = None
 
 
 @dataclass
@@ -208,6 +159,11 @@ class Discovery:
     settings: Settings = field(default_factory=Settings)
     evaluations: int = 0
     notes: list[str] = field(default_factory=list)
+    verdict: str = "no_discrepancy"
+    lack_of_fit: dict = field(default_factory=dict)
+    noise: dict = field(default_factory=dict)
+    rms_after_all: float = 0.0
+    sliding: np.ndarray | None = None
 
     @property
     def names(self) -> list[str]:
@@ -216,7 +172,7 @@ class Discovery:
 
     def summary(self) -> dict:
         """The summary.json content (SPEC), plus the refit, rounds and per-leg gaps."""
-        from gsfric.discovery.report import summary
+        from gsfric.discovery.summary import summary
 
         return summary(self)
 
@@ -230,7 +186,7 @@ def _rms(r: np.ndarray) -> float:
 
 def discover(motion: Motion, forces: np.ndarray, platform: Platform | None = None, *,
              settings: Settings | None = None, seed: int = 0, progress: bool = False,
-             **options) -> Discovery:
+             poses: tuple[np.ndarray, np.ndarray] | None = None, **options) -> Discovery:
     """Find which effects the model misses, fit them, and measure how much of the gap closes.
 
     Parameters
@@ -246,6 +202,11 @@ def discover(motion: Motion, forces: np.ndarray, platform: Platform | None = Non
         Seed of the block bootstrap.
     progress : bool
         Show progress on stderr.
+    poses : (ndarray (N, 3), ndarray (N, 3, 3)), optional
+        The recorded (unsmoothed) positions (m) and rotations, from which the pose noise and
+        the uncertainty of the leg speeds are estimated (``rest.speed_uncertainty``; see
+        ``rest.poses_from_columns``). Default: the motion's smoothed poses, which
+        underestimate it.
     **options
         Fields of ``Settings`` overriding ``settings``.
 
@@ -261,7 +222,7 @@ def discover(motion: Motion, forces: np.ndarray, platform: Platform | None = Non
     platform = reference_platform() if platform is None else platform
     bar = _Progress(progress, settings.max_effects + 3)
     bar.step("simulating the model along the measured motion")
-    problem = Problem(motion, forces, platform, settings)
+    problem = Problem(motion, forces, platform, settings, poses=poses)
     model = problem.model
     rng = np.random.default_rng(seed)
     theta0 = model.theta0.copy()
@@ -270,13 +231,15 @@ def discover(motion: Motion, forces: np.ndarray, platform: Platform | None = Non
     # -- refit of the model's own parameters
     bar.step("refitting the model's own parameters")
     names = problem.refit_names([])
-    F0, J0 = model.jacobian(theta0, names)
-    residual_before = problem.y - F0[problem.used]
-    whitener = st.Whitener.fit(residual_before)
-    refit = _refit_report(problem, theta0, J0[problem.used], whitener, residual_before)
-    theta, r, J = refine(problem, theta0, names, whitener,
-                          start=(residual_before, J0[problem.used]))
-    rms_refit = _rms(r)
+    F0, J0 = model.jacobian(theta0, names, rows=problem.used)
+    residual_before = problem.mask(problem.y - F0[problem.used])
+    J0 *= problem.weight[:, :, None]
+    whitener = st.Whitener.fit(residual_before, valid=problem.sliding)
+    refit = _refit_report(problem, theta0, J0, whitener, residual_before)
+    theta, r, J = refine(problem, theta0, names, whitener, start=(residual_before, J0))
+    del J0
+    sliding = problem.sliding
+    rms_refit = _rms(r[sliding])
     for name in names:
         if name not in refit["parameters"]:
             refit["parameters"][name] = {
@@ -293,8 +256,9 @@ def discover(motion: Motion, forces: np.ndarray, platform: Platform | None = Non
         if not candidates:
             break
         bar.step(f"round {len(rounds) + 1}: testing {len(candidates)} candidate effects")
+        design = screen = None     # the previous round's, before the next is built
         design = problem.linearise(theta, active, candidates)
-        whitener = st.Whitener.fit(design.r)
+        whitener = _noise_whitener(design, problem)
         screen = screen_candidates(problem, design, whitener, candidates)
         if not rounds:
             for name, alts in refit_alternatives(problem, design, screen, theta0).items():
@@ -308,7 +272,7 @@ def discover(motion: Motion, forces: np.ndarray, platform: Platform | None = Non
                 break
             fit = screen.fits[winner]
             r_alt = design.r - design.X[:, :, fit.columns] @ fit.coef
-            whitener = st.Whitener.fit(r_alt)
+            whitener = st.Whitener.fit(r_alt, valid=problem.sliding)
             screen = screen_candidates(problem, design, whitener, candidates)
             new = winner_of(screen)
             if new == winner:
@@ -319,43 +283,58 @@ def discover(motion: Motion, forces: np.ndarray, platform: Platform | None = Non
             seen.append(winner)
         level = settings.alpha / len(candidates)
         rnd = Round(len(rounds) + 1, list(screen.tests.values()), winner, level=level,
-                    noise_model=noise_model(whitener), rms_before=_rms(design.r))
+                    noise_model=noise_model(whitener), rms_before=_rms(design.r[sliding]))
         rounds.append(rnd)
         if winner is None:
             rnd.rms_after = rnd.rms_before
             break
         rnd.indistinguishable, p_alone = indistinguishable(problem, design, screen, winner)
+        if rnd.indistinguishable:
+            # parsimony: of explanations the data cannot tell apart, the simpler one
+            group = [winner] + list(rnd.indistinguishable)
+            rank = {c.name: (c.simpler, len(c.fitted)) for c in candidates}
+            simplest = min(group, key=lambda n: rank[n])
+            if rank[simplest] < rank[winner]:
+                rnd.preferred_over = winner
+                winner = rnd.winner = simplest
+                rnd.indistinguishable, p_alone = indistinguishable(problem, design, screen,
+                                                                   winner)
+                if rnd.preferred_over not in rnd.indistinguishable:
+                    rnd.indistinguishable.append(rnd.preferred_over)
         rnd.bootstrap_share = bootstrap_share(problem, design, screen, rng)
         c = next(c for c in candidates if c.name == winner)
         start = design.theta.copy()
         values = screen.tests[winner].parameters
-        for p in c.fitted:
-            start[model.index[f"{winner}.{p}"]] = values[p]
+        for p, v in values.items():
+            start[model.index[f"{winner}.{p}"]] = v
         step_fit = screen.fits[winner]
         for col, step in zip(step_fit.columns, step_fit.coef):
             if col in design.refit:
                 start[model.index[design.names[col]]] += design.signs[col] * step
         names = problem.refit_names(active + [winner])
-        theta, r, J = refine(problem, start, names, whitener)
-        rnd.rms_after = _rms(r)
-        active.append(winner)
         test = screen.tests[winner]
+        design = screen = None     # free the round's design before the refinement
+        theta, r, J = refine(problem, start, names, whitener)
+        rnd.rms_after = _rms(r[sliding])
+        active.append(winner)
         findings_evidence[winner] = {
             "round": rnd.index, "F": test.F, "p_value": test.p_value, "dof": test.dof,
             "level": level, "cv_gain": test.cv_gain, "fold_share": test.fold_share,
             "bootstrap_share": rnd.bootstrap_share.get(winner, 0.0),
             "indistinguishable_from": list(rnd.indistinguishable),
+            "preferred_over": rnd.preferred_over,
             "p_value_beyond": {k: v for k, v in p_alone.items()},
             "rms_before": rnd.rms_before, "rms_after": rnd.rms_after,
             "signature": c.signature,
         }
 
+    design = screen = None     # free the last round's design before the final steps
     bar.step("bootstrap of the final fit")
     residual_after = r
-    whitener = st.Whitener.fit(residual_after)
+    whitener = st.Whitener.fit(residual_after, valid=problem.sliding)
     intervals = _intervals(problem, J, names, whitener, residual_after, rng, theta)
     n_fitted = len(names)
-    rows = residual_after.size
+    rows = int(np.count_nonzero(sliding))
     noise = float(np.sqrt(np.sum(residual_after ** 2) / max(rows - n_fitted, 1)))
     final = model.platform_at(theta, list(dict.fromkeys(
         [c.name for c in problem.own_effects] + active)))
@@ -379,17 +358,84 @@ def discover(motion: Motion, forces: np.ndarray, platform: Platform | None = Non
         notes.append(f"{flagged} of {len(residual_before)} samples are flagged by the model "
                      "(see gsfric.evaluation: stroke, near-singular poses); they are kept")
     used = problem.used
+    full_after = problem.y - model.forces(theta)[used]
+    lof = _lack_of_fit(problem, theta, residual_after, whitener)
+    rms_after = _rms(residual_after[sliding])
+    independent = float(np.sqrt(np.mean(problem.force_noise ** 2)))
+    noise_info = {
+        "high_frequency": independent,
+        "high_frequency_per_leg": [float(v) for v in problem.force_noise],
+        "residual_corrected": noise,
+        "innovation_std": [float(v) for v in whitener.innovation_std],
+        "method": "high_frequency: residual of a local cubic fit of each force channel "
+                  "(robust scale), independent of the model; residual_corrected: final "
+                  "residual corrected for the parameters fitted",
+        "speed_uncertainty": [float(v) for v in problem.sigma_v],
+        "not_sliding_share": float(1.0 - sliding.mean()),
+    }
+    if lof["significant"]:
+        verdict = "unexplained_discrepancy"
+    elif active:
+        verdict = "explained"
+    else:
+        closed = np.sqrt(max(_rms(residual_before[sliding]) ** 2 - rms_after ** 2, 0.0))
+        verdict = "explained" if closed >= settings.min_gap * rms_after else "no_discrepancy"
+    lof.pop("fitted")
     table = regime_bands(np.asarray(motion.t[used]), problem.result.D_dot[used],
                          problem.result.D[used], problem.result.F[used],
                          motion.rotation[used], residual_before, residual_after)
     bar.close()
     return Discovery(
-        effects=findings, refit=refit, rounds=rounds, rms_before=_rms(residual_before),
-        rms_refit=rms_refit, rms_after=_rms(residual_after), noise_rms_estimate=noise,
+        effects=findings, refit=refit, rounds=rounds, rms_before=_rms(residual_before[sliding]),
+        rms_refit=rms_refit, rms_after=rms_after, noise_rms_estimate=independent,
         t=np.asarray(motion.t[problem.used]), residual_before=residual_before,
         residual_after=residual_after, used=problem.used, model=platform, platform=final,
         result_before=problem.result, noise_model=noise_model(whitener), regimes=table,
-        settings=settings, evaluations=model.evaluations, notes=notes)
+        settings=settings, evaluations=model.evaluations, notes=notes, verdict=verdict,
+        lack_of_fit=lof, noise=noise_info, rms_after_all=_rms(full_after),
+        sliding=sliding)
+
+
+def _noise_whitener(design, problem: Problem) -> st.Whitener:
+    """The AR noise model of a round, fitted to the residual of the largest model (every
+    candidate's columns and the refit at once, least squares): what the candidates could
+    explain does not inflate the noise model, so a step-like effect (Coulomb friction) is not
+    whitened away before it is tested, and the noise is not under-modelled either."""
+    coef = st.solve(design.XtX, design.Xtr)
+    k = design.X.shape[2]
+    r = design.r.copy()
+    for j in range(k):
+        r -= design.X[:, :, j] * coef[j]
+    return st.Whitener.fit(r, valid=problem.sliding)
+
+
+def _lack_of_fit(problem: Problem, theta: np.ndarray, residual: np.ndarray,
+                 whitener: st.Whitener) -> dict:
+    """The lack-of-fit test of the final residual (``lackfit``), with where it lives."""
+    from gsfric.discovery import lackfit
+
+    s = problem.settings
+    used = problem.used
+    F = problem.model.forces(theta)[used]
+    t = np.asarray(problem.model.t[used])
+    X = lackfit.basis(t, F, problem.result.D_dot[used], problem.sliding)
+    X *= problem.weight[:, :, None]
+    # the noise model from the residual of the basis fit (largest model), as in each round
+    k = X.shape[2]
+    flat = X.reshape(-1, k)
+    coef = st.solve(flat.T @ flat, flat.T @ residual.reshape(-1))
+    whitener = st.Whitener.fit(residual - X @ coef, valid=problem.sliding)
+    out = lackfit.test(residual, X, whitener, alpha=s.alpha, min_gap=s.min_gap,
+                       n_blocks=s.n_blocks, n_folds=s.n_folds,
+                       min_fold_share=s.min_fold_share)
+    fitted = out["fitted"]
+    thirds = np.array_split(np.arange(len(t)), 3)
+    out["time_rms"] = {f"{t[g[0]]:.4g}-{t[g[-1]]:.4g} s": _rms(fitted[g]) for g in thirds}
+    out["frequency"] = lackfit.dominant_frequency(t, residual)
+    main = max(out["signals"], key=out["signals"].get) if out["signals"] else None
+    out["looks_like"] = lackfit.MEANING.get(main, "") if main else ""
+    out["main_signal"] = main
+    return out
 
 
 def _contributions(problem: Problem, theta: np.ndarray, active: Sequence[str]
@@ -421,9 +467,7 @@ def _intervals(problem: Problem, J: np.ndarray, names: list[str], whitener: st.W
         return {}
     model = problem.model
     s = problem.settings
-    X = whitener.apply(J)
-    z = whitener.apply(residual)
-    blocks = st.Blocks.build(X, z, s.n_blocks)
+    blocks = st.Blocks.whitened(whitener, J, residual, s.n_blocks)
     cols = [model.index[n] for n in names]
     lo = np.array([problem.bounds(n)[0] for n in names]) - theta[cols]
     hi = np.array([problem.bounds(n)[1] for n in names]) - theta[cols]
@@ -447,9 +491,9 @@ def _refit_report(problem: Problem, theta0: np.ndarray, J: np.ndarray,
     out = {"parameters": {}, "implausible": [], "notes": []}
     if not names:
         return out
-    X = whitener.apply(J[:, :, :len(names)]).reshape(-1, len(names))
-    z = whitener.apply(residual0).reshape(-1)
-    free = st.solve(np.einsum("ik,il->kl", X, X), np.einsum("ik,i->k", X, z))
+    A, b, _, _ = st.Blocks.whitened(whitener, np.ascontiguousarray(J[:, :, :len(names)]),
+                                    residual0, problem.settings.n_blocks).total()
+    free = st.solve(A, b)
     free += theta0[[model.index[n] for n in names]]
     for k, name in enumerate(names):
         lo, hi = problem.plausible[name]

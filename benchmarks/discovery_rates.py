@@ -1,0 +1,230 @@
+"""Rates of the discovery workflow on generated rig data (docs/discovery.md).
+
+Its own generator: three motion families (sines, chirps, point-to-point minimum-jerk moves
+with rests), two platforms (the reference platform, and one with a 1.5x payload and 2x
+prismatic viscous friction), white and AR(1) force noise (phi up to 0.95), pose noise, effects
+at effect-to-noise 2-10, null cases, pairs and out-of-catalog cases (a delay when
+time_offset is left out of the candidates; a load cell with a quadratic characteristic).
+Prints the table of rates.
+
+    python benchmarks/discovery_rates.py                 # the full table (long)
+    python benchmarks/discovery_rates.py --per-cell 2 --samples 3000   # a quick look
+"""
+
+from __future__ import annotations
+
+import argparse
+import time
+from collections import defaultdict
+
+import numpy as np
+
+from gsfric.discovery import CANDIDATE_NAMES, discover
+from gsfric.discovery.rest import poses_from_columns
+from gsfric.models import reference_platform
+from gsfric.synth import synthesize
+from gsfric.trajectory import Motion, quaternion_from_rotation, rotation_from_euler
+
+RATE = 200.0
+AMPLITUDE = np.array([0.03, 0.03, 0.02, 0.05, 0.05, 0.05])
+
+
+def _motion(pose: np.ndarray, t: np.ndarray) -> Motion:
+    position = pose[:, :3] + [0.0, 0.0, 0.95]
+    rotation = rotation_from_euler(pose[:, 3], pose[:, 4] + 0.2, pose[:, 5])
+    return Motion.from_samples(t, position, quaternion=quaternion_from_rotation(rotation))
+
+
+def sines(rng, n):
+    t = np.arange(n) / RATE
+    f = rng.uniform(0.2, 1.2, 6)
+    ph = rng.uniform(0, 2 * np.pi, 6)
+    return _motion(AMPLITUDE * np.sin(2 * np.pi * f * t[:, None] + ph), t)
+
+
+def chirps(rng, n):
+    t = np.arange(n) / RATE
+    f0, f1 = rng.uniform(0.05, 0.2, 6), rng.uniform(1.0, 2.0, 6)
+    phase = 2 * np.pi * (f0 * t[:, None] + (f1 - f0) * t[:, None] ** 2 / (2 * t[-1]))
+    return _motion(AMPLITUDE * np.sin(phase + rng.uniform(0, 2 * np.pi, 6)), t)
+
+
+def point_to_point(rng, n):
+    t = np.arange(n) / RATE
+    pose = np.zeros((n, 6))
+    k, current = 0, np.zeros(6)
+    while k < n:
+        move, rest = int(rng.uniform(1.0, 2.0) * RATE), int(rng.uniform(0.3, 0.7) * RATE)
+        target = rng.uniform(-1, 1, 6) * AMPLITUDE
+        s = np.linspace(0, 1, move)
+        seg = current + (10 * s ** 3 - 15 * s ** 4 + 6 * s ** 5)[:, None] * (target - current)
+        m = min(move, n - k)
+        pose[k:k + m] = seg[:m]
+        k += m
+        m = min(rest, n - k)
+        pose[k:k + m] = target
+        k += m
+        current = target
+    return _motion(pose, t)
+
+
+FAMILIES = {"sines": sines, "chirps": chirps, "rests": point_to_point}
+
+
+def platforms():
+    ref = reference_platform()
+    heavy = ref.with_body(payload_mass=1.5 * ref.platform.payload_mass).with_friction(
+        prismatic_viscous=2 * ref.friction.prismatic_viscous)
+    return {"reference": ref, "heavy": heavy}
+
+
+UNIT = {  # parameters giving an effect of about unit size; scaled to the drawn size
+    "stribeck": {"static": 1.0, "velocity": 0.01},
+    "seal_friction": {"force": 1.0},
+    "quadratic_drag": {"coefficient": 20.0},
+    "stroke_friction": {"slope": 20.0},
+    "payload_offset": {"x": 0.02, "y": -0.01, "z": 0.01},
+    "sensor_bias": {f"b{i}": v for i, v in enumerate([1, -1, 0.5, -0.5, 1, -1], 1)},
+    "joint_friction_coupling": {"scale": 1.0},
+    "bushing_friction": {"coefficient": 0.1},
+    "force_scale": {f"g{i}": v for i, v in enumerate([0.02, -0.02, 0.01, -0.01, 0.02, 0.0], 1)},
+    "time_offset": {"delay": 0.01},
+}
+SCALED = {"stribeck": "static", "seal_friction": "force", "quadratic_drag": "coefficient",
+          "stroke_friction": "slope", "joint_friction_coupling": "scale",
+          "bushing_friction": "coefficient", "time_offset": "delay"}
+
+
+def scaled(name, platform, motion, size, sigma):
+    """Parameters of ``name`` giving an effect of RMS ``size * sigma``."""
+    from gsfric.synth import effect_contributions
+
+    params = dict(UNIT[name])
+    if name == "stroke_friction":
+        from gsfric.evaluation import evaluate
+
+        params["reference"] = float(evaluate(platform, motion).D.min())
+    c = effect_contributions(platform.with_effect(name, **params), motion, [name])[name]
+    k = size * sigma / max(float(np.sqrt(np.mean(c ** 2))), 1e-12)
+    keys = [SCALED[name]] if name in SCALED else [p for p in params if p != "reference"]
+    for p in keys:
+        params[p] *= k
+    return params
+
+
+def one_case(kind, names, family, platform_name, phi, size, seed, samples):
+    rng = np.random.default_rng(seed)
+    platform = platforms()[platform_name]
+    motion = FAMILIES[family](rng, samples)
+    sigma = 0.2
+    effects = {n: scaled(n, platform, motion, size, sigma) for n in names}
+    data = synthesize(platform, effects, motion=motion, noise=sigma, noise_correlation=phi,
+                      pose_noise=1e-5, seed=seed)
+    fr = data.frame
+    rec = Motion.from_samples(fr.t.values, fr[["x", "y", "z"]].values,
+                              quaternion=fr[["qw", "qx", "qy", "qz"]].values)
+    forces = fr[[f"F{i}" for i in range(1, 7)]].values
+    candidates = CANDIDATE_NAMES
+    if kind == "delay_outside":
+        candidates = tuple(c for c in CANDIDATE_NAMES if c != "time_offset")
+    if kind == "nonlinear_sensor":
+        forces = forces + size * sigma * (data.forces * np.abs(data.forces)) / np.sqrt(
+            np.mean(data.forces ** 4))
+    r = discover(rec, forces, platform, poses=poses_from_columns(fr), n_bootstrap=20,
+                 n_threads=1, candidates=candidates)
+    true_noise = float(np.sqrt(np.mean(data.noise ** 2)))
+    return r, true_noise
+
+
+def cases(per_cell, sizes):
+    seed = 0
+    out = []
+    fam, plats = list(FAMILIES), ["reference", "heavy"]
+    for k in range(max(50, per_cell * 6)):
+        out.append(("null", [], fam[k % 3], plats[k % 2], (0.0, 0.95)[k % 2], 0.0, seed))
+        seed += 1
+    c = 0     # one counter over every single case: families, platforms and noises all cycle
+    for name in CANDIDATE_NAMES:
+        if name == "leg_weight":
+            continue
+        for size in sizes:
+            for _ in range(per_cell):
+                out.append(("single", [name], fam[c % 3], plats[(c // 3) % 2],
+                            (0.0, 0.95)[(c // 6) % 2], size, seed))
+                seed += 1
+                c += 1
+    pairs = [("seal_friction", "bushing_friction"), ("stribeck", "payload_offset"),
+             ("seal_friction", "force_scale"), ("quadratic_drag", "sensor_bias")]
+    for a, b in pairs:
+        for j in range(per_cell):
+            out.append(("pair", [a, b], fam[j % 3], plats[j % 2], (0.0, 0.9)[j % 2], 5.0,
+                        seed))
+            seed += 1
+    for kind, names in (("delay_outside", ["time_offset"]), ("nonlinear_sensor", [])):
+        for j in range(per_cell):
+            out.append((kind, names, fam[j % 3], plats[j % 2], (0.0, 0.9)[j % 2], 5.0, seed))
+            seed += 1
+    return out
+
+
+def memory(n):
+    """Peak traced memory (NumPy arrays included) and time of one discover on n samples."""
+    import tracemalloc
+
+    data = synthesize(effects=["stribeck:static=2,velocity=0.01"], samples=n, rate=RATE,
+                      noise=0.1, pose_noise=1e-5, seed=1)
+    fr = data.frame
+    rec = Motion.from_samples(fr.t.values, fr[["x", "y", "z"]].values,
+                              quaternion=fr[["qw", "qx", "qy", "qz"]].values)
+    forces, poses, model = fr[[f"F{i}" for i in range(1, 7)]].values, poses_from_columns(fr), \
+        data.model
+    del data, fr
+    tracemalloc.start()
+    start = time.time()
+    r = discover(rec, forces, model, poses=poses, n_threads=1)
+    seconds = time.time() - start
+    peak = tracemalloc.get_traced_memory()[1]
+    print(f"{n} samples: discover {seconds:.1f} s (with tracemalloc), traced peak "
+          f"{peak / 2**20:.0f} MB = {peak / n:.0f} B/sample; named {r.names}")
+
+
+def main():
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--per-cell", type=int, default=12, help="cases per effect and size")
+    ap.add_argument("--samples", type=int, default=6000)
+    ap.add_argument("--sizes", type=float, nargs="+", default=[2.0, 3.0, 10.0])
+    ap.add_argument("--nulls", type=int, default=None, help="null cases (default >= 50)")
+    ap.add_argument("--memory", type=int, default=None, metavar="N",
+                    help="only measure the traced memory peak and time of one discover on N "
+                         "samples")
+    a = ap.parse_args()
+    if a.memory:
+        return memory(a.memory)
+    todo = cases(a.per_cell, a.sizes)
+    if a.nulls is not None:
+        nulls = [c for c in todo if c[0] == "null"][:a.nulls]
+        todo = nulls + [c for c in todo if c[0] != "null"]
+    rows = defaultdict(lambda: [0, 0, 0.0])
+    start = time.time()
+    for kind, names, family, plat, phi, size, seed in todo:
+        r, noise = one_case(kind, names, family, plat, phi, size, seed, a.samples)
+        if kind == "null":
+            key, ok = ("null: false discovery", family), bool(r.names)
+        elif kind == "single":
+            key, ok = (f"{names[0]} @ {size:g}", family), names[0] in r.names
+        elif kind == "pair":
+            key, ok = ("pair: both named", "+".join(names)), set(names) <= set(r.names)
+        else:
+            key, ok = (f"{kind}: unexplained", family), r.verdict == "unexplained_discrepancy"
+        rows[key][0] += int(ok)
+        rows[key][1] += 1
+        if kind in ("single", "pair") and ok:
+            rows[key][2] = max(rows[key][2], r.rms_after / noise)
+    print(f"{len(todo)} cases, {a.samples} samples each, {time.time() - start:.0f} s")
+    print(f"{'case':40s} {'family':28s} {'rate':>7s} {'n':>4s} {'max rms_after/noise':>20s}")
+    for (name, family), (k, n, worst) in sorted(rows.items()):
+        print(f"{name:40s} {family:28s} {k / n:7.0%} {n:4d} {worst:20.3f}")
+
+
+if __name__ == "__main__":
+    main()
