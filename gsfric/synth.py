@@ -271,7 +271,7 @@ def synthesize(platform: Platform | None = None, effects=(), *, motion: Motion |
     """
     import pandas as pd
 
-    from gsfric.evaluation import Evaluator, state_array
+    from gsfric.evaluation import Evaluator
     from gsfric.models import reference_platform
 
     if int(samples) < 20:
