@@ -34,9 +34,10 @@ SENSOR_EFFECTS: dict[str, dict[str, float]] = {
 """Sensor effects applied by the runtime: name -> {parameter: default}."""
 
 _SENSOR_DESCRIPTIONS = {
-    "force_scale": ("gain error of each load cell: F_i -> (1 + g_i) F_i", "1"),
+    "force_scale": ("gain error of each load cell: F_i -> (1 + g_i) F_i", "1",
+                    "relative gain error of load cell {i}"),
     "time_offset": ("delay of the force channels behind the pose channels: F(t) -> F(t - delay)",
-                    "s"),
+                    "s", "delay of the force readings behind the poses"),
 }
 
 
@@ -44,9 +45,10 @@ def describe() -> list[dict]:
     """Effects: name, description, parameters (name, default, unit); generated ones first."""
     out = list(manifest()["effects"])
     for name, params in SENSOR_EFFECTS.items():
-        text, unit = _SENSOR_DESCRIPTIONS[name]
+        text, unit, about = _SENSOR_DESCRIPTIONS[name]
         out.append({"name": name, "description": text, "kind": "sensor",
-                    "parameters": [{"name": p, "default": d, "unit": unit}
+                    "parameters": [{"name": p, "default": d, "unit": unit,
+                                    "description": about.format(i=p[1:])}
                                    for p, d in params.items()]})
     return out
 

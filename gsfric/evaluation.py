@@ -448,7 +448,7 @@ class Evaluator:
                 flag[s:e] = self._flags(xs, view)
         shapes = {name: shape for name, _, shape in self._full.outputs}
         arrays = {k: v.reshape((n,) + tuple(shapes[k])) for k, v in outs.items()}
-        self._apply_sensor(np.asarray(motion.t, float), arrays)
+        self._apply_sensor(np.asarray(motion.t, float), arrays, flag)
         return Result(t=np.asarray(motion.t, float), arrays=arrays, flag=flag, mode=self.mode)
 
     def flag_spec(self) -> "native.FlagSpec":
@@ -462,14 +462,23 @@ class Evaluator:
                 UNIVERSAL_LIMIT, SINGULAR_LIMIT, 24)
         return spec
 
-    def _apply_sensor(self, t: np.ndarray, arrays: dict) -> None:
+    def _apply_sensor(self, t: np.ndarray, arrays: dict, flag: np.ndarray) -> None:
         """Sensor effects (force_scale, time_offset: gsfric.catalog) on F, what a load cell
-        reads; the reactions stay those of the mechanism."""
+        reads; the reactions stay those of the mechanism. A delay interpolates between the
+        steps with finite values only, so a non-finite step stays NaN and spreads nowhere."""
         from gsfric.catalog import apply_sensor, sensor_parameters
 
         gains, delay = sensor_parameters(self.platform.effects)
-        if delay != 0.0 or np.any(gains != 0.0):
+        if delay == 0.0 and not np.any(gains != 0.0):
+            return
+        good = (flag & FLAG_NONFINITE) == 0
+        if good.all():
             arrays["F"] = apply_sensor(t, arrays["F"], gains, delay)
+            return
+        out = np.full_like(arrays["F"], np.nan)
+        if good.any():
+            out[good] = apply_sensor(t[good], arrays["F"][good], gains, delay)
+        arrays["F"] = out
 
     def _flags(self, x, arrays) -> np.ndarray:
         """The flags of ``_native/batch.c`` in NumPy, for the CasADi fallback (no compiler)."""
