@@ -22,6 +22,8 @@ from dataclasses import dataclass
 
 import sympy as sp
 
+from . import bushing as bu
+from . import coupled as cp
 from . import effects as fx
 from . import friction as fr
 from . import kinematics as kin
@@ -71,6 +73,11 @@ PARAMETERS = (
     ("prismatic_coulomb", (), "1", "Coulomb coefficient, prismatic joints"),
     ("joint_eps", (), "rad/s", "regularisation speed of the joints' sign function"),
     ("prismatic_eps", (), "m/s", "regularisation speed of the prismatic sign function"),
+    ("friction_model", (), "1", "1: coupled model (friction loads the mechanism, bushings, "
+     "per-axis universal joints); 0: the paper's post-hoc (33)-(35)"),
+    ("bushing_offset", (), "m", "distance from C_i of the first bushing (coupled model)"),
+    ("bushing_spacing", (), "m", "distance b between the two bushings (coupled model)"),
+    ("prismatic_seal", (), "N", "Coulomb force of the prismatic joints' seals"),
 )
 PAPER_CONSTANTS = (
     ("platform_acc", (3,), "m/s^2", "platform and payload acceleration"),
@@ -103,6 +110,15 @@ OUTPUTS = (
     ("s2", (6,), "1", "1 - (u.a1)^2: zero where the universal joint's moment is undefined"),
     ("R_3_leg", (6, 3), "N", "R_3 in the paper's leg frame (18)-(27)"),
     ("M_3_leg", (6, 3), "N m", "M_3 in the paper's leg frame (18)-(27)"),
+    ("coupling_change", (6,), "N", "change of the axial forces over the coupled solve's last "
+     "iteration"),
+    ("F_joint", (6,), "N", "part of F from the joint friction moments carried by the actuators"),
+    ("Ffr_viscous", (6,), "N", "viscous part of Ffr"),
+    ("Ffr_coulomb", (6,), "N", "Coulomb part of Ffr from |R_3|, (35) (paper model)"),
+    ("Ffr_bushing", (6,), "N", "Coulomb part of Ffr from the bushing forces (coupled model)"),
+    ("Ffr_seal", (6,), "N", "seal part of Ffr"),
+    ("Ffr_effects", (6,), "N", "part of Ffr from the catalog's prismatic friction effects"),
+    ("N_bushing", (6, 2), "N", "magnitudes of the two bushings' normal forces (first, second)"),
 )
 
 
@@ -256,7 +272,7 @@ def build(mode: str = "kinematic") -> Model:
         M_C = ch.let(f"M_C{k}", lg.torsion_moment(K_leg, u, n), f"M_{{C{k}}}", "11-17")
         t_E = ch.let(f"t_E{k}", lg.transverse_end_force(K_leg, M_C, u, n, D),
                      rf"R_{{E{k}}}^{{\perp}}", "11-17")
-        legs.append(dict(k=k, C=C, e=e, a1=a1, E=E, D=D, u=u, n=n, D_dot=D_dot, w_L=w_L,
+        legs.append(dict(k=k, C=C, e=e, a1=a1, a2=a2, E=E, D=D, u=u, n=n, D_dot=D_dot, w_L=w_L,
                          w_Lin=w_Lin, al_L=al_L, s2=s2, turn2=turn2, c2=c2, a2c=a2c, mg2=mg2,
                          F_leg=F_leg, K=K_leg, M_C=M_C, t_E=t_E, parts=parts))
 
@@ -283,12 +299,9 @@ def build(mode: str = "kinematic") -> Model:
         L["F0"] = ch.let(f"F0_{k}", F_ax, f"F_{{0,{k}}}", "28-32")
         L["R_3"] = ch.let(f"R_3{k}", R_3, f"R_{{3,{k}}}", "28-32")
         L["M_3"] = ch.let(f"M_3{k}", M_3, f"M_{{3,{k}}}", "28-32")
-        E_next = legs[(i + 1) % N_LEGS]["E"]
-        Lf = lf.leg_frame(L["E"], L["C"], E_next)
-        L["R_3_leg"] = lf.to_leg_frame(Lf, L["R_3"])
-        L["M_3_leg"] = lf.to_leg_frame(Lf, L["M_3"])
 
-    # ---- friction (33)-(35)
+    # ---- friction (33)-(35); in the coupled model it loads the mechanism (derive/coupled.py)
+    m_model = P["friction_model"] if mode == "kinematic" else sp.S.Zero
     for L in legs:
         k = L["k"]
         w_rel = ch.let(f"omega_rel{k}", w - L["w_L"], rf"\omega_{{1{k}}}", "33-35")
@@ -299,27 +312,39 @@ def build(mode: str = "kinematic") -> Model:
                            rf"\omega^{{*}}_{{1{k}}}", "33-35")
             w_C = ch.let(f"omega_C_paper{k}", _with_magnitude(w_C, K["joint_speed"], L["u"]),
                          rf"\omega^{{*}}_{{0{k}}}", "33-35")
-        L["w_rel"] = w_rel
-        L.update(_leg_friction(ch, k, P, Q, L["R_E"], L["R_C"], L["R_3"], L["M_3"], w_rel,
-                               w_C, L["D_dot"], L["D"], L["u"]))
+        L["w_rel"], L["w_C"] = w_rel, w_C
+    weight = cp.coupling_weight(P, Q, mode)
 
-    # ---- joint friction carried by the actuators (effect joint_friction_coupling)
-    s = Q["joint_friction_coupling.scale"]
-    dF_rhs, dM_rhs = sp.zeros(3, 1), sp.zeros(3, 1)
-    for L in legs:
-        dK = L["MfrE"] - L["MfrC"]
-        dM_C = lg.torsion_moment(dK, L["u"], L["n"])
-        dt = ch.let(f"dt_E{L['k']}", lg.transverse_end_force(dK, dM_C, L["u"], L["n"],
-                                                                  L["D"]),
-                    rf"\Delta R_{{E{L['k']}}}^{{\perp}}", "effects")
-        dF_rhs -= dt
-        dM_rhs -= cross(L["E"] - p, dt) + L["MfrE"]
-    df = ch.solve("df", A_qr, sp.Matrix.vstack(dF_rhs, dM_rhs), r"\Delta f", "effects")
+    def moments(L, R_E, R_C, it):
+        return _joint_friction(ch, f"{L['k']}_{it}", P, m_model, R_E, R_C, L["w_rel"],
+                               L["w_C"], L["a1"], L["a2"])
+
+    change = cp.solve(ch, legs, A_qr, p, weight, moments, m_model)
+    for i, L in enumerate(legs):
+        k = L["k"]
+        dR = L["dR_E"]
+        L["R_3"] = ch.let(f"R_3c{k}", L["R_3"] + dR - dot(L["u"], dR) * L["u"],
+                          f"R_{{3,{k}}}^{{fr}}", "coupled")
+        L["M_3"] = ch.let(f"M_3c{k}", L["M_3"] + cross(L["E"] - L["P3"], dR)
+                          + m_model * L["MfrE"], f"M_{{3,{k}}}^{{fr}}", "coupled")
+        E_next = legs[(i + 1) % N_LEGS]["E"]
+        Lf = lf.leg_frame(L["E"], L["C"], E_next)
+        L["R_3_leg"] = lf.to_leg_frame(Lf, L["R_3"])
+        L["M_3_leg"] = lf.to_leg_frame(Lf, L["M_3"])
+        L["MfrE_s"] = fr.joint_friction_scalar(L["w_rel"], L["R_E_fr"], P["joint_viscous"],
+                                               P["joint_coulomb"], P["joint_radius"],
+                                               P["joint_eps"])
+        L["MfrC_s"] = fr.joint_friction_scalar(L["w_C"], L["R_C_fr"], P["joint_viscous"],
+                                               P["joint_coulomb"], P["joint_radius"],
+                                               P["joint_eps"])
+        L.update(_prismatic_friction(ch, k, P, Q, m_model, L["R_3"], L["M_3"], L["D_dot"],
+                                     L["D"], L["u"]))
+    df = sp.Matrix([L["dF"] for L in legs])
 
     bias = [Q[f"sensor_bias.b{k}"] for k in range(1, 7)]
     out = {name: [] for name, *_ in OUTPUTS}
     for i, L in enumerate(legs):
-        F = ch.let(f"F{L['k']}", L["F0"] + s * df[i] - L["Ffr"] + bias[i], f"F_{{{L['k']}}}",
+        F = ch.let(f"F{L['k']}", L["F0"] + df[i] - L["Ffr"] + bias[i], f"F_{{{L['k']}}}",
                    "28-32")
         vals = dict(F=[F], F0=[L["F0"]], R_E=list(L["R_E"]), R_C=list(L["R_C"]),
                     M_C=[L["M_C"]], R_3=list(L["R_3"]), M_3=list(L["M_3"]),
@@ -327,7 +352,10 @@ def build(mode: str = "kinematic") -> Model:
                     MfrE_s=[L["MfrE_s"]], MfrC_s=[L["MfrC_s"]], Ffr_s=[L["Ffr_s"]],
                     D=[L["D"]], D_dot=[L["D_dot"]], u=list(L["u"]), omega_leg=list(L["w_L"]),
                     omega_rel=list(L["w_rel"]), s2=[L["s2"]], R_3_leg=list(L["R_3_leg"]),
-                    M_3_leg=list(L["M_3_leg"]))
+                    M_3_leg=list(L["M_3_leg"]), coupling_change=[change[i]], F_joint=[df[i]],
+                    Ffr_viscous=[L["Ffr_viscous"]], Ffr_coulomb=[L["Ffr_coulomb"]],
+                    Ffr_bushing=[L["Ffr_bushing"]], Ffr_seal=[L["Ffr_seal"]],
+                    Ffr_effects=[L["Ffr_effects"]], N_bushing=list(L["N_bushing"]))
         for name, vlist in vals.items():
             out[name].extend(vlist)
     outputs = {name: sp.Matrix(v) for name, v in out.items()}
@@ -350,28 +378,54 @@ FRICTION_INPUTS = (
 )
 
 
-def _leg_friction(ch, k, P, Q, R_E, R_C, R_3, M_3, w_rel, w_C, v, D, u) -> dict:
-    """Friction of leg k, eqs. (33)-(35) and the catalog's prismatic friction effects."""
-    c_s, mu, r = P["joint_viscous"], P["joint_coulomb"], P["joint_radius"]
-    eps_w, eps_v = P["joint_eps"], P["prismatic_eps"]
+def _joint_friction(ch, tag, P, m, R_E, R_C, w_rel, w_C, a1, a2):
+    """Friction moments (M_frE on the platform, M_frC on the leg) of one leg, (33)-(34).
+
+    ``m``: the friction model's weight (1: universal joint per bearing axis, coupled.py;
+    0: the paper's vector form (34)); the spherical joint keeps the vector form (33).
+    """
+    c_s, mu, r, eps = P["joint_viscous"], P["joint_coulomb"], P["joint_radius"], P["joint_eps"]
+    MfrE = ch.let(f"MfrE{tag}", fr.joint_friction_moment(w_rel, R_E, c_s, mu, r, eps),
+                  f"M_{{frE{tag}}}", "33-35")
+    vector = fr.joint_friction_moment(w_C, R_C, c_s, mu, r, eps)
+    if m == 0:
+        MfrC = vector
+    else:
+        MfrC = m * cp.universal_joint_friction(w_C, R_C, a1, a2, c_s, mu, r, eps) \
+            + (1 - m) * vector
+    return MfrE, ch.let(f"MfrC{tag}", MfrC, f"M_{{frC{tag}}}", "33-35")
+
+
+def _prismatic_friction(ch, k, P, Q, m, R_3, M_3, v, D, u) -> dict:
+    """Prismatic friction of leg k in its parts: (35) with |R_3| (weight 1 - m) or the
+    bushings (weight m, bushing.py), viscous, seals and the catalog's effects."""
+    eps_v, c, mu = P["prismatic_eps"], P["prismatic_viscous"], P["prismatic_coulomb"]
     out = {}
-    out["MfrE"] = ch.let(f"MfrE{k}", fr.joint_friction_moment(w_rel, R_E, c_s, mu, r, eps_w),
-                         f"M_{{frE{k}}}", "33-35")
-    out["MfrC"] = ch.let(f"MfrC{k}", fr.joint_friction_moment(w_C, R_C, c_s, mu, r, eps_w),
-                         f"M_{{frC{k}}}", "33-35")
-    out["MfrE_s"] = fr.joint_friction_scalar(w_rel, R_E, c_s, mu, r, eps_w)
-    out["MfrC_s"] = fr.joint_friction_scalar(w_C, R_C, c_s, mu, r, eps_w)
     sgn_v = ch.let(f"sgn_v{k}", fr.smooth_sign(v, eps_v), rf"\sigma_{{{k}}}", "33-35")
-    base = -(P["prismatic_viscous"] * v + P["prismatic_coulomb"] * norm(R_3) * sgn_v)
-    out["Ffr_s"] = fr.prismatic_friction_scalar(v, R_3, P["prismatic_viscous"],
-                                                P["prismatic_coulomb"], eps_v)
-    extra = fx.prismatic_effects_force(Q, v, sgn_v, D, u, M_3)
-    out["Ffr"] = ch.let(f"Ffr{k}", base + extra, f"F_{{fr,{k}}}", "33-35")
+    s_a = P["bushing_offset"] - P["prismatic_point"] * D
+    N_a, N_b = bu.bushing_forces(R_3, M_3, u, s_a, P["bushing_spacing"])
+    N_a = ch.let(f"N_a{k}", N_a, f"N_{{a,{k}}}", "bushing")
+    N_b = ch.let(f"N_b{k}", N_b, f"N_{{b,{k}}}", "bushing")
+    out["N_bushing"] = [norm(N_a), norm(N_b)]
+    viscous, bushing, seal = bu.bushing_friction_parts(v, N_a, N_b, c, mu, P["prismatic_seal"],
+                                                       eps_v)
+    out["Ffr_viscous"] = viscous
+    out["Ffr_bushing"] = m * bushing
+    out["Ffr_seal"] = seal
+    out["Ffr_coulomb"] = -(1 - m) * mu * norm(R_3) * sgn_v
+    out["Ffr_effects"] = fx.prismatic_effects_force(Q, v, sgn_v, D, u, M_3)
+    out["Ffr_s"] = fr.prismatic_friction_scalar(v, R_3, c, mu, eps_v)
+    out["Ffr"] = ch.let(f"Ffr{k}", viscous + out["Ffr_coulomb"] + out["Ffr_bushing"] + seal
+                        + out["Ffr_effects"], f"F_{{fr,{k}}}", "33-35")
     return out
 
 
 def build_friction() -> Model:
-    """The friction map alone: reactions, joint speeds and coefficients -> friction."""
+    """The friction map alone: reactions, joint speeds and coefficients -> friction.
+
+    The friction of the platform's friction model (``friction_model``) evaluated from the given
+    reactions, with nothing fed back.
+    """
     ch = Chain()
     blocks = {n: _block(ch, n, s) for n, s, *_ in FRICTION_INPUTS}
     P = {n: _block(ch, n, s) for n, s, _, _ in PARAMETERS}
@@ -379,11 +433,21 @@ def build_friction() -> Model:
     Qm = ch.input("effects", len(q_names), 1, "Q")
     Q = {n: Qm[j] for j, n in enumerate(q_names)}
     out = {n: [] for n in ("MfrE", "MfrC", "Ffr", "MfrE_s", "MfrC_s", "Ffr_s")}
+    m = P["friction_model"]
+    c_s, mu, r, eps = P["joint_viscous"], P["joint_coulomb"], P["joint_radius"], P["joint_eps"]
     for i in range(N_LEGS):
+        k = i + 1
         row = {n: (_row(b, i) if b.shape[1] == 3 else b[i]) for n, b in blocks.items()}
-        res = _leg_friction(ch, i + 1, P, Q, row["R_E"], row["R_C"], row["R_3"], row["M_3"],
-                            row["omega_rel"], row["omega_leg"], row["D_dot"], row["D"],
-                            row["u"])
+        u = row["u"]
+        a1 = _row(P["universal_axes"], i)
+        a2 = cross(a1, u) / norm(cross(a1, u))
+        res = {}
+        res["MfrE"], res["MfrC"] = _joint_friction(ch, k, P, m, row["R_E"], row["R_C"],
+                                                   row["omega_rel"], row["omega_leg"], a1, a2)
+        res["MfrE_s"] = fr.joint_friction_scalar(row["omega_rel"], row["R_E"], c_s, mu, r, eps)
+        res["MfrC_s"] = fr.joint_friction_scalar(row["omega_leg"], row["R_C"], c_s, mu, r, eps)
+        res.update(_prismatic_friction(ch, k, P, Q, m, row["R_3"], row["M_3"], row["D_dot"],
+                                       row["D"], u))
         for n in out:
             v = res[n]
             out[n].extend(list(v) if isinstance(v, sp.MatrixBase) else [v])

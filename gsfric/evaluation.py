@@ -12,7 +12,10 @@ Step flags (bits of ``Result.flag``; 0 = sound step):
   has a condition number above ``COND_LIMIT``: the axial forces are ill-determined;
 * 8 ``FLAG_UNIVERSAL``: a leg within ``UNIVERSAL_LIMIT`` of the direction of its universal
   joint's first axis (``1 - (u.a1)^2 < UNIVERSAL_LIMIT``), where the joint's torsion moment is
-  undefined.
+  undefined;
+* 16 ``FLAG_COUPLING``: the coupled friction model's fixed point has not converged: the axial
+  forces changed by more than ``COUPLING_TOLERANCE * (1 N + |F0|)`` over the last of its
+  iterations (joint friction so large that it nearly locks the mechanism; docs/friction.md).
 """
 
 from __future__ import annotations
@@ -32,9 +35,12 @@ FLAG_NONFINITE = 1
 FLAG_STROKE = 2
 FLAG_SINGULAR = 4
 FLAG_UNIVERSAL = 8
+FLAG_COUPLING = 16
 FLAG_NAMES = {FLAG_NONFINITE: "non-finite value", FLAG_STROKE: "leg length outside the stroke",
               FLAG_SINGULAR: "near-singular platform Jacobian",
-              FLAG_UNIVERSAL: "leg near its universal joint's first axis"}
+              FLAG_UNIVERSAL: "leg near its universal joint's first axis",
+              FLAG_COUPLING: "coupled friction solve not converged"}
+COUPLING_TOLERANCE = 1e-6
 COND_LIMIT = 1e6
 UNIVERSAL_LIMIT = 1e-4
 
@@ -79,7 +85,9 @@ def parameter_values(platform: Platform) -> dict[str, object]:
         prismatic_point=PRISMATIC_POINT, joint_viscous=fr.joint_viscous,
         joint_coulomb=fr.joint_coulomb, joint_radius=fr.joint_radius,
         prismatic_viscous=fr.prismatic_viscous, prismatic_coulomb=fr.prismatic_coulomb,
-        joint_eps=JOINT_EPS, prismatic_eps=PRISMATIC_EPS)
+        joint_eps=JOINT_EPS, prismatic_eps=PRISMATIC_EPS,
+        friction_model=float(fr.model == "coupled"), bushing_offset=fr.bushing_offset,
+        bushing_spacing=fr.bushing_spacing, prismatic_seal=fr.prismatic_seal)
 
 
 def parameter_vector(platform: Platform) -> np.ndarray:
@@ -272,6 +280,9 @@ class Evaluator:
             out = ((D < lo) | (D > hi)).any(axis=1)
             flag[out] |= FLAG_STROKE
         flag[(arrays["s2"] < UNIVERSAL_LIMIT).any(axis=1)] |= FLAG_UNIVERSAL
+        if "coupling_change" in arrays:
+            limit = COUPLING_TOLERANCE * (1.0 + np.abs(arrays["F0"]))
+            flag[(np.abs(arrays["coupling_change"]) > limit).any(axis=1)] |= FLAG_COUPLING
         u = arrays["u"]
         arm = np.einsum("nij,kj->nki", motion.rotation, self.platform.geometry.platform_joints)
         A = np.concatenate([u, np.cross(arm, u)], axis=2)  # (N, 6 legs, 6)

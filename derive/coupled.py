@@ -1,0 +1,138 @@
+"""The coupled friction model: joint friction that loads the mechanism, solved at every step.
+
+In the paper's model friction is evaluated after the fact from the frictionless reactions and
+fed back nowhere. In the coupled model the friction moments of the spherical joints (on the
+platform, ``M_frE``; its reaction ``-M_frE`` on the leg) and of the universal joints (on the leg,
+``M_frC``) enter the equilibrium of the legs (11)-(16) and of the platform (2)-(7):
+
+    leg i, moments about C_i:   -D u x R_E + M_C n = K + M_frE - M_frC
+    platform:                   sum R_E = F_req,   sum (E_i - p) x R_E + M_frE = M_req
+
+As in the frictionless solve, each leg's moment balance gives the change of its torsion moment
+and of the transverse part of R_E, and the 6x6 system ``A f = b`` in the axial forces keeps its
+matrix: only the right-hand side changes. Friction depends on the reactions it changes
+(``|R_E|``, ``|R_C|``), so the system is solved by fixed-point iteration, unrolled
+``N_ITERATIONS`` times in the generated code:
+
+    M_fr^(0) = friction(R^(0))                     (R^(0): the frictionless reactions)
+    f^(k)    = f^(0) + A^-1 db(M_fr^(k-1)),  R^(k) = R(f^(k), M_fr^(k-1)),
+    M_fr^(k) = friction(R^(k)),                    k = 1 .. N_ITERATIONS
+
+each step re-using the QR factor of A (one back-substitution). The reported reactions are
+``R^(N)``, in equilibrium with the reported friction moments ``M_fr^(N-1)``; the output
+``coupling_change`` is ``f^(N) - f^(N-1)``, which the runtime compares with a tolerance
+(``gsfric.evaluation.COUPLING_TOLERANCE``) to flag steps where the iteration has not converged
+(mu r so large that friction locks the mechanism). The map from f^(k-1) to f^(k) contracts with a
+factor proportional to ``mu r / D``; docs/friction.md states the limits checked by the tests.
+
+The universal joint's friction is taken per bearing axis: the leg's angular velocity relative to
+the base is ``omega_L = w_1 a_1 + w_2 a_2`` (a_1 base-fixed, a_2 leg-fixed, orthogonal), and each
+bearing carries its own radial load ``|a_j x R_C|`` and turns with its own speed ``w_j``:
+
+    M_frC = -sum_j (c_s w_j + mu r |a_j x R_C| sgn(w_j)) a_j
+
+The spherical joint keeps the vector form (33).
+
+The coupling weight ``w`` multiplies every friction moment in the right-hand sides: ``w = 1`` in
+the coupled model, and in the paper model the effect ``joint_friction_coupling`` (``scale``) sets
+it (0 by default: the paper's post-hoc evaluation, unchanged). In the paper model friction is
+always evaluated from the frictionless reactions and the reported reactions stay frictionless;
+the effect changes the actuator forces only (one solve with the post-hoc moments).
+"""
+
+from __future__ import annotations
+
+import sympy as sp
+
+from . import legs as lg
+from .friction import smooth_sign
+from .vectors import cross, dot, norm
+
+N_ITERATIONS = 6
+"""Fixed-point iterations unrolled in the generated code (each: friction, one back-substitution)."""
+
+
+def universal_joint_friction(w_L, R_C, a1, a2, c_s, mu, r, eps):
+    """Per-bearing-axis friction moment of a universal joint on the leg, base frame, N m."""
+    out = sp.zeros(3, 1)
+    for a in (a1, a2):
+        w = dot(w_L, a)
+        load = norm(cross(a, R_C))
+        out -= (c_s * w + mu * r * load * smooth_sign(w, eps)) * a
+    return out
+
+
+def coupling_weight(P, Q, mode):
+    """The weight of the joint friction moments in the equilibrium.
+
+    Kinematic mode: ``m + (1 - m) s`` with ``m = friction_model`` (1 coupled, 0 paper) and ``s``
+    the effect ``joint_friction_coupling.scale``; paper mode (the paper's RESULTS set-up): ``s``.
+    """
+    s = Q["joint_friction_coupling.scale"]
+    if mode == "paper":
+        return s
+    m = P["friction_model"]
+    return m + (1 - m) * s
+
+
+def solve(ch, legs, A_qr, p, weight, moments, m, n_iter=N_ITERATIONS):
+    """Unrolled fixed point of the coupled equilibrium; updates every leg dict in place.
+
+    ``m``: the friction model (1 coupled, 0 paper). Friction is evaluated from the reactions
+    ``R^(0) + m (R^(k) - R^(0))`` and the reported reactions are the same: in the paper model
+    everything stays the frictionless (post-hoc) value, and only the effect
+    ``joint_friction_coupling`` (through ``weight``) adds the post-hoc moments' load to the
+    axial forces, as one solve (every iterate is the same; with a symbolic ``m = 0`` one
+    iteration is generated).
+
+    ``legs``: dicts with the frictionless ``R_E``, ``R_C``, ``M_C`` and u, n, D, E, k;
+    ``moments(L, R_E, R_C, it)``: the friction moments (M_frE, M_frC) of leg L from its
+    reactions. Sets ``R_E``, ``R_C``, ``M_C`` (coupled), ``MfrE``, ``MfrC`` (in equilibrium
+    with them), ``R_E_fr`` and ``R_C_fr`` (the reactions the moments were computed from),
+    ``dR_E`` (change of R_E by friction) and ``dF`` (change of the axial force); returns the
+    change of the axial forces over the last iteration, (6, 1), N.
+    """
+    if m == 0:
+        n_iter = 1
+    R0 = [(L["R_E"], L["R_C"], L["M_C"]) for L in legs]
+    R_E = [r[0] for r in R0]
+    R_C = [r[1] for r in R0]
+    mfr = [moments(L, R_E[i], R_C[i], 0) for i, L in enumerate(legs)]
+    df_prev = sp.zeros(len(legs), 1)
+    for it in range(1, n_iter + 1):
+        rhs_F, rhs_M = sp.zeros(3, 1), sp.zeros(3, 1)
+        dts, dMCs = [], []
+        for L, (ME, MC) in zip(legs, mfr):
+            k = L["k"]
+            dK = weight * (ME - MC)
+            dM_C = ch.let(f"dM_C{k}_{it}", lg.torsion_moment(dK, L["u"], L["n"]),
+                          rf"\Delta M_{{C{k}}}^{{({it})}}", "coupled")
+            dt = ch.let(f"dt_E{k}_{it}", lg.transverse_end_force(dK, dM_C, L["u"], L["n"],
+                                                                 L["D"]),
+                        rf"\Delta R_{{E{k}}}^{{\perp({it})}}", "coupled")
+            rhs_F -= dt
+            rhs_M -= cross(L["E"] - p, dt) + weight * ME
+            dts.append(dt)
+            dMCs.append(dM_C)
+        df = ch.solve(f"df_it{it}_", A_qr, sp.Matrix.vstack(rhs_F, rhs_M),
+                      rf"\Delta f^{{({it})}}", "coupled")
+        R_E_new, R_C_new = [], []
+        for i, L in enumerate(legs):
+            dR = m * (df[i] * L["u"] + dts[i])
+            R_E_new.append(R0[i][0] + dR)
+            R_C_new.append(R0[i][1] + dR)
+        if it == n_iter:
+            break
+        R_E, R_C = R_E_new, R_C_new
+        df_prev = df
+        mfr = [moments(L, R_E[i], R_C[i], it) for i, L in enumerate(legs)]
+    for i, L in enumerate(legs):
+        k = L["k"]
+        L["R_E_fr"], L["R_C_fr"] = R_E[i], R_C[i]
+        L["MfrE"], L["MfrC"] = mfr[i]
+        L["dR_E"] = m * (df[i] * L["u"] + dts[i])
+        L["dF"] = df[i]
+        L["M_C"] = ch.let(f"M_Cc{k}", R0[i][2] + m * dMCs[i], f"M_{{C{k}}}^{{fr}}", "coupled")
+        L["R_E"] = ch.let(f"R_Ec{k}", R_E_new[i], f"R_{{E{k}}}^{{fr}}", "coupled")
+        L["R_C"] = ch.let(f"R_Cc{k}", R_C_new[i], f"R_{{C{k}}}^{{fr}}", "coupled")
+    return df - df_prev
