@@ -42,12 +42,14 @@ def bushing_forces(R_3, M_3, u, s, b):
     return R_3 - N_b, N_b
 
 
-def bushing_friction_parts(v, N_a, N_b, c, mu, seal, eps):
-    """The friction force on the rod along u in its parts: (viscous, bushing Coulomb, seal), N."""
-    sgn = smooth_sign(v, eps)
+def bushing_friction_parts(v, N_a, N_b, c, mu, seal, sgn):
+    """The friction force on the rod along u in its parts: (viscous, bushing Coulomb, seal), N.
+
+    ``sgn``: the regularised sign of v (``friction.smooth_sign(v, eps)``).
+    """
     return -c * v, -mu * (norm(N_a) + norm(N_b)) * sgn, -seal * sgn
 
 
 def bushing_friction(v, N_a, N_b, c, mu, seal, eps):
     """The friction force on the rod along u, N (sum of ``bushing_friction_parts``)."""
-    return sp.Add(*bushing_friction_parts(v, N_a, N_b, c, mu, seal, eps))
+    return sp.Add(*bushing_friction_parts(v, N_a, N_b, c, mu, seal, smooth_sign(v, eps)))

@@ -41,6 +41,41 @@ class Factor:
     inv: list[sp.Symbol]
 
 
+def inline(name: str, expr, latex: str | None = None):
+    """The ``let`` that defines nothing: returns ``expr`` itself (for reading and testing).
+
+    Every derive/ function that names intermediate quantities takes a ``let`` argument with this
+    signature; the model passes ``Chain.scope(...)`` so that each quantity becomes one chain step,
+    computed once and shared by every later use.
+    """
+    return expr
+
+
+class Scope:
+    """A ``let`` bound to one chain, one equation group and (optionally) one leg.
+
+    ``scope(name, expr, latex)`` defines ``name`` (suffixed ``_k`` for leg k) in the chain; its
+    LaTeX gets the leg number as a last subscript (``D`` -> ``D_{3}``, ``a_{2}`` -> ``a_{2,3}``).
+    """
+
+    def __init__(self, chain: "Chain", equation: str, leg: int | None = None) -> None:
+        self.chain, self.equation, self.leg = chain, equation, leg
+
+    def __call__(self, name: str, expr, latex: str | None = None):
+        base = latex or name
+        if self.leg is not None:
+            name = f"{name}_{self.leg}"
+            if base.endswith("}") and "_{" in base:
+                base = f"{base[:-1]},{self.leg}}}"
+            else:
+                base = f"{base}_{{{self.leg}}}"
+        return self.chain.let(name, expr, base, self.equation)
+
+    def group(self, equation: str) -> "Scope":
+        """The same scope (chain, leg) for another equation group."""
+        return Scope(self.chain, equation, self.leg)
+
+
 class Chain:
     """Ordered definitions in terms of named inputs.
 
@@ -97,6 +132,10 @@ class Chain:
         target = self._symbol(base)
         self.steps.append(Step(name, [target], [sp.sympify(expr)], equation=equation))
         return target
+
+    def scope(self, equation: str, leg: int | None = None) -> Scope:
+        """A ``let`` for the quantities of one equation group (and one leg, numbered from 1)."""
+        return Scope(self, equation, leg)
 
     def factor(self, name: str, A: sp.Matrix, latex: str | None = None,
                equation: str = "") -> "Factor":

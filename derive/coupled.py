@@ -75,64 +75,77 @@ def coupling_weight(P, Q, mode):
     return m + (1 - m) * s
 
 
-def solve(ch, legs, A_qr, p, weight, moments, m, n_iter=N_ITERATIONS):
-    """Unrolled fixed point of the coupled equilibrium; updates every leg dict in place.
+def solve(ch, legs, A_qr, weight, moments, m, n_iter=N_ITERATIONS):
+    """Unrolled fixed point of the coupled equilibrium; updates every leg's outputs in place.
 
-    ``m``: the friction model (1 coupled, 0 paper). Friction is evaluated from the reactions
-    ``R^(0) + m (R^(k) - R^(0))`` and the reported reactions are the same: in the paper model
-    everything stays the frictionless (post-hoc) value, and only the effect
-    ``joint_friction_coupling`` (through ``weight``) adds the post-hoc moments' load to the
-    axial forces, as one solve (every iterate is the same; with a symbolic ``m = 0`` one
-    iteration is generated).
+    Parameters
+    ----------
+    ch : Chain
+    legs : list of model.Leg
+        With the frictionless ``R_E``, ``R_C``, ``M_C`` in ``leg.out``.
+    A_qr : Factor
+        The QR factor of the platform's 6x6 system in the axial forces.
+    weight : sympy expression
+        Weight of the friction moments in the equilibrium (``coupling_weight``).
+    moments : callable
+        ``moments(leg, R_E, R_C, it)``: the friction moments (M_frE, M_frC) of the leg from its
+        reactions, (3, 1) each, N m.
+    m : sympy expression
+        The friction model (1 coupled, 0 paper). Friction is evaluated from the reactions
+        ``R^(0) + m (R^(k) - R^(0))`` and the reported reactions are the same: in the paper
+        model everything stays the frictionless (post-hoc) value, and only the effect
+        ``joint_friction_coupling`` (through ``weight``) adds the post-hoc moments' load to the
+        axial forces, as one solve (every iterate is the same; with a symbolic ``m = 0`` one
+        iteration is generated).
 
-    ``legs``: dicts with the frictionless ``R_E``, ``R_C``, ``M_C`` and u, n, D, E, k;
-    ``moments(L, R_E, R_C, it)``: the friction moments (M_frE, M_frC) of leg L from its
-    reactions. Sets ``R_E``, ``R_C``, ``M_C`` (coupled), ``MfrE``, ``MfrC`` (in equilibrium
-    with them), ``R_E_fr`` and ``R_C_fr`` (the reactions the moments were computed from),
-    ``dR_E`` (change of R_E by friction) and ``dF`` (change of the axial force); returns the
-    change of the axial forces over the last iteration, (6, 1), N.
+    Returns
+    -------
+    (df, change) : sympy.Matrix (6, 1) each, N
+        The change of the axial forces by the joint friction, and its change over the last
+        iteration. Sets in ``leg.out``: ``R_E``, ``R_C``, ``M_C`` (coupled), ``MfrE``,
+        ``MfrC`` (in equilibrium with them), ``R_E_fr``, ``R_C_fr`` (the reactions the moments
+        were computed from) and ``dR_E`` (the change of R_E by friction).
     """
     if m == 0:
         n_iter = 1
-    R0 = [(L["R_E"], L["R_C"], L["M_C"]) for L in legs]
+    R0 = [(leg.out["R_E"], leg.out["R_C"], leg.out["M_C"]) for leg in legs]
     R_E = [r[0] for r in R0]
     R_C = [r[1] for r in R0]
-    mfr = [moments(L, R_E[i], R_C[i], 0) for i, L in enumerate(legs)]
+    mfr = [moments(leg, R_E[i], R_C[i], 0) for i, leg in enumerate(legs)]
     df_prev = sp.zeros(len(legs), 1)
     for it in range(1, n_iter + 1):
         rhs_F, rhs_M = sp.zeros(3, 1), sp.zeros(3, 1)
         dts, dMCs = [], []
-        for L, (ME, MC) in zip(legs, mfr):
-            k = L["k"]
+        for leg, (ME, MC) in zip(legs, mfr):
+            let = ch.scope("coupled", leg.k)
             dK = weight * (ME - MC)
-            dM_C = ch.let(f"dM_C{k}_{it}", lg.torsion_moment(dK, L["u"], L["n"]),
-                          rf"\Delta M_{{C{k}}}^{{({it})}}", "coupled")
-            dt = ch.let(f"dt_E{k}_{it}", lg.transverse_end_force(dK, dM_C, L["u"], L["n"],
-                                                                 L["D"]),
-                        rf"\Delta R_{{E{k}}}^{{\perp({it})}}", "coupled")
+            dM_C = let(f"dM_C{it}", lg.torsion_moment(dK, leg.u, leg.joint.n_dot_u),
+                       rf"\Delta M^{{({it})}}_{{C}}")
+            dt = let(f"dt_E{it}", lg.transverse_end_force(dK, dM_C, leg.u, leg.n, leg.D),
+                     rf"\Delta R^{{({it})}}_{{E\perp}}")
             rhs_F -= dt
-            rhs_M -= cross(L["E"] - p, dt) + weight * ME
+            rhs_M -= cross(leg.r_E, dt) + weight * ME
             dts.append(dt)
             dMCs.append(dM_C)
         df = ch.solve(f"df_it{it}_", A_qr, sp.Matrix.vstack(rhs_F, rhs_M),
                       rf"\Delta f^{{({it})}}", "coupled")
         R_E_new, R_C_new = [], []
-        for i, L in enumerate(legs):
-            dR = m * (df[i] * L["u"] + dts[i])
+        for i, leg in enumerate(legs):
+            dR = m * (df[i] * leg.u + dts[i])
             R_E_new.append(R0[i][0] + dR)
             R_C_new.append(R0[i][1] + dR)
         if it == n_iter:
             break
         R_E, R_C = R_E_new, R_C_new
         df_prev = df
-        mfr = [moments(L, R_E[i], R_C[i], it) for i, L in enumerate(legs)]
-    for i, L in enumerate(legs):
-        k = L["k"]
-        L["R_E_fr"], L["R_C_fr"] = R_E[i], R_C[i]
-        L["MfrE"], L["MfrC"] = mfr[i]
-        L["dR_E"] = m * (df[i] * L["u"] + dts[i])
-        L["dF"] = df[i]
-        L["M_C"] = ch.let(f"M_Cc{k}", R0[i][2] + m * dMCs[i], f"M_{{C{k}}}^{{fr}}", "coupled")
-        L["R_E"] = ch.let(f"R_Ec{k}", R_E_new[i], f"R_{{E{k}}}^{{fr}}", "coupled")
-        L["R_C"] = ch.let(f"R_Cc{k}", R_C_new[i], f"R_{{C{k}}}^{{fr}}", "coupled")
-    return df - df_prev
+        mfr = [moments(leg, R_E[i], R_C[i], it) for i, leg in enumerate(legs)]
+    for i, leg in enumerate(legs):
+        let = ch.scope("coupled", leg.k)
+        o = leg.out
+        o["R_E_fr"], o["R_C_fr"] = R_E[i], R_C[i]
+        o["MfrE"], o["MfrC"] = mfr[i]
+        o["dR_E"] = m * (df[i] * leg.u + dts[i])
+        o["M_C"] = let("M_C_fr", R0[i][2] + m * dMCs[i], r"M^{fr}_{C}")
+        o["R_E"] = let("R_E_fr", R_E_new[i], r"R^{fr}_{E}")
+        o["R_C"] = let("R_C_fr", R_C_new[i], r"R^{fr}_{C}")
+    return df, df - df_prev

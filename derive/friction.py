@@ -24,28 +24,93 @@ from .vectors import dot, norm
 
 
 def smooth_sign(w, eps):
-    """Regularised sign of a scalar or the unit vector of a vector: ``w / sqrt(w.w + eps^2)``."""
+    """Regularised sign of a scalar, or unit vector of a vector: ``w / sqrt(w.w + eps^2)``.
+
+    Parameters
+    ----------
+    w : sympy.Expr or sympy.Matrix, shape (3, 1)
+        A speed (m/s) or an angular velocity (rad/s, base frame).
+    eps : sympy.Expr
+        Regularisation speed, same unit as w.
+
+    Returns
+    -------
+    sympy.Expr or sympy.Matrix, shape (3, 1)
+        Dimensionless, magnitude below 1.
+    """
     if isinstance(w, sp.MatrixBase):
         return w / sp.sqrt(dot(w, w) + eps**2)
     return w / sp.sqrt(w**2 + eps**2)
 
 
 def joint_friction_moment(w, R, c_s, mu, r, eps):
-    """Eqs. (33)/(34): friction moment vector opposing the relative angular velocity w."""
+    """Eqs. (33)/(34): friction moment opposing the relative angular velocity w.
+
+    ``-(c_s w + mu r |R| sgn(w))`` with the regularised ``sgn`` of ``smooth_sign``.
+
+    Parameters
+    ----------
+    w : sympy.Matrix, shape (3, 1)
+        Relative angular velocity in the joint, base frame, rad/s.
+    R : sympy.Matrix, shape (3, 1)
+        Reaction force carried by the joint, base frame, N.
+    c_s : sympy.Expr
+        Viscous coefficient, N m s/rad.
+    mu : sympy.Expr
+        Coulomb coefficient, 1.
+    r : sympy.Expr
+        Joint radius, m.
+    eps : sympy.Expr
+        Regularisation speed, rad/s.
+
+    Returns
+    -------
+    sympy.Matrix, shape (3, 1)
+        N m, base frame.
+    """
     return -(c_s * w + mu * r * norm(R) * smooth_sign(w, eps))
 
 
 def joint_friction_scalar(w, R, c_s, mu, r, eps):
-    """The paper's signed scalar of (33)/(34): ``-(c_s |w| + mu r |R| |w| / sqrt(|w|^2 + eps^2))``."""
+    """The paper's signed scalar of (33)/(34): ``-(c_s |w| + mu r |R| |w| / sqrt(|w|^2 + eps^2))``.
+
+    Parameters are those of ``joint_friction_moment``. Returns a sympy.Expr, N m (negative =
+    opposing).
+    """
     speed2 = dot(w, w)
     return -(c_s * sp.sqrt(speed2) + mu * r * norm(R) * sp.sqrt(speed2 / (speed2 + eps**2)))
 
 
-def prismatic_friction(v, R_3, c, mu, eps):
-    """Eq. (35): friction force on the upper part along u, opposing the sliding speed v."""
-    return -(c * v + mu * norm(R_3) * smooth_sign(v, eps))
+def prismatic_friction(v, R_3, c, mu, sign):
+    """Eq. (35): friction force on the upper part along u, opposing the sliding speed v.
+
+    ``-(c v + mu |R_3| sgn(v))``.
+
+    Parameters
+    ----------
+    v : sympy.Expr
+        Sliding speed ``D'``, m/s.
+    R_3 : sympy.Matrix, shape (3, 1)
+        Transverse force of the prismatic joint, base frame, N.
+    c : sympy.Expr
+        Viscous coefficient, N s/m.
+    mu : sympy.Expr
+        Coulomb coefficient, 1.
+    sign : sympy.Expr
+        ``smooth_sign(v, eps)``, 1 (passed in so that the catalog's effects share it).
+
+    Returns
+    -------
+    sympy.Expr
+        N, along u.
+    """
+    return -(c * v + mu * norm(R_3) * sign)
 
 
 def prismatic_friction_scalar(v, R_3, c, mu, eps):
-    """The paper's signed scalar of (35): ``-(c |v| + mu |R_3| |sgn(v)|)``."""
+    """The paper's signed scalar of (35): ``-(c |v| + mu |R_3| |sgn(v)|)``.
+
+    Parameters are those of ``prismatic_friction`` with ``eps`` (m/s) the regularisation speed.
+    Returns a sympy.Expr, N (negative = opposing).
+    """
     return -(c * sp.sqrt(v**2) + mu * norm(R_3) * sp.sqrt(v**2 / (v**2 + eps**2)))

@@ -10,15 +10,33 @@ along ``n = (u - (u.a1) a1) / |u - (u.a1) a1|``, the direction of the joint's to
 Writing ``omega_L = u x u' + lam u`` (every angular velocity that turns u at the rate u') and
 imposing ``omega_L . n = 0`` gives ``lam = c q / (1 - c^2)`` with ``c = u.a1`` and
 ``q = (u x u').a1``; differentiating gives the leg's angular acceleration.
+
+Every function takes the chain's ``let`` (default ``inline``: plain expressions); the model
+passes a ``Chain.scope`` so that each named quantity is computed once. Vectors are SymPy 3x1
+matrices in the base frame, SI units.
 """
+
+from typing import NamedTuple
 
 import sympy as sp
 
+from .chain import inline
 from .vectors import cross, dot, norm
 
 
 def rotation_zxz(alpha, beta, gamma) -> sp.Matrix:
-    """``T = Rz(gamma) Rx(beta) Rz(alpha)``: the paper's matrix of entries b_ij (eq. 1)."""
+    """``T = Rz(gamma) Rx(beta) Rz(alpha)``: the paper's matrix of entries b_ij (eq. 1).
+
+    Parameters
+    ----------
+    alpha, beta, gamma : sympy.Expr
+        The z-x-z Euler angles, rad.
+
+    Returns
+    -------
+    sympy.Matrix, shape (3, 3)
+        Rotation platform frame -> base frame, 1.
+    """
     def rz(t):
         return sp.Matrix([[sp.cos(t), -sp.sin(t), 0], [sp.sin(t), sp.cos(t), 0], [0, 0, 1]])
 
@@ -29,7 +47,18 @@ def rotation_zxz(alpha, beta, gamma) -> sp.Matrix:
 
 
 def paper_b_entries(alpha, beta, gamma) -> sp.Matrix:
-    """The entries b_ij exactly as the paper prints them below eq. (1)."""
+    """The entries b_ij exactly as the paper prints them below eq. (1).
+
+    Parameters
+    ----------
+    alpha, beta, gamma : sympy.Expr
+        The z-x-z Euler angles, rad.
+
+    Returns
+    -------
+    sympy.Matrix, shape (3, 3)
+        The printed matrix [b_ij], 1 (equal to ``rotation_zxz``).
+    """
     c, s = sp.cos, sp.sin
     return sp.Matrix([
         [c(alpha) * c(gamma) - c(beta) * s(alpha) * s(gamma),
@@ -40,69 +69,268 @@ def paper_b_entries(alpha, beta, gamma) -> sp.Matrix:
     ])
 
 
-def platform_point(p: sp.Matrix, T: sp.Matrix, e: sp.Matrix) -> sp.Matrix:
-    """Eq. (1): a platform point in the base frame, ``E = p + T e``."""
-    return p + T * e
+def platform_point(p, T, e, let=inline, name="E"):
+    """Eq. (1): a platform point in the base frame, ``E = p + T e``.
+
+    Parameters
+    ----------
+    p : sympy.Matrix, shape (3, 1)
+        Platform frame origin, base frame, m.
+    T : sympy.Matrix, shape (3, 3)
+        Rotation platform -> base, 1.
+    e : sympy.Matrix, shape (3, 1)
+        The point in the platform frame, m.
+    let : callable
+        The chain's ``let``; defines ``r_<name>`` and ``<name>``.
+
+    Returns
+    -------
+    E : sympy.Matrix, shape (3, 1)
+        The point, base frame, m.
+    r : sympy.Matrix, shape (3, 1)
+        Its offset ``T e`` from p, base frame, m (for velocities and moments about p).
+    """
+    r = let(f"r_{name}", T * e, f"r_{{{name}}}")
+    return let(name, p + r, name), r
 
 
 def point_velocity(v, omega, r):
-    """Velocity of a platform point at offset ``r`` (base frame) from the frame origin."""
+    """Velocity of a point fixed to the platform: ``v + omega x r``.
+
+    Parameters
+    ----------
+    v : sympy.Matrix, shape (3, 1)
+        Velocity of the platform frame origin, base frame, m/s.
+    omega : sympy.Matrix, shape (3, 1)
+        Platform angular velocity, base frame, rad/s.
+    r : sympy.Matrix, shape (3, 1)
+        Offset of the point from the origin, base frame, m.
+
+    Returns
+    -------
+    sympy.Matrix, shape (3, 1)
+        m/s, base frame.
+    """
     return v + cross(omega, r)
 
 
 def point_acceleration(a, alpha, omega, r):
-    """Acceleration of a platform point at offset ``r``: ``a + alpha x r + omega x (omega x r)``."""
+    """Acceleration of a point fixed to the platform: ``a + alpha x r + omega x (omega x r)``.
+
+    Parameters
+    ----------
+    a : sympy.Matrix, shape (3, 1)
+        Acceleration of the platform frame origin, base frame, m/s^2.
+    alpha, omega : sympy.Matrix, shape (3, 1)
+        Platform angular acceleration (rad/s^2) and velocity (rad/s), base frame.
+    r : sympy.Matrix, shape (3, 1)
+        Offset of the point from the origin, base frame, m.
+
+    Returns
+    -------
+    sympy.Matrix, shape (3, 1)
+        m/s^2, base frame.
+    """
     return a + cross(alpha, r) + cross(omega, cross(omega, r))
 
 
-def leg_length_and_direction(E, C):
-    """Eqs. (8)-(10): the length D and the direction cosines u = (E - C) / D."""
-    r = E - C
-    D = norm(r)
-    return D, r / D
+def leg_length_and_direction(E, C, let=inline):
+    """Eqs. (8)-(10): the leg's length ``D = |E - C|`` and direction cosines ``u = (E - C) / D``.
 
+    Parameters
+    ----------
+    E, C : sympy.Matrix, shape (3, 1)
+        Platform joint and base joint, base frame, m.
+    let : callable
+        The chain's ``let``; defines ``D`` and ``u``.
 
-def leg_rates(u, D, vE, aE):
-    """First and second time derivatives of the leg's length and direction.
-
-    From ``E - C = D u`` with C fixed: ``D' = u.vE``, ``u' = (vE - D' u) / D``,
-    ``D'' = u'.vE + u.aE``, ``u'' = (aE - D'' u - 2 D' u') / D``.
+    Returns
+    -------
+    D : sympy.Expr
+        Leg length, m.
+    u : sympy.Matrix, shape (3, 1)
+        Unit vector from C to E, base frame, 1.
     """
-    D_dot = dot(u, vE)
-    u_dot = (vE - D_dot * u) / D
-    return D_dot, u_dot
+    r = E - C
+    D = let("D", norm(r), "D")
+    return D, let("u", r / D, "u")
 
 
-def leg_second_rates(u, u_dot, D, D_dot, vE, aE):
-    D_ddot = dot(u_dot, vE) + dot(u, aE)
-    u_ddot = (aE - D_ddot * u - 2 * D_dot * u_dot) / D
-    return D_ddot, u_ddot
+def leg_rates(u, D, vE, let=inline):
+    """First time derivatives of the leg's length and direction (C is fixed).
+
+    From ``E - C = D u``: ``D' = u . vE`` and ``u' = (vE - D' u) / D``.
+
+    Parameters
+    ----------
+    u : sympy.Matrix, shape (3, 1)
+        Unit leg direction, base frame, 1.
+    D : sympy.Expr
+        Leg length, m.
+    vE : sympy.Matrix, shape (3, 1)
+        Velocity of the platform joint E, base frame, m/s.
+    let : callable
+        The chain's ``let``; defines ``D_dot`` and ``u_dot``.
+
+    Returns
+    -------
+    D_dot : sympy.Expr
+        Sliding speed of the prismatic joint, m/s.
+    u_dot : sympy.Matrix, shape (3, 1)
+        Rate of the direction, base frame, 1/s.
+    """
+    D_dot = let("D_dot", dot(u, vE), r"\dot{D}")
+    return D_dot, let("u_dot", (vE - D_dot * u) / D, r"\dot{u}")
 
 
-def universal_joint_axes(u, a1):
-    """The second axis ``a2`` (in the leg) and the torsion direction ``n``; ``s2 = 1 - (u.a1)^2``."""
-    c = dot(u, a1)
-    s2 = 1 - c**2
-    a2 = cross(a1, u) / sp.sqrt(s2)
-    n = (u - c * a1) / sp.sqrt(s2)
-    return c, s2, a2, n
+def leg_second_rates(u, u_dot, D, D_dot, vE, aE, let=inline):
+    """Second time derivatives of the leg's length and direction.
+
+    ``D'' = u' . vE + u . aE`` and ``u'' = (aE - D'' u - 2 D' u') / D``.
+
+    Parameters
+    ----------
+    u, u_dot : sympy.Matrix, shape (3, 1)
+        Leg direction (1) and its rate (1/s), base frame.
+    D, D_dot : sympy.Expr
+        Leg length (m) and its rate (m/s).
+    vE, aE : sympy.Matrix, shape (3, 1)
+        Velocity (m/s) and acceleration (m/s^2) of E, base frame.
+    let : callable
+        The chain's ``let``; defines ``D_ddot`` and ``u_ddot``.
+
+    Returns
+    -------
+    D_ddot : sympy.Expr
+        m/s^2.
+    u_ddot : sympy.Matrix, shape (3, 1)
+        1/s^2, base frame.
+    """
+    D_ddot = let("D_ddot", dot(u_dot, vE) + dot(u, aE), r"\ddot{D}")
+    return D_ddot, let("u_ddot", (aE - D_ddot * u - 2 * D_dot * u_dot) / D, r"\ddot{u}")
 
 
-def leg_angular_velocity(u, u_dot, a1, c, s2):
-    """``omega_L = u x u' + lam u`` with ``lam`` such that ``omega_L . n = 0``."""
-    q = dot(cross(u, u_dot), a1)
-    lam = c * q / s2
-    return cross(u, u_dot) + lam * u, lam, q
+class UniversalJoint(NamedTuple):
+    """The universal joint's geometry for one leg (see ``universal_joint_axes``)."""
+
+    cos: sp.Expr          #: ``c = u . a1``, 1
+    sin2: sp.Expr         #: ``s^2 = 1 - c^2``, 1 (zero where the torsion moment is undefined)
+    inv_sin: sp.Expr      #: ``1 / s``, 1
+    a2: sp.Matrix         #: second axis, fixed in the leg, (3, 1), 1
+    n: sp.Matrix          #: torsion direction, (3, 1), 1
+    frame: sp.Matrix      #: leg body axes ``[a2, u x a2, u]`` as columns, (3, 3), 1
+
+    @property
+    def n_dot_u(self):
+        """``n . u = s``, the divisor of the torsion moment."""
+        return self.sin2 * self.inv_sin
 
 
-def leg_angular_acceleration(u, u_dot, u_ddot, a1, c, s2, lam, q):
-    """Time derivative of ``leg_angular_velocity`` (a1 is constant)."""
-    c_dot = dot(u_dot, a1)
-    q_dot = dot(cross(u, u_ddot), a1)
-    lam_dot = (c_dot * q + c * q_dot) / s2 + 2 * c**2 * c_dot * q / s2**2
-    return cross(u, u_ddot) + lam_dot * u + lam * u_dot
+def universal_joint_axes(u, a1, let=inline) -> UniversalJoint:
+    """The universal joint's second axis, torsion direction and the leg's body axes.
+
+    With ``c = u . a1`` and ``s = sqrt(1 - c^2)``: ``a2 = (a1 x u) / s`` (fixed in the leg),
+    ``n = (u - c a1) / s`` (the direction of the joint's torsion moment, perpendicular to a1 and
+    a2) and ``u x a2 = (a1 - c u) / s``. The leg's body axes are ``[a2, u x a2, u]``.
+
+    Parameters
+    ----------
+    u : sympy.Matrix, shape (3, 1)
+        Unit leg direction, base frame, 1.
+    a1 : sympy.Matrix, shape (3, 1)
+        Unit first axis of the joint (fixed in the base), base frame, 1.
+    let : callable
+        The chain's ``let``; defines ``cos_a1``, ``sin2_a1``, ``inv_sin_a1``, ``a2``, ``n`` and
+        ``b`` (= u x a2).
+
+    Returns
+    -------
+    UniversalJoint
+    """
+    c = let("cos_a1", dot(u, a1), "c")
+    s2 = let("sin2_a1", 1 - c**2, "s^{2}")
+    inv_s = let("inv_sin_a1", 1 / sp.sqrt(s2), "s^{-1}")
+    a2 = let("a2", cross(a1, u) * inv_s, "a_{2}")
+    n = let("n", (u - c * a1) * inv_s, "n")
+    b = let("b", (a1 - c * u) * inv_s, "b")
+    return UniversalJoint(c, s2, inv_s, a2, n, sp.Matrix.hstack(a2, b, u))
+
+
+def leg_angular_velocity(u, u_dot, a1, joint: UniversalJoint, let=inline):
+    """The leg's angular velocity ``omega_L = u x u' + lam u`` with ``omega_L . n = 0``.
+
+    ``lam = c q / s^2`` with ``q = (u x u') . a1``.
+
+    Parameters
+    ----------
+    u, u_dot : sympy.Matrix, shape (3, 1)
+        Leg direction (1) and its rate (1/s), base frame.
+    a1 : sympy.Matrix, shape (3, 1)
+        First axis of the universal joint, base frame, 1.
+    joint : UniversalJoint
+    let : callable
+        The chain's ``let``; defines ``u_x_u_dot``, ``q``, ``lam`` and ``omega_leg``.
+
+    Returns
+    -------
+    omega_L : sympy.Matrix, shape (3, 1)
+        rad/s, base frame.
+    lam : sympy.Expr
+        Spin rate about the leg's axis, rad/s.
+    q : sympy.Expr
+        ``(u x u') . a1``, 1/s.
+    """
+    turn = let("u_x_u_dot", cross(u, u_dot), r"u \times \dot{u}")
+    q = let("q", dot(turn, a1), "q")
+    lam = let("lam", joint.cos * q / joint.sin2, r"\lambda")
+    return let("omega_leg", turn + lam * u, r"\omega_{L}"), lam, q
+
+
+def leg_angular_acceleration(u, u_dot, u_ddot, a1, joint: UniversalJoint, lam, q, let=inline):
+    """Time derivative of ``leg_angular_velocity`` (a1 is constant).
+
+    ``alpha_L = u x u'' + lam' u + lam u'`` with ``lam' = (c' q + c q' + 2 c c' lam) / s^2``,
+    ``c' = u' . a1`` and ``q' = (u x u'') . a1``.
+
+    Parameters
+    ----------
+    u, u_dot, u_ddot : sympy.Matrix, shape (3, 1)
+        Leg direction (1) and its first (1/s) and second (1/s^2) rates, base frame.
+    a1 : sympy.Matrix, shape (3, 1)
+        First axis of the universal joint, base frame, 1.
+    joint : UniversalJoint
+    lam, q : sympy.Expr
+        From ``leg_angular_velocity``.
+    let : callable
+        The chain's ``let``; defines ``u_x_u_ddot``, ``lam_dot`` and ``alpha_leg``.
+
+    Returns
+    -------
+    sympy.Matrix, shape (3, 1)
+        rad/s^2, base frame.
+    """
+    turn = let("u_x_u_ddot", cross(u, u_ddot), r"u \times \ddot{u}")
+    c, c_dot, q_dot = joint.cos, dot(u_dot, a1), dot(turn, a1)
+    lam_dot = let("lam_dot", (c_dot * q + c * q_dot + 2 * c * c_dot * lam) / joint.sin2,
+                  r"\dot{\lambda}")
+    return let("alpha_leg", turn + lam_dot * u + lam * u_dot, r"\alpha_{L}")
 
 
 def point_on_leg_acceleration(s, s_dot, s_ddot, u, u_dot, u_ddot):
-    """Acceleration of ``s(t) u(t)``, a point at a (possibly varying) distance s along the leg."""
+    """Acceleration of the point ``C + s(t) u(t)`` at a (possibly varying) distance s from C.
+
+    ``s'' u + 2 s' u' + s u''``.
+
+    Parameters
+    ----------
+    s, s_dot, s_ddot : sympy.Expr
+        Distance from C (m) and its rates (m/s, m/s^2).
+    u, u_dot, u_ddot : sympy.Matrix, shape (3, 1)
+        Leg direction and its rates, base frame (1, 1/s, 1/s^2).
+
+    Returns
+    -------
+    sympy.Matrix, shape (3, 1)
+        m/s^2, base frame.
+    """
     return s_ddot * u + 2 * s_dot * u_dot + s * u_ddot

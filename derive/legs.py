@@ -20,34 +20,92 @@ platform's Jacobian). R_Ci then follows from (11)-(13).
 
 import sympy as sp
 
+from .mechanics import Wrench
 from .vectors import cross, dot
 
 
-def leg_required(parts, C, g_vec):
-    """Force and moment about C that the two parts of a leg need (right-hand sides above).
+def leg_required(wrenches, C):
+    """The wrench, about C, that the leg's parts need: the sum of their required wrenches.
 
-    ``parts`` is a list of dicts with keys m, m_weight, c (centre), a_c and moment (the
-    moment about the centre that the part's rotation needs, ``platform.inertial_moment``).
+    Parameters
+    ----------
+    wrenches : sequence of mechanics.Wrench
+        Required wrench of each part (``Body.required_wrench``), any reference point.
+    C : sympy.Matrix, shape (3, 1)
+        Base joint, base frame, m.
+
+    Returns
+    -------
+    mechanics.Wrench
+        ``F_leg`` (N) and ``K`` (N m, about C), base frame: the right-hand sides above.
     """
-    force = sp.zeros(3, 1)
-    moment = sp.zeros(3, 1)
-    for k in parts:
-        f = k["m"] * k["a_c"] - k["m_weight"] * g_vec
-        force += f
-        moment += cross(k["c"] - C, f) + k["moment"]
-    return force, moment
+    total = Wrench(sp.zeros(3, 1), sp.zeros(3, 1), C)
+    for w in wrenches:
+        total = total + w
+    return total
 
 
-def torsion_moment(K, u, n):
-    """The universal joint's constraint moment along n: ``M_C = (K.u) / (n.u)``."""
-    return dot(K, u) / dot(n, u)
+def torsion_moment(K, u, n_dot_u):
+    """The universal joint's constraint moment along n: ``M_C = (K . u) / (n . u)``.
+
+    Parameters
+    ----------
+    K : sympy.Matrix, shape (3, 1)
+        Moment about C the leg needs, base frame, N m.
+    u : sympy.Matrix, shape (3, 1)
+        Unit leg direction, base frame, 1.
+    n_dot_u : sympy.Expr
+        ``n . u`` (``UniversalJoint.n_dot_u`` = ``sqrt(1 - (u . a1)^2)``), 1.
+
+    Returns
+    -------
+    sympy.Expr
+        N m.
+    """
+    return dot(K, u) / n_dot_u
 
 
 def transverse_end_force(K, M_C, u, n, D):
-    """The part of R_E perpendicular to the leg: ``u x (K - M_C n) / D``."""
+    """The part of R_E perpendicular to the leg: ``u x (K - M_C n) / D``.
+
+    Parameters
+    ----------
+    K : sympy.Matrix, shape (3, 1)
+        Moment about C the leg needs, base frame, N m.
+    M_C : sympy.Expr
+        Torsion moment of the universal joint, N m.
+    u, n : sympy.Matrix, shape (3, 1)
+        Unit leg direction and torsion direction, base frame, 1.
+    D : sympy.Expr
+        Leg length, m.
+
+    Returns
+    -------
+    sympy.Matrix, shape (3, 1)
+        N, base frame.
+    """
     return cross(u, K - M_C * n) / D
 
 
 def leg_residual(R_E, R_C, M_C, u, n, D, F_leg, K):
-    """Residual of (11)-(16) for one leg; zero at equilibrium."""
+    """Residual of (11)-(16) for one leg; zero at equilibrium.
+
+    Parameters
+    ----------
+    R_E, R_C : sympy.Matrix, shape (3, 1)
+        Force of the leg on the platform at E, of the base on the leg at C, base frame, N.
+    M_C : sympy.Expr
+        Torsion moment, N m.
+    u, n : sympy.Matrix, shape (3, 1)
+        Leg direction and torsion direction, base frame, 1.
+    D : sympy.Expr
+        Leg length, m.
+    F_leg, K : sympy.Matrix, shape (3, 1)
+        Required force (N) and moment about C (N m), base frame.
+
+    Returns
+    -------
+    sympy.Matrix, shape (6, 1)
+        Force (N) and moment (N m) residuals.
+    """
     return sp.Matrix.vstack(R_C - R_E - F_leg, -D * cross(u, R_E) + M_C * n - K)

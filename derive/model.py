@@ -14,11 +14,18 @@ Two modes share every equation and differ only in where the bodies' acceleration
 Inputs (each a named block; the generated functions take them concatenated, see ``LAYOUT``):
 state ``x`` (24 per step), parameters ``P`` (platform description), effect parameters ``Q``
 (effects.CATALOG), and in paper mode the constants ``K``.
+
+``build`` reads as the physics runs: ``_platform`` (what platform and payload need), ``_leg``
+for each leg (kinematics, the parts' needs, the reduction to one unknown), ``_solve`` (the 6x6
+system in the axial forces), ``_reactions`` (every joint's reaction), ``_friction`` and
+``_coupling`` (joint friction carried by the actuators: the coupled model's fixed point,
+derive/coupled.py, and the prismatic friction of either model from the final reactions). Each calls the equation groups'
+functions through a ``Chain.scope`` so that every named quantity is computed once.
 """
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import sympy as sp
 
@@ -29,9 +36,9 @@ from . import friction as fr
 from . import kinematics as kin
 from . import leg_frames as lf
 from . import legs as lg
-from . import platform as pf
 from . import prismatic as pr
 from .chain import Chain
+from .mechanics import Body, Inertia, Wrench
 from .vectors import cross, dot, norm
 
 N_LEGS = 6
@@ -141,6 +148,93 @@ def _row(M: sp.Matrix, i: int) -> sp.Matrix:
     return M[i, :].T
 
 
+STATE_LATEX = {"position": "p", "rotation": "T", "velocity": "v", "omega": r"\omega",
+               "acceleration": "a", "alpha": r"\alpha"}
+PARAMETER_LATEX = {
+    "gravity": "g", "base_joints": "C", "platform_joints": "e", "universal_axes": "a_{1}",
+    "platform_mass": "m_{M}", "payload_mass": "m_{L}", "platform_inertia": "I_{M}",
+    "payload_inertia": "I_{L}", "platform_com": "c_{M}", "payload_com": "c_{L}",
+    "lower_mass": "m_{4}", "upper_mass": "m_{2}", "lower_com": "l_{4}", "upper_com": "l_{2}",
+    "lower_frac": "k_{4}", "upper_frac": "k_{2}", "lower_inertia": "I_{4}",
+    "upper_inertia": "I_{2}", "leg_weight": "w_{leg}", "prismatic_point": "k_{3}",
+    "joint_viscous": "c_{s}", "joint_coulomb": r"\mu", "joint_radius": "r",
+    "prismatic_viscous": "c_{p}", "prismatic_coulomb": r"\mu_{p}",
+    "joint_eps": r"\varepsilon_{\omega}", "prismatic_eps": r"\varepsilon_{v}",
+    "friction_model": "m_{fr}", "bushing_offset": "s_{a}", "bushing_spacing": "b",
+    "prismatic_seal": "F_{seal}"}
+CONSTANT_LATEX = {"platform_acc": "a^{*}", "platform_alpha": r"\alpha^{*}",
+                  "leg_acc": "a^{*}_{leg}", "leg_alpha": r"\alpha^{*}_{leg}",
+                  "joint_speed": r"\omega^{*}"}
+
+
+@dataclass
+class Inputs:
+    """The chain's inputs by name: state X, parameters P, effect parameters Q, constants K."""
+
+    mode: str
+    X: dict
+    P: dict
+    Q: dict
+    K: dict | None
+    g_vec: sp.Matrix     # gravitational acceleration, base frame, (3, 1), m/s^2
+
+    @property
+    def kinematic(self) -> bool:
+        return self.mode == "kinematic"
+
+
+@dataclass
+class PlatformPart:
+    """Platform and payload: their bodies and the wrench about p they need, eqs. (2)-(7)."""
+
+    p: sp.Matrix
+    T: sp.Matrix
+    platform: Body
+    payload: Body
+    alpha: sp.Matrix          # angular acceleration entering the rotation moment
+    omega: sp.Matrix          # angular velocity entering it (zero in paper mode)
+    required: Wrench          # F_req, M_req about p
+
+
+@dataclass
+class Leg:
+    """Leg k's quantities, filled block by block (paper symbols: C, E, D, u, n, R_E ...)."""
+
+    k: int
+    C: sp.Matrix
+    a1: sp.Matrix
+    E: sp.Matrix
+    r_E: sp.Matrix                 # E - p, base frame
+    D: sp.Expr
+    u: sp.Matrix
+    joint: kin.UniversalJoint
+    D_dot: sp.Expr
+    omega_leg: sp.Matrix
+    alpha_leg: sp.Matrix
+    lower: Body
+    upper: Body
+    upper_need: Wrench             # the upper part's required wrench
+    F_leg: sp.Matrix
+    K: sp.Matrix
+    M_C: sp.Expr
+    t_E: sp.Matrix                 # R_E's part perpendicular to u
+    out: dict = field(default_factory=dict)   # reactions and friction, by output name
+
+    @property
+    def n(self) -> sp.Matrix:
+        return self.joint.n
+
+    @property
+    def parts(self) -> tuple[Body, Body]:
+        return self.lower, self.upper
+
+    def __getattr__(self, name):
+        out = self.__dict__.get("out", {})
+        if name in out:
+            return out[name]
+        raise AttributeError(name)
+
+
 @dataclass
 class Model:
     """A built chain with its named inputs and outputs (Matrices of chain symbols)."""
@@ -149,220 +243,245 @@ class Model:
     chain: Chain
     inputs: dict[str, tuple]          # input vector name -> block specs
     outputs: dict[str, sp.Matrix]
-    symbols: dict                     # named intermediate symbols, for tests and notebooks
+    symbols: dict                     # named intermediate quantities, for tests and notebooks
 
 
 def build(mode: str = "kinematic") -> Model:
-    """Derive the model in ``mode`` ("kinematic" or "paper")."""
+    """Derive the model in ``mode`` ("kinematic" or "paper").
+
+    Parameters
+    ----------
+    mode : {"kinematic", "paper"}
+        Where the bodies' accelerations come from (module docstring).
+
+    Returns
+    -------
+    Model
+        The chain, its inputs (``x``, ``P``, ``Q`` and in paper mode ``K``, laid out as
+        ``STATE``, ``PARAMETERS``, the effect catalog and ``PAPER_CONSTANTS``) and the outputs of
+        ``OUTPUTS`` (per step, legs in order, base frame, SI units).
+    """
     if mode not in ("kinematic", "paper"):
         raise ValueError(f"unknown mode {mode!r}")
     ch = Chain()
-    latex = {"position": "p", "rotation": "T", "velocity": "v", "omega": r"\omega",
-             "acceleration": "a", "alpha": r"\alpha"}
-    X = {n: _block(ch, n, s, latex.get(n)) for n, s, _, _ in STATE}
-    plat_latex = {"gravity": "g", "base_joints": "C", "platform_joints": "e",
-                  "universal_axes": "a_{1}", "platform_mass": "m_{M}", "payload_mass": "m_{L}",
-                  "platform_inertia": "I_{M}", "payload_inertia": "I_{L}",
-                  "platform_com": "c_{M}", "payload_com": "c_{L}",
-                  "lower_mass": "m_{4}", "upper_mass": "m_{2}", "lower_com": "l_{4}",
-                  "upper_com": "l_{2}", "lower_frac": "k_{4}", "upper_frac": "k_{2}",
-                  "lower_inertia": "I_{4}", "upper_inertia": "I_{2}", "leg_weight": "w_{leg}",
-                  "prismatic_point": "k_{3}", "joint_viscous": "c_{s}", "joint_coulomb": r"\mu",
-                  "joint_radius": "r", "prismatic_viscous": "c_{p}",
-                  "prismatic_coulomb": r"\mu_{p}", "joint_eps": r"\varepsilon_{\omega}",
-                  "prismatic_eps": r"\varepsilon_{v}"}
-    P = {n: _block(ch, n, s, plat_latex.get(n)) for n, s, _, _ in PARAMETERS}
+    inp = _inputs(ch, mode)
+    platform = _platform(ch, inp)
+    legs = [_leg(ch, inp, platform, i) for i in range(N_LEGS)]
+    A, A_qr, f = _solve(ch, platform, legs)
+    for i, leg in enumerate(legs):
+        _reactions(ch, inp, leg, f[i], legs[(i + 1) % N_LEGS])
+    for leg in legs:
+        _friction(ch, inp, leg)
+    df = _coupling(ch, inp, legs, A_qr)
+    for leg in legs:
+        _actuator_force(ch, inp, leg, df[leg.k - 1])
+    outputs = {name: sp.Matrix([v for leg in legs for v in _flat(leg.out[name])])
+               for name, *_ in OUTPUTS}
+    inputs = {"x": STATE, "P": PARAMETERS,
+              "Q": tuple((n, (), "", "") for n in fx.parameter_names())}
+    if mode == "paper":
+        inputs["K"] = PAPER_CONSTANTS
+    symbols = dict(legs=legs, f=f, df=df, A=A, F_req=platform.required.force,
+                   M_req=platform.required.moment, p=platform.p, T=platform.T, X=inp.X,
+                   P=inp.P, Q=inp.Q, K=inp.K, g_vec=inp.g_vec, platform=platform,
+                   r_M=platform.platform.centre - platform.p,
+                   r_L=platform.payload.centre - platform.p,
+                   a_M=platform.platform.acceleration, a_L=platform.payload.acceleration,
+                   J_M=platform.platform.inertia.in_base(),
+                   J_L=platform.payload.inertia.in_base(),
+                   alpha_platform=platform.alpha, omega_inertial=platform.omega)
+    return Model(mode, ch, inputs, outputs, symbols)
+
+
+def _flat(value) -> list:
+    return list(value) if isinstance(value, sp.MatrixBase) else [value]
+
+
+def _inputs(ch: Chain, mode: str) -> Inputs:
+    """Declare the input blocks, in the order of the flat input vectors."""
+    X = {n: _block(ch, n, s, STATE_LATEX.get(n)) for n, s, _, _ in STATE}
+    P = {n: _block(ch, n, s, PARAMETER_LATEX.get(n)) for n, s, _, _ in PARAMETERS}
     q_names = fx.parameter_names()
     Qm = ch.input("effects", len(q_names), 1, "Q")
-    Q = {n: Qm[k] for k, n in enumerate(q_names)}
-    inputs = {"x": STATE, "P": PARAMETERS,
-              "Q": tuple((n, (), "", "") for n in q_names)}
+    Q = {n: Qm[j] for j, n in enumerate(q_names)}
     K = None
     if mode == "paper":
-        klatex = {"platform_acc": "a^{*}", "platform_alpha": r"\alpha^{*}",
-                  "leg_acc": "a^{*}_{leg}", "leg_alpha": r"\alpha^{*}_{leg}",
-                  "joint_speed": r"\omega^{*}"}
-        K = {n: _block(ch, n, s, klatex[n]) for n, s, _, _ in PAPER_CONSTANTS}
-        inputs["K"] = PAPER_CONSTANTS
+        K = {n: _block(ch, n, s, CONSTANT_LATEX[n]) for n, s, _, _ in PAPER_CONSTANTS}
+    return Inputs(mode, X, P, Q, K, sp.Matrix([0, 0, -P["gravity"]]))
 
-    g_vec = sp.Matrix([0, 0, -P["gravity"]])
+
+def _platform(ch: Chain, inp: Inputs) -> PlatformPart:
+    """Platform and payload: centres (1), accelerations, the wrench they need (2)-(7)."""
+    X, P, Q = inp.X, inp.P, inp.Q
     p, T = X["position"], X["rotation"]
-    v, w, a, al = X["velocity"], X["omega"], X["acceleration"], X["alpha"]
-    eq_kin = "kinematics"
-
-    # ---- platform and payload: centres, accelerations, inertias (eq. 1 and Newton-Euler)
+    geometry, motion, need = ch.scope("1"), ch.scope("kinematics"), ch.scope("2-7")
     offset = sp.Matrix([Q["payload_offset.x"], Q["payload_offset.y"], Q["payload_offset.z"]])
-    r_M = ch.let("r_M", T * P["platform_com"], "r_{M}", "1")
-    r_L = ch.let("r_L", T * (P["payload_com"] + offset), "r_{L}", "1")
-    J_M = T * P["platform_inertia"] * T.T
-    J_L = T * P["payload_inertia"] * T.T
-    if mode == "kinematic":
-        a_M = ch.let("a_M", kin.point_acceleration(a, al, w, r_M), "a_{M}", eq_kin)
-        a_L = ch.let("a_L", kin.point_acceleration(a, al, w, r_L), "a_{L}", eq_kin)
-        al_P, w_in = al, w
+    r_M = geometry("r_M", T * P["platform_com"], "r_{M}")
+    r_L = geometry("r_L", T * (P["payload_com"] + offset), "r_{L}")
+    if inp.kinematic:
+        a, alpha, omega = X["acceleration"], X["alpha"], X["omega"]
+        a_M = motion("a_M", kin.point_acceleration(a, alpha, omega, r_M), "a_{M}")
+        a_L = motion("a_L", kin.point_acceleration(a, alpha, omega, r_L), "a_{L}")
     else:
-        a_M = a_L = K["platform_acc"]
-        al_P, w_in = K["platform_alpha"], sp.zeros(3, 1)
+        a_M = a_L = inp.K["platform_acc"]
+        alpha, omega = inp.K["platform_alpha"], sp.zeros(3, 1)
     m_M, m_L = P["platform_mass"], P["payload_mass"]
-    turn = ch.let("M_rot", pf.inertial_moment(T, P["platform_inertia"] + P["payload_inertia"],
-                                              al_P, w_in), "M_{rot}", "2-7")
-    F_Mr, M_Mr = pf.body_required_wrench(m_M, m_M, r_M, a_M, g_vec, turn)
-    F_Lr, M_Lr = pf.body_required_wrench(m_L, m_L, r_L, a_L, g_vec, sp.zeros(3, 1))
-    F_req = ch.let("F_req", F_Mr + F_Lr, "F_{req}", "2-7")
-    M_req = ch.let("M_req", M_Mr + M_Lr, "M_{req}", "2-7")
+    platform = Body(m_M, m_M, Inertia(P["platform_inertia"], T, p + r_M), a_M, alpha, omega)
+    payload = Body(m_L, m_L, Inertia(P["payload_inertia"], T, p + r_L), a_L, alpha, omega)
+    # One rotation moment for both: they turn together, in the same axes.
+    both = Inertia(P["platform_inertia"] + P["payload_inertia"], T, p)
+    turn = both.rotation_moment(alpha, omega, need, "M_rot", "M_{rot}")
+    required = (platform.required_wrench(inp.g_vec, turn)
+                + payload.required_wrench(inp.g_vec, sp.zeros(3, 1))).about(p)
+    required = Wrench(need("F_req", required.force, "F_{req}"),
+                      need("M_req", required.moment, "M_{req}"), p)
+    return PlatformPart(p, T, platform, payload, alpha, omega, required)
 
-    # ---- legs: kinematics (1), (8)-(10) and the required loads (11)-(17)
-    legs = []
-    for i in range(N_LEGS):
-        k = i + 1
-        C, e, a1 = _row(P["base_joints"], i), _row(P["platform_joints"], i), \
-            _row(P["universal_axes"], i)
-        r_E = ch.let(f"r_E{k}", T * e, f"r_{{E{k}}}", "1")
-        E = ch.let(f"E{k}", p + r_E, f"E_{{{k}}}", "1")
-        D = ch.let(f"D{k}", norm(E - C), f"D_{{{k}}}", "8-10")
-        u = ch.let(f"u{k}", (E - C) / D, f"u_{{{k}}}", "8-10")
-        vE = ch.let(f"vE{k}", kin.point_velocity(v, w, r_E), f"v_{{E{k}}}", eq_kin)
-        D_dot = ch.let(f"D_dot{k}", dot(u, vE), rf"\dot{{D}}_{{{k}}}", eq_kin)
-        u_dot = ch.let(f"u_dot{k}", (vE - D_dot * u) / D, rf"\dot{{u}}_{{{k}}}", eq_kin)
-        c, s2, a2, n = kin.universal_joint_axes(u, a1)
-        c = ch.let(f"c{k}", c, f"c_{{{k}}}", eq_kin)
-        s2 = ch.let(f"s2_{k}", 1 - c**2, f"s^{{2}}_{{{k}}}", eq_kin)
-        a2 = ch.let(f"a2_{k}", cross(a1, u) / sp.sqrt(s2), f"a_{{2,{k}}}", eq_kin)
-        n = ch.let(f"n{k}", (u - c * a1) / sp.sqrt(s2), f"n_{{{k}}}", eq_kin)
-        q = ch.let(f"q{k}", dot(cross(u, u_dot), a1), f"q_{{{k}}}", eq_kin)
-        lam = ch.let(f"lam{k}", c * q / s2, rf"\lambda_{{{k}}}", eq_kin)
-        w_L = ch.let(f"omega_L{k}", cross(u, u_dot) + lam * u, rf"\omega_{{L{k}}}", eq_kin)
-        B = sp.Matrix.hstack(a2, cross(u, a2), u)
-        s4 = P["lower_com"] + P["lower_frac"] * D
-        s2E = P["upper_com"] + P["upper_frac"] * D
-        c4 = C + s4 * u
-        c2 = E - s2E * u
-        if mode == "kinematic":
-            aE = ch.let(f"aE{k}", kin.point_acceleration(a, al, w, r_E), f"a_{{E{k}}}", eq_kin)
-            D_ddot = ch.let(f"D_ddot{k}", dot(u_dot, vE) + dot(u, aE), rf"\ddot{{D}}_{{{k}}}",
-                            eq_kin)
-            u_ddot = ch.let(f"u_ddot{k}", (aE - D_ddot * u - 2 * D_dot * u_dot) / D,
-                            rf"\ddot{{u}}_{{{k}}}", eq_kin)
-            al_L = ch.let(f"alpha_L{k}", kin.leg_angular_acceleration(
-                u, u_dot, u_ddot, a1, c, s2, lam, q), rf"\alpha_{{L{k}}}", eq_kin)
-            a4 = ch.let(f"a4_{k}", kin.point_on_leg_acceleration(
-                s4, P["lower_frac"] * D_dot, P["lower_frac"] * D_ddot, u, u_dot, u_ddot),
-                f"a_{{4,{k}}}", eq_kin)
-            a2c = ch.let(f"a2c_{k}", aE - kin.point_on_leg_acceleration(
-                s2E, P["upper_frac"] * D_dot, P["upper_frac"] * D_ddot, u, u_dot, u_ddot),
-                f"a_{{c2,{k}}}", eq_kin)
-            w_Lin = w_L
-        else:
-            a4 = a2c = K["leg_acc"]
-            al_L, w_Lin = K["leg_alpha"], sp.zeros(3, 1)
-        mg4 = P["leg_weight"] * P["lower_mass"] + Q["leg_weight.lower_mass"]
-        mg2 = P["leg_weight"] * P["upper_mass"] + Q["leg_weight.upper_mass"]
-        turn4 = ch.let(f"M_rot4_{k}", pf.inertial_moment(B, P["lower_inertia"], al_L, w_Lin),
-                       f"M_{{rot4,{k}}}", "17")
-        turn2 = ch.let(f"M_rot2_{k}", pf.inertial_moment(B, P["upper_inertia"], al_L, w_Lin),
-                       f"M_{{rot2,{k}}}", "17")
-        # J: the parts' inertias in base axes, for reading and for the tests (not computed)
-        parts = [dict(m=P["lower_mass"], m_weight=mg4, J=B * P["lower_inertia"] * B.T, c=c4,
-                      a_c=a4, alpha=al_L, omega=w_Lin, moment=turn4),
-                 dict(m=P["upper_mass"], m_weight=mg2, J=B * P["upper_inertia"] * B.T, c=c2,
-                      a_c=a2c, alpha=al_L, omega=w_Lin, moment=turn2)]
-        F_leg_e, K_leg_e = lg.leg_required(parts, C, g_vec)
-        F_leg = ch.let(f"F_leg{k}", F_leg_e, f"F_{{leg,{k}}}", "11-17")
-        K_leg = ch.let(f"K{k}", K_leg_e, f"K_{{{k}}}", "11-17")
-        M_C = ch.let(f"M_C{k}", lg.torsion_moment(K_leg, u, n), f"M_{{C{k}}}", "11-17")
-        t_E = ch.let(f"t_E{k}", lg.transverse_end_force(K_leg, M_C, u, n, D),
-                     rf"R_{{E{k}}}^{{\perp}}", "11-17")
-        legs.append(dict(k=k, C=C, e=e, a1=a1, a2=a2, E=E, D=D, u=u, n=n, D_dot=D_dot, w_L=w_L,
-                         w_Lin=w_Lin, al_L=al_L, s2=s2, turn2=turn2, c2=c2, a2c=a2c, mg2=mg2,
-                         F_leg=F_leg, K=K_leg, M_C=M_C, t_E=t_E, parts=parts))
 
-    # ---- the 6x6 system in the axial forces, from (2)-(7)
+def _leg(ch: Chain, inp: Inputs, platform: PlatformPart, i: int) -> Leg:
+    """Leg i: kinematics (1), (8)-(10), its parts' needs (11)-(17), R_E up to its axial part."""
+    k = i + 1
+    X, P, Q = inp.X, inp.P, inp.Q
+    geometry, lengths = ch.scope("1", k), ch.scope("8-10", k)
+    motion, need = ch.scope("kinematics", k), ch.scope("11-17", k)
+    C, e, a1 = (_row(P[n], i) for n in ("base_joints", "platform_joints", "universal_axes"))
+    E, r_E = kin.platform_point(platform.p, platform.T, e, geometry)
+    D, u = kin.leg_length_and_direction(E, C, lengths)
+    joint = kin.universal_joint_axes(u, a1, motion)
+    v_E = motion("v_E", kin.point_velocity(X["velocity"], X["omega"], r_E), "v_{E}")
+    D_dot, u_dot = kin.leg_rates(u, D, v_E, motion)
+    omega_leg, lam, q = kin.leg_angular_velocity(u, u_dot, a1, joint, motion)
+    # the parts' centres, as distances from C along the leg
+    k_low, k_up = P["lower_frac"], 1 - P["upper_frac"]
+    s_low = P["lower_com"] + k_low * D
+    s_up = k_up * D - P["upper_com"]
+    if inp.kinematic:
+        a_E = motion("a_E", kin.point_acceleration(X["acceleration"], X["alpha"], X["omega"],
+                                                   r_E), "a_{E}")
+        D_ddot, u_ddot = kin.leg_second_rates(u, u_dot, D, D_dot, v_E, a_E, motion)
+        alpha_leg = kin.leg_angular_acceleration(u, u_dot, u_ddot, a1, joint, lam, q, motion)
+        a_low = motion("a_lower", kin.point_on_leg_acceleration(
+            s_low, k_low * D_dot, k_low * D_ddot, u, u_dot, u_ddot), "a_{4}")
+        a_up = motion("a_upper", kin.point_on_leg_acceleration(
+            s_up, k_up * D_dot, k_up * D_ddot, u, u_dot, u_ddot), "a_{c2}")
+        omega_in = omega_leg
+    else:
+        a_low = a_up = inp.K["leg_acc"]
+        alpha_leg, omega_in = inp.K["leg_alpha"], sp.zeros(3, 1)
+    weight = P["leg_weight"]
+    lower = Body(P["lower_mass"], weight * P["lower_mass"] + Q["leg_weight.lower_mass"],
+                 Inertia(P["lower_inertia"], joint.frame, C + s_low * u), a_low, alpha_leg,
+                 omega_in)
+    upper = Body(P["upper_mass"], weight * P["upper_mass"] + Q["leg_weight.upper_mass"],
+                 Inertia(P["upper_inertia"], joint.frame, C + s_up * u), a_up, alpha_leg,
+                 omega_in)
+    rotation = ch.scope("17", k)
+    rates = lower.inertia.body_rates(alpha_leg, omega_in, rotation, "leg_body")
+    lower_need = lower.required_wrench(inp.g_vec, lower.inertia.rotation_moment(
+        alpha_leg, omega_in, rotation, "M_rot4", "M_{rot4}", rates))
+    upper_need = upper.required_wrench(inp.g_vec, upper.inertia.rotation_moment(
+        alpha_leg, omega_in, rotation, "M_rot2", "M_{rot2}", rates))
+    total = lg.leg_required([lower_need, upper_need], C)
+    F_leg = need("F_leg", total.force, "F_{leg}")
+    K = need("K", total.moment, "K")
+    M_C = need("M_C", lg.torsion_moment(K, u, joint.n_dot_u), "M_{C}")
+    t_E = need("t_E", lg.transverse_end_force(K, M_C, u, joint.n, D), r"R_{E}^{\perp}")
+    return Leg(k, C, a1, E, r_E, D, u, joint, D_dot, omega_leg, alpha_leg, lower, upper,
+               upper_need, F_leg, K, M_C, t_E)
+
+
+def _on_platform(platform: PlatformPart, leg: Leg, force, moment=None) -> Wrench:
+    """A wrench the leg puts on the platform at E (its point written p + r_E)."""
+    return Wrench(force, moment if moment is not None else sp.zeros(3, 1),
+                  platform.p + leg.r_E)
+
+
+def _solve(ch: Chain, platform: PlatformPart, legs: list[Leg]):
+    """Eqs. (2)-(7) as a 6x6 system in the axial forces f: ``A f = required - transverse``."""
     A = sp.zeros(6, 6)
-    rhs_F, rhs_M = sp.Matrix(F_req), sp.Matrix(M_req)
-    for i, L in enumerate(legs):
-        A[:3, i] = L["u"]
-        A[3:, i] = cross(L["E"] - p, L["u"])
-        rhs_F -= L["t_E"]
-        rhs_M -= cross(L["E"] - p, L["t_E"])
+    rest = platform.required
+    for i, leg in enumerate(legs):
+        A[:3, i] = leg.u
+        A[3:, i] = cross(leg.r_E, leg.u)
+        rest = rest - _on_platform(platform, leg, leg.t_E)
     A_qr = ch.factor("A", A, "A", "2-7")
-    f = ch.solve("f", A_qr, sp.Matrix.vstack(rhs_F, rhs_M), "f", "2-7")
+    f = ch.solve("f", A_qr, sp.Matrix.vstack(rest.force, rest.moment), "f", "2-7")
+    return A, A_qr, f
 
-    P3 = P["prismatic_point"]
-    for i, L in enumerate(legs):
-        k = L["k"]
-        L["R_E"] = ch.let(f"R_E{k}", f[i] * L["u"] + L["t_E"], f"R_{{E{k}}}", "11-17")
-        L["R_C"] = ch.let(f"R_C{k}", L["R_E"] + L["F_leg"], f"R_{{C{k}}}", "11-17")
-        L["P3"] = L["C"] + P3 * L["D"] * L["u"]
-        F_ax, R_3, M_3 = pr.upper_part_loads(L["R_E"], L["u"], L["E"], L["P3"],
-                                             P["upper_mass"], L["mg2"], L["a2c"], L["c2"],
-                                             L["turn2"], g_vec)
-        L["F0"] = ch.let(f"F0_{k}", F_ax, f"F_{{0,{k}}}", "28-32")
-        L["R_3"] = ch.let(f"R_3{k}", R_3, f"R_{{3,{k}}}", "28-32")
-        L["M_3"] = ch.let(f"M_3{k}", M_3, f"M_{{3,{k}}}", "28-32")
 
-    # ---- friction (33)-(35); in the coupled model it loads the mechanism (derive/coupled.py)
-    m_model = P["friction_model"] if mode == "kinematic" else sp.S.Zero
-    for L in legs:
-        k = L["k"]
-        w_rel = ch.let(f"omega_rel{k}", w - L["w_L"], rf"\omega_{{1{k}}}", "33-35")
-        w_C = L["w_L"]
-        if mode == "paper":
-            w_rel = ch.let(f"omega_rel_paper{k}", _with_magnitude(w_rel, K["joint_speed"],
-                                                                  L["u"]),
-                           rf"\omega^{{*}}_{{1{k}}}", "33-35")
-            w_C = ch.let(f"omega_C_paper{k}", _with_magnitude(w_C, K["joint_speed"], L["u"]),
-                         rf"\omega^{{*}}_{{0{k}}}", "33-35")
-        L["w_rel"], L["w_C"] = w_rel, w_C
-    weight = cp.coupling_weight(P, Q, mode)
+def _reactions(ch: Chain, inp: Inputs, leg: Leg, f_axial, next_leg: Leg) -> None:
+    """R_E, R_C (11)-(17), the prismatic joint (28)-(32) and the leg frame (18)-(27)."""
+    need, prismatic = ch.scope("11-17", leg.k), ch.scope("28-32", leg.k)
+    R_E = need("R_E", f_axial * leg.u + leg.t_E, "R_{E}")
+    R_C = need("R_C", R_E + leg.F_leg, "R_{C}")
+    P3 = leg.C + inp.P["prismatic_point"] * leg.D * leg.u
+    F_ax, R_3, M_3 = pr.upper_part_loads(Wrench.force_at(R_E, leg.E), leg.upper_need, leg.u, P3)
+    frame = lf.leg_frame(leg.E, leg.C, next_leg.E)
+    R_3 = prismatic("R_3", R_3, "R_{3}")
+    M_3 = prismatic("M_3", M_3, "M_{3}")
+    leg.out.update(R_E=R_E, R_C=R_C, P3=P3, M_C=leg.M_C, D=leg.D, D_dot=leg.D_dot, u=leg.u,
+                   omega_leg=leg.omega_leg, s2=leg.joint.sin2,
+                   F0=prismatic("F0", F_ax, "F_{0}"), R_3=R_3, M_3=M_3, frame=frame)
 
-    def moments(L, R_E, R_C, it):
-        return _joint_friction(ch, f"{L['k']}_{it}", P, m_model, R_E, R_C, L["w_rel"],
-                               L["w_C"], L["a1"], L["a2"])
 
-    change = cp.solve(ch, legs, A_qr, p, weight, moments, m_model)
-    for i, L in enumerate(legs):
-        k = L["k"]
-        dR = L["dR_E"]
-        L["R_3"] = ch.let(f"R_3c{k}", L["R_3"] + dR - dot(L["u"], dR) * L["u"],
-                          f"R_{{3,{k}}}^{{fr}}", "coupled")
-        L["M_3"] = ch.let(f"M_3c{k}", L["M_3"] + cross(L["E"] - L["P3"], dR)
-                          + m_model * L["MfrE"], f"M_{{3,{k}}}^{{fr}}", "coupled")
-        E_next = legs[(i + 1) % N_LEGS]["E"]
-        Lf = lf.leg_frame(L["E"], L["C"], E_next)
-        L["R_3_leg"] = lf.to_leg_frame(Lf, L["R_3"])
-        L["M_3_leg"] = lf.to_leg_frame(Lf, L["M_3"])
-        L["MfrE_s"] = fr.joint_friction_scalar(L["w_rel"], L["R_E_fr"], P["joint_viscous"],
-                                               P["joint_coulomb"], P["joint_radius"],
-                                               P["joint_eps"])
-        L["MfrC_s"] = fr.joint_friction_scalar(L["w_C"], L["R_C_fr"], P["joint_viscous"],
-                                               P["joint_coulomb"], P["joint_radius"],
-                                               P["joint_eps"])
-        L.update(_prismatic_friction(ch, k, P, Q, m_model, L["R_3"], L["M_3"], L["D_dot"],
-                                     L["D"], L["u"]))
-    df = sp.Matrix([L["dF"] for L in legs])
+def _friction(ch: Chain, inp: Inputs, leg: Leg) -> None:
+    """The joints' relative angular velocities that friction (33)-(34) opposes."""
+    let = ch.scope("33-35", leg.k)
+    omega_rel = let("omega_rel", inp.X["omega"] - leg.omega_leg, r"\omega_{1}")
+    omega_C = leg.omega_leg
+    if inp.mode == "paper":
+        speed = inp.K["joint_speed"]
+        omega_rel = let("omega_rel_paper", _with_magnitude(omega_rel, speed, leg.u),
+                        r"\omega^{*}_{1}")
+        omega_C = let("omega_C_paper", _with_magnitude(omega_C, speed, leg.u),
+                      r"\omega^{*}_{0}")
+    leg.out["omega_rel"], leg.out["omega_C"] = omega_rel, omega_C
 
-    bias = [Q[f"sensor_bias.b{k}"] for k in range(1, 7)]
-    out = {name: [] for name, *_ in OUTPUTS}
-    for i, L in enumerate(legs):
-        F = ch.let(f"F{L['k']}", L["F0"] + df[i] - L["Ffr"] + bias[i], f"F_{{{L['k']}}}",
-                   "28-32")
-        vals = dict(F=[F], F0=[L["F0"]], R_E=list(L["R_E"]), R_C=list(L["R_C"]),
-                    M_C=[L["M_C"]], R_3=list(L["R_3"]), M_3=list(L["M_3"]),
-                    MfrE=list(L["MfrE"]), MfrC=list(L["MfrC"]), Ffr=[L["Ffr"]],
-                    MfrE_s=[L["MfrE_s"]], MfrC_s=[L["MfrC_s"]], Ffr_s=[L["Ffr_s"]],
-                    D=[L["D"]], D_dot=[L["D_dot"]], u=list(L["u"]), omega_leg=list(L["w_L"]),
-                    omega_rel=list(L["w_rel"]), s2=[L["s2"]], R_3_leg=list(L["R_3_leg"]),
-                    M_3_leg=list(L["M_3_leg"]), coupling_change=[change[i]], F_joint=[df[i]],
-                    Ffr_viscous=[L["Ffr_viscous"]], Ffr_coulomb=[L["Ffr_coulomb"]],
-                    Ffr_bushing=[L["Ffr_bushing"]], Ffr_seal=[L["Ffr_seal"]],
-                    Ffr_effects=[L["Ffr_effects"]], N_bushing=list(L["N_bushing"]))
-        for name, vlist in vals.items():
-            out[name].extend(vlist)
-    outputs = {name: sp.Matrix(v) for name, v in out.items()}
-    symbols = dict(legs=legs, f=f, df=df, A=A, F_req=F_req, M_req=M_req, p=p, T=T, X=X, P=P,
-                   Q=Q, K=K, g_vec=g_vec, r_M=r_M, r_L=r_L, a_M=a_M, a_L=a_L, J_M=J_M, J_L=J_L,
-                   alpha_platform=al_P, omega_inertial=w_in)
-    return Model(mode, ch, inputs, outputs, symbols)
+
+def _coupling(ch: Chain, inp: Inputs, legs: list[Leg], A_qr):
+    """Joint friction in the equilibrium (derive/coupled.py), then every leg's friction.
+
+    Coupled model (kinematic mode, ``friction_model = 1``): the fixed point of the reactions
+    and the friction they cause. Paper model (and paper mode): friction from the frictionless
+    reactions; the effect joint_friction_coupling adds the joint moments' load to F. Then the
+    prismatic friction from the final R_3, M_3 (the spherical joint's friction moment enters
+    M_3 in the coupled model).
+    """
+    P, Q = inp.P, inp.Q
+    m = P["friction_model"] if inp.kinematic else sp.S.Zero
+
+    def moments(leg, R_E, R_C, it):
+        return _joint_friction(ch.scope("33-35", leg.k), f"_{it}", P, m, R_E, R_C,
+                               leg.out["omega_rel"], leg.out["omega_C"], leg.a1, leg.joint.a2)
+
+    df, change = cp.solve(ch, legs, A_qr, cp.coupling_weight(P, Q, inp.mode), moments, m)
+    for i, leg in enumerate(legs):
+        o, let = leg.out, ch.scope("coupled", leg.k)
+        dR = o["dR_E"]
+        o["R_3"] = let("R_3_fr", o["R_3"] + dR - dot(leg.u, dR) * leg.u, r"R^{fr}_{3}")
+        o["M_3"] = let("M_3_fr", o["M_3"] + cross(leg.E - o["P3"], dR) + m * o["MfrE"],
+                       r"M^{fr}_{3}")
+        frame = o.pop("frame")
+        o["R_3_leg"], o["M_3_leg"] = lf.to_leg_frame(frame, o["R_3"]), \
+            lf.to_leg_frame(frame, o["M_3"])
+        c_s, mu, r, eps = P["joint_viscous"], P["joint_coulomb"], P["joint_radius"], \
+            P["joint_eps"]
+        o["MfrE_s"] = fr.joint_friction_scalar(o["omega_rel"], o["R_E_fr"], c_s, mu, r, eps)
+        o["MfrC_s"] = fr.joint_friction_scalar(o["omega_C"], o["R_C_fr"], c_s, mu, r, eps)
+        o.update(_prismatic_friction(ch.scope("33-35", leg.k), P, Q, m, o["R_3"], o["M_3"],
+                                     leg.D_dot, leg.D, leg.u))
+        o["coupling_change"], o["F_joint"] = change[i], df[i]
+    return df
+
+
+def _actuator_force(ch: Chain, inp: Inputs, leg: Leg, df) -> None:
+    """The actuator force: frictionless axial force, coupled joint friction, prismatic
+    friction and the sensor's bias."""
+    Q = inp.Q
+    o = leg.out
+    o["F"] = ch.scope("28-32", leg.k)(
+        "F", o["F0"] + df - o["Ffr"]
+        + Q[f"sensor_bias.b{leg.k}"], "F")
 
 
 FRICTION_INPUTS = (
@@ -378,53 +497,55 @@ FRICTION_INPUTS = (
 )
 
 
-def _joint_friction(ch, tag, P, m, R_E, R_C, w_rel, w_C, a1, a2):
+def _joint_friction(let, tag, P, m, R_E, R_C, w_rel, w_C, a1, a2):
     """Friction moments (M_frE on the platform, M_frC on the leg) of one leg, (33)-(34).
 
-    ``m``: the friction model's weight (1: universal joint per bearing axis, coupled.py;
-    0: the paper's vector form (34)); the spherical joint keeps the vector form (33).
+    ``m``: the friction model (1: the universal joint per bearing axis, coupled.py; 0: the
+    paper's vector form (34)); the spherical joint keeps the vector form (33). ``tag`` tells
+    the fixed point's iterates apart.
     """
     c_s, mu, r, eps = P["joint_viscous"], P["joint_coulomb"], P["joint_radius"], P["joint_eps"]
-    MfrE = ch.let(f"MfrE{tag}", fr.joint_friction_moment(w_rel, R_E, c_s, mu, r, eps),
-                  f"M_{{frE{tag}}}", "33-35")
-    vector = fr.joint_friction_moment(w_C, R_C, c_s, mu, r, eps)
-    if m == 0:
-        MfrC = vector
-    else:
+    MfrE = let(f"MfrE{tag}", fr.joint_friction_moment(w_rel, R_E, c_s, mu, r, eps),
+               f"M_{{frE{tag}}}")
+    MfrC = fr.joint_friction_moment(w_C, R_C, c_s, mu, r, eps)
+    if m != 0:
         MfrC = m * cp.universal_joint_friction(w_C, R_C, a1, a2, c_s, mu, r, eps) \
-            + (1 - m) * vector
-    return MfrE, ch.let(f"MfrC{tag}", MfrC, f"M_{{frC{tag}}}", "33-35")
+            + (1 - m) * MfrC
+    return MfrE, let(f"MfrC{tag}", MfrC, f"M_{{frC{tag}}}")
 
 
-def _prismatic_friction(ch, k, P, Q, m, R_3, M_3, v, D, u) -> dict:
-    """Prismatic friction of leg k in its parts: (35) with |R_3| (weight 1 - m) or the
-    bushings (weight m, bushing.py), viscous, seals and the catalog's effects."""
-    eps_v, c, mu = P["prismatic_eps"], P["prismatic_viscous"], P["prismatic_coulomb"]
-    out = {}
-    sgn_v = ch.let(f"sgn_v{k}", fr.smooth_sign(v, eps_v), rf"\sigma_{{{k}}}", "33-35")
+def _prismatic_friction(let, P, Q, m, R_3, M_3, v, D, u) -> dict:
+    """Prismatic friction of one leg in its parts: (35) with |R_3| (weight 1 - m) or the two
+    bushings (weight m, bushing.py), viscous, seal, and the catalog's effects."""
+    eps_v, c_p, mu_p = P["prismatic_eps"], P["prismatic_viscous"], P["prismatic_coulomb"]
+    sign_v = let("sgn_v", fr.smooth_sign(v, eps_v), r"\sigma")
     s_a = P["bushing_offset"] - P["prismatic_point"] * D
     N_a, N_b = bu.bushing_forces(R_3, M_3, u, s_a, P["bushing_spacing"])
-    N_a = ch.let(f"N_a{k}", N_a, f"N_{{a,{k}}}", "bushing")
-    N_b = ch.let(f"N_b{k}", N_b, f"N_{{b,{k}}}", "bushing")
-    out["N_bushing"] = [norm(N_a), norm(N_b)]
-    viscous, bushing, seal = bu.bushing_friction_parts(v, N_a, N_b, c, mu, P["prismatic_seal"],
-                                                       eps_v)
-    out["Ffr_viscous"] = viscous
-    out["Ffr_bushing"] = m * bushing
-    out["Ffr_seal"] = seal
-    out["Ffr_coulomb"] = -(1 - m) * mu * norm(R_3) * sgn_v
-    out["Ffr_effects"] = fx.prismatic_effects_force(Q, v, sgn_v, D, u, M_3)
-    out["Ffr_s"] = fr.prismatic_friction_scalar(v, R_3, c, mu, eps_v)
-    out["Ffr"] = ch.let(f"Ffr{k}", viscous + out["Ffr_coulomb"] + out["Ffr_bushing"] + seal
-                        + out["Ffr_effects"], f"F_{{fr,{k}}}", "33-35")
+    N_a, N_b = let("N_a", N_a, "N_{a}"), let("N_b", N_b, "N_{b}")
+    viscous, bushing, seal = bu.bushing_friction_parts(v, N_a, N_b, c_p, mu_p,
+                                                       P["prismatic_seal"], sign_v)
+    out = dict(Ffr_viscous=viscous, Ffr_bushing=m * bushing, Ffr_seal=seal,
+               Ffr_coulomb=(1 - m) * (fr.prismatic_friction(v, R_3, c_p, mu_p, sign_v)
+                                      - viscous),
+               Ffr_effects=fx.prismatic_effects_force(Q, v, sign_v, D, u, M_3),
+               N_bushing=sp.Matrix([norm(N_a), norm(N_b)]),
+               Ffr_s=fr.prismatic_friction_scalar(v, R_3, c_p, mu_p, eps_v))
+    out["Ffr"] = let("Ffr", viscous + out["Ffr_coulomb"] + out["Ffr_bushing"] + seal
+                     + out["Ffr_effects"], "F_{fr}")
     return out
 
 
 def build_friction() -> Model:
     """The friction map alone: reactions, joint speeds and coefficients -> friction.
 
-    The friction of the platform's friction model (``friction_model``) evaluated from the given
-    reactions, with nothing fed back.
+    The friction of the platform's friction model (``friction_model``) evaluated from the
+    given reactions, with nothing fed back.
+
+    Returns
+    -------
+    Model
+        Inputs ``FRICTION_INPUTS`` (per step, legs in order), ``P`` and ``Q``; outputs
+        MfrE, MfrC (6, 3) N m, Ffr (6,) N and the paper's scalars MfrE_s, MfrC_s, Ffr_s.
     """
     ch = Chain()
     blocks = {n: _block(ch, n, s) for n, s, *_ in FRICTION_INPUTS}
@@ -436,21 +557,18 @@ def build_friction() -> Model:
     m = P["friction_model"]
     c_s, mu, r, eps = P["joint_viscous"], P["joint_coulomb"], P["joint_radius"], P["joint_eps"]
     for i in range(N_LEGS):
-        k = i + 1
         row = {n: (_row(b, i) if b.shape[1] == 3 else b[i]) for n, b in blocks.items()}
-        u = row["u"]
-        a1 = _row(P["universal_axes"], i)
+        let = ch.scope("33-35", i + 1)
+        u, a1 = row["u"], _row(P["universal_axes"], i)
         a2 = cross(a1, u) / norm(cross(a1, u))
-        res = {}
-        res["MfrE"], res["MfrC"] = _joint_friction(ch, k, P, m, row["R_E"], row["R_C"],
-                                                   row["omega_rel"], row["omega_leg"], a1, a2)
+        res = dict(zip(("MfrE", "MfrC"), _joint_friction(
+            let, "", P, m, row["R_E"], row["R_C"], row["omega_rel"], row["omega_leg"], a1, a2)))
         res["MfrE_s"] = fr.joint_friction_scalar(row["omega_rel"], row["R_E"], c_s, mu, r, eps)
         res["MfrC_s"] = fr.joint_friction_scalar(row["omega_leg"], row["R_C"], c_s, mu, r, eps)
-        res.update(_prismatic_friction(ch, k, P, Q, m, row["R_3"], row["M_3"], row["D_dot"],
+        res.update(_prismatic_friction(let, P, Q, m, row["R_3"], row["M_3"], row["D_dot"],
                                        row["D"], u))
         for n in out:
-            v = res[n]
-            out[n].extend(list(v) if isinstance(v, sp.MatrixBase) else [v])
+            out[n].extend(_flat(res[n]))
     inputs = {n: s for n, s, *_ in FRICTION_INPUTS}
     return Model("friction", ch, inputs, {n: sp.Matrix(v) for n, v in out.items()}, {})
 
@@ -463,4 +581,5 @@ def _with_magnitude(w, speed, fallback):
 
 
 def input_size(specs) -> int:
+    """Length of the flat vector laid out by ``specs`` ((name, shape, ...) tuples)."""
     return sum(_size(s) for _, s, *_ in specs)

@@ -14,7 +14,7 @@ platform frame's origin ``p``:
 
 import sympy as sp
 
-from .vectors import cross
+from .mechanics import Inertia, Wrench
 
 
 def inertial_moment(R, I, alpha, omega):
@@ -23,34 +23,46 @@ def inertial_moment(R, I, alpha, omega):
     ``R`` turns body axes into base axes, ``I`` is the inertia about the centre of mass in
     body axes; ``alpha`` and ``omega`` are in base axes. Working in body axes,
     ``R (I a_b + w_b x I w_b)`` with ``a_b = R^T alpha`` and ``w_b = R^T omega``, avoids forming J.
+    (``mechanics.Inertia.rotation_moment`` is the same with the chain's ``let``.)
+
+    Parameters
+    ----------
+    R : sympy.Matrix, shape (3, 3)
+        Rotation body -> base, 1.
+    I : sympy.Matrix, shape (3, 3)
+        Inertia about the centre of mass, body axes, kg m^2.
+    alpha, omega : sympy.Matrix, shape (3, 1)
+        Angular acceleration (rad/s^2) and velocity (rad/s), base frame.
+
+    Returns
+    -------
+    sympy.Matrix, shape (3, 1)
+        N m, base frame.
     """
-    a_b = R.T * alpha
-    w_b = R.T * omega
-    return R * (I * a_b + cross(w_b, I * w_b))
-
-
-def body_required_wrench(m, m_weight, r_c, a_c, g_vec, moment_c):
-    """Force and moment (about the point from which ``r_c`` is measured) a body needs.
-
-    Parameters: ``m`` inertial mass, ``m_weight`` gravitational mass (the same for a real body),
-    ``r_c`` centre of mass relative to the reference point, ``a_c`` its acceleration,
-    ``moment_c`` the moment about the centre of mass that the body's rotation needs
-    (``inertial_moment``).
-    """
-    force = m * a_c - m_weight * g_vec
-    return force, cross(r_c, force) + moment_c
+    return Inertia(I, R, sp.zeros(3, 1)).rotation_moment(alpha, omega)
 
 
 def platform_residual(R_E, E, p, F_req, M_req, M_joint=None):
     """Residual of (2)-(7) for forces R_E[i] at points E[i]; zero at equilibrium.
 
-    ``M_joint`` are moments the joints put on the platform besides the forces (friction).
+    Parameters
+    ----------
+    R_E, E : sequence of sympy.Matrix, shape (3, 1)
+        Force of each leg on the platform (N) and its point (m), base frame.
+    p : sympy.Matrix, shape (3, 1)
+        Platform frame origin (the moments' reference point), base frame, m.
+    F_req, M_req : sympy.Matrix, shape (3, 1)
+        Required force (N) and moment about p (N m) of platform and payload.
+    M_joint : sequence of sympy.Matrix, shape (3, 1), optional
+        Moments the joints put on the platform besides the forces (friction), N m.
+
+    Returns
+    -------
+    sympy.Matrix, shape (6, 1)
+        Force (N) and moment (N m) residuals.
     """
-    force = sp.zeros(3, 1)
-    moment = sp.zeros(3, 1)
+    on_platform = Wrench(sp.zeros(3, 1), sp.zeros(3, 1), p)
     for i in range(len(R_E)):
-        force += R_E[i]
-        moment += cross(E[i] - p, R_E[i])
-        if M_joint is not None:
-            moment += M_joint[i]
-    return sp.Matrix.vstack(force - F_req, moment - M_req)
+        moment = M_joint[i] if M_joint is not None else sp.zeros(3, 1)
+        on_platform = on_platform + Wrench(R_E[i], moment, E[i])
+    return sp.Matrix.vstack(on_platform.force - F_req, on_platform.moment - M_req)

@@ -15,21 +15,36 @@ E_i (as the paper takes them) give the same M_3: the two differ by ``(E - P_3) x
 force.
 """
 
-from .vectors import cross, dot
+from .mechanics import Wrench
+from .vectors import dot
 
 
-def upper_part_loads(R_E, u, E, P3, m2, m2_weight, a2, c2, moment2, g_vec, M_joint_E=None):
+def upper_part_loads(on_platform: Wrench, required: Wrench, u, P3):
     """Axial force F_ax, transverse force R_3 and moment M_3 of the prismatic joint.
 
-    ``moment2`` is the moment about its centre that the part's rotation needs
-    (``J_2 alpha_L + omega_L x J_2 omega_L``). ``M_joint_E`` is a moment that the platform's
-    joint puts on the upper part besides R_E (the spherical joint's friction moment, with the sign
-    it has on the leg).
+    The upper part carries the reaction of ``on_platform`` and the lower part's joint wrench at
+    P3; Newton-Euler gives that joint wrench as ``required - reaction(on_platform)`` about P3.
+
+    Parameters
+    ----------
+    on_platform : mechanics.Wrench
+        What the leg puts on the platform at E (force ``R_E``, and any joint moment), base frame.
+    required : mechanics.Wrench
+        The upper part's required wrench (``Body.required_wrench``).
+    u : sympy.Matrix, shape (3, 1)
+        Unit leg direction, base frame, 1.
+    P3 : sympy.Matrix, shape (3, 1)
+        The prismatic joint point, base frame, m.
+
+    Returns
+    -------
+    F_ax : sympy.Expr
+        Axial force, N (positive pushes the platform away: the frictionless actuator force).
+    R_3 : sympy.Matrix, shape (3, 1)
+        Transverse force on the upper part, base frame, N.
+    M_3 : sympy.Matrix, shape (3, 1)
+        Moment on the upper part about P3, base frame, N m.
     """
-    total = R_E + m2 * a2 - m2_weight * g_vec
-    F_ax = dot(u, total)
-    R_3 = total - F_ax * u
-    M_3 = cross(E - P3, R_E) + cross(c2 - P3, m2 * a2 - m2_weight * g_vec) + moment2
-    if M_joint_E is not None:
-        M_3 = M_3 - M_joint_E
-    return F_ax, R_3, M_3
+    joint = (required - on_platform.reaction()).about(P3)
+    F_ax = dot(u, joint.force)
+    return F_ax, joint.force - F_ax * u, joint.moment

@@ -131,7 +131,12 @@ def paper(out_dir, mode, platform_file, no_plots):
                    "on the first chunk].")
 @click.option("--progress/--no-progress", default=None,
               help="Progress bar on stderr [default: when stderr is a terminal].")
-def simulate(trajectory, platform_file, out, mode, strict, threads, chunk, window, progress):
+@click.option("--breakdown", "breakdown_file", type=click.Path(path_type=Path), default=None,
+              help="Also write F per leg split into its parts (inertia, gravity, payload, "
+                   "joint friction, prismatic friction by kind, effects) to this CSV or "
+                   "Parquet file (kinematic mode; the trajectory is read whole).")
+def simulate(trajectory, platform_file, out, mode, strict, threads, chunk, window, progress,
+             breakdown_file):
     """Evaluate a motion: actuator forces, reactions and friction at every step.
 
     Long files are streamed: read, differentiated and evaluated chunk by chunk in bounded
@@ -141,6 +146,11 @@ def simulate(trajectory, platform_file, out, mode, strict, threads, chunk, windo
     import warnings
 
     from gsfric.stream import simulate_file
+
+    if breakdown_file is not None and mode != "kinematic":
+        from gsfric.errors import InputError
+
+        raise InputError("--breakdown: only in the kinematic mode")
 
     def show(message, category, filename, lineno, file=None, line=None):
         click.echo(f"gsfric: warning: {message}", err=True)
@@ -152,6 +162,13 @@ def simulate(trajectory, platform_file, out, mode, strict, threads, chunk, windo
         summary = simulate_file(trajectory, out, platform, mode=mode, strict=strict,
                                 chunk=chunk, window=window, n_threads=threads,
                                 progress=progress)
+        if breakdown_file is not None:
+            from gsfric import breakdown, io
+
+            motion = io.read_trajectory(trajectory)
+            parts = breakdown.breakdown(platform, motion)
+            io.write_table(breakdown.to_frame(motion.t, parts), breakdown_file)
+            click.echo(f"wrote {breakdown_file}")
     click.echo(f"wrote {out} ({summary.steps} steps, {summary.flagged} flagged)")
 
 

@@ -123,6 +123,17 @@ class Result:
     flag: np.ndarray
     mode: str = "kinematic"
     notes: list[str] = field(default_factory=list)
+    source: tuple | None = field(default=None, repr=False)   # (platform, motion) evaluated
+
+    def breakdown(self) -> dict[str, np.ndarray]:
+        """F per leg split into inertia, gravity, payload, joint friction carried, prismatic
+        friction by kind and effects, (N, 6) N each (``gsfric.breakdown``; kinematic mode)."""
+        from gsfric.breakdown import breakdown
+
+        if self.source is None or self.mode != "kinematic":
+            raise GsfricError("breakdown: needs a kinematic-mode result of Evaluator.evaluate")
+        platform, motion = self.source
+        return breakdown(platform, motion, self)
 
     def __getattr__(self, name):
         arrays = self.__dict__.get("arrays", {})
@@ -158,6 +169,16 @@ class Result:
         for i in range(6):
             cols[f"F0_{i + 1}"] = self.F0[:, i]
             cols[f"D{i + 1}"] = self.D[:, i]
+        # signed friction (docs/friction.md): the force on the rod along u (negative while the
+        # leg extends), the joint moments' vectors (base frame), the joint friction carried
+        for name, key in (("FfrS", "Ffr"), ("Fjoint", "F_joint")):
+            if key in self.arrays:
+                for i in range(6):
+                    cols[f"{name}{i + 1}"] = self.arrays[key][:, i]
+        for key in ("MfrE", "MfrC"):
+            for i in range(6):
+                for j, ax in enumerate("xyz"):
+                    cols[f"{key}{ax}{i + 1}"] = self.arrays[key][:, i, j]
         cols["flag"] = self.flag
         return pd.DataFrame(cols)
 
@@ -255,7 +276,8 @@ class Evaluator:
         shapes = {name: shape for name, _, shape in self._full.outputs}
         arrays = {k: v.reshape((n,) + tuple(shapes[k])) for k, v in outs.items()}
         flag = self._flags(x, motion, arrays)
-        result = Result(t=np.asarray(motion.t, float), arrays=arrays, flag=flag, mode=self.mode)
+        result = Result(t=np.asarray(motion.t, float), arrays=arrays, flag=flag, mode=self.mode,
+                        source=(self.platform, motion))
         bad = result.flagged()
         if bad.size:
             kinds = sorted({FLAG_NAMES[b] for b in FLAG_NAMES if np.any(flag & b)})

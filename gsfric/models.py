@@ -93,15 +93,16 @@ def reference_platform(friction_model: str = "coupled") -> Platform:
     Parameters
     ----------
     friction_model : {"coupled", "paper"}
-        ``"paper"`` gives the same platform with the paper's post-hoc friction model (the
-        bushing and seal values then only matter through ``prismatic_seal``, which stays 2 N).
+        ``"paper"`` gives the same platform with the paper's post-hoc friction model: (35) as
+        printed, with mu = 0.1 at R_3 and no seal.
     """
     return Platform(
         gravity=9.81,
         geometry=reference_geometry(),
         platform=Body(mass=10.0, inertia=np.eye(3) * 0.07, payload_mass=3.0),
         legs=reference_leg(),
-        friction=Friction(**{**REFERENCE_FRICTION, "model": friction_model}),
+        friction=Friction(**{**REFERENCE_FRICTION, "model": friction_model,
+                             **({"prismatic_seal": 0.0} if friction_model == "paper" else {})}),
         effects={},
     )
 

@@ -37,32 +37,34 @@ def balances(model) -> dict[str, sp.Matrix]:
     g = S["g_vec"]
     legs = S["legs"]
     out = {}
-    R_E = [L["R_E"] for L in legs]
-    E = [L["E"] for L in legs]
+    R_E = [L.R_E for L in legs]
+    E = [L.E for L in legs]
     out["platform (2)-(7)"] = pf.platform_residual(R_E, E, S["p"], S["F_req"], S["M_req"])
     scale = {"platform (2)-(7)": sp.Matrix.vstack(S["F_req"], S["M_req"])}
     for L in legs:
-        k = L["k"]
-        u, C = L["u"], L["C"]
-        low, up = L["parts"]
-        out[f"leg {k} (11)-(16)"] = lg.leg_residual(L["R_E"], L["R_C"], L["M_C"], u, L["n"],
-                                                    L["D"], L["F_leg"], L["K"])
-        scale[f"leg {k} (11)-(16)"] = sp.Matrix.vstack(L["R_E"], L["D"] * L["R_E"])
-        axial = L["F0"] * u
+        k = L.k
+        u, C = L.u, L.C
+        low, up = L.parts
+        out[f"leg {k} (11)-(16)"] = lg.leg_residual(L.R_E, L.R_C, L.M_C, u, L.n, L.D, L.F_leg,
+                                                    L.K)
+        scale[f"leg {k} (11)-(16)"] = sp.Matrix.vstack(L.R_E, L.D * L.R_E)
+        axial = L.F0 * u
         # upper part: -R_E at E, R_3 + axial and M_3 from the lower part at P3, gravity
-        f_up = -L["R_E"] + L["R_3"] + axial + up["m_weight"] * g - up["m"] * up["a_c"]
-        m_up = (cross(L["E"] - L["P3"], -L["R_E"]) + L["M_3"]
-                + cross(up["c"] - L["P3"], up["m_weight"] * g - up["m"] * up["a_c"])
-                - up["J"] * up["alpha"] - cross(up["omega"], up["J"] * up["omega"]))
+        f_up = -L.R_E + L.R_3 + axial + up.weight_mass * g - up.mass * up.acceleration
+        J_up = up.inertia.in_base()
+        m_up = (cross(L.E - L.P3, -L.R_E) + L.M_3
+                + cross(up.centre - L.P3, up.weight_mass * g - up.mass * up.acceleration)
+                - J_up * up.alpha - cross(up.omega, J_up * up.omega))
         out[f"upper part {k} (28)-(32)"] = sp.Matrix.vstack(f_up, m_up)
-        scale[f"upper part {k} (28)-(32)"] = sp.Matrix.vstack(L["R_E"], L["D"] * L["R_E"])
+        scale[f"upper part {k} (28)-(32)"] = sp.Matrix.vstack(L.R_E, L.D * L.R_E)
         # lower part: R_C and M_C n at C, -(R_3 + axial) and -M_3 at P3, gravity
-        f_low = L["R_C"] - L["R_3"] - axial + low["m_weight"] * g - low["m"] * low["a_c"]
-        m_low = (L["M_C"] * L["n"] + cross(L["P3"] - C, -L["R_3"] - axial) - L["M_3"]
-                 + cross(low["c"] - C, low["m_weight"] * g - low["m"] * low["a_c"])
-                 - low["J"] * low["alpha"] - cross(low["omega"], low["J"] * low["omega"]))
+        f_low = L.R_C - L.R_3 - axial + low.weight_mass * g - low.mass * low.acceleration
+        J_low = low.inertia.in_base()
+        m_low = (L.M_C * L.n + cross(L.P3 - C, -L.R_3 - axial) - L.M_3
+                 + cross(low.centre - C, low.weight_mass * g - low.mass * low.acceleration)
+                 - J_low * low.alpha - cross(low.omega, J_low * low.omega))
         out[f"lower part {k}"] = sp.Matrix.vstack(f_low, m_low)
-        scale[f"lower part {k}"] = sp.Matrix.vstack(L["R_C"], L["D"] * L["R_C"])
+        scale[f"lower part {k}"] = sp.Matrix.vstack(L.R_C, L.D * L.R_C)
     return out, scale
 
 
@@ -134,7 +136,7 @@ def test_leg_angular_velocity_has_no_component_along_the_torsion_direction(kinem
     platform = perturbed_platform(rng)
     x = random_states(rng, 20)
     legs = kinematic_model.symbols["legs"]
-    dots = {f"leg{L['k']}": sp.Matrix([(L["w_L"].T * L["n"])[0, 0]]) for L in legs}
+    dots = {f"leg{L.k}": sp.Matrix([(L.omega_leg.T * L.n)[0, 0]]) for L in legs}
     out = kinematic_model.chain.evaluate(chain_values(platform, x), dots)
     for name, v in out.items():
         assert np.max(np.abs(v)) < 1e-12, name
@@ -151,13 +153,13 @@ def test_leg_angular_velocity_and_acceleration_match_finite_differences(kinemati
     legs = kinematic_model.symbols["legs"]
     outputs = {}
     for L in legs:
-        outputs[f"u{L['k']}"] = L["u"]
-        outputs[f"w{L['k']}"] = L["w_L"]
-        outputs[f"al{L['k']}"] = L["al_L"]
+        outputs[f"u{L.k}"] = L.u
+        outputs[f"w{L.k}"] = L.omega_leg
+        outputs[f"al{L.k}"] = L.alpha_leg
     out = kinematic_model.chain.evaluate(chain_values(platform, state_array(motion)), outputs)
     n = t0.size
     for L in legs:
-        k = L["k"]
+        k = L.k
         u, w, al = out[f"u{k}"], out[f"w{k}"], out[f"al{k}"]
         du = (u[2 * n:] - u[:n]) / (2 * h)
         dw = (w[2 * n:] - w[:n]) / (2 * h)

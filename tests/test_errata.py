@@ -68,17 +68,19 @@ def _compiled():
            "J_P": S["J_M"] + S["J_L"], "alpha_P": S["alpha_platform"],
            "omega_P": S["omega_inertial"]}
     for L in S["legs"]:
-        lower, upper = L["parts"]
+        lower, upper = L.parts
         quantities = dict(
-            E=L["E"], C=L["C"], D=L["D"], u=L["u"], n=L["n"], R_E=L["R_E"],
-            R_C=L["R_C"], M_C=L["M_C"], R_3=L["R_3"], M_3=L["M_3"], F0=L["F0"], P3=L["P3"],
-            m2=upper["m"], mg2=upper["m_weight"], a2=upper["a_c"], c2=upper["c"], J2=upper["J"],
-            m4=lower["m"], mg4=lower["m_weight"], a4=lower["a_c"], c4=lower["c"], J4=lower["J"],
-            alpha_L=upper["alpha"], omega_in=upper["omega"], omega_L=L["w_L"],
-            omega_rel=L["w_rel"], D_dot=L["D_dot"], R_3_leg=L["R_3_leg"], MfrE=L["MfrE"],
-            MfrC=L["MfrC"])
+            E=L.E, C=L.C, D=L.D, u=L.u, n=L.n, R_E=L.R_E, R_C=L.R_C, M_C=L.M_C, R_3=L.R_3,
+            M_3=L.M_3, F0=L.F0, P3=L.P3,
+            m2=upper.mass, mg2=upper.weight_mass, a2=upper.acceleration, c2=upper.centre,
+            J2=upper.inertia.in_base(),
+            m4=lower.mass, mg4=lower.weight_mass, a4=lower.acceleration, c4=lower.centre,
+            J4=lower.inertia.in_base(),
+            alpha_L=upper.alpha, omega_in=upper.omega, omega_L=L.omega_leg,
+            omega_rel=L.omega_rel, D_dot=L.D_dot, R_3_leg=L.R_3_leg, MfrE=L.MfrE,
+            MfrC=L.MfrC)
         for name, value in quantities.items():
-            out[f"{name}{L['k']}"] = value if isinstance(value, sp.MatrixBase) \
+            out[f"{name}{L.k}"] = value if isinstance(value, sp.MatrixBase) \
                 else sp.Matrix([value])
     inputs = {n: ca.SX.sym(n.replace(".", "_"), len(mat)) for n, mat in m.chain.inputs.items()}
     exprs = m.chain.to_casadi(inputs, out)
