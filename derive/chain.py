@@ -9,8 +9,8 @@ shared quantities are computed once, and the same chain is translated three ways
 * to LaTeX (``definitions``), to read in a notebook.
 
 Every step is a definition ``symbol := expression``; the 6x6 system in the legs' axial forces is
-solved by a QR factorisation written out as such steps (``factor``, ``solve``), so that a second
-right-hand side reuses the factor.
+solved by an orthogonal (Gram-Schmidt) factorisation written out as such steps (``factor``,
+``solve``), so that a second right-hand side reuses the factor.
 """
 
 from __future__ import annotations
@@ -32,12 +32,16 @@ class Step:
 
 @dataclass
 class Factor:
-    """A QR factor defined in a chain: unit columns q, upper entries R, reciprocal diagonal."""
+    """An orthogonal factor ``A = V U`` defined in a chain.
+
+    ``v`` are orthogonal (not normalised) columns, ``U`` the strictly upper entries of a unit
+    upper-triangular matrix, ``inv`` the reciprocals ``1 / (v_j . v_j)``.
+    """
 
     name: str
     latex: str
-    q: list[sp.Matrix]
-    R: dict
+    v: list[sp.Matrix]
+    U: dict
     inv: list[sp.Symbol]
 
 
@@ -139,38 +143,40 @@ class Chain:
 
     def factor(self, name: str, A: sp.Matrix, latex: str | None = None,
                equation: str = "") -> "Factor":
-        """QR factorisation of a square A by modified Gram-Schmidt, as chain steps.
+        """Orthogonal factorisation ``A = V U`` of a square A by modified Gram-Schmidt, as steps.
 
-        Each column ``a_j`` is reduced against the earlier unit columns ``q_i``
-        (``r_ij = q_i . v``, ``v -= r_ij q_i``) and normalised, ``q_j = v / r_jj``; the
-        reciprocals ``1 / r_jj`` are kept, so solving with the factor needs no division.
+        Each column ``a_j`` is reduced against the earlier columns ``v_i``
+        (``U_ij = (v_i . v) / (v_i . v_i)``, ``v -= U_ij v_i``); the columns are not normalised
+        (no square root) and the reciprocals ``1 / (v_j . v_j)`` are kept, so that solving with
+        the factor needs no division.
         """
         base = latex or name
         n = A.shape[0]
-        q, R, inv = [], {}, []
+        vs, U, inv = [], {}, []
         for j in range(n):
             v = A[:, j]
             for i in range(j):
-                R[i, j] = self.let(f"{name}_R{i}{j}", (q[i].T * v)[0, 0],
-                                   f"{base}_{{R{i + 1}{j + 1}}}", equation)
-                v = self.let(f"{name}_v{i}{j}", v - R[i, j] * q[i],
+                U[i, j] = self.let(f"{name}_U{i}{j}", (vs[i].T * v)[0, 0] * inv[i],
+                                   f"{base}_{{U{i + 1}{j + 1}}}", equation)
+                v = self.let(f"{name}_v{i}{j}", v - U[i, j] * vs[i],
                              f"{base}_{{v{i + 1}{j + 1}}}", equation)
-            inv.append(self.let(f"{name}_inv{j}", 1 / sp.sqrt((v.T * v)[0, 0]),
-                                f"{base}_{{r{j + 1}}}^{{-1}}", equation))
-            q.append(self.let(f"{name}_q{j}", v * inv[j], f"{base}_{{q{j + 1}}}", equation))
-        return Factor(name, base, q, R, inv)
+            if j == 0:
+                v = self.let(f"{name}_v0", v, f"{base}_{{v1}}", equation)
+            vs.append(v)
+            inv.append(self.let(f"{name}_inv{j}", 1 / (v.T * v)[0, 0],
+                                f"{base}_{{n{j + 1}}}^{{-1}}", equation))
+        return Factor(name, base, vs, U, inv)
 
     def solve(self, name: str, factor: "Factor", b: sp.Matrix, latex: str | None = None,
               equation: str = "") -> sp.Matrix:
-        """Define ``name := A^-1 b`` with the QR factor of A: ``R x = Q^T b``."""
+        """Define ``name := A^-1 b`` with the factor of A: ``U x = diag(inv) V^T b``."""
         base = latex or name
-        n = len(factor.q)
-        y = [(factor.q[j].T * b)[0, 0] for j in range(n)]
+        n = len(factor.v)
+        y = [(factor.v[j].T * b)[0, 0] * factor.inv[j] for j in range(n)]
         x = [None] * n
         for j in reversed(range(n)):
-            rest = sum((factor.R[j, k] * x[k] for k in range(j + 1, n)), sp.S.Zero)
-            x[j] = self.let(f"{name}{j}", (y[j] - rest) * factor.inv[j],
-                            f"{base}_{{{j + 1}}}", equation)
+            rest = sum((factor.U[j, k] * x[k] for k in range(j + 1, n)), sp.S.Zero)
+            x[j] = self.let(f"{name}{j}", y[j] - rest, f"{base}_{{{j + 1}}}", equation)
         return sp.Matrix(x)
 
     def definitions(self, equation: str | None = None):

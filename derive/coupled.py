@@ -52,8 +52,48 @@ N_ITERATIONS = 6
 """Fixed-point iterations unrolled in the generated code (each: friction, one back-substitution)."""
 
 
+def joint_friction_terms(let, w_rel, w_C, a1, a2, c_s, mu, r, eps, m) -> dict:
+    """The parts of the joints' friction moments that do not depend on the reactions.
+
+    Friction is linear in the loads once the speeds are known: with ``sgn`` the regularised
+    sign of friction.py (``smooth_sign``),
+
+    * spherical joint (33): ``M_frE = -c_s w - |R_E| g_E``, ``g_E = mu r sgn(w)``;
+    * universal joint, vector form (34): ``-c_s omega_L - |R_C| g_C``, ``g_C = mu r sgn(omega_L)``;
+    * universal joint per bearing axis: ``-sum_j (c_s w_j + |a_j x R_C| h_j) a_j`` with
+      ``w_j = omega_L . a_j`` and ``h_j = mu r sgn(w_j)``; since omega_L = w_1 a_1 + w_2 a_2,
+      its viscous part is the vector form's ``-c_s omega_L``.
+
+    They are defined once per leg, so that each fixed-point iteration only evaluates the loads.
+    ``m`` weighs the per-axis form against the vector form (1 coupled model, 0 paper).
+    """
+    t = dict(vE=let("fr_vE", -c_s * w_rel, r"v_{frE}"),
+             gE=let("fr_gE", mu * r * smooth_sign(w_rel, eps), r"g_{frE}"),
+             vC=let("fr_vC", -c_s * w_C, r"v_{frC}"), m=m, axes=())
+    if m != 1:
+        t["gC"] = let("fr_gC", (1 - m) * mu * r * smooth_sign(w_C, eps), r"g_{frC}")
+    if m != 0:
+        t["axes"] = tuple((a, let(f"fr_h{j}", m * mu * r * smooth_sign(dot(w_C, a), eps),
+                                  rf"h_{{fr{j}}}"))
+                          for j, a in ((1, a1), (2, a2)))
+    return t
+
+
+def joint_friction_moments(t, R_E, R_C):
+    """(M_frE on the platform, M_frC on the leg), base frame, N m, from ``joint_friction_terms``
+    and the reactions R_E, R_C (N)."""
+    MfrE = t["vE"] - norm(R_E) * t["gE"]
+    MfrC = t["vC"]
+    if "gC" in t:
+        MfrC = MfrC - norm(R_C) * t["gC"]
+    for a, h in t["axes"]:
+        MfrC = MfrC - norm(cross(a, R_C)) * h * a
+    return MfrE, MfrC
+
+
 def universal_joint_friction(w_L, R_C, a1, a2, c_s, mu, r, eps):
-    """Per-bearing-axis friction moment of a universal joint on the leg, base frame, N m."""
+    """Per-bearing-axis friction moment of a universal joint on the leg, base frame, N m
+    (the formula of ``joint_friction_terms`` written out, for reading and tests)."""
     out = sp.zeros(3, 1)
     for a in (a1, a2):
         w = dot(w_L, a)
@@ -102,7 +142,7 @@ def solve(ch, legs, A_qr, weight, moments, m, n_iter=N_ITERATIONS):
     -------
     (df, change) : sympy.Matrix (6, 1) each, N
         The change of the axial forces by the joint friction, and its change over the last
-        iteration. Sets in ``leg.out``: ``R_E``, ``R_C``, ``M_C`` (coupled), ``MfrE``,
+        iteration (zero in the paper model, where every iterate is the same). Sets in ``leg.out``: ``R_E``, ``R_C``, ``M_C`` (coupled), ``MfrE``,
         ``MfrC`` (in equilibrium with them), ``R_E_fr``, ``R_C_fr`` (the reactions the moments
         were computed from) and ``dR_E`` (the change of R_E by friction).
     """
@@ -118,10 +158,11 @@ def solve(ch, legs, A_qr, weight, moments, m, n_iter=N_ITERATIONS):
         dts, dMCs = [], []
         for leg, (ME, MC) in zip(legs, mfr):
             let = ch.scope("coupled", leg.k)
-            dK = weight * (ME - MC)
-            dM_C = let(f"dM_C{it}", lg.torsion_moment(dK, leg.u, leg.joint.n_dot_u),
+            dK = let(f"dK_leg{it}", leg.joint.frame.T * (weight * (ME - MC)),
+                     rf"\Delta K^{{({it})}}_{{leg}}")
+            dM_C = let(f"dM_C{it}", lg.torsion_moment(dK, leg.joint),
                        rf"\Delta M^{{({it})}}_{{C}}")
-            dt = let(f"dt_E{it}", lg.transverse_end_force(dK, dM_C, leg.u, leg.n, leg.D),
+            dt = let(f"dt_E{it}", lg.transverse_end_force(dK, dM_C, leg.joint, leg.D),
                      rf"\Delta R^{{({it})}}_{{E\perp}}")
             rhs_F -= dt
             rhs_M -= cross(leg.r_E, dt) + weight * ME
@@ -148,4 +189,4 @@ def solve(ch, legs, A_qr, weight, moments, m, n_iter=N_ITERATIONS):
         o["M_C"] = let("M_C_fr", R0[i][2] + m * dMCs[i], r"M^{fr}_{C}")
         o["R_E"] = let("R_E_fr", R_E_new[i], r"R^{fr}_{E}")
         o["R_C"] = let("R_C_fr", R_C_new[i], r"R^{fr}_{C}")
-    return df, df - df_prev
+    return df, m * (df - df_prev)

@@ -20,6 +20,7 @@ NaN. The paper's tables give scalars, negative = opposing: ``-(c_s |w| + mu r |R
 
 import sympy as sp
 
+from .chain import inline
 from .vectors import dot, norm
 
 
@@ -43,10 +44,12 @@ def smooth_sign(w, eps):
     return w / sp.sqrt(w**2 + eps**2)
 
 
-def joint_friction_moment(w, R, c_s, mu, r, eps):
+def joint_friction_moment(w, R, c_s, mu, r, eps, let=inline, name="Mfr"):
     """Eqs. (33)/(34): friction moment opposing the relative angular velocity w.
 
-    ``-(c_s w + mu r |R| sgn(w))`` with the regularised ``sgn`` of ``smooth_sign``.
+    ``-(c_s w + mu r |R| sgn(w))`` with the regularised ``sgn(w) = w / sqrt(w.w + eps^2)`` of
+    ``smooth_sign``; both terms are along w, so the moment is ``-k w`` with the scalar
+    ``k = c_s + mu r |R| / sqrt(w.w + eps^2)``.
 
     Parameters
     ----------
@@ -62,13 +65,17 @@ def joint_friction_moment(w, R, c_s, mu, r, eps):
         Joint radius, m.
     eps : sympy.Expr
         Regularisation speed, rad/s.
+    let : callable
+        The chain's ``let``; defines ``<name>_k`` (= -k, N m s/rad).
 
     Returns
     -------
     sympy.Matrix, shape (3, 1)
         N m, base frame.
     """
-    return -(c_s * w + mu * r * norm(R) * smooth_sign(w, eps))
+    k = let(f"{name}_k", -(c_s + mu * r * norm(R) / sp.sqrt(dot(w, w) + eps**2)),
+            rf"-k_{{{name}}}")
+    return k * w
 
 
 def joint_friction_scalar(w, R, c_s, mu, r, eps):

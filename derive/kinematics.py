@@ -221,6 +221,11 @@ class UniversalJoint(NamedTuple):
     frame: sp.Matrix      #: leg body axes ``[a2, u x a2, u]`` as columns, (3, 3), 1
 
     @property
+    def b(self) -> sp.Matrix:
+        """``u x a2``, the leg's second body axis, (3, 1), 1."""
+        return self.frame[:, 1]
+
+    @property
     def n_dot_u(self):
         """``n . u = s``, the divisor of the torsion moment."""
         return self.sin2 * self.inv_sin
@@ -256,64 +261,77 @@ def universal_joint_axes(u, a1, let=inline) -> UniversalJoint:
     return UniversalJoint(c, s2, inv_s, a2, n, sp.Matrix.hstack(a2, b, u))
 
 
-def leg_angular_velocity(u, u_dot, a1, joint: UniversalJoint, let=inline):
+class LegSpin(NamedTuple):
+    """The leg's angular velocity, in base and in its own axes (see ``leg_angular_velocity``)."""
+
+    omega: sp.Matrix        #: base frame, (3, 1), rad/s
+    omega_body: sp.Matrix   #: leg axes ``[a2, u x a2, u]``, (3, 1), rad/s
+    lam: sp.Expr            #: spin about u, ``omega . u``, rad/s
+    a2_u_dot: sp.Expr       #: ``a2 . u'``, 1/s
+    b_u_dot: sp.Expr        #: ``(u x a2) . u'``, 1/s
+
+
+def leg_angular_velocity(u, u_dot, joint: UniversalJoint, let=inline) -> LegSpin:
     """The leg's angular velocity ``omega_L = u x u' + lam u`` with ``omega_L . n = 0``.
 
-    ``lam = c q / s^2`` with ``q = (u x u') . a1``.
+    ``lam = c q / s^2`` with ``q = (u x u') . a1 = s (a2 . u')``, so ``lam = c (a2 . u') / s``.
+    In the leg's axes ``[a2, b = u x a2, u]`` the same vector is ``(-b . u', a2 . u', lam)``.
 
     Parameters
     ----------
     u, u_dot : sympy.Matrix, shape (3, 1)
         Leg direction (1) and its rate (1/s), base frame.
-    a1 : sympy.Matrix, shape (3, 1)
-        First axis of the universal joint, base frame, 1.
     joint : UniversalJoint
     let : callable
-        The chain's ``let``; defines ``u_x_u_dot``, ``q``, ``lam`` and ``omega_leg``.
+        The chain's ``let``; defines ``a2_u_dot``, ``b_u_dot``, ``lam`` and ``omega_leg``.
 
     Returns
     -------
-    omega_L : sympy.Matrix, shape (3, 1)
-        rad/s, base frame.
-    lam : sympy.Expr
-        Spin rate about the leg's axis, rad/s.
-    q : sympy.Expr
-        ``(u x u') . a1``, 1/s.
+    LegSpin
     """
-    turn = let("u_x_u_dot", cross(u, u_dot), r"u \times \dot{u}")
-    q = let("q", dot(turn, a1), "q")
-    lam = let("lam", joint.cos * q / joint.sin2, r"\lambda")
-    return let("omega_leg", turn + lam * u, r"\omega_{L}"), lam, q
+    a2_du = let("a2_u_dot", dot(joint.a2, u_dot), r"a_{2} \cdot \dot{u}")
+    b_du = let("b_u_dot", dot(joint.b, u_dot), r"b \cdot \dot{u}")
+    lam = let("lam", joint.cos * joint.inv_sin * a2_du, r"\lambda")
+    omega = let("omega_leg", cross(u, u_dot) + lam * u, r"\omega_{L}")
+    return LegSpin(omega, sp.Matrix([-b_du, a2_du, lam]), lam, a2_du, b_du)
 
 
-def leg_angular_acceleration(u, u_dot, u_ddot, a1, joint: UniversalJoint, lam, q, let=inline):
-    """Time derivative of ``leg_angular_velocity`` (a1 is constant).
+def leg_angular_acceleration(u_dot, u_ddot, a1, joint: UniversalJoint, spin: LegSpin,
+                             let=inline):
+    """Time derivative of ``leg_angular_velocity`` (a1 is constant), in the leg's axes.
 
-    ``alpha_L = u x u'' + lam' u + lam u'`` with ``lam' = (c' q + c q' + 2 c c' lam) / s^2``,
-    ``c' = u' . a1`` and ``q' = (u x u'') . a1``.
+    ``alpha_L = u x u'' + lam' u + lam u'``; with ``c' = u' . a1`` and ``q' = s (a2 . u'')``,
+    ``lam' = (c' (a2 . u') + c (a2 . u'')) / s + 2 c c' lam / s^2``. In the leg's axes
+    ``[a2, b, u]``: ``(-b . u'' + lam a2 . u', a2 . u'' + lam b . u', lam')``.
 
     Parameters
     ----------
-    u, u_dot, u_ddot : sympy.Matrix, shape (3, 1)
-        Leg direction (1) and its first (1/s) and second (1/s^2) rates, base frame.
+    u_dot, u_ddot : sympy.Matrix, shape (3, 1)
+        First (1/s) and second (1/s^2) rates of the leg direction, base frame.
     a1 : sympy.Matrix, shape (3, 1)
         First axis of the universal joint, base frame, 1.
     joint : UniversalJoint
-    lam, q : sympy.Expr
+    spin : LegSpin
         From ``leg_angular_velocity``.
     let : callable
-        The chain's ``let``; defines ``u_x_u_ddot``, ``lam_dot`` and ``alpha_leg``.
+        The chain's ``let``; defines ``lam_dot`` and ``alpha_leg_body``.
 
     Returns
     -------
-    sympy.Matrix, shape (3, 1)
-        rad/s^2, base frame.
+    alpha_body : sympy.Matrix, shape (3, 1)
+        Leg axes, rad/s^2 (what the rotation moments need).
+    alpha : sympy.Matrix, shape (3, 1)
+        The same in the base frame, rad/s^2 (an expression, for reading and tests).
     """
-    turn = let("u_x_u_ddot", cross(u, u_ddot), r"u \times \ddot{u}")
-    c, c_dot, q_dot = joint.cos, dot(u_dot, a1), dot(turn, a1)
-    lam_dot = let("lam_dot", (c_dot * q + c * q_dot + 2 * c * c_dot * lam) / joint.sin2,
-                  r"\dot{\lambda}")
-    return let("alpha_leg", turn + lam_dot * u + lam * u_dot, r"\alpha_{L}")
+    c, inv_s = joint.cos, joint.inv_sin
+    c_dot = dot(u_dot, a1)
+    a2_ddu, b_ddu = dot(joint.a2, u_ddot), dot(joint.b, u_ddot)
+    lam_dot = let("lam_dot", inv_s * (c_dot * spin.a2_u_dot + c * a2_ddu
+                                      + 2 * c * c_dot * spin.lam * inv_s), r"\dot{\lambda}")
+    alpha_body = let("alpha_leg_body", sp.Matrix([-b_ddu + spin.lam * spin.a2_u_dot,
+                                                  a2_ddu + spin.lam * spin.b_u_dot, lam_dot]),
+                     r"\alpha_{L}^{leg}")
+    return alpha_body, joint.frame * alpha_body
 
 
 def point_on_leg_acceleration(s, s_dot, s_ddot, u, u_dot, u_ddot):

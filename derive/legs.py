@@ -13,69 +13,78 @@ moments about C_i:
 
 The moment equation fixes everything in R_Ei but its axial part: its component along u gives
 ``M_Ci = (K.u) / (n.u)``, and crossing with u gives the transverse part
-``R_Ei,perp = u x (K - M_Ci n) / D``. So ``R_Ei = f_i u + R_Ei,perp`` with one unknown f_i per leg,
+``R_Ei,perp = u x (K - M_Ci n) / D``. Both are cheapest in the leg's own axes ``[a2, u x a2, u]``
+(kinematics.universal_joint_axes), where u and n have constant components. So ``R_Ei = f_i u + R_Ei,perp`` with one unknown f_i per leg,
 and the platform's six equations (2)-(7) become a 6x6 linear system in f (the transpose of the
 platform's Jacobian). R_Ci then follows from (11)-(13).
 """
 
 import sympy as sp
 
-from .mechanics import Wrench
 from .vectors import cross, dot
 
 
-def leg_required(wrenches, C):
-    """The wrench, about C, that the leg's parts need: the sum of their required wrenches.
+def leg_moment(distances, forces, rotation_moments, joint):
+    """K, the moment about C the leg's parts need, in the leg's axes ``[a2, b, u]``.
+
+    A part whose centre is at ``C + s_k u`` needs the force ``F_k`` and the rotation moment
+    ``M_k`` (``Inertia.rotation_moment_in_body``, leg axes):
+    ``K = sum_k (s_k u x F_k) + R M_k`` with R the leg's axes. With ``S = sum_k s_k F_k``,
+    ``u x S`` has the leg-axes components ``(-S . b, S . a2, 0)``.
 
     Parameters
     ----------
-    wrenches : sequence of mechanics.Wrench
-        Required wrench of each part (``Body.required_wrench``), any reference point.
-    C : sympy.Matrix, shape (3, 1)
-        Base joint, base frame, m.
+    distances : sequence of sympy.Expr
+        Distances of the parts' centres from C along u, m.
+    forces : sequence of sympy.Matrix, shape (3, 1)
+        The parts' required forces (``Body.required_force``), base frame, N.
+    rotation_moments : sequence of sympy.Matrix, shape (3, 1)
+        The parts' rotation moments, leg axes, N m.
+    joint : kinematics.UniversalJoint
 
     Returns
     -------
-    mechanics.Wrench
-        ``F_leg`` (N) and ``K`` (N m, about C), base frame: the right-hand sides above.
+    sympy.Matrix, shape (3, 1)
+        K in leg axes, N m (``joint.frame * K`` in the base frame).
     """
-    total = Wrench(sp.zeros(3, 1), sp.zeros(3, 1), C)
-    for w in wrenches:
-        total = total + w
-    return total
+    S = sum((s * F for s, F in zip(distances, forces)), sp.zeros(3, 1))
+    M = sum(rotation_moments, sp.zeros(3, 1))
+    return sp.Matrix([M[0] - dot(S, joint.b), M[1] + dot(S, joint.a2), M[2]])
 
 
-def torsion_moment(K, u, n_dot_u):
+def torsion_moment(K_leg, joint):
     """The universal joint's constraint moment along n: ``M_C = (K . u) / (n . u)``.
+
+    In the leg's axes ``u = (0, 0, 1)`` and ``n = (0, -c, s)`` (c = u . a1, s^2 = 1 - c^2),
+    so ``M_C = K_z / s``.
 
     Parameters
     ----------
-    K : sympy.Matrix, shape (3, 1)
-        Moment about C the leg needs, base frame, N m.
-    u : sympy.Matrix, shape (3, 1)
-        Unit leg direction, base frame, 1.
-    n_dot_u : sympy.Expr
-        ``n . u`` (``UniversalJoint.n_dot_u`` = ``sqrt(1 - (u . a1)^2)``), 1.
+    K_leg : sympy.Matrix, shape (3, 1)
+        Moment about C the leg needs, leg axes, N m.
+    joint : kinematics.UniversalJoint
 
     Returns
     -------
     sympy.Expr
         N m.
     """
-    return dot(K, u) / n_dot_u
+    return K_leg[2] * joint.inv_sin
 
 
-def transverse_end_force(K, M_C, u, n, D):
+def transverse_end_force(K_leg, M_C, joint, D):
     """The part of R_E perpendicular to the leg: ``u x (K - M_C n) / D``.
+
+    In the leg's axes ``K - M_C n = (K_x, K_y + c M_C, 0)`` and ``u x`` that is
+    ``(-(K_y + c M_C), K_x, 0)``; in the base frame ``(K_x b - (K_y + c M_C) a2) / D``.
 
     Parameters
     ----------
-    K : sympy.Matrix, shape (3, 1)
-        Moment about C the leg needs, base frame, N m.
+    K_leg : sympy.Matrix, shape (3, 1)
+        Moment about C the leg needs, leg axes, N m.
     M_C : sympy.Expr
         Torsion moment of the universal joint, N m.
-    u, n : sympy.Matrix, shape (3, 1)
-        Unit leg direction and torsion direction, base frame, 1.
+    joint : kinematics.UniversalJoint
     D : sympy.Expr
         Leg length, m.
 
@@ -84,7 +93,7 @@ def transverse_end_force(K, M_C, u, n, D):
     sympy.Matrix, shape (3, 1)
         N, base frame.
     """
-    return cross(u, K - M_C * n) / D
+    return joint.b * (K_leg[0] / D) - joint.a2 * ((K_leg[1] + joint.cos * M_C) / D)
 
 
 def leg_residual(R_E, R_C, M_C, u, n, D, F_leg, K):

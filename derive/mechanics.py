@@ -110,6 +110,24 @@ class Inertia:
         w_b = omega if omega.is_zero_matrix else let(f"{name}_omega", R.T * omega)
         return a_b, w_b
 
+    def rotation_moment_in_body(self, a_b, w_b) -> sp.Matrix:
+        """``I a_b + w_b x I w_b``: the rotation moment in body axes.
+
+        Parameters
+        ----------
+        a_b, w_b : sympy.Matrix, shape (3, 1)
+            Angular acceleration (rad/s^2) and velocity (rad/s), body axes (``body_rates``).
+
+        Returns
+        -------
+        sympy.Matrix, shape (3, 1)
+            Moment about ``point``, body axes, N m.
+        """
+        body = self.matrix * a_b
+        if not w_b.is_zero_matrix:
+            body = body + cross(w_b, self.matrix * w_b)
+        return body
+
     def rotation_moment(self, alpha, omega, let=inline, name="M_rot", latex=None, rates=None):
         """``J alpha + omega x J omega`` about ``point``, computed in body axes (``J`` never formed).
 
@@ -125,19 +143,15 @@ class Inertia:
         name, latex : str
             Name of the moment in the chain.
         rates : tuple, optional
-            ``body_rates(alpha, omega)`` when already computed (bodies sharing one frame).
+            ``body_rates(alpha, omega)`` when already known (bodies sharing one frame).
 
         Returns
         -------
         sympy.Matrix, shape (3, 1)
             Moment about ``point``, base frame, N m.
         """
-        R, I = self.frame, self.matrix
         a_b, w_b = rates if rates is not None else self.body_rates(alpha, omega, let, name)
-        body = I * a_b
-        if not w_b.is_zero_matrix:
-            body = body + cross(w_b, I * w_b)
-        return let(name, R * body, latex)
+        return let(name, self.frame * self.rotation_moment_in_body(a_b, w_b), latex)
 
 
 @dataclass(frozen=True)
@@ -172,6 +186,16 @@ class Body:
         """Centre of mass, base frame, m."""
         return self.inertia.point
 
+    def required_force(self, g_vec) -> sp.Matrix:
+        """``m a - m_w g``: the resultant external force the body needs, base frame, N.
+
+        Parameters
+        ----------
+        g_vec : sympy.Matrix, shape (3, 1)
+            Gravitational acceleration, base frame, m/s^2.
+        """
+        return self.mass * self.acceleration - self.weight_mass * g_vec
+
     def required_wrench(self, g_vec, rotation_moment) -> Wrench:
         """Resultant external wrench the body needs, about its centre of mass.
 
@@ -190,5 +214,4 @@ class Body:
         Wrench
             About ``centre``.
         """
-        force = self.mass * self.acceleration - self.weight_mass * g_vec
-        return Wrench(force, rotation_moment, self.centre)
+        return Wrench(self.required_force(g_vec), rotation_moment, self.centre)

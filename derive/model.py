@@ -213,9 +213,10 @@ class Leg:
     alpha_leg: sp.Matrix
     lower: Body
     upper: Body
-    upper_need: Wrench             # the upper part's required wrench
+    upper_need: Wrench             # the upper part's required wrench (about its centre)
+    s_upper: sp.Expr               # distance of the upper part's centre from C
     F_leg: sp.Matrix
-    K: sp.Matrix
+    K: sp.Matrix                   # base frame (computed in the leg's axes)
     M_C: sp.Expr
     t_E: sp.Matrix                 # R_E's part perpendicular to u
     out: dict = field(default_factory=dict)   # reactions and friction, by output name
@@ -350,7 +351,7 @@ def _leg(ch: Chain, inp: Inputs, platform: PlatformPart, i: int) -> Leg:
     joint = kin.universal_joint_axes(u, a1, motion)
     v_E = motion("v_E", kin.point_velocity(X["velocity"], X["omega"], r_E), "v_{E}")
     D_dot, u_dot = kin.leg_rates(u, D, v_E, motion)
-    omega_leg, lam, q = kin.leg_angular_velocity(u, u_dot, a1, joint, motion)
+    spin = kin.leg_angular_velocity(u, u_dot, joint, motion)
     # the parts' centres, as distances from C along the leg
     k_low, k_up = P["lower_frac"], 1 - P["upper_frac"]
     s_low = P["lower_com"] + k_low * D
@@ -359,15 +360,18 @@ def _leg(ch: Chain, inp: Inputs, platform: PlatformPart, i: int) -> Leg:
         a_E = motion("a_E", kin.point_acceleration(X["acceleration"], X["alpha"], X["omega"],
                                                    r_E), "a_{E}")
         D_ddot, u_ddot = kin.leg_second_rates(u, u_dot, D, D_dot, v_E, a_E, motion)
-        alpha_leg = kin.leg_angular_acceleration(u, u_dot, u_ddot, a1, joint, lam, q, motion)
+        alpha_body, alpha_leg = kin.leg_angular_acceleration(u_dot, u_ddot, a1, joint, spin,
+                                                             motion)
         a_low = motion("a_lower", kin.point_on_leg_acceleration(
             s_low, k_low * D_dot, k_low * D_ddot, u, u_dot, u_ddot), "a_{4}")
         a_up = motion("a_upper", kin.point_on_leg_acceleration(
             s_up, k_up * D_dot, k_up * D_ddot, u, u_dot, u_ddot), "a_{c2}")
-        omega_in = omega_leg
+        omega_in = spin.omega
+        rates = (alpha_body, spin.omega_body)
     else:
         a_low = a_up = inp.K["leg_acc"]
         alpha_leg, omega_in = inp.K["leg_alpha"], sp.zeros(3, 1)
+        rates = None
     weight = P["leg_weight"]
     lower = Body(P["lower_mass"], weight * P["lower_mass"] + Q["leg_weight.lower_mass"],
                  Inertia(P["lower_inertia"], joint.frame, C + s_low * u), a_low, alpha_leg,
@@ -376,18 +380,23 @@ def _leg(ch: Chain, inp: Inputs, platform: PlatformPart, i: int) -> Leg:
                  Inertia(P["upper_inertia"], joint.frame, C + s_up * u), a_up, alpha_leg,
                  omega_in)
     rotation = ch.scope("17", k)
-    rates = lower.inertia.body_rates(alpha_leg, omega_in, rotation, "leg_body")
-    lower_need = lower.required_wrench(inp.g_vec, lower.inertia.rotation_moment(
-        alpha_leg, omega_in, rotation, "M_rot4", "M_{rot4}", rates))
-    upper_need = upper.required_wrench(inp.g_vec, upper.inertia.rotation_moment(
-        alpha_leg, omega_in, rotation, "M_rot2", "M_{rot2}", rates))
-    total = lg.leg_required([lower_need, upper_need], C)
-    F_leg = need("F_leg", total.force, "F_{leg}")
-    K = need("K", total.moment, "K")
-    M_C = need("M_C", lg.torsion_moment(K, u, joint.n_dot_u), "M_{C}")
-    t_E = need("t_E", lg.transverse_end_force(K, M_C, u, joint.n, D), r"R_{E}^{\perp}")
-    return Leg(k, C, a1, E, r_E, D, u, joint, D_dot, omega_leg, alpha_leg, lower, upper,
-               upper_need, F_leg, K, M_C, t_E)
+    if rates is None:
+        rates = lower.inertia.body_rates(alpha_leg, omega_in, rotation, "leg_body")
+    turn_low = rotation("M_rot4_leg", lower.inertia.rotation_moment_in_body(*rates),
+                        "M^{leg}_{rot4}")
+    turn_up = rotation("M_rot2_leg", upper.inertia.rotation_moment_in_body(*rates),
+                       "M^{leg}_{rot2}")
+    force_low = need("F_lower", lower.required_force(inp.g_vec), "F_{4}")
+    force_up = need("F_upper", upper.required_force(inp.g_vec), "F_{2}")
+    F_leg = need("F_leg", force_low + force_up, "F_{leg}")
+    K_leg = need("K_leg", lg.leg_moment([s_low, s_up], [force_low, force_up],
+                                        [turn_low, turn_up], joint), "K^{leg}")
+    M_C = need("M_C", lg.torsion_moment(K_leg, joint), "M_{C}")
+    t_E = need("t_E", lg.transverse_end_force(K_leg, M_C, joint, D), r"R_{E}^{\perp}")
+    upper_need = Wrench(force_up, rotation("M_rot2", joint.frame * turn_up, "M_{rot2}"),
+                        upper.centre)
+    return Leg(k, C, a1, E, r_E, D, u, joint, D_dot, spin.omega, alpha_leg, lower, upper,
+               upper_need, s_up, F_leg, joint.frame * K_leg, M_C, t_E)
 
 
 def _on_platform(platform: PlatformPart, leg: Leg, force, moment=None) -> Wrench:
@@ -414,8 +423,10 @@ def _reactions(ch: Chain, inp: Inputs, leg: Leg, f_axial, next_leg: Leg) -> None
     need, prismatic = ch.scope("11-17", leg.k), ch.scope("28-32", leg.k)
     R_E = need("R_E", f_axial * leg.u + leg.t_E, "R_{E}")
     R_C = need("R_C", R_E + leg.F_leg, "R_{C}")
-    P3 = leg.C + inp.P["prismatic_point"] * leg.D * leg.u
-    F_ax, R_3, M_3 = pr.upper_part_loads(Wrench.force_at(R_E, leg.E), leg.upper_need, leg.u, P3)
+    s_3 = inp.P["prismatic_point"] * leg.D
+    P3 = leg.C + s_3 * leg.u
+    F_ax, R_3, M_3 = pr.upper_part_loads(R_E, leg.upper_need.force, leg.upper_need.moment,
+                                         leg.u, leg.D, leg.s_upper, s_3)
     frame = lf.leg_frame(leg.E, leg.C, next_leg.E)
     R_3 = prismatic("R_3", R_3, "R_{3}")
     M_3 = prismatic("M_3", M_3, "M_{3}")
@@ -450,9 +461,11 @@ def _coupling(ch: Chain, inp: Inputs, legs: list[Leg], A_qr):
     P, Q = inp.P, inp.Q
     m = P["friction_model"] if inp.kinematic else sp.S.Zero
 
+    terms = [_joint_friction_terms(ch.scope("33-35", leg.k), P, m, leg.out["omega_rel"],
+                                   leg.out["omega_C"], leg.a1, leg.joint.a2) for leg in legs]
+
     def moments(leg, R_E, R_C, it):
-        return _joint_friction(ch.scope("33-35", leg.k), f"_{it}", P, m, R_E, R_C,
-                               leg.out["omega_rel"], leg.out["omega_C"], leg.a1, leg.joint.a2)
+        return _joint_friction(ch.scope("33-35", leg.k), f"_{it}", terms[leg.k - 1], R_E, R_C)
 
     df, change = cp.solve(ch, legs, A_qr, cp.coupling_weight(P, Q, inp.mode), moments, m)
     for i, leg in enumerate(legs):
@@ -497,21 +510,22 @@ FRICTION_INPUTS = (
 )
 
 
-def _joint_friction(let, tag, P, m, R_E, R_C, w_rel, w_C, a1, a2):
+def _joint_friction_terms(let, P, m, w_rel, w_C, a1, a2) -> dict:
+    """The reaction-free parts of one leg's joint friction (coupled.joint_friction_terms)."""
+    return cp.joint_friction_terms(let, w_rel, w_C, a1, a2, P["joint_viscous"],
+                                   P["joint_coulomb"], P["joint_radius"], P["joint_eps"], m)
+
+
+def _joint_friction(let, tag, terms, R_E, R_C):
     """Friction moments (M_frE on the platform, M_frC on the leg) of one leg, (33)-(34).
 
-    ``m``: the friction model (1: the universal joint per bearing axis, coupled.py; 0: the
-    paper's vector form (34)); the spherical joint keeps the vector form (33). ``tag`` tells
-    the fixed point's iterates apart.
+    ``terms``: ``_joint_friction_terms`` (the model ``m``: 1 the universal joint per bearing
+    axis, 0 the paper's vector form (34); the spherical joint keeps the vector form (33)).
+    ``tag`` tells the fixed point's iterates apart.
     """
-    c_s, mu, r, eps = P["joint_viscous"], P["joint_coulomb"], P["joint_radius"], P["joint_eps"]
-    MfrE = let(f"MfrE{tag}", fr.joint_friction_moment(w_rel, R_E, c_s, mu, r, eps),
-               f"M_{{frE{tag}}}")
-    MfrC = fr.joint_friction_moment(w_C, R_C, c_s, mu, r, eps)
-    if m != 0:
-        MfrC = m * cp.universal_joint_friction(w_C, R_C, a1, a2, c_s, mu, r, eps) \
-            + (1 - m) * MfrC
-    return MfrE, let(f"MfrC{tag}", MfrC, f"M_{{frC{tag}}}")
+    MfrE, MfrC = cp.joint_friction_moments(terms, R_E, R_C)
+    return let(f"MfrE{tag}", MfrE, f"M_{{frE{tag}}}"), let(f"MfrC{tag}", MfrC,
+                                                           f"M_{{frC{tag}}}")
 
 
 def _prismatic_friction(let, P, Q, m, R_3, M_3, v, D, u) -> dict:
@@ -561,8 +575,9 @@ def build_friction() -> Model:
         let = ch.scope("33-35", i + 1)
         u, a1 = row["u"], _row(P["universal_axes"], i)
         a2 = cross(a1, u) / norm(cross(a1, u))
-        res = dict(zip(("MfrE", "MfrC"), _joint_friction(
-            let, "", P, m, row["R_E"], row["R_C"], row["omega_rel"], row["omega_leg"], a1, a2)))
+        terms = _joint_friction_terms(let, P, m, row["omega_rel"], row["omega_leg"], a1, a2)
+        res = dict(zip(("MfrE", "MfrC"), _joint_friction(let, "", terms, row["R_E"],
+                                                         row["R_C"])))
         res["MfrE_s"] = fr.joint_friction_scalar(row["omega_rel"], row["R_E"], c_s, mu, r, eps)
         res["MfrC_s"] = fr.joint_friction_scalar(row["omega_leg"], row["R_C"], c_s, mu, r, eps)
         res.update(_prismatic_friction(let, P, Q, m, row["R_3"], row["M_3"], row["D_dot"],

@@ -15,26 +15,28 @@ E_i (as the paper takes them) give the same M_3: the two differ by ``(E - P_3) x
 force.
 """
 
-from .mechanics import Wrench
-from .vectors import dot
+from .vectors import cross, dot
 
 
-def upper_part_loads(on_platform: Wrench, required: Wrench, u, P3):
+def upper_part_loads(R_E, force2, rotation2, u, s_E, s_2, s_3):
     """Axial force F_ax, transverse force R_3 and moment M_3 of the prismatic joint.
 
-    The upper part carries the reaction of ``on_platform`` and the lower part's joint wrench at
-    P3; Newton-Euler gives that joint wrench as ``required - reaction(on_platform)`` about P3.
+    The points involved lie on the leg's axis, at distances from C: E at ``s_E`` (= D), the upper
+    part's centre at ``s_2`` and the joint point P_3 at ``s_3``; so the moment arms about P_3
+    are multiples of u and ``M_3 = u x ((s_E - s_3) R_E + (s_2 - s_3) F_2) + M_rot2``.
 
     Parameters
     ----------
-    on_platform : mechanics.Wrench
-        What the leg puts on the platform at E (force ``R_E``, and any joint moment), base frame.
-    required : mechanics.Wrench
-        The upper part's required wrench (``Body.required_wrench``).
+    R_E : sympy.Matrix, shape (3, 1)
+        Force of the leg on the platform at E, base frame, N.
+    force2 : sympy.Matrix, shape (3, 1)
+        The upper part's required force ``m_2 (a_2 - g)``, base frame, N.
+    rotation2 : sympy.Matrix, shape (3, 1)
+        Its rotation moment ``J_2 alpha_L + omega_L x J_2 omega_L``, base frame, N m.
     u : sympy.Matrix, shape (3, 1)
         Unit leg direction, base frame, 1.
-    P3 : sympy.Matrix, shape (3, 1)
-        The prismatic joint point, base frame, m.
+    s_E, s_2, s_3 : sympy.Expr
+        Distances from C of E, the upper centre and P_3, m.
 
     Returns
     -------
@@ -45,6 +47,7 @@ def upper_part_loads(on_platform: Wrench, required: Wrench, u, P3):
     M_3 : sympy.Matrix, shape (3, 1)
         Moment on the upper part about P3, base frame, N m.
     """
-    joint = (required - on_platform.reaction()).about(P3)
-    F_ax = dot(u, joint.force)
-    return F_ax, joint.force - F_ax * u, joint.moment
+    total = R_E + force2
+    F_ax = dot(u, total)
+    M_3 = cross(u, (s_E - s_3) * R_E + (s_2 - s_3) * force2) + rotation2
+    return F_ax, total - F_ax * u, M_3

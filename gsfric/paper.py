@@ -853,9 +853,21 @@ def run_paper(out_dir: str | os.PathLike[str], mode: str = "paper",
             with atomic_write(path, "wb") as handle:
                 handle.write(png)
             written.append(path)
+    from gsfric import paper_friction
+
+    if plots:
+        path = out / "breakdown.png"
+        png = figure_png(paper_friction.breakdown_figure(platform, run.motion))
+        with atomic_write(path, "wb") as handle:
+            handle.write(png)
+        written.append(path)
     path = out / "report.md"
     text = report_text(run, files=[p.name for p in written] + [path.name],
                        source=None if platform_file is None else f"`{platform_file}`")
+    text += "\n".join(paper_friction.report_section(run)) + "\n"
+    if plots:
+        text += ("\nWhat each part contributes to the actuator force (kinematic mode, legs 1 "
+                 "and 4): ![breakdown](breakdown.png)\n")
     with atomic_write(path, "w") as handle:
         handle.write(text)
     written.append(path)
