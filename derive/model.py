@@ -18,7 +18,8 @@ state ``x`` (24 per step), parameters ``P`` (platform description), effect param
 ``build`` reads as the physics runs: ``_platform`` (what platform and payload need), ``_leg``
 for each leg (kinematics, the parts' needs, the reduction to one unknown), ``_solve`` (the 6x6
 system in the axial forces), ``_reactions`` (every joint's reaction), ``_friction`` and
-``_coupling`` (joint friction carried by the actuators). Each calls the equation groups'
+``_coupling`` (joint friction carried by the actuators: the coupled model's fixed point,
+derive/coupled.py, and the prismatic friction of either model from the final reactions). Each calls the equation groups'
 functions through a ``Chain.scope`` so that every named quantity is computed once.
 """
 
@@ -29,6 +30,8 @@ from dataclasses import dataclass, field
 import sympy as sp
 
 from . import conditioning
+from . import bushing as bu
+from . import coupled as cp
 from . import effects as fx
 from . import friction as fr
 from . import kinematics as kin
@@ -38,7 +41,7 @@ from . import platform as pf
 from . import prismatic as pr
 from .chain import Chain
 from .mechanics import Body, Inertia, Wrench
-from .vectors import cross, dot
+from .vectors import cross, dot, norm
 
 N_LEGS = 6
 
@@ -79,6 +82,11 @@ PARAMETERS = (
     ("prismatic_coulomb", (), "1", "Coulomb coefficient, prismatic joints"),
     ("joint_eps", (), "rad/s", "regularisation speed of the joints' sign function"),
     ("prismatic_eps", (), "m/s", "regularisation speed of the prismatic sign function"),
+    ("friction_model", (), "1", "1: coupled model (friction loads the mechanism, bushings, "
+     "per-axis universal joints); 0: the paper's post-hoc (33)-(35)"),
+    ("bushing_offset", (), "m", "distance from C_i of the first bushing (coupled model)"),
+    ("bushing_spacing", (), "m", "distance b between the two bushings (coupled model)"),
+    ("prismatic_seal", (), "N", "Coulomb force of the prismatic joints' seals"),
 )
 PAPER_CONSTANTS = (
     ("platform_acc", (3,), "m/s^2", "platform and payload acceleration"),
@@ -112,6 +120,15 @@ OUTPUTS = (
     ("R_3_leg", (6, 3), "N", "R_3 in the paper's leg frame (18)-(27)"),
     ("M_3_leg", (6, 3), "N m", "M_3 in the paper's leg frame (18)-(27)"),
     ("h", (), "1", "singularity measure of the force Jacobian, 0 = singular (conditioning.py)"),
+    ("coupling_change", (6,), "N", "change of the axial forces over the coupled solve's last "
+     "iteration"),
+    ("F_joint", (6,), "N", "part of F from the joint friction moments carried by the actuators"),
+    ("Ffr_viscous", (6,), "N", "viscous part of Ffr"),
+    ("Ffr_coulomb", (6,), "N", "Coulomb part of Ffr from |R_3|, (35) (paper model)"),
+    ("Ffr_bushing", (6,), "N", "Coulomb part of Ffr from the bushing forces (coupled model)"),
+    ("Ffr_seal", (6,), "N", "seal part of Ffr"),
+    ("Ffr_effects", (6,), "N", "part of Ffr from the catalog's prismatic friction effects"),
+    ("N_bushing", (6, 2), "N", "magnitudes of the two bushings' normal forces (first, second)"),
 )
 
 
@@ -145,7 +162,9 @@ PARAMETER_LATEX = {
     "upper_inertia": "I_{2}", "leg_weight": "w_{leg}", "prismatic_point": "k_{3}",
     "joint_viscous": "c_{s}", "joint_coulomb": r"\mu", "joint_radius": "r",
     "prismatic_viscous": "c_{p}", "prismatic_coulomb": r"\mu_{p}",
-    "joint_eps": r"\varepsilon_{\omega}", "prismatic_eps": r"\varepsilon_{v}"}
+    "joint_eps": r"\varepsilon_{\omega}", "prismatic_eps": r"\varepsilon_{v}",
+    "friction_model": "m_{fr}", "bushing_offset": "s_{a}", "bushing_spacing": "b",
+    "prismatic_seal": "F_{seal}"}
 CONSTANT_LATEX = {"platform_acc": "a^{*}", "platform_alpha": r"\alpha^{*}",
                   "leg_acc": "a^{*}_{leg}", "leg_alpha": r"\alpha^{*}_{leg}",
                   "joint_speed": r"\omega^{*}"}
@@ -258,7 +277,7 @@ def build(mode: str = "kinematic") -> Model:
         _reactions(ch, inp, leg, f[i], legs[(i + 1) % N_LEGS])
     for leg in legs:
         _friction(ch, inp, leg)
-    df = _coupling(ch, platform, legs, A_qr)
+    df = _coupling(ch, inp, legs, A_qr)
     for leg in legs:
         _actuator_force(ch, inp, leg, df[leg.k - 1])
     outputs = {name: sp.Matrix([v for leg in legs for v in _flat(leg.out[name])])
@@ -417,12 +436,11 @@ def _reactions(ch: Chain, inp: Inputs, leg: Leg, f_axial, next_leg: Leg) -> None
     M_3 = prismatic("M_3", M_3, "M_{3}")
     leg.out.update(R_E=R_E, R_C=R_C, P3=P3, M_C=leg.M_C, D=leg.D, D_dot=leg.D_dot, u=leg.u,
                    omega_leg=leg.omega_leg, s2=leg.joint.sin2,
-                   F0=prismatic("F0", F_ax, "F_{0}"), R_3=R_3, M_3=M_3,
-                   R_3_leg=lf.to_leg_frame(frame, R_3), M_3_leg=lf.to_leg_frame(frame, M_3))
+                   F0=prismatic("F0", F_ax, "F_{0}"), R_3=R_3, M_3=M_3, frame=frame)
 
 
 def _friction(ch: Chain, inp: Inputs, leg: Leg) -> None:
-    """Joint friction (33)-(35) of one leg, with the catalog's prismatic effects."""
+    """The joints' relative angular velocities that friction (33)-(34) opposes."""
     let = ch.scope("33-35", leg.k)
     omega_rel = let("omega_rel", inp.X["omega"] - leg.omega_leg, r"\omega_{1}")
     omega_C = leg.omega_leg
@@ -432,29 +450,45 @@ def _friction(ch: Chain, inp: Inputs, leg: Leg) -> None:
                         r"\omega^{*}_{1}")
         omega_C = let("omega_C_paper", _with_magnitude(omega_C, speed, leg.u),
                       r"\omega^{*}_{0}")
-    o = leg.out
-    o["omega_rel"] = omega_rel
-    o.update(_leg_friction(let, inp.P, inp.Q, o["R_E"], o["R_C"], o["R_3"], o["M_3"],
-                           omega_rel, omega_C, leg.D_dot, leg.D, leg.u))
+    leg.out["omega_rel"], leg.out["omega_C"] = omega_rel, omega_C
 
 
-def _coupling(ch: Chain, platform: PlatformPart, legs: list[Leg], A_qr):
-    """Effect joint_friction_coupling: the joints' friction moments in the equilibrium.
+def _coupling(ch: Chain, inp: Inputs, legs: list[Leg], A_qr):
+    """Joint friction in the equilibrium (derive/coupled.py), then every leg's friction.
 
-    The platform's joint puts MfrE on the platform (and its reaction on the leg), the base's
-    joint MfrC on the leg; each leg's extra moment ``dK = MfrE - MfrC`` about C is reduced as
-    K is, and the platform's system is solved again with the same factor.
+    Coupled model (kinematic mode, ``friction_model = 1``): the fixed point of the reactions
+    and the friction they cause. Paper model (and paper mode): friction from the frictionless
+    reactions; the effect joint_friction_coupling adds the joint moments' load to F. Then the
+    prismatic friction from the final R_3, M_3 (the spherical joint's friction moment enters
+    M_3 in the coupled model).
     """
-    rest = Wrench(sp.zeros(3, 1), sp.zeros(3, 1), platform.p)
-    for leg in legs:
-        let = ch.scope("effects", leg.k)
-        dK = let("dK_leg", leg.joint.frame.T * (leg.out["MfrE"] - leg.out["MfrC"]),
-                 r"\Delta K^{leg}")
-        dt = let("dt_E", lg.transverse_end_force(dK, lg.torsion_moment(dK, leg.joint),
-                                                 leg.joint, leg.D), r"\Delta R_{E}^{\perp}")
-        rest = rest - _on_platform(platform, leg, dt, leg.out["MfrE"])
-    return ch.solve("df", A_qr, sp.Matrix.vstack(rest.force, rest.moment), r"\Delta f",
-                    "effects")
+    P, Q = inp.P, inp.Q
+    m = P["friction_model"] if inp.kinematic else sp.S.Zero
+
+    terms = [_joint_friction_terms(ch.scope("33-35", leg.k), P, m, leg.out["omega_rel"],
+                                   leg.out["omega_C"], leg.a1, leg.joint.a2) for leg in legs]
+
+    def moments(leg, R_E, R_C, it):
+        return _joint_friction(ch.scope("33-35", leg.k), f"_{it}", terms[leg.k - 1], R_E, R_C)
+
+    df, change = cp.solve(ch, legs, A_qr, cp.coupling_weight(P, Q, inp.mode), moments, m)
+    for i, leg in enumerate(legs):
+        o, let = leg.out, ch.scope("coupled", leg.k)
+        dR = o["dR_E"]
+        o["R_3"] = let("R_3_fr", o["R_3"] + dR - dot(leg.u, dR) * leg.u, r"R^{fr}_{3}")
+        o["M_3"] = let("M_3_fr", o["M_3"] + cross(leg.E - o["P3"], dR) + m * o["MfrE"],
+                       r"M^{fr}_{3}")
+        frame = o.pop("frame")
+        o["R_3_leg"], o["M_3_leg"] = lf.to_leg_frame(frame, o["R_3"]), \
+            lf.to_leg_frame(frame, o["M_3"])
+        c_s, mu, r, eps = P["joint_viscous"], P["joint_coulomb"], P["joint_radius"], \
+            P["joint_eps"]
+        o["MfrE_s"] = fr.joint_friction_scalar(o["omega_rel"], o["R_E_fr"], c_s, mu, r, eps)
+        o["MfrC_s"] = fr.joint_friction_scalar(o["omega_C"], o["R_C_fr"], c_s, mu, r, eps)
+        o.update(_prismatic_friction(ch.scope("33-35", leg.k), P, Q, m, o["R_3"], o["M_3"],
+                                     leg.D_dot, leg.D, leg.u))
+        o["coupling_change"], o["F_joint"] = change[i], df[i]
+    return df
 
 
 def _actuator_force(ch: Chain, inp: Inputs, leg: Leg, df) -> None:
@@ -463,7 +497,7 @@ def _actuator_force(ch: Chain, inp: Inputs, leg: Leg, df) -> None:
     Q = inp.Q
     o = leg.out
     o["F"] = ch.scope("28-32", leg.k)(
-        "F", o["F0"] + Q["joint_friction_coupling.scale"] * df - o["Ffr"]
+        "F", o["F0"] + df - o["Ffr"]
         + Q[f"sensor_bias.b{leg.k}"], "F")
 
 
@@ -480,26 +514,50 @@ FRICTION_INPUTS = (
 )
 
 
-def _leg_friction(let, P, Q, R_E, R_C, R_3, M_3, w_rel, w_C, v, D, u) -> dict:
-    """Friction of one leg, eqs. (33)-(35) and the catalog's prismatic friction effects."""
-    c_s, mu, r = P["joint_viscous"], P["joint_coulomb"], P["joint_radius"]
-    eps_w, eps_v = P["joint_eps"], P["prismatic_eps"]
-    c_p, mu_p = P["prismatic_viscous"], P["prismatic_coulomb"]
+def _joint_friction_terms(let, P, m, w_rel, w_C, a1, a2) -> dict:
+    """The reaction-free parts of one leg's joint friction (coupled.joint_friction_terms)."""
+    return cp.joint_friction_terms(let, w_rel, w_C, a1, a2, P["joint_viscous"],
+                                   P["joint_coulomb"], P["joint_radius"], P["joint_eps"], m)
+
+
+def _joint_friction(let, tag, terms, R_E, R_C):
+    """Friction moments (M_frE on the platform, M_frC on the leg) of one leg, (33)-(34).
+
+    ``terms``: ``_joint_friction_terms`` (the model ``m``: 1 the universal joint per bearing
+    axis, 0 the paper's vector form (34); the spherical joint keeps the vector form (33)).
+    ``tag`` tells the fixed point's iterates apart.
+    """
+    MfrE, MfrC = cp.joint_friction_moments(terms, R_E, R_C)
+    return let(f"MfrE{tag}", MfrE, f"M_{{frE{tag}}}"), let(f"MfrC{tag}", MfrC,
+                                                           f"M_{{frC{tag}}}")
+
+
+def _prismatic_friction(let, P, Q, m, R_3, M_3, v, D, u) -> dict:
+    """Prismatic friction of one leg in its parts: (35) with |R_3| (weight 1 - m) or the two
+    bushings (weight m, bushing.py), viscous, seal, and the catalog's effects."""
+    eps_v, c_p, mu_p = P["prismatic_eps"], P["prismatic_viscous"], P["prismatic_coulomb"]
     sign_v = let("sgn_v", fr.smooth_sign(v, eps_v), r"\sigma")
-    return dict(
-        MfrE=let("MfrE", fr.joint_friction_moment(w_rel, R_E, c_s, mu, r, eps_w, let, "MfrE"),
-                 "M_{frE}"),
-        MfrC=let("MfrC", fr.joint_friction_moment(w_C, R_C, c_s, mu, r, eps_w, let, "MfrC"),
-                 "M_{frC}"),
-        MfrE_s=fr.joint_friction_scalar(w_rel, R_E, c_s, mu, r, eps_w),
-        MfrC_s=fr.joint_friction_scalar(w_C, R_C, c_s, mu, r, eps_w),
-        Ffr_s=fr.prismatic_friction_scalar(v, R_3, c_p, mu_p, eps_v),
-        Ffr=let("Ffr", fr.prismatic_friction(v, R_3, c_p, mu_p, sign_v)
-                + fx.prismatic_effects_force(Q, v, sign_v, D, u, M_3), "F_{fr}"))
+    s_a = P["bushing_offset"] - P["prismatic_point"] * D
+    N_a, N_b = bu.bushing_forces(R_3, M_3, u, s_a, P["bushing_spacing"])
+    N_a, N_b = let("N_a", N_a, "N_{a}"), let("N_b", N_b, "N_{b}")
+    viscous, bushing, seal = bu.bushing_friction_parts(v, N_a, N_b, c_p, mu_p,
+                                                       P["prismatic_seal"], sign_v)
+    out = dict(Ffr_viscous=viscous, Ffr_bushing=m * bushing, Ffr_seal=seal,
+               Ffr_coulomb=(1 - m) * (fr.prismatic_friction(v, R_3, c_p, mu_p, sign_v)
+                                      - viscous),
+               Ffr_effects=fx.prismatic_effects_force(Q, v, sign_v, D, u, M_3),
+               N_bushing=sp.Matrix([norm(N_a), norm(N_b)]),
+               Ffr_s=fr.prismatic_friction_scalar(v, R_3, c_p, mu_p, eps_v))
+    out["Ffr"] = let("Ffr", viscous + out["Ffr_coulomb"] + out["Ffr_bushing"] + seal
+                     + out["Ffr_effects"], "F_{fr}")
+    return out
 
 
 def build_friction() -> Model:
     """The friction map alone: reactions, joint speeds and coefficients -> friction.
+
+    The friction of the platform's friction model (``friction_model``) evaluated from the
+    given reactions, with nothing fed back.
 
     Returns
     -------
@@ -514,11 +572,20 @@ def build_friction() -> Model:
     Qm = ch.input("effects", len(q_names), 1, "Q")
     Q = {n: Qm[j] for j, n in enumerate(q_names)}
     out = {n: [] for n in ("MfrE", "MfrC", "Ffr", "MfrE_s", "MfrC_s", "Ffr_s")}
+    m = P["friction_model"]
+    c_s, mu, r, eps = P["joint_viscous"], P["joint_coulomb"], P["joint_radius"], P["joint_eps"]
     for i in range(N_LEGS):
         row = {n: (_row(b, i) if b.shape[1] == 3 else b[i]) for n, b in blocks.items()}
-        res = _leg_friction(ch.scope("33-35", i + 1), P, Q, row["R_E"], row["R_C"],
-                            row["R_3"], row["M_3"], row["omega_rel"], row["omega_leg"],
-                            row["D_dot"], row["D"], row["u"])
+        let = ch.scope("33-35", i + 1)
+        u, a1 = row["u"], _row(P["universal_axes"], i)
+        a2 = cross(a1, u) / norm(cross(a1, u))
+        terms = _joint_friction_terms(let, P, m, row["omega_rel"], row["omega_leg"], a1, a2)
+        res = dict(zip(("MfrE", "MfrC"), _joint_friction(let, "", terms, row["R_E"],
+                                                         row["R_C"])))
+        res["MfrE_s"] = fr.joint_friction_scalar(row["omega_rel"], row["R_E"], c_s, mu, r, eps)
+        res["MfrC_s"] = fr.joint_friction_scalar(row["omega_leg"], row["R_C"], c_s, mu, r, eps)
+        res.update(_prismatic_friction(let, P, Q, m, row["R_3"], row["M_3"], row["D_dot"],
+                                       row["D"], u))
         for n in out:
             out[n].extend(_flat(res[n]))
     inputs = {n: s for n, s, *_ in FRICTION_INPUTS}

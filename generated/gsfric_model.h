@@ -32,7 +32,7 @@ const casadi_int* gsfric_model_eval_sparsity_out(casadi_int i);
 int gsfric_model_eval_work(casadi_int *sz_arg, casadi_int* sz_res, casadi_int *sz_iw, casadi_int *sz_w);
 int gsfric_model_eval_work_bytes(casadi_int *sz_arg, casadi_int* sz_res, casadi_int *sz_iw, casadi_int *sz_w);
 #define gsfric_model_eval_SZ_ARG 3
-#define gsfric_model_eval_SZ_RES 22
+#define gsfric_model_eval_SZ_RES 30
 #define gsfric_model_eval_SZ_IW 0
 #define gsfric_model_eval_SZ_W 0
 int gsfric_model_eval_paper(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem);
@@ -50,7 +50,7 @@ const casadi_int* gsfric_model_eval_paper_sparsity_out(casadi_int i);
 int gsfric_model_eval_paper_work(casadi_int *sz_arg, casadi_int* sz_res, casadi_int *sz_iw, casadi_int *sz_w);
 int gsfric_model_eval_paper_work_bytes(casadi_int *sz_arg, casadi_int* sz_res, casadi_int *sz_iw, casadi_int *sz_w);
 #define gsfric_model_eval_paper_SZ_ARG 4
-#define gsfric_model_eval_paper_SZ_RES 22
+#define gsfric_model_eval_paper_SZ_RES 30
 #define gsfric_model_eval_paper_SZ_IW 0
 #define gsfric_model_eval_paper_SZ_W 0
 int gsfric_model_actuator(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem);

@@ -43,7 +43,8 @@ DT = 1e-3
 SEED = 20261122
 
 IMPLEMENTATIONS = {
-    "compiled": "compiled C (Evaluator.actuator_forces)",
+    "compiled": "compiled C (Evaluator.actuator_forces), coupled friction model",
+    "compiled_paper": "compiled C, the paper's post-hoc friction model",
     "numpy": "vectorised NumPy (numpy_model.actuator_forces_numpy)",
     "loop": "per-step loop, 42x42 solve (numpy_model.actuator_forces_loop)",
 }
@@ -150,8 +151,10 @@ def _callable(implementation: str, threads: int, x: np.ndarray):
     from gsfric import models, numpy_model
     from gsfric.evaluation import Evaluator
 
-    platform = models.reference_platform()
-    if implementation == "compiled":
+    platform = models.reference_platform("paper")   # the model the NumPy references implement
+    if implementation in ("compiled", "compiled_paper"):
+        if implementation == "compiled":
+            platform = models.reference_platform()
         evaluator = Evaluator(platform, n_threads=threads)
         out = np.empty((x.shape[0], 6))
         out.fill(0.0)
@@ -248,7 +251,7 @@ def memory_child(implementation: str, threads: int, path: str) -> dict:
         fn()
         rise = _max_rss_kib() - before
     result = {"rss_mib": rise / 1024, "tracemalloc_mib": None}
-    if implementation != "compiled":
+    if not implementation.startswith("compiled"):
         tracemalloc.start()
         fn()
         result["tracemalloc_mib"] = tracemalloc.get_traced_memory()[1] / 2**20
@@ -545,7 +548,7 @@ def measure(sizes=SIZES, threads=(1, 2), budget: float = 2.0, memory: bool = Tru
     with tempfile.TemporaryDirectory(prefix="gsfric-bench-") as tmp:
         for n in sizes:
             x = np.ascontiguousarray(x_all[:n])
-            plan = [("compiled", t) for t in threads] + [("numpy", 1)]
+            plan = [("compiled", t) for t in threads] + [("compiled_paper", 1), ("numpy", 1)]
             if n <= LOOP_MAX_STEPS:
                 plan.append(("loop", 1))
             for implementation, t in plan:
@@ -599,16 +602,16 @@ def format_report(report: Report) -> str:
              f"cores free for this run (two CPU-bound processes together, 2.0 = two idle "
              f"cores): start {m.get('parallel_capacity_start', float('nan')):.2f}, end "
              f"{m.get('parallel_capacity_end', float('nan')):.2f}", ""]
-    head = (f"{'implementation':<12} {'threads':>7} {'N':>9} {'steps/s':>10} "
+    head = (f"{'implementation':<14} {'threads':>7} {'N':>9} {'steps/s':>10} "
             f"{'(CPU time)':>10} {'latency best':>13} {'median':>10} {'calls':>6} "
             f"{'mem RSS MiB':>12} {'tracemalloc':>12}")
     lines += [head, "-" * len(head)]
-    order = {"compiled": 0, "numpy": 1, "loop": 2}
+    order = {"compiled": 0, "compiled_paper": 1, "numpy": 2, "loop": 3}
     for c in sorted(report.cases, key=lambda c: (c.steps, order[c.implementation],
                                                   c.threads)):
         mark = " (extrapolated)" if c.extrapolated else ""
         cpu = "-" if c.steps_per_cpu_second is None else f"{c.steps_per_cpu_second:.3g}"
-        lines.append(f"{c.implementation:<12} {c.threads:>7} {c.steps:>9,} "
+        lines.append(f"{c.implementation:<14} {c.threads:>7} {c.steps:>9,} "
                      f"{c.steps_per_second:>10.3g} {cpu:>10} {_seconds(c.best):>13} "
                      f"{_seconds(c.median):>10} {c.calls:>6} {_mib(c.memory_rss_mib):>12} "
                      f"{_mib(c.memory_tracemalloc_mib):>12}{mark}")

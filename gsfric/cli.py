@@ -255,9 +255,13 @@ def paper(out_dir, mode, platform_file, no_plots):
                    "[default: all]; t and flag are always written.")
 @click.option("--float32", is_flag=True,
               help="Write the outputs as float32 (relative error up to 6e-8, half the size).")
+@click.option("--breakdown", "breakdown_file", type=click.Path(path_type=Path), default=None,
+              help="Also write F per leg split into its parts (inertia, gravity, payload, "
+                   "joint friction, prismatic friction by kind, effects) to this CSV or "
+                   "Parquet file (kinematic mode; the trajectory is read whole).")
 @_log_options
 def simulate(trajectory, platform_file, out, mode, strict, threads, chunk, window, progress,
-             quiet, columns, float32, column_map, units_map, angles, keep_columns):
+             quiet, columns, float32, breakdown_file, column_map, units_map, angles, keep_columns):
     """Evaluate a motion: actuator forces, reactions and friction at every step.
 
     The trajectory may be a measured-data file: with F1..F6 the output also has
@@ -272,6 +276,11 @@ def simulate(trajectory, platform_file, out, mode, strict, threads, chunk, windo
 
     from gsfric.stream import parse_columns, simulate_file
 
+    if breakdown_file is not None and mode != "kinematic":
+        from gsfric.errors import InputError
+
+        raise InputError("--breakdown: only in the kinematic mode")
+
     def show(message, category, filename, lineno, file=None, line=None):
         click.echo(f"gsfric: warning: {message}", err=True)
 
@@ -285,6 +294,14 @@ def simulate(trajectory, platform_file, out, mode, strict, threads, chunk, windo
                                 progress=False if quiet else progress,
                                 log_format=log_format, columns=parse_columns(columns),
                                 float32=float32)
+        if breakdown_file is not None:
+            from gsfric import breakdown, io
+
+            motion = io.read_trajectory(trajectory, log_format=log_format)
+            parts = breakdown.breakdown(platform, motion)
+            io.write_table(breakdown.to_frame(motion.t, parts), breakdown_file)
+            if not quiet:
+                click.echo(f"wrote {breakdown_file}")
     if not quiet:
         click.echo(f"wrote {out} ({summary.steps} steps, {summary.flagged} flagged)")
 

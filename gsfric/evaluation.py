@@ -16,9 +16,13 @@ Step flags (bits of ``Result.flag``; 0 = sound step):
   divided by the platform's size and its columns scaled to unit length;
 * 8 ``FLAG_UNIVERSAL``: a leg within ``UNIVERSAL_LIMIT`` of the direction of its universal
   joint's first axis (``1 - (u.a1)^2 < UNIVERSAL_LIMIT``), where the joint's torsion moment is
-  undefined.
+  undefined;
+* 16 ``FLAG_COUPLING``: the coupled friction model's fixed point has not converged: the axial
+  forces changed by more than ``COUPLING_TOLERANCE * (1 N + |F0|)`` over the last of its
+  iterations (joint friction so large that it nearly locks the mechanism; docs/friction.md).
 
-Every flag is computed in C in the same pass as the outputs (``_native/batch.c``).
+Every flag is computed in C in the same pass as the outputs (``_native/batch.c``), but for
+``FLAG_COUPLING``, one comparison per step in NumPy.
 
 Concurrency: an ``Evaluator`` is immutable after construction (its parameter vectors are
 read-only arrays) and every call works on its own buffers, so one Evaluator, or several, may be
@@ -47,9 +51,12 @@ FLAG_NONFINITE = 1
 FLAG_STROKE = 2
 FLAG_SINGULAR = 4
 FLAG_UNIVERSAL = 8
+FLAG_COUPLING = 16
 FLAG_NAMES = {FLAG_NONFINITE: "non-finite value", FLAG_STROKE: "leg length outside the stroke",
               FLAG_SINGULAR: "near-singular platform Jacobian",
-              FLAG_UNIVERSAL: "leg near its universal joint's first axis"}
+              FLAG_UNIVERSAL: "leg near its universal joint's first axis",
+              FLAG_COUPLING: "coupled friction solve not converged"}
+COUPLING_TOLERANCE = 1e-6
 COND_LIMIT = 1e6
 SINGULAR_LIMIT = 2.0 / COND_LIMIT
 UNIVERSAL_LIMIT = 1e-4
@@ -123,7 +130,9 @@ def parameter_values(platform: Platform) -> dict[str, object]:
         prismatic_point=PRISMATIC_POINT, joint_viscous=fr.joint_viscous,
         joint_coulomb=fr.joint_coulomb, joint_radius=fr.joint_radius,
         prismatic_viscous=fr.prismatic_viscous, prismatic_coulomb=fr.prismatic_coulomb,
-        joint_eps=JOINT_EPS, prismatic_eps=PRISMATIC_EPS)
+        joint_eps=JOINT_EPS, prismatic_eps=PRISMATIC_EPS,
+        friction_model=float(fr.model == "coupled"), bushing_offset=fr.bushing_offset,
+        bushing_spacing=fr.bushing_spacing, prismatic_seal=fr.prismatic_seal)
 
 
 def parameter_vector(platform: Platform) -> np.ndarray:
@@ -184,6 +193,17 @@ class Result:
     flag: np.ndarray
     mode: str = "kinematic"
     notes: list[str] = field(default_factory=list)
+    source: tuple | None = field(default=None, repr=False)   # (platform, motion) evaluated
+
+    def breakdown(self) -> dict[str, np.ndarray]:
+        """F per leg split into inertia, gravity, payload, joint friction carried, prismatic
+        friction by kind and effects, (N, 6) N each (``gsfric.breakdown``; kinematic mode)."""
+        from gsfric.breakdown import breakdown
+
+        if self.source is None or self.mode != "kinematic":
+            raise GsfricError("breakdown: needs a kinematic-mode result of Evaluator.evaluate")
+        platform, motion = self.source
+        return breakdown(platform, motion, self)
 
     def __getattr__(self, name):
         arrays = self.__dict__.get("arrays", {})
@@ -288,6 +308,16 @@ class Result:
         for i in range(6):
             cols[f"F0_{i + 1}"] = self.F0[:, i]
             cols[f"D{i + 1}"] = self.D[:, i]
+        # signed friction (docs/friction.md): the force on the rod along u (negative while the
+        # leg extends), the joint moments' vectors (base frame), the joint friction carried
+        for name, key in (("FfrS", "Ffr"), ("Fjoint", "F_joint")):
+            if key in self.arrays:
+                for i in range(6):
+                    cols[f"{name}{i + 1}"] = self.arrays[key][:, i]
+        for key in ("MfrE", "MfrC"):
+            for i in range(6):
+                for j, ax in enumerate("xyz"):
+                    cols[f"{key}{ax}{i + 1}"] = self.arrays[key][:, i, j]
         cols["flag"] = self.flag
         return annotate(pd.DataFrame(cols))
 
@@ -448,8 +478,12 @@ class Evaluator:
                 flag[s:e] = self._flags(xs, view)
         shapes = {name: shape for name, _, shape in self._full.outputs}
         arrays = {k: v.reshape((n,) + tuple(shapes[k])) for k, v in outs.items()}
+        if "coupling_change" in arrays:
+            limit = COUPLING_TOLERANCE * (1.0 + np.abs(arrays["F0"]))
+            flag[(np.abs(arrays["coupling_change"]) > limit).any(axis=1)] |= FLAG_COUPLING
         self._apply_sensor(np.asarray(motion.t, float), arrays, flag)
-        return Result(t=np.asarray(motion.t, float), arrays=arrays, flag=flag, mode=self.mode)
+        return Result(t=np.asarray(motion.t, float), arrays=arrays, flag=flag, mode=self.mode,
+                      source=(self.platform, motion))
 
     def flag_spec(self) -> "native.FlagSpec":
         """The settings of the step flags computed in C (read-only, shared by calls)."""

@@ -57,26 +57,71 @@ def reference_geometry() -> Geometry:
     return Geometry(base_joints=base, platform_joints=top, stroke=STROKE)
 
 
-def reference_platform() -> Platform:
-    """The built-in platform: the paper's masses and coefficients on the reference geometry.
+def reference_leg() -> Legs:
+    """The reference leg: a ball-screw electric cylinder with its motor at the universal joint.
 
-    Platform 10 kg with inertia 0.07 kg m^2 (times identity), payload 3 kg, leg parts 0.5 kg
-    with inertia 0.035 kg m^2, rigid leg model with centres 0.2 m from C_i and from E_i,
-    friction c_s = 0.02 N m s/rad, mu = 0.04, r = 0.05 m, prismatic 0.02 N s/m and 0.04.
+    Lower part (cylinder, screw, motor) 2.6 kg, centre 0.12 m from C_i; upper part (piston rod,
+    nut, rod end) 0.7 kg, centre 0.17 m from E_i; inertias of slender bodies 0.40 m and 0.45 m
+    long. The numbers and how they were obtained: docs/reference.md.
+    """
+    return Legs(model="rigid", weight=True,
+                lower_mass=REFERENCE_LEG["lower_mass"], lower_com=REFERENCE_LEG["lower_com"],
+                lower_inertia=np.diag(REFERENCE_LEG["lower_inertia"]),
+                upper_mass=REFERENCE_LEG["upper_mass"], upper_com=REFERENCE_LEG["upper_com"],
+                upper_inertia=np.diag(REFERENCE_LEG["upper_inertia"]))
+
+
+REFERENCE_LEG = dict(lower_mass=2.6, lower_com=0.12, lower_inertia=(0.040, 0.040, 0.0012),
+                     upper_mass=0.7, upper_com=0.17, upper_inertia=(0.012, 0.012, 0.0001))
+"""The reference leg's masses (kg), centre distances (m, from C_i and from E_i) and principal
+inertias (kg m^2, leg body frame: transverse, transverse, axial); see docs/reference.md."""
+
+REFERENCE_FRICTION = dict(model="coupled", bushing_offset=0.25, bushing_spacing=0.1,
+                          prismatic_seal=2.0, prismatic_coulomb=0.1)
+"""The reference platform's friction besides the paper's joint coefficients: the coupled model,
+polymer bushings (mu 0.1) at 0.25 m and 0.35 m from C_i, a 2 N rod seal."""
+
+
+def reference_platform(friction_model: str = "coupled") -> Platform:
+    """The built-in platform: the reference geometry, the paper's platform and payload, the
+    reference leg (``reference_leg``) and the coupled friction model.
+
+    Platform 10 kg with inertia 0.07 kg m^2 (times identity), payload 3 kg; joints
+    c_s = 0.02 N m s/rad, mu = 0.04, r = 0.05 m; prismatic joints 0.02 N s/m, bushings with
+    mu = 0.1 at 0.25 m and 0.35 m from C_i, seal 2 N (docs/reference.md, docs/friction.md).
+
+    Parameters
+    ----------
+    friction_model : {"coupled", "paper"}
+        ``"paper"`` gives the same platform with the paper's post-hoc friction model: (35) as
+        printed, with mu = 0.1 at R_3 and no seal.
     """
     return Platform(
         gravity=9.81,
         geometry=reference_geometry(),
         platform=Body(mass=10.0, inertia=np.eye(3) * 0.07, payload_mass=3.0),
-        legs=Legs(),
-        friction=Friction(),
+        legs=reference_leg(),
+        friction=Friction(**{**REFERENCE_FRICTION, "model": friction_model,
+                             **({"prismatic_seal": 0.0} if friction_model == "paper" else {})}),
         effects={},
     )
 
 
 def paper_platform() -> Platform:
-    """The reference platform with the paper's leg model (zone centres at 0.25 D and 0.75 D)."""
-    return reference_platform().with_legs(model="paper")
+    """The paper's platform: the paper's masses and coefficients on the reference geometry.
+
+    Leg parts 0.5 kg with inertia 0.035 kg m^2, the paper's leg model (zone centres at 0.25 D
+    and 0.75 D from C_i), friction c_s = 0.02 N m s/rad, mu = 0.04, r = 0.05 m, prismatic
+    0.02 N s/m and 0.04, the paper's post-hoc friction model.
+    """
+    return Platform(
+        gravity=9.81,
+        geometry=reference_geometry(),
+        platform=Body(mass=10.0, inertia=np.eye(3) * 0.07, payload_mass=3.0),
+        legs=Legs(model="paper"),
+        friction=Friction(),
+        effects={},
+    )
 
 
 def paper_constants() -> np.ndarray:

@@ -399,6 +399,7 @@ def run_paper(out_dir: str | os.PathLike[str], mode: str = "paper",
     list of Path
         The files written: table1-3.csv, platform.toml, the plots, report.md.
     """
+    from gsfric import paper_friction
     from gsfric.io import output_folder
 
     out = Path(out_dir)
@@ -421,9 +422,18 @@ def run_paper(out_dir: str | os.PathLike[str], mode: str = "paper",
                 with atomic_write(path, "wb") as handle:
                     handle.write(png)
                 written.append(path)
+            path = folder / "breakdown.png"
+            png = figure_png(paper_friction.breakdown_figure(platform, run.motion))
+            with atomic_write(path, "wb") as handle:
+                handle.write(png)
+            written.append(path)
         path = folder / "report.md"
         text = report_text(run, files=[p.name for p in written] + [path.name],
                            source=None if platform_file is None else f"`{platform_file}`")
+        text += "\n".join(paper_friction.report_section(run)) + "\n"
+        if plots:
+            text += ("\nWhat each part contributes to the actuator force (kinematic mode, legs 1 "
+                     "and 4): ![breakdown](breakdown.png)\n")
         with atomic_write(path, "w") as handle:
             handle.write(text)
         written.append(path)

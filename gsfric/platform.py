@@ -12,7 +12,7 @@ Units are SI: m, kg, kg m^2, N, s. The TOML layout (see SPEC.md)::
     [legs]           model, weight, lower_mass, lower_com, lower_inertia,
                      upper_mass, upper_com, upper_inertia
     [friction]       joint_viscous, joint_coulomb, joint_radius, prismatic_viscous,
-                     prismatic_coulomb
+                     prismatic_coulomb, model, bushing_offset, bushing_spacing, prismatic_seal
     [effects]        name = { parameter = value, ... }
     [limits]         optional ratings for ``gsfric sweep``'s check (see ``LIMITS``)
 
@@ -39,6 +39,10 @@ from gsfric.errors import GsfricError, GsfricWarning, InputError
 LEG_MODELS = ("rigid", "paper")
 """Leg models: ``rigid`` (centres of mass at fixed distances from C_i and E_i) and ``paper``
 (centres at 0.25 d and 0.75 d from C_i, d the leg length)."""
+
+FRICTION_MODELS = ("paper", "coupled")
+"""Friction models (``[friction] model``): the paper's post-hoc evaluation, and the coupled model
+in which friction loads the mechanism (docs/friction.md)."""
 
 PAPER_LEG_FRACTION = 0.25
 """Fraction of the leg length at which the paper model places the lower and upper centres."""
@@ -297,7 +301,19 @@ class Friction:
     prismatic_viscous : float
         Viscous coefficient of the prismatic joints, N s/m. Default 0.02.
     prismatic_coulomb : float
-        mu of the prismatic joints. Default 0.04.
+        mu of the prismatic joints: at the transverse force R_3 in the paper model, at each
+        bushing in the coupled model. Default 0.04.
+    model : {"paper", "coupled"}
+        ``"paper"``: the paper's post-hoc (33)-(35), nothing fed back; ``"coupled"``: friction
+        loads the mechanism (solved at every step), prismatic friction from two bushings,
+        universal joints per bearing axis (docs/friction.md). Default ``"paper"``: the meaning
+        of every file written before the key existed.
+    bushing_offset : float
+        Distance of the first bushing from C_i along the leg, m (coupled model). Default 0.25.
+    bushing_spacing : float
+        Distance between the two bushings, m, > 0 (coupled model). Default 0.1.
+    prismatic_seal : float
+        Coulomb force of the prismatic joint's seals, N (both models). Default 0.
     """
 
     joint_viscous: float = 0.02
@@ -305,11 +321,24 @@ class Friction:
     joint_radius: float = 0.05
     prismatic_viscous: float = 0.02
     prismatic_coulomb: float = 0.04
+    model: str = "paper"
+    bushing_offset: float = 0.25
+    bushing_spacing: float = 0.1
+    prismatic_seal: float = 0.0
 
     def __post_init__(self) -> None:
         for f in dataclasses.fields(self):
+            if f.name == "model":
+                if self.model not in FRICTION_MODELS:
+                    raise InputError(f"friction.model: expected one of "
+                                     f"{', '.join(map(repr, FRICTION_MODELS))}, got "
+                                     f"{short(self.model)}")
+                continue
             value = as_float(getattr(self, f.name), f"friction.{f.name}", minimum=0.0)
             _set(self, f.name, value)
+        if self.bushing_spacing <= 0.0:
+            raise InputError(f"friction.bushing_spacing: expected a positive distance, got "
+                             f"{self.bushing_spacing!r}")
 
     __eq__ = fields_equal
     __hash__ = None  # type: ignore[assignment]

@@ -12,7 +12,7 @@ from gsfric.manifest import layout
 
 def perturbed_platform(rng: np.random.Generator, legs_model: str = "rigid") -> gsfric.Platform:
     """The reference platform with moved joints, tilted axes, full inertias and a payload offset."""
-    base = models.reference_platform()
+    base = models.reference_platform("paper")
     g = base.geometry
     axes = g.universal_axes + rng.uniform(-0.3, 0.3, (6, 3))
 

@@ -28,7 +28,7 @@ def random_inertia(rng: np.random.Generator, scale: float) -> np.ndarray:
 def random_platform(rng: np.random.Generator) -> gsfric.Platform:
     """The reference platform with moved joints, tilted universal axes, full inertias, offset
     centres of mass and payload, and random masses (rigid leg model)."""
-    base = models.reference_platform()
+    base = models.reference_platform("paper")
     g = base.geometry
     axes = g.universal_axes + rng.uniform(-0.3, 0.3, (6, 3))
     return (base

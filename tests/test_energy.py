@@ -3,6 +3,9 @@
 The work of the actuators, integrated over the motion, must equal the change of the hexapod's
 kinetic plus potential energy, plus the work lost to friction when the actuators carry it.
 
+The platforms use the paper's friction model unless a test says otherwise; the coupled model
+(docs/friction.md) has its own balance below.
+
 The energies are computed independently of gsfric's dynamics (tests/helpers_validation.py):
 from the platform pose alone, every body's centre and orientation (platform, payload, each leg's
 two parts) is placed by the geometry, and the velocities come from fourth-order central finite
@@ -33,7 +36,7 @@ SEEDS = (0, 1, 2)
 @functools.lru_cache(maxsize=None)
 def case(seed: int):
     rng = np.random.default_rng(seed)
-    platform = models.reference_platform() if seed == 0 else random_platform(rng)
+    platform = models.reference_platform("paper") if seed == 0 else random_platform(rng)
 
     def motion_of_t(t):
         return models.random_motion(np.random.default_rng(100 + seed), t, scale=1.5)
@@ -157,3 +160,20 @@ def test_friction_power_is_never_positive(seed):
         worst = np.unravel_index(np.argmax(power), power.shape)
         assert power[worst] <= 1e-9 * np.max(np.abs(power)), (
             f"{joint} friction produces {power[worst]:.3g} W at t = {c['t'][worst[0]]:.3f} s")
+
+
+@pytest.mark.parametrize("seed", SEEDS)
+def test_energy_balance_with_coupled_friction(seed):
+    """Coupled model: the actuators' power minus the friction dissipated in every joint
+    (spherical, universal per bearing axis, prismatic bushings and seal) is the rate of change
+    of kinetic plus potential energy; and the friction actually loads the actuators."""
+    c = case(seed)
+    platform = c["platform"].with_friction(model="coupled", prismatic_seal=1.5,
+                                           bushing_offset=0.2, bushing_spacing=0.12)
+    result = evaluate(platform, c["motion"])
+    lost = -(prismatic_friction_power(result, c) + joint_friction_power(result, c))
+    actuator = np.sum(result.F * c["leg_rates"], axis=1)
+    assert balance_error(c, actuator, lost) < TOLERANCE
+    # leaving out the joints' dissipation breaks it: the coupled F carries it
+    assert balance_error(c, actuator, -prismatic_friction_power(result, c)) > 1e2 * TOLERANCE
+    assert np.all(lost >= -1e-9 * np.max(np.abs(lost)))

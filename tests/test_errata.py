@@ -212,7 +212,7 @@ def world(name: str) -> SimpleNamespace:
     rng = np.random.default_rng(SEED + sum(map(ord, name)))
     paper_legs = models.paper_platform()
     if name == "rigid":
-        return _quantities(models.reference_platform().with_legs(**RIGID_CENTRES),
+        return _quantities(models.reference_platform("paper").with_legs(**RIGID_CENTRES),
                            _lively_motion(rng))
     if name == "paper_legs":
         return _quantities(paper_legs, _lively_motion(rng))

@@ -87,7 +87,8 @@ def test_defaults(tmp_path):
     assert (p.legs.model, p.legs.weight, p.legs.lower_mass, p.legs.upper_com) == \
         ("rigid", True, 0.5, 0.2)
     np.testing.assert_array_equal(p.legs.upper_inertia, 0.035 * np.eye(3))
-    assert dataclasses.astuple(p.friction) == (0.02, 0.04, 0.05, 0.02, 0.04)
+    assert dataclasses.astuple(p.friction) == (0.02, 0.04, 0.05, 0.02, 0.04, "paper", 0.25,
+                                               0.1, 0.0)
     np.testing.assert_array_equal(p.platform.com, np.zeros(3))
     np.testing.assert_array_equal(p.platform.payload_inertia, np.zeros((3, 3)))
     np.testing.assert_array_equal(p.platform.payload_com, np.zeros(3))

@@ -21,7 +21,7 @@ RTOL = 1e-9
 
 def _platforms(rng):
     return {
-        "reference": models.reference_platform(),
+        "reference": models.reference_platform("paper"),
         "perturbed rigid, every effect": with_every_effect(rng, perturbed_platform(rng)),
         "perturbed paper legs, every effect": with_every_effect(
             rng, perturbed_platform(rng, "paper")),

@@ -5,6 +5,11 @@ and a prismatic joint, a 3-D point closure at each spherical joint). Its RNEA an
 Jacobians give the actuator forces and the joint reactions; gsfric's frictionless actuator
 forces F0, the spherical joints' forces R_E, the universal joints' forces R_C and constraint
 moments M_C must agree to a relative 1e-8 (of each quantity's largest magnitude over the steps).
+
+With the coupled friction model the engine carries the same friction wrenches (the universal
+joints' friction torques as the revolute joints' generalized forces, the spherical joints'
+friction moments as external moments on platform and upper part, the prismatic friction on the
+upper part); the actuator forces with friction F and the coupled reactions must agree to 1e-8.
 """
 
 from __future__ import annotations
@@ -16,8 +21,8 @@ pytest.importorskip("pinocchio")
 
 import gsfric  # noqa: E402
 from gsfric import models  # noqa: E402
-from helpers_validation import (engine, engine_results, random_platform,  # noqa: E402
-                                relative_difference)
+from helpers_validation import (engine, engine_geometry, engine_results,  # noqa: E402
+                                random_platform, relative_difference)
 
 TOLERANCE = 1e-8
 STEPS = 40
@@ -45,7 +50,55 @@ def assert_agree(diffs):
 
 def test_reference_platform():
     rng = np.random.default_rng(7)
-    assert_agree(differences(models.reference_platform(), smooth_motion(rng)))
+    assert_agree(differences(models.reference_platform("paper"), smooth_motion(rng)))
+
+
+COUPLED = (("F", "F"), ("R_E", "R_E"), ("R_C", "R_C"), ("M_C", "M_C"))
+
+
+def coupled_differences(platform, motion) -> dict[str, float]:
+    """gsfric's coupled solve against the engine loaded with gsfric's friction wrenches."""
+    result = gsfric.Evaluator(platform).evaluate(motion, strict=True)
+    geom = engine_geometry(platform)
+    steps = []
+    for k in range(len(motion)):
+        state = {key: getattr(motion, key)[k] for key in engine.STATE_KEYS}
+        friction = dict(MfrE=result.MfrE[k], MfrC=result.MfrC[k], Ffr=result.Ffr[k])
+        steps.append(engine.inverse_dynamics(geom, state, friction))
+    reference = {key: np.array([s[key] for s in steps]) for key in steps[0]}
+    assert reference["solve_residual"].max() < 1e-9 * np.abs(reference["F"]).max()
+    assert reference["moment_offaxis"].max() < 1e-9 * np.abs(reference["M_C"]).max()
+    return {ours: relative_difference(getattr(result, ours), reference[theirs])
+            for ours, theirs in COUPLED}
+
+
+def test_coupled_friction_reference_platform():
+    rng = np.random.default_rng(8)
+    platform = models.reference_platform()
+    assert platform.friction.model == "coupled"
+    assert_agree(coupled_differences(platform, smooth_motion(rng)))
+
+
+@pytest.mark.parametrize("seed", range(3))
+def test_coupled_friction_random_platforms(seed):
+    """Large joint friction (mu r = 0.003 m, 1.5x the paper's) so that it matters."""
+    rng = np.random.default_rng(6000 + seed)
+    platform = random_platform(rng).with_friction(model="coupled", joint_coulomb=0.06,
+                                                  prismatic_seal=1.0)
+    assert_agree(coupled_differences(platform, smooth_motion(rng)))
+
+
+def test_coupled_comparison_detects_friction_left_out():
+    """Without the joint friction's load the engine disagrees by far more than 1e-8."""
+    rng = np.random.default_rng(6100)
+    platform = random_platform(rng).with_friction(model="coupled")
+    motion = smooth_motion(rng)
+    coupled = gsfric.Evaluator(platform).evaluate(motion, strict=True)
+    paper = gsfric.Evaluator(platform.with_friction(model="paper")).evaluate(motion,
+                                                                             strict=True)
+    reference = engine_results(platform, motion)   # frictionless engine
+    assert relative_difference(coupled.R_E, reference["R_E"]) > 1e3 * TOLERANCE
+    assert relative_difference(paper.R_E, reference["R_E"]) < TOLERANCE
 
 
 @pytest.mark.parametrize("seed", range(5))

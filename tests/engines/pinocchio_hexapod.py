@@ -63,6 +63,15 @@ expressed in that joint's frame at C_i:
   n_i = normalize(u_i - (u_i . a1_i) a1_i);
 * ``M_C[i] = M_C_vector[i] . n_i``: the universal joint's constraint moment (torsion).
 
+Friction (``inverse_dynamics(geom, state, friction)``): given friction wrenches are applied as
+loads, nothing else changes. ``friction["MfrC"][i]`` (base frame, on the leg) acts in the
+universal joint: its components along a1 and a2 are the generalized forces of the two revolute
+joints (the joint's friction torques); ``friction["MfrE"][i]`` acts on the platform and its
+reaction ``-MfrE`` on the upper part (external forces of both bodies);
+``friction["Ffr"][i]`` acts on the upper part along u, so the prismatic joint's generalized force
+is the actuator force plus it: ``F = tau_p - Ffr``. With friction the universal joint's moment
+``M_C_vector`` has the friction torques along a1 and a2 besides the torsion along n.
+
 Residuals returned: ``closure_position``, ``closure_velocity``, ``closure_acceleration`` (largest
 norm of the point gap and its rates), ``solve_residual`` (largest deviation of the second rnea
 from ``S^T F``) and ``moment_offaxis`` (largest norm of the part of ``M_C_vector`` not along n).
@@ -224,8 +233,12 @@ def platform_twist(state):
     return np.concatenate([v_l, w_l]), np.concatenate([a_l, dw_l])
 
 
-def inverse_dynamics(geom, state):
-    """Actuator forces and joint reactions of the hexapod at one state (see module docstring)."""
+def inverse_dynamics(geom, state, friction=None):
+    """Actuator forces and joint reactions of the hexapod at one state (see module docstring).
+
+    ``friction``: optional dict of friction loads, ``MfrE`` (6, 3) N m (on the platform),
+    ``MfrC`` (6, 3) N m (on the leg), ``Ffr`` (6,) N (on the upper part along u), base frame.
+    """
     state = {k: np.asarray(state[k], dtype=float) for k in STATE_KEYS}
     model, ids = build_model(geom, state)
     data = model.createData()
@@ -253,7 +266,29 @@ def inverse_dynamics(geom, state):
     pin.updateFramePlacements(model, data)
     gap, dgap, ddgap = _closure_gaps(model, data, ids)
 
-    tau = pin.rnea(model, data, q, v, a).copy()
+    C, E, u, d = leg_geometry(geom, state)
+    a1 = np.asarray(geom["universal_axes"], dtype=float)
+    R = state["rotation"]
+    fr_ext = pin.StdVec_Force()
+    for _ in range(model.njoints):
+        fr_ext.append(pin.Force.Zero())
+    tau_joint = np.zeros(model.nv)
+    F_slide = np.zeros(6)
+    if friction is not None:
+        MfrE = np.asarray(friction["MfrE"], float)
+        MfrC = np.asarray(friction["MfrC"], float)
+        F_slide = np.asarray(friction["Ffr"], float)
+        platform_moment = np.zeros(3)
+        for i in range(6):
+            R_end = data.oMi[ids["p"][i]].rotation
+            fr_ext[ids["p"][i]] = pin.Force(np.zeros(3), R_end.T @ -MfrE[i])
+            platform_moment += R.T @ MfrE[i]
+            a2 = _unit(np.cross(a1[i], u[i]))
+            tau_joint[ids["idx_u1"][i]] = MfrC[i] @ _unit(a1[i])
+            tau_joint[ids["idx_u2"][i]] = MfrC[i] @ a2
+            tau_joint[ids["idx_p"][i]] = F_slide[i]
+        fr_ext[ids["platform"]] = pin.Force(np.zeros(3), platform_moment)
+    tau = pin.rnea(model, data, q, v, a, fr_ext).copy() - tau_joint
     A = np.zeros((model.nv, 24))
     A[ids["idx_p"], np.arange(6)] = 1.0
     A[:, 6:] = J.T
@@ -263,23 +298,20 @@ def inverse_dynamics(geom, state):
     R_E = -lam
 
     fext = pin.StdVec_Force()
-    for _ in range(model.njoints):
-        fext.append(pin.Force.Zero())
-    R = state["rotation"]
+    for j in range(model.njoints):
+        fext.append(pin.Force(fr_ext[j]))
     Ep = np.asarray(geom["platform_joints"], dtype=float)
     f_platform = np.zeros(6)
     for i in range(6):
         R_end = data.oMi[ids["p"][i]].rotation
-        fext[ids["p"][i]] = pin.Force(R_end.T @ lam[i], np.zeros(3))
+        fext[ids["p"][i]] = fext[ids["p"][i]] + pin.Force(R_end.T @ lam[i], np.zeros(3))
         f_local = R.T @ R_E[i]
         f_platform += np.concatenate([f_local, np.cross(Ep[i], f_local)])
-    fext[ids["platform"]] = pin.Force(f_platform[:3], f_platform[3:])
+    fext[ids["platform"]] = fext[ids["platform"]] + pin.Force(f_platform[:3], f_platform[3:])
     tau_ext = pin.rnea(model, data, q, v, a, fext).copy()
-    tau_expected = np.zeros(model.nv)
-    tau_expected[ids["idx_p"]] = F
+    tau_expected = tau_joint.copy()
+    tau_expected[ids["idx_p"]] += F
 
-    C, E, u, d = leg_geometry(geom, state)
-    a1 = np.asarray(geom["universal_axes"], dtype=float)
     n = u - np.sum(u * a1, axis=1)[:, None] * a1
     n /= np.linalg.norm(n, axis=1)[:, None]
     R_C = np.zeros((6, 3))
@@ -298,6 +330,7 @@ def inverse_dynamics(geom, state):
 
     return {
         "F": F,
+        "F_axial": F + F_slide,
         "R_E": R_E,
         "R_C": R_C,
         "M_C": M_C,
@@ -322,7 +355,9 @@ def inverse_dynamics(geom, state):
         "closure_acceleration": float(np.max(np.linalg.norm(ddgap, axis=1))),
         "solve_residual": float(np.max(np.abs(tau_ext - tau_expected))),
         "moment_offaxis": float(
-            np.max(np.linalg.norm(M_vec - M_C[:, None] * n, axis=1))
+            np.max(np.linalg.norm(M_vec - M_C[:, None] * n
+                                  - (0.0 if friction is None else
+                                     np.asarray(friction["MfrC"], float)), axis=1))
         ),
     }
 

@@ -1,0 +1,192 @@
+"""The coupled friction model: joint friction that loads the mechanism, solved at every step.
+
+In the paper's model friction is evaluated after the fact from the frictionless reactions and
+fed back nowhere. In the coupled model the friction moments of the spherical joints (on the
+platform, ``M_frE``; its reaction ``-M_frE`` on the leg) and of the universal joints (on the leg,
+``M_frC``) enter the equilibrium of the legs (11)-(16) and of the platform (2)-(7):
+
+    leg i, moments about C_i:   -D u x R_E + M_C n = K + M_frE - M_frC
+    platform:                   sum R_E = F_req,   sum (E_i - p) x R_E + M_frE = M_req
+
+As in the frictionless solve, each leg's moment balance gives the change of its torsion moment
+and of the transverse part of R_E, and the 6x6 system ``A f = b`` in the axial forces keeps its
+matrix: only the right-hand side changes. Friction depends on the reactions it changes
+(``|R_E|``, ``|R_C|``), so the system is solved by fixed-point iteration, unrolled
+``N_ITERATIONS`` times in the generated code:
+
+    M_fr^(0) = friction(R^(0))                     (R^(0): the frictionless reactions)
+    f^(k)    = f^(0) + A^-1 db(M_fr^(k-1)),  R^(k) = R(f^(k), M_fr^(k-1)),
+    M_fr^(k) = friction(R^(k)),                    k = 1 .. N_ITERATIONS
+
+each step re-using the QR factor of A (one back-substitution). The reported reactions are
+``R^(N)``, in equilibrium with the reported friction moments ``M_fr^(N-1)``; the output
+``coupling_change`` is ``f^(N) - f^(N-1)``, which the runtime compares with a tolerance
+(``gsfric.evaluation.COUPLING_TOLERANCE``) to flag steps where the iteration has not converged
+(mu r so large that friction locks the mechanism). The map from f^(k-1) to f^(k) contracts with a
+factor proportional to ``mu r / D``; docs/friction.md states the limits checked by the tests.
+
+The universal joint's friction is taken per bearing axis: the leg's angular velocity relative to
+the base is ``omega_L = w_1 a_1 + w_2 a_2`` (a_1 base-fixed, a_2 leg-fixed, orthogonal), and each
+bearing carries its own radial load ``|a_j x R_C|`` and turns with its own speed ``w_j``:
+
+    M_frC = -sum_j (c_s w_j + mu r |a_j x R_C| sgn(w_j)) a_j
+
+The spherical joint keeps the vector form (33).
+
+The coupling weight ``w`` multiplies every friction moment in the right-hand sides: ``w = 1`` in
+the coupled model, and in the paper model the effect ``joint_friction_coupling`` (``scale``) sets
+it (0 by default: the paper's post-hoc evaluation, unchanged). In the paper model friction is
+always evaluated from the frictionless reactions and the reported reactions stay frictionless;
+the effect changes the actuator forces only (one solve with the post-hoc moments).
+"""
+
+from __future__ import annotations
+
+import sympy as sp
+
+from . import legs as lg
+from .friction import smooth_sign
+from .vectors import cross, dot, norm
+
+N_ITERATIONS = 6
+"""Fixed-point iterations unrolled in the generated code (each: friction, one back-substitution)."""
+
+
+def joint_friction_terms(let, w_rel, w_C, a1, a2, c_s, mu, r, eps, m) -> dict:
+    """The parts of the joints' friction moments that do not depend on the reactions.
+
+    Friction is linear in the loads once the speeds are known: with ``sgn`` the regularised
+    sign of friction.py (``smooth_sign``),
+
+    * spherical joint (33): ``M_frE = -c_s w - |R_E| g_E``, ``g_E = mu r sgn(w)``;
+    * universal joint, vector form (34): ``-c_s omega_L - |R_C| g_C``, ``g_C = mu r sgn(omega_L)``;
+    * universal joint per bearing axis: ``-sum_j (c_s w_j + |a_j x R_C| h_j) a_j`` with
+      ``w_j = omega_L . a_j`` and ``h_j = mu r sgn(w_j)``; since omega_L = w_1 a_1 + w_2 a_2,
+      its viscous part is the vector form's ``-c_s omega_L``.
+
+    They are defined once per leg, so that each fixed-point iteration only evaluates the loads.
+    ``m`` weighs the per-axis form against the vector form (1 coupled model, 0 paper).
+    """
+    t = dict(vE=let("fr_vE", -c_s * w_rel, r"v_{frE}"),
+             gE=let("fr_gE", mu * r * smooth_sign(w_rel, eps), r"g_{frE}"),
+             vC=let("fr_vC", -c_s * w_C, r"v_{frC}"), m=m, axes=())
+    if m != 1:
+        t["gC"] = let("fr_gC", (1 - m) * mu * r * smooth_sign(w_C, eps), r"g_{frC}")
+    if m != 0:
+        t["axes"] = tuple((a, let(f"fr_h{j}", m * mu * r * smooth_sign(dot(w_C, a), eps),
+                                  rf"h_{{fr{j}}}"))
+                          for j, a in ((1, a1), (2, a2)))
+    return t
+
+
+def joint_friction_moments(t, R_E, R_C):
+    """(M_frE on the platform, M_frC on the leg), base frame, N m, from ``joint_friction_terms``
+    and the reactions R_E, R_C (N)."""
+    MfrE = t["vE"] - norm(R_E) * t["gE"]
+    MfrC = t["vC"]
+    if "gC" in t:
+        MfrC = MfrC - norm(R_C) * t["gC"]
+    for a, h in t["axes"]:
+        MfrC = MfrC - norm(cross(a, R_C)) * h * a
+    return MfrE, MfrC
+
+
+def universal_joint_friction(w_L, R_C, a1, a2, c_s, mu, r, eps):
+    """Per-bearing-axis friction moment of a universal joint on the leg, base frame, N m
+    (the formula of ``joint_friction_terms`` written out, for reading and tests)."""
+    out = sp.zeros(3, 1)
+    for a in (a1, a2):
+        w = dot(w_L, a)
+        load = norm(cross(a, R_C))
+        out -= (c_s * w + mu * r * load * smooth_sign(w, eps)) * a
+    return out
+
+
+def coupling_weight(P, Q, mode):
+    """The weight of the joint friction moments in the equilibrium.
+
+    Kinematic mode: ``m + (1 - m) s`` with ``m = friction_model`` (1 coupled, 0 paper) and ``s``
+    the effect ``joint_friction_coupling.scale``; paper mode (the paper's RESULTS set-up): ``s``.
+    """
+    s = Q["joint_friction_coupling.scale"]
+    if mode == "paper":
+        return s
+    m = P["friction_model"]
+    return m + (1 - m) * s
+
+
+def solve(ch, legs, A_qr, weight, moments, m, n_iter=N_ITERATIONS):
+    """Unrolled fixed point of the coupled equilibrium; updates every leg's outputs in place.
+
+    Parameters
+    ----------
+    ch : Chain
+    legs : list of model.Leg
+        With the frictionless ``R_E``, ``R_C``, ``M_C`` in ``leg.out``.
+    A_qr : Factor
+        The QR factor of the platform's 6x6 system in the axial forces.
+    weight : sympy expression
+        Weight of the friction moments in the equilibrium (``coupling_weight``).
+    moments : callable
+        ``moments(leg, R_E, R_C, it)``: the friction moments (M_frE, M_frC) of the leg from its
+        reactions, (3, 1) each, N m.
+    m : sympy expression
+        The friction model (1 coupled, 0 paper). Friction is evaluated from the reactions
+        ``R^(0) + m (R^(k) - R^(0))`` and the reported reactions are the same: in the paper
+        model everything stays the frictionless (post-hoc) value, and only the effect
+        ``joint_friction_coupling`` (through ``weight``) adds the post-hoc moments' load to the
+        axial forces, as one solve (every iterate is the same; with a symbolic ``m = 0`` one
+        iteration is generated).
+
+    Returns
+    -------
+    (df, change) : sympy.Matrix (6, 1) each, N
+        The change of the axial forces by the joint friction, and its change over the last
+        iteration (zero in the paper model, where every iterate is the same). Sets in ``leg.out``: ``R_E``, ``R_C``, ``M_C`` (coupled), ``MfrE``,
+        ``MfrC`` (in equilibrium with them), ``R_E_fr``, ``R_C_fr`` (the reactions the moments
+        were computed from) and ``dR_E`` (the change of R_E by friction).
+    """
+    if m == 0:
+        n_iter = 1
+    R0 = [(leg.out["R_E"], leg.out["R_C"], leg.out["M_C"]) for leg in legs]
+    R_E = [r[0] for r in R0]
+    R_C = [r[1] for r in R0]
+    mfr = [moments(leg, R_E[i], R_C[i], 0) for i, leg in enumerate(legs)]
+    df_prev = sp.zeros(len(legs), 1)
+    for it in range(1, n_iter + 1):
+        rhs_F, rhs_M = sp.zeros(3, 1), sp.zeros(3, 1)
+        dts, dMCs = [], []
+        for leg, (ME, MC) in zip(legs, mfr):
+            let = ch.scope("coupled", leg.k)
+            dK = let(f"dK_leg{it}", leg.joint.frame.T * (weight * (ME - MC)),
+                     rf"\Delta K^{{({it})}}_{{leg}}")
+            dM_C = let(f"dM_C{it}", lg.torsion_moment(dK, leg.joint),
+                       rf"\Delta M^{{({it})}}_{{C}}")
+            dt = let(f"dt_E{it}", lg.transverse_end_force(dK, dM_C, leg.joint, leg.D),
+                     rf"\Delta R^{{({it})}}_{{E\perp}}")
+            rhs_F -= dt
+            rhs_M -= cross(leg.r_E, dt) + weight * ME
+            dts.append(dt)
+            dMCs.append(dM_C)
+        df = ch.solve(f"df_it{it}_", A_qr, sp.Matrix.vstack(rhs_F, rhs_M),
+                      rf"\Delta f^{{({it})}}", "coupled")
+        R_E_new, R_C_new = [], []
+        for i, leg in enumerate(legs):
+            dR = m * (df[i] * leg.u + dts[i])
+            R_E_new.append(R0[i][0] + dR)
+            R_C_new.append(R0[i][1] + dR)
+        if it == n_iter:
+            break
+        R_E, R_C = R_E_new, R_C_new
+        df_prev = df
+        mfr = [moments(leg, R_E[i], R_C[i], it) for i, leg in enumerate(legs)]
+    for i, leg in enumerate(legs):
+        let = ch.scope("coupled", leg.k)
+        o = leg.out
+        o["R_E_fr"], o["R_C_fr"] = R_E[i], R_C[i]
+        o["MfrE"], o["MfrC"] = mfr[i]
+        o["dR_E"] = m * (df[i] * leg.u + dts[i])
+        o["M_C"] = let("M_C_fr", R0[i][2] + m * dMCs[i], r"M^{fr}_{C}")
+        o["R_E"] = let("R_E_fr", R_E_new[i], r"R^{fr}_{E}")
+        o["R_C"] = let("R_C_fr", R_C_new[i], r"R^{fr}_{C}")
+    return df, m * (df - df_prev)
