@@ -154,7 +154,7 @@ def _callable(implementation: str, threads: int, x: np.ndarray):
     platform = models.reference_platform("paper")   # the model the NumPy references implement
     if implementation in ("compiled", "compiled_paper"):
         if implementation == "compiled":
-            platform = models.reference_platform()
+            platform = models.reference_platform("coupled")
         evaluator = Evaluator(platform, n_threads=threads)
         out = np.empty((x.shape[0], 6))
         out.fill(0.0)

@@ -512,6 +512,10 @@ def _platform_template() -> str:
     def rows(a):
         return "\n".join(f"    [{', '.join(repr(float(v)) for v in row)}]," for row in a)
 
+    def matrix(a):
+        return "[" + ", ".join("[" + ", ".join(repr(float(v)) for v in row) + "]"
+                               for row in a) + "]"
+
     stroke = "" if g.stroke is None else (
         f"stroke = [{g.stroke[0]:.6g}, {g.stroke[1]:.6g}]   # m, shortest and longest leg "
         "(steps outside are flagged)\n")
@@ -541,7 +545,11 @@ payload_mass = {b.payload_mass:g}              # kg, at payload_com (platform fr
 [legs]
 model = "{p.legs.model}"                # "rigid", or "paper": the paper's zone centres at 0.25 D and 0.75 D
 lower_mass = {p.legs.lower_mass:g}               # kg, moves with the universal joint
+lower_com = {p.legs.lower_com:g}                # m from C_i along the leg (rigid model)
+lower_inertia = {matrix(p.legs.lower_inertia)}   # kg m^2, leg body frame (z along the leg)
 upper_mass = {p.legs.upper_mass:g}               # kg, moves with the spherical joint end
+upper_com = {p.legs.upper_com:g}                # m from E_i along the leg (rigid model)
+upper_inertia = {matrix(p.legs.upper_inertia)}   # kg m^2, leg body frame
 
 [friction]
 joint_viscous = {f.joint_viscous:g}          # c_s, N m s/rad, spherical and universal joints
@@ -549,6 +557,10 @@ joint_coulomb = {f.joint_coulomb:g}          # mu, 1
 joint_radius = {f.joint_radius:g}           # r, m
 prismatic_viscous = {f.prismatic_viscous:g}      # N s/m
 prismatic_coulomb = {f.prismatic_coulomb:g}      # mu, 1
+model = "{f.model}"               # "paper": post-hoc, (35) with R_3; "coupled": friction loads the actuators
+bushing_offset = {f.bushing_offset:g}          # m, first bushing from C_i (coupled model)
+bushing_spacing = {f.bushing_spacing:g}         # m, between the two bushings (coupled model)
+prismatic_seal = {f.prismatic_seal:g}           # N, seal friction (coupled model)
 
 [effects]                       # none switched on; e.g. stribeck = {{ static = 2.0, velocity = 0.01 }}
 """

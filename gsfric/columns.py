@@ -62,9 +62,20 @@ COLUMNS: tuple[Column, ...] = (
     Column("F0_{i}", "N", "actuator force of leg i with frictionless joints; + pushes the "
            "platform away (Result.F0)", "forces"),
     Column("D{i}", "m", "length of leg i, C_i to E_i (Result.D)", "legs"),
+    Column("FfrS{i}", "N", "signed friction force of prismatic joint i on the rod along the "
+           "leg direction u_i (C_i to E_i): negative while the leg extends, positive while it "
+           "retracts (Result.Ffr)", "friction"),
+    Column("Fjoint{i}", "N", "part of F_i that carries the spherical and universal joints' "
+           "friction moments (coupled model; zero in the paper's post-hoc model)", "friction"),
+    Column("MfrE{a}{i}", "N m", "friction moment vector of spherical joint E_i on the platform, "
+           "opposing the platform's rotation relative to the leg; base frame components x, y, z "
+           "(Result.MfrE)", "friction"),
+    Column("MfrC{a}{i}", "N m", "friction moment vector of universal joint C_i on the leg, "
+           "opposing the leg's rotation relative to the base; base frame components x, y, z "
+           "(Result.MfrC)", "friction"),
     Column("flag", "1", "0 for a sound step; else the sum of 1 (non-finite value), 2 (leg "
            "length outside the stroke), 4 (near-singular platform Jacobian), 8 (leg near its "
-           "universal joint's first axis)", "flags"),
+           "universal joint's first axis), 16 (coupled friction solve not converged)", "flags"),
 )
 """Every column of ``Result.to_frame``, in order."""
 

@@ -82,9 +82,9 @@ REFERENCE_FRICTION = dict(model="coupled", bushing_offset=0.25, bushing_spacing=
 polymer bushings (mu 0.1) at 0.25 m and 0.35 m from C_i, a 2 N rod seal."""
 
 
-def reference_platform(friction_model: str = "coupled") -> Platform:
+def reference_platform(friction_model: str = "paper") -> Platform:
     """The built-in platform: the reference geometry, the paper's platform and payload, the
-    reference leg (``reference_leg``) and the coupled friction model.
+    reference leg (``reference_leg``) and, by default, the paper's post-hoc friction model.
 
     Platform 10 kg with inertia 0.07 kg m^2 (times identity), payload 3 kg; joints
     c_s = 0.02 N m s/rad, mu = 0.04, r = 0.05 m; prismatic joints 0.02 N s/m, bushings with
@@ -92,9 +92,10 @@ def reference_platform(friction_model: str = "coupled") -> Platform:
 
     Parameters
     ----------
-    friction_model : {"coupled", "paper"}
-        ``"paper"`` gives the same platform with the paper's post-hoc friction model: (35) as
-        printed, with mu = 0.1 at R_3 and no seal.
+    friction_model : {"paper", "coupled"}
+        ``"paper"`` (default): the paper's post-hoc friction model, (35) as printed with
+        mu = 0.1 at R_3 and no seal. ``"coupled"``: friction loads the mechanism (bushings,
+        seal, per-axis universal joints; docs/friction.md).
     """
     return Platform(
         gravity=9.81,

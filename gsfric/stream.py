@@ -511,7 +511,8 @@ def _steps_text(indices: np.ndarray, total: int, limit: int = 10) -> str:
 
 COLUMN_GROUPS = {
     "forces": "F1..F6: actuator forces with friction, N",
-    "friction": "MfrE1..6, MfrC1..6 (N m), Ffr1..6 (N): the paper's signed friction scalars",
+    "friction": "MfrE1..6, MfrC1..6 (N m), Ffr1..6 (N): the paper's signed friction scalars; "
+                "FfrS1..6, Fjoint1..6 (N), MfrEx1..MfrCz6 (N m): signed friction",
     "reactions": "REx1..REz6, RCx1..RCz6 (N), MC1..MC6 (N m): joint reactions",
     "frictionless": "F0_1..F0_6: actuator forces of frictionless joints, N",
     "lengths": "D1..D6: leg lengths, m",
@@ -535,6 +536,11 @@ def _column_plan(groups) -> list[tuple[str, str, int, str]]:
     plan += [(f"MC{i + 1}", "M_C", i, "reactions") for i in range(6)]
     for i in range(6):
         plan += [(f"F0_{i + 1}", "F0", i, "frictionless"), (f"D{i + 1}", "D", i, "lengths")]
+    plan += [(f"FfrS{i + 1}", "Ffr", i, "friction") for i in range(6)]
+    plan += [(f"Fjoint{i + 1}", "F_joint", i, "friction") for i in range(6)]
+    for name in ("MfrE", "MfrC"):
+        plan += [(f"{name}{ax}{i + 1}", name, 3 * i + j, "friction")
+                 for i in range(6) for j, ax in enumerate("xyz")]
     return [p for p in plan if p[3] in groups]
 
 

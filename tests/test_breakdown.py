@@ -15,7 +15,7 @@ from gsfric.cli import main
 
 @pytest.fixture(scope="module")
 def case():
-    platform = models.reference_platform().with_effect("seal_friction", force=1.0) \
+    platform = models.reference_platform("coupled").with_effect("seal_friction", force=1.0) \
         .with_effect("sensor_bias", b1=0.5)
     motion = models.sinusoidal(np.linspace(0.0, 4.0, 201))
     result = gsfric.evaluate(platform, motion)

@@ -101,12 +101,12 @@ def test_fixed_point_converges_on_random_platforms(seed, mu_r):
 
 
 def test_locking_friction_is_flagged():
-    platform = _coupled(models.reference_platform(), MU_R_LOCKING)
+    platform = _coupled(models.reference_platform("coupled"), MU_R_LOCKING)
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
         result = gsfric.evaluate(platform, _motion(3))
     assert np.any(result.flag & FLAG_COUPLING)
-    converged = gsfric.evaluate(_coupled(models.reference_platform(), 0.002), _motion(3))
+    converged = gsfric.evaluate(_coupled(models.reference_platform("coupled"), 0.002), _motion(3))
     assert not np.any(converged.flag & FLAG_COUPLING)
 
 
@@ -114,7 +114,7 @@ def test_coupled_friction_reaches_the_actuators():
     """The reference platform on a smooth motion: joint friction changes F by newtons, not by
     the 0.01 N of the post-hoc model, and the prismatic friction is bushing + seal + viscous."""
     motion = models.sinusoidal(np.linspace(0.0, 10.0, 501))
-    coupled_ = gsfric.evaluate(models.reference_platform(), motion)
+    coupled_ = gsfric.evaluate(models.reference_platform("coupled"), motion)
     paper = gsfric.evaluate(models.reference_platform("paper"), motion)
     assert np.abs(coupled_.F_joint).max() > 0.5
     assert np.all(paper.F_joint == 0.0)
@@ -147,7 +147,7 @@ def test_paper_model_is_the_post_hoc_evaluation():
 def test_universal_joint_friction_acts_per_bearing_axis():
     """Coupled model: M_frC lies along a_1 and a_2, each component opposing its own axis speed;
     the paper's vector form is antiparallel to omega_L instead."""
-    platform = models.reference_platform().with_friction(joint_viscous=0.0)
+    platform = models.reference_platform("coupled").with_friction(joint_viscous=0.0)
     result = gsfric.evaluate(platform, _motion(7))
     a1 = platform.geometry.universal_axes[None]
     u = result.u
@@ -167,7 +167,7 @@ def test_universal_joint_friction_acts_per_bearing_axis():
 
 
 def test_platform_file_without_friction_model_keeps_the_paper_meaning(tmp_path):
-    platform = models.reference_platform()
+    platform = models.reference_platform("coupled")
     path = tmp_path / "p.toml"
     platform.to_toml(path)
     text = path.read_text()
@@ -185,7 +185,7 @@ def test_platform_file_without_friction_model_keeps_the_paper_meaning(tmp_path):
 
 
 def test_actuator_hot_path_equals_the_full_evaluation():
-    platform = models.reference_platform()
+    platform = models.reference_platform("coupled")
     motion = _motion(11, 40)
     F = Evaluator(platform).actuator_forces(state_array(motion))
     assert np.allclose(F, gsfric.evaluate(platform, motion).F, rtol=1e-13, atol=1e-11)

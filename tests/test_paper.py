@@ -48,10 +48,10 @@ def test_run_paper_writes_every_file(written):
     out, paths = written
     names = [p.name for p in paths]
     assert names == ["table1.csv", "table2.csv", "table3.csv", "platform.toml", "table1.png",
-                     "table2.png", "table3.png", "report.md"]
+                     "table2.png", "table3.png", "breakdown.png", "report.md"]
     assert all(p.parent == out and p.stat().st_size > 0 for p in paths)
     assert not list(out.glob(".*.tmp")), "a temporary file of an atomic write was left behind"
-    for name in ("table1.png", "table2.png", "table3.png"):
+    for name in ("table1.png", "table2.png", "table3.png", "breakdown.png"):
         assert (out / name).read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
 
 

@@ -74,7 +74,7 @@ def coupled_differences(platform, motion) -> dict[str, float]:
 
 def test_coupled_friction_reference_platform():
     rng = np.random.default_rng(8)
-    platform = models.reference_platform()
+    platform = models.reference_platform("coupled")
     assert platform.friction.model == "coupled"
     assert_agree(coupled_differences(platform, smooth_motion(rng)))
 
