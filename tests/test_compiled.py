@@ -164,7 +164,10 @@ def test_without_a_compiler_casadi_evaluates_the_same_numbers(tmp_path):
     import gsfric
 
     expected = gsfric.evaluate(gsfric.reference_platform(), models.paper_motion()).F
-    np.testing.assert_allclose(np.load(tmp_path / "F.npy"), expected, rtol=1e-12)
+    # the vectorised C and CasADi's virtual machine order some sums differently: agreement to
+    # rounding, relative to the forces' size (about 30 N)
+    np.testing.assert_allclose(np.load(tmp_path / "F.npy"), expected, rtol=1e-12,
+                               atol=1e-12 * np.abs(expected).max())
 
 
 def test_effect_vector_follows_the_catalog_order(platform):
