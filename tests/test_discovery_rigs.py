@@ -105,7 +105,6 @@ def point_to_point(samples=6000, rate=200.0, seed=0) -> Motion:
 
     rng = np.random.default_rng(seed)
     t = np.arange(samples) / rate
-    home = reference_platform  # noqa: F841 (the reference platform's home pose below)
     pose = np.zeros((samples, 6))
     k, current = 0, np.zeros(6)
     while k < samples:

@@ -12,7 +12,6 @@ from __future__ import annotations
 import errno
 import json
 import os
-import shutil
 import signal
 import stat
 import subprocess
@@ -29,7 +28,7 @@ from click.testing import CliRunner
 from gsfric import models, native
 from gsfric.cli import main
 from gsfric.errors import InputError, OutputError
-from gsfric.io import (atomic_write, output_folder, read_table, read_trajectory,
+from gsfric.io import (output_folder, read_table, read_trajectory,
                        remove_stale_temporaries, write_table)
 
 ROOT = Path(__file__).resolve().parent.parent
