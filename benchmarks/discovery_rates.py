@@ -21,6 +21,7 @@ import numpy as np
 
 from gsfric.discovery import CANDIDATE_NAMES, discover
 from gsfric.discovery.rest import poses_from_columns
+from gsfric import models
 from gsfric.models import reference_platform
 from gsfric.synth import synthesize
 from gsfric.trajectory import Motion, quaternion_from_rotation, rotation_from_euler
@@ -50,22 +51,7 @@ def chirps(rng, n):
 
 
 def point_to_point(rng, n):
-    t = np.arange(n) / RATE
-    pose = np.zeros((n, 6))
-    k, current = 0, np.zeros(6)
-    while k < n:
-        move, rest = int(rng.uniform(1.0, 2.0) * RATE), int(rng.uniform(0.3, 0.7) * RATE)
-        target = rng.uniform(-1, 1, 6) * AMPLITUDE
-        s = np.linspace(0, 1, move)
-        seg = current + (10 * s ** 3 - 15 * s ** 4 + 6 * s ** 5)[:, None] * (target - current)
-        m = min(move, n - k)
-        pose[k:k + m] = seg[:m]
-        k += m
-        m = min(rest, n - k)
-        pose[k:k + m] = target
-        k += m
-        current = target
-    return _motion(pose, t)
+    return models.point_to_point(rng, n, RATE, AMPLITUDE, height=0.95)
 
 
 FAMILIES = {"sines": sines, "chirps": chirps, "rests": point_to_point}

@@ -139,11 +139,9 @@ class Report:
 # --------------------------------------------------------------------------------- inputs
 def states(n: int) -> np.ndarray:
     """States (n, 24) of a smooth random motion sampled every ``DT`` seconds."""
-    from gsfric import models
     from gsfric.evaluation import state_array
 
-    rng = np.random.default_rng(SEED)
-    return state_array(models.random_motion(rng, DT * np.arange(n)))
+    return state_array(_motion(n))
 
 
 def _callable(implementation: str, threads: int, x: np.ndarray):

@@ -117,10 +117,6 @@ def sensor_jacobian(t: np.ndarray, F: np.ndarray, gains: np.ndarray, delay: floa
     return d_gains, d_delay
 
 
-def is_sensor(name: str) -> bool:
-    """Whether effect ``name`` is a sensor effect (applied by the runtime)."""
-    return name in SENSOR_EFFECTS
-
 
 def __getattr__(name):
     if name == "EFFECTS":

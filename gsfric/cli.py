@@ -281,12 +281,8 @@ def simulate(trajectory, platform_file, out, mode, strict, threads, chunk, windo
 
         raise InputError("--breakdown: only in the kinematic mode")
 
-    def show(message, category, filename, lineno, file=None, line=None):
-        click.echo(f"gsfric: warning: {message}", err=True)
-
-    with warnings.catch_warnings():
+    with warnings.catch_warnings():                    # shown one line each by _Group
         warnings.simplefilter("always", UserWarning)   # GsfricWarning, flags, build, staleness
-        warnings.showwarning = show
         log_format = _log_format(column_map, units_map, angles, keep_columns)
         platform = _platform(platform_file)
         summary = simulate_file(trajectory, out, platform, mode=mode, strict=strict,

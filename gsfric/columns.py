@@ -13,6 +13,7 @@ friction force along the leg and ``Result.MfrE`` / ``Result.MfrC`` are vectors.
 
 from __future__ import annotations
 
+import functools
 from dataclasses import dataclass
 
 
@@ -118,9 +119,16 @@ def markdown_table(measured: bool = True) -> str:
     return "\n".join(lines)
 
 
+@functools.lru_cache(maxsize=1)
+def _known() -> tuple:
+    """``(units(), descriptions())``, built once: annotate and arrow_table run per chunk.
+    Private and never mutated (the public functions return fresh dicts)."""
+    return units(), descriptions()
+
+
 def annotate(frame):
     """``frame`` with ``attrs["units"]`` (and ``attrs["descriptions"]``) for its known columns."""
-    known_units, known_text = units(), descriptions()
+    known_units, known_text = _known()
     frame.attrs["units"] = {c: known_units[c] for c in frame.columns if c in known_units}
     frame.attrs["descriptions"] = {c: known_text[c] for c in frame.columns if c in known_text}
     return frame
@@ -133,7 +141,7 @@ def arrow_table(frame):
 
     table = pa.table(frame) if isinstance(frame, dict) else \
         pa.Table.from_pandas(frame, preserve_index=False)
-    known_units, known_text = units(), descriptions()
+    known_units, known_text = _known()
     fields = []
     for f in table.schema:
         if f.name in known_units:

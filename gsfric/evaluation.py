@@ -72,11 +72,10 @@ CHUNK = 200_000
 def state_array(motion: Motion) -> np.ndarray:
     """The generated functions' state input, (N, 24): p, T (row-major), v, omega, a, alpha.
 
-    This is the one place where the step-leading arrays of a Motion are laid out for C.
+    Laid out by ``state_into``.
     """
-    n = len(motion)
-    return np.concatenate([motion.position, motion.rotation.reshape(n, 9), motion.velocity,
-                           motion.omega, motion.acceleration, motion.alpha], axis=1)
+    return state_into(np.empty((len(motion), 24)), motion.position, motion.rotation,
+                      motion.velocity, motion.omega, motion.acceleration, motion.alpha)
 
 
 @functools.lru_cache(maxsize=None)
@@ -88,25 +87,18 @@ def _slots(function_name: str, input_name: str) -> tuple:
 
 
 def _pack(slots: tuple, values: dict) -> np.ndarray:
+    """The named values laid out in one input vector (zeros in any gap of the layout)."""
     size, where = slots
-    flat: list[float] = []
+    out = np.zeros(size)
     for name, start, stop in where:
-        value = values[name]
-        if stop - start == 1:
-            flat.append(float(value))
-        else:
-            flat.extend(np.ravel(value).tolist())
-    if len(flat) != size:  # the layout has gaps or a block has the wrong size
-        out = np.zeros(size)
-        for name, start, stop in where:
-            out[start:stop] = np.ravel(values[name])
-        return out
-    return np.array(flat)
+        out[start:stop] = np.ravel(values[name])
+    return out
 
 
 def state_into(out: np.ndarray, position, rotation, velocity, omega, acceleration,
                alpha) -> np.ndarray:
-    """Lay out states into ``out`` (N, 24) as ``state_array`` does, from the motion's arrays."""
+    """Lay out states into ``out`` (N, 24): p, T (row-major), v, omega, a, alpha; the one
+    place where the step-leading arrays of a motion are laid out for C."""
     out[:, 0:3] = position
     out[:, 3:12] = np.reshape(rotation, (-1, 9))
     out[:, 12:15] = velocity

@@ -420,7 +420,7 @@ def numeric_columns(path: Path, frame, names: list[str], first_row: int = 0) -> 
 def count_rows(path: str | os.PathLike[str]) -> int | None:
     """Data rows of a table file (for a progress bar's total), or None if it cannot tell.
 
-    Parquet: from the metadata. CSV: the non-empty lines after the header, counted in binary
+    Parquet: from the metadata. CSV: the lines after the header, counted in binary
     blocks (about a second per gigabyte; quoted line breaks are not expected in these files).
     """
     path = Path(path)
@@ -1011,8 +1011,14 @@ def read_measured(path: str | os.PathLike[str], *, window: int | None = None,
         As ``read_trajectory``, and for missing F columns, an incomplete D1..D6 set or a
         non-positive leg length.
     """
+    return _read_measured(path, window, polyorder, log_format)[:3]
+
+
+def _read_measured(path, window, polyorder, log_format):
+    """``read_measured`` and the file's columns as read (SI), for callers that also need the
+    recorded poses (discovery's rest detection)."""
     path, columns, orientation = _read_samples(path, True, log_format)
     motion = _motion(path, columns, orientation, window, polyorder)
     forces = np.stack([columns[n] for n in FORCES], axis=1)
     lengths = np.stack([columns[n] for n in LENGTHS], axis=1) if "D1" in columns else None
-    return motion, forces, lengths
+    return motion, forces, lengths, columns

@@ -16,7 +16,7 @@ from __future__ import annotations
 import numpy as np
 
 from gsfric.platform import Body, Friction, Geometry, Legs, Platform
-from gsfric.trajectory import Motion
+from gsfric.trajectory import Motion, quaternion_from_rotation, rotation_from_euler
 
 BASE_RADIUS = 0.5
 PLATFORM_RADIUS = 0.3
@@ -224,3 +224,49 @@ def random_motion(rng: np.random.Generator, t: np.ndarray, scale: float = 1.0) -
     freq = rng.uniform(0.2, 1.2, 6)
     phase = rng.uniform(0, 2 * np.pi, 6)
     return sinusoidal(t, amp, freq, phase)
+
+
+def point_to_point(rng: np.random.Generator, samples: int, rate: float = 200.0,
+                   amplitude=(0.03, 0.03, 0.02, 0.05, 0.05, 0.05), height: float = HOME_HEIGHT,
+                   tilt: float = 0.2) -> Motion:
+    """Minimum-jerk moves between random poses, each followed by a rest (about a quarter of
+    the time at rest): the motion of a test rig driven from point to point.
+
+    Each move lasts 1-2 s and each rest 0.3-0.7 s; targets are uniform within +-``amplitude``.
+    The motion is differentiated from its samples (``Motion.from_samples``), as measured
+    poses would be.
+
+    Parameters
+    ----------
+    rng : numpy.random.Generator
+        Draws the durations and targets.
+    samples : int
+        Number of samples N.
+    rate : float, Hz
+        Sampling rate; the samples are at ``t = k / rate``.
+    amplitude : 6 values
+        Largest offsets of x, y, z (m) and of the three ZXZ angles (rad) from the centre pose.
+    height : float, m
+        z of the centre pose.
+    tilt : float, rad
+        beta of the centre pose (away from the ZXZ angles' singularity at beta = 0).
+    """
+    t = np.arange(samples) / rate
+    pose = np.zeros((samples, 6))
+    k, current = 0, np.zeros(6)
+    while k < samples:
+        move, rest = int(rng.uniform(1.0, 2.0) * rate), int(rng.uniform(0.3, 0.7) * rate)
+        target = rng.uniform(-1, 1, 6) * np.asarray(amplitude, float)
+        s = np.linspace(0, 1, move)
+        seg = current + (10 * s ** 3 - 15 * s ** 4 + 6 * s ** 5)[:, None] * (target - current)
+        m = min(move, samples - k)
+        pose[k:k + m] = seg[:m]
+        k += m
+        m = min(rest, samples - k)
+        pose[k:k + m] = target
+        k += m
+        current = target
+    position = pose[:, :3] + [0.0, 0.0, height]
+    rotation = rotation_from_euler(pose[:, 3], pose[:, 4] + tilt, pose[:, 5])
+    return Motion.from_samples(t, position, quaternion=quaternion_from_rotation(rotation))
+

@@ -56,8 +56,6 @@ DEFAULT_CHUNK = 100_000
 MAX_REPORTED = 10_000
 """Flagged step indices kept for the summary (the count is always exact)."""
 
-_FLAG_WARNING = r"[0-9]+ of [0-9]+ steps flagged"
-
 
 # -- reading in blocks --------------------------------------------------------------------------
 
@@ -133,19 +131,6 @@ def _parquet_blocks(path: Path, rows: int):
             raise InputError(f"{path}: cannot read as Parquet: {error}") from None
         frame.columns = [str(c) for c in frame.columns]
         yield frame
-
-
-def parquet_rows(path: str | os.PathLike[str]) -> int | None:
-    """Number of data rows of a Parquet file from its metadata, or None (CSV, unreadable)."""
-    path = Path(path)
-    if path.suffix.lower() not in gio._PARQUET:
-        return None
-    try:
-        import pyarrow.parquet as pq
-
-        return int(pq.ParquetFile(path).metadata.num_rows)
-    except Exception:  # noqa: BLE001 - the reader reports the problem properly
-        return None
 
 
 @dataclass

@@ -547,9 +547,7 @@ def run_task(task: Task):
         pieces = iter([(task.first_pose * ws.states, motion, x)])
     for start, motion, x in pieces:
         for ev, env in zip(evaluators, envelopes):
-            with warnings.catch_warnings():
-                warnings.simplefilter("ignore")        # flagged steps are counted instead
-                result = ev.evaluate(motion)
+            result = ev.evaluate_quiet(motion)         # flagged steps are counted instead
             env.add(result, x, start, timed)
     rows = []
     for v, env in zip(task.variants, envelopes):
@@ -563,9 +561,9 @@ def run_task(task: Task):
 
 
 def _file_rows(path: Path) -> int:
-    from gsfric.stream import parquet_rows
+    from gsfric.io import count_rows
 
-    rows = parquet_rows(path)
+    rows = count_rows(path)
     if rows is not None:
         return rows
     with open(path, "rb") as handle:

@@ -101,33 +101,9 @@ def test_clean_data_has_no_data_problem():
 
 def point_to_point(samples=6000, rate=200.0, seed=0) -> Motion:
     """Minimum-jerk moves between random poses with rests of about a quarter of the time."""
-    from gsfric.trajectory import rotation_from_euler
+    from gsfric import models
 
-    rng = np.random.default_rng(seed)
-    t = np.arange(samples) / rate
-    pose = np.zeros((samples, 6))
-    k, current = 0, np.zeros(6)
-    while k < samples:
-        move, rest = int(rng.uniform(1.0, 2.0) * rate), int(rng.uniform(0.3, 0.7) * rate)
-        target = rng.uniform(-1, 1, 6) * [0.03, 0.03, 0.02, 0.05, 0.05, 0.05]
-        s = np.linspace(0, 1, move)
-        shape = 10 * s ** 3 - 15 * s ** 4 + 6 * s ** 5
-        seg = current + shape[:, None] * (target - current)
-        n = min(move, samples - k)
-        pose[k:k + n] = seg[:n]
-        k += n
-        n = min(rest, samples - k)
-        pose[k:k + n] = target
-        k += n
-        current = target
-    from gsfric.models import sinusoidal
-
-    z0 = sinusoidal(np.zeros(1)).position[0, 2]
-    position = pose[:, :3] + [0.0, 0.0, z0]
-    rotation = rotation_from_euler(pose[:, 3], pose[:, 4] + 0.2, pose[:, 5])
-    from gsfric.trajectory import quaternion_from_rotation
-
-    return Motion.from_samples(t, position, quaternion=quaternion_from_rotation(rotation))
+    return models.point_to_point(np.random.default_rng(seed), samples, rate)
 
 
 @pytest.mark.parametrize("effect", ["seal_friction:force=1.5", "stribeck:static=2,velocity=0.01"])

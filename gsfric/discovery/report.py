@@ -19,7 +19,7 @@ from pathlib import Path
 import numpy as np
 
 from gsfric.discovery.regimes import hotspots
-from gsfric.discovery.summary import _clean, _per_leg, summary  # noqa: F401
+from gsfric.discovery.summary import _per_leg, summary
 from gsfric.discovery.workflow import Discovery, discover
 from gsfric.io import atomic_write
 
@@ -320,11 +320,8 @@ def run_discover(measured: str | os.PathLike[str],
     platform = reference_platform() if platform_file is None else Platform.from_toml(
         platform_file)
     log_format = options.pop("log_format", None)   # column map and units of a log
-    path, columns, orientation = gio._read_samples(measured, True, log_format)
-    motion = gio._motion(path, columns, orientation, None, gio.DEFAULT_POLYORDER)
-    forces = np.stack([columns[n] for n in gio.FORCES], axis=1)
-    lengths = (np.stack([columns[n] for n in gio.LENGTHS], axis=1) if "D1" in columns
-               else None)
+    motion, forces, lengths, columns = gio._read_measured(measured, None, gio.DEFAULT_POLYORDER,
+                                                          log_format)
     result = discover(motion, forces, platform, seed=seed, progress=progress,
                       poses=poses_from_columns(columns), **options)
     if lengths is not None:
