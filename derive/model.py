@@ -303,13 +303,18 @@ def _flat(value) -> list:
     return list(value) if isinstance(value, sp.MatrixBase) else [value]
 
 
+def _effects_input(ch: Chain) -> dict:
+    """Declare the effect-parameter vector Q; its entries by flat name ``effect.parameter``."""
+    names = fx.parameter_names()
+    Qm = ch.input("effects", len(names), 1, "Q")
+    return {n: Qm[j] for j, n in enumerate(names)}
+
+
 def _inputs(ch: Chain, mode: str) -> Inputs:
     """Declare the input blocks, in the order of the flat input vectors."""
     X = {n: _block(ch, n, s, STATE_LATEX.get(n)) for n, s, _, _ in STATE}
     P = {n: _block(ch, n, s, PARAMETER_LATEX.get(n)) for n, s, _, _ in PARAMETERS}
-    q_names = fx.parameter_names()
-    Qm = ch.input("effects", len(q_names), 1, "Q")
-    Q = {n: Qm[j] for j, n in enumerate(q_names)}
+    Q = _effects_input(ch)
     K = None
     if mode == "paper":
         K = {n: _block(ch, n, s, CONSTANT_LATEX[n]) for n, s, _, _ in PAPER_CONSTANTS}
@@ -568,9 +573,7 @@ def build_friction() -> Model:
     ch = Chain()
     blocks = {n: _block(ch, n, s) for n, s, *_ in FRICTION_INPUTS}
     P = {n: _block(ch, n, s) for n, s, _, _ in PARAMETERS}
-    q_names = fx.parameter_names()
-    Qm = ch.input("effects", len(q_names), 1, "Q")
-    Q = {n: Qm[j] for j, n in enumerate(q_names)}
+    Q = _effects_input(ch)
     out = {n: [] for n in ("MfrE", "MfrC", "Ffr", "MfrE_s", "MfrC_s", "Ffr_s")}
     m = P["friction_model"]
     c_s, mu, r, eps = P["joint_viscous"], P["joint_coulomb"], P["joint_radius"], P["joint_eps"]

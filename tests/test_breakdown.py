@@ -58,6 +58,12 @@ def test_friction_parts_are_the_model_outputs(case):
     moving = np.abs(result.D_dot[:, 0]) > 1e-2
     assert np.allclose(parts["effects"][moving, 0],
                        0.5 + np.sign(result.D_dot[moving, 0]) * 1.0, atol=1e-3)
+    # every leg: an expected value that does not come from the remainder F - (other parts),
+    # so the parts' sum is checked against the effects' own size
+    sliding = np.abs(result.D_dot) > 1e-2
+    expected = np.sign(result.D_dot) * 1.0 + np.array([0.5, 0, 0, 0, 0, 0])
+    assert sliding.any(axis=0).all()
+    assert np.allclose(parts["effects"][sliding], expected[sliding], atol=1e-3)
 
 
 def test_signed_friction_columns(case):

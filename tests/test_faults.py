@@ -120,13 +120,9 @@ def _trajectory_file(tmp_path: Path, n: int = 400) -> Path:
 
 
 @pytest.mark.parametrize("suffix", [".csv", ".parquet"])
-def test_full_disk_simulate_exit_3(tmp_path, monkeypatch, suffix):
+def test_full_disk_simulate_exit_3(tmp_path, disk_full, suffix):
     path = _trajectory_file(tmp_path)
     out = tmp_path / f"o{suffix}"
-    def fsync(fd):
-        raise OSError(errno.ENOSPC, os.strerror(errno.ENOSPC))
-
-    monkeypatch.setattr(os, "fsync", fsync)
     result = run("simulate", "--trajectory", path, "--out", out, "--chunk", "100")
     message = one_error(result.stderr, 3, result.exit_code)
     assert message.startswith(f"{out}: cannot write (No space left on device)")
