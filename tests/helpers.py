@@ -10,6 +10,20 @@ from gsfric.evaluation import effect_vector, parameter_vector, state_array
 from gsfric.manifest import layout
 
 
+PAPER_MISPRINTS = {
+    (1, 10, "MfrE5", "-0.0133", ("digits", "small")),   # an order of magnitude low
+    (1, 12, "MfrE1", "-0.0131", ("digits", "small")),   # an order of magnitude low
+    (1, 19, "MfrE2", "-0.1430", ("digits",)),           # an extra digit
+    (2, 15, "MfrC5", "-0.1216", ("digits",)),           # an extra digit
+    (2, 26, "MfrC6", "-0.188", ("large",)),             # far above the rest of Table 2
+    (3, 8, "Ffr5", "-0.7247", ("digits",)),             # an extra digit
+    (3, 14, "Ffr1", "-0.6234", ("digits",)),            # an extra digit
+    (3, 27, "Ffr5", "-0.0687", ("digits", "small")),    # an order of magnitude low
+}
+"""Misprints of the paper's tables, found by reading them (docs/errata.md, E32):
+(table, step, column, as printed, kinds in alphabetical order)."""
+
+
 def perturbed_platform(rng: np.random.Generator, legs_model: str = "rigid") -> gsfric.Platform:
     """The reference platform with moved joints, tilted axes, full inertias and a payload offset."""
     base = models.reference_platform("paper")

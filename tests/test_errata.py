@@ -35,6 +35,7 @@ from derive import printed as pr
 from gsfric import models, paper
 from gsfric.evaluation import parameter_values, state_array
 from gsfric.trajectory import Motion
+from helpers import PAPER_MISPRINTS
 
 PAPER = Path(__file__).resolve().parents[2] / "shared" / "paper"
 DOC = Path(__file__).resolve().parents[1] / "docs" / "errata.md"
@@ -639,25 +640,12 @@ def test_E31_universal_joints_called_spherical():
         assert np.linalg.norm(leg.omega_L, axis=0).min() > 1e-3
 
 
-TABLE_MISPRINTS = {
-    (1, 10, "MfrE5", "-0.0133", ("digits", "small")),
-    (1, 12, "MfrE1", "-0.0131", ("digits", "small")),
-    (1, 19, "MfrE2", "-0.1430", ("digits",)),
-    (2, 15, "MfrC5", "-0.1216", ("digits",)),
-    (2, 26, "MfrC6", "-0.188", ("large",)),
-    (3, 8, "Ffr5", "-0.7247", ("digits",)),
-    (3, 14, "Ffr1", "-0.6234", ("digits",)),
-    (3, 27, "Ffr5", "-0.0687", ("digits", "small")),
-}
-"""The cells of E32: (table, pos, column, as printed, kinds)."""
-
-
 def test_E32_table_misprints():
     """The runtime's detector (the only one) finds exactly the cells of E32 in the printed
     tables."""
     found = {(m.table, m.pos, m.column, m.printed, tuple(sorted(m.kinds)))
              for number in (1, 2, 3) for m in paper.find_misprints(number)}
-    assert found == TABLE_MISPRINTS
+    assert found == PAPER_MISPRINTS
 
 
 def test_E33_tables_1_2_disagree():

@@ -13,23 +13,13 @@ from gsfric import models, paper
 from gsfric.cli import main
 from gsfric.errors import InputError
 from gsfric.platform import Platform
+from helpers import PAPER_MISPRINTS
 
 SHARED_PAPER = Path(__file__).resolve().parents[1].parent / "shared" / "paper"
 SHARED_CSV = {1: "table1_friction_moments_moving_platform_joints.csv",
               2: "table2_friction_moments_fixed_platform_joints.csv",
               3: "table3_friction_forces_prismatic_joints.csv"}
 
-# Misprints of the paper's tables, found by reading them: (table, step, column, printed, kinds).
-PAPER_MISPRINTS = {
-    (1, 10, "MfrE5", "-0.0133", ("small", "digits")),   # an order of magnitude low
-    (1, 12, "MfrE1", "-0.0131", ("small", "digits")),   # an order of magnitude low
-    (1, 19, "MfrE2", "-0.1430", ("digits",)),           # an extra digit
-    (2, 15, "MfrC5", "-0.1216", ("digits",)),           # an extra digit
-    (2, 26, "MfrC6", "-0.188", ("large",)),             # far above the rest of Table 2
-    (3, 8, "Ffr5", "-0.7247", ("digits",)),             # an extra digit
-    (3, 14, "Ffr1", "-0.6234", ("digits",)),            # an extra digit
-    (3, 27, "Ffr5", "-0.0687", ("small", "digits")),    # an order of magnitude low
-}
 
 
 @pytest.fixture(scope="module")
@@ -138,12 +128,6 @@ def test_implied_reaction_of_our_own_moments_is_our_reaction(run):
                                run.reaction("R_E"), rtol=1e-4)
     np.testing.assert_allclose(paper.implied_joint_reaction(run.result.MfrC_s),
                                run.reaction("R_C"), rtol=1e-4)
-
-
-def test_misprint_detector_finds_the_known_misprints_and_nothing_else():
-    found = {(m.table, m.pos, m.column, m.printed, m.kinds)
-             for n in paper.TABLES for m in paper.find_misprints(n)}
-    assert found == PAPER_MISPRINTS
 
 
 def test_misprints_of_an_order_of_magnitude_are_left_out(run):
