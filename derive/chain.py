@@ -317,12 +317,9 @@ class Chain:
             names[sym] = f"s{len(names)}"
             return names[sym]
 
-        def full(expr):
-            return f"broadcast_to(1.0 * ({printer.doprint(expr)}), (n,))"
-
         for step in self.steps:
             for t, e in zip(step.targets, step.exprs):
-                lines.append(f"    {new(t)} = {full(e)}")
+                lines.append(f"    {new(t)} = {_full_length(printer, e)}")
         return names, lines, printer
 
     # ----------------------------------------------------------------- back ends
@@ -391,19 +388,21 @@ class Chain:
             self._numpy_body = (len(self.steps),) + self._print_numpy_body()
         _, names, lines, printer = self._numpy_body
         lines = list(lines)
-
-        def full(expr):
-            return f"broadcast_to(1.0 * ({printer.doprint(expr)}), (n,))"
-
         lines.append("    return {")
         for name, mat in outputs.items():
-            lines.append(f"        {name!r}: stack([{', '.join(full(v) for v in mat)}], -1),")
+            entries = ", ".join(_full_length(printer, v) for v in mat)
+            lines.append(f"        {name!r}: stack([{entries}], -1),")
         lines.append("    }")
         env = {k: getattr(np, k) for k in dir(np)
                if not k.startswith("_") and not hasattr(builtins, k)}
         env["reduce"] = __import__("functools").reduce
         exec(compile("\n".join(lines), "<chain>", "exec"), env)
         return env["chain"]
+
+
+def _full_length(printer, expr) -> str:
+    """NumPy source of ``expr`` broadcast to the chain's ``n`` steps (constants included)."""
+    return f"broadcast_to(1.0 * ({printer.doprint(expr)}), (n,))"
 
 
 def _entry_name(base: str, r: int, c: int, rows: int, cols: int) -> str:
