@@ -185,6 +185,26 @@ def test_platform_file_without_friction_model_keeps_the_paper_meaning(tmp_path):
         gsfric.Platform.from_toml(path)
 
 
+def test_defaults_and_written_files_name_their_model(tmp_path):
+    """The physical default is the coupled model, the paper's platform keeps the paper's, and
+    every platform file gsfric writes states its model (a file without it means "paper")."""
+    from gsfric.cli import _platform_template
+
+    assert models.reference_platform().friction.model == "coupled"
+    assert models.reference_platform() == models.reference_platform("coupled")
+    assert models.paper_platform().friction.model == "paper"
+    for platform, model in ((models.reference_platform(), "coupled"),
+                            (models.paper_platform(), "paper")):
+        path = tmp_path / f"{model}.toml"
+        platform.to_toml(path)
+        friction = path.read_text().split("[friction]", 1)[1]
+        assert f'model = "{model}"' in friction.split("\n[", 1)[0]
+    template = tmp_path / "template.toml"
+    template.write_text(_platform_template())
+    assert 'model = "coupled"' in template.read_text().split("[friction]", 1)[1]
+    assert gsfric.Platform.from_toml(template).friction.model == "coupled"
+
+
 def test_actuator_hot_path_equals_the_full_evaluation():
     platform = models.reference_platform("coupled")
     motion = _motion(11, 40)
