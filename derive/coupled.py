@@ -14,16 +14,24 @@ matrix: only the right-hand side changes. Friction depends on the reactions it c
 (``|R_E|``, ``|R_C|``), so the system is solved by fixed-point iteration, unrolled
 ``N_ITERATIONS`` times in the generated code:
 
-    M_fr^(0) = friction(R^(0))                     (R^(0): the frictionless reactions)
-    f^(k)    = f^(0) + A^-1 db(M_fr^(k-1)),  R^(k) = R(f^(k), M_fr^(k-1)),
-    M_fr^(k) = friction(R^(k)),                    k = 1 .. N_ITERATIONS
+    M_fr^(0) = G(R^(0))                            (R^(0): the frictionless reactions)
+    f^(k)    = f^(0) + A^-1 db(x^(k)),  R^(k) = R(f^(k), x^(k)),     x^(1) = M_fr^(0)
+    G^(k)    = friction(R^(k)),  r^(k) = G^(k) - x^(k)
+    x^(k+1)  = G^(k) - theta^(k) (G^(k) - G^(k-1)),
+    theta^(k) = <r^(k), r^(k) - r^(k-1)> / |r^(k) - r^(k-1)|^2,      k = 1 .. N_ITERATIONS - 1
 
-each step re-using the QR factor of A (one back-substitution). The reported reactions are
-``R^(N)``, in equilibrium with the reported friction moments ``M_fr^(N-1)``; the output
-``coupling_change`` is ``f^(N) - f^(N-1)``, which the runtime compares with a tolerance
-(``gsfric.evaluation.COUPLING_TOLERANCE``) to flag steps where the iteration has not converged
-(mu r so large that friction locks the mechanism). The map from f^(k-1) to f^(k) contracts with a
-factor proportional to ``mu r / D``; docs/friction.md states the limits checked by the tests.
+each step re-using the QR factor of A (one back-substitution). The update is Anderson's
+acceleration of depth 1 (a secant step on the friction moments of all legs at once, the residual
+``r`` the change friction would make); it is left out (theta = 0, the plain step
+``x^(k+1) = G^(k)``) at the first update, which has no previous residual, and at the last, so that
+the reported moments are the friction of R^(N-1) and ``coupling_change`` measures a plain step.
+The reported
+reactions are ``R^(N)``, in equilibrium with the reported friction moments ``x^(N)``; the output
+``coupling_change`` is ``f^(N) - f^(N-1)``, the change the last plain step made, which the
+runtime compares with a tolerance (``gsfric.evaluation.COUPLING_TOLERANCE``) to flag steps where
+the iteration has not converged (mu r so large that friction locks the mechanism). The plain map
+contracts with a factor proportional to ``mu r / D``; docs/friction.md states the limits checked
+by the tests and what the acceleration gains.
 
 The universal joint's friction is taken per bearing axis: the leg's angular velocity relative to
 the base is ``omega_L = w_1 a_1 + w_2 a_2`` (a_1 base-fixed, a_2 leg-fixed, orthogonal), and each
@@ -50,6 +58,12 @@ from .vectors import cross, dot, norm
 
 N_ITERATIONS = 6
 """Fixed-point iterations unrolled in the generated code (each: friction, one back-substitution)."""
+
+ACCELERATE = True
+"""Anderson steps (depth 1) between the plain iterations (``_anderson_step``)."""
+
+ANDERSON_FLOOR = 1e-300
+"""(N m)^2: added to the Anderson step's denominator, so that an unchanged residual gives 0."""
 
 
 def joint_friction_terms(let, w_rel, w_C, a1, a2, c_s, mu, r, eps, m) -> dict:
@@ -115,7 +129,7 @@ def coupling_weight(P, Q, mode):
     return m + (1 - m) * s
 
 
-def solve(ch, legs, A_qr, weight, moments, m, n_iter=N_ITERATIONS):
+def solve(ch, legs, A_qr, weight, moments, m, n_iter=N_ITERATIONS, accelerate=ACCELERATE):
     """Unrolled fixed point of the coupled equilibrium; updates every leg's outputs in place.
 
     Parameters
@@ -153,6 +167,7 @@ def solve(ch, legs, A_qr, weight, moments, m, n_iter=N_ITERATIONS):
     R_C = [r[1] for r in R0]
     mfr = [moments(leg, R_E[i], R_C[i], 0) for i, leg in enumerate(legs)]
     df_prev = sp.zeros(len(legs), 1)
+    images = residuals = None
     for it in range(1, n_iter + 1):
         rhs_F, rhs_M = sp.zeros(3, 1), sp.zeros(3, 1)
         dts, dMCs = [], []
@@ -179,7 +194,13 @@ def solve(ch, legs, A_qr, weight, moments, m, n_iter=N_ITERATIONS):
             break
         R_E, R_C = R_E_new, R_C_new
         df_prev = df
-        mfr = [moments(leg, R_E[i], R_C[i], it) for i, leg in enumerate(legs)]
+        image = [moments(leg, R_E[i], R_C[i], it) for i, leg in enumerate(legs)]
+        residual = [(G[0] - x[0], G[1] - x[1]) for G, x in zip(image, mfr)]
+        if accelerate and residuals is not None and it < n_iter - 1:
+            mfr = _anderson_step(ch, it, image, residual, images, residuals)
+        else:
+            mfr = image
+        images, residuals = image, residual
     for i, leg in enumerate(legs):
         let = ch.scope("coupled", leg.k)
         o = leg.out
@@ -190,3 +211,23 @@ def solve(ch, legs, A_qr, weight, moments, m, n_iter=N_ITERATIONS):
         o["R_E"] = let("R_E_fr", R_E_new[i], r"R^{fr}_{E}")
         o["R_C"] = let("R_C_fr", R_C_new[i], r"R^{fr}_{C}")
     return df, m * (df - df_prev)
+
+
+def _anderson_step(ch, it, image, residual, images, residuals):
+    """One Anderson step of depth 1 on the friction moments, (ME, MC) per leg.
+
+    With ``x`` the moments an iteration was solved with, ``G(x)`` the moments of its reactions
+    and ``r = G(x) - x``, the next moments are ``G_k - theta (G_k - G_(k-1))`` with
+    ``theta = <r_k, r_k - r_(k-1)> / |r_k - r_(k-1)|^2`` (the secant step that cancels the
+    residual along its last change; 0 when the residual did not change).
+    """
+    num = den = sp.S.Zero
+    for (rE, rC), (pE, pC) in zip(residual, residuals):
+        for r, p in ((rE, pE), (rC, pC)):
+            d = r - p
+            num += dot(r, d)
+            den += dot(d, d)
+    theta = ch.scope("coupled")(f"theta{it}", num / (den + ANDERSON_FLOOR),
+                                rf"\theta^{{({it})}}")
+    return [(G[0] - theta * (G[0] - P[0]), G[1] - theta * (G[1] - P[1]))
+            for G, P in zip(image, images)]

@@ -58,11 +58,11 @@ def reference_geometry() -> Geometry:
 
 
 def reference_leg() -> Legs:
-    """The reference leg: a ball-screw electric cylinder with its motor at the universal joint.
+    """The reference leg: a 32 mm electric cylinder (ball screw, motor at the universal joint).
 
-    Lower part (cylinder, screw, motor) 2.6 kg, centre 0.12 m from C_i; upper part (piston rod,
-    nut, rod end) 0.7 kg, centre 0.17 m from E_i; inertias of slender bodies 0.40 m and 0.45 m
-    long. The numbers and how they were obtained: docs/reference.md.
+    Lower part (body, screw, motor) 2.6 kg, centre 0.21 m from C_i; upper part (rod, nut, rod
+    end) 0.7 kg, centre 0.25 m from E_i: the mass of an SMC LEY32 with 250 mm of stroke, split
+    and placed from its parts. The numbers and how they were obtained: docs/reference.md.
     """
     return Legs(model="rigid", weight=True,
                 lower_mass=REFERENCE_LEG["lower_mass"], lower_com=REFERENCE_LEG["lower_com"],
@@ -71,20 +71,21 @@ def reference_leg() -> Legs:
                 upper_inertia=np.diag(REFERENCE_LEG["upper_inertia"]))
 
 
-REFERENCE_LEG = dict(lower_mass=2.6, lower_com=0.12, lower_inertia=(0.040, 0.040, 0.0012),
-                     upper_mass=0.7, upper_com=0.17, upper_inertia=(0.012, 0.012, 0.0001))
+REFERENCE_LEG = dict(lower_mass=2.6, lower_com=0.21, lower_inertia=(0.071, 0.071, 0.0012),
+                     upper_mass=0.7, upper_com=0.25, upper_inertia=(0.019, 0.019, 0.0001))
 """The reference leg's masses (kg), centre distances (m, from C_i and from E_i) and principal
 inertias (kg m^2, leg body frame: transverse, transverse, axial); see docs/reference.md."""
 
 REFERENCE_FRICTION = dict(model="coupled", bushing_offset=0.25, bushing_spacing=0.1,
                           prismatic_seal=2.0, prismatic_coulomb=0.1)
-"""The reference platform's friction besides the paper's joint coefficients: the coupled model,
-polymer bushings (mu 0.1) at 0.25 m and 0.35 m from C_i, a 2 N rod seal."""
+"""The reference platform's friction besides the paper's joint coefficients: the coupled model
+(the default of ``reference_platform``), polymer bushings (mu 0.1) at 0.25 m and 0.35 m from
+C_i, a 2 N rod seal."""
 
 
-def reference_platform(friction_model: str = "paper") -> Platform:
+def reference_platform(friction_model: str = "coupled") -> Platform:
     """The built-in platform: the reference geometry, the paper's platform and payload, the
-    reference leg (``reference_leg``) and, by default, the paper's post-hoc friction model.
+    reference leg (``reference_leg``) and, by default, the coupled friction model.
 
     Platform 10 kg with inertia 0.07 kg m^2 (times identity), payload 3 kg; joints
     c_s = 0.02 N m s/rad, mu = 0.04, r = 0.05 m; prismatic joints 0.02 N s/m, bushings with
@@ -92,10 +93,10 @@ def reference_platform(friction_model: str = "paper") -> Platform:
 
     Parameters
     ----------
-    friction_model : {"paper", "coupled"}
-        ``"paper"`` (default): the paper's post-hoc friction model, (35) as printed with
-        mu = 0.1 at R_3 and no seal. ``"coupled"``: friction loads the mechanism (bushings,
-        seal, per-axis universal joints; docs/friction.md).
+    friction_model : {"coupled", "paper"}
+        ``"coupled"`` (default): friction loads the mechanism (bushings, seal, per-axis
+        universal joints, solved at every step; docs/friction.md). ``"paper"``: the paper's
+        post-hoc friction model, (35) as printed with mu = 0.1 at R_3 and no seal.
     """
     return Platform(
         gravity=9.81,
