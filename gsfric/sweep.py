@@ -446,112 +446,245 @@ class Task:
     workspace: Workspace | None = None
 
 
+BLOCK_STEPS = 4096
+"""Steps evaluated and reduced at a time inside a task. A block's outputs and work arrays
+(about 20 MB) are reused from block to block and from variant to variant, so a worker's memory
+follows this size, not the task's or the sweep's."""
+
+_VECTORS = ("R_E", "R_C", "R_3", "M_3", "MfrE", "MfrC")
+"""Outputs (N, 6, 3) whose magnitudes are enveloped."""
+
+_ROWS = (*_VECTORS, "M_C", "F_max", "F_min", "Ffr", "P_E", "P_C", "P_3")
+"""Rows of a block's magnitude array (13, n, 6), every one maximised over the steps: the
+squared magnitudes of ``_VECTORS`` (the square root is taken of the extremes only), |M_C|,
+F, -F (the largest -F is the smallest F), |Ffr| and the three dissipated friction powers."""
+
+_OTHER = ("F", "F0", "M_C", "Ffr", "D_dot", "D", "s2", "h", "coupling_change")
+"""The other outputs the envelopes and the step flags need; the rest are not computed."""
+
+_SUM_THREE = np.ones(3)
+_MINUS_SUM_THREE = -np.ones(3)
+
+
+class _Block:
+    """Buffers of one block of at most ``size`` steps, reused: the outputs the envelopes need,
+    the step flags and the magnitudes. Belongs to one task (never shared between threads)."""
+
+    def __init__(self, size: int) -> None:
+        from gsfric import native
+
+        self.fn = native.get("eval")
+        self.compiled = native.is_compiled()
+        sizes = {name: s for name, s, _ in self.fn.outputs}
+        self.size = size
+        self._vectors = np.empty(len(_VECTORS) * size * 18)
+        self._rates = np.empty(2 * size * 18)           # omega_rel, omega_leg
+        self._squares = np.empty_like(self._vectors)
+        self._products = np.empty_like(self._rates)
+        self._magnitudes = np.empty(len(_ROWS) * size * 6)
+        self._other = {k: np.empty(size * sizes[k]) for k in _OTHER if k in sizes}
+        self._sizes = sizes
+        self._flag = np.empty(size, dtype=np.int64)
+        self.n = 0
+        self.names = (*_VECTORS, "omega_rel", "omega_leg", *self._other)
+
+    def use(self, n: int) -> None:
+        """Lay the buffers out for ``n <= size`` steps (every view C-contiguous)."""
+        self.n = n
+        self.vectors = self._vectors[:len(_VECTORS) * n * 18].reshape(len(_VECTORS), n, 18)
+        self.rates = self._rates[:2 * n * 18].reshape(2, n, 18)
+        self.squares = self._squares[:self.vectors.size].reshape(self.vectors.shape)
+        self.products = self._products[:self.rates.size].reshape(self.rates.shape)
+        self.magnitudes = self._magnitudes[:len(_ROWS) * n * 6].reshape(len(_ROWS), n, 6)
+        self.out = {name: self.vectors[k] for k, name in enumerate(_VECTORS)}
+        self.out["omega_rel"], self.out["omega_leg"] = self.rates[0], self.rates[1]
+        self.out.update({k: v[:n * self._sizes[k]].reshape(n, self._sizes[k])
+                         for k, v in self._other.items()})
+        self.flag = self._flag[:n]
+
+    def reduce(self) -> np.ndarray:
+        """The magnitudes (13, n, 6) of the block's outputs (rows ``_ROWS``), in few passes."""
+        o, G = self.out, self.magnitudes
+        np.square(self.vectors, out=self.squares)
+        np.matmul(self.squares.reshape(-1, 3), _SUM_THREE, out=G[0:6].reshape(-1))
+        np.abs(o["M_C"], out=G[6])
+        G[7] = o["F"]
+        np.negative(o["F"], out=G[8])
+        np.abs(o["Ffr"], out=G[9])
+        # -MfrE . omega_rel and -MfrC . omega_leg
+        np.multiply(self.vectors[4:6], self.rates, out=self.products)
+        np.matmul(self.products.reshape(-1, 3), _MINUS_SUM_THREE, out=G[10:12].reshape(-1))
+        np.multiply(o["Ffr"], o["D_dot"], out=G[12])
+        np.negative(G[12], out=G[12])
+        return G
+
+
+class _Evaluation:
+    """One variant's evaluation of blocks of states into a ``_Block``: only the outputs the
+    envelopes need, with the step flags, in one call of the compiled code per block.
+
+    Gives what ``Evaluator.evaluate_quiet`` gives for these outputs (the same compiled
+    function, step flags and coupled-friction flag); a platform with sensor effects (which
+    change F after the compiled code) and the CasADi fallback go through
+    ``Evaluator.evaluate_quiet`` itself.
+    """
+
+    def __init__(self, platform: Platform) -> None:
+        from gsfric.catalog import sensor_parameters
+        from gsfric.evaluation import Evaluator
+
+        self.evaluator = Evaluator(platform, n_threads=1)
+        gains, delay = sensor_parameters(platform.effects)
+        self.sensor = delay != 0.0 or bool(np.any(gains != 0.0))
+
+    def blocks(self, block: _Block, x: np.ndarray, t: np.ndarray):
+        """Fill ``block`` with the steps ``s:e`` of states x (n, 24) at times t (n,) block
+        after block; yields ``(s, e)``."""
+        n = len(x)
+        if block.compiled and not self.sensor:
+            from gsfric.evaluation import COUPLING_TOLERANCE, FLAG_COUPLING
+
+            ev = self.evaluator
+            spec = ev.flag_spec()
+            for s in range(0, n, block.size):
+                e = min(n, s + block.size)
+                block.use(e - s)
+                block.fn([x[s:e], ev.P, ev.Q], block.out, 1, select=block.names, flags=spec,
+                         flag=block.flag)
+                change = block.out.get("coupling_change")
+                if change is not None:
+                    limit = COUPLING_TOLERANCE * (1.0 + np.abs(block.out["F0"]))
+                    block.flag[(np.abs(change) > limit).any(axis=1)] |= FLAG_COUPLING
+                yield s, e
+            return
+        from gsfric.trajectory import Motion
+
+        motion = Motion(t, x[:, 0:3], x[:, 3:12].reshape(n, 3, 3), x[:, 12:15], x[:, 15:18],
+                        x[:, 18:21], x[:, 21:24])
+        result = self.evaluator.evaluate_quiet(motion)       # flagged steps are counted
+        for s in range(0, n, block.size):
+            e = min(n, s + block.size)
+            block.use(e - s)
+            for name, buf in block.out.items():
+                buf[...] = result.arrays[name][s:e].reshape(e - s, -1)
+            block.flag[...] = result.flag[s:e]
+            yield s, e
+
+
 class _Envelope:
-    """Running extremes of one case; merged chunk by chunk in order (deterministic)."""
+    """Running extremes of one case, block by block in step order (deterministic: ties go to
+    the earlier step)."""
 
     def __init__(self) -> None:
-        self.value = {q: np.full(6, -np.inf if QUANTITIES[q][0] != "min" else np.inf)
-                      for q in QUANTITIES if QUANTITIES[q][0] != "sum"}
-        self.where = {q: np.full((6, 8), np.nan) for q in self.value}    # step, t, pose
-        self.sums = {q: np.zeros(6) for q in QUANTITIES if QUANTITIES[q][0] == "sum"}
+        shape = (len(_ROWS), 6)
+        self.best = np.full(shape, -np.inf)
+        self.step = np.full(shape, -1, dtype=np.int64)
+        self.t = np.full(shape, np.nan)
+        self.state = np.full(shape + (12,), np.nan)    # position and rotation of the step
+        self.energy = np.zeros((3, 6))                  # W_E, W_C, W_3
         self.steps = 0
         self.flagged = 0
         self.last = None      # (t, powers (3, 6)) of the motion's previous step
 
-    def add(self, result, x: np.ndarray, step0: int, timed: bool) -> None:
-        a = result.arrays
-        n = len(result.t)
-        ok = result.flag == 0
-        self.steps += n
-        self.flagged += int((~ok).sum())
-        P = np.stack([-np.einsum("nij,nij->ni", a["MfrE"], a["omega_rel"]),
-                      -np.einsum("nij,nij->ni", a["MfrC"], a["omega_leg"]),
-                      -a["Ffr"] * a["D_dot"]])                          # (3, N, 6)
-        series = {
-            "R_E": np.linalg.norm(a["R_E"], axis=2), "R_C": np.linalg.norm(a["R_C"], axis=2),
-            "M_C": np.abs(a["M_C"]), "R_3": np.linalg.norm(a["R_3"], axis=2),
-            "M_3": np.linalg.norm(a["M_3"], axis=2), "F_max": a["F"], "F_min": a["F"],
-            "Ffr": np.abs(a["Ffr"]), "MfrE": np.linalg.norm(a["MfrE"], axis=2),
-            "MfrC": np.linalg.norm(a["MfrC"], axis=2), "P_E": P[0], "P_C": P[1], "P_3": P[2]}
-        if ok.any():
-            idx_ok = np.flatnonzero(ok)
-            rot = x[:, 3:12].reshape(-1, 3, 3)
-            for q, s in series.items():
-                s = s[idx_ok]
-                k = np.argmin(s, axis=0) if QUANTITIES[q][0] == "min" else np.argmax(s, axis=0)
-                v = s[k, np.arange(6)]
-                better = v < self.value[q] if QUANTITIES[q][0] == "min" else v > self.value[q]
-                if better.any():
-                    steps = idx_ok[k[better]]
-                    self.value[q][better] = v[better]
-                    self.where[q][better, 0] = step0 + steps
-                    self.where[q][better, 1] = result.t[steps] if timed else np.nan
-                    self.where[q][better, 2:5] = x[steps, 0:3]
-                    self.where[q][better, 5:8] = _angles(rot[steps])
-        if timed:   # trapezoid over the motion's time, across chunk boundaries
-            t = result.t
-            Pz = np.where(ok[None, :, None], P, 0.0)
-            if self.last is not None:
-                t = np.concatenate([[self.last[0]], t])
-                Pz = np.concatenate([self.last[1][:, None, :], Pz], axis=1)
-            dt = np.diff(t)
-            W = 0.5 * np.einsum("n,knl->kl", dt, Pz[:, 1:] + Pz[:, :-1])
-            for q, w in zip(("W_E", "W_C", "W_3"), W):
-                self.sums[q] += w
-            self.last = (t[-1], Pz[:, -1, :])
+    def add(self, block: _Block, x: np.ndarray, t: np.ndarray, step0: int, timed: bool) -> None:
+        """Fold in the block's outputs: states x (n, 24), times t (n,), first step ``step0``."""
+        G = block.reduce()
+        bad = np.flatnonzero(block.flag)
+        self.steps += block.n
+        self.flagged += bad.size
+        if timed:
+            self._integrate(G[10:13], bad, t)
+        if bad.size:
+            G[:, bad] = -np.inf                 # flagged steps are left out of the envelope
+        k = G.argmax(axis=1)                                        # (13, 6)
+        v = np.take_along_axis(G, k[:, None, :], axis=1)[:, 0, :]
+        better = v > self.best
+        if better.any():
+            q, leg = np.nonzero(better)
+            at = k[q, leg]
+            self.best[q, leg] = v[q, leg]
+            self.step[q, leg] = step0 + at
+            self.t[q, leg] = t[at]
+            self.state[q, leg] = x[at, :12]
+
+    def _integrate(self, P: np.ndarray, bad: np.ndarray, t: np.ndarray) -> None:
+        """Trapezoid of the powers P (3, n, 6) over t, across block boundaries (flagged: 0)."""
+        if bad.size:
+            P = P.copy()
+            P[:, bad] = 0.0
+        if self.last is not None:
+            self.energy += 0.5 * (t[0] - self.last[0]) * (P[:, 0] + self.last[1])
+        if len(t) > 1:
+            self.energy += 0.5 * np.matmul(np.diff(t), P[:, 1:] + P[:, :-1])
+        self.last = (t[-1], P[:, -1].copy())
 
     def rows(self, motion: str, variant: int, timed: bool) -> list[tuple]:
+        found = self.step >= 0
+        value = np.where(found, self.best, np.nan)
+        value[0:6] = np.sqrt(value[0:6])
+        value[8] = -value[8]
+        pose = np.full((len(_ROWS), 6, 6), np.nan)
+        pose[found, 0:3] = self.state[found, 0:3]
+        if found.any():
+            pose[found, 3:6] = _angles(self.state[found, 3:12].reshape(-1, 3, 3))
         out = []
+        sums = {"W_E": 0, "W_C": 1, "W_3": 2}
         for q in QUANTITIES:
             for leg in range(6):
-                if q in self.sums:
-                    value = float(self.sums[q][leg]) if timed else math.nan
+                if q in sums:
+                    w = float(self.energy[sums[q], leg]) if timed else math.nan
                     where = [-1] + [math.nan] * 7
-                else:
-                    value = float(self.value[q][leg])
-                    if not math.isfinite(value):
-                        value = math.nan
-                    where = self.where[q][leg].tolist()
-                    where[0] = -1 if math.isnan(where[0]) else int(where[0])
-                out.append((motion, variant, q, leg + 1, value, *where, self.steps,
-                            self.flagged))
+                    out.append((motion, variant, q, leg + 1, w, *where, self.steps,
+                                self.flagged))
+                    continue
+                r = _ROWS.index(q)
+                where = [int(self.step[r, leg]),
+                         float(self.t[r, leg]) if timed and found[r, leg] else math.nan,
+                         *pose[r, leg].tolist()]
+                out.append((motion, variant, q, leg + 1, float(value[r, leg]), *where,
+                            self.steps, self.flagged))
         return out
+
+
+def _pieces(task: Task):
+    """(first step, states (n, 24), times (n,)) of a task, piece by piece: a trajectory file
+    as it is streamed, a block of workspace poses ``BLOCK_STEPS`` states at a time."""
+    if task.path is not None:
+        from gsfric.evaluation import state_array
+        from gsfric.stream import iter_motions
+
+        for start, m in iter_motions(task.path, chunk=STREAM_CHUNK):
+            yield start, state_array(m), np.asarray(m.t, float)
+        return
+    ws = task.workspace
+    per = max(1, BLOCK_STEPS // ws.states)
+    zeros = np.zeros(per * ws.states)
+    for p0 in range(0, len(task.poses), per):
+        first = task.first_pose + p0
+        x = ws.states_of(task.poses[p0:p0 + per], first)
+        yield first * ws.states, x, zeros[:len(x)]
 
 
 def run_task(task: Task):
     """Evaluate one task and reduce it to envelope rows (a DataFrame of ``ENVELOPE_COLUMNS``).
 
-    Runs on a worker. One ``Evaluator`` per variant, built here and used by this task only:
-    the evaluator must not be shared between threads until it is thread-safe.
+    Runs on a worker, in one thread, block after block of ``BLOCK_STEPS`` steps: each block is
+    evaluated for every variant of the task into the same reused buffers and folded into the
+    variant's envelope at once, so memory follows ``BLOCK_STEPS``, not the task's size.
     """
     import pandas as pd
 
-    from gsfric.evaluation import Evaluator
-    from gsfric.trajectory import Motion
-
-    evaluators = [Evaluator(p) for p in task.platforms]
+    block = _Block(BLOCK_STEPS)
+    evaluations = [_Evaluation(p) for p in task.platforms]
     envelopes = [_Envelope() for _ in task.platforms]
     timed = task.path is not None
-    if timed:
-        from gsfric.evaluation import state_array
-        from gsfric.stream import iter_motions
-
-        pieces = ((start, m, state_array(m)) for start, m in
-                  iter_motions(task.path, chunk=STREAM_CHUNK))
-    else:
-        ws = task.workspace
-        x = ws.states_of(task.poses, task.first_pose)
-        n = len(x)
-        motion = Motion(np.zeros(n), x[:, 0:3], x[:, 3:12].reshape(n, 3, 3), x[:, 12:15],
-                        x[:, 15:18], x[:, 18:21], x[:, 21:24])
-        pieces = iter([(task.first_pose * ws.states, motion, x)])
-    for start, motion, x in pieces:
-        for ev, env in zip(evaluators, envelopes):
-            result = ev.evaluate_quiet(motion)         # flagged steps are counted instead
-            env.add(result, x, start, timed)
+    for start, x, t in _pieces(task):
+        for evaluation, envelope in zip(evaluations, envelopes):
+            for s, e in evaluation.blocks(block, x, t):
+                envelope.add(block, x[s:e], t[s:e], start + s, timed)
     rows = []
-    for v, env in zip(task.variants, envelopes):
-        rows += env.rows(task.motion, v, timed)
+    for v, envelope in zip(task.variants, envelopes):
+        rows += envelope.rows(task.motion, v, timed)
     frame = pd.DataFrame(rows, columns=list(ENVELOPE_COLUMNS))
     frame.insert(0, "task", task.id)
     return frame
