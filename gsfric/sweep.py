@@ -100,8 +100,8 @@ SCALAR_PARAMETERS = (
 JOINT_TOLERANCES = ("geometry.base_joints", "geometry.platform_joints")
 """Tolerances only: a normal error of this standard deviation (m) on every joint coordinate."""
 
-CHUNK_STEPS = 100_000
-"""Default evaluated steps per task: a few seconds of one core."""
+CHUNK_STEPS = 1_000_000
+"""Default evaluated steps per task: one to a few seconds of one core (docs/sizing.md)."""
 
 SERIAL_BELOW = 300_000
 """``scheduler="auto"`` runs sweeps of fewer steps in this process: starting a LocalCluster
@@ -232,28 +232,31 @@ class Workspace:
             out[:, varying] = lo[varying] + unit * (hi[varying] - lo[varying])
         return out
 
-    def states_of(self, poses: np.ndarray, first: int) -> np.ndarray:
+    def states_of(self, poses: np.ndarray, first: int,
+                  rotation: np.ndarray | None = None) -> np.ndarray:
         """The ``states`` dynamic states of poses ``first, first + 1, ...``, (n * states, 24).
 
         Laid out as ``gsfric.evaluation.state_array``. The signs come from a counter-based
         generator (Philox) positioned at the first pose, so each pose's states depend on the
         seed and its index only: the same on every worker, in every run, for any chunking.
+        ``rotation`` (n, 3, 3), the poses' rotation matrices, saves computing them again.
         """
         n, s = len(poses), self.states
         bits = np.random.Philox(key=self.seed)
-        bits.advance(first * s * 3)          # 4 doubles per counter step, 12 per state
-        rng = np.random.Generator(bits)
+        bits.advance(first * s * 3)          # 4 words per counter step, 12 per state
+        # a component is at -bound where the uniform double of its word is below 0.5, that
+        # is where the word is below 2**63 (the double is the word's top 53 bits / 2**53)
+        low = bits.random_raw(n * s * 12).reshape(n, s, 12) < np.uint64(1 << 63)
         bound = np.concatenate([np.asarray(self.bounds.get(k, np.zeros(3)), float)
                                 for k in _BOUNDS])                       # (12,)
-        signs = np.where(rng.random((n, s, 12)) < 0.5, -1.0, 1.0)
-        signs[:, 0, :] = 0.0                                             # the static state
-        dyn = (signs * bound).reshape(n * s, 12)
-        rot = _rotation(poses)
-        x = np.empty((n * s, 24))
-        x[:, 0:3] = np.repeat(poses[:, :3], s, axis=0)
-        x[:, 3:12] = np.repeat(rot.reshape(n, 9), s, axis=0)
-        x[:, 12:24] = dyn
-        return x
+        if rotation is None:
+            rotation = _rotation(poses)
+        x = np.empty((n, s, 24))
+        x[:, :, 0:3] = poses[:, None, :3]
+        x[:, :, 3:12] = rotation.reshape(n, 1, 9)
+        x[:, :, 12:24] = np.where(low, -bound, bound)
+        x[:, 0, 12:24] = 0.0                                             # the static state
+        return x.reshape(n * s, 24)
 
 
 def _interval(value, name: str) -> tuple[float, float]:
@@ -282,19 +285,14 @@ def _angles(rotation: np.ndarray) -> np.ndarray:
         return Rotation.from_matrix(rotation).as_euler("ZYX")[:, ::-1]
 
 
-def leg_lengths(platform: Platform, poses: np.ndarray) -> np.ndarray:
-    """Leg lengths (n, 6), m, of poses (n, 6) (``POSE`` columns)."""
-    g = platform.geometry
-    E = np.einsum("nij,kj->nki", _rotation(poses), g.platform_joints) + poses[:, None, :3]
-    return np.linalg.norm(E - g.base_joints, axis=2)
-
-
 def check_reachable(platform: Platform, poses: np.ndarray, source: str = "workspace") -> None:
     """``InputError`` (one line) when a pose puts a leg outside the platform's stroke."""
+    from gsfric.discovery.rest import leg_lengths
+
     stroke = platform.geometry.stroke
     if stroke is None:
         return
-    D = leg_lengths(platform, poses)
+    D = leg_lengths(platform, poses[:, :3], _rotation(poses))
     bad = ((D < stroke[0]) | (D > stroke[1])).any(axis=1)
     if bad.any():
         k = int(np.flatnonzero(bad)[0])
@@ -446,10 +444,11 @@ class Task:
     workspace: Workspace | None = None
 
 
-BLOCK_STEPS = 4096
+BLOCK_STEPS = 2048
 """Steps evaluated and reduced at a time inside a task. A block's outputs and work arrays
-(about 20 MB) are reused from block to block and from variant to variant, so a worker's memory
-follows this size, not the task's or the sweep's."""
+(about 4 MB: they stay in a core's cache between the evaluation and the reduction) are reused
+from block to block and from variant to variant, so a worker's memory follows this size and
+the task's poses, not the sweep's size."""
 
 _VECTORS = ("R_E", "R_C", "R_3", "M_3", "MfrE", "MfrC")
 """Outputs (N, 6, 3) whose magnitudes are enveloped."""
@@ -464,6 +463,8 @@ _OTHER = ("F", "F0", "M_C", "Ffr", "D_dot", "D", "s2", "h", "coupling_change")
 
 _SUM_THREE = np.ones(3)
 _MINUS_SUM_THREE = -np.ones(3)
+_ROW_INDEX = np.arange(len(_ROWS))[:, None]
+_LEG_INDEX = np.arange(6)[None, :]
 
 
 class _Block:
@@ -479,8 +480,6 @@ class _Block:
         self.size = size
         self._vectors = np.empty(len(_VECTORS) * size * 18)
         self._rates = np.empty(2 * size * 18)           # omega_rel, omega_leg
-        self._squares = np.empty_like(self._vectors)
-        self._products = np.empty_like(self._rates)
         self._magnitudes = np.empty(len(_ROWS) * size * 6)
         self._other = {k: np.empty(size * sizes[k]) for k in _OTHER if k in sizes}
         self._sizes = sizes
@@ -490,11 +489,11 @@ class _Block:
 
     def use(self, n: int) -> None:
         """Lay the buffers out for ``n <= size`` steps (every view C-contiguous)."""
+        if n == self.n:
+            return
         self.n = n
         self.vectors = self._vectors[:len(_VECTORS) * n * 18].reshape(len(_VECTORS), n, 18)
         self.rates = self._rates[:2 * n * 18].reshape(2, n, 18)
-        self.squares = self._squares[:self.vectors.size].reshape(self.vectors.shape)
-        self.products = self._products[:self.rates.size].reshape(self.rates.shape)
         self.magnitudes = self._magnitudes[:len(_ROWS) * n * 6].reshape(len(_ROWS), n, 6)
         self.out = {name: self.vectors[k] for k, name in enumerate(_VECTORS)}
         self.out["omega_rel"], self.out["omega_leg"] = self.rates[0], self.rates[1]
@@ -503,19 +502,20 @@ class _Block:
         self.flag = self._flag[:n]
 
     def reduce(self) -> np.ndarray:
-        """The magnitudes (13, n, 6) of the block's outputs (rows ``_ROWS``), in few passes."""
-        o, G = self.out, self.magnitudes
-        np.square(self.vectors, out=self.squares)
-        np.matmul(self.squares.reshape(-1, 3), _SUM_THREE, out=G[0:6].reshape(-1))
+        """The magnitudes (13, n, 6) of the block's outputs (rows ``_ROWS``), in few passes
+        over the buffers (the vectors and rates are overwritten: used once per block)."""
+        o, G, V, W = self.out, self.magnitudes, self.vectors, self.rates
+        # -MfrE . omega_rel and -MfrC . omega_leg
+        np.multiply(V[4:6], W, out=W)
+        np.matmul(W.reshape(-1, 3), _MINUS_SUM_THREE, out=G[10:12].reshape(-1))
+        np.multiply(o["Ffr"], o["D_dot"], out=G[12])
+        np.negative(G[12], out=G[12])
+        np.square(V, out=V)
+        np.matmul(V.reshape(-1, 3), _SUM_THREE, out=G[0:6].reshape(-1))
         np.abs(o["M_C"], out=G[6])
         G[7] = o["F"]
         np.negative(o["F"], out=G[8])
         np.abs(o["Ffr"], out=G[9])
-        # -MfrE . omega_rel and -MfrC . omega_leg
-        np.multiply(self.vectors[4:6], self.rates, out=self.products)
-        np.matmul(self.products.reshape(-1, 3), _MINUS_SUM_THREE, out=G[10:12].reshape(-1))
-        np.multiply(o["Ffr"], o["D_dot"], out=G[12])
-        np.negative(G[12], out=G[12])
         return G
 
 
@@ -597,7 +597,7 @@ class _Envelope:
         if bad.size:
             G[:, bad] = -np.inf                 # flagged steps are left out of the envelope
         k = G.argmax(axis=1)                                        # (13, 6)
-        v = np.take_along_axis(G, k[:, None, :], axis=1)[:, 0, :]
+        v = G[_ROW_INDEX, k, _LEG_INDEX]
         better = v > self.best
         if better.any():
             q, leg = np.nonzero(better)
@@ -659,9 +659,10 @@ def _pieces(task: Task):
     ws = task.workspace
     per = max(1, BLOCK_STEPS // ws.states)
     zeros = np.zeros(per * ws.states)
+    rotation = _rotation(task.poses)
     for p0 in range(0, len(task.poses), per):
         first = task.first_pose + p0
-        x = ws.states_of(task.poses[p0:p0 + per], first)
+        x = ws.states_of(task.poses[p0:p0 + per], first, rotation[p0:p0 + per])
         yield first * ws.states, x, zeros[:len(x)]
 
 
@@ -729,6 +730,7 @@ class Plan:
     fingerprint: str
     inputs: dict
     variants: list[dict]
+    platform: Platform          # the nominal platform, read once
     workspace_poses: int = 0
 
     @property
@@ -791,7 +793,7 @@ def plan(trajectories=None, workspace: Workspace | str | os.PathLike | None = No
               "tolerances": dict(tolerances or {}), "variants": nv - 1, "seed": seed,
               "chunk_steps": int(chunk_steps)}
     hasher.update(json.dumps(inputs, sort_keys=True, default=str).encode())
-    return Plan(tasks, hasher.hexdigest()[:16], inputs, table, n_poses)
+    return Plan(tasks, hasher.hexdigest()[:16], inputs, table, platform, n_poses)
 
 
 # -- merging ----------------------------------------------------------------------------------
@@ -1093,9 +1095,7 @@ def sweep(out: str | os.PathLike, trajectories=None,
     envelopes = merge(merged)
     summary = summarize(envelopes)
     variants_table = pd.DataFrame(p.variants)
-    base = platform if isinstance(platform, Platform) else (
-        Platform.from_toml(platform) if platform is not None else None)
-    limits = base.limits if base is not None else {}
+    limits = p.platform.limits
     exceeded = check_limits(envelopes, limits)
     envelopes.to_parquet(partial / "envelopes.parquet", index=False)
     summary.to_csv(partial / "summary.csv", index=False)
