@@ -74,6 +74,11 @@ def _blocks(ws, poses):
         yield p0 * ws.states, x, zeros[:len(x)]
 
 
+def cpu_seconds() -> float:
+    """CPU time of this process (all its threads), s."""
+    return time.process_time()
+
+
 def evaluate(ws) -> tuple[int, float]:
     """``Evaluator.evaluate_quiet`` (all outputs) block by block; (steps, seconds)."""
     from gsfric import models
@@ -163,8 +168,9 @@ def main() -> None:
 
     native.is_compiled()
     ws = workspace(int(args.steps))
-    rows, startup, memory, threads, tasks = {}, {}, {}, {}, None
+    rows, startup, memory, threads, tasks, cpu = {}, {}, {}, {}, None, {}
     for name in args.paths:
+        cpu0 = cpu_seconds()
         if name == "evaluate":
             steps, sec = evaluate(ws)
         elif name in ("eval-only", "direct"):
@@ -181,26 +187,42 @@ def main() -> None:
                 client.wait_for_workers(n)
                 client.run(warm)       # import gsfric and load the cached compiled library
                 startup[n] = time.perf_counter() - t0
+                cpu0 = cpu_seconds()
+                before = client.run(cpu_seconds)
                 steps, sec, info = swept(ws, args.chunk, client)
+                after = client.run(cpu_seconds)
+                cpu[name] = (sum(after[w] - before[w] for w in after),
+                             cpu_seconds() - cpu0)
                 tasks = info["tasks"]
                 memory[name] = max(client.run(peak_rss_mb).values())
                 threads[name] = next(iter(client.run(worker_threads).values()))
+        if name not in cpu:
+            cpu[name] = (cpu_seconds() - cpu0, 0.0)
         rows[name] = (steps, sec, 1 if not name.startswith("dask") else int(name[-1]))
     print(f"sweep of {steps} steps ({ws.samples} poses x {ws.states} states), "
           f"{args.chunk} steps per task ({tasks} tasks), {sw.BLOCK_STEPS} steps per block")
-    print(f"{'path':<10} {'workers':>7} {'seconds':>9} {'steps/s':>10} {'steps/s/core':>13}")
+    print(f"{'path':<10} {'workers':>7} {'seconds':>9} {'steps/s':>10} {'steps/s/core':>13}"
+          f" {'cpu s':>8} {'steps/cpu-s':>12} {'client cpu s':>13}")
     for name, (steps, sec, n) in rows.items():
-        print(f"{name:<10} {n:>7} {sec:>9.2f} {steps / sec:>10.0f} {steps / sec / n:>13.0f}")
+        work, client_cpu = cpu[name]
+        print(f"{name:<10} {n:>7} {sec:>9.2f} {steps / sec:>10.0f} {steps / sec / n:>13.0f}"
+              f" {work:>8.2f} {steps / work:>12.0f} {client_cpu:>13.2f}")
+    print("(cpu s: CPU time of the process(es) doing the work: this one, or the Dask workers "
+          "together; client cpu s: this process while the workers ran)")
     per_core = {k: v[0] / v[1] / v[2] for k, v in rows.items()}
+    per_cpu = {k: rows[k][0] / cpu[k][0] for k in rows}
     figures = {"steps": steps, "chunk": args.chunk, "tasks": tasks,
-               "block": sw.BLOCK_STEPS, "rates_per_core": per_core,
+               "block": sw.BLOCK_STEPS, "rates_per_core": per_core, "rates_per_cpu_s": per_cpu,
+               "cpu_s": cpu,
                "cluster_startup_s": startup, "worker_peak_rss_mb": memory,
                "client_peak_rss_mb": peak_rss_mb(), "worker_threads": threads}
 
     def ratio(slow, fast):
         if slow in per_core and fast in per_core:
             figures[f"{slow}_over_{fast}"] = per_core[fast] / per_core[slow]
-            return f"{per_core[fast] / per_core[slow]:.2f}x"
+            figures[f"{slow}_over_{fast}_cpu"] = per_cpu[fast] / per_cpu[slow]
+            return (f"{per_core[fast] / per_core[slow]:.2f}x "
+                    f"(cpu {per_cpu[fast] / per_cpu[slow]:.2f}x)")
         return None
 
     lines = []

@@ -232,30 +232,33 @@ class Workspace:
             out[:, varying] = lo[varying] + unit * (hi[varying] - lo[varying])
         return out
 
-    def states_of(self, poses: np.ndarray, first: int,
-                  rotation: np.ndarray | None = None) -> np.ndarray:
+    def states_of(self, poses: np.ndarray, first: int, rotation: np.ndarray | None = None,
+                  out: np.ndarray | None = None) -> np.ndarray:
         """The ``states`` dynamic states of poses ``first, first + 1, ...``, (n * states, 24).
 
         Laid out as ``gsfric.evaluation.state_array``. The signs come from a counter-based
         generator (Philox) positioned at the first pose, so each pose's states depend on the
         seed and its index only: the same on every worker, in every run, for any chunking.
-        ``rotation`` (n, 3, 3), the poses' rotation matrices, saves computing them again.
+        ``rotation`` (n, 3, 3), the poses' rotation matrices, saves computing them again;
+        ``out`` (at least n * states * 24 values, float64) receives the states (no array of
+        the size of the states is allocated then).
         """
         n, s = len(poses), self.states
-        bits = np.random.Philox(key=self.seed)
-        bits.advance(first * s * 3)          # 4 words per counter step, 12 per state
-        # a component is at -bound where the uniform double of its word is below 0.5, that
-        # is where the word is below 2**63 (the double is the word's top 53 bits / 2**53)
-        low = bits.random_raw(n * s * 12).reshape(n, s, 12) < np.uint64(1 << 63)
+        size = n * s * 24
+        x = (np.empty(size) if out is None else out.reshape(-1)[:size]).reshape(n, s, 24)
+        rng = np.random.Generator(np.random.Philox(key=self.seed))
+        rng.bit_generator.advance(first * s * 3)   # 4 doubles per counter step, 12 per state
+        uniform = x.reshape(-1)[:n * s * 12]        # drawn into x's memory, then replaced
+        rng.random(out=uniform)
+        low = (uniform < 0.5).reshape(n, s, 12)
+        dyn = x[:, :, 12:24]
         bound = np.concatenate([np.asarray(self.bounds.get(k, np.zeros(3)), float)
                                 for k in _BOUNDS])                       # (12,)
-        if rotation is None:
-            rotation = _rotation(poses)
-        x = np.empty((n, s, 24))
+        np.multiply(low, -2.0 * bound, out=dyn)    # -bound where the double is below 0.5,
+        np.add(dyn, bound, out=dyn)                # else +bound
+        dyn[:, 0, :] = 0.0                         # the static state
         x[:, :, 0:3] = poses[:, None, :3]
-        x[:, :, 3:12] = rotation.reshape(n, 1, 9)
-        x[:, :, 12:24] = np.where(low, -bound, bound)
-        x[:, 0, 12:24] = 0.0                                             # the static state
+        x[:, :, 3:12] = (_rotation(poses) if rotation is None else rotation).reshape(n, 1, 9)
         return x.reshape(n * s, 24)
 
 
@@ -478,13 +481,17 @@ _OTHER = ("F", "F0", "M_C", "Ffr", "D_dot", "D", "s2", "h", "coupling_change")
 
 _SUM_THREE = np.ones(3)
 _MINUS_SUM_THREE = -np.ones(3)
+_NONE = np.zeros(0, dtype=np.int64)
 _ROW_INDEX = np.arange(len(_ROWS))[:, None]
 _LEG_INDEX = np.arange(6)[None, :]
 
 
 class _Block:
     """Buffers of one block of at most ``size`` steps, reused: the outputs the envelopes need,
-    the step flags and the magnitudes. Belongs to one task (never shared between threads)."""
+    the step flags, the magnitudes and the workspace states. Belongs to one task (never shared
+    between threads). Nothing of the block's size is allocated block after block: Dask's
+    workers return freed memory to the system at once (``MALLOC_TRIM_THRESHOLD_``), so every
+    such allocation would cost fresh pages."""
 
     def __init__(self, size: int) -> None:
         from gsfric import native
@@ -496,6 +503,10 @@ class _Block:
         self._vectors = np.empty(len(_VECTORS) * size * 18)
         self._rates = np.empty(2 * size * 18)           # omega_rel, omega_leg
         self._magnitudes = np.empty(len(_ROWS) * size * 6)
+        self._ranked = np.empty_like(self._magnitudes)  # the magnitudes, steps last
+        self.states = np.empty(size * 24)               # workspace states of a block
+        self.times = np.zeros(size)
+        self._pairs = np.empty(3 * size * 6)            # the trapezoid's sums of neighbours
         self._other = {k: np.empty(size * sizes[k]) for k in _OTHER if k in sizes}
         self._sizes = sizes
         self._flag = np.empty(size, dtype=np.int64)
@@ -510,6 +521,7 @@ class _Block:
         self.vectors = self._vectors[:len(_VECTORS) * n * 18].reshape(len(_VECTORS), n, 18)
         self.rates = self._rates[:2 * n * 18].reshape(2, n, 18)
         self.magnitudes = self._magnitudes[:len(_ROWS) * n * 6].reshape(len(_ROWS), n, 6)
+        self.ranked = self._ranked[:len(_ROWS) * n * 6].reshape(len(_ROWS), 6, n)
         self.out = {name: self.vectors[k] for k, name in enumerate(_VECTORS)}
         self.out["omega_rel"], self.out["omega_leg"] = self.rates[0], self.rates[1]
         self.out.update({k: v[:n * self._sizes[k]].reshape(n, self._sizes[k])
@@ -604,14 +616,15 @@ class _Envelope:
     def add(self, block: _Block, x: np.ndarray, t: np.ndarray, step0: int, timed: bool) -> None:
         """Fold in the block's outputs: states x (n, 24), times t (n,), first step ``step0``."""
         G = block.reduce()
-        bad = np.flatnonzero(block.flag)
+        bad = np.flatnonzero(block.flag) if block.flag.any() else _NONE
         self.steps += block.n
         self.flagged += bad.size
         if timed:
-            self._integrate(G[10:13], bad, t)
+            self._integrate(G[10:13], bad, t, block._pairs)
         if bad.size:
             G[:, bad] = -np.inf                 # flagged steps are left out of the envelope
-        k = G.argmax(axis=1)                                        # (13, 6)
+        np.copyto(block.ranked, G.transpose(0, 2, 1))
+        k = block.ranked.argmax(axis=2)                             # (13, 6)
         v = G[_ROW_INDEX, k, _LEG_INDEX]
         better = v > self.best
         if better.any():
@@ -622,15 +635,20 @@ class _Envelope:
             self.t[q, leg] = t[at]
             self.state[q, leg] = x[at, :12]
 
-    def _integrate(self, P: np.ndarray, bad: np.ndarray, t: np.ndarray) -> None:
-        """Trapezoid of the powers P (3, n, 6) over t, across block boundaries (flagged: 0)."""
+    def _integrate(self, P: np.ndarray, bad: np.ndarray, t: np.ndarray,
+                   work: np.ndarray) -> None:
+        """Trapezoid of the powers P (3, n, 6) over t, across block boundaries (flagged: 0);
+        ``work`` holds at least 3 (n - 1) 6 values."""
         if bad.size:
             P = P.copy()
             P[:, bad] = 0.0
         if self.last is not None:
             self.energy += 0.5 * (t[0] - self.last[0]) * (P[:, 0] + self.last[1])
-        if len(t) > 1:
-            self.energy += 0.5 * np.matmul(np.diff(t), P[:, 1:] + P[:, :-1])
+        n = len(t)
+        if n > 1:
+            pairs = work[:3 * (n - 1) * 6].reshape(3, n - 1, 6)
+            np.add(P[:, 1:], P[:, :-1], out=pairs)
+            self.energy += 0.5 * np.matmul(np.diff(t), pairs)
         self.last = (t[-1], P[:, -1].copy())
 
     def rows(self, motion: str, variant: int, timed: bool) -> list[tuple]:
@@ -661,9 +679,10 @@ class _Envelope:
         return out
 
 
-def _pieces(task: Task):
+def _pieces(task: Task, block: _Block):
     """(first step, states (n, 24), times (n,)) of a task, piece by piece: a trajectory file
-    as it is streamed, a block of workspace poses ``BLOCK_STEPS`` states at a time."""
+    as it is streamed, a block of workspace poses ``BLOCK_STEPS`` states at a time (in the
+    block's buffers: valid until the next piece)."""
     if task.path is not None:
         from gsfric.evaluation import state_array
         from gsfric.stream import iter_motions
@@ -672,13 +691,12 @@ def _pieces(task: Task):
             yield start, state_array(m), np.asarray(m.t, float)
         return
     ws = task.workspace
-    per = max(1, BLOCK_STEPS // ws.states)
-    zeros = np.zeros(per * ws.states)
+    per = max(1, block.size // ws.states)
     rotation = _rotation(task.poses)
     for p0 in range(0, len(task.poses), per):
         first = task.first_pose + p0
-        x = ws.states_of(task.poses[p0:p0 + per], first, rotation[p0:p0 + per])
-        yield first * ws.states, x, zeros[:len(x)]
+        x = ws.states_of(task.poses[p0:p0 + per], first, rotation[p0:p0 + per], block.states)
+        yield first * ws.states, x, block.times[:len(x)]
 
 
 def run_task(task: Task):
@@ -690,11 +708,12 @@ def run_task(task: Task):
     """
     import pandas as pd
 
-    block = _Block(BLOCK_STEPS)
+    states = task.workspace.states if task.workspace is not None else 1
+    block = _Block(max(BLOCK_STEPS, states))
     evaluations = [_Evaluation(p) for p in task.platforms]
     envelopes = [_Envelope() for _ in task.platforms]
     timed = task.path is not None
-    for start, x, t in _pieces(task):
+    for start, x, t in _pieces(task, block):
         for evaluation, envelope in zip(evaluations, envelopes):
             for s, e in evaluation.blocks(block, x, t):
                 envelope.add(block, x[s:e], t[s:e], start + s, timed)
