@@ -240,22 +240,25 @@ class Workspace:
         generator (Philox) positioned at the first pose, so each pose's states depend on the
         seed and its index only: the same on every worker, in every run, for any chunking.
         ``rotation`` (n, 3, 3), the poses' rotation matrices, saves computing them again;
-        ``out`` (at least n * states * 24 values, float64) receives the states (no array of
-        the size of the states is allocated then).
+        ``out``, a contiguous float64 buffer of at least 36 values per state, receives the
+        states in its first 24 per state (the rest is scratch): nothing of the size of the
+        states is allocated then.
         """
         n, s = len(poses), self.states
-        size = n * s * 24
-        x = (np.empty(size) if out is None else out.reshape(-1)[:size]).reshape(n, s, 24)
+        m = n * s
+        buf = np.empty(m * 36) if out is None else out.reshape(-1)
+        if buf.size < m * 36:
+            raise ValueError(f"states_of: out holds {buf.size} values, needs {m * 36}")
+        x = buf[:m * 24].reshape(n, s, 24)
+        uniform = buf[m * 24:m * 36].reshape(n, s, 12)
         rng = np.random.Generator(np.random.Philox(key=self.seed))
         rng.bit_generator.advance(first * s * 3)   # 4 doubles per counter step, 12 per state
-        uniform = x.reshape(-1)[:n * s * 12]        # drawn into x's memory, then replaced
         rng.random(out=uniform)
-        low = (uniform < 0.5).reshape(n, s, 12)
-        dyn = x[:, :, 12:24]
+        uniform -= 0.5
         bound = np.concatenate([np.asarray(self.bounds.get(k, np.zeros(3)), float)
                                 for k in _BOUNDS])                       # (12,)
-        np.multiply(low, -2.0 * bound, out=dyn)    # -bound where the double is below 0.5,
-        np.add(dyn, bound, out=dyn)                # else +bound
+        dyn = x[:, :, 12:24]
+        np.copysign(bound, uniform, out=dyn)       # -bound where the double is below 0.5
         dyn[:, 0, :] = 0.0                         # the static state
         x[:, :, 0:3] = poses[:, None, :3]
         x[:, :, 3:12] = (_rotation(poses) if rotation is None else rotation).reshape(n, 1, 9)
@@ -504,9 +507,12 @@ class _Block:
         self._rates = np.empty(2 * size * 18)           # omega_rel, omega_leg
         self._magnitudes = np.empty(len(_ROWS) * size * 6)
         self._ranked = np.empty_like(self._magnitudes)  # the magnitudes, steps last
-        self.states = np.empty(size * 24)               # workspace states of a block
+        self.states = np.empty(size * 36)               # workspace states of a block
         self.times = np.zeros(size)
         self._pairs = np.empty(3 * size * 6)            # the trapezoid's sums of neighbours
+        self._limit = np.empty(size * 6)                # the coupled-friction flag's check
+        self._change = np.empty(size * 6)
+        self._over = np.empty(size * 6, dtype=bool)
         self._other = {k: np.empty(size * sizes[k]) for k in _OTHER if k in sizes}
         self._sizes = sizes
         self._flag = np.empty(size, dtype=np.int64)
@@ -579,9 +585,14 @@ class _Evaluation:
                 block.fn([x[s:e], ev.P, ev.Q], block.out, 1, select=block.names, flags=spec,
                          flag=block.flag)
                 change = block.out.get("coupling_change")
-                if change is not None:
-                    limit = COUPLING_TOLERANCE * (1.0 + np.abs(block.out["F0"]))
-                    block.flag[(np.abs(change) > limit).any(axis=1)] |= FLAG_COUPLING
+                if change is not None:     # evaluate_quiet's test, in the block's buffers
+                    n6 = change.size
+                    limit = np.abs(block.out["F0"], out=block._limit[:n6].reshape(-1, 6))
+                    limit += 1.0
+                    limit *= COUPLING_TOLERANCE
+                    over = np.greater(np.abs(change, out=block._change[:n6].reshape(-1, 6)),
+                                      limit, out=block._over[:n6].reshape(-1, 6))
+                    block.flag[over.any(axis=1)] |= FLAG_COUPLING
                 yield s, e
             return
         from gsfric.trajectory import Motion
@@ -616,7 +627,7 @@ class _Envelope:
     def add(self, block: _Block, x: np.ndarray, t: np.ndarray, step0: int, timed: bool) -> None:
         """Fold in the block's outputs: states x (n, 24), times t (n,), first step ``step0``."""
         G = block.reduce()
-        bad = np.flatnonzero(block.flag) if block.flag.any() else _NONE
+        bad = np.flatnonzero(block.flag) if np.count_nonzero(block.flag) else _NONE
         self.steps += block.n
         self.flagged += bad.size
         if timed:
