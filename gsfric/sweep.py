@@ -6,8 +6,11 @@ reduces it, where it is evaluated, to a **load envelope per joint**: the largest
 friction power and the dissipated friction energy of each leg's three joints, each extreme with
 the motion, step, time and pose where it occurs. Only these envelopes leave a worker.
 
-Work is cut into *tasks* of about ``chunk_steps`` evaluated steps (a few seconds each): one
-trajectory file or one block of workspace poses, on a range of variants. Tasks run in this
+Work is cut into *tasks* of about ``chunk_steps`` evaluated steps (a second or more each): one
+trajectory file or one block of workspace poses, on a range of variants. Inside a task, steps
+are evaluated and reduced ``BLOCK_STEPS`` at a time into reused buffers: the compiled code
+computes only the outputs the envelopes need, and a block's magnitudes are reduced in a few
+vectorised passes while they are still in the core's cache. Tasks run in this
 process (``scheduler="serial"``), on a Dask ``LocalCluster`` of one single-threaded worker
 process per core (``"local"``), or on a running Dask cluster (``"tcp://host:port"`` or the
 ``DASK_SCHEDULER_ADDRESS`` variable). The result does not depend on where a task runs: a task's
@@ -24,9 +27,9 @@ Output folder ``OUT`` (built in ``OUT.partial`` and renamed when complete):
 Finished tasks are kept in ``OUT.partial/chunks/`` as they arrive; a sweep interrupted and
 started again with the same inputs and output folder computes only the missing tasks.
 
-Threads: the compiled evaluator is not yet safe to call from two threads of one process (they
-share the compiled function's argument buffers), so every task builds its own ``Evaluator``,
-tasks never share one, and Dask workers are processes with one thread each.
+Threads: every task builds its own evaluators and buffers and evaluates in one thread
+(``n_threads=1``); Dask workers are processes with one thread each (and one BLAS thread: Dask
+sets ``OMP_NUM_THREADS=1`` and the like in the processes it starts), one per core.
 """
 
 from __future__ import annotations
@@ -103,9 +106,10 @@ JOINT_TOLERANCES = ("geometry.base_joints", "geometry.platform_joints")
 CHUNK_STEPS = 1_000_000
 """Default evaluated steps per task: one to a few seconds of one core (docs/sizing.md)."""
 
-SERIAL_BELOW = 300_000
-"""``scheduler="auto"`` runs sweeps of fewer steps in this process: starting a LocalCluster
-(about 3 s here) costs more than it saves below this size (docs/sizing.md)."""
+SERIAL_BELOW = 2_000_000
+"""``scheduler="auto"`` runs sweeps of fewer steps in this process: below two tasks a cluster
+has nothing to share out, and starting one (1-3 s with the workers' imports) costs about what
+a second core saves on a million steps (docs/sizing.md)."""
 
 STREAM_CHUNK = 50_000
 """Steps of a trajectory file read and evaluated at a time inside a task (bounds memory)."""
@@ -963,7 +967,7 @@ def _client(scheduler, workers: int | None = None):
     if scheduler == "local":
         import logging
 
-        # processes with one thread each: the compiled evaluator is not thread-safe yet
+        # processes with one thread each, one per core: nothing shared between cores
         cluster = LocalCluster(n_workers=workers or os.cpu_count() or 1, threads_per_worker=1,
                                processes=True, dashboard_address=None,
                                silence_logs=logging.ERROR)
@@ -1037,7 +1041,7 @@ def sweep(out: str | os.PathLike, trajectories=None,
     scheduler : {"auto", "serial", "local"}, address "tcp://host:port", or a Client
         "auto" (None): ``DASK_SCHEDULER_ADDRESS`` if set, else "serial" below
         ``SERIAL_BELOW`` steps and "local" (a LocalCluster, one process per core) above.
-        Threads are not offered: the compiled evaluator is not yet thread-safe.
+        Each task evaluates in one thread; the parallelism is Dask's processes.
     workers : int, optional
         Worker processes of the "local" cluster (default: one per core).
     chunk_steps : int
