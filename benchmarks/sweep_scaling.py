@@ -12,9 +12,10 @@ in up to six ways on the same steps, each in one thread (one core):
   loop in this process: the sweep's arithmetic without tasks, files or Dask;
 * ``serial``: ``gsfric.sweep(scheduler="serial")``: the tasks in this process, with the task
   envelopes, the chunk files and the merge;
-* ``dask-1`` and ``dask-2``: ``gsfric.sweep`` on a ``LocalCluster`` of 1 and 2 single-threaded
-  worker processes (cluster start-up and the workers' imports timed apart: paid once per
-  sweep); each row also gives the workers' peak memory (resident set).
+* ``dask-1`` and ``dask-2``: ``gsfric.sweep`` on the ``LocalCluster`` of ``scheduler="local"``
+  (``gsfric.sweep.local_cluster``) with 1 and 2 single-threaded worker processes (cluster
+  start-up and the workers' imports timed apart: paid once per sweep); the workers' peak
+  memory (resident set) is printed.
 
 It prints steps/s of each and the time per step of the Dask path per core against ``eval-only``
 (the cost of the reduction and of Dask together: target <= 1.3x on >= 1e7 steps) and against
@@ -33,7 +34,6 @@ from __future__ import annotations
 
 import argparse
 import json
-import logging
 import os
 import resource
 import tempfile
@@ -129,7 +129,16 @@ def warm() -> None:
 
 
 def peak_rss_mb() -> float:
-    """This process's peak resident set, MB (Linux: ru_maxrss is in kB)."""
+    """This process's peak resident set, MB: ``VmHWM`` of /proc/self/status (Linux; reset by
+    exec, unlike ``ru_maxrss``, which a spawned worker inherits from its parent), else
+    ``ru_maxrss``."""
+    try:
+        with open("/proc/self/status") as status:
+            for line in status:
+                if line.startswith("VmHWM:"):
+                    return int(line.split()[1]) / 1024
+    except OSError:
+        pass
     return resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024
 
 
@@ -162,7 +171,7 @@ def main() -> None:
     parser.add_argument("--paths", nargs="+", choices=PATHS, default=list(PATHS))
     parser.add_argument("--json", type=Path, help="also write the figures as JSON")
     args = parser.parse_args()
-    from distributed import Client, LocalCluster
+    from distributed import Client
 
     from gsfric import native
 
@@ -181,9 +190,7 @@ def main() -> None:
         else:
             n = int(name[-1])
             t0 = time.perf_counter()
-            with LocalCluster(n_workers=n, threads_per_worker=1, processes=True,
-                              dashboard_address=None, silence_logs=logging.ERROR) as cluster, \
-                    Client(cluster) as client:
+            with sw.local_cluster(n) as cluster, Client(cluster) as client:
                 client.wait_for_workers(n)
                 client.run(warm)       # import gsfric and load the cached compiled library
                 startup[n] = time.perf_counter() - t0

@@ -418,3 +418,16 @@ def test_workspace_states_follow_their_definition():
 
     rotation = Rotation.from_euler("ZYX", poses[:, [5, 4, 3]]).as_matrix()
     np.testing.assert_allclose(x[::5, 3:12].reshape(-1, 3, 3), rotation, rtol=0, atol=1e-15)
+
+
+def test_reachability_uses_the_leg_lengths_of_the_discovery_workflow():
+    """The sweep's leg lengths (one matrix product per pose) are rest.leg_lengths'."""
+    from gsfric.discovery.rest import leg_lengths
+
+    ws, poses = _flagging_workspace()
+    platform = models.reference_platform()
+    expected = leg_lengths(platform, poses[:, :3], sw._rotation(poses))
+    np.testing.assert_allclose(sw._leg_lengths(platform, poses), expected, rtol=1e-15,
+                               atol=1e-15)
+    lo, hi = platform.geometry.stroke
+    assert ((expected < lo) | (expected > hi)).any()
