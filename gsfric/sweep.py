@@ -990,8 +990,8 @@ def _client(scheduler, workers: int | None = None):
 def local_cluster(workers: int):
     """The ``LocalCluster`` of ``scheduler="local"``: ``workers`` processes with one thread
     each, one per core (nothing shared between cores), without the workers' statistical
-    profiler (it samples the running task's stack 100 times a second: 4-8 % of a task's CPU
-    time measured here)."""
+    profiler (it samples the running task's stack 100 times a second: about 5 % of a task's
+    CPU time measured here, docs/sizing.md)."""
     import logging
 
     import dask
