@@ -488,9 +488,9 @@ class Task:
 
 BLOCK_STEPS = 2048
 """Steps evaluated and reduced at a time inside a task. A block's outputs and work arrays
-(about 4 MB: they stay in a core's cache between the evaluation and the reduction) are reused
-from block to block and from variant to variant, so a worker's memory follows this size and
-the task's poses, not the sweep's size."""
+(about 6 MB, mostly still in the core's cache between the evaluation and the reduction) are
+reused from block to block and from variant to variant, so a worker's memory follows this
+size and the task's poses, not the sweep's size."""
 
 _VECTORS = ("R_E", "R_C", "R_3", "M_3", "MfrE", "MfrC")
 """Outputs (N, 6, 3) whose magnitudes are enveloped."""
