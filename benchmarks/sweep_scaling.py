@@ -17,10 +17,11 @@ in up to six ways on the same steps, each in one thread (one core):
   start-up and the workers' imports timed apart: paid once per sweep); the workers' peak
   memory (resident set) is printed.
 
-It prints steps/s of each and the time per step of the Dask path per core against ``eval-only``
-(the cost of the reduction and of Dask together: target <= 1.3x on >= 1e7 steps) and against
-``direct`` (Dask's and the tasks' own cost), and the speed-up of 2 workers over 1 (target >=
-1.7x)::
+It prints wall-clock steps/s of each and the CPU time of the process(es) doing the work (the
+figure to read on a shared machine), the time per step of the Dask path per core against
+``eval-only`` (the cost of the reduction and of Dask together: target <= 1.3x on >= 1e7 steps)
+and against ``direct`` (Dask's and the tasks' own cost), and the speed-up of 2 workers over 1
+(target >= 1.7x)::
 
     .venv/bin/python benchmarks/sweep_scaling.py                    # 1e6 steps
     .venv/bin/python benchmarks/sweep_scaling.py --steps 10000000   # the target's size

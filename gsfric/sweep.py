@@ -508,6 +508,8 @@ _MINUS_SUM_THREE = -np.ones(3)
 _NONE = np.zeros(0, dtype=np.int64)
 _ROW_INDEX = np.arange(len(_ROWS))[:, None]
 _LEG_INDEX = np.arange(6)[None, :]
+for _constant in (_SUM_THREE, _MINUS_SUM_THREE, _NONE, _ROW_INDEX, _LEG_INDEX):
+    _constant.flags.writeable = False      # shared by every task of a process
 
 
 class _Block:
