@@ -792,6 +792,28 @@ def _trajectory_files(trajectories) -> list[Path]:
     return files
 
 
+_POSE_BYTES = 48
+_VARIANT_BYTES = 17_000
+"""What a pose and a variant weigh in a task's traffic: a pose in (6 floats), a variant's
+platform in (2 kB) and its envelope out (15 kB), pickled (measured)."""
+
+
+def _pose_block(n_poses: int, states: int, variants: int, chunk_steps: int) -> int:
+    """Poses per workspace task, the task covering ``chunk_steps // (block * states)``
+    variants of them.
+
+    As few as let one task hold every variant (``chunk_steps / (states * variants)``), but
+    enough that the poses a task carries and its variants weigh alike (``b * 48 B = p *
+    17 kB`` with ``b * p * states = chunk_steps``: 6700 poses and 19 variants for tasks of 1e6
+    steps at 8 states, 0.6 MB of traffic), and at least one evaluated block per variant: a
+    task does not carry all the poses when a sweep has many variants.
+    """
+    whole = -(-chunk_steps // states)                  # one variant per task
+    balanced = int(math.sqrt(_VARIANT_BYTES * chunk_steps / (_POSE_BYTES * states)))
+    block = max(BLOCK_STEPS // states, balanced, -(-chunk_steps // (states * variants)))
+    return max(1, min(n_poses, whole, block))
+
+
 @dataclass
 class Plan:
     tasks: list[Task]
@@ -845,8 +867,10 @@ def plan(trajectories=None, workspace: Workspace | str | os.PathLike | None = No
         poses = workspace.poses()
         n_poses = len(poses)
         check_reachable(platform, poses, source)
-        block = max(1, min(n_poses, -(-chunk_steps // workspace.states)))
+        block = _pose_block(n_poses, workspace.states, nv, chunk_steps)
         per = max(1, chunk_steps // (block * workspace.states))
+        block = -(-n_poses // -(-n_poses // block))   # blocks of equal size, and
+        per = -(-nv // -(-nv // per))                 # groups of variants of equal size
         for p0 in range(0, n_poses, block):
             part = poses[p0:p0 + block]
             for lo in range(0, nv, per):

@@ -431,3 +431,21 @@ def test_reachability_uses_the_leg_lengths_of_the_discovery_workflow():
                                atol=1e-15)
     lo, hi = platform.geometry.stroke
     assert ((expected < lo) | (expected > hi)).any()
+
+
+def test_workspace_tasks_with_many_variants_carry_few_poses():
+    """Every (pose, variant) pair is in exactly one task; with many variants a task carries a
+    block of the poses and a group of the variants, near the chunk size, not all the poses."""
+    import pickle
+
+    ws = sw.Workspace.from_dict({**WORKSPACE, "samples": 125_000, "states": 8})
+    p = sw.plan(workspace=ws, vary={"platform.payload_mass": (0.0, 8.0)}, variants=200,
+                chunk_steps=10**6)
+    counts = np.zeros((125_000, 201), dtype=int)
+    for task in p.tasks:
+        counts[task.first_pose:task.first_pose + len(task.poses), task.variants] += 1
+        assert task.steps == len(task.poses) * 8 * len(task.variants)
+        assert 0.5e6 <= task.steps <= 1e6
+    assert (counts == 1).all()
+    sizes = [len(pickle.dumps(task)) for task in p.tasks[:5]]
+    assert max(sizes) < 0.1 * 125_000 * 48           # all the poses: 6 MB
