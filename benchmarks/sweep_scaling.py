@@ -1,21 +1,31 @@
-"""Throughput of ``gsfric sweep``: direct evaluation, in-process tasks, Dask with 1 and 2 workers.
+"""Throughput of ``gsfric sweep``: the evaluator alone, with the reduction, and on Dask workers.
 
 One workspace sweep (Latin-hypercube poses x dynamic states on the reference platform) is run
-four ways on the same steps:
+in up to six ways on the same steps, each in one thread (one core):
 
-* ``direct``: ``Evaluator.evaluate`` called on the same states, chunk by chunk, in this
-  process, no reduction (what a user looping over the evaluator would get);
-* ``serial``: ``gsfric.sweep(scheduler="serial")``: the same tasks in this process, with the
-  reduction to envelopes, the chunk files and the merge;
-* ``dask-1`` and ``dask-2``: ``gsfric.sweep`` on a ``LocalCluster`` of 1 and 2 single-threaded
-  worker processes (cluster start-up and the workers' imports timed apart: paid once per sweep).
+* ``evaluate``: the states built as the sweep builds them, ``Evaluator.evaluate_quiet`` on them
+  ``BLOCK_STEPS`` at a time into reused buffers (every output): what a user calling the
+  evaluator's public API in a loop gets; no reduction;
+* ``eval-only``: the same states, the compiled evaluation the sweep makes (only the outputs the
+  envelopes need, with the step flags), block by block; no reduction;
+* ``direct``: ``eval-only`` plus the same reduction to envelopes, folded block by block, in one
+  loop in this process: the sweep's arithmetic without tasks, files or Dask;
+* ``serial``: ``gsfric.sweep(scheduler="serial")``: the tasks in this process, with the task
+  envelopes, the chunk files and the merge;
+* ``dask-1`` and ``dask-2``: ``gsfric.sweep`` on the ``LocalCluster`` of ``scheduler="local"``
+  (``gsfric.sweep.local_cluster``) with 1 and 2 single-threaded worker processes (cluster
+  start-up and the workers' imports timed apart: paid once per sweep); the workers' peak
+  memory (resident set) is printed.
 
-It prints steps/s of each, the Dask path's cost per core against ``direct`` (target <= 1.3x on
->= 1e7 steps) and the speed-up of 2 workers over 1 (target >= 1.7x)::
+It prints wall-clock steps/s of each and the CPU time of the process(es) doing the work (the
+figure to read on a shared machine), the time per step of the Dask path per core against
+``eval-only`` (the cost of the reduction and of Dask together: target <= 1.3x on >= 1e7 steps)
+and against ``direct`` (Dask's and the tasks' own cost), and the speed-up of 2 workers over 1
+(target >= 1.7x)::
 
     .venv/bin/python benchmarks/sweep_scaling.py                    # 1e6 steps
     .venv/bin/python benchmarks/sweep_scaling.py --steps 10000000   # the target's size
-    .venv/bin/python benchmarks/sweep_scaling.py --steps 200000 --json out.json
+    .venv/bin/python benchmarks/sweep_scaling.py --steps 2e6 --paths dask-1 --json out.json
 
 The machine it runs on should be otherwise idle; docs/sizing.md has the figures of one run and
 the cost of a 1e10-step sweep computed from them.
@@ -25,19 +35,21 @@ from __future__ import annotations
 
 import argparse
 import json
-import logging
 import os
+import resource
 import tempfile
 import time
 import warnings
 from pathlib import Path
 
-# one core per path, as Dask's workers have (they set these to 1): otherwise numpy's LAPACK
-# (the flags' condition numbers) would use every core in this process and not in the workers
+# one core per path, as Dask's workers have (they set these to 1): otherwise numpy's BLAS would
+# use every core in this process and not in the workers
 for _name in ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS"):
     os.environ[_name] = "1"
 
 import numpy as np  # noqa: E402
+
+PATHS = ("evaluate", "eval-only", "direct", "serial", "dask-1", "dask-2")
 
 
 def workspace(steps: int, states: int = 8):
@@ -50,26 +62,62 @@ def workspace(steps: int, states: int = 8):
         "bounds": {"velocity": 0.2, "omega": 0.5, "acceleration": 2.0, "alpha": 5.0}})
 
 
-def direct(ws, chunk: int) -> tuple[int, float]:
-    """Evaluator.evaluate over the workspace's states in chunks; (steps, seconds)."""
+def _blocks(ws, poses):
+    """(first step, states, times) of the workspace, ``BLOCK_STEPS`` states at a time, built as
+    the sweep builds them (rotations once, states per block)."""
+    from gsfric import sweep as sw
+
+    per = max(1, sw.BLOCK_STEPS // ws.states)
+    rotation = sw._rotation(poses)
+    zeros = np.zeros(per * ws.states)
+    for p0 in range(0, len(poses), per):
+        x = ws.states_of(poses[p0:p0 + per], p0, rotation[p0:p0 + per])
+        yield p0 * ws.states, x, zeros[:len(x)]
+
+
+def cpu_seconds() -> float:
+    """CPU time of this process (all its threads), s."""
+    return time.process_time()
+
+
+def evaluate(ws) -> tuple[int, float]:
+    """``Evaluator.evaluate_quiet`` (all outputs) block by block; (steps, seconds)."""
     from gsfric import models
     from gsfric.evaluation import Evaluator
     from gsfric.trajectory import Motion
 
     poses = ws.poses()
     ev = Evaluator(models.reference_platform())
-    per = max(1, chunk // ws.states)
+    buffers: dict = {}
     steps = 0
     start = time.perf_counter()
-    for p0 in range(0, len(poses), per):
-        x = ws.states_of(poses[p0:p0 + per], p0)
+    for _, x, t in _blocks(ws, poses):
         n = len(x)
-        motion = Motion(np.zeros(n), x[:, 0:3], x[:, 3:12].reshape(n, 3, 3), x[:, 12:15],
-                        x[:, 15:18], x[:, 18:21], x[:, 21:24])
+        motion = Motion(t, x[:, 0:3], x[:, 3:12].reshape(n, 3, 3), x[:, 12:15], x[:, 15:18],
+                        x[:, 18:21], x[:, 21:24])
         with warnings.catch_warnings():
             warnings.simplefilter("ignore")
-            ev.evaluate(motion)
+            ev.evaluate_quiet(motion, buffers=buffers)
         steps += n
+    return steps, time.perf_counter() - start
+
+
+def direct(ws, reduce: bool) -> tuple[int, float]:
+    """The sweep's block evaluation (and, with ``reduce``, its reduction) in one loop."""
+    from gsfric import models
+    from gsfric import sweep as sw
+
+    poses = ws.poses()
+    block = sw._Block(sw.BLOCK_STEPS)
+    evaluation = sw._Evaluation(models.reference_platform())
+    envelope = sw._Envelope()
+    steps = 0
+    start = time.perf_counter()
+    for first, x, t in _blocks(ws, poses):
+        for s, e in evaluation.blocks(block, x, t):
+            if reduce:
+                envelope.add(block, x[s:e], t[s:e], first + s, False)
+        steps += len(x)
     return steps, time.perf_counter() - start
 
 
@@ -81,63 +129,129 @@ def warm() -> None:
     native.get("eval")
 
 
-def swept(ws, chunk: int, scheduler) -> tuple[int, float]:
+def peak_rss_mb() -> float:
+    """This process's peak resident set, MB: ``VmHWM`` of /proc/self/status (Linux; reset by
+    exec, unlike ``ru_maxrss``, which a spawned worker inherits from its parent), else
+    ``ru_maxrss``."""
+    try:
+        with open("/proc/self/status") as status:
+            for line in status:
+                if line.startswith("VmHWM:"):
+                    return int(line.split()[1]) / 1024
+    except OSError:
+        pass
+    return resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024
+
+
+def worker_threads() -> dict:
+    """What a worker runs with: its BLAS thread variables and its threads."""
+    import threading
+
+    return {"OMP_NUM_THREADS": os.environ.get("OMP_NUM_THREADS"),
+            "OPENBLAS_NUM_THREADS": os.environ.get("OPENBLAS_NUM_THREADS"),
+            "MKL_NUM_THREADS": os.environ.get("MKL_NUM_THREADS"),
+            "threads": threading.active_count()}
+
+
+def swept(ws, chunk: int, scheduler) -> tuple[int, float, dict]:
     import gsfric
 
     with tempfile.TemporaryDirectory() as tmp:
         start = time.perf_counter()
         result = gsfric.sweep(Path(tmp) / "out", workspace=ws, scheduler=scheduler,
                               chunk_steps=chunk, plots=False, progress=False)
-        return result.info["steps"], time.perf_counter() - start
+        return result.info["steps"], time.perf_counter() - start, result.info
 
 
 def main() -> None:
+    from gsfric import sweep as sw
+
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--steps", type=float, default=1e6)
-    parser.add_argument("--chunk", type=int, default=100_000, help="steps per task")
+    parser.add_argument("--chunk", type=int, default=sw.CHUNK_STEPS, help="steps per task")
+    parser.add_argument("--paths", nargs="+", choices=PATHS, default=list(PATHS))
     parser.add_argument("--json", type=Path, help="also write the figures as JSON")
     args = parser.parse_args()
-    from distributed import Client, LocalCluster
+    from distributed import Client
 
     from gsfric import native
 
     native.is_compiled()
     ws = workspace(int(args.steps))
-    rows = {}
-    steps, sec = direct(ws, args.chunk)
-    rows["direct"] = (steps, sec, 1)
-    steps, sec = swept(ws, args.chunk, "serial")
-    rows["serial"] = (steps, sec, 1)
-    startup = {}
-    for n in (1, 2):
-        t0 = time.perf_counter()
-        with LocalCluster(n_workers=n, threads_per_worker=1, processes=True,
-                          dashboard_address=None, silence_logs=logging.ERROR) as cluster, \
-                Client(cluster) as client:
-            client.wait_for_workers(n)
-            client.run(warm)       # import gsfric and load the cached compiled library
-            startup[n] = time.perf_counter() - t0
-            steps, sec = swept(ws, args.chunk, client)
-        rows[f"dask-{n}"] = (steps, sec, n)
+    rows, startup, memory, threads, tasks, cpu = {}, {}, {}, {}, None, {}
+    for name in args.paths:
+        cpu0 = cpu_seconds()
+        if name == "evaluate":
+            steps, sec = evaluate(ws)
+        elif name in ("eval-only", "direct"):
+            steps, sec = direct(ws, reduce=name == "direct")
+        elif name == "serial":
+            steps, sec, info = swept(ws, args.chunk, "serial")
+            tasks = info["tasks"]
+        else:
+            n = int(name[-1])
+            t0 = time.perf_counter()
+            with sw.local_cluster(n) as cluster, Client(cluster) as client:
+                client.wait_for_workers(n)
+                client.run(warm)       # import gsfric and load the cached compiled library
+                startup[n] = time.perf_counter() - t0
+                cpu0 = cpu_seconds()
+                before = client.run(cpu_seconds)
+                steps, sec, info = swept(ws, args.chunk, client)
+                after = client.run(cpu_seconds)
+                cpu[name] = (sum(after[w] - before[w] for w in after),
+                             cpu_seconds() - cpu0)
+                tasks = info["tasks"]
+                memory[name] = max(client.run(peak_rss_mb).values())
+                threads[name] = next(iter(client.run(worker_threads).values()))
+        if name not in cpu:
+            cpu[name] = (cpu_seconds() - cpu0, 0.0)
+        rows[name] = (steps, sec, 1 if not name.startswith("dask") else int(name[-1]))
     print(f"sweep of {steps} steps ({ws.samples} poses x {ws.states} states), "
-          f"{args.chunk} steps per task")
-    print(f"{'path':<8} {'workers':>7} {'seconds':>9} {'steps/s':>10} {'steps/s/core':>13}")
+          f"{args.chunk} steps per task ({tasks} tasks), {sw.BLOCK_STEPS} steps per block")
+    print(f"{'path':<10} {'workers':>7} {'seconds':>9} {'steps/s':>10} {'steps/s/core':>13}"
+          f" {'cpu s':>8} {'steps/cpu-s':>12} {'client cpu s':>13}")
     for name, (steps, sec, n) in rows.items():
-        print(f"{name:<8} {n:>7} {sec:>9.2f} {steps / sec:>10.0f} {steps / sec / n:>13.0f}")
-    rate = {k: v[0] / v[1] for k, v in rows.items()}
-    figures = {
-        "steps": steps, "chunk": args.chunk, "rates": rate,
-        "cluster_startup_s": startup,
-        "serial_over_direct": rate["direct"] / rate["serial"],
-        "dask1_over_direct_per_core": rate["direct"] / rate["dask-1"],
-        "dask2_over_direct_per_core": rate["direct"] / (rate["dask-2"] / 2),
-        "speedup_2_over_1": rate["dask-2"] / rate["dask-1"],
-    }
-    print(f"LocalCluster start-up: 1 worker {startup[1]:.2f} s, 2 workers {startup[2]:.2f} s")
-    print(f"time per step relative to direct: serial {figures['serial_over_direct']:.2f}x, "
-          f"dask 1 worker {figures['dask1_over_direct_per_core']:.2f}x, "
-          f"dask 2 workers (per core) {figures['dask2_over_direct_per_core']:.2f}x")
-    print(f"2 workers over 1: {figures['speedup_2_over_1']:.2f}x")
+        work, client_cpu = cpu[name]
+        print(f"{name:<10} {n:>7} {sec:>9.2f} {steps / sec:>10.0f} {steps / sec / n:>13.0f}"
+              f" {work:>8.2f} {steps / work:>12.0f} {client_cpu:>13.2f}")
+    print("(cpu s: CPU time of the process(es) doing the work: this one, or the Dask workers "
+          "together; client cpu s: this process while the workers ran)")
+    per_core = {k: v[0] / v[1] / v[2] for k, v in rows.items()}
+    per_cpu = {k: rows[k][0] / cpu[k][0] for k in rows}
+    figures = {"steps": steps, "chunk": args.chunk, "tasks": tasks,
+               "block": sw.BLOCK_STEPS, "rates_per_core": per_core, "rates_per_cpu_s": per_cpu,
+               "cpu_s": cpu,
+               "cluster_startup_s": startup, "worker_peak_rss_mb": memory,
+               "client_peak_rss_mb": peak_rss_mb(), "worker_threads": threads}
+
+    def ratio(slow, fast):
+        if slow in per_core and fast in per_core:
+            figures[f"{slow}_over_{fast}"] = per_core[fast] / per_core[slow]
+            figures[f"{slow}_over_{fast}_cpu"] = per_cpu[fast] / per_cpu[slow]
+            return (f"{per_core[fast] / per_core[slow]:.2f}x "
+                    f"(cpu {per_cpu[fast] / per_cpu[slow]:.2f}x)")
+        return None
+
+    lines = []
+    for ref in ("eval-only", "direct", "evaluate"):
+        parts = [f"{k} {r}" for k in ("direct", "serial", "dask-1", "dask-2")
+                 if k != ref and (r := ratio(k, ref))]
+        if parts:
+            lines.append(f"time per step per core against {ref}: " + ", ".join(parts))
+    if "dask-1" in rows and "dask-2" in rows:
+        figures["speedup_2_over_1"] = per_core["dask-2"] * 2 / per_core["dask-1"]
+        lines.append(f"2 workers over 1: {figures['speedup_2_over_1']:.2f}x")
+    if startup:
+        lines.append("LocalCluster start-up with the workers' imports: " +
+                     ", ".join(f"{n} worker(s) {s:.2f} s" for n, s in startup.items()))
+    if memory:
+        lines.append("workers' peak memory: " +
+                     ", ".join(f"{k} {v:.0f} MB" for k, v in memory.items()) +
+                     f"; this process {figures['client_peak_rss_mb']:.0f} MB")
+    if threads:
+        lines.append(f"a worker's threads: {next(iter(threads.values()))}")
+    print("\n".join(lines))
     if args.json:
         args.json.write_text(json.dumps(figures, indent=1))
 

@@ -418,7 +418,7 @@ def _pairs(values, option, ranged):
 @click.option("--workers", type=click.IntRange(1, 256), default=None,
               help="Worker processes of the local cluster [default: one per core].")
 @click.option("--chunk-steps", type=click.IntRange(1), default=None,
-              help="Evaluated steps per task [default: 100000, a few seconds].")
+              help="Evaluated steps per task [default: 1000000, a second or more].")
 @click.option("--progress/--no-progress", default=None,
               help="Progress bar with total and ETA [default: when stderr is a terminal].")
 @click.option("--no-plots", is_flag=True, help="Skip the plots.")

@@ -6,8 +6,11 @@ reduces it, where it is evaluated, to a **load envelope per joint**: the largest
 friction power and the dissipated friction energy of each leg's three joints, each extreme with
 the motion, step, time and pose where it occurs. Only these envelopes leave a worker.
 
-Work is cut into *tasks* of about ``chunk_steps`` evaluated steps (a few seconds each): one
-trajectory file or one block of workspace poses, on a range of variants. Tasks run in this
+Work is cut into *tasks* of about ``chunk_steps`` evaluated steps (a second or more each): one
+trajectory file or one block of workspace poses, on a range of variants. Inside a task, steps
+are evaluated and reduced ``BLOCK_STEPS`` at a time into reused buffers: the compiled code
+computes only the outputs the envelopes need, and a block's magnitudes are reduced in a few
+vectorised passes while they are still in the core's cache. Tasks run in this
 process (``scheduler="serial"``), on a Dask ``LocalCluster`` of one single-threaded worker
 process per core (``"local"``), or on a running Dask cluster (``"tcp://host:port"`` or the
 ``DASK_SCHEDULER_ADDRESS`` variable). The result does not depend on where a task runs: a task's
@@ -24,9 +27,9 @@ Output folder ``OUT`` (built in ``OUT.partial`` and renamed when complete):
 Finished tasks are kept in ``OUT.partial/chunks/`` as they arrive; a sweep interrupted and
 started again with the same inputs and output folder computes only the missing tasks.
 
-Threads: the compiled evaluator is not yet safe to call from two threads of one process (they
-share the compiled function's argument buffers), so every task builds its own ``Evaluator``,
-tasks never share one, and Dask workers are processes with one thread each.
+Threads: every task builds its own evaluators and buffers and evaluates in one thread
+(``n_threads=1``); Dask workers are processes with one thread each (and one BLAS thread: Dask
+sets ``OMP_NUM_THREADS=1`` and the like in the processes it starts), one per core.
 """
 
 from __future__ import annotations
@@ -100,12 +103,13 @@ SCALAR_PARAMETERS = (
 JOINT_TOLERANCES = ("geometry.base_joints", "geometry.platform_joints")
 """Tolerances only: a normal error of this standard deviation (m) on every joint coordinate."""
 
-CHUNK_STEPS = 100_000
-"""Default evaluated steps per task: a few seconds of one core."""
+CHUNK_STEPS = 1_000_000
+"""Default evaluated steps per task: one to a few seconds of one core (docs/sizing.md)."""
 
-SERIAL_BELOW = 300_000
-"""``scheduler="auto"`` runs sweeps of fewer steps in this process: starting a LocalCluster
-(about 3 s here) costs more than it saves below this size (docs/sizing.md)."""
+SERIAL_BELOW = 2_000_000
+"""``scheduler="auto"`` runs sweeps of fewer steps in this process: below two tasks a cluster
+has nothing to share out, and starting one (1-3 s with the workers' imports) costs about what
+a second core saves on a million steps (docs/sizing.md)."""
 
 STREAM_CHUNK = 50_000
 """Steps of a trajectory file read and evaluated at a time inside a task (bounds memory)."""
@@ -232,28 +236,37 @@ class Workspace:
             out[:, varying] = lo[varying] + unit * (hi[varying] - lo[varying])
         return out
 
-    def states_of(self, poses: np.ndarray, first: int) -> np.ndarray:
+    def states_of(self, poses: np.ndarray, first: int, rotation: np.ndarray | None = None,
+                  out: np.ndarray | None = None) -> np.ndarray:
         """The ``states`` dynamic states of poses ``first, first + 1, ...``, (n * states, 24).
 
         Laid out as ``gsfric.evaluation.state_array``. The signs come from a counter-based
         generator (Philox) positioned at the first pose, so each pose's states depend on the
         seed and its index only: the same on every worker, in every run, for any chunking.
+        ``rotation`` (n, 3, 3), the poses' rotation matrices, saves computing them again;
+        ``out``, a contiguous float64 buffer of at least 36 values per state, receives the
+        states in its first 24 per state (the rest is scratch): nothing of the size of the
+        states is allocated then.
         """
         n, s = len(poses), self.states
-        bits = np.random.Philox(key=self.seed)
-        bits.advance(first * s * 3)          # 4 doubles per counter step, 12 per state
-        rng = np.random.Generator(bits)
+        m = n * s
+        buf = np.empty(m * 36) if out is None else out.reshape(-1)
+        if buf.size < m * 36:
+            raise ValueError(f"states_of: out holds {buf.size} values, needs {m * 36}")
+        x = buf[:m * 24].reshape(n, s, 24)
+        uniform = buf[m * 24:m * 36].reshape(n, s, 12)
+        rng = np.random.Generator(np.random.Philox(key=self.seed))
+        rng.bit_generator.advance(first * s * 3)   # 4 doubles per counter step, 12 per state
+        rng.random(out=uniform)
+        uniform -= 0.5
         bound = np.concatenate([np.asarray(self.bounds.get(k, np.zeros(3)), float)
                                 for k in _BOUNDS])                       # (12,)
-        signs = np.where(rng.random((n, s, 12)) < 0.5, -1.0, 1.0)
-        signs[:, 0, :] = 0.0                                             # the static state
-        dyn = (signs * bound).reshape(n * s, 12)
-        rot = _rotation(poses)
-        x = np.empty((n * s, 24))
-        x[:, 0:3] = np.repeat(poses[:, :3], s, axis=0)
-        x[:, 3:12] = np.repeat(rot.reshape(n, 9), s, axis=0)
-        x[:, 12:24] = dyn
-        return x
+        dyn = x[:, :, 12:24]
+        np.copysign(bound, uniform, out=dyn)       # -bound where the double is below 0.5
+        dyn[:, 0, :] = 0.0                         # the static state
+        x[:, :, 0:3] = poses[:, None, :3]
+        x[:, :, 3:12] = (_rotation(poses) if rotation is None else rotation).reshape(n, 1, 9)
+        return x.reshape(n * s, 24)
 
 
 def _interval(value, name: str) -> tuple[float, float]:
@@ -268,9 +281,24 @@ def _interval(value, name: str) -> tuple[float, float]:
 
 
 def _rotation(poses: np.ndarray) -> np.ndarray:
-    from scipy.spatial.transform import Rotation
+    """Rotation matrices (n, 3, 3) ``R = Rz(yaw) Ry(pitch) Rx(roll)`` of poses (n, 6).
 
-    return Rotation.from_euler("ZYX", poses[:, [5, 4, 3]]).as_matrix()
+    What ``scipy.spatial.transform.Rotation.from_euler("ZYX", [yaw, pitch, roll])`` gives
+    (to rounding), written out: six times faster, which matters at a million poses.
+    """
+    c, s = np.cos(poses[:, 3:6]), np.sin(poses[:, 3:6])
+    (cr, cp, cy), (sr, sp, sy) = c.T, s.T
+    out = np.empty((len(poses), 3, 3))
+    out[:, 0, 0] = cy * cp
+    out[:, 0, 1] = cy * sp * sr - sy * cr
+    out[:, 0, 2] = cy * sp * cr + sy * sr
+    out[:, 1, 0] = sy * cp
+    out[:, 1, 1] = sy * sp * sr + cy * cr
+    out[:, 1, 2] = sy * sp * cr - cy * sr
+    out[:, 2, 0] = -sp
+    out[:, 2, 1] = cp * sr
+    out[:, 2, 2] = cp * cr
+    return out
 
 
 def _angles(rotation: np.ndarray) -> np.ndarray:
@@ -282,11 +310,23 @@ def _angles(rotation: np.ndarray) -> np.ndarray:
         return Rotation.from_matrix(rotation).as_euler("ZYX")[:, ::-1]
 
 
-def leg_lengths(platform: Platform, poses: np.ndarray) -> np.ndarray:
-    """Leg lengths (n, 6), m, of poses (n, 6) (``POSE`` columns)."""
+def _leg_lengths(platform: Platform, poses: np.ndarray) -> np.ndarray:
+    """Leg lengths |p + R e_i - c_i| (n, 6), m, of poses (n, 6) (``POSE`` columns).
+
+    The formula of ``gsfric.discovery.rest.leg_lengths``, with every ``R e_i`` of a pose as one
+    matrix product (the rotation's 9 entries times a (9, 18) matrix of the joints): five times
+    faster, which a workspace of a million poses, checked before its sweep starts, needs.
+    """
     g = platform.geometry
-    E = np.einsum("nij,kj->nki", _rotation(poses), g.platform_joints) + poses[:, None, :3]
-    return np.linalg.norm(E - g.base_joints, axis=2)
+    n = len(poses)
+    joints = np.zeros((3, 3, 6, 3))           # R[i, j] e[k, j] -> component i of joint k
+    for i in range(3):
+        joints[i, :, :, i] = g.platform_joints.T
+    legs = (_rotation(poses).reshape(n, 9) @ joints.reshape(9, 18)).reshape(n, 6, 3)
+    legs += poses[:, None, :3]
+    legs -= g.base_joints
+    np.square(legs, out=legs)
+    return np.sqrt(legs @ np.ones(3))
 
 
 def check_reachable(platform: Platform, poses: np.ndarray, source: str = "workspace") -> None:
@@ -294,7 +334,7 @@ def check_reachable(platform: Platform, poses: np.ndarray, source: str = "worksp
     stroke = platform.geometry.stroke
     if stroke is None:
         return
-    D = leg_lengths(platform, poses)
+    D = _leg_lengths(platform, poses)
     bad = ((D < stroke[0]) | (D > stroke[1])).any(axis=1)
     if bad.any():
         k = int(np.flatnonzero(bad)[0])
@@ -446,112 +486,274 @@ class Task:
     workspace: Workspace | None = None
 
 
+BLOCK_STEPS = 2048
+"""Steps evaluated and reduced at a time inside a task. A block's outputs and work arrays
+(about 6 MB, mostly still in the core's cache between the evaluation and the reduction) are
+reused from block to block and from variant to variant, so a worker's memory follows this
+size and the task's poses, not the sweep's size."""
+
+_VECTORS = ("R_E", "R_C", "R_3", "M_3", "MfrE", "MfrC")
+"""Outputs (N, 6, 3) whose magnitudes are enveloped."""
+
+_ROWS = (*_VECTORS, "M_C", "F_max", "F_min", "Ffr", "P_E", "P_C", "P_3")
+"""Rows of a block's magnitude array (13, n, 6), every one maximised over the steps: the
+squared magnitudes of ``_VECTORS`` (the square root is taken of the extremes only), |M_C|,
+F, -F (the largest -F is the smallest F), |Ffr| and the three dissipated friction powers."""
+
+_OTHER = ("F", "F0", "M_C", "Ffr", "D_dot", "D", "s2", "h", "coupling_change")
+"""The other outputs the envelopes and the step flags need; the rest are not computed."""
+
+_SUM_THREE = np.ones(3)
+_MINUS_SUM_THREE = -np.ones(3)
+_NONE = np.zeros(0, dtype=np.int64)
+_ROW_INDEX = np.arange(len(_ROWS))[:, None]
+_LEG_INDEX = np.arange(6)[None, :]
+for _constant in (_SUM_THREE, _MINUS_SUM_THREE, _NONE, _ROW_INDEX, _LEG_INDEX):
+    _constant.flags.writeable = False      # shared by every task of a process
+
+
+class _Block:
+    """Buffers of one block of at most ``size`` steps, reused: the outputs the envelopes need,
+    the step flags, the magnitudes and the workspace states. Belongs to one task (never shared
+    between threads). Nothing of the block's size is allocated block after block: Dask's
+    workers return freed memory to the system at once (``MALLOC_TRIM_THRESHOLD_``), so every
+    such allocation would cost fresh pages."""
+
+    def __init__(self, size: int) -> None:
+        from gsfric import native
+
+        self.fn = native.get("eval")
+        self.compiled = native.is_compiled()
+        sizes = {name: s for name, s, _ in self.fn.outputs}
+        self.size = size
+        self._vectors = np.empty(len(_VECTORS) * size * 18)
+        self._rates = np.empty(2 * size * 18)           # omega_rel, omega_leg
+        self._magnitudes = np.empty(len(_ROWS) * size * 6)
+        self._ranked = np.empty_like(self._magnitudes)  # the magnitudes, steps last
+        self.states = np.empty(size * 36)               # workspace states of a block
+        self.times = np.zeros(size)
+        self._pairs = np.empty(3 * size * 6)            # the trapezoid's sums of neighbours
+        self._limit = np.empty(size * 6)                # the coupled-friction flag's check
+        self._change = np.empty(size * 6)
+        self._over = np.empty(size * 6, dtype=bool)
+        self._other = {k: np.empty(size * sizes[k]) for k in _OTHER if k in sizes}
+        self._sizes = sizes
+        self._flag = np.empty(size, dtype=np.int64)
+        self.n = 0
+        self.names = (*_VECTORS, "omega_rel", "omega_leg", *self._other)
+
+    def use(self, n: int) -> None:
+        """Lay the buffers out for ``n <= size`` steps (every view C-contiguous)."""
+        if n == self.n:
+            return
+        self.n = n
+        self.vectors = self._vectors[:len(_VECTORS) * n * 18].reshape(len(_VECTORS), n, 18)
+        self.rates = self._rates[:2 * n * 18].reshape(2, n, 18)
+        self.magnitudes = self._magnitudes[:len(_ROWS) * n * 6].reshape(len(_ROWS), n, 6)
+        self.ranked = self._ranked[:len(_ROWS) * n * 6].reshape(len(_ROWS), 6, n)
+        self.out = {name: self.vectors[k] for k, name in enumerate(_VECTORS)}
+        self.out["omega_rel"], self.out["omega_leg"] = self.rates[0], self.rates[1]
+        self.out.update({k: v[:n * self._sizes[k]].reshape(n, self._sizes[k])
+                         for k, v in self._other.items()})
+        self.flag = self._flag[:n]
+
+    def reduce(self) -> np.ndarray:
+        """The magnitudes (13, n, 6) of the block's outputs (rows ``_ROWS``), in few passes
+        over the buffers (the vectors and rates are overwritten: used once per block)."""
+        o, G, V, W = self.out, self.magnitudes, self.vectors, self.rates
+        # -MfrE . omega_rel and -MfrC . omega_leg
+        np.multiply(V[4:6], W, out=W)
+        np.matmul(W.reshape(-1, 3), _MINUS_SUM_THREE, out=G[10:12].reshape(-1))
+        np.multiply(o["Ffr"], o["D_dot"], out=G[12])
+        np.negative(G[12], out=G[12])
+        np.square(V, out=V)
+        np.matmul(V.reshape(-1, 3), _SUM_THREE, out=G[0:6].reshape(-1))
+        np.abs(o["M_C"], out=G[6])
+        G[7] = o["F"]
+        np.negative(o["F"], out=G[8])
+        np.abs(o["Ffr"], out=G[9])
+        return G
+
+
+class _Evaluation:
+    """One variant's evaluation of blocks of states into a ``_Block``: only the outputs the
+    envelopes need, with the step flags, in one call of the compiled code per block.
+
+    Gives what ``Evaluator.evaluate_quiet`` gives for these outputs (the same compiled
+    function, step flags and coupled-friction flag); a platform with sensor effects (which
+    change F after the compiled code) and the CasADi fallback go through
+    ``Evaluator.evaluate_quiet`` itself.
+    """
+
+    def __init__(self, platform: Platform) -> None:
+        from gsfric.catalog import sensor_parameters
+        from gsfric.evaluation import Evaluator
+
+        self.evaluator = Evaluator(platform, n_threads=1)
+        gains, delay = sensor_parameters(platform.effects)
+        self.sensor = delay != 0.0 or bool(np.any(gains != 0.0))
+
+    def blocks(self, block: _Block, x: np.ndarray, t: np.ndarray):
+        """Fill ``block`` with the steps ``s:e`` of states x (n, 24) at times t (n,) block
+        after block; yields ``(s, e)``."""
+        n = len(x)
+        if block.compiled and not self.sensor:
+            from gsfric.evaluation import COUPLING_TOLERANCE, FLAG_COUPLING
+
+            ev = self.evaluator
+            spec = ev.flag_spec()
+            for s in range(0, n, block.size):
+                e = min(n, s + block.size)
+                block.use(e - s)
+                block.fn([x[s:e], ev.P, ev.Q], block.out, 1, select=block.names, flags=spec,
+                         flag=block.flag)
+                change = block.out.get("coupling_change")
+                if change is not None:     # evaluate_quiet's test, in the block's buffers
+                    n6 = change.size
+                    limit = np.abs(block.out["F0"], out=block._limit[:n6].reshape(-1, 6))
+                    limit += 1.0
+                    limit *= COUPLING_TOLERANCE
+                    over = np.greater(np.abs(change, out=block._change[:n6].reshape(-1, 6)),
+                                      limit, out=block._over[:n6].reshape(-1, 6))
+                    block.flag[over.any(axis=1)] |= FLAG_COUPLING
+                yield s, e
+            return
+        from gsfric.trajectory import Motion
+
+        motion = Motion(t, x[:, 0:3], x[:, 3:12].reshape(n, 3, 3), x[:, 12:15], x[:, 15:18],
+                        x[:, 18:21], x[:, 21:24])
+        result = self.evaluator.evaluate_quiet(motion)       # flagged steps are counted
+        for s in range(0, n, block.size):
+            e = min(n, s + block.size)
+            block.use(e - s)
+            for name, buf in block.out.items():
+                buf[...] = result.arrays[name][s:e].reshape(e - s, -1)
+            block.flag[...] = result.flag[s:e]
+            yield s, e
+
+
 class _Envelope:
-    """Running extremes of one case; merged chunk by chunk in order (deterministic)."""
+    """Running extremes of one case, block by block in step order (deterministic: ties go to
+    the earlier step)."""
 
     def __init__(self) -> None:
-        self.value = {q: np.full(6, -np.inf if QUANTITIES[q][0] != "min" else np.inf)
-                      for q in QUANTITIES if QUANTITIES[q][0] != "sum"}
-        self.where = {q: np.full((6, 8), np.nan) for q in self.value}    # step, t, pose
-        self.sums = {q: np.zeros(6) for q in QUANTITIES if QUANTITIES[q][0] == "sum"}
+        shape = (len(_ROWS), 6)
+        self.best = np.full(shape, -np.inf)
+        self.step = np.full(shape, -1, dtype=np.int64)
+        self.t = np.full(shape, np.nan)
+        self.state = np.full(shape + (12,), np.nan)    # position and rotation of the step
+        self.energy = np.zeros((3, 6))                  # W_E, W_C, W_3
         self.steps = 0
         self.flagged = 0
         self.last = None      # (t, powers (3, 6)) of the motion's previous step
 
-    def add(self, result, x: np.ndarray, step0: int, timed: bool) -> None:
-        a = result.arrays
-        n = len(result.t)
-        ok = result.flag == 0
-        self.steps += n
-        self.flagged += int((~ok).sum())
-        P = np.stack([-np.einsum("nij,nij->ni", a["MfrE"], a["omega_rel"]),
-                      -np.einsum("nij,nij->ni", a["MfrC"], a["omega_leg"]),
-                      -a["Ffr"] * a["D_dot"]])                          # (3, N, 6)
-        series = {
-            "R_E": np.linalg.norm(a["R_E"], axis=2), "R_C": np.linalg.norm(a["R_C"], axis=2),
-            "M_C": np.abs(a["M_C"]), "R_3": np.linalg.norm(a["R_3"], axis=2),
-            "M_3": np.linalg.norm(a["M_3"], axis=2), "F_max": a["F"], "F_min": a["F"],
-            "Ffr": np.abs(a["Ffr"]), "MfrE": np.linalg.norm(a["MfrE"], axis=2),
-            "MfrC": np.linalg.norm(a["MfrC"], axis=2), "P_E": P[0], "P_C": P[1], "P_3": P[2]}
-        if ok.any():
-            idx_ok = np.flatnonzero(ok)
-            rot = x[:, 3:12].reshape(-1, 3, 3)
-            for q, s in series.items():
-                s = s[idx_ok]
-                k = np.argmin(s, axis=0) if QUANTITIES[q][0] == "min" else np.argmax(s, axis=0)
-                v = s[k, np.arange(6)]
-                better = v < self.value[q] if QUANTITIES[q][0] == "min" else v > self.value[q]
-                if better.any():
-                    steps = idx_ok[k[better]]
-                    self.value[q][better] = v[better]
-                    self.where[q][better, 0] = step0 + steps
-                    self.where[q][better, 1] = result.t[steps] if timed else np.nan
-                    self.where[q][better, 2:5] = x[steps, 0:3]
-                    self.where[q][better, 5:8] = _angles(rot[steps])
-        if timed:   # trapezoid over the motion's time, across chunk boundaries
-            t = result.t
-            Pz = np.where(ok[None, :, None], P, 0.0)
-            if self.last is not None:
-                t = np.concatenate([[self.last[0]], t])
-                Pz = np.concatenate([self.last[1][:, None, :], Pz], axis=1)
-            dt = np.diff(t)
-            W = 0.5 * np.einsum("n,knl->kl", dt, Pz[:, 1:] + Pz[:, :-1])
-            for q, w in zip(("W_E", "W_C", "W_3"), W):
-                self.sums[q] += w
-            self.last = (t[-1], Pz[:, -1, :])
+    def add(self, block: _Block, x: np.ndarray, t: np.ndarray, step0: int, timed: bool) -> None:
+        """Fold in the block's outputs: states x (n, 24), times t (n,), first step ``step0``."""
+        G = block.reduce()
+        bad = np.flatnonzero(block.flag) if np.count_nonzero(block.flag) else _NONE
+        self.steps += block.n
+        self.flagged += bad.size
+        if timed:
+            self._integrate(G[10:13], bad, t, block._pairs)
+        if bad.size:
+            G[:, bad] = -np.inf                 # flagged steps are left out of the envelope
+        np.copyto(block.ranked, G.transpose(0, 2, 1))
+        k = block.ranked.argmax(axis=2)                             # (13, 6)
+        v = G[_ROW_INDEX, k, _LEG_INDEX]
+        better = v > self.best
+        if better.any():
+            q, leg = np.nonzero(better)
+            at = k[q, leg]
+            self.best[q, leg] = v[q, leg]
+            self.step[q, leg] = step0 + at
+            self.t[q, leg] = t[at]
+            self.state[q, leg] = x[at, :12]
+
+    def _integrate(self, P: np.ndarray, bad: np.ndarray, t: np.ndarray,
+                   work: np.ndarray) -> None:
+        """Trapezoid of the powers P (3, n, 6) over t, across block boundaries (flagged: 0);
+        ``work`` holds at least 3 (n - 1) 6 values."""
+        if bad.size:
+            P = P.copy()
+            P[:, bad] = 0.0
+        if self.last is not None:
+            self.energy += 0.5 * (t[0] - self.last[0]) * (P[:, 0] + self.last[1])
+        n = len(t)
+        if n > 1:
+            pairs = work[:3 * (n - 1) * 6].reshape(3, n - 1, 6)
+            np.add(P[:, 1:], P[:, :-1], out=pairs)
+            self.energy += 0.5 * np.matmul(np.diff(t), pairs)
+        self.last = (t[-1], P[:, -1].copy())
 
     def rows(self, motion: str, variant: int, timed: bool) -> list[tuple]:
+        found = self.step >= 0
+        value = np.where(found, self.best, np.nan)
+        value[0:6] = np.sqrt(value[0:6])
+        value[8] = -value[8]
+        pose = np.full((len(_ROWS), 6, 6), np.nan)
+        pose[found, 0:3] = self.state[found, 0:3]
+        if found.any():
+            pose[found, 3:6] = _angles(self.state[found, 3:12].reshape(-1, 3, 3))
         out = []
+        sums = {"W_E": 0, "W_C": 1, "W_3": 2}
         for q in QUANTITIES:
             for leg in range(6):
-                if q in self.sums:
-                    value = float(self.sums[q][leg]) if timed else math.nan
+                if q in sums:
+                    w = float(self.energy[sums[q], leg]) if timed else math.nan
                     where = [-1] + [math.nan] * 7
-                else:
-                    value = float(self.value[q][leg])
-                    if not math.isfinite(value):
-                        value = math.nan
-                    where = self.where[q][leg].tolist()
-                    where[0] = -1 if math.isnan(where[0]) else int(where[0])
-                out.append((motion, variant, q, leg + 1, value, *where, self.steps,
-                            self.flagged))
+                    out.append((motion, variant, q, leg + 1, w, *where, self.steps,
+                                self.flagged))
+                    continue
+                r = _ROWS.index(q)
+                where = [int(self.step[r, leg]),
+                         float(self.t[r, leg]) if timed and found[r, leg] else math.nan,
+                         *pose[r, leg].tolist()]
+                out.append((motion, variant, q, leg + 1, float(value[r, leg]), *where,
+                            self.steps, self.flagged))
         return out
+
+
+def _pieces(task: Task, block: _Block):
+    """(first step, states (n, 24), times (n,)) of a task, piece by piece: a trajectory file
+    as it is streamed, a block of workspace poses ``BLOCK_STEPS`` states at a time (in the
+    block's buffers: valid until the next piece)."""
+    if task.path is not None:
+        from gsfric.evaluation import state_array
+        from gsfric.stream import iter_motions
+
+        for start, m in iter_motions(task.path, chunk=STREAM_CHUNK):
+            yield start, state_array(m), np.asarray(m.t, float)
+        return
+    ws = task.workspace
+    per = max(1, block.size // ws.states)
+    rotation = _rotation(task.poses)
+    for p0 in range(0, len(task.poses), per):
+        first = task.first_pose + p0
+        x = ws.states_of(task.poses[p0:p0 + per], first, rotation[p0:p0 + per], block.states)
+        yield first * ws.states, x, block.times[:len(x)]
 
 
 def run_task(task: Task):
     """Evaluate one task and reduce it to envelope rows (a DataFrame of ``ENVELOPE_COLUMNS``).
 
-    Runs on a worker. One ``Evaluator`` per variant, built here and used by this task only:
-    the evaluator must not be shared between threads until it is thread-safe.
+    Runs on a worker, in one thread, block after block of ``BLOCK_STEPS`` steps: each block is
+    evaluated for every variant of the task into the same reused buffers and folded into the
+    variant's envelope at once, so memory follows ``BLOCK_STEPS``, not the task's size.
     """
     import pandas as pd
 
-    from gsfric.evaluation import Evaluator
-    from gsfric.trajectory import Motion
-
-    evaluators = [Evaluator(p) for p in task.platforms]
+    states = task.workspace.states if task.workspace is not None else 1
+    block = _Block(max(BLOCK_STEPS, states))
+    evaluations = [_Evaluation(p) for p in task.platforms]
     envelopes = [_Envelope() for _ in task.platforms]
     timed = task.path is not None
-    if timed:
-        from gsfric.evaluation import state_array
-        from gsfric.stream import iter_motions
-
-        pieces = ((start, m, state_array(m)) for start, m in
-                  iter_motions(task.path, chunk=STREAM_CHUNK))
-    else:
-        ws = task.workspace
-        x = ws.states_of(task.poses, task.first_pose)
-        n = len(x)
-        motion = Motion(np.zeros(n), x[:, 0:3], x[:, 3:12].reshape(n, 3, 3), x[:, 12:15],
-                        x[:, 15:18], x[:, 18:21], x[:, 21:24])
-        pieces = iter([(task.first_pose * ws.states, motion, x)])
-    for start, motion, x in pieces:
-        for ev, env in zip(evaluators, envelopes):
-            result = ev.evaluate_quiet(motion)         # flagged steps are counted instead
-            env.add(result, x, start, timed)
+    for start, x, t in _pieces(task, block):
+        for evaluation, envelope in zip(evaluations, envelopes):
+            for s, e in evaluation.blocks(block, x, t):
+                envelope.add(block, x[s:e], t[s:e], start + s, timed)
     rows = []
-    for v, env in zip(task.variants, envelopes):
-        rows += env.rows(task.motion, v, timed)
+    for v, envelope in zip(task.variants, envelopes):
+        rows += envelope.rows(task.motion, v, timed)
     frame = pd.DataFrame(rows, columns=list(ENVELOPE_COLUMNS))
     frame.insert(0, "task", task.id)
     return frame
@@ -590,12 +792,35 @@ def _trajectory_files(trajectories) -> list[Path]:
     return files
 
 
+_POSE_BYTES = 48
+_VARIANT_BYTES = 17_000
+"""What a pose and a variant weigh in a task's traffic: a pose in (6 floats), a variant's
+platform in (2 kB) and its envelope out (15 kB), pickled (measured)."""
+
+
+def _pose_block(n_poses: int, states: int, variants: int, chunk_steps: int) -> int:
+    """Poses per workspace task, the task covering ``chunk_steps // (block * states)``
+    variants of them.
+
+    As few as let one task hold every variant (``chunk_steps / (states * variants)``), but
+    enough that the poses a task carries and its variants weigh alike (``b * 48 B = p *
+    17 kB`` with ``b * p * states = chunk_steps``: 6700 poses and 19 variants for tasks of 1e6
+    steps at 8 states, 0.6 MB of traffic), and at least one evaluated block per variant: a
+    task does not carry all the poses when a sweep has many variants.
+    """
+    whole = -(-chunk_steps // states)                  # one variant per task
+    balanced = int(math.sqrt(_VARIANT_BYTES * chunk_steps / (_POSE_BYTES * states)))
+    block = max(BLOCK_STEPS // states, balanced, -(-chunk_steps // (states * variants)))
+    return max(1, min(n_poses, whole, block))
+
+
 @dataclass
 class Plan:
     tasks: list[Task]
     fingerprint: str
     inputs: dict
     variants: list[dict]
+    platform: Platform          # the nominal platform, read once
     workspace_poses: int = 0
 
     @property
@@ -642,8 +867,10 @@ def plan(trajectories=None, workspace: Workspace | str | os.PathLike | None = No
         poses = workspace.poses()
         n_poses = len(poses)
         check_reachable(platform, poses, source)
-        block = max(1, min(n_poses, -(-chunk_steps // workspace.states)))
+        block = _pose_block(n_poses, workspace.states, nv, chunk_steps)
         per = max(1, chunk_steps // (block * workspace.states))
+        block = -(-n_poses // -(-n_poses // block))   # blocks of equal size, and
+        per = -(-nv // -(-nv // per))                 # groups of variants of equal size
         for p0 in range(0, n_poses, block):
             part = poses[p0:p0 + block]
             for lo in range(0, nv, per):
@@ -658,7 +885,7 @@ def plan(trajectories=None, workspace: Workspace | str | os.PathLike | None = No
               "tolerances": dict(tolerances or {}), "variants": nv - 1, "seed": seed,
               "chunk_steps": int(chunk_steps)}
     hasher.update(json.dumps(inputs, sort_keys=True, default=str).encode())
-    return Plan(tasks, hasher.hexdigest()[:16], inputs, table, n_poses)
+    return Plan(tasks, hasher.hexdigest()[:16], inputs, table, platform, n_poses)
 
 
 # -- merging ----------------------------------------------------------------------------------
@@ -776,19 +1003,29 @@ class SweepResult:
 
 def _client(scheduler, workers: int | None = None):
     """A distributed Client and the LocalCluster we started for it (None otherwise)."""
-    from distributed import Client, LocalCluster
+    from distributed import Client
 
     if not isinstance(scheduler, str):
         return scheduler, None
     if scheduler == "local":
-        import logging
-
-        # processes with one thread each: the compiled evaluator is not thread-safe yet
-        cluster = LocalCluster(n_workers=workers or os.cpu_count() or 1, threads_per_worker=1,
-                               processes=True, dashboard_address=None,
-                               silence_logs=logging.ERROR)
+        cluster = local_cluster(workers or os.cpu_count() or 1)
         return Client(cluster), cluster
     return Client(scheduler), None
+
+
+def local_cluster(workers: int):
+    """The ``LocalCluster`` of ``scheduler="local"``: ``workers`` processes with one thread
+    each, one per core (nothing shared between cores), without the workers' statistical
+    profiler (it samples the running task's stack 100 times a second: about 5 % of a task's
+    CPU time measured here, docs/sizing.md)."""
+    import logging
+
+    import dask
+    from distributed import LocalCluster
+
+    with dask.config.set({"distributed.worker.profile.enabled": False}):
+        return LocalCluster(n_workers=workers, threads_per_worker=1, processes=True,
+                            dashboard_address=None, silence_logs=logging.ERROR)
 
 
 def _resolve_scheduler(scheduler, steps: int):
@@ -857,7 +1094,7 @@ def sweep(out: str | os.PathLike, trajectories=None,
     scheduler : {"auto", "serial", "local"}, address "tcp://host:port", or a Client
         "auto" (None): ``DASK_SCHEDULER_ADDRESS`` if set, else "serial" below
         ``SERIAL_BELOW`` steps and "local" (a LocalCluster, one process per core) above.
-        Threads are not offered: the compiled evaluator is not yet thread-safe.
+        Each task evaluates in one thread; the parallelism is Dask's processes.
     workers : int, optional
         Worker processes of the "local" cluster (default: one per core).
     chunk_steps : int
@@ -960,9 +1197,7 @@ def sweep(out: str | os.PathLike, trajectories=None,
     envelopes = merge(merged)
     summary = summarize(envelopes)
     variants_table = pd.DataFrame(p.variants)
-    base = platform if isinstance(platform, Platform) else (
-        Platform.from_toml(platform) if platform is not None else None)
-    limits = base.limits if base is not None else {}
+    limits = p.platform.limits
     exceeded = check_limits(envelopes, limits)
     envelopes.to_parquet(partial / "envelopes.parquet", index=False)
     summary.to_csv(partial / "summary.csv", index=False)

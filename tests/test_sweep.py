@@ -281,3 +281,171 @@ def test_merge_is_independent_of_arrival_order_and_folding(serial, inputs):
     folded = sw._reduce(shuffled[:3])
     pd.testing.assert_frame_equal(sw.merge([folded, *shuffled[3:]]), serial.envelopes,
                                   check_exact=True)
+
+
+# -- the block evaluation and reduction ---------------------------------------------------------
+
+
+def _flagging_workspace():
+    """Poses of which some put a leg beyond the stroke (flagged steps), in dynamic states."""
+    ws = sw.Workspace.from_dict({**WORKSPACE, "samples": 40, "pose": {
+        **WORKSPACE["pose"], "z": [0.66, 1.12]}})
+    return ws, ws.poses()
+
+
+def _platforms():
+    from gsfric.evaluation import COUPLING_TOLERANCE  # noqa: F401  (the flag checked below)
+
+    reference = models.reference_platform()
+    locking = models.reference_platform("coupled").with_friction(
+        model="coupled", joint_radius=0.05, joint_coulomb=0.05 / 0.05)
+    sensor = reference.with_effect("force_scale", g1=0.1, g4=-0.05)
+    return {"reference": reference, "coupled, locking": locking, "load-cell gains": sensor}
+
+
+@pytest.mark.parametrize("name", list(_platforms()))
+def test_block_evaluation_is_evaluate_quiet(name):
+    """The outputs the envelopes need and the step flags, evaluated block by block, are
+    exactly those of Evaluator.evaluate_quiet (stroke and coupled-friction flags included)."""
+    from gsfric.evaluation import FLAG_COUPLING, FLAG_STROKE, Evaluator
+    from gsfric.trajectory import Motion
+
+    platform = _platforms()[name]
+    ws, poses = _flagging_workspace()
+    x = ws.states_of(poses, 0)
+    n = len(x)
+    t = np.linspace(0.0, 1.0, n)
+    motion = Motion(t, x[:, 0:3], x[:, 3:12].reshape(n, 3, 3), x[:, 12:15], x[:, 15:18],
+                    x[:, 18:21], x[:, 21:24])
+    with np.errstate(all="ignore"):
+        expected = Evaluator(platform).evaluate_quiet(motion)
+    assert np.any(expected.flag & FLAG_STROKE) and not np.all(expected.flag)
+    if name.startswith("coupled"):
+        assert np.any(expected.flag & FLAG_COUPLING)
+    block = sw._Block(37)                    # blocks that do not divide the steps
+    seen = 0
+    for s, e in sw._Evaluation(platform).blocks(block, x, t):
+        assert s == seen and e - s <= 37
+        np.testing.assert_array_equal(block.flag, expected.flag[s:e])
+        for key, value in block.out.items():
+            np.testing.assert_array_equal(value, expected.arrays[key][s:e].reshape(e - s, -1),
+                                          err_msg=key)
+        seen = e
+    assert seen == n
+
+
+def test_workspace_envelope_leaves_the_flagged_steps_out(monkeypatch):
+    """A task's envelope is the extreme over the unflagged steps of evaluate_quiet, block
+    boundaries and all; flagged steps are counted."""
+    from gsfric.evaluation import Evaluator
+    from gsfric.trajectory import Motion
+
+    monkeypatch.setattr(sw, "BLOCK_STEPS", 24)
+    ws, poses = _flagging_workspace()
+    platform = models.reference_platform()
+    task = sw.Task(0, "workspace", [0], [platform], len(poses) * ws.states, poses=poses,
+                   first_pose=0, workspace=ws)
+    frame = sw.run_task(task).set_index(["quantity", "leg"])
+    x = ws.states_of(poses, 0)
+    n = len(x)
+    r = Evaluator(platform).evaluate_quiet(Motion(
+        np.zeros(n), x[:, 0:3], x[:, 3:12].reshape(n, 3, 3), x[:, 12:15], x[:, 15:18],
+        x[:, 18:21], x[:, 21:24]))
+    ok = r.flag == 0
+    assert 0 < ok.sum() < n
+    assert (frame.flagged == n - ok.sum()).all() and (frame.steps == n).all()
+    power = -np.einsum("nij,nij->ni", r.MfrC, r.omega_leg)
+    series = {"R_E": np.linalg.norm(r.R_E, axis=2), "M_3": np.linalg.norm(r.M_3, axis=2),
+              "F_max": r.F, "F_min": -r.F, "P_C": power}
+    for q, s in series.items():
+        s = np.where(ok[:, None], s, -np.inf)
+        for leg in range(6):
+            row = frame.loc[(q, leg + 1)]
+            k = int(np.argmax(s[:, leg]))
+            assert row.step == k and ok[k]
+            assert (-row.value if q == "F_min" else row.value) == pytest.approx(s[k, leg],
+                                                                                rel=1e-14)
+            assert np.allclose([row.x, row.y, row.z], poses[k // ws.states, :3], rtol=0,
+                               atol=0)
+            assert np.allclose([row.roll, row.pitch, row.yaw], poses[k // ws.states, 3:],
+                               atol=1e-12)
+    assert frame.loc[("W_C", 1)].value != frame.loc[("W_C", 1)].value   # NaN: no motion
+
+
+def test_task_memory_follows_the_block_not_the_task():
+    """Peak memory (numpy's traced allocations) of a task 8 times larger grows only by its
+    poses, not by its evaluated outputs (313 values per step)."""
+    import tracemalloc
+
+    ws = sw.Workspace.from_dict({**WORKSPACE, "samples": 16_000, "states": 8})
+    poses = ws.poses()
+    platform = models.reference_platform()
+    sw.run_task(sw.Task(0, "workspace", [0], [platform], 8, poses=poses[:1], workspace=ws))
+
+    def peak(n_poses):
+        task = sw.Task(0, "workspace", [0], [platform], n_poses * 8, poses=poses[:n_poses],
+                       first_pose=0, workspace=ws)
+        tracemalloc.start()
+        try:
+            sw.run_task(task)
+            return tracemalloc.get_traced_memory()[1]
+        finally:
+            tracemalloc.stop()
+
+    small, large = peak(2_000), peak(16_000)   # 16 000 and 128 000 steps
+    per_pose = 3 * 9 * 8                        # the task's rotations and their copies
+    assert large - small < 14_000 * per_pose + 2**20
+    assert large < 64 * 2**20                   # all outputs of the task: 320 MB
+
+
+def test_workspace_states_follow_their_definition():
+    """Each component at -bound where the pose's Philox stream draws a double below 0.5, else
+    +bound; state 0 static; the same whatever block a pose is drawn in."""
+    ws = sw.Workspace.from_dict({**WORKSPACE, "states": 5, "bounds": {
+        "velocity": [0.2, 0.0, 0.1], "omega": 0.4, "acceleration": 2.0, "alpha": 4.0}})
+    poses = ws.poses()
+    x = ws.states_of(poses, 0)
+    bits = np.random.Philox(key=WORKSPACE["seed"])
+    u = np.random.Generator(bits).random((len(poses), 5, 12))
+    bound = np.array([0.2, 0.0, 0.1] + [0.4] * 3 + [2.0] * 3 + [4.0] * 3)
+    expected = np.where(u < 0.5, -bound, bound)
+    expected[:, 0] = 0.0
+    np.testing.assert_array_equal(x[:, 12:].reshape(len(poses), 5, 12), expected)
+    buffer = np.empty(7 * 5 * 36)
+    part = ws.states_of(poses[13:20], 13, out=buffer)
+    np.testing.assert_array_equal(part, x[13 * 5:20 * 5])
+    from scipy.spatial.transform import Rotation
+
+    rotation = Rotation.from_euler("ZYX", poses[:, [5, 4, 3]]).as_matrix()
+    np.testing.assert_allclose(x[::5, 3:12].reshape(-1, 3, 3), rotation, rtol=0, atol=1e-15)
+
+
+def test_reachability_uses_the_leg_lengths_of_the_discovery_workflow():
+    """The sweep's leg lengths (one matrix product per pose) are rest.leg_lengths'."""
+    from gsfric.discovery.rest import leg_lengths
+
+    ws, poses = _flagging_workspace()
+    platform = models.reference_platform()
+    expected = leg_lengths(platform, poses[:, :3], sw._rotation(poses))
+    np.testing.assert_allclose(sw._leg_lengths(platform, poses), expected, rtol=1e-15,
+                               atol=1e-15)
+    lo, hi = platform.geometry.stroke
+    assert ((expected < lo) | (expected > hi)).any()
+
+
+def test_workspace_tasks_with_many_variants_carry_few_poses():
+    """Every (pose, variant) pair is in exactly one task; with many variants a task carries a
+    block of the poses and a group of the variants, near the chunk size, not all the poses."""
+    import pickle
+
+    ws = sw.Workspace.from_dict({**WORKSPACE, "samples": 125_000, "states": 8})
+    p = sw.plan(workspace=ws, vary={"platform.payload_mass": (0.0, 8.0)}, variants=200,
+                chunk_steps=10**6)
+    counts = np.zeros((125_000, 201), dtype=int)
+    for task in p.tasks:
+        counts[task.first_pose:task.first_pose + len(task.poses), task.variants] += 1
+        assert task.steps == len(task.poses) * 8 * len(task.variants)
+        assert 0.5e6 <= task.steps <= 1e6
+    assert (counts == 1).all()
+    sizes = [len(pickle.dumps(task)) for task in p.tasks[:5]]
+    assert max(sizes) < 0.1 * 125_000 * 48           # all the poses: 6 MB
