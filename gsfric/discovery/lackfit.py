@@ -17,6 +17,25 @@ held-out error of the block cross-validation in total, a gap of at least ``min_g
 the noise; not "in most folds": a discrepancy confined to part of the record is still one).
 A basis that explains the residual means the catalog did not: the verdict is
 ``unexplained_discrepancy``, and the signals that carry the structure say what it looks like.
+
+A discrepancy need not take any of these forms (a gas spring or cable carrier pulling with the
+stroke, a screw's ripple, crosstalk between the load cells' channels). What every such error
+shares, and noise does not, is that it repeats: it comes back whenever the rig comes back to the
+same state. ``state_structure`` tests exactly that, without a model: the residual is averaged
+in bins of one state variable at a time (each leg's length, each leg's speed, the model force of
+each leg), and the bin means of the other folds of the block cross-validation predict the
+held-out fold. Noise, white or slow, does not repeat at the same state in another stretch of
+time, so the held-out error grows; a function of the state is predicted, so it falls. The test
+needs no prewhitening (the folds are long contiguous stretches) and no dense design matrix
+(bin sums per fold).
+
+Nor need it repeat with the state: a lightly damped mode of the rig's structure, excited by the
+motion, rings on after every change of force. Its residual follows the motion through a filter,
+and an AR noise model can mimic the filter's spectrum, so whitening hides it from the basis.
+``dynamic_structure`` asks the question that separates the two (a Granger test): does the
+motion (the model force's rate and the legs' acceleration, now and a few samples back) predict
+the residual *beyond the residual's own past*? The residual's past absorbs coloured noise
+however slow; an input-driven part, delayed, filtered or resonant, is predicted by the input.
 """
 
 from __future__ import annotations
@@ -37,6 +56,40 @@ MEANING = {
     "acceleration": "correlated with the legs' acceleration: an inertia or timing error",
     "drift": "a slow drift in time: a thermal drift or a zero shift of the load cells",
 }
+
+
+STATE_MEANING = {
+    "leg length": "a function of the stroke position, the same at every visit: a spring or "
+                  "cable force, a screw's ripple, a position-dependent friction",
+    "leg speed": "a function of the leg speed, the same at every visit: a friction or damping "
+                 "law outside the catalog",
+    "model force": "a function of the leg's own force: a nonlinear or hysteretic load cell",
+}
+"""What a repeatable residual in bins of each state variable of ``state_features`` suggests;
+the force of another leg means crosstalk between the load cells' channels."""
+
+
+DYNAMIC_MEANING = ("driven by the motion through a filter (it follows the force's rate or the legs' "
+                   "acceleration beyond the residual's own past): a resonance of the structure, "
+                   "a delay or the dynamics of the sensor")
+
+
+def state_features(D: np.ndarray, speed: np.ndarray, F: np.ndarray) -> dict[str, np.ndarray]:
+    """The state variables binned by ``state_structure``, each (M, 6): the leg's length (m),
+    speed (m/s) and model force (N), and the model force of every other leg (column i of
+    ``"force of leg i+k"`` is leg (i + k) mod 6's force)."""
+    out = {"leg length": D, "leg speed": speed, "model force": F}
+    for k in range(1, F.shape[1]):
+        out[f"force of leg i+{k}"] = np.roll(F, -k, axis=1)
+    return out
+
+
+def state_meaning(variable: str) -> str:
+    """Plain words for a repeatable residual in bins of ``variable``."""
+    if variable.startswith("force of leg"):
+        return ("a function of another leg's force: crosstalk between the load cells' channels "
+                "or a load path the model does not have")
+    return STATE_MEANING.get(variable, "")
 
 
 def basis(t: np.ndarray, F: np.ndarray, speed: np.ndarray, sliding: np.ndarray
@@ -108,3 +161,197 @@ def dominant_frequency(t: np.ndarray, residual: np.ndarray) -> float:
     power = np.sum(np.abs(np.fft.rfft(r, axis=0)) ** 2, axis=1)
     freqs = np.fft.rfftfreq(n, step)
     return float(freqs[1:][np.argmax(power[1:])])
+
+
+STATE_BINS = 24
+"""Bins per state variable and leg in ``state_structure`` (quantiles of the used samples)."""
+
+
+def state_structure(residual: np.ndarray, features: dict[str, np.ndarray],
+                    valid: np.ndarray, *, n_folds: int, min_gap: float,
+                    n_bins: int = STATE_BINS) -> dict:
+    """Does the residual repeat as a function of one state variable? (see the module docstring)
+
+    Parameters
+    ----------
+    residual : ndarray, shape (M, 6)
+        Final residual per leg, N.
+    features : dict of str -> ndarray, shape (M, 6)
+        State variables per leg (the column of leg i is the variable binned for leg i's
+        residual), in any units.
+    valid : ndarray of bool, shape (M, 6)
+        The (sample, leg) pairs to use (sliding pairs).
+    n_folds : int
+        Contiguous folds of the cross-validation.
+    min_gap : float
+        Smallest held-out structure, relative to the RMS left, that counts.
+
+    Returns
+    -------
+    dict
+        ``significant``; ``variable`` (the best state variable); ``gap`` (held-out structure
+        RMS over the RMS left); ``cv_gain`` (share of the held-out squared residual that the
+        bin means of the other folds predict); ``structure_rms`` (N, in-sample bin means);
+        ``per_leg_rms`` (N); ``gains`` (every variable's ``cv_gain``).
+    """
+    r = np.asarray(residual, float)
+    m = len(r)
+    fold = np.minimum(np.arange(m) * n_folds // max(m, 1), n_folds - 1)
+    gains, fitted_by = {}, {}
+    for name, z in features.items():
+        held_err = held_null = 0.0
+        fitted = np.zeros_like(r)
+        for leg in range(r.shape[1]):
+            ok = valid[:, leg] & np.isfinite(z[:, leg])
+            if np.count_nonzero(ok) < 4 * n_bins:
+                continue
+            zi, ri, fi = z[ok, leg], r[ok, leg], fold[ok]
+            edges = np.unique(np.quantile(zi, np.linspace(0, 1, n_bins + 1)[1:-1]))
+            b = np.searchsorted(edges, zi)
+            nb = len(edges) + 1
+            key = fi * nb + b
+            count = np.bincount(key, minlength=n_folds * nb).reshape(n_folds, nb)
+            total = np.bincount(key, ri, minlength=n_folds * nb).reshape(n_folds, nb)
+            rest_count = count.sum(0) - count           # the other folds, per fold and bin
+            rest_total = total.sum(0) - total
+            mean = np.where(rest_count >= 5, rest_total / np.maximum(rest_count, 1), 0.0)
+            level = rest_total.sum(1) / np.maximum(rest_count.sum(1), 1)   # the null: a mean
+            held_err += float(np.sum((ri - mean[fi, b]) ** 2))
+            held_null += float(np.sum((ri - level[fi]) ** 2))
+            all_mean = total.sum(0) / np.maximum(count.sum(0), 1)
+            fitted[np.flatnonzero(ok), leg] = all_mean[b] - ri.mean()
+        gains[name] = 1.0 - held_err / held_null if held_null > 0 else 0.0
+        fitted_by[name] = fitted
+    if not gains:
+        return {"significant": False, "variable": None, "gap": 0.0, "cv_gain": 0.0,
+                "structure_rms": 0.0, "per_leg_rms": [0.0] * r.shape[1], "gains": {}}
+    best = max(gains, key=gains.get)
+    g = gains[best]
+    gap = float(np.sqrt(g / (1.0 - g))) if 0.0 < g < 1.0 else (np.inf if g >= 1.0 else 0.0)
+    fitted = fitted_by[best]
+    return {"significant": bool(gap >= min_gap), "variable": best, "gap": gap,
+            "cv_gain": float(g), "structure_rms": float(np.sqrt(np.mean(fitted[valid] ** 2))),
+            "per_leg_rms": [float(np.sqrt(np.mean(fitted[valid[:, k], k] ** 2)))
+                            if valid[:, k].any() else 0.0 for k in range(r.shape[1])],
+            "gains": {k: float(v) for k, v in gains.items()}}
+
+
+DYNAMIC_ORDER = 6
+"""Lagged residuals per leg in ``dynamic_structure`` (the noise's own past)."""
+DYNAMIC_LAGS = 4
+"""Current and lagged samples of each input in ``dynamic_structure`` (lags 0..DYNAMIC_LAGS)."""
+
+
+def dynamic_structure(residual: np.ndarray, inputs: dict[str, np.ndarray], valid: np.ndarray,
+                      *, alpha: float, min_gap: float, order: int = DYNAMIC_ORDER,
+                      lags: int = DYNAMIC_LAGS) -> dict:
+    """Is the residual driven by the motion beyond its own past? (see the module docstring)
+
+    An ARX model per leg, ``r_t = sum_k a_k r_{t-k} + sum_u sum_j b_uj u_{t-j} + e_t``, with AR
+    coefficients per leg and input coefficients shared by the legs (inputs scaled per leg to
+    unit RMS), against the AR model alone: an F-test of the input block, and the size of the
+    input-driven part, the inputs' term passed through the fitted AR recursion.
+
+    Parameters
+    ----------
+    residual : ndarray, shape (M, 6)
+        Final residual per leg, N.
+    inputs : dict of str -> ndarray, shape (M, 6)
+        Input signals per leg.
+    valid : ndarray of bool, shape (M, 6)
+        Pairs to use; a row enters when it and the ``max(order, lags)`` rows before it are valid.
+    alpha : float
+        Level of the F-test.
+    min_gap : float
+        Smallest input-driven part, relative to the RMS left, that counts.
+
+    Returns
+    -------
+    dict
+        ``significant``, ``p_value``, ``gap``, ``structure_rms`` (N), ``per_leg_rms`` (N),
+        ``inputs`` (each input's share of the driven part).
+    """
+    from scipy import stats
+    from scipy.signal import lfilter
+
+    r = np.asarray(residual, float)
+    m, legs = r.shape
+    back = max(order, lags)
+    names = list(inputs)
+    k_in = len(names) * (lags + 1)
+    k = legs * order + k_in
+    A = np.zeros((k, k))
+    b = np.zeros(k)
+    yy = 0.0
+    rows = 0
+    scaled = {}
+    design = []
+    for leg in range(legs):
+        ok = valid[:, leg].copy()
+        run = np.convolve(~ok, np.ones(back + 1), mode="full")[:m] == 0   # the row and back
+        run[:back] = False
+        idx = np.flatnonzero(run)
+        us = []
+        for name in names:
+            u = np.asarray(inputs[name][:, leg], float)
+            s = np.sqrt(np.mean(u[ok] ** 2)) if ok.any() else 0.0
+            us.append(u / s if s > 0 else u * 0.0)
+        scaled[leg] = us
+        if len(idx) == 0:
+            design.append(None)
+            continue
+        ar = np.stack([r[idx - j, leg] for j in range(1, order + 1)], axis=1)
+        ins = np.stack([u[idx - j] for u in us for j in range(lags + 1)], axis=1)
+        cols = np.concatenate([np.arange(leg * order, (leg + 1) * order),
+                               legs * order + np.arange(k_in)])
+        X = np.concatenate([ar, ins], axis=1)
+        y = r[idx, leg]
+        A[np.ix_(cols, cols)] += X.T @ X
+        b[cols] += X.T @ y
+        yy += float(y @ y)
+        rows += len(idx)
+        design.append(idx)
+    empty = {"significant": False, "p_value": 1.0, "gap": 0.0, "structure_rms": 0.0,
+             "per_leg_rms": [0.0] * legs, "inputs": {}}
+    if rows <= k + 10:
+        return empty
+    scale = np.sqrt(np.maximum(np.diag(A), 1e-300))
+    An = A / np.outer(scale, scale)
+    coef = np.linalg.lstsq(An, b / scale, rcond=1e-10)[0] / scale
+    rss_full = yy - 2 * coef @ b + coef @ A @ coef
+    ar_cols = np.arange(legs * order)
+    Ar = A[np.ix_(ar_cols, ar_cols)]
+    coef_ar = np.linalg.lstsq(Ar, b[ar_cols], rcond=1e-10)[0]
+    rss_ar = yy - 2 * coef_ar @ b[ar_cols] + coef_ar @ Ar @ coef_ar
+    df2 = rows - k
+    if rss_full <= 0 or df2 <= 0:
+        return empty
+    f = ((rss_ar - rss_full) / k_in) / (rss_full / df2)
+    p = float(stats.f.sf(f, k_in, df2))
+    # the input-driven part: the inputs' term through each leg's AR recursion (if stable)
+    driven = np.zeros_like(r)
+    shares = dict.fromkeys(names, 0.0)
+    for leg in range(legs):
+        if design[leg] is None:
+            continue
+        a = coef[leg * order:(leg + 1) * order]
+        den = np.concatenate([[1.0], -a])
+        stable = np.all(np.abs(np.roots(den)) < 0.999) if order else True
+        for n_i, name in enumerate(names):
+            bj = coef[legs * order + n_i * (lags + 1):legs * order + (n_i + 1) * (lags + 1)]
+            part = lfilter(bj, den if stable else [1.0], scaled[leg][n_i])
+            driven[:, leg] += part
+            shares[name] += float(np.sum(part[design[leg]] ** 2))
+    mask = np.zeros_like(valid)
+    for leg in range(legs):
+        if design[leg] is not None:
+            mask[design[leg], leg] = True
+    size = float(np.sqrt(np.mean(driven[mask] ** 2)))
+    left = float(np.sqrt(np.mean((r - driven)[mask] ** 2)))
+    gap = size / left if left > 0 else np.inf
+    total = max(sum(shares.values()), 1e-300)
+    return {"significant": bool(p < alpha and gap >= min_gap), "p_value": p, "gap": float(gap),
+            "structure_rms": size,
+            "per_leg_rms": [float(np.sqrt(np.mean(driven[mask[:, j], j] ** 2)))
+                            if mask[:, j].any() else 0.0 for j in range(legs)],
+            "inputs": {n: v / total for n, v in shares.items()}}

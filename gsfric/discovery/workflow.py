@@ -428,12 +428,32 @@ def _lack_of_fit(problem: Problem, theta: np.ndarray, residual: np.ndarray,
     out = lackfit.test(residual, X, whitener, alpha=s.alpha, min_gap=s.min_gap,
                        n_blocks=s.n_blocks, n_folds=s.n_folds,
                        min_fold_share=s.min_fold_share)
+    D, speed = problem.result.D[used], problem.result.D_dot[used]
+    state = lackfit.state_structure(residual, lackfit.state_features(D, speed, F),
+                                    problem.sliding, n_folds=s.n_folds, min_gap=s.min_gap)
+    dynamic = lackfit.dynamic_structure(
+        residual, {"dF/dt": np.gradient(F, t, axis=0), "acceleration": np.gradient(speed, t, axis=0)},
+        problem.sliding, alpha=s.alpha, min_gap=s.min_gap)
+    out["state"], out["dynamic"] = state, dynamic
+    # structure in a form of the basis says most about what it is; else structure that repeats
+    # with the state; else structure that follows the motion
+    tests = {"basis": out, "state": state, "dynamic": dynamic}
+    by = next((k for k, v in tests.items() if v["significant"]), None)
+    if by in ("state", "dynamic"):
+        out.update(significant=True, gap=tests[by]["gap"],
+                   structure_rms=tests[by]["structure_rms"], per_leg_rms=tests[by]["per_leg_rms"])
     fitted = out["fitted"]
     thirds = np.array_split(np.arange(len(t)), 3)
     out["time_rms"] = {f"{t[g[0]]:.4g}-{t[g[-1]]:.4g} s": _rms(fitted[g]) for g in thirds}
     out["frequency"] = lackfit.dominant_frequency(t, residual)
     main = max(out["signals"], key=out["signals"].get) if out["signals"] else None
     out["looks_like"] = lackfit.MEANING.get(main, "") if main else ""
+    if by == "state":
+        main = f"repeats with {state['variable']}"
+        out["looks_like"] = lackfit.state_meaning(state["variable"])
+    elif by == "dynamic":
+        main = "driven by the motion"
+        out["looks_like"] = lackfit.DYNAMIC_MEANING
     out["main_signal"] = main
     return out
 

@@ -1,0 +1,103 @@
+"""The model-free lack-of-fit tests: structure that repeats with the state, structure driven by
+the motion beyond the residual's own past; and that neither fires on noise, white or slow."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+from scipy.signal import lfilter
+
+from gsfric.discovery import lackfit
+
+M = 6000
+RATE = 250.0
+
+
+def _motion(rng):
+    """Leg lengths (m) and speeds (m/s) of six legs moving back and forth, (M, 6)."""
+    t = np.arange(M) / RATE
+    f = rng.uniform(0.2, 0.6, 6)
+    phase = rng.uniform(0, 2 * np.pi, 6)
+    D = 0.9 + 0.04 * np.sin(2 * np.pi * f * t[:, None] + phase)
+    return t, D, np.gradient(D, t, axis=0)
+
+
+def _ar1(rng, phi, sigma=0.2):
+    e = rng.normal(0, sigma * np.sqrt(1 - phi ** 2), (M, 6))
+    return lfilter([1.0], [1.0, -phi], e, axis=0)
+
+
+def _state(residual, D, v, F):
+    return lackfit.state_structure(residual, lackfit.state_features(D, v, F),
+                                   np.ones(residual.shape, bool), n_folds=8, min_gap=0.3)
+
+
+def _dynamic(residual, t, v, F):
+    inputs = {"dF/dt": np.gradient(F, t, axis=0), "acceleration": np.gradient(v, t, axis=0)}
+    return lackfit.dynamic_structure(residual, inputs, np.ones(residual.shape, bool),
+                                     alpha=0.01, min_gap=0.3)
+
+
+@pytest.mark.parametrize("phi", [0.0, 0.9, 0.995])
+def test_noise_alone_has_no_structure(phi):
+    """Noise, white or as slow as AR(1) with phi = 0.995, neither repeats with the state nor
+    follows the motion."""
+    for seed in range(3):
+        rng = np.random.default_rng(seed)
+        t, D, v = _motion(rng)
+        F = 50 + 300 * np.gradient(v, t, axis=0)
+        r = _ar1(rng, phi)
+        assert not _state(r, D, v, F)["significant"], seed
+        assert not _dynamic(r, t, v, F)["significant"], seed
+
+
+@pytest.mark.parametrize("phi", [0.0, 0.95])
+def test_a_ripple_in_the_stroke_repeats_with_the_leg_length(phi):
+    rng = np.random.default_rng(1)
+    t, D, v = _motion(rng)
+    F = 50 + 300 * np.gradient(v, t, axis=0)
+    ripple = 0.4 * np.sin(2 * np.pi * D / 0.012 + rng.uniform(0, 6, 6))
+    out = _state(ripple + _ar1(rng, phi), D, v, F)
+    assert out["significant"] and out["variable"] == "leg length"
+    assert out["structure_rms"] == pytest.approx(0.4 / np.sqrt(2), rel=0.25)
+
+
+def test_crosstalk_repeats_with_the_other_legs_force():
+    rng = np.random.default_rng(2)
+    t, D, v = _motion(rng)
+    F = 100 * rng.uniform(0.5, 1.5, 6) * np.sin(2 * np.pi * rng.uniform(0.3, 1.0, 6)
+                                                 * t[:, None])
+    out = _state(0.05 * np.roll(F, -2, axis=1) + _ar1(rng, 0.5), D, v, F)
+    assert out["significant"] and out["variable"] == "force of leg i+2"
+
+
+@pytest.mark.parametrize("phi", [0.0, 0.95])
+def test_a_ringing_mode_is_driven_by_the_motion(phi):
+    """A 7 Hz mode with 5 % damping excited by the force's rate: not a function of the state,
+    and its spectrum an AR model could mimic; the motion predicts it beyond the residual's
+    past."""
+    rng = np.random.default_rng(3)
+    t, D, v = _motion(rng)
+    F = 50 + 300 * np.gradient(v, t, axis=0) + 20 * np.sin(2 * np.pi * 1.3 * t)[:, None]
+    w, z, dt = 2 * np.pi * 7.0, 0.05, 1 / RATE
+    a = np.exp(-z * w * dt)
+    ring = lfilter([1.0], [1.0, -2 * a * np.cos(w * dt), a * a], np.gradient(F, t, axis=0),
+                   axis=0)
+    ring *= 0.5 / np.sqrt(np.mean(ring ** 2))
+    out = _dynamic(ring + _ar1(rng, phi), t, v, F)
+    assert out["significant"] and out["p_value"] < 1e-6
+    assert out["structure_rms"] == pytest.approx(0.5, rel=0.3)
+
+
+def test_samples_left_out_are_not_used():
+    """Pairs marked not valid carry no information: a ripple confined to them is not seen."""
+    rng = np.random.default_rng(4)
+    t, D, v = _motion(rng)
+    F = 50 + 300 * np.gradient(v, t, axis=0)
+    valid = np.abs(v) > np.quantile(np.abs(v), 0.5)
+    ripple = np.where(valid, 0.0, 0.5 * np.sin(2 * np.pi * D / 0.012))
+    r = ripple + _ar1(rng, 0.0)
+    assert _state(r, D, v, F)["significant"]
+    out = lackfit.state_structure(r, lackfit.state_features(D, v, F), valid, n_folds=8,
+                                  min_gap=0.3)
+    assert not out["significant"]
