@@ -25,13 +25,12 @@ acceleration of depth 1 (a secant step on the friction moments of all legs at on
 ``r`` the change friction would make); it is left out (theta = 0, the plain step
 ``x^(k+1) = G^(k)``) at the first update, which has no previous residual, and at the last, so that
 the reported moments are the friction of R^(N-1) and ``coupling_change`` measures a plain step.
-The reported
-reactions are ``R^(N)``, in equilibrium with the reported friction moments ``x^(N)``; the output
-``coupling_change`` is ``f^(N) - f^(N-1)``, the change the last plain step made, which the
-runtime compares with a tolerance (``gsfric.evaluation.COUPLING_TOLERANCE``) to flag steps where
-the iteration has not converged (mu r so large that friction locks the mechanism). The plain map
-contracts with a factor proportional to ``mu r / D``; docs/friction.md states the limits checked
-by the tests and what the acceleration gains.
+The reported reactions are ``R^(N)``, in equilibrium with the reported friction moments
+``x^(N)``; the output ``coupling_change`` is ``f^(N) - f^(N-1)``, the change the last plain step
+made, which the runtime compares with a tolerance (``gsfric.evaluation.COUPLING_TOLERANCE``) to
+flag steps where the iteration has not converged (mu r so large that friction locks the
+mechanism). The plain map contracts with a factor proportional to ``mu r / D``; docs/friction.md
+states the limits checked by the tests and what the acceleration gains.
 
 The universal joint's friction is taken per bearing axis: the leg's angular velocity relative to
 the base is ``omega_L = w_1 a_1 + w_2 a_2`` (a_1 base-fixed, a_2 leg-fixed, orthogonal), and each
@@ -151,6 +150,10 @@ def solve(ch, legs, A_qr, weight, moments, m, n_iter=N_ITERATIONS, accelerate=AC
         ``joint_friction_coupling`` (through ``weight``) adds the post-hoc moments' load to the
         axial forces, as one solve (every iterate is the same; with a symbolic ``m = 0`` one
         iteration is generated).
+    n_iter : int
+        Iterations (back-substitutions), ``N_ITERATIONS``.
+    accelerate : bool
+        Anderson steps (``_anderson_step``) on the updates 2 .. n_iter - 2 (``ACCELERATE``).
 
     Returns
     -------
