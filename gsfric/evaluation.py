@@ -428,12 +428,14 @@ class Evaluator:
         return result
 
     def evaluate_quiet(self, motion: Motion, progress: bool = False, chunk: int = CHUNK,
-                       buffers: dict | None = None) -> Result:
+                       buffers: dict | None = None, sensor: bool = True) -> Result:
         """``evaluate`` without reporting the flagged steps (no warning, no error).
 
         ``buffers`` (a dict, filled on first use) lends the output arrays: a caller that
         evaluates chunk after chunk passes the same dict and reuses the memory; the Result's
-        arrays are then views into it, valid until the next call with it.
+        arrays are then views into it, valid until the next call with it. ``sensor=False``
+        leaves F as the mechanism's (no sensor effects): for a caller that applies them
+        over a longer record than this motion (``gsfric.stream``).
         """
         n = len(motion)
         if int(chunk) < 1:
@@ -473,7 +475,8 @@ class Evaluator:
         if "coupling_change" in arrays:
             limit = COUPLING_TOLERANCE * (1.0 + np.abs(arrays["F0"]))
             flag[(np.abs(arrays["coupling_change"]) > limit).any(axis=1)] |= FLAG_COUPLING
-        self._apply_sensor(np.asarray(motion.t, float), arrays, flag)
+        if sensor:
+            self._apply_sensor(np.asarray(motion.t, float), arrays, flag)
         return Result(t=np.asarray(motion.t, float), arrays=arrays, flag=flag, mode=self.mode,
                       source=(self.platform, motion))
 

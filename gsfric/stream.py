@@ -14,7 +14,9 @@ given, or the one chosen by generalized cross-validation on the first chunk (as
 neighbours' samples within the window (an overlap of half a window on each side, a whole
 window at the ends of the file), so every step gets the value that filtering the whole file at
 once with that window gives (to rounding). Quaternion signs are made continuous across
-chunk boundaries.
+chunk boundaries. The sensor's ``time_offset`` (``gsfric.catalog``) interpolates F between
+steps that may lie in a neighbouring chunk: it is applied across chunks (``_Delay``), with the
+values ``evaluate`` gives over the whole file.
 
 Checks. Every row is checked as ``read_trajectory`` checks it (numbers, finite, increasing
 times), with the file's 1-based data row in the message. Euler input is checked for angles
@@ -32,6 +34,7 @@ on any error or a KeyboardInterrupt it is removed and an existing output is left
 from __future__ import annotations
 
 import contextlib
+import functools
 import os
 import sys
 import warnings
@@ -541,19 +544,73 @@ def parse_columns(text: str | None) -> tuple[str, ...]:
     return chosen
 
 
-def result_columns(result, plan, float32: bool = False) -> dict[str, np.ndarray]:
-    """The output columns of one Result, each a contiguous 1-D array (one transpose per
-    output array)."""
+def result_columns(result, plan, float32: bool = False,
+                   F: np.ndarray | None = None) -> dict[str, np.ndarray]:
+    """The output columns of one Result, each a contiguous 1-D array of its own (one
+    transposed copy per output array; nothing refers to the Result's buffers). ``F`` (N, 6)
+    replaces ``result.F``."""
     n = len(result)
-    cols = {"t": np.ascontiguousarray(result.t, dtype=np.float64)}
+    cols = {"t": np.array(result.t, dtype=np.float64)}
     rows: dict[str, np.ndarray] = {}
     dtype = np.float32 if float32 else np.float64
     for column, key, index, _ in plan:
         if key not in rows:
-            rows[key] = np.ascontiguousarray(result.arrays[key].reshape(n, -1).T, dtype=dtype)
+            values = F if key == "F" and F is not None else result.arrays[key]
+            rows[key] = np.array(values.reshape(n, -1).T, dtype=dtype, order="C")
         cols[column] = rows[key][index]
-    cols["flag"] = np.asarray(result.flag, dtype=np.int64)
+    cols["flag"] = np.array(result.flag, dtype=np.int64)
     return cols
+
+
+class _Delay:
+    """The sensor's ``time_offset`` applied across chunks exactly as over the whole record.
+
+    ``F(t - delay)`` interpolates between the finite steps around ``t - delay``, which may lie
+    in an earlier chunk (delay > 0) or a later one (delay < 0): the finite steps' times and
+    forces are carried from chunk to chunk (back to the last one at or before the earliest
+    time still needed), and a chunk waits, its columns built, until the samples after its last
+    ``t - delay`` have been evaluated (or the file has ended). The interpolation brackets are
+    those of the whole record, so the values are the same, bit for bit, as
+    ``gsfric.catalog.apply_sensor`` over the whole record (``Evaluator.evaluate``)."""
+
+    def __init__(self, gains: np.ndarray, delay: float) -> None:
+        self.gains, self.delay = gains, delay
+        self.t = np.empty(0)
+        self.F = np.empty((0, 6))
+        self.pending: list[tuple] = []
+
+    def add(self, t: np.ndarray, F: np.ndarray, good: np.ndarray, build) -> list:
+        """Take one chunk: its times, mechanism forces F (N, 6), finite steps, and
+        ``build(F_sensor)`` giving what to write. Returns what is ready, in order."""
+        self.t = np.concatenate([self.t, t[good]])
+        self.F = np.concatenate([self.F, F[good]])
+        self.pending.append((t, good, build))
+        return self._ready(final=False)
+
+    def finish(self) -> list:
+        """Everything still waiting (the file has ended)."""
+        return self._ready(final=True)
+
+    def _ready(self, final: bool) -> list:
+        done = []
+        while self.pending:
+            t, good, build = self.pending[0]
+            if not final and not (len(self.t) and self.t[-1] >= t[-1] - self.delay):
+                break
+            self.pending.pop(0)
+            shifted = np.full((len(t), 6), np.nan)
+            if len(self.t):
+                x = t[good] - self.delay
+                part = np.empty((len(x), 6))
+                for i in range(6):
+                    part[:, i] = np.interp(x, self.t, self.F[:, i])
+                shifted[good] = part * (1.0 + self.gains)
+            done.append(build(shifted))
+            earliest = (self.pending[0][0][0] if self.pending else t[-1]) - self.delay
+            first = int(np.searchsorted(self.t, earliest, side="right")) - 1
+            if first > 0:
+                self.t, self.F = self.t[first:], self.F[first:]
+        return done
 
 
 class _Writer:
@@ -685,11 +742,17 @@ def simulate_file(trajectory: str | os.PathLike[str], out: str | os.PathLike[str
     from concurrent.futures import ThreadPoolExecutor
 
     buffers: dict = {}  # output arrays reused from chunk to chunk (by the one worker)
+    from gsfric.catalog import sensor_parameters
+    from gsfric.evaluation import FLAG_NONFINITE
+
+    gains, delay = sensor_parameters(platform.effects)
+    # a delay reaches across chunks: applied here, over the record, not per chunk
+    shift = _Delay(gains, delay) if delay != 0.0 else None
 
     def process(writer, start: int, motion, carried: dict[str, np.ndarray]) -> None:
         """Evaluate, count the flags, write (in the worker thread; no warnings issued)."""
         result = evaluator.evaluate_quiet(motion, chunk=min(len(motion), DEFAULT_CHUNK),
-                                          buffers=buffers)
+                                          buffers=buffers, sensor=shift is None)
         bad = result.flagged()
         if bad.size:
             summary.flagged += int(bad.size)
@@ -705,7 +768,15 @@ def simulate_file(trajectory: str | os.PathLike[str], out: str | os.PathLike[str
                     summary.flag_message(trajectory)
                     + " (--strict: stopped at the first chunk with flagged steps; "
                     "no output written)")
-        writer.write(_with_carried(result_columns(result, plan, float32), carried))
+        if shift is None:
+            writer.write(_with_carried(result_columns(result, plan, float32), carried))
+        else:
+            t = np.array(result.t, dtype=np.float64)
+            good = (result.flag & FLAG_NONFINITE) == 0
+            for columns in shift.add(t, result.F, good, functools.partial(
+                    _delayed_columns, result_columns(result, plan, float32), plan, float32,
+                    carried)):
+                writer.write(columns)
         summary.steps = start + len(motion)
         summary.chunks += 1
         bar.update(len(motion))
@@ -726,6 +797,9 @@ def simulate_file(trajectory: str | os.PathLike[str], out: str | os.PathLike[str
                     del motion
                 if pending is not None:
                     pending.result()
+                if shift is not None:
+                    for columns in shift.finish():
+                        writer.write(columns)
             except BaseException:
                 if pending is not None:
                     with contextlib.suppress(BaseException):
@@ -761,6 +835,17 @@ def _take(carry: list[dict], n: int) -> dict[str, np.ndarray]:
     if not parts or not parts[0]:
         return {}
     return {key: np.concatenate([p[key] for p in parts]) for key in parts[0]}
+
+
+def _delayed_columns(columns: dict[str, np.ndarray], plan, float32: bool,
+                     carried: dict[str, np.ndarray], F: np.ndarray) -> dict[str, np.ndarray]:
+    """A chunk's columns with the sensor's F (N, 6) in place of the mechanism's."""
+    dtype = np.float32 if float32 else np.float64
+    columns = dict(columns)
+    for column, key, index, _ in plan:
+        if key == "F":
+            columns[column] = np.array(F[:, index], dtype=dtype)
+    return _with_carried(columns, carried)
 
 
 def _with_carried(columns: dict[str, np.ndarray],
