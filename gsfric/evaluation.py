@@ -281,35 +281,14 @@ class Result:
         """
         import pandas as pd
 
-        from gsfric.columns import annotate
+        from gsfric.columns import annotate, plan
 
+        n = len(self.t)
         cols = {"t": self.t}
-        for i in range(6):
-            cols[f"F{i + 1}"] = self.F[:, i]
-        for name in ("MfrE", "MfrC"):
-            for i in range(6):
-                cols[f"{name}{i + 1}"] = self.arrays[f"{name}_s"][:, i]
-        for i in range(6):
-            cols[f"Ffr{i + 1}"] = self.Ffr_s[:, i]
-        for name, key in (("RE", "R_E"), ("RC", "R_C")):
-            for i in range(6):
-                for j, ax in enumerate("xyz"):
-                    cols[f"{name}{ax}{i + 1}"] = self.arrays[key][:, i, j]
-        for i in range(6):
-            cols[f"MC{i + 1}"] = self.M_C[:, i]
-        for i in range(6):
-            cols[f"F0_{i + 1}"] = self.F0[:, i]
-            cols[f"D{i + 1}"] = self.D[:, i]
-        # signed friction (docs/friction.md): the force on the rod along u (negative while the
-        # leg extends), the joint moments' vectors (base frame), the joint friction carried
-        for name, key in (("FfrS", "Ffr"), ("Fjoint", "F_joint")):
-            if key in self.arrays:
-                for i in range(6):
-                    cols[f"{name}{i + 1}"] = self.arrays[key][:, i]
-        for key in ("MfrE", "MfrC"):
-            for i in range(6):
-                for j, ax in enumerate("xyz"):
-                    cols[f"{key}{ax}{i + 1}"] = self.arrays[key][:, i, j]
+        for column, key, index, _ in plan():
+            values = self.arrays.get(key)
+            if values is not None:
+                cols[column] = values.reshape(n, -1)[:, index]
         cols["flag"] = self.flag
         return annotate(pd.DataFrame(cols))
 

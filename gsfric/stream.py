@@ -46,6 +46,8 @@ from typing import Any
 import numpy as np
 
 from gsfric import io as gio
+from gsfric.columns import GROUPS as COLUMN_GROUPS   # output groups of --columns
+from gsfric.columns import plan as _column_plan      # the columns from gsfric.columns
 from gsfric.errors import GsfricWarning, InputError, StepFlagError
 from gsfric.evaluation import FLAG_NAMES, Evaluator
 from gsfric.trajectory import (DEFAULT_POLYORDER, GIMBAL_JUMP, GIMBAL_SIN_BETA, MIN_SAMPLES,
@@ -497,39 +499,8 @@ def _steps_text(indices: np.ndarray, total: int, limit: int = 10) -> str:
 
 # -- output columns -----------------------------------------------------------------------------
 
-COLUMN_GROUPS = {
-    "forces": "F1..F6: actuator forces with friction, N",
-    "friction": "MfrE1..6, MfrC1..6 (N m), Ffr1..6 (N): the paper's signed friction scalars; "
-                "FfrS1..6, Fjoint1..6 (N), MfrEx1..MfrCz6 (N m): signed friction",
-    "reactions": "REx1..REz6, RCx1..RCz6 (N), MC1..MC6 (N m): joint reactions",
-    "frictionless": "F0_1..F0_6: actuator forces of frictionless joints, N",
-    "lengths": "D1..D6: leg lengths, m",
-}
-"""Output column groups of ``simulate`` (``--columns``); ``t`` and ``flag`` are always written."""
-
 FLOAT32_RTOL = 2.0 ** -24
 """Relative rounding error of an output written as float32 (``--float32``): half an ulp."""
-
-
-def _column_plan(groups) -> list[tuple[str, str, int, str]]:
-    """(column, result array, flat index in its step row, group), in ``Result.to_frame``'s
-    order, for the chosen groups."""
-    plan = [(f"F{i + 1}", "F", i, "forces") for i in range(6)]
-    for name in ("MfrE", "MfrC"):
-        plan += [(f"{name}{i + 1}", f"{name}_s", i, "friction") for i in range(6)]
-    plan += [(f"Ffr{i + 1}", "Ffr_s", i, "friction") for i in range(6)]
-    for name, key in (("RE", "R_E"), ("RC", "R_C")):
-        plan += [(f"{name}{ax}{i + 1}", key, 3 * i + j, "reactions")
-                 for i in range(6) for j, ax in enumerate("xyz")]
-    plan += [(f"MC{i + 1}", "M_C", i, "reactions") for i in range(6)]
-    for i in range(6):
-        plan += [(f"F0_{i + 1}", "F0", i, "frictionless"), (f"D{i + 1}", "D", i, "lengths")]
-    plan += [(f"FfrS{i + 1}", "Ffr", i, "friction") for i in range(6)]
-    plan += [(f"Fjoint{i + 1}", "F_joint", i, "friction") for i in range(6)]
-    for name in ("MfrE", "MfrC"):
-        plan += [(f"{name}{ax}{i + 1}", name, 3 * i + j, "friction")
-                 for i in range(6) for j, ax in enumerate("xyz")]
-    return [p for p in plan if p[3] in groups]
 
 
 def parse_columns(text: str | None) -> tuple[str, ...]:
