@@ -515,11 +515,12 @@ def parse_columns(text: str | None) -> tuple[str, ...]:
     return chosen
 
 
-def result_columns(result, plan, float32: bool = False,
-                   F: np.ndarray | None = None) -> dict[str, np.ndarray]:
-    """The output columns of one Result, each a contiguous 1-D array of its own (one
-    transposed copy per output array; nothing refers to the Result's buffers). ``F`` (N, 6)
-    replaces ``result.F``."""
+def result_columns(result, plan, float32: bool = False, F: np.ndarray | None = None,
+                   reuse: dict | None = None) -> dict[str, np.ndarray]:
+    """The output columns of one Result, each a contiguous 1-D array (one transposed copy per
+    output array; nothing refers to the Result's buffers). ``F`` (N, 6) replaces
+    ``result.F``. ``reuse`` (a dict, filled on first use) lends the arrays of the columns from
+    call to call: the columns are then valid until the next call with it."""
     n = len(result)
     cols = {"t": np.array(result.t, dtype=np.float64)}
     rows: dict[str, np.ndarray] = {}
@@ -527,7 +528,15 @@ def result_columns(result, plan, float32: bool = False,
     for column, key, index, _ in plan:
         if key not in rows:
             values = F if key == "F" and F is not None else result.arrays[key]
-            rows[key] = np.array(values.reshape(n, -1).T, dtype=dtype, order="C")
+            values = values.reshape(n, -1).T
+            if reuse is None:
+                rows[key] = np.array(values, dtype=dtype, order="C")
+            else:
+                buf = reuse.get(key)
+                if buf is None or buf.shape[1] < n or buf.dtype != dtype:
+                    buf = reuse[key] = np.empty((values.shape[0], n), dtype=dtype)
+                rows[key] = buf[:, :n]
+                np.copyto(rows[key], values, casting="same_kind")
         cols[column] = rows[key][index]
     cols["flag"] = np.array(result.flag, dtype=np.int64)
     return cols
@@ -713,6 +722,7 @@ def simulate_file(trajectory: str | os.PathLike[str], out: str | os.PathLike[str
     from concurrent.futures import ThreadPoolExecutor
 
     buffers: dict = {}  # output arrays reused from chunk to chunk (by the one worker)
+    column_arrays: dict = {}  # and the output columns' arrays
     from gsfric.catalog import sensor_parameters
     from gsfric.evaluation import FLAG_NONFINITE
 
@@ -739,15 +749,16 @@ def simulate_file(trajectory: str | os.PathLike[str], out: str | os.PathLike[str
                     summary.flag_message(trajectory)
                     + " (--strict: stopped at the first chunk with flagged steps; "
                     "no output written)")
-        if shift is None:
-            writer.write(_with_carried(result_columns(result, plan, float32), carried))
+        if shift is None:   # written before the next chunk: its column arrays are reused
+            writer.write(_with_carried(
+                result_columns(result, plan, float32, reuse=column_arrays), carried))
         else:
             t = np.array(result.t, dtype=np.float64)
             good = (result.flag & FLAG_NONFINITE) == 0
-            for columns in shift.add(t, result.F, good, functools.partial(
+            for ready in shift.add(t, result.F, good, functools.partial(
                     _delayed_columns, result_columns(result, plan, float32), plan, float32,
                     carried)):
-                writer.write(columns)
+                writer.write(ready)
         summary.steps = start + len(motion)
         summary.chunks += 1
         bar.update(len(motion))
@@ -769,8 +780,8 @@ def simulate_file(trajectory: str | os.PathLike[str], out: str | os.PathLike[str
                 if pending is not None:
                     pending.result()
                 if shift is not None:
-                    for columns in shift.finish():
-                        writer.write(columns)
+                    for ready in shift.finish():
+                        writer.write(ready)
             except BaseException:
                 if pending is not None:
                     with contextlib.suppress(BaseException):
