@@ -372,31 +372,46 @@ def write_trajectory(path: Path, steps: int, group: int = 250_000) -> None:
             writer.close()
 
 
-def simulate_case(steps: int, folder: Path) -> dict | None:
-    """``gsfric simulate`` of a ``steps``-step Parquet trajectory to Parquet (default
-    columns and chunk) in a fresh process: wall and CPU seconds, steps per second, its peak
-    resident set size (``os.wait4``), the output's size."""
-    trajectory, out = folder / "trajectory.parquet", folder / "forces.parquet"
-    write_trajectory(trajectory, steps)
-    cmd = [sys.executable, "-m", "gsfric.cli", "simulate", "--trajectory", str(trajectory),
-           "--out", str(out), "--no-progress", "--quiet"]
+def simulate_child(steps: int, trajectory: str, out: str) -> dict | None:
+    """``gsfric simulate`` of ``trajectory`` (``steps`` rows) to ``out`` (default columns and
+    chunk) in a child process: wall and CPU seconds, steps per second, its peak resident set
+    size (``os.wait4``), the output's size. Run from a small process (``simulate_case``): a
+    child's peak RSS counts the copy of its parent's memory it starts as."""
+    cmd = [sys.executable, "-m", "gsfric.cli", "simulate", "--trajectory", trajectory,
+           "--out", out, "--no-progress", "--quiet"]
     start = time.perf_counter()
-    child = subprocess.Popen(cmd, stdout=subprocess.DEVNULL, stderr=subprocess.PIPE)
+    child = subprocess.Popen(cmd, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
     _, status, usage = os.wait4(child.pid, 0)
     wall = time.perf_counter() - start
-    child.stderr.close()
+    if os.waitstatus_to_exitcode(status) != 0:
+        return None
+    rss = usage.ru_maxrss * (1 if sys.platform == "darwin" else 1024)   # bytes
+    cpu = usage.ru_utime + usage.ru_stime
+    return {"steps": steps, "wall_s": wall, "cpu_s": cpu, "steps_per_s": steps / wall,
+            "steps_per_cpu_s": steps / max(cpu, 1e-9), "peak_rss_gb": rss / 1e9,
+            "output_gb": Path(out).stat().st_size / 1e9}
+
+
+def simulate_case(steps: int, folder: Path) -> dict | None:
+    """The trajectory written, then ``simulate_child`` run, each in a fresh process (this one
+    is large by now); the files are removed."""
+    trajectory, out = folder / "trajectory.parquet", folder / "forces.parquet"
     try:
-        if os.waitstatus_to_exitcode(status) != 0:
+        subprocess.run([sys.executable, "-c", "import sys; from pathlib import Path; "
+                        "from gsfric.bench import write_trajectory; "
+                        "write_trajectory(Path(sys.argv[1]), int(sys.argv[2]))",
+                        str(trajectory), str(steps)], check=True)
+        run = subprocess.run([sys.executable, "-c", "import json, sys; "
+                              "from gsfric.bench import simulate_child; print(json.dumps("
+                              "simulate_child(int(sys.argv[1]), sys.argv[2], sys.argv[3])))",
+                              str(steps), str(trajectory), str(out)],
+                             capture_output=True, text=True)
+        if run.returncode != 0:
             return None
-        size = out.stat().st_size
+        return json.loads(run.stdout.strip().splitlines()[-1])
     finally:
         trajectory.unlink(missing_ok=True)
         out.unlink(missing_ok=True)
-    rss = usage.ru_maxrss * (1 if sys.platform == "darwin" else 1024)   # bytes
-    return {"steps": steps, "wall_s": wall, "cpu_s": usage.ru_utime + usage.ru_stime,
-            "steps_per_s": steps / wall, "steps_per_cpu_s":
-                steps / max(usage.ru_utime + usage.ru_stime, 1e-9),
-            "peak_rss_gb": rss / 1e9, "output_gb": size / 1e9}
 
 
 def measure_paths(budget: float, memory: bool, progress=print, simulate: bool = False) -> dict:
