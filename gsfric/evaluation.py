@@ -184,8 +184,8 @@ def _packed(platform: Platform) -> tuple[np.ndarray, np.ndarray, dict]:
 class Outputs(MutableMapping):
     """The named arrays of a Result: those the evaluation kept and, on first access to any of
     them, the detail outputs (``DETAILS``), computed together in one more compiled pass over
-    the motion (non-finite steps NaN, as in the first pass). Iteration lists both, in the
-    generated function's order; ``kept()`` gives the arrays held now, without computing.
+    the motion (non-finite steps NaN, as in the first pass). Iteration lists both (the kept
+    ones first); ``kept()`` gives the arrays held now, without computing.
     """
 
     def __init__(self, arrays: dict, later: tuple | None = None) -> None:
