@@ -515,7 +515,8 @@ def _machine() -> dict:
     return {"cpu": model, "cores": os.cpu_count(), "python": _platform.python_version(),
             "numpy": np.__version__, "os": _platform.platform(),
             "compiled": compiled,
-            "compiler": " ".join(native._compiler() + list(native.CFLAGS)) if compiled
+            "compiler": " ".join(native._compiler() + list(native.CFLAGS))
+                        + f" (SIMD source: {' '.join(native.SIMD_CFLAGS)})" if compiled
             else "none (CasADi fallback)",
             "actuator_entry": (f"SIMD over steps, {_lanes()} lanes" if simd
                                else "one step per call"),

@@ -63,12 +63,14 @@ def _target_flags() -> tuple[str, ...]:
     return flags
 
 
-# -fschedule-insns: instruction scheduling before register allocation, which GCC leaves off
-# on x86; on the generated functions' long straight-line bodies it cuts the spills of vector
-# registers (1.3-1.4x the hot path with -O3, the same results bit for bit: see
-# docs/performance.md)
-CFLAGS = ("-O3", "-fschedule-insns", *_target_flags(), "-fno-math-errno", "-freciprocal-math",
-          "-fPIC", "-fno-semantic-interposition", "-pthread")
+CFLAGS = ("-O2", *_target_flags(), "-fno-math-errno", "-freciprocal-math", "-fPIC",
+          "-fno-semantic-interposition", "-pthread")
+SIMD_CFLAGS = ("-O3", "-fschedule-insns")
+"""Added for the SIMD-over-steps source (generated/*_batch.c, the hot paths) when it is
+compiled at -O2: instruction scheduling before register allocation, which GCC leaves off on
+x86, cuts the spills of vector registers in its long straight-line bodies (1.4x the hot path,
+the same results bit for bit: docs/performance.md). CasADi's per-step source keeps -O2 (it is
+large, and compiles much longer with these)."""
 LIBRARY = "libgsfric.so"
 RECORD = "libgsfric.json"
 DEFAULT_CC_TIMEOUT = 600.0
@@ -146,6 +148,7 @@ def _build_key(sources: list[Path], cmd: list[str]) -> str:
     for s in sources:
         h.update(s.read_bytes())
     h.update(" ".join(cmd).encode())
+    h.update(" ".join(SIMD_CFLAGS).encode())
     h.update(sys.platform.encode())
     h.update(cpu_features().encode())
     return h.hexdigest()[:20]
@@ -200,12 +203,18 @@ def _run(commands: list[list[str]], timeout: float) -> list[str]:
         _kill(procs)
 
 
+def _extra_flags(source: Path, flags) -> tuple[str, ...]:
+    """``SIMD_CFLAGS`` for the SIMD-over-steps source compiled at -O2, else nothing."""
+    return SIMD_CFLAGS if source.name.endswith("_batch.c") and "-O2" in flags else ()
+
+
 def _compile(cc: list[str], flags, sources: list[Path], target: Path) -> str | None:
     """Compile every source to an object in parallel and link them; an error line or None."""
     objects = [target.with_name(f"{target.stem}.{k}.o") for k in range(len(sources))]
     timeout = _timeout()
     try:
-        failed = [e for e in _run([cc + list(flags) + ["-c", str(src), "-o", str(obj)]
+        failed = [e for e in _run([cc + list(flags) + list(_extra_flags(src, flags))
+                                   + ["-c", str(src), "-o", str(obj)]
                                    for src, obj in zip(sources, objects)], timeout) if e]
         if not failed:
             failed = [e for e in _run([cc + list(flags) + ["-shared"]
