@@ -39,6 +39,7 @@ import numpy as np
 SIZES = (40, 1_000, 100_000, 1_000_000)
 QUICK_SIZES = (40, 1_000)
 LOOP_MAX_STEPS = 1_000
+SIMULATE_STEPS = 1_000_000   # benchmarks/memory_10M.py runs the same at 10 million
 DT = 1e-3
 SEED = 20261122
 
@@ -66,6 +67,11 @@ TARGETS = {
                         "(worst)", ">=", 1.0, "x"),
     "evaluate_memory_1e6_gib": ("gsfric.evaluate at N = 1e6, peak memory added", "<=", 2.3,
                                 "GiB"),
+    "simulate_steps_per_s": (f"gsfric simulate to Parquet, default columns, N = "
+                             f"{SIMULATE_STEPS:.0e} (wall clock, end to end)", ">=", 5e5,
+                             "steps/s"),
+    "simulate_peak_gb": (f"gsfric simulate, N = {SIMULATE_STEPS:.0e}, peak RSS", "<=", 1.0,
+                         "GB"),
 }
 
 
@@ -335,11 +341,80 @@ def evaluate_memory_child(n: int) -> dict:
         before = _max_rss_kib()
         result = gsfric.evaluate(platform, motion)
         rise = _max_rss_kib() - before
-    size = sum(v.nbytes for v in result.arrays.values()) + result.flag.nbytes
-    return {"peak_gib": rise / 2**20, "results_gib": size / 2**30}
+    kept = result.arrays.kept()      # the detail outputs are computed only when read
+    size = sum(v.nbytes for v in kept.values()) + result.flag.nbytes
+    return {"peak_gib": rise / 2**20, "results_gib": size / 2**30, "arrays": len(kept),
+            "values_per_step": sum(v[0].size for v in kept.values())}
 
 
-def measure_paths(budget: float, memory: bool, progress=print) -> dict:
+def write_trajectory(path: Path, steps: int, group: int = 250_000) -> None:
+    """A ``models.sinusoidal`` motion sampled every ``DT`` as a Parquet trajectory file
+    (``t, x, y, z, qw, qx, qy, qz``), written in row groups of ``group`` rows."""
+    import pyarrow as pa
+    import pyarrow.parquet as pq
+
+    from gsfric import models
+
+    writer = None
+    try:
+        for start in range(0, steps, group):
+            t = np.arange(start, min(steps, start + group)) * DT
+            motion = models.sinusoidal(t)
+            q = motion.quaternion()
+            table = pa.table({"t": t, "x": motion.position[:, 0], "y": motion.position[:, 1],
+                              "z": motion.position[:, 2], "qw": q[:, 0], "qx": q[:, 1],
+                              "qy": q[:, 2], "qz": q[:, 3]})
+            if writer is None:
+                writer = pq.ParquetWriter(path, table.schema)
+            writer.write_table(table)
+    finally:
+        if writer is not None:
+            writer.close()
+
+
+def simulate_child(steps: int, trajectory: str, out: str) -> dict | None:
+    """``gsfric simulate`` of ``trajectory`` (``steps`` rows) to ``out`` (default columns and
+    chunk) in a child process: wall and CPU seconds, steps per second, its peak resident set
+    size (``os.wait4``), the output's size. Run from a small process (``simulate_case``): a
+    child's peak RSS counts the copy of its parent's memory it starts as."""
+    cmd = [sys.executable, "-m", "gsfric.cli", "simulate", "--trajectory", trajectory,
+           "--out", out, "--no-progress", "--quiet"]
+    start = time.perf_counter()
+    child = subprocess.Popen(cmd, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+    _, status, usage = os.wait4(child.pid, 0)
+    wall = time.perf_counter() - start
+    if os.waitstatus_to_exitcode(status) != 0:
+        return None
+    rss = usage.ru_maxrss * (1 if sys.platform == "darwin" else 1024)   # bytes
+    cpu = usage.ru_utime + usage.ru_stime
+    return {"steps": steps, "wall_s": wall, "cpu_s": cpu, "steps_per_s": steps / wall,
+            "steps_per_cpu_s": steps / max(cpu, 1e-9), "peak_rss_gb": rss / 1e9,
+            "output_gb": Path(out).stat().st_size / 1e9}
+
+
+def simulate_case(steps: int, folder: Path) -> dict | None:
+    """The trajectory written, then ``simulate_child`` run, each in a fresh process (this one
+    is large by now); the files are removed."""
+    trajectory, out = folder / "trajectory.parquet", folder / "forces.parquet"
+    try:
+        subprocess.run([sys.executable, "-c", "import sys; from pathlib import Path; "
+                        "from gsfric.bench import write_trajectory; "
+                        "write_trajectory(Path(sys.argv[1]), int(sys.argv[2]))",
+                        str(trajectory), str(steps)], check=True)
+        run = subprocess.run([sys.executable, "-c", "import json, sys; "
+                              "from gsfric.bench import simulate_child; print(json.dumps("
+                              "simulate_child(int(sys.argv[1]), sys.argv[2], sys.argv[3])))",
+                              str(steps), str(trajectory), str(out)],
+                             capture_output=True, text=True)
+        if run.returncode != 0:
+            return None
+        return json.loads(run.stdout.strip().splitlines()[-1])
+    finally:
+        trajectory.unlink(missing_ok=True)
+        out.unlink(missing_ok=True)
+
+
+def measure_paths(budget: float, memory: bool, progress=print, simulate: bool = False) -> dict:
     """The paths around the hot path: ``evaluate`` with flags, the README's control loop,
     Evaluator construction, two threads against a busy core, evaluate's memory."""
     import gsfric
@@ -347,17 +422,20 @@ def measure_paths(budget: float, memory: bool, progress=print) -> dict:
     from gsfric.evaluation import Evaluator, state_array
 
     platform = gsfric.reference_platform()
-    out: dict = {}
+    out: dict = {"friction_model": platform.friction.model}
     lib = native._library()
     out["lanes"] = lib.gsfric_simd_lanes() if lib is not None else None
     progress("  evaluate (all outputs + flags) N=100,000")
     motion = _motion(100_000)
     best, median, cpu = _best_times(lambda: gsfric.evaluate(platform, motion), budget)
+    ev, buffers = Evaluator(platform), {}
+    rbest, _, rcpu = _best_times(lambda: ev.evaluate_quiet(motion, buffers=buffers), budget)
     x = state_array(motion)
     nbest, _, ncpu = _best_times(lambda: numpy_model.actuator_forces_numpy(platform, x), budget)
     out["evaluate_1e5"] = {"steps_per_s": 1e5 / best, "steps_per_cpu_s": 1e5 / cpu,
                            "numpy_steps_per_s": 1e5 / nbest, "vs_numpy": nbest / best,
-                           "vs_numpy_cpu": ncpu / cpu}
+                           "vs_numpy_cpu": ncpu / cpu, "reused_steps_per_s": 1e5 / rbest,
+                           "reused_steps_per_cpu_s": 1e5 / rcpu}
     progress("  README control loop, 40 steps")
     m40 = _motion(40)
     args = (m40.position, m40.rotation, m40.velocity, m40.omega, m40.acceleration, m40.alpha)
@@ -389,6 +467,12 @@ def measure_paths(budget: float, memory: bool, progress=print) -> dict:
         run = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True)
         if run.returncode == 0:
             out["evaluate_memory_1e6"] = json.loads(run.stdout.strip().splitlines()[-1])
+    if simulate:
+        progress(f"  gsfric simulate to Parquet, N={SIMULATE_STEPS:,} (fresh process)")
+        with tempfile.TemporaryDirectory(prefix="gsfric-bench-") as tmp:
+            result = simulate_case(SIMULATE_STEPS, Path(tmp))
+        if result is not None:
+            out["simulate"] = result
     return out
 
 
@@ -431,7 +515,8 @@ def _machine() -> dict:
     return {"cpu": model, "cores": os.cpu_count(), "python": _platform.python_version(),
             "numpy": np.__version__, "os": _platform.platform(),
             "compiled": compiled,
-            "compiler": " ".join(native._compiler() + list(native.CFLAGS)) if compiled
+            "compiler": " ".join(native._compiler() + list(native.CFLAGS))
+                        + f" (SIMD source: {' '.join(native.SIMD_CFLAGS)})" if compiled
             else "none (CasADi fallback)",
             "actuator_entry": (f"SIMD over steps, {_lanes()} lanes" if simd
                                else "one step per call"),
@@ -519,6 +604,11 @@ def _targets(report: Report) -> dict:
         mem = paths["evaluate_memory_1e6"]
         values["evaluate_memory_1e6_gib"] = mem["peak_gib"]
         notes["evaluate_memory_1e6_gib"] = f"results {mem['results_gib']:.3g} GiB"
+    if "simulate" in paths:
+        sim = paths["simulate"]
+        values["simulate_steps_per_s"] = sim["steps_per_s"]
+        notes["simulate_steps_per_s"] = f"{sim['steps_per_cpu_s']:.3g} per CPU second"
+        values["simulate_peak_gb"] = sim["peak_rss_gb"]
     out = {}
     for key, value in values.items():
         label, op, target, unit = TARGETS[key]
@@ -563,7 +653,8 @@ def measure(sizes=SIZES, threads=(1, 2), budget: float = 2.0, memory: bool = Tru
             if report.case("loop", 1, n) is None:
                 report.cases.append(Case("loop", 1, n, calls=0, best=per_step * n,
                                          median=per_step * n, extrapolated=True))
-    report.paths = measure_paths(budget, memory and max(sizes) >= 1_000_000, progress)
+    full = memory and max(sizes) >= 1_000_000
+    report.paths = measure_paths(budget, full, progress, simulate=full)
     progress("  import gsfric (fresh interpreters)")
     report.import_time = import_time()
     report.ratios = _ratios(report, sizes)
@@ -625,10 +716,13 @@ def format_report(report: Report) -> str:
         lines += ["", f"SIMD lanes: {p.get('lanes')}"]
         if "evaluate_1e5" in p:
             e = p["evaluate_1e5"]
-            lines.append(f"gsfric.evaluate (all outputs + flags), N = 100,000: "
+            lines.append(f"gsfric.evaluate (all outputs + flags, {p.get('friction_model')} "
+                         f"friction model), N = 100,000: "
                          f"{e['steps_per_s']:.3g} steps/s ({e['steps_per_cpu_s']:.3g} per CPU "
                          f"second), {e['vs_numpy']:.1f}x the vectorised NumPy actuator map "
-                         f"({e['vs_numpy_cpu']:.1f}x in CPU time)")
+                         f"({e['vs_numpy_cpu']:.1f}x in CPU time); into reused arrays "
+                         f"(evaluate_quiet(buffers=...)): {e['reused_steps_per_s']:.3g} steps/s "
+                         f"({e['reused_steps_per_cpu_s']:.3g} per CPU second)")
         if "control_loop_40" in p:
             c, k = p["control_loop_40"], p["evaluator_construct"]
             lines.append(f"README control loop (new Evaluator + forces, 40 steps): median "
@@ -641,7 +735,16 @@ def format_report(report: Report) -> str:
         if "evaluate_memory_1e6" in p:
             mem = p["evaluate_memory_1e6"]
             lines.append(f"gsfric.evaluate at N = 1e6: peak memory added {mem['peak_gib']:.3g} "
-                         f"GiB (results {mem['results_gib']:.3g} GiB)")
+                         f"GiB (results {mem['results_gib']:.3g} GiB: "
+                         f"{mem.get('values_per_step', '?')} values per step in "
+                         f"{mem.get('arrays', '?')} arrays, the detail outputs not read)")
+        if "simulate" in p:
+            sim = p["simulate"]
+            lines.append(f"gsfric simulate, {sim['steps']:,} steps Parquet to Parquet (default "
+                         f"columns): {sim['wall_s']:.3g} s wall, {sim['cpu_s']:.3g} s CPU, "
+                         f"{sim['steps_per_s']:.3g} steps/s ({sim['steps_per_cpu_s']:.3g} per "
+                         f"CPU second), peak RSS {sim['peak_rss_gb']:.3g} GB, output "
+                         f"{sim['output_gb']:.3g} GB")
     it = report.import_time
     lines += ["", f"import gsfric: median {it['median_s'] * 1e3:.0f} ms, best "
               f"{it['best_s'] * 1e3:.0f} ms over {it['runs']} fresh interpreters "

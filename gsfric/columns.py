@@ -1,8 +1,10 @@
 """The output columns of ``gsfric simulate`` and ``Result.to_frame``: names, units, meanings.
 
-One source for the units that travel with the data: ``DataFrame.attrs["units"]`` of
-``Result.to_frame``, the Parquet field metadata (``unit``, ``description``) of ``simulate``'s
-output, ``gsfric columns`` and the README's output table.
+The one list of the output columns (``COLUMNS``): their names, order, Result arrays, output
+groups (``simulate --columns``), units and meanings. ``Result.to_frame`` and ``simulate`` build
+their columns from it (``plan``); it gives the units that travel with the data
+(``DataFrame.attrs["units"]``, the Parquet field metadata ``unit`` and ``description``),
+``gsfric columns`` and the README's output table.
 
 Legs are numbered 1..6 in column names (index 0..5 in arrays). Frames: "base" is the fixed
 base frame. Sign conventions are stated per column; note that ``Ffr1..Ffr6``, ``MfrE1..``
@@ -19,12 +21,19 @@ from dataclasses import dataclass
 
 @dataclass(frozen=True)
 class Column:
-    """One output column (or family of six, ``name`` with ``i`` = 1..6)."""
+    """One output column (or family of six, ``name`` with ``i`` = 1..6).
+
+    ``group``: the output group of ``simulate --columns`` (``GROUPS``; "time", "flags" and
+    "measured" are always written); ``array``: the Result array the values come from (leg i
+    at index i - 1 of a step's row, the components x, y, z of leg i at 3 (i - 1) + 0, 1, 2),
+    None for ``t``, ``flag`` and the measured columns.
+    """
 
     name: str
     unit: str
     description: str
     group: str
+    array: str | None = None
 
     @property
     def label(self) -> str:
@@ -34,46 +43,52 @@ class Column:
 
     def names(self) -> list[str]:
         """The concrete column names: ``F{i}`` -> F1..F6, ``RE{a}{i}`` -> REx1..REz6."""
+        return [name for name, _ in self.entries()]
+
+    def entries(self) -> list[tuple[str, int]]:
+        """(column name, index in a step's row of ``array``) of every concrete column."""
         if "{a}" in self.name:
-            return [self.name.format(a=a, i=i) for i in range(1, 7) for a in "xyz"]
+            return [(self.name.format(a=a, i=i), 3 * (i - 1) + j)
+                    for i in range(1, 7) for j, a in enumerate("xyz")]
         if "{i}" in self.name:
-            return [self.name.format(i=i) for i in range(1, 7)]
-        return [self.name]
+            return [(self.name.format(i=i), i - 1) for i in range(1, 7)]
+        return [(self.name, 0)]
 
 
 COLUMNS: tuple[Column, ...] = (
     Column("t", "s", "time of the step (as read from the input, converted to s)", "time"),
     Column("F{i}", "N", "actuator force of leg i with friction and effects; + pushes the "
-           "platform away from the base (Result.F)", "forces"),
+           "platform away from the base (Result.F)", "forces", "F"),
     Column("MfrE{i}", "N m", "friction moment of spherical joint E_i, the paper's scalar of "
            "(33): <= 0, negative = opposing (Result.MfrE_s; the vector is Result.MfrE)",
-           "friction"),
+           "friction", "MfrE_s"),
     Column("MfrC{i}", "N m", "friction moment of universal joint C_i, the paper's scalar of "
            "(34): <= 0, negative = opposing (Result.MfrC_s; the vector is Result.MfrC)",
-           "friction"),
+           "friction", "MfrC_s"),
     Column("Ffr{i}", "N", "friction force of prismatic joint i, the paper's scalar of (35): "
            "<= 0, negative = opposing (Result.Ffr_s; the signed force along the leg is "
-           "Result.Ffr)", "friction"),
+           "Result.Ffr)", "friction", "Ffr_s"),
     Column("RE{a}{i}", "N", "force of leg i on the platform at E_i, base frame "
-           "components x, y, z (Result.R_E)", "reactions"),
+           "components x, y, z (Result.R_E)", "reactions", "R_E"),
     Column("RC{a}{i}", "N", "force of the base on leg i at C_i, base frame "
-           "components x, y, z (Result.R_C)", "reactions"),
+           "components x, y, z (Result.R_C)", "reactions", "R_C"),
     Column("MC{i}", "N m", "constraint moment of universal joint i along its normal n_i "
-           "(Result.M_C)", "reactions"),
+           "(Result.M_C)", "reactions", "M_C"),
     Column("F0_{i}", "N", "actuator force of leg i with frictionless joints; + pushes the "
-           "platform away (Result.F0)", "forces"),
-    Column("D{i}", "m", "length of leg i, C_i to E_i (Result.D)", "legs"),
+           "platform away (Result.F0)", "frictionless", "F0"),
+    Column("D{i}", "m", "length of leg i, C_i to E_i (Result.D)", "lengths", "D"),
     Column("FfrS{i}", "N", "signed friction force of prismatic joint i on the rod along the "
            "leg direction u_i (C_i to E_i): negative while the leg extends, positive while it "
-           "retracts (Result.Ffr)", "friction"),
+           "retracts (Result.Ffr)", "friction", "Ffr"),
     Column("Fjoint{i}", "N", "part of F_i that carries the spherical and universal joints' "
-           "friction moments (coupled model; zero in the paper's post-hoc model)", "friction"),
+           "friction moments (coupled model; zero in the paper's post-hoc model)", "friction",
+           "F_joint"),
     Column("MfrE{a}{i}", "N m", "friction moment vector of spherical joint E_i on the platform, "
            "opposing the platform's rotation relative to the leg; base frame components x, y, z "
-           "(Result.MfrE)", "friction"),
+           "(Result.MfrE)", "friction", "MfrE"),
     Column("MfrC{a}{i}", "N m", "friction moment vector of universal joint C_i on the leg, "
            "opposing the leg's rotation relative to the base; base frame components x, y, z "
-           "(Result.MfrC)", "friction"),
+           "(Result.MfrC)", "friction", "MfrC"),
     Column("flag", "1", "0 for a sound step; else the sum of 1 (non-finite value), 2 (leg "
            "length outside the stroke), 4 (near-singular platform Jacobian), 8 (leg near its "
            "universal joint's first axis), 16 (coupled friction solve not converged)", "flags"),
@@ -87,6 +102,25 @@ MEASURED: tuple[Column, ...] = (
            "(Fi_measured - Fi); simulate of a measured-data file only", "measured"),
 )
 """The columns ``simulate`` adds for an input with measured forces F1..F6."""
+
+
+GROUPS = {
+    "forces": "F1..F6: actuator forces with friction, N",
+    "friction": "MfrE1..6, MfrC1..6 (N m), Ffr1..6 (N): the paper's signed friction scalars; "
+                "FfrS1..6, Fjoint1..6 (N), MfrEx1..MfrCz6 (N m): signed friction",
+    "reactions": "REx1..REz6, RCx1..RCz6 (N), MC1..MC6 (N m): joint reactions",
+    "frictionless": "F0_1..F0_6: actuator forces of frictionless joints, N",
+    "lengths": "D1..D6: leg lengths, m",
+}
+"""Output groups of ``simulate --columns``; ``t`` and ``flag`` are always written."""
+
+
+def plan(groups=tuple(GROUPS)) -> list[tuple[str, str, int, str]]:
+    """(column, Result array, index in a step's row of it, group) of every column of the
+    chosen groups from a Result, in ``COLUMNS``' order (``t`` and ``flag`` not included)."""
+    chosen = set(groups)
+    return [(name, c.array, index, c.group) for c in COLUMNS
+            if c.array is not None and c.group in chosen for name, index in c.entries()]
 
 
 def all_columns(measured: bool = True) -> tuple[Column, ...]:

@@ -65,6 +65,12 @@ def _target_flags() -> tuple[str, ...]:
 
 CFLAGS = ("-O2", *_target_flags(), "-fno-math-errno", "-freciprocal-math", "-fPIC",
           "-fno-semantic-interposition", "-pthread")
+SIMD_CFLAGS = ("-O3", "-fschedule-insns")
+"""Added for the SIMD-over-steps source (generated/*_batch.c, the hot paths) when it is
+compiled at -O2: instruction scheduling before register allocation, which GCC leaves off on
+x86, cuts the spills of vector registers in its long straight-line bodies (1.4x the hot path,
+the same results bit for bit: docs/performance.md). CasADi's per-step source keeps -O2 (it is
+large, and compiles much longer with these)."""
 LIBRARY = "libgsfric.so"
 RECORD = "libgsfric.json"
 DEFAULT_CC_TIMEOUT = 600.0
@@ -142,6 +148,7 @@ def _build_key(sources: list[Path], cmd: list[str]) -> str:
     for s in sources:
         h.update(s.read_bytes())
     h.update(" ".join(cmd).encode())
+    h.update(" ".join(SIMD_CFLAGS).encode())
     h.update(sys.platform.encode())
     h.update(cpu_features().encode())
     return h.hexdigest()[:20]
@@ -196,12 +203,18 @@ def _run(commands: list[list[str]], timeout: float) -> list[str]:
         _kill(procs)
 
 
+def _extra_flags(source: Path, flags) -> tuple[str, ...]:
+    """``SIMD_CFLAGS`` for the SIMD-over-steps source compiled at -O2, else nothing."""
+    return SIMD_CFLAGS if source.name.endswith("_batch.c") and "-O2" in flags else ()
+
+
 def _compile(cc: list[str], flags, sources: list[Path], target: Path) -> str | None:
     """Compile every source to an object in parallel and link them; an error line or None."""
     objects = [target.with_name(f"{target.stem}.{k}.o") for k in range(len(sources))]
     timeout = _timeout()
     try:
-        failed = [e for e in _run([cc + list(flags) + ["-c", str(src), "-o", str(obj)]
+        failed = [e for e in _run([cc + list(flags) + list(_extra_flags(src, flags))
+                                   + ["-c", str(src), "-o", str(obj)]
                                    for src, obj in zip(sources, objects)], timeout) if e]
         if not failed:
             failed = [e for e in _run([cc + list(flags) + ["-shared"]
@@ -369,7 +382,8 @@ class FlagSpec(ctypes.Structure):
     _fields_ = [("d", ctypes.c_int), ("s2", ctypes.c_int), ("h", ctypes.c_int),
                 ("has_stroke", ctypes.c_int), ("stroke_lo", ctypes.c_double),
                 ("stroke_hi", ctypes.c_double), ("universal_limit", ctypes.c_double),
-                ("singular_limit", ctypes.c_double), ("x_size", ctypes.c_longlong)]
+                ("singular_limit", ctypes.c_double), ("x_size", ctypes.c_longlong),
+                ("cc", ctypes.c_int), ("f0", ctypes.c_int), ("coupling_tol", ctypes.c_double)]
 
 
 class CompiledFunction:
@@ -404,13 +418,14 @@ class CompiledFunction:
         self._index = {name: k for k, (name, _, _) in enumerate(self.outputs)}
 
     def __call__(self, inputs, outputs=None, n_threads: int = 1, select=None,
-                 flags: FlagSpec | None = None, flag: np.ndarray | None = None) -> dict:
+                 flags: FlagSpec | None = None, flag: np.ndarray | None = None,
+                 motion=None) -> dict:
         """Evaluate over N steps.
 
         Parameters
         ----------
         inputs : sequence of ndarray
-            One per input, (N, size) or (size,).
+            One per input, (N, size) or (size,); with ``motion``, input 0 is None.
         outputs : dict of name -> ndarray (N, size), optional
             Preallocated output buffers (C-contiguous float64); others are allocated.
         n_threads : int
@@ -419,14 +434,25 @@ class CompiledFunction:
             Outputs to compute (default all); the others are skipped.
         flags : FlagSpec, optional
             Compute the step flags into ``flag`` (int64 (N,)) in the same pass; a non-finite
-            step's outputs are set to NaN.
+            step's outputs are set to NaN. The outputs the flags read are computed whether
+            or not they are selected.
+        motion : sequence of 6 ndarray, optional
+            position (N, 3), rotation (N, 3, 3), velocity, omega, acceleration, alpha (N, 3)
+            in place of the state input 0 (laid out in C, block by block: no (N, 24) array).
 
         Returns
         -------
         dict of output name -> ndarray (N, size).
         """
         arrays, n = [], None
+        parts = None
+        if motion is not None:
+            parts = _motion_arrays(self.name, motion)
+            n = parts[0].shape[0]
         for (name, size), value in zip(self.inputs, inputs):
+            if value is None and parts is not None:
+                arrays.append(None)
+                continue
             a = np.ascontiguousarray(value, dtype=np.float64)
             if a.ndim == 1:
                 if a.shape[0] != size:
@@ -443,9 +469,12 @@ class CompiledFunction:
             arrays.append(a)
         n = 1 if n is None else n
         # this call's own argument arrays
-        in_ptrs = (ctypes.c_void_p * len(arrays))(*[a.ctypes.data for a in arrays])
+        in_ptrs = (ctypes.c_void_p * len(arrays))(
+            *[None if a is None else a.ctypes.data for a in arrays])
         in_strides = (ctypes.c_longlong * len(arrays))(
-            *[a.shape[1] if a.ndim == 2 else 0 for a in arrays])
+            *[24 if a is None else a.shape[1] if a.ndim == 2 else 0 for a in arrays])
+        motion_ptrs = None if parts is None else \
+            (ctypes.c_void_p * 6)(*[a.ctypes.data for a in parts])
         out_ptrs = (ctypes.c_void_p * len(self.outputs))()
         wanted = None if select is None else set(select)
         result = {}
@@ -471,7 +500,8 @@ class CompiledFunction:
             flag_ptr = flag.ctypes.data
         failed = self._lib.gsfric_run(ctypes.byref(self._fn), in_ptrs, in_strides, out_ptrs,
                                       self._out_strides, n, int(n_threads),
-                                      None if flags is None else ctypes.byref(flags), flag_ptr)
+                                      None if flags is None else ctypes.byref(flags), flag_ptr,
+                                      motion_ptrs)
         if failed:
             raise GsfricError(f"{self.name}: evaluation failed at {failed} steps")
         return result
@@ -491,8 +521,10 @@ class CompiledFunction:
         in_strides = (ctypes.c_longlong * n_in)(self.inputs[0][1], *([0] * (n_in - 1)))
         index = self._index[output]
         size_x, size_out = self.inputs[0][1], self.outputs[index][1]
-        run_one, fn = self._lib.gsfric_run_one, ctypes.byref(self._fn)
+        fn = ctypes.byref(self._fn)
         out_strides, name, threads = self._out_strides, self.name, int(n_threads)
+        by_object = _objects_readable(self._lib)
+        run_one = self._lib.gsfric_run_one_objects if by_object else self._lib.gsfric_run_one
 
         def call(x: np.ndarray, out: np.ndarray) -> np.ndarray:
             if (x.dtype != np.float64 or x.ndim != 2 or x.shape[1] != size_x
@@ -500,12 +532,101 @@ class CompiledFunction:
                     or out.shape != (x.shape[0], size_out) or not out.flags.c_contiguous):
                 raise GsfricError(f"{name}: x must be C-contiguous float64 (N, {size_x}) "
                                   f"and out (N, {size_out})")
-            run_one(fn, fixed_ptrs, in_strides, out_strides, x.ctypes.data, index,
-                    out.ctypes.data, x.shape[0], threads)
+            if by_object:
+                run_one(fn, fixed_ptrs, in_strides, out_strides, x, index, out, x.shape[0],
+                        threads)
+            else:
+                run_one(fn, fixed_ptrs, in_strides, out_strides, x.ctypes.data, index,
+                        out.ctypes.data, x.shape[0], threads)
             return out
 
         call.keep = (fixed, fixed_ptrs, in_strides, self)  # alive as long as the callable
         return call
+
+    def bound_motion(self, constants: list[np.ndarray], output: str, n_threads: int = 1):
+        """``bound``'s callable from a motion's arrays: ``f(position, rotation, velocity,
+        omega, acceleration, alpha, out)``, shapes (N, 3) and rotation (N, 3, 3); arrays that
+        are not C-contiguous float64 are converted. The states are laid out in C."""
+        fixed = [np.ascontiguousarray(c, dtype=np.float64) for c in constants]
+        n_in = len(self.inputs)
+        if self.inputs[0][1] != 24:
+            raise GsfricError(f"{self.name}: input 0 is not a motion's state")
+        fixed_ptrs = (ctypes.c_void_p * n_in)(0, *[c.ctypes.data for c in fixed])
+        in_strides = (ctypes.c_longlong * n_in)(24, *([0] * (n_in - 1)))
+        index = self._index[output]
+        size_out = self.outputs[index][1]
+        fn = ctypes.byref(self._fn)
+        out_strides, name, threads = self._out_strides, self.name, int(n_threads)
+        f64 = np.float64
+        by_object = _objects_readable(self._lib)
+        run = self._lib.gsfric_run_one_motion_objects if by_object else \
+            self._lib.gsfric_run_one_motion
+
+        def call(position, rotation, velocity, omega, acceleration, alpha, out):
+            p = np.ascontiguousarray(position, dtype=f64)
+            T = np.ascontiguousarray(rotation, dtype=f64)
+            v = np.ascontiguousarray(velocity, dtype=f64)
+            w = np.ascontiguousarray(omega, dtype=f64)
+            a = np.ascontiguousarray(acceleration, dtype=f64)
+            al = np.ascontiguousarray(alpha, dtype=f64)
+            n = p.shape[0] if p.ndim == 2 else -1
+            three = (n, 3)
+            if (p.shape != three or v.shape != three or w.shape != three or a.shape != three
+                    or al.shape != three or T.shape != (n, 3, 3)):
+                raise GsfricError(f"{name}: position, velocity, omega, acceleration, alpha "
+                                  "must be (N, 3) and rotation (N, 3, 3) with the same N; got "
+                                  f"{[x.shape for x in (p, T, v, w, a, al)]}")
+            if out.dtype != f64 or out.shape != (n, size_out) or not out.flags.c_contiguous:
+                raise GsfricError(f"{name}: out must be C-contiguous float64 ({n}, {size_out})")
+            if by_object:
+                run(fn, fixed_ptrs, in_strides, out_strides, p, T, v, w, a, al, index, out, n,
+                    threads)
+            else:
+                run(fn, fixed_ptrs, in_strides, out_strides, p.ctypes.data, T.ctypes.data,
+                    v.ctypes.data, w.ctypes.data, a.ctypes.data, al.ctypes.data, index,
+                    out.ctypes.data, n, threads)
+            return out
+
+        call.keep = (fixed, fixed_ptrs, in_strides, self)  # alive as long as the callable
+        return call
+
+
+@functools.lru_cache(maxsize=None)
+def _objects_readable(lib) -> bool:
+    """True when the library reads a NumPy array's data pointer from the array object as
+    NumPy itself gives it (``gsfric_array_data``, _native/batch.c) for arrays, views and
+    slices: the control loop's calls then pass arrays as objects."""
+    base = np.arange(60.0).reshape(5, 12)
+    samples = [base, base[2:], base[1:3, 4:], np.empty((1, 6)), np.zeros(0)]
+    try:
+        return all(lib.gsfric_array_data(a) == a.ctypes.data for a in samples)
+    except Exception:  # noqa: BLE001 - any failure: the pointers' way
+        return False
+
+
+_MOTION_SHAPES = ((3,), (3, 3), (3,), (3,), (3,), (3,))
+_MOTION_NAMES = ("position", "rotation", "velocity", "omega", "acceleration", "alpha")
+
+
+def _motion_arrays(name: str, motion) -> list[np.ndarray]:
+    """The six arrays of a motion, C-contiguous float64 with one N, else ``GsfricError``."""
+    parts = [np.ascontiguousarray(a, dtype=np.float64) for a in motion]
+    if len(parts) != 6:
+        raise GsfricError(f"{name}: a motion is 6 arrays, got {len(parts)}")
+    n = parts[0].shape[0] if parts[0].ndim else 0
+    for part, shape, label in zip(parts, _MOTION_SHAPES, _MOTION_NAMES):
+        if part.shape != (n,) + shape:
+            raise GsfricError(f"{name}: {label} has shape {part.shape}, expected "
+                              f"{(n,) + shape}")
+    return parts
+
+
+def state_of(motion) -> np.ndarray:
+    """The (N, 24) state array of a motion's six arrays (p, T row-major, v, omega, a,
+    alpha): for the CasADi fallback."""
+    parts = _motion_arrays("motion", motion)
+    n = parts[0].shape[0]
+    return np.concatenate([p.reshape(n, -1) for p in parts], axis=1)
 
 
 class CasadiFunction:
@@ -518,7 +639,10 @@ class CasadiFunction:
         self.outputs = [(o["name"], o["size"], tuple(o["shape"])) for o in meta["outputs"]]
         self._f = f
 
-    def __call__(self, inputs, outputs=None, n_threads: int = 1, select=None) -> dict:
+    def __call__(self, inputs, outputs=None, n_threads: int = 1, select=None,
+                 motion=None) -> dict:
+        if motion is not None:
+            inputs = [state_of(motion), *list(inputs)[1:]]
         arrays = [np.asarray(a, dtype=np.float64) for a in inputs]
         n = max([a.shape[0] for a in arrays if a.ndim == 2] or [1])
         cols = [a.T if a.ndim == 2 else np.broadcast_to(a[:, None], (a.shape[0], n))
@@ -540,6 +664,16 @@ class CasadiFunction:
     def bound(self, constants: list[np.ndarray], output: str, n_threads: int = 1):
         """``CompiledFunction.bound``'s interface, evaluated by CasADi."""
         def call(x, out):
+            out[...] = self([x] + list(constants), n_threads=n_threads,
+                            select=(output,))[output]
+            return out
+
+        return call
+
+    def bound_motion(self, constants: list[np.ndarray], output: str, n_threads: int = 1):
+        """``CompiledFunction.bound_motion``'s interface, evaluated by CasADi."""
+        def call(position, rotation, velocity, omega, acceleration, alpha, out):
+            x = state_of((position, rotation, velocity, omega, acceleration, alpha))
             out[...] = self([x] + list(constants), n_threads=n_threads,
                             select=(output,))[output]
             return out
@@ -581,11 +715,26 @@ def _library():
     lib.gsfric_run.restype = ctypes.c_longlong
     lib.gsfric_run.argtypes = [ctypes.POINTER(_Fn), ctypes.c_void_p, ctypes.c_void_p,
                                ctypes.c_void_p, ctypes.c_void_p, ctypes.c_longlong, ctypes.c_int,
-                               ctypes.c_void_p, ctypes.c_void_p]
+                               ctypes.c_void_p, ctypes.c_void_p, ctypes.c_void_p]
     lib.gsfric_run_one.restype = ctypes.c_longlong
     lib.gsfric_run_one.argtypes = [ctypes.POINTER(_Fn), ctypes.c_void_p, ctypes.c_void_p,
                                    ctypes.c_void_p, ctypes.c_void_p, ctypes.c_int,
                                    ctypes.c_void_p, ctypes.c_longlong, ctypes.c_int]
+    lib.gsfric_run_one_motion.restype = ctypes.c_longlong
+    lib.gsfric_run_one_motion.argtypes = [ctypes.POINTER(_Fn), ctypes.c_void_p, ctypes.c_void_p,
+                                          ctypes.c_void_p, *([ctypes.c_void_p] * 6),
+                                          ctypes.c_int, ctypes.c_void_p, ctypes.c_longlong,
+                                          ctypes.c_int]
+    objects = [ctypes.POINTER(_Fn), ctypes.c_void_p, ctypes.c_void_p, ctypes.c_void_p]
+    lib.gsfric_run_one_objects.restype = ctypes.c_longlong
+    lib.gsfric_run_one_objects.argtypes = objects + [ctypes.py_object, ctypes.c_int,
+                                                     ctypes.py_object, ctypes.c_longlong,
+                                                     ctypes.c_int]
+    lib.gsfric_run_one_motion_objects.restype = ctypes.c_longlong
+    lib.gsfric_run_one_motion_objects.argtypes = objects + [ctypes.py_object] * 6 + [
+        ctypes.c_int, ctypes.py_object, ctypes.c_longlong, ctypes.c_int]
+    lib.gsfric_array_data.restype = ctypes.c_longlong
+    lib.gsfric_array_data.argtypes = [ctypes.py_object]
     lib.gsfric_simd_lanes.restype = ctypes.c_int
     return lib
 

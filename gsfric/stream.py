@@ -14,7 +14,9 @@ given, or the one chosen by generalized cross-validation on the first chunk (as
 neighbours' samples within the window (an overlap of half a window on each side, a whole
 window at the ends of the file), so every step gets the value that filtering the whole file at
 once with that window gives (to rounding). Quaternion signs are made continuous across
-chunk boundaries.
+chunk boundaries. The sensor's ``time_offset`` (``gsfric.catalog``) interpolates F between
+steps that may lie in a neighbouring chunk: it is applied across chunks (``_Delay``), with the
+values ``evaluate`` gives over the whole file.
 
 Checks. Every row is checked as ``read_trajectory`` checks it (numbers, finite, increasing
 times), with the file's 1-based data row in the message. Euler input is checked for angles
@@ -32,6 +34,7 @@ on any error or a KeyboardInterrupt it is removed and an existing output is left
 from __future__ import annotations
 
 import contextlib
+import functools
 import os
 import sys
 import warnings
@@ -43,6 +46,8 @@ from typing import Any
 import numpy as np
 
 from gsfric import io as gio
+from gsfric.columns import GROUPS as COLUMN_GROUPS   # output groups of --columns
+from gsfric.columns import plan as _column_plan      # the columns from gsfric.columns
 from gsfric.errors import GsfricWarning, InputError, StepFlagError
 from gsfric.evaluation import FLAG_NAMES, Evaluator
 from gsfric.trajectory import (DEFAULT_POLYORDER, GIMBAL_JUMP, GIMBAL_SIN_BETA, MIN_SAMPLES,
@@ -494,39 +499,8 @@ def _steps_text(indices: np.ndarray, total: int, limit: int = 10) -> str:
 
 # -- output columns -----------------------------------------------------------------------------
 
-COLUMN_GROUPS = {
-    "forces": "F1..F6: actuator forces with friction, N",
-    "friction": "MfrE1..6, MfrC1..6 (N m), Ffr1..6 (N): the paper's signed friction scalars; "
-                "FfrS1..6, Fjoint1..6 (N), MfrEx1..MfrCz6 (N m): signed friction",
-    "reactions": "REx1..REz6, RCx1..RCz6 (N), MC1..MC6 (N m): joint reactions",
-    "frictionless": "F0_1..F0_6: actuator forces of frictionless joints, N",
-    "lengths": "D1..D6: leg lengths, m",
-}
-"""Output column groups of ``simulate`` (``--columns``); ``t`` and ``flag`` are always written."""
-
 FLOAT32_RTOL = 2.0 ** -24
 """Relative rounding error of an output written as float32 (``--float32``): half an ulp."""
-
-
-def _column_plan(groups) -> list[tuple[str, str, int, str]]:
-    """(column, result array, flat index in its step row, group), in ``Result.to_frame``'s
-    order, for the chosen groups."""
-    plan = [(f"F{i + 1}", "F", i, "forces") for i in range(6)]
-    for name in ("MfrE", "MfrC"):
-        plan += [(f"{name}{i + 1}", f"{name}_s", i, "friction") for i in range(6)]
-    plan += [(f"Ffr{i + 1}", "Ffr_s", i, "friction") for i in range(6)]
-    for name, key in (("RE", "R_E"), ("RC", "R_C")):
-        plan += [(f"{name}{ax}{i + 1}", key, 3 * i + j, "reactions")
-                 for i in range(6) for j, ax in enumerate("xyz")]
-    plan += [(f"MC{i + 1}", "M_C", i, "reactions") for i in range(6)]
-    for i in range(6):
-        plan += [(f"F0_{i + 1}", "F0", i, "frictionless"), (f"D{i + 1}", "D", i, "lengths")]
-    plan += [(f"FfrS{i + 1}", "Ffr", i, "friction") for i in range(6)]
-    plan += [(f"Fjoint{i + 1}", "F_joint", i, "friction") for i in range(6)]
-    for name in ("MfrE", "MfrC"):
-        plan += [(f"{name}{ax}{i + 1}", name, 3 * i + j, "friction")
-                 for i in range(6) for j, ax in enumerate("xyz")]
-    return [p for p in plan if p[3] in groups]
 
 
 def parse_columns(text: str | None) -> tuple[str, ...]:
@@ -541,19 +515,82 @@ def parse_columns(text: str | None) -> tuple[str, ...]:
     return chosen
 
 
-def result_columns(result, plan, float32: bool = False) -> dict[str, np.ndarray]:
-    """The output columns of one Result, each a contiguous 1-D array (one transpose per
-    output array)."""
+def result_columns(result, plan, float32: bool = False, F: np.ndarray | None = None,
+                   reuse: dict | None = None) -> dict[str, np.ndarray]:
+    """The output columns of one Result, each a contiguous 1-D array (one transposed copy per
+    output array; nothing refers to the Result's buffers). ``F`` (N, 6) replaces
+    ``result.F``. ``reuse`` (a dict, filled on first use) lends the arrays of the columns from
+    call to call: the columns are then valid until the next call with it."""
     n = len(result)
-    cols = {"t": np.ascontiguousarray(result.t, dtype=np.float64)}
+    cols = {"t": np.array(result.t, dtype=np.float64)}
     rows: dict[str, np.ndarray] = {}
     dtype = np.float32 if float32 else np.float64
     for column, key, index, _ in plan:
         if key not in rows:
-            rows[key] = np.ascontiguousarray(result.arrays[key].reshape(n, -1).T, dtype=dtype)
+            values = F if key == "F" and F is not None else result.arrays[key]
+            values = values.reshape(n, -1).T
+            if reuse is None:
+                rows[key] = np.array(values, dtype=dtype, order="C")
+            else:
+                buf = reuse.get(key)
+                if buf is None or buf.shape[1] < n or buf.dtype != dtype:
+                    buf = reuse[key] = np.empty((values.shape[0], n), dtype=dtype)
+                rows[key] = buf[:, :n]
+                np.copyto(rows[key], values, casting="same_kind")
         cols[column] = rows[key][index]
-    cols["flag"] = np.asarray(result.flag, dtype=np.int64)
+    cols["flag"] = np.array(result.flag, dtype=np.int64)
     return cols
+
+
+class _Delay:
+    """The sensor's ``time_offset`` applied across chunks exactly as over the whole record.
+
+    ``F(t - delay)`` interpolates between the finite steps around ``t - delay``, which may lie
+    in an earlier chunk (delay > 0) or a later one (delay < 0): the finite steps' times and
+    forces are carried from chunk to chunk (back to the last one at or before the earliest
+    time still needed), and a chunk waits, its columns built, until the samples after its last
+    ``t - delay`` have been evaluated (or the file has ended). The interpolation brackets are
+    those of the whole record, so the values are the same, bit for bit, as
+    ``gsfric.catalog.apply_sensor`` over the whole record (``Evaluator.evaluate``)."""
+
+    def __init__(self, gains: np.ndarray, delay: float) -> None:
+        self.gains, self.delay = gains, delay
+        self.t = np.empty(0)
+        self.F = np.empty((0, 6))
+        self.pending: list[tuple] = []
+
+    def add(self, t: np.ndarray, F: np.ndarray, good: np.ndarray, build) -> list:
+        """Take one chunk: its times, mechanism forces F (N, 6), finite steps, and
+        ``build(F_sensor)`` giving what to write. Returns what is ready, in order."""
+        self.t = np.concatenate([self.t, t[good]])
+        self.F = np.concatenate([self.F, F[good]])
+        self.pending.append((t, good, build))
+        return self._ready(final=False)
+
+    def finish(self) -> list:
+        """Everything still waiting (the file has ended)."""
+        return self._ready(final=True)
+
+    def _ready(self, final: bool) -> list:
+        done = []
+        while self.pending:
+            t, good, build = self.pending[0]
+            if not final and not (len(self.t) and self.t[-1] >= t[-1] - self.delay):
+                break
+            self.pending.pop(0)
+            shifted = np.full((len(t), 6), np.nan)
+            if len(self.t):
+                x = t[good] - self.delay
+                part = np.empty((len(x), 6))
+                for i in range(6):
+                    part[:, i] = np.interp(x, self.t, self.F[:, i])
+                shifted[good] = part * (1.0 + self.gains)
+            done.append(build(shifted))
+            earliest = (self.pending[0][0][0] if self.pending else t[-1]) - self.delay
+            first = int(np.searchsorted(self.t, earliest, side="right")) - 1
+            if first > 0:
+                self.t, self.F = self.t[first:], self.F[first:]
+        return done
 
 
 class _Writer:
@@ -685,11 +722,18 @@ def simulate_file(trajectory: str | os.PathLike[str], out: str | os.PathLike[str
     from concurrent.futures import ThreadPoolExecutor
 
     buffers: dict = {}  # output arrays reused from chunk to chunk (by the one worker)
+    column_arrays: dict = {}  # and the output columns' arrays
+    from gsfric.catalog import sensor_parameters
+    from gsfric.evaluation import FLAG_NONFINITE
+
+    gains, delay = sensor_parameters(platform.effects)
+    # a delay reaches across chunks: applied here, over the record, not per chunk
+    shift = _Delay(gains, delay) if delay != 0.0 else None
 
     def process(writer, start: int, motion, carried: dict[str, np.ndarray]) -> None:
         """Evaluate, count the flags, write (in the worker thread; no warnings issued)."""
         result = evaluator.evaluate_quiet(motion, chunk=min(len(motion), DEFAULT_CHUNK),
-                                          buffers=buffers)
+                                          buffers=buffers, sensor=shift is None)
         bad = result.flagged()
         if bad.size:
             summary.flagged += int(bad.size)
@@ -705,7 +749,16 @@ def simulate_file(trajectory: str | os.PathLike[str], out: str | os.PathLike[str
                     summary.flag_message(trajectory)
                     + " (--strict: stopped at the first chunk with flagged steps; "
                     "no output written)")
-        writer.write(_with_carried(result_columns(result, plan, float32), carried))
+        if shift is None:   # written before the next chunk: its column arrays are reused
+            writer.write(_with_carried(
+                result_columns(result, plan, float32, reuse=column_arrays), carried))
+        else:
+            t = np.array(result.t, dtype=np.float64)
+            good = (result.flag & FLAG_NONFINITE) == 0
+            for ready in shift.add(t, result.F, good, functools.partial(
+                    _delayed_columns, result_columns(result, plan, float32), plan, float32,
+                    carried)):
+                writer.write(ready)
         summary.steps = start + len(motion)
         summary.chunks += 1
         bar.update(len(motion))
@@ -726,6 +779,9 @@ def simulate_file(trajectory: str | os.PathLike[str], out: str | os.PathLike[str
                     del motion
                 if pending is not None:
                     pending.result()
+                if shift is not None:
+                    for ready in shift.finish():
+                        writer.write(ready)
             except BaseException:
                 if pending is not None:
                     with contextlib.suppress(BaseException):
@@ -761,6 +817,17 @@ def _take(carry: list[dict], n: int) -> dict[str, np.ndarray]:
     if not parts or not parts[0]:
         return {}
     return {key: np.concatenate([p[key] for p in parts]) for key in parts[0]}
+
+
+def _delayed_columns(columns: dict[str, np.ndarray], plan, float32: bool,
+                     carried: dict[str, np.ndarray], F: np.ndarray) -> dict[str, np.ndarray]:
+    """A chunk's columns with the sensor's F (N, 6) in place of the mechanism's."""
+    dtype = np.float32 if float32 else np.float64
+    columns = dict(columns)
+    for column, key, index, _ in plan:
+        if key == "F":
+            columns[column] = np.array(F[:, index], dtype=dtype)
+    return _with_carried(columns, carried)
 
 
 def _with_carried(columns: dict[str, np.ndarray],

@@ -194,3 +194,69 @@ def test_bound_hot_path_equals_the_general_call_and_checks_its_buffers(rng):
         ev.actuator_forces(np.asfortranarray(x), out=out)
     with pytest.raises(GsfricError, match="C-contiguous float64"):
         ev.actuator_forces(x, out=np.empty((12, 6)))
+
+
+def _motion_with_bad_steps(rng, n):
+    """A random motion over n steps with a singular, an out-of-stroke and an overflowing step."""
+    from scipy.spatial.transform import Rotation
+
+    from gsfric.trajectory import Motion
+
+    m = models.random_motion(rng, np.sort(rng.uniform(0, 20, n)))
+    position, rotation = m.position.copy(), m.rotation.copy()
+    rotation[n // 3] = Rotation.from_rotvec([0.0, 0.0, np.pi / 2]).as_matrix()
+    position[n // 3] = [0.0, 0.0, models.HOME_HEIGHT]
+    position[n // 2] = [0.0, 0.0, 1.4]
+    position[n - 5] = [1e200, 0.0, 1e200]
+    return Motion(m.t, position, rotation, m.velocity, m.omega, m.acceleration, m.alpha)
+
+
+@pytest.mark.parametrize("threads", [1, 2])
+def test_motion_input_in_blocks_equals_the_state_array(rng, threads):
+    """evaluate lays out the states in C block by block (4096 steps) and keeps only the
+    non-detail outputs: every output and flag equals the state-array call's over several
+    blocks and threads, the details (computed on first access) too, NaN where non-finite."""
+    from gsfric.evaluation import DETAILS, FLAG_NONFINITE, state_array
+
+    n = 2 * 4096 + 37
+    motion = _motion_with_bad_steps(rng, n)
+    ev = Evaluator(models.reference_platform("coupled"), n_threads=threads)
+    result = ev.evaluate_quiet(motion)
+    assert not set(DETAILS) & set(result.arrays.kept())
+    assert {1, 2, 4} <= {b for b in (1, 2, 4) if (result.flag & b).any()}
+    x = state_array(motion)
+    raw = native.get("eval")([x, ev.P, ev.Q], n_threads=threads)
+    np.testing.assert_array_equal(ev._flags(x, raw), result.flag)   # NaN where non-finite
+    for name, value in raw.items():
+        np.testing.assert_array_equal(value.reshape(result.arrays[name].shape),
+                                      result.arrays[name], err_msg=name)
+    assert set(DETAILS) <= set(result.arrays.kept())
+    bad = (result.flag & FLAG_NONFINITE) != 0
+    assert np.isnan(result.N_bushing[bad]).all() and np.isfinite(result.N_bushing[~bad]).all()
+    F = ev.forces(motion.position, motion.rotation, motion.velocity, motion.omega,
+                  motion.acceleration, motion.alpha)
+    np.testing.assert_array_equal(F, native.get("actuator")([x, ev.P, ev.Q])["F"])
+
+
+def test_control_loop_calls_read_views_and_slices_as_the_general_call(rng):
+    """The bound calls get arrays as objects (their data pointer read in C): views with an
+    offset, slices and converted arrays give the general call's numbers."""
+    from gsfric.errors import GsfricError
+    from gsfric.evaluation import state_array
+
+    motion = models.random_motion(rng, np.sort(rng.uniform(0, 5, 50)))
+    ev = Evaluator(perturbed_platform(rng))
+    x = state_array(motion)
+    expected = native.get("actuator")([x[7:47], ev.P, ev.Q])["F"]
+    out = np.zeros((60, 6))[10:50]
+    assert ev.actuator_forces(x[7:47], out=out) is out
+    np.testing.assert_array_equal(out, expected)
+    parts = [motion.position[7:47], motion.rotation[7:47], motion.velocity[7:47].tolist(),
+             np.asfortranarray(motion.omega[7:47]), motion.acceleration[7:47].astype(np.float32)
+             .astype(np.float64), motion.alpha[7:47]]
+    rounded = native.get("actuator")([native.state_of(parts), ev.P, ev.Q])["F"]
+    np.testing.assert_array_equal(ev.forces(*parts), rounded)
+    with pytest.raises(GsfricError, match=r"rotation \(N, 3, 3\)"):
+        ev.forces(*parts[:1], parts[1][:-1], *parts[2:])
+    with pytest.raises(GsfricError, match="out must be"):
+        ev.forces(*parts, out=np.empty((40, 5)))

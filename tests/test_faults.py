@@ -284,11 +284,11 @@ def test_stale_temporaries_of_dead_runs_are_removed(tmp_path):
 SLOW_SIMULATE = textwrap.dedent("""
     import sys, time
     from gsfric.evaluation import Evaluator
-    original = Evaluator.evaluate
+    original = Evaluator.evaluate_quiet
     def slow(self, motion, **kwargs):
         time.sleep(0.3)
         return original(self, motion, **kwargs)
-    Evaluator.evaluate = slow
+    Evaluator.evaluate_quiet = slow
     from gsfric.cli import main
     main(sys.argv[1:])
 """)

@@ -101,3 +101,35 @@ def test_streamed_chunks_are_written_in_order(full):
     path, every, _ = full
     assert np.all(np.diff(every["t"].to_numpy()) > 0)
     assert len(every) == 700
+
+
+@pytest.mark.parametrize("delay", [0.0175, -0.0175, 0.26])
+def test_streamed_sensor_delay_equals_the_whole_record(tmp_path, delay):
+    """time_offset reaches across chunk starts (and, at 0.26 s, over a whole chunk of 200
+    steps): the streamed F is the whole record's shifted F, bit for bit, and the evaluation
+    of the whole file to rounding."""
+    from gsfric.catalog import apply_sensor
+    from gsfric.io import read_trajectory
+
+    path = _trajectory(tmp_path / "t.parquet")              # 700 steps at 200 Hz
+    base = models.reference_platform()
+    gains = np.array([0.01, -0.02, 0.0, 0.03, 0.0, -0.01])
+    sensor = base.with_effect("time_offset", delay=delay).with_effect(
+        "force_scale", **{f"g{i + 1}": g for i, g in enumerate(gains)})
+    plain, shifted = tmp_path / "plain.parquet", tmp_path / "shifted.parquet"
+    stream.simulate_file(path, plain, base, chunk=200, window=9, columns=["forces"])
+    summary = stream.simulate_file(path, shifted, sensor, chunk=200, window=9,
+                                   columns=["forces", "lengths"])
+    assert summary.chunks == 4
+    plain, shifted = pd.read_parquet(plain), pd.read_parquet(shifted)
+    names = [f"F{i}" for i in range(1, 7)]
+    t = plain["t"].to_numpy()
+    expected = apply_sensor(t, plain[names].to_numpy(), gains, delay)
+    np.testing.assert_array_equal(shifted[names].to_numpy(), expected)
+    np.testing.assert_array_equal(shifted["t"].to_numpy(), t)
+    whole = gsfric.evaluate(sensor, read_trajectory(path, window=9))
+    np.testing.assert_allclose(shifted[names].to_numpy(), whole.F, rtol=1e-9, atol=1e-9)
+    # shifted within each chunk alone, F is wrong next to the chunk boundaries
+    per_chunk = np.vstack([apply_sensor(t[s:s + 200], plain[names].to_numpy()[s:s + 200],
+                                        gains, delay) for s in range(0, 700, 200)])
+    assert np.abs(per_chunk - expected).max() > 1e-3

@@ -15,6 +15,13 @@
  * Threads: a call on n_threads > 1 splits the steps into contiguous ranges, runs one in the
  * calling thread and each other in a POSIX thread created for the call, and joins them. No
  * thread ever waits by spinning: a busy core delays only its own range.
+ *
+ * Motion input: instead of input 0 (the state x, 24 values per step), a call may give the six
+ * arrays of a motion (position (N, 3), rotation (N, 3, 3) row-major, velocity, omega,
+ * acceleration, alpha (N, 3), C-contiguous). Each range then lays out x for blocks of
+ * XBLOCK steps in a small buffer of its own and evaluates block after block: no state array of
+ * N steps, no pass over the motion before the evaluation. The same blocks give the outputs the
+ * flags need but the caller did not ask for (a per-range scratch buffer).
  */
 #include <math.h>
 #include <pthread.h>
@@ -33,12 +40,16 @@ typedef void (*batch_eval_t)(const double **in, const long long *in_stride, doub
 #define MAX_THREADS 64
 #define MIN_STEPS_PER_THREAD 2048  /* below this, creating a thread costs more than it saves */
 #define BLOCK 32                   /* steps evaluated before their flags (64 KB of outputs, in cache) */
+#define XBLOCK 4096                /* steps per block of a motion input (x: 768 KB); as long as a
+                                      batch whose outputs go past the caches (STREAM_STEPS) */
+#define X_SIZE 24                  /* p (3), T (9), v, omega, a, alpha (3 each) */
 
 /* The flags' bits: the same as gsfric/evaluation.py's FLAG_* */
 #define FLAG_NONFINITE 1
 #define FLAG_STROKE 2
 #define FLAG_SINGULAR 4
 #define FLAG_UNIVERSAL 8
+#define FLAG_COUPLING 16
 
 typedef struct {
     batch_eval_t simd;   /* NULL: none */
@@ -54,6 +65,8 @@ typedef struct {
     double universal_limit;   /* flag s2 < this */
     double singular_limit;    /* flag h < this */
     long long x_size;         /* values of input 0 per step */
+    int cc, f0;               /* output indices of coupling_change (6) and F0 (6), or -1 */
+    double coupling_tol;      /* flag |cc| > coupling_tol (1 + |F0|) on a finite step */
 } gsfric_flags;
 
 typedef struct {
@@ -67,6 +80,7 @@ typedef struct {
     int use_simd;
     long long start, stop;
     long long failed;
+    const double *const *motion;  /* NULL, or the six arrays of a motion in place of input 0 */
 } range_task;
 
 /* 1 when none of y[0..n) is infinite or NaN (exponent bits all set), by integer operations
@@ -115,6 +129,12 @@ static void flag_steps(const range_task *t, long long s, long long e, int checke
         if (fl->h >= 0 && t->out[fl->h]) {
             if (t->out[fl->h][i * t->out_stride[fl->h]] < fl->singular_limit) f |= FLAG_SINGULAR;
         }
+        if (finite && fl->cc >= 0 && fl->f0 >= 0 && t->out[fl->cc] && t->out[fl->f0]) {
+            const double *cc = t->out[fl->cc] + i * t->out_stride[fl->cc];
+            const double *F0 = t->out[fl->f0] + i * t->out_stride[fl->f0];
+            for (int j = 0; j < 6; ++j)
+                if (fabs(cc[j]) > fl->coupling_tol * (1.0 + fabs(F0[j]))) f |= FLAG_COUPLING;
+        }
         if (!finite) {
             f |= FLAG_NONFINITE;
             for (int k = 0; k < n_out; ++k) {
@@ -127,11 +147,92 @@ static void flag_steps(const range_task *t, long long s, long long e, int checke
     }
 }
 
+static void *run_range(void *arg);
+
+/* Lay out the states of steps s..e-1 of a motion into x (rows of X_SIZE values). */
+static void layout_states(const double *const *m, long long s, long long e, double *x)
+{
+    static const int width[6] = {3, 9, 3, 3, 3, 3};
+    for (long long i = s; i < e; ++i) {
+        double *row = x + (i - s) * X_SIZE;
+        for (int k = 0, o = 0; k < 6; o += width[k], ++k)
+            for (int j = 0; j < width[k]; ++j) row[o + j] = m[k][i * width[k] + j];
+    }
+}
+
+/* The output indices the flags read (-1: none) */
+static int flag_outputs(const gsfric_flags *fl, int *k)
+{
+    if (!fl) return 0;
+    k[0] = fl->d; k[1] = fl->s2; k[2] = fl->h; k[3] = fl->cc; k[4] = fl->f0;
+    return 5;
+}
+
+/* A range evaluated block by block: with a motion, x laid out per block; outputs the flags
+ * need but the caller does not get are written to a scratch buffer of this range. */
+static void run_blocks(range_task *t)
+{
+    const gsfric_fn *fn = t->fn;
+    int n_in = fn->n_in, n_out = fn->n_out;
+    long long length = t->stop - t->start;
+    long long blk = length < XBLOCK ? length : XBLOCK;
+    double *x = NULL, *scratch[MAX_ARGS] = {0};
+    int need[5], n_need = flag_outputs(t->flags, need), ok = 1;
+    if (t->motion) ok &= (x = malloc(sizeof(double) * X_SIZE * blk)) != NULL;
+    for (int q = 0; q < n_need; ++q) {
+        int k = need[q];
+        if (k >= 0 && k < n_out && !t->out[k] && !scratch[k])
+            ok &= (scratch[k] = malloc(sizeof(double) * t->out_stride[k] * blk)) != NULL;
+    }
+    if (!ok) {
+        t->failed = length;
+        goto done;
+    }
+    for (long long s = t->start; s < t->stop; s += blk) {
+        long long e = s + blk < t->stop ? s + blk : t->stop;
+        const double *in[MAX_ARGS];
+        long long in_stride[MAX_ARGS];
+        double *out[MAX_ARGS];
+        for (int k = 0; k < n_in; ++k) {
+            in[k] = t->in[k] ? t->in[k] + s * t->in_stride[k] : NULL;
+            in_stride[k] = t->in_stride[k];
+        }
+        if (t->motion) {
+            layout_states(t->motion, s, e, x);
+            in[0] = x;
+            in_stride[0] = X_SIZE;
+        }
+        for (int k = 0; k < n_out; ++k)
+            out[k] = t->out[k] ? t->out[k] + s * t->out_stride[k] : scratch[k];
+        range_task block = {fn, in, in_stride, out, t->out_stride, t->flags,
+                            t->flag ? t->flag + s : NULL, t->use_simd, 0, e - s, 0, NULL};
+        run_range(&block);
+        t->failed += block.failed;
+    }
+done:
+    free(x);
+    for (int k = 0; k < n_out; ++k) free(scratch[k]);
+}
+
+/* 1 when the range must go block by block (a motion, or flags on outputs not asked for) */
+static int blocked(const range_task *t)
+{
+    int need[5], n_need = flag_outputs(t->flags, need);
+    if (t->motion) return 1;
+    for (int q = 0; q < n_need; ++q)
+        if (need[q] >= 0 && need[q] < t->fn->n_out && !t->out[need[q]]) return 1;
+    return 0;
+}
+
 static void *run_range(void *arg)
 {
     range_task *t = arg;
     const gsfric_fn *fn = t->fn;
     int n_in = fn->n_in, n_out = fn->n_out;
+    if (blocked(t)) {
+        run_blocks(t);
+        return NULL;
+    }
     casadi_int sz_arg = 0, sz_res = 0, sz_iw = 0, sz_w = 0;
     const double **carg = NULL;
     double **cres = NULL;
@@ -187,7 +288,7 @@ done:
  * Returns the number of steps whose evaluation reported an error. */
 long long gsfric_run(const gsfric_fn *fn, const double **in, const long long *in_stride,
                      double **out, const long long *out_stride, long long n, int n_threads,
-                     const gsfric_flags *flags, long long *flag)
+                     const gsfric_flags *flags, long long *flag, const double *const *motion)
 {
     if (fn->n_in > MAX_ARGS || fn->n_out > MAX_ARGS) return n;
     if (n <= 0) return 0;
@@ -202,7 +303,7 @@ long long gsfric_run(const gsfric_fn *fn, const double **in, const long long *in
     int started[MAX_THREADS] = {0};
     for (int k = 0; k < n_threads; ++k) {
         tasks[k] = (range_task){fn, in, in_stride, out, out_stride, flags, flag, use_simd,
-                                n * k / n_threads, n * (k + 1) / n_threads, 0};
+                                n * k / n_threads, n * (k + 1) / n_threads, 0, motion};
     }
     for (int k = 1; k < n_threads; ++k)
         started[k] = pthread_create(&threads[k], NULL, run_range, &tasks[k]) == 0;
@@ -232,5 +333,57 @@ long long gsfric_run_one(const gsfric_fn *fn, const double **fixed, const long l
     in[0] = x;
     for (int k = 0; k < fn->n_out; ++k) out[k] = 0;
     out[index] = y;
-    return gsfric_run(fn, in, in_stride, out, out_stride, n, n_threads, NULL, NULL);
+    return gsfric_run(fn, in, in_stride, out, out_stride, n, n_threads, NULL, NULL, NULL);
+}
+
+/* The same from a motion's six arrays (see the top of this file) instead of x. */
+long long gsfric_run_one_motion(const gsfric_fn *fn, const double **fixed,
+                                const long long *in_stride, const long long *out_stride,
+                                const double *p, const double *T, const double *v,
+                                const double *w, const double *a, const double *alpha,
+                                int index, double *y, long long n, int n_threads)
+{
+    const double *in[MAX_ARGS];
+    double *out[MAX_ARGS];
+    const double *motion[6] = {p, T, v, w, a, alpha};
+    if (fn->n_in > MAX_ARGS || fn->n_out > MAX_ARGS || index < 0 || index >= fn->n_out)
+        return n;
+    for (int k = 0; k < fn->n_in; ++k) in[k] = fixed[k];
+    in[0] = NULL;
+    for (int k = 0; k < fn->n_out; ++k) out[k] = 0;
+    out[index] = y;
+    return gsfric_run(fn, in, in_stride, out, out_stride, n, n_threads, NULL, NULL, motion);
+}
+
+/* The control loop's calls can take NumPy arrays as Python objects: their data pointer is
+ * then read here, in PyArrayObject_fields.data, the first field after the object header (two
+ * pointer-sized fields), which costs far less than asking NumPy for it in Python (a ctypes
+ * object per array). gsfric/native.py checks at load time that this reads the same address as
+ * NumPy's ``ctypes.data`` and uses the pointers otherwise. */
+static void *array_data(const void *obj)
+{
+    return *(void *const *)((const char *)obj + 2 * sizeof(void *));
+}
+
+long long gsfric_array_data(const void *obj) { return (long long)array_data(obj); }
+
+long long gsfric_run_one_objects(const gsfric_fn *fn, const double **fixed,
+                                 const long long *in_stride, const long long *out_stride,
+                                 const void *x, int index, const void *y, long long n,
+                                 int n_threads)
+{
+    return gsfric_run_one(fn, fixed, in_stride, out_stride, array_data(x), index,
+                          array_data(y), n, n_threads);
+}
+
+long long gsfric_run_one_motion_objects(const gsfric_fn *fn, const double **fixed,
+                                        const long long *in_stride,
+                                        const long long *out_stride, const void *p,
+                                        const void *T, const void *v, const void *w,
+                                        const void *a, const void *alpha, int index,
+                                        const void *y, long long n, int n_threads)
+{
+    return gsfric_run_one_motion(fn, fixed, in_stride, out_stride, array_data(p),
+                                 array_data(T), array_data(v), array_data(w), array_data(a),
+                                 array_data(alpha), index, array_data(y), n, n_threads);
 }
