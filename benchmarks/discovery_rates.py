@@ -57,8 +57,15 @@ def point_to_point(rng, n):
 FAMILIES = {"sines": sines, "chirps": chirps, "rests": point_to_point}
 
 
+MODEL = "paper"
+"""The base friction model of both platforms (``--model``); never the library's default."""
+
+COUPLED_ONLY = ("joint_friction_coupling", "bushing_friction")
+"""Effects that are part of the coupled friction model itself (not candidates on it)."""
+
+
 def platforms():
-    ref = reference_platform()
+    ref = reference_platform(friction_model=MODEL)
     heavy = ref.with_body(payload_mass=1.5 * ref.platform.payload_mass).with_friction(
         prismatic_viscous=2 * ref.friction.prismatic_viscous)
     return {"reference": ref, "heavy": heavy}
@@ -131,7 +138,7 @@ def cases(per_cell, sizes):
         seed += 1
     c = 0     # one counter over every single case: families, platforms and noises all cycle
     for name in CANDIDATE_NAMES:
-        if name == "leg_weight":
+        if name == "leg_weight" or (MODEL == "coupled" and name in COUPLED_ONLY):
             continue
         for size in sizes:
             for _ in range(per_cell):
@@ -141,6 +148,8 @@ def cases(per_cell, sizes):
                 c += 1
     pairs = [("seal_friction", "bushing_friction"), ("stribeck", "payload_offset"),
              ("seal_friction", "force_scale"), ("quadratic_drag", "sensor_bias")]
+    if MODEL == "coupled":
+        pairs[0] = ("seal_friction", "stroke_friction")
     for a, b in pairs:
         for j in range(per_cell):
             out.append(("pair", [a, b], fam[j % 3], plats[j % 2], (0.0, 0.9)[j % 2], 5.0,
@@ -157,7 +166,8 @@ def memory(n):
     """Peak traced memory (NumPy arrays included) and time of one discover on n samples."""
     import tracemalloc
 
-    data = synthesize(effects=["stribeck:static=2,velocity=0.01"], samples=n, rate=RATE,
+    data = synthesize(reference_platform(friction_model=MODEL),
+                      effects=["stribeck:static=2,velocity=0.01"], samples=n, rate=RATE,
                       noise=0.1, pose_noise=1e-5, seed=1)
     fr = data.frame
     rec = Motion.from_samples(fr.t.values, fr[["x", "y", "z"]].values,
@@ -180,16 +190,35 @@ def main():
     ap.add_argument("--samples", type=int, default=6000)
     ap.add_argument("--sizes", type=float, nargs="+", default=[2.0, 3.0, 10.0])
     ap.add_argument("--nulls", type=int, default=None, help="null cases (default >= 50)")
+    ap.add_argument("--model", choices=("paper", "coupled"), default="paper",
+                    help="friction model of the base platforms (default paper)")
+    ap.add_argument("--kinds", nargs="+", default=None,
+                    choices=("null", "single", "pair", "delay_outside", "nonlinear_sensor"),
+                    help="only these kinds of case")
+    ap.add_argument("--families", nargs="+", default=None, choices=tuple(FAMILIES),
+                    help="only cases of these motion families")
+    ap.add_argument("--effects", nargs="+", default=None, choices=CANDIDATE_NAMES,
+                    help="only single and pair cases with these effects")
+    ap.add_argument("--verbose", action="store_true",
+                    help="one line per case: names, verdict, rms_after over the noise")
     ap.add_argument("--memory", type=int, default=None, metavar="N",
                     help="only measure the traced memory peak and time of one discover on N "
                          "samples")
     a = ap.parse_args()
+    global MODEL
+    MODEL = a.model
     if a.memory:
         return memory(a.memory)
     todo = cases(a.per_cell, a.sizes)
     if a.nulls is not None:
         nulls = [c for c in todo if c[0] == "null"][:a.nulls]
         todo = nulls + [c for c in todo if c[0] != "null"]
+    if a.kinds:
+        todo = [c for c in todo if c[0] in a.kinds]
+    if a.families:
+        todo = [c for c in todo if c[2] in a.families]
+    if a.effects:
+        todo = [c for c in todo if c[0] not in ("single", "pair") or set(c[1]) & set(a.effects)]
     rows = defaultdict(lambda: [0, 0, 0.0])
     start = time.time()
     for kind, names, family, plat, phi, size, seed in todo:
@@ -202,11 +231,15 @@ def main():
             key, ok = ("pair: both named", "+".join(names)), set(names) <= set(r.names)
         else:
             key, ok = (f"{kind}: unexplained", family), r.verdict == "unexplained_discrepancy"
+        if a.verbose:
+            print(f"{kind:17s} {'+'.join(names) or '-':40s} {family:7s} {plat:9s} phi={phi:<4g} "
+                  f"size={size:<4g} seed={seed:<4d} -> {ok!s:5s} {','.join(r.names) or '-':40s}"
+                  f" {r.verdict:24s} {r.rms_after / noise:.3f}", flush=True)
         rows[key][0] += int(ok)
         rows[key][1] += 1
         if kind in ("single", "pair") and ok:
             rows[key][2] = max(rows[key][2], r.rms_after / noise)
-    print(f"{len(todo)} cases, {a.samples} samples each, {time.time() - start:.0f} s")
+    print(f"{len(todo)} cases, {a.samples} samples each, base model {MODEL}, {time.time() - start:.0f} s")
     print(f"{'case':40s} {'family':28s} {'rate':>7s} {'n':>4s} {'max rms_after/noise':>20s}")
     for (name, family), (k, n, worst) in sorted(rows.items()):
         print(f"{name:40s} {family:28s} {k / n:7.0%} {n:4d} {worst:20.3f}")
