@@ -10,7 +10,8 @@ out-of-model errors of a rig produce, none of them a catalog term in this form:
 * ``a`` the leg's acceleration (an inertia or timing error),
 * a cubic drift in time (a thermal drift of the load cells).
 
-Each column is shared by the six legs (scaled per leg to unit RMS). The residual and the
+Each column is shared by the six legs (one coefficient, scaled to unit RMS over all legs): the
+load cells of a rig are alike, and a delay or a nonlinearity common to them is then one column. The residual and the
 columns are prewhitened with an AR model of the residual left by the basis fit, and the basis is accepted
 as *structure* under the rules of a candidate effect but one (F-test at ``alpha``, a lower
 held-out error of the block cross-validation in total, a gap of at least ``min_gap`` times
@@ -53,9 +54,9 @@ def basis(t: np.ndarray, F: np.ndarray, speed: np.ndarray, sliding: np.ndarray
     tau = 2 * (t - t[0]) / max(t[-1] - t[0], 1e-300) - 1
     for p in (1, 2, 3):
         X[:, :, 5 + p] = np.polynomial.legendre.legval(tau, [0] * p + [1])[:, None]
-    for j in range(9):     # unit RMS per leg and signal
-        scale = np.sqrt(np.mean(X[:, :, j] ** 2, axis=0))
-        X[:, :, j] /= np.where(scale > 0, scale, 1.0)
+    for j in range(9):     # unit RMS per signal over all legs (one coefficient: one cause)
+        scale = float(np.sqrt(np.mean(X[:, :, j] ** 2)))
+        X[:, :, j] /= scale if scale > 0 else 1.0
     return X
 
 

@@ -268,6 +268,73 @@ def bootstrap_share(problem: Problem, design: Design, screen: Screen,
     return {n: float(v / len(weights)) for n, v in zip(names, wins)}
 
 
+def generic_competitor(problem: Problem, design: Design, whitener: st.Whitener,
+                       screen: Screen, winner: str) -> dict:
+    """The winner against the generic out-of-model structure of ``lackfit`` (a delay, a
+    nonlinear or mis-scaled load cell, another friction law, a drift).
+
+    The winner is *blocked* (not named) when it adds nothing worth naming to the generic basis
+    (p >= alpha, or a gap below ``min_gap`` times the noise, with the refitted model in both),
+    while the generic basis adds something significant (p < alpha / K and a gap of at least
+    ``min_gap``) to the winner and every other accepted candidate of the round: the structure
+    is then a generic, out-of-catalog one that the winner only imitates in part. Returns the two p-values, ``blocked`` and the generic signal that carries most.
+    """
+    from gsfric.discovery import lackfit
+
+    s = problem.settings
+    used = problem.used
+    F = problem.model.forces(design.theta)[used]
+    B = lackfit.basis(np.asarray(problem.model.t[used], float), F,
+                      problem.result.D_dot[used], problem.sliding)
+    B *= problem.weight[:, :, None]
+    others = [n for n, t in screen.tests.items() if t.significant and n != winner]
+    wcols = design.variants[winner][screen.variant[winner]]
+    ocols = [c for n in others for c in design.variants[n][screen.variant[n]]]
+    cols = design.refit + wcols + ocols
+    X = np.concatenate([design.X[:, :, cols], B], axis=2)
+    blocks = st.Blocks.whitened(whitener, X, design.r, s.n_blocks)
+    flat = X.reshape(-1, X.shape[2])
+    XtX, Xtr = flat.T @ flat, flat.T @ design.r.reshape(-1)
+    del X, flat
+
+    def gap(small: st.Fit, large: st.Fit) -> float:     # as gap_closed, unwhitened
+        a = np.zeros(len(Xtr))
+        a[large.columns] = large.coef
+        change = a.copy()
+        change[small.columns] -= small.coef
+        left = design.rtr - 2 * a @ Xtr + a @ XtX @ a
+        return float(np.sqrt(max(change @ XtX @ change, 0.0) / max(left, 1e-300)))
+
+    nr, nw, no, nb = len(design.refit), len(wcols), len(ocols), B.shape[2]
+    lower = np.r_[design.lower[cols], np.full(nb, -np.inf)]
+    upper = np.r_[design.upper[cols], np.full(nb, np.inf)]
+    R = list(range(nr))
+    W = list(range(nr, nr + nw))
+    O = list(range(nr + nw, nr + nw + no))
+    G = list(range(nr + nw + no, nr + nw + no + nb))
+    k_w = len(next(c for c in problem.candidates if c.name == winner).fitted)
+    generic = st.fit(blocks, R + G, lower, upper)
+    both = st.fit(blocks, R + G + W, lower, upper)
+    _, p_winner, _ = st.f_test(generic, both, k=k_w)
+    catalog = st.fit(blocks, R + W + O, lower, upper)
+    everything = st.fit(blocks, R + W + O + G, lower, upper)
+    _, p_generic, _ = st.f_test(catalog, everything)
+    level = s.alpha / max(len(screen.tests), 1)
+    parts = {}
+    coef = everything.coef[len(R + W + O):]
+    names = list(lackfit.SIGNALS[:-1]) + ["drift"] * 3
+    for j, name in enumerate(names):
+        parts[name] = parts.get(name, 0.0) + float(coef[j] ** 2 * np.sum(B[:, :, j] ** 2))
+    main = max(parts, key=parts.get) if parts else None
+    gap_winner, gap_generic = gap(generic, both), gap(catalog, everything)
+    adds = p_winner < s.alpha and gap_winner >= s.min_gap
+    structure = p_generic < level and gap_generic >= s.min_gap
+    return {"p_winner_beyond_generic": float(p_winner), "gap_winner_beyond_generic": gap_winner,
+            "p_generic_beyond_catalog": float(p_generic),
+            "gap_generic_beyond_catalog": gap_generic,
+            "blocked": bool(structure and not adds), "main_signal": main}
+
+
 # -- Gauss-Newton refinement on the compiled model ---------------------------------------------
 
 

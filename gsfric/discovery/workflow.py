@@ -35,7 +35,8 @@ from gsfric.discovery.candidates import CANDIDATES
 from gsfric.discovery.regimes import bands as regime_bands
 from gsfric.discovery.residuals import Problem
 from gsfric.discovery.settings import Settings
-from gsfric.discovery.selection import (CandidateTest, bootstrap_share, indistinguishable,
+from gsfric.discovery.selection import (CandidateTest, bootstrap_share, generic_competitor,
+                                        indistinguishable,
                                         noise_model, refine, refit_alternatives,
                                         screen_candidates, winner_of)
 from gsfric.platform import Platform
@@ -74,6 +75,11 @@ class Round:
     rms_before: float = 0.0
     rms_after: float = 0.0
     preferred_over: str | None = None
+    generic: dict = field(default_factory=dict)
+    """The winner against the generic out-of-model structure (``generic_competitor``)."""
+    blocked: str | None = None
+    """A winner not named because a generic out-of-catalog structure explains the data better
+    and the winner adds nothing to it."""
 
 
 @dataclass
@@ -301,6 +307,15 @@ def discover(motion: Motion, forces: np.ndarray, platform: Platform | None = Non
                                                                    winner)
                 if rnd.preferred_over not in rnd.indistinguishable:
                     rnd.indistinguishable.append(rnd.preferred_over)
+        rnd.generic = generic_competitor(problem, design, whitener, screen, winner)
+        if rnd.generic["blocked"]:
+            rnd.blocked, rnd.winner = winner, None
+            rnd.rms_after = rnd.rms_before
+            notes.append(
+                f"round {rnd.index}: {winner} was significant but adds nothing to a generic "
+                f"out-of-catalog structure (mainly {rnd.generic['main_signal']}), which "
+                "explains more: not named")
+            break
         rnd.bootstrap_share = bootstrap_share(problem, design, screen, rng)
         c = next(c for c in candidates if c.name == winner)
         start = design.theta.copy()
@@ -373,7 +388,7 @@ def discover(motion: Motion, forces: np.ndarray, platform: Platform | None = Non
         "speed_uncertainty": [float(v) for v in problem.sigma_v],
         "not_sliding_share": float(1.0 - sliding.mean()),
     }
-    if lof["significant"]:
+    if lof["significant"] or any(rnd.blocked for rnd in rounds):
         verdict = "unexplained_discrepancy"
     elif active:
         verdict = "explained"
