@@ -169,9 +169,10 @@ def _leg_weight_applies(platform: Platform) -> str | None:
 STRIBECK_VELOCITIES = tuple(float(v) for v in np.geomspace(0.002, 0.1, 6))
 """Starting values of the Stribeck velocity, m/s."""
 
-TIME_OFFSET_STEPS = tuple(float(v) for v in np.geomspace(0.002, 0.064, 6))
-"""Delays (s) at which the secant columns of ``time_offset`` are taken, either sign: from
-less than a sample at 200 Hz to about the shortest motion features; Gauss-Newton refines."""
+TIME_OFFSET_STEPS = (0.002, 0.006, 0.018, 0.054)
+"""Delays (s) at which the secant columns of ``time_offset`` are taken, either sign (factors
+of 3, from less than a sample at 200 Hz to about the shortest motion features); the best
+secant starts the Gauss-Newton refinement."""
 
 CANDIDATES: tuple[Candidate, ...] = (
     Candidate("stribeck", ("static", "velocity"), (0.0, 5e-4), (INF, 0.5),
