@@ -28,6 +28,10 @@ from gsfric.discovery import statistics as st
 
 SIGNALS = ("dF/dt", "F|F|", "F^3", "F", "sgn(v)", "acceleration", "drift")
 
+CATALOG_EQUIVALENT = {"dF/dt": "time_offset", "F": "force_scale", "sgn(v)": "seal_friction"}
+"""Signals that a catalog effect reproduces (a common delay, a common gain, a common Coulomb
+force): out of the catalog only when that effect is not a candidate."""
+
 MEANING = {
     "dF/dt": "correlated with the rate of change of the force: a delay between the pose and "
              "force channels, or a dynamic sensor",

@@ -110,7 +110,9 @@ def screen_candidates(problem: Problem, design: Design, whitener: st.Whitener,
 
     A candidate is accepted when (a) its F-test gives p < alpha / K, (b) it lowers the
     held-out error of the block cross-validation in total and in at least ``min_fold_share``
-    of the folds, (c) the gap it closes reaches ``min_gap``.
+    of the folds, (c) the gap it closes reaches ``min_gap``, (d) it lowers the plain residual
+    as well as the prewhitened one (the prewhitened fit weighs frequencies by the noise
+    model; an explanation of the gap must also shrink the gap as measured).
     """
     s = problem.settings
     blocks = st.Blocks.whitened(whitener, design.X, design.r, s.n_blocks)
@@ -133,6 +135,7 @@ def screen_candidates(problem: Problem, design: Design, whitener: st.Whitener,
         gap = gap_closed(design, null, best)
         test = CandidateTest(c.name, params, float(F), p, k, cv_gain, share,
                              float((null.sse - best.sse) / null.sse), gap)
+        plain = plain_sse(design, best) < plain_sse(design, null)
         if p >= level:
             test.reason = f"not significant (p = {p:.2g} >= {level:.2g})"
         elif cv_gain <= 0:
@@ -143,11 +146,21 @@ def screen_candidates(problem: Problem, design: Design, whitener: st.Whitener,
         elif gap < s.min_gap:
             test.reason = (f"closes a gap of only {gap:.2f} x the noise level "
                            f"(needs {s.min_gap:g})")
+        elif not plain:
+            test.reason = ("lowers the prewhitened error but not the residual itself: it "
+                           "fits what the noise model weighs most, not the gap")
         else:
             test.significant = True
             test.reason = "significant"
         tests[c.name], fits[c.name], chosen[c.name] = test, best, j
     return Screen(tests, fits, chosen, null, blocks, cv_null)
+
+
+def plain_sse(design: Design, f: st.Fit) -> float:
+    """Sum of squares of the plain (not prewhitened) residual left by a fit's coefficients."""
+    a = np.zeros(design.XtX.shape[0])
+    a[f.columns] = f.coef
+    return float(design.rtr - 2 * a @ design.Xtr + a @ design.XtX @ a)
 
 
 def gap_closed(design: Design, null: st.Fit, alternative: st.Fit) -> float:
@@ -271,7 +284,8 @@ def bootstrap_share(problem: Problem, design: Design, screen: Screen,
 def generic_competitor(problem: Problem, design: Design, whitener: st.Whitener,
                        screen: Screen, winner: str) -> dict:
     """The winner against the generic out-of-model structure of ``lackfit`` (a delay, a
-    nonlinear or mis-scaled load cell, another friction law, a drift).
+    nonlinear or mis-scaled load cell, another friction law, a drift), without the signals
+    that a tested candidate reproduces (``lackfit.CATALOG_EQUIVALENT``).
 
     The winner is *blocked* (not named) when it adds nothing worth naming to the generic basis
     (p >= alpha, or a gap below ``min_gap`` times the noise, with the refitted model in both),
@@ -286,7 +300,14 @@ def generic_competitor(problem: Problem, design: Design, whitener: st.Whitener,
     F = problem.model.forces(design.theta)[used]
     B = lackfit.basis(np.asarray(problem.model.t[used], float), F,
                       problem.result.D_dot[used], problem.sliding)
-    B *= problem.weight[:, :, None]
+    # only what lies outside the catalog as tested: a signal that a candidate (or an effect of
+    # the model) reproduces is that effect, not a generic structure
+    available = set(screen.tests) | {n.split(".")[0] for n in design.names}
+    names = list(lackfit.SIGNALS[:-1]) + ["drift"] * 3
+    keep = [j for j, name in enumerate(names)
+            if lackfit.CATALOG_EQUIVALENT.get(name) not in available]
+    B = B[:, :, keep] * problem.weight[:, :, None]
+    names = [names[j] for j in keep]
     others = [n for n, t in screen.tests.items() if t.significant and n != winner]
     wcols = design.variants[winner][screen.variant[winner]]
     ocols = [c for n in others for c in design.variants[n][screen.variant[n]]]
@@ -322,7 +343,6 @@ def generic_competitor(problem: Problem, design: Design, whitener: st.Whitener,
     level = s.alpha / max(len(screen.tests), 1)
     parts = {}
     coef = everything.coef[len(R + W + O):]
-    names = list(lackfit.SIGNALS[:-1]) + ["drift"] * 3
     for j, name in enumerate(names):
         parts[name] = parts.get(name, 0.0) + float(coef[j] ** 2 * np.sum(B[:, :, j] ** 2))
     main = max(parts, key=parts.get) if parts else None

@@ -78,8 +78,9 @@ class Round:
     generic: dict = field(default_factory=dict)
     """The winner against the generic out-of-model structure (``generic_competitor``)."""
     blocked: str | None = None
-    """A winner not named because a generic out-of-catalog structure explains the data better
-    and the winner adds nothing to it."""
+    """A winner not named: a generic out-of-catalog structure explains the data better and the
+    winner adds nothing to it (``generic["blocked"]``), or refined on the compiled model it
+    does not lower the residual."""
 
 
 @dataclass
@@ -326,11 +327,19 @@ def discover(motion: Motion, forces: np.ndarray, platform: Platform | None = Non
         for col, step in zip(step_fit.columns, step_fit.coef):
             if col in design.refit:
                 start[model.index[design.names[col]]] += design.signs[col] * step
-        names = problem.refit_names(active + [winner])
+        new_names = problem.refit_names(active + [winner])
         test = screen.tests[winner]
         design = screen = None     # free the round's design before the refinement
-        theta, r, J = refine(problem, start, names, whitener)
-        rnd.rms_after = _rms(r[sliding])
+        theta_new, r_new, J_new = refine(problem, start, new_names, whitener)
+        rnd.rms_after = _rms(r_new[sliding])
+        if rnd.rms_after >= rnd.rms_before:
+            # refined on the compiled model, the effect no longer shrinks the gap
+            notes.append(f"round {rnd.index}: {winner} refined on the compiled model does "
+                         f"not lower the residual ({rnd.rms_before:.4g} N -> "
+                         f"{rnd.rms_after:.4g} N): not named")
+            rnd.blocked, rnd.winner, rnd.rms_after = winner, None, rnd.rms_before
+            break
+        theta, r, J, names = theta_new, r_new, J_new, new_names
         active.append(winner)
         findings_evidence[winner] = {
             "round": rnd.index, "F": test.F, "p_value": test.p_value, "dof": test.dof,
@@ -388,7 +397,7 @@ def discover(motion: Motion, forces: np.ndarray, platform: Platform | None = Non
         "speed_uncertainty": [float(v) for v in problem.sigma_v],
         "not_sliding_share": float(1.0 - sliding.mean()),
     }
-    if lof["significant"] or any(rnd.blocked for rnd in rounds):
+    if lof["significant"] or any(rnd.generic.get("blocked") for rnd in rounds):
         verdict = "unexplained_discrepancy"
     elif active:
         verdict = "explained"
