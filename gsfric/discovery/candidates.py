@@ -169,7 +169,7 @@ def _leg_weight_applies(platform: Platform) -> str | None:
 STRIBECK_VELOCITIES = tuple(float(v) for v in np.geomspace(0.002, 0.1, 6))
 """Starting values of the Stribeck velocity, m/s."""
 
-TIME_OFFSET_STEPS = (0.002, 0.006, 0.018, 0.054)
+TIME_OFFSET_STEPS = (0.002, 0.006, 0.018, 0.054, 0.162)
 """Delays (s) at which the secant columns of ``time_offset`` are taken, either sign (factors
 of 3, from less than a sample at 200 Hz to about the shortest motion features); the best
 secant starts the Gauss-Newton refinement."""

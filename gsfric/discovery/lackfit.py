@@ -64,9 +64,16 @@ def basis(t: np.ndarray, F: np.ndarray, speed: np.ndarray, sliding: np.ndarray
     return X
 
 
+def column_names() -> list[str]:
+    """The signal of each column of ``basis`` (drift: three columns)."""
+    return list(SIGNALS[:-1]) + ["drift"] * 3
+
+
 def test(residual: np.ndarray, X: np.ndarray, whitener: st.Whitener, *, alpha: float,
-         min_gap: float, n_blocks: int, n_folds: int, min_fold_share: float) -> dict:
-    """The lack-of-fit test of the residual (M, 6) against the basis X (M, 6, k).
+         min_gap: float, n_blocks: int, n_folds: int, min_fold_share: float,
+         names: list[str] | None = None) -> dict:
+    """The lack-of-fit test of the residual (M, 6) against the basis X (M, 6, k) whose
+    columns carry the signals ``names`` (default ``column_names()``).
 
     Returns
     -------
@@ -90,7 +97,7 @@ def test(residual: np.ndarray, X: np.ndarray, whitener: st.Whitener, *, alpha: f
     gap = float(np.sqrt(np.mean(fitted ** 2) / max(np.mean(left ** 2), 1e-300)))
     parts = {}
     total = max(float(np.sum(fitted ** 2)), 1e-300)
-    names = list(SIGNALS[:-1]) + ["drift"] * 3
+    names = column_names() if names is None else names
     for j, name in enumerate(names):
         part = X[:, :, j] * full.coef[j]
         parts[name] = parts.get(name, 0.0) + float(np.sum(part * fitted)) / total

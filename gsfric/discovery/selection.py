@@ -303,7 +303,7 @@ def generic_competitor(problem: Problem, design: Design, whitener: st.Whitener,
     # only what lies outside the catalog as tested: a signal that a candidate (or an effect of
     # the model) reproduces is that effect, not a generic structure
     available = set(screen.tests) | {n.split(".")[0] for n in design.names}
-    names = list(lackfit.SIGNALS[:-1]) + ["drift"] * 3
+    names = lackfit.column_names()
     keep = [j for j, name in enumerate(names)
             if lackfit.CATALOG_EQUIVALENT.get(name) not in available]
     B = B[:, :, keep] * problem.weight[:, :, None]

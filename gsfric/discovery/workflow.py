@@ -383,7 +383,8 @@ def discover(motion: Motion, forces: np.ndarray, platform: Platform | None = Non
                      "(see gsfric.evaluation: stroke, near-singular poses); they are kept")
     used = problem.used
     full_after = problem.y - model.forces(theta)[used]
-    lof = _lack_of_fit(problem, theta, residual_after, whitener)
+    lof = _lack_of_fit(problem, theta, residual_after, whitener,
+                       in_model=[c.name for c in problem.own_effects] + active)
     rms_after = _rms(residual_after[sliding])
     independent = float(np.sqrt(np.mean(problem.force_noise ** 2)))
     noise_info = {
@@ -434,7 +435,7 @@ def _noise_whitener(design, problem: Problem) -> st.Whitener:
 
 
 def _lack_of_fit(problem: Problem, theta: np.ndarray, residual: np.ndarray,
-                 whitener: st.Whitener) -> dict:
+                 whitener: st.Whitener, in_model: Sequence[str] = ()) -> dict:
     """The lack-of-fit test of the final residual (``lackfit``), with where it lives."""
     from gsfric.discovery import lackfit
 
@@ -443,7 +444,13 @@ def _lack_of_fit(problem: Problem, theta: np.ndarray, residual: np.ndarray,
     F = problem.model.forces(theta)[used]
     t = np.asarray(problem.model.t[used])
     X = lackfit.basis(t, F, problem.result.D_dot[used], problem.sliding)
-    X *= problem.weight[:, :, None]
+    # a signal that an effect of the final model reproduces (a delay's dF/dt once time_offset
+    # is in it) is that effect's parameter, refitted already: not a structure outside the model
+    names = lackfit.column_names()
+    keep = [j for j, name in enumerate(names)
+            if lackfit.CATALOG_EQUIVALENT.get(name) not in in_model]
+    X = X[:, :, keep] * problem.weight[:, :, None]
+    names = [names[j] for j in keep]
     # the noise model from the residual of the basis fit (largest model), as in each round
     k = X.shape[2]
     flat = X.reshape(-1, k)
@@ -451,7 +458,7 @@ def _lack_of_fit(problem: Problem, theta: np.ndarray, residual: np.ndarray,
     whitener = st.Whitener.fit(residual - X @ coef, valid=problem.sliding)
     out = lackfit.test(residual, X, whitener, alpha=s.alpha, min_gap=s.min_gap,
                        n_blocks=s.n_blocks, n_folds=s.n_folds,
-                       min_fold_share=s.min_fold_share)
+                       min_fold_share=s.min_fold_share, names=names)
     fitted = out["fitted"]
     thirds = np.array_split(np.arange(len(t)), 3)
     out["time_rms"] = {f"{t[g[0]]:.4g}-{t[g[-1]]:.4g} s": _rms(fitted[g]) for g in thirds}
