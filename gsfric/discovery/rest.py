@@ -8,9 +8,11 @@ sigma_D the noise of the leg length and h the Savitzky-Golay derivative filter u
 noise; physically, friction at rest (static friction) holds whatever force is needed, up to its
 static level, and is not a function of the speed at all. So a (sample, leg) pair whose speed
 lies within ``REST_BAND`` sigma_v of zero is treated as *not sliding*: its friction is only
-bounded, and it carries no information about any friction law. The workflow leaves those pairs
-out of every fit and statistic (they are masked: residual and derivative columns set to zero,
-which is the least-squares solution of the bound when the bound is not active).
+bounded, and it carries no information about any friction law. So is every pair whose
+differentiator window reaches into a rest (``sliding_mask``): there the differentiated speed
+is biased by the stop. The workflow leaves those pairs out of every fit and statistic (they
+are masked: residual and derivative columns set to zero, which is the least-squares solution
+of the bound when the bound is not active).
 The model's own evaluation keeps its documented regularisation of the sign (PRISMATIC_EPS).
 
 ``force_noise`` estimates the force noise from the force channels alone, without the model:
@@ -118,13 +120,14 @@ def sliding_mask(speed: np.ndarray, sigma_v: np.ndarray, floor: float,
     differentiator window reaches into a rest. A rest is a run of at least ``reach`` samples
     inside the band, with excursions out of the band shorter than ``reach`` samples (the
     differentiated noise is correlated over the window: such an excursion is one noise event,
-    or the pull of the next move on the window, not a move). Why: the differentiator (a local polynomial
-    fit over ``2 reach + 1`` samples) is unbiased where the motion is a polynomial over its
-    window, as at a smooth reversal, whose passage through the band is short; at a rest's start
-    and end the motion stops (a jump of the acceleration or jerk), the window mixes the rest
-    with the move, and the estimate's bias, a fraction of the move's speed half a window away,
-    is not covered by the noise band. A speed with the wrong sign or a spurious
-    low speed there would make a Coulomb-type friction flip by twice its level.
+    or the pull of the next move on the window, not a move).
+
+    Why: the differentiator (a local polynomial fit over ``2 reach + 1`` samples) is unbiased
+    where the motion is a polynomial over its window, as at a smooth reversal, whose passage
+    through the band is short; at a rest's start and end the motion stops (a jump of the
+    acceleration or jerk), the window mixes the rest with the move, and the estimate's bias,
+    a fraction of the move's speed half a window away, is not covered by the noise band. A
+    speed with the wrong sign there makes a Coulomb-type friction flip by twice its level.
 
     Parameters
     ----------
