@@ -253,7 +253,8 @@ def main():
         if kind in ("single", "pair") and ok:
             rows[key][2] = max(rows[key][2], r.rms_after / noise)
             rows[key][3] = max(rows[key][3], r.rms_after / true_rms)
-    print(f"{len(todo)} cases, {a.samples} samples each, base model {MODEL}, {time.time() - start:.0f} s")
+    print(f"{len(todo)} cases, {a.samples} samples each, base model {MODEL}, "
+          f"{time.time() - start:.0f} s")
     print(f"{'case':40s} {'family':28s} {'rate':>7s} {'n':>4s} {'max rms_after/noise':>20s} "
           f"{'max rms_after/true model':>25s}")
     for (name, family), (k, n, worst, worst_true) in sorted(rows.items()):

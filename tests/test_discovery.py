@@ -446,7 +446,8 @@ def test_summary_is_json_and_has_the_spec_keys():
 
 def test_effects_the_model_already_has_are_refitted(tmp_path):
     """A model whose [effects] has a Stribeck peak of the wrong height: refitted, not named."""
-    model = reference_platform(friction_model="paper").with_effect("stribeck", static=1.0, velocity=0.02)
+    model = reference_platform(friction_model="paper").with_effect("stribeck", static=1.0,
+                                                                   velocity=0.02)
     truth = model.with_effect("stribeck", static=2.0, velocity=0.01)
     rng = np.random.default_rng(7)
     motion = excitation_motion(rng, np.arange(SAMPLES) / RATE)

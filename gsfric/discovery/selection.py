@@ -291,7 +291,8 @@ def generic_competitor(problem: Problem, design: Design, whitener: st.Whitener,
     (p >= alpha, or a gap below ``min_gap`` times the noise, with the refitted model in both),
     while the generic basis adds something significant (p < alpha / K and a gap of at least
     ``min_gap``) to the winner and every other accepted candidate of the round: the structure
-    is then a generic, out-of-catalog one that the winner only imitates in part. Returns the two p-values, ``blocked`` and the generic signal that carries most.
+    is then a generic, out-of-catalog one that the winner only imitates in part. Returns the
+    p-values and gaps both ways, ``blocked`` and the generic signal that carries most.
     """
     from gsfric.discovery import lackfit
 
