@@ -81,7 +81,7 @@ def draw_parameters(name: str, rng: np.random.Generator) -> dict[str, float]:
 def model_for(names) -> object:
     """The model the researcher starts from: the reference platform (without the legs' weight
     when leg_weight is hidden: that effect only exists for such a model)."""
-    platform = reference_platform()
+    platform = reference_platform(friction_model="paper")
     return platform.with_legs(weight=False) if "leg_weight" in names else platform
 
 
@@ -384,7 +384,7 @@ def test_names_both_hidden_effects(names):
 
 
 def test_wrong_model_parameters_are_refitted_not_named():
-    model = reference_platform()
+    model = reference_platform(friction_model="paper")
     truth = model.with_friction(prismatic_viscous=5.0).with_body(payload_mass=3.6)
     rng = np.random.default_rng(5)
     motion = excitation_motion(rng, np.arange(SAMPLES) / RATE)
@@ -400,7 +400,7 @@ def test_wrong_model_parameters_are_refitted_not_named():
 
 
 def test_an_implausible_refit_is_reported_as_a_missing_effect():
-    model = reference_platform()
+    model = reference_platform(friction_model="paper")
     truth = model.with_friction(prismatic_coulomb=1.5)
     rng = np.random.default_rng(6)
     motion = excitation_motion(rng, np.arange(SAMPLES) / RATE)
@@ -418,7 +418,7 @@ def test_an_implausible_refit_is_reported_as_a_missing_effect():
 def test_explanations_the_data_cannot_tell_apart_are_reported():
     """A common sensor offset on a slow motion looks like extra payload: no effect is named
     and both explanations are reported."""
-    model = reference_platform()
+    model = reference_platform(friction_model="paper")
     rng = np.random.default_rng(0)
     motion = random_motion(rng, np.arange(3000) / RATE, scale=0.3)
     data = synthesize(model, ["sensor_bias:" + ",".join(f"b{i}=0.4" for i in range(1, 7))],
@@ -446,7 +446,8 @@ def test_summary_is_json_and_has_the_spec_keys():
 
 def test_effects_the_model_already_has_are_refitted(tmp_path):
     """A model whose [effects] has a Stribeck peak of the wrong height: refitted, not named."""
-    model = reference_platform().with_effect("stribeck", static=1.0, velocity=0.02)
+    model = reference_platform(friction_model="paper").with_effect("stribeck", static=1.0,
+                                                                   velocity=0.02)
     truth = model.with_effect("stribeck", static=2.0, velocity=0.01)
     rng = np.random.default_rng(7)
     motion = excitation_motion(rng, np.arange(SAMPLES) / RATE)

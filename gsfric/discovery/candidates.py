@@ -108,6 +108,10 @@ class Candidate:
     grid_from: Callable[[dict], dict] = lambda context: {}
     simpler: int = 0
     """Rank in parsimony among indistinguishable candidates (lower: simpler, preferred)."""
+    secants: tuple[float, ...] = (1.0,)
+    """Steps of the amplitude at which its one-sided (secant) columns are taken, for an
+    amplitude on which F is nonlinear (``time_offset``: a delay of several samples shifts a
+    friction step, which the derivative at zero delay does not describe)."""
 
     def grids(self, context: dict) -> dict[str, tuple[float, ...]]:
         """Starting values of the grid parameters, the data-dependent ones included."""
@@ -121,7 +125,8 @@ class Candidate:
     @property
     def stepped(self) -> bool:
         """Whether the screening column comes from one-sided steps (see the module docstring)."""
-        return self.coulomb or bool(self.grid) or self.grid_from({}) is None
+        return (self.coulomb or bool(self.grid) or self.grid_from({}) is None
+                or self.secants != (1.0,))
 
     @property
     def amplitude(self) -> str:
@@ -145,6 +150,16 @@ def _bushing_spacing(platform: Platform, context: dict) -> dict:
     return {"spacing": float(own.get("spacing", EFFECTS["bushing_friction"]["spacing"]))}
 
 
+def _coupled_applies(platform: Platform) -> str | None:
+    """Joint friction carried by the actuators and bushing friction are part of the coupled
+    friction model itself: there, a change of them is a refit of the model's own coefficients
+    (``prismatic_coulomb`` is the bushings' coefficient), not a missing effect."""
+    if platform.friction.model == "coupled":
+        return ("part of the coupled friction model ([friction] model = \"coupled\"); its "
+                "coefficients are refitted instead")
+    return None
+
+
 def _leg_weight_applies(platform: Platform) -> str | None:
     if platform.legs.weight:
         return "the model already has the legs' weight ([legs] weight = true)"
@@ -153,6 +168,11 @@ def _leg_weight_applies(platform: Platform) -> str | None:
 
 STRIBECK_VELOCITIES = tuple(float(v) for v in np.geomspace(0.002, 0.1, 6))
 """Starting values of the Stribeck velocity, m/s."""
+
+TIME_OFFSET_STEPS = (0.002, 0.006, 0.018, 0.054, 0.162)
+"""Delays (s) at which the secant columns of ``time_offset`` are taken, either sign (factors
+of 3, from less than a sample at 200 Hz to about the shortest motion features); the best
+secant starts the Gauss-Newton refinement."""
 
 CANDIDATES: tuple[Candidate, ...] = (
     Candidate("stribeck", ("static", "velocity"), (0.0, 5e-4), (INF, 0.5),
@@ -170,18 +190,20 @@ CANDIDATES: tuple[Candidate, ...] = (
     Candidate("sensor_bias", tuple(f"b{i}" for i in range(1, 7)), (-INF,) * 6, (INF,) * 6,
               "a constant offset per leg, in every regime"),
     Candidate("joint_friction_coupling", ("scale",), (0.0,), (INF,),
-              "friction-like, from the joints' friction moments, largest at high load"),
+              "friction-like, from the joints' friction moments, largest at high load",
+              applies=_coupled_applies),
     Candidate("leg_weight", ("lower_mass", "upper_mass"), (0.0, 0.0), (INF, INF),
               "load-like, varying with the legs' inclination", applies=_leg_weight_applies),
     Candidate("bushing_friction", ("coefficient",), (0.0,), (INF,),
               "friction-like, growing with the bending moment in the prismatic joint",
-              fixed=_bushing_spacing, coulomb=True, simpler=1),
+              fixed=_bushing_spacing, coulomb=True, simpler=1, applies=_coupled_applies),
     Candidate("force_scale", tuple(f"g{i}" for i in range(1, 7)), (-0.5,) * 6, (0.5,) * 6,
               "proportional to the measured force on each leg (a load cell's gain error)",
               simpler=3),
     Candidate("time_offset", ("delay",), (-0.5,), (0.5,),
               "proportional to the rate of change of the force (a delay between the pose and "
-              "force channels), largest where the force changes fastest", simpler=1),
+              "force channels), largest where the force changes fastest", simpler=1,
+              signs=(1.0, -1.0), secants=TIME_OFFSET_STEPS),
 )
 
 SEPARATING_MOTION = {

@@ -10,11 +10,13 @@ out-of-model errors of a rig produce, none of them a catalog term in this form:
 * ``a`` the leg's acceleration (an inertia or timing error),
 * a cubic drift in time (a thermal drift of the load cells).
 
-Each column is shared by the six legs (scaled per leg to unit RMS). The residual and the
-columns are prewhitened with an AR model of the residual left by the basis fit, and the basis is accepted
-as *structure* under the rules of a candidate effect but one (F-test at ``alpha``, a lower
-held-out error of the block cross-validation in total, a gap of at least ``min_gap`` times
-the noise; not "in most folds": a discrepancy confined to part of the record is still one).
+Each column is shared by the six legs (one coefficient, scaled to unit RMS over all legs): the
+load cells of a rig are alike, and a delay or a nonlinearity common to them is then one
+column. The residual and the columns are prewhitened with an AR model of the residual left by
+the basis fit, and the basis is accepted as *structure* under the rules of a candidate
+effect but one (F-test at ``alpha``, a lower held-out error of the block cross-validation in
+total, a gap of at least ``min_gap`` times the noise; not "in most folds": a discrepancy
+confined to part of the record is still one).
 A basis that explains the residual means the catalog did not: the verdict is
 ``unexplained_discrepancy``, and the signals that carry the structure say what it looks like.
 
@@ -45,6 +47,10 @@ import numpy as np
 from gsfric.discovery import statistics as st
 
 SIGNALS = ("dF/dt", "F|F|", "F^3", "F", "sgn(v)", "acceleration", "drift")
+
+CATALOG_EQUIVALENT = {"dF/dt": "time_offset", "F": "force_scale", "sgn(v)": "seal_friction"}
+"""Signals that a catalog effect reproduces (a common delay, a common gain, a common Coulomb
+force): out of the catalog only when that effect is not a candidate."""
 
 MEANING = {
     "dF/dt": "correlated with the rate of change of the force: a delay between the pose and "
@@ -106,15 +112,22 @@ def basis(t: np.ndarray, F: np.ndarray, speed: np.ndarray, sliding: np.ndarray
     tau = 2 * (t - t[0]) / max(t[-1] - t[0], 1e-300) - 1
     for p in (1, 2, 3):
         X[:, :, 5 + p] = np.polynomial.legendre.legval(tau, [0] * p + [1])[:, None]
-    for j in range(9):     # unit RMS per leg and signal
-        scale = np.sqrt(np.mean(X[:, :, j] ** 2, axis=0))
-        X[:, :, j] /= np.where(scale > 0, scale, 1.0)
+    for j in range(9):     # unit RMS per signal over all legs (one coefficient: one cause)
+        scale = float(np.sqrt(np.mean(X[:, :, j] ** 2)))
+        X[:, :, j] /= scale if scale > 0 else 1.0
     return X
 
 
+def column_names() -> list[str]:
+    """The signal of each column of ``basis`` (drift: three columns)."""
+    return list(SIGNALS[:-1]) + ["drift"] * 3
+
+
 def test(residual: np.ndarray, X: np.ndarray, whitener: st.Whitener, *, alpha: float,
-         min_gap: float, n_blocks: int, n_folds: int, min_fold_share: float) -> dict:
-    """The lack-of-fit test of the residual (M, 6) against the basis X (M, 6, k).
+         min_gap: float, n_blocks: int, n_folds: int, min_fold_share: float,
+         names: list[str] | None = None) -> dict:
+    """The lack-of-fit test of the residual (M, 6) against the basis X (M, 6, k) whose
+    columns carry the signals ``names`` (default ``column_names()``).
 
     Returns
     -------
@@ -138,7 +151,7 @@ def test(residual: np.ndarray, X: np.ndarray, whitener: st.Whitener, *, alpha: f
     gap = float(np.sqrt(np.mean(fitted ** 2) / max(np.mean(left ** 2), 1e-300)))
     parts = {}
     total = max(float(np.sum(fitted ** 2)), 1e-300)
-    names = list(SIGNALS[:-1]) + ["drift"] * 3
+    names = column_names() if names is None else names
     for j, name in enumerate(names):
         part = X[:, :, j] * full.coef[j]
         parts[name] = parts.get(name, 0.0) + float(np.sum(part * fitted)) / total

@@ -14,6 +14,8 @@ import os
 import warnings
 from collections.abc import Sequence
 from dataclasses import dataclass
+from itertools import product
+
 import numpy as np
 
 from gsfric.discovery.candidates import CANDIDATE_NAMES, CANDIDATES, REFIT, Candidate
@@ -118,10 +120,13 @@ class Problem:
         if poses is None:
             poses = (np.asarray(motion.position, float), np.asarray(motion.rotation, float))
         uniform = np.ptp(np.diff(t)) <= 1e-6 * np.mean(np.diff(t))
-        self.sigma_v = (rest.speed_uncertainty(platform, t, *poses) if uniform
-                        else np.zeros(6))
-        self.sliding = rest.sliding_mask(self.result.D_dot[self.used], self.sigma_v,
-                                         3 * PRISMATIC_EPS)
+        self.sigma_v, self.reach = np.zeros(6), 0
+        if uniform:
+            short, long = rest.differentiator_windows(*poses)
+            self.sigma_v = rest.speed_uncertainty(platform, t, *poses, window=short)
+            self.reach = long // 2
+        self.sliding = rest.sliding_mask(self.result.D_dot, self.sigma_v, 3 * PRISMATIC_EPS,
+                                         reach=self.reach)[self.used]
         self.weight = self.sliding.astype(float)
         self.force_noise = rest.force_noise(forces[self.used])
         self.candidates = [c for c in CANDIDATES if c.name in settings.candidates
@@ -193,7 +198,8 @@ class Problem:
         Refitted parameters and smooth candidates: columns of the compiled Jacobian.
         Candidates whose amplitude enters the non-negative Coulomb sum, or that have a grid
         (see ``candidates``): one variant per sign of the amplitude and grid value, each the
-        one-sided step ``F(amplitude + sign) - F``, evaluated by the compiled model; a
+        one-sided step ``(F(amplitude + sign size) - F) / size`` for each of the candidate's
+        ``secants`` sizes (1 but for ``time_offset``), evaluated by the compiled model; a
         variant's coefficient is the amplitude's distance from zero (non-negative).
         """
         theta = self.with_fixed(theta, candidates)
@@ -210,7 +216,7 @@ class Problem:
             variants[c.name] = [list(range(k, k + len(c.columns)))]
             grid[c.name] = [{}]
             k += len(c.columns)
-        steps, owners = [], []
+        steps, owners, sizes = [], [], []
         for c in candidates:
             if not c.stepped:
                 continue
@@ -219,24 +225,24 @@ class Problem:
             for gname, values in c.grids(self.context).items():
                 settings = [{**s_, gname: v} for s_ in settings for v in values]
             variants[c.name], grid[c.name] = [], []
-            for sign in c.signs:
-                for values in settings:
-                    step = theta.copy()
-                    for gname, v in values.items():
-                        step[index[f"{c.name}.{gname}"]] = v
-                    step[index[amp]] += sign
-                    steps.append(step)
-                    variants[c.name].append([k])
-                    grid[c.name].append(values)
-                    names.append(amp)
-                    signs.append(sign)
-                    owners.append(c.name)
-                    k += 1
+            for sign, size, values in product(c.signs, c.secants, settings):
+                step = theta.copy()
+                for gname, v in values.items():
+                    step[index[f"{c.name}.{gname}"]] = v
+                step[index[amp]] += sign * size
+                steps.append(step)
+                sizes.append(size)
+                variants[c.name].append([k])
+                grid[c.name].append(values)
+                names.append(amp)
+                signs.append(sign)
+                owners.append(c.name)
+                k += 1
         X = np.empty((len(self.y), 6, len(names)))
         F, _ = self.model.jacobian(theta, columns, rows=self.used,
                                    out=X[:, :, :len(columns)])
         for j, step in enumerate(steps):
-            X[:, :, len(columns) + j] = (self.model.forces(step) - F)[self.used]
+            X[:, :, len(columns) + j] = (self.model.forces(step) - F)[self.used] / sizes[j]
         signs = np.array(signs)
         lower = np.empty(len(names))
         upper = np.empty(len(names))

@@ -8,9 +8,11 @@ sigma_D the noise of the leg length and h the Savitzky-Golay derivative filter u
 noise; physically, friction at rest (static friction) holds whatever force is needed, up to its
 static level, and is not a function of the speed at all. So a (sample, leg) pair whose speed
 lies within ``REST_BAND`` sigma_v of zero is treated as *not sliding*: its friction is only
-bounded, and it carries no information about any friction law. The workflow leaves those pairs
-out of every fit and statistic (they are masked: residual and derivative columns set to zero,
-which is the least-squares solution of the bound when the bound is not active).
+bounded, and it carries no information about any friction law. So is every pair whose
+differentiator window reaches into a rest (``sliding_mask``): there the differentiated speed
+is biased by the stop. The workflow leaves those pairs out of every fit and statistic (they
+are masked: residual and derivative columns set to zero, which is the least-squares solution
+of the bound when the bound is not active).
 The model's own evaluation keeps its documented regularisation of the sign (PRISMATIC_EPS).
 
 ``force_noise`` estimates the force noise from the force channels alone, without the model:
@@ -66,6 +68,20 @@ def leg_lengths(platform, position: np.ndarray, rotation: np.ndarray) -> np.ndar
                           axis=2)
 
 
+def differentiator_windows(position: np.ndarray, rotation: np.ndarray,
+                           polyorder: int | None = None) -> tuple[int, int]:
+    """The Savitzky-Golay windows (samples) that ``Motion.from_samples`` chooses for the
+    recorded positions (N, 3) and orientations (N, 3, 3): (shorter, longer)."""
+    from gsfric.trajectory import (DEFAULT_POLYORDER, _continuous, _gcv_window,
+                                   quaternion_from_rotation)
+
+    polyorder = DEFAULT_POLYORDER if polyorder is None else int(polyorder)
+    q = _continuous(quaternion_from_rotation(np.asarray(rotation, float)))
+    a = _gcv_window(np.asarray(position, float), polyorder)
+    b = _gcv_window(q, polyorder)
+    return min(a, b), max(a, b)
+
+
 def speed_uncertainty(platform, t: np.ndarray, position: np.ndarray, rotation: np.ndarray,
                       window: int | None = None, polyorder: int | None = None) -> np.ndarray:
     """Standard deviation of each leg's differentiated speed due to pose noise (6,), m/s.
@@ -80,30 +96,63 @@ def speed_uncertainty(platform, t: np.ndarray, position: np.ndarray, rotation: n
     rotation : ndarray, shape (N, 3, 3)
         Recorded (unsmoothed) orientations.
     window, polyorder : int, optional
-        The Savitzky-Golay differentiator (default: as ``Motion.from_samples`` chooses it for
-        the positions).
+        The Savitzky-Golay differentiator (default: the shorter of the windows
+        ``Motion.from_samples`` chooses for positions and orientations: the larger gain).
     """
-    from gsfric.trajectory import DEFAULT_POLYORDER, _gcv_window
+    from gsfric.trajectory import DEFAULT_POLYORDER
 
     polyorder = DEFAULT_POLYORDER if polyorder is None else int(polyorder)
     D = leg_lengths(platform, np.asarray(position, float), np.asarray(rotation, float))
     sigma_D = high_frequency_std(D)
     if window is None:
-        # the shorter of the windows chosen for position and orientation: the larger gain
-        from gsfric.trajectory import _continuous, quaternion_from_rotation
-
-        q = _continuous(quaternion_from_rotation(np.asarray(rotation, float)))
-        window = min(_gcv_window(np.asarray(position, float), polyorder),
-                     _gcv_window(q, polyorder))
+        window = differentiator_windows(position, rotation, polyorder)[0]
     step = float(np.mean(np.diff(t)))
     h = savgol_coeffs(int(window), polyorder, deriv=1, delta=step)
     return sigma_D * float(np.sqrt(np.sum(h ** 2)))
 
 
-def sliding_mask(speed: np.ndarray, sigma_v: np.ndarray, floor: float) -> np.ndarray:
-    """(N, 6) True where |speed| exceeds ``REST_BAND`` sigma_v (and ``floor``): sliding."""
+def sliding_mask(speed: np.ndarray, sigma_v: np.ndarray, floor: float,
+                 reach: int = 0) -> np.ndarray:
+    """(N, 6) True where a leg is known to slide.
+
+    A pair (sample, leg) slides where ``|speed|`` exceeds ``REST_BAND`` sigma_v (and
+    ``floor``) and, with ``reach`` > 0, no rest lies within ``reach`` samples: no sample whose
+    differentiator window reaches into a rest. A rest is a run of at least ``reach`` samples
+    inside the band, with excursions out of the band shorter than ``reach`` samples (the
+    differentiated noise is correlated over the window: such an excursion is one noise event,
+    or the pull of the next move on the window, not a move).
+
+    Why: the differentiator (a local polynomial fit over ``2 reach + 1`` samples) is unbiased
+    where the motion is a polynomial over its window, as at a smooth reversal, whose passage
+    through the band is short; at a rest's start and end the motion stops (a jump of the
+    acceleration or jerk), the window mixes the rest with the move, and the estimate's bias,
+    a fraction of the move's speed half a window away, is not covered by the noise band. A
+    speed with the wrong sign there makes a Coulomb-type friction flip by twice its level.
+
+    Parameters
+    ----------
+    speed : ndarray, shape (N, 6)
+        Differentiated leg speeds, m/s.
+    sigma_v : ndarray, shape (6,)
+        Their standard deviation due to pose noise, m/s.
+    floor : float
+        Smallest half-width of the band, m/s.
+    reach : int
+        Half-width of the differentiator's window, samples (0: no rest widening).
+    """
     band = np.maximum(REST_BAND * np.asarray(sigma_v, float), floor)
-    return np.abs(speed) > band[None, :]
+    inside = np.abs(speed) <= band[None, :]
+    if reach <= 0:
+        return ~inside
+    from scipy.ndimage import binary_closing, binary_dilation, binary_opening
+
+    reach = int(reach)
+    structure = np.ones((reach, 1), bool)
+    # a rest: in the band for at least `reach` samples, excursions shorter than `reach`
+    # (one correlated noise event of the differentiator) included
+    rests = binary_opening(binary_closing(inside, structure=structure), structure=structure)
+    widened = binary_dilation(rests, structure=np.ones((2 * reach + 1, 1), bool))
+    return ~(inside | widened)
 
 
 def force_noise(forces: np.ndarray) -> np.ndarray:

@@ -110,7 +110,9 @@ def screen_candidates(problem: Problem, design: Design, whitener: st.Whitener,
 
     A candidate is accepted when (a) its F-test gives p < alpha / K, (b) it lowers the
     held-out error of the block cross-validation in total and in at least ``min_fold_share``
-    of the folds, (c) the gap it closes reaches ``min_gap``.
+    of the folds, (c) the gap it closes reaches ``min_gap``, (d) it lowers the plain residual
+    as well as the prewhitened one (the prewhitened fit weighs frequencies by the noise
+    model; an explanation of the gap must also shrink the gap as measured).
     """
     s = problem.settings
     blocks = st.Blocks.whitened(whitener, design.X, design.r, s.n_blocks)
@@ -133,6 +135,7 @@ def screen_candidates(problem: Problem, design: Design, whitener: st.Whitener,
         gap = gap_closed(design, null, best)
         test = CandidateTest(c.name, params, float(F), p, k, cv_gain, share,
                              float((null.sse - best.sse) / null.sse), gap)
+        plain = plain_sse(design, best) < plain_sse(design, null)
         if p >= level:
             test.reason = f"not significant (p = {p:.2g} >= {level:.2g})"
         elif cv_gain <= 0:
@@ -143,11 +146,21 @@ def screen_candidates(problem: Problem, design: Design, whitener: st.Whitener,
         elif gap < s.min_gap:
             test.reason = (f"closes a gap of only {gap:.2f} x the noise level "
                            f"(needs {s.min_gap:g})")
+        elif not plain:
+            test.reason = ("lowers the prewhitened error but not the residual itself: it "
+                           "fits what the noise model weighs most, not the gap")
         else:
             test.significant = True
             test.reason = "significant"
         tests[c.name], fits[c.name], chosen[c.name] = test, best, j
     return Screen(tests, fits, chosen, null, blocks, cv_null)
+
+
+def plain_sse(design: Design, f: st.Fit) -> float:
+    """Sum of squares of the plain (not prewhitened) residual left by a fit's coefficients."""
+    a = np.zeros(design.XtX.shape[0])
+    a[f.columns] = f.coef
+    return float(design.rtr - 2 * a @ design.Xtr + a @ design.XtX @ a)
 
 
 def gap_closed(design: Design, null: st.Fit, alternative: st.Fit) -> float:
@@ -266,6 +279,81 @@ def bootstrap_share(problem: Problem, design: Design, screen: Screen,
             gains.append(null.sse - f.sse)
         wins[int(np.argmax(gains))] += 1
     return {n: float(v / len(weights)) for n, v in zip(names, wins)}
+
+
+def generic_competitor(problem: Problem, design: Design, whitener: st.Whitener,
+                       screen: Screen, winner: str) -> dict:
+    """The winner against the generic out-of-model structure of ``lackfit`` (a delay, a
+    nonlinear or mis-scaled load cell, another friction law, a drift), without the signals
+    that a tested candidate reproduces (``lackfit.CATALOG_EQUIVALENT``).
+
+    The winner is *blocked* (not named) when it adds nothing worth naming to the generic basis
+    (p >= alpha, or a gap below ``min_gap`` times the noise, with the refitted model in both),
+    while the generic basis adds something significant (p < alpha / K and a gap of at least
+    ``min_gap``) to the winner and every other accepted candidate of the round: the structure
+    is then a generic, out-of-catalog one that the winner only imitates in part. Returns the
+    p-values and gaps both ways, ``blocked`` and the generic signal that carries most.
+    """
+    from gsfric.discovery import lackfit
+
+    s = problem.settings
+    used = problem.used
+    F = problem.model.forces(design.theta)[used]
+    B = lackfit.basis(np.asarray(problem.model.t[used], float), F,
+                      problem.result.D_dot[used], problem.sliding)
+    # only what lies outside the catalog as tested: a signal that a candidate (or an effect of
+    # the model) reproduces is that effect, not a generic structure
+    available = set(screen.tests) | {n.split(".")[0] for n in design.names}
+    names = lackfit.column_names()
+    keep = [j for j, name in enumerate(names)
+            if lackfit.CATALOG_EQUIVALENT.get(name) not in available]
+    B = B[:, :, keep] * problem.weight[:, :, None]
+    names = [names[j] for j in keep]
+    others = [n for n, t in screen.tests.items() if t.significant and n != winner]
+    wcols = design.variants[winner][screen.variant[winner]]
+    ocols = [c for n in others for c in design.variants[n][screen.variant[n]]]
+    cols = design.refit + wcols + ocols
+    X = np.concatenate([design.X[:, :, cols], B], axis=2)
+    blocks = st.Blocks.whitened(whitener, X, design.r, s.n_blocks)
+    flat = X.reshape(-1, X.shape[2])
+    XtX, Xtr = flat.T @ flat, flat.T @ design.r.reshape(-1)
+    del X, flat
+
+    def gap(small: st.Fit, large: st.Fit) -> float:     # as gap_closed, unwhitened
+        a = np.zeros(len(Xtr))
+        a[large.columns] = large.coef
+        change = a.copy()
+        change[small.columns] -= small.coef
+        left = design.rtr - 2 * a @ Xtr + a @ XtX @ a
+        return float(np.sqrt(max(change @ XtX @ change, 0.0) / max(left, 1e-300)))
+
+    nr, nw, no, nb = len(design.refit), len(wcols), len(ocols), B.shape[2]
+    lower = np.r_[design.lower[cols], np.full(nb, -np.inf)]
+    upper = np.r_[design.upper[cols], np.full(nb, np.inf)]
+    R = list(range(nr))
+    W = list(range(nr, nr + nw))
+    O = list(range(nr + nw, nr + nw + no))
+    G = list(range(nr + nw + no, nr + nw + no + nb))
+    k_w = len(next(c for c in problem.candidates if c.name == winner).fitted)
+    generic = st.fit(blocks, R + G, lower, upper)
+    both = st.fit(blocks, R + G + W, lower, upper)
+    _, p_winner, _ = st.f_test(generic, both, k=k_w)
+    catalog = st.fit(blocks, R + W + O, lower, upper)
+    everything = st.fit(blocks, R + W + O + G, lower, upper)
+    _, p_generic, _ = st.f_test(catalog, everything)
+    level = s.alpha / max(len(screen.tests), 1)
+    parts = {}
+    coef = everything.coef[len(R + W + O):]
+    for j, name in enumerate(names):
+        parts[name] = parts.get(name, 0.0) + float(coef[j] ** 2 * np.sum(B[:, :, j] ** 2))
+    main = max(parts, key=parts.get) if parts else None
+    gap_winner, gap_generic = gap(generic, both), gap(catalog, everything)
+    adds = p_winner < s.alpha and gap_winner >= s.min_gap
+    structure = p_generic < level and gap_generic >= s.min_gap
+    return {"p_winner_beyond_generic": float(p_winner), "gap_winner_beyond_generic": gap_winner,
+            "p_generic_beyond_catalog": float(p_generic),
+            "gap_generic_beyond_catalog": gap_generic,
+            "blocked": bool(structure and not adds), "main_signal": main}
 
 
 # -- Gauss-Newton refinement on the compiled model ---------------------------------------------

@@ -68,6 +68,7 @@ def summary(d: Discovery) -> dict:
             "indistinguishable": rnd.indistinguishable,
             "bootstrap_share": rnd.bootstrap_share, "noise_model": rnd.noise_model,
             "rms_before": rnd.rms_before, "rms_after": rnd.rms_after,
+            "generic": rnd.generic, "blocked": rnd.blocked,
             "tests": [{"name": t.name, "F": t.F, "p_value": t.p_value, "dof": t.dof,
                        "cv_gain": t.cv_gain, "fold_share": t.fold_share,
                        "sse_gain": t.sse_gain, "gap": t.gap, "significant": t.significant,

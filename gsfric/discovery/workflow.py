@@ -35,7 +35,8 @@ from gsfric.discovery.candidates import CANDIDATES
 from gsfric.discovery.regimes import bands as regime_bands
 from gsfric.discovery.residuals import Problem
 from gsfric.discovery.settings import Settings
-from gsfric.discovery.selection import (CandidateTest, bootstrap_share, indistinguishable,
+from gsfric.discovery.selection import (CandidateTest, bootstrap_share, generic_competitor,
+                                        indistinguishable,
                                         noise_model, refine, refit_alternatives,
                                         screen_candidates, winner_of)
 from gsfric.platform import Platform
@@ -74,6 +75,12 @@ class Round:
     rms_before: float = 0.0
     rms_after: float = 0.0
     preferred_over: str | None = None
+    generic: dict = field(default_factory=dict)
+    """The winner against the generic out-of-model structure (``generic_competitor``)."""
+    blocked: str | None = None
+    """A winner not named: a generic out-of-catalog structure explains the data better and the
+    winner adds nothing to it (``generic["blocked"]``), or refined on the compiled model it
+    does not lower the residual."""
 
 
 @dataclass
@@ -301,6 +308,15 @@ def discover(motion: Motion, forces: np.ndarray, platform: Platform | None = Non
                                                                    winner)
                 if rnd.preferred_over not in rnd.indistinguishable:
                     rnd.indistinguishable.append(rnd.preferred_over)
+        rnd.generic = generic_competitor(problem, design, whitener, screen, winner)
+        if rnd.generic["blocked"]:
+            rnd.blocked, rnd.winner = winner, None
+            rnd.rms_after = rnd.rms_before
+            notes.append(
+                f"round {rnd.index}: {winner} was significant but adds nothing to a generic "
+                f"out-of-catalog structure (mainly {rnd.generic['main_signal']}), which "
+                "explains more: not named")
+            break
         rnd.bootstrap_share = bootstrap_share(problem, design, screen, rng)
         c = next(c for c in candidates if c.name == winner)
         start = design.theta.copy()
@@ -311,11 +327,19 @@ def discover(motion: Motion, forces: np.ndarray, platform: Platform | None = Non
         for col, step in zip(step_fit.columns, step_fit.coef):
             if col in design.refit:
                 start[model.index[design.names[col]]] += design.signs[col] * step
-        names = problem.refit_names(active + [winner])
+        new_names = problem.refit_names(active + [winner])
         test = screen.tests[winner]
         design = screen = None     # free the round's design before the refinement
-        theta, r, J = refine(problem, start, names, whitener)
-        rnd.rms_after = _rms(r[sliding])
+        theta_new, r_new, J_new = refine(problem, start, new_names, whitener)
+        rnd.rms_after = _rms(r_new[sliding])
+        if rnd.rms_after >= rnd.rms_before:
+            # refined on the compiled model, the effect no longer shrinks the gap
+            notes.append(f"round {rnd.index}: {winner} refined on the compiled model does "
+                         f"not lower the residual ({rnd.rms_before:.4g} N -> "
+                         f"{rnd.rms_after:.4g} N): not named")
+            rnd.blocked, rnd.winner, rnd.rms_after = winner, None, rnd.rms_before
+            break
+        theta, r, J, names = theta_new, r_new, J_new, new_names
         active.append(winner)
         findings_evidence[winner] = {
             "round": rnd.index, "F": test.F, "p_value": test.p_value, "dof": test.dof,
@@ -359,7 +383,8 @@ def discover(motion: Motion, forces: np.ndarray, platform: Platform | None = Non
                      "(see gsfric.evaluation: stroke, near-singular poses); they are kept")
     used = problem.used
     full_after = problem.y - model.forces(theta)[used]
-    lof = _lack_of_fit(problem, theta, residual_after, whitener)
+    lof = _lack_of_fit(problem, theta, residual_after, whitener,
+                       in_model=[c.name for c in problem.own_effects] + active)
     rms_after = _rms(residual_after[sliding])
     independent = float(np.sqrt(np.mean(problem.force_noise ** 2)))
     noise_info = {
@@ -373,7 +398,7 @@ def discover(motion: Motion, forces: np.ndarray, platform: Platform | None = Non
         "speed_uncertainty": [float(v) for v in problem.sigma_v],
         "not_sliding_share": float(1.0 - sliding.mean()),
     }
-    if lof["significant"]:
+    if lof["significant"] or any(rnd.generic.get("blocked") for rnd in rounds):
         verdict = "unexplained_discrepancy"
     elif active:
         verdict = "explained"
@@ -410,7 +435,7 @@ def _noise_whitener(design, problem: Problem) -> st.Whitener:
 
 
 def _lack_of_fit(problem: Problem, theta: np.ndarray, residual: np.ndarray,
-                 whitener: st.Whitener) -> dict:
+                 whitener: st.Whitener, in_model: Sequence[str] = ()) -> dict:
     """The lack-of-fit test of the final residual (``lackfit``), with where it lives."""
     from gsfric.discovery import lackfit
 
@@ -419,7 +444,13 @@ def _lack_of_fit(problem: Problem, theta: np.ndarray, residual: np.ndarray,
     F = problem.model.forces(theta)[used]
     t = np.asarray(problem.model.t[used])
     X = lackfit.basis(t, F, problem.result.D_dot[used], problem.sliding)
-    X *= problem.weight[:, :, None]
+    # a signal that an effect of the final model reproduces (a delay's dF/dt once time_offset
+    # is in it) is that effect's parameter, refitted already: not a structure outside the model
+    names = lackfit.column_names()
+    keep = [j for j, name in enumerate(names)
+            if lackfit.CATALOG_EQUIVALENT.get(name) not in in_model]
+    X = X[:, :, keep] * problem.weight[:, :, None]
+    names = [names[j] for j in keep]
     # the noise model from the residual of the basis fit (largest model), as in each round
     k = X.shape[2]
     flat = X.reshape(-1, k)
@@ -427,7 +458,7 @@ def _lack_of_fit(problem: Problem, theta: np.ndarray, residual: np.ndarray,
     whitener = st.Whitener.fit(residual - X @ coef, valid=problem.sliding)
     out = lackfit.test(residual, X, whitener, alpha=s.alpha, min_gap=s.min_gap,
                        n_blocks=s.n_blocks, n_folds=s.n_folds,
-                       min_fold_share=s.min_fold_share)
+                       min_fold_share=s.min_fold_share, names=names)
     D, speed = problem.result.D[used], problem.result.D_dot[used]
     state = lackfit.state_structure(residual, lackfit.state_features(D, speed, F),
                                     problem.sliding, n_folds=s.n_folds, min_gap=s.min_gap)
