@@ -25,39 +25,16 @@ import tempfile
 import time
 from pathlib import Path
 
-import numpy as np
-
-RATE = 1000.0            # Hz
 ROWS_PER_GROUP = 250_000
 
 
-def write_trajectory(path: Path, steps: int, rate: float = RATE,
-                     rows_per_group: int = ROWS_PER_GROUP) -> None:
-    """A ``models.sinusoidal`` motion of ``steps`` samples as a Parquet trajectory file.
+def write_trajectory(path: Path, steps: int, rows_per_group: int = ROWS_PER_GROUP) -> None:
+    """A ``models.sinusoidal`` motion of ``steps`` samples at 1 kHz as a Parquet trajectory
+    file (``t, x, y, z, qw, qx, qy, qz``), in row groups of ``rows_per_group``: the file of
+    ``gsfric bench``'s simulate case."""
+    from gsfric.bench import write_trajectory as write
 
-    Columns ``t, x, y, z, qw, qx, qy, qz``; written in row groups of ``rows_per_group``.
-    """
-    import pyarrow as pa
-    import pyarrow.parquet as pq
-
-    from gsfric import models
-
-    writer = None
-    try:
-        for start in range(0, steps, rows_per_group):
-            t = np.arange(start, min(steps, start + rows_per_group)) / rate
-            motion = models.sinusoidal(t)
-            q = motion.quaternion()          # unit, qw > 0 here (small angles)
-            columns = {"t": t, "x": motion.position[:, 0], "y": motion.position[:, 1],
-                       "z": motion.position[:, 2], "qw": q[:, 0], "qx": q[:, 1],
-                       "qy": q[:, 2], "qz": q[:, 3]}
-            table = pa.table(columns)
-            if writer is None:
-                writer = pq.ParquetWriter(path, table.schema)
-            writer.write_table(table)
-    finally:
-        if writer is not None:
-            writer.close()
+    write(path, steps, group=rows_per_group)
 
 
 def run_simulate(trajectory: Path, out: Path, chunk: int, threads: int = 1,
