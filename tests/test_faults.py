@@ -294,13 +294,20 @@ SLOW_SIMULATE = textwrap.dedent("""
 """)
 
 
+def _interruptible() -> None:
+    """In the child: SIGINT as an interactive shell leaves it. A suite started in the
+    background (``make test &``, nohup) ignores SIGINT, and the child would inherit that."""
+    signal.signal(signal.SIGINT, signal.SIG_DFL)
+
+
 def _start_slow_simulate(tmp_path: Path) -> tuple[subprocess.Popen, Path]:
     path = _trajectory_file(tmp_path, 3000)
     out = tmp_path / "o.csv"
     out.write_text("earlier output\n")
     proc = subprocess.Popen([sys.executable, "-c", SLOW_SIMULATE, "simulate", "--trajectory",
                              str(path), "--out", str(out), "--chunk", "100", "--no-progress"],
-                            stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+                            stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
+                            preexec_fn=_interruptible)
     deadline = time.monotonic() + 120
     while not leftovers(tmp_path):
         assert proc.poll() is None, proc.communicate()
