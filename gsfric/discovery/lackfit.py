@@ -253,6 +253,13 @@ DYNAMIC_ORDER = 6
 """Lagged residuals per leg in ``dynamic_structure`` (the noise's own past)."""
 DYNAMIC_LAGS = 4
 """Current and lagged samples of each input in ``dynamic_structure`` (lags 0..DYNAMIC_LAGS)."""
+DYNAMIC_MIN_GAP = 0.5
+"""Smallest input-driven part, relative to the RMS left, that the workflow counts (at least
+``Settings.min_gap``). A motion differentiated from noisy poses leaves a force error that
+follows the accelerations (the smoothing's bias at the fast end of a chirp): on the chirps of
+``benchmarks/discovery_rates.py`` (1-2 Hz, heavy payload, AR(1) noise) it reached 0.31 times
+the noise left, with the true effect named; a resonance or a delay of the size of the noise is
+above 0.6."""
 
 
 def dynamic_structure(residual: np.ndarray, inputs: dict[str, np.ndarray], valid: np.ndarray,

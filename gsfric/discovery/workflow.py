@@ -464,7 +464,7 @@ def _lack_of_fit(problem: Problem, theta: np.ndarray, residual: np.ndarray,
                                     problem.sliding, n_folds=s.n_folds, min_gap=s.min_gap)
     dynamic = lackfit.dynamic_structure(
         residual, {"dF/dt": np.gradient(F, t, axis=0), "acceleration": np.gradient(speed, t, axis=0)},
-        problem.sliding, alpha=s.alpha, min_gap=s.min_gap)
+        problem.sliding, alpha=s.alpha, min_gap=max(s.min_gap, lackfit.DYNAMIC_MIN_GAP))
     out["state"], out["dynamic"] = state, dynamic
     # structure in a form of the basis says most about what it is; else structure that repeats
     # with the state; else structure that follows the motion
