@@ -40,7 +40,9 @@ SIZES = (40, 1_000, 100_000, 1_000_000)
 QUICK_SIZES = (40, 1_000)
 LOOP_MAX_STEPS = 1_000
 SIMULATE_STEPS = 1_000_000   # benchmarks/memory_10M.py runs the same at 10 million
-DT = 1e-3
+RATE = 1000.0
+"""Sampling rate of the benchmark's motions, Hz."""
+DT = 1 / RATE
 SEED = 20261122
 
 IMPLEMENTATIONS = {
@@ -358,7 +360,7 @@ def write_trajectory(path: Path, steps: int, group: int = 250_000) -> None:
     writer = None
     try:
         for start in range(0, steps, group):
-            t = np.arange(start, min(steps, start + group)) * DT
+            t = np.arange(start, min(steps, start + group)) / RATE
             motion = models.sinusoidal(t)
             q = motion.quaternion()
             table = pa.table({"t": t, "x": motion.position[:, 0], "y": motion.position[:, 1],

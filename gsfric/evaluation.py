@@ -202,8 +202,8 @@ class Outputs(MutableMapping):
         except KeyError:
             if key not in self._pending():
                 raise
-        platform, mode, constants, motion, flag, names = self._later
-        evaluator = Evaluator(platform, mode=mode, paper_constants=constants)
+        platform, mode, constants, threads, motion, flag, names = self._later
+        evaluator = Evaluator(platform, mode=mode, paper_constants=constants, n_threads=threads)
         self._arrays.update(evaluator.details(motion, names, flag))
         self._later = None
         return self._arrays[key]
@@ -513,7 +513,8 @@ class Evaluator:
         arrays = {k: v.reshape((n,) + tuple(shapes[k])) for k, v in outs.items()}
         if sensor:
             self._apply_sensor(np.asarray(motion.t, float), arrays, flag)
-        later = (self.platform, self.mode, self.K, motion, flag, tuple(details))
+        # what the detail pass needs, picklable (a Result travels between processes)
+        later = (self.platform, self.mode, self.K, self.n_threads, motion, flag, tuple(details))
         return Result(t=np.asarray(motion.t, float), arrays=Outputs(arrays, later), flag=flag,
                       mode=self.mode, source=(self.platform, motion))
 

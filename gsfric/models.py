@@ -270,4 +270,3 @@ def point_to_point(rng: np.random.Generator, samples: int, rate: float = 200.0,
     position = pose[:, :3] + [0.0, 0.0, height]
     rotation = rotation_from_euler(pose[:, 3], pose[:, 4] + tilt, pose[:, 5])
     return Motion.from_samples(t, position, quaternion=quaternion_from_rotation(rotation))
-

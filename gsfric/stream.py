@@ -515,20 +515,19 @@ def parse_columns(text: str | None) -> tuple[str, ...]:
     return chosen
 
 
-def result_columns(result, plan, float32: bool = False, F: np.ndarray | None = None,
-                   reuse: dict | None = None) -> dict[str, np.ndarray]:
+def result_columns(result, plan, float32: bool = False, reuse: dict | None = None
+                   ) -> dict[str, np.ndarray]:
     """The output columns of one Result, each a contiguous 1-D array (one transposed copy per
-    output array; nothing refers to the Result's buffers). ``F`` (N, 6) replaces
-    ``result.F``. ``reuse`` (a dict, filled on first use) lends the arrays of the columns from
-    call to call: the columns are then valid until the next call with it."""
+    output array; nothing refers to the Result's buffers). ``reuse`` (a dict, filled on first
+    use) lends the arrays of the columns from call to call: the columns are then valid until
+    the next call with it."""
     n = len(result)
     cols = {"t": np.array(result.t, dtype=np.float64)}
     rows: dict[str, np.ndarray] = {}
     dtype = np.float32 if float32 else np.float64
     for column, key, index, _ in plan:
         if key not in rows:
-            values = F if key == "F" and F is not None else result.arrays[key]
-            values = values.reshape(n, -1).T
+            values = result.arrays[key].reshape(n, -1).T
             if reuse is None:
                 rows[key] = np.array(values, dtype=dtype, order="C")
             else:

@@ -533,9 +533,6 @@ class _Block:
         self.states = np.empty(size * 36)               # workspace states of a block
         self.times = np.zeros(size)
         self._pairs = np.empty(3 * size * 6)            # the trapezoid's sums of neighbours
-        self._limit = np.empty(size * 6)                # the coupled-friction flag's check
-        self._change = np.empty(size * 6)
-        self._over = np.empty(size * 6, dtype=bool)
         self._other = {k: np.empty(size * sizes[k]) for k in _OTHER if k in sizes}
         self._sizes = sizes
         self._flag = np.empty(size, dtype=np.int64)
@@ -598,24 +595,13 @@ class _Evaluation:
         after block; yields ``(s, e)``."""
         n = len(x)
         if block.compiled and not self.sensor:
-            from gsfric.evaluation import COUPLING_TOLERANCE, FLAG_COUPLING
-
-            ev = self.evaluator
+            ev = self.evaluator         # every flag, the coupled solve's included, set in C
             spec = ev.flag_spec()
             for s in range(0, n, block.size):
                 e = min(n, s + block.size)
                 block.use(e - s)
                 block.fn([x[s:e], ev.P, ev.Q], block.out, 1, select=block.names, flags=spec,
                          flag=block.flag)
-                change = block.out.get("coupling_change")
-                if change is not None:     # evaluate_quiet's test, in the block's buffers
-                    n6 = change.size
-                    limit = np.abs(block.out["F0"], out=block._limit[:n6].reshape(-1, 6))
-                    limit += 1.0
-                    limit *= COUPLING_TOLERANCE
-                    over = np.greater(np.abs(change, out=block._change[:n6].reshape(-1, 6)),
-                                      limit, out=block._over[:n6].reshape(-1, 6))
-                    block.flag[over.any(axis=1)] |= FLAG_COUPLING
                 yield s, e
             return
         from gsfric.trajectory import Motion

@@ -294,7 +294,6 @@ def _flagging_workspace():
 
 
 def _platforms():
-    from gsfric.evaluation import COUPLING_TOLERANCE  # noqa: F401  (the flag checked below)
 
     reference = models.reference_platform()
     locking = models.reference_platform("coupled").with_friction(

@@ -123,6 +123,18 @@ def column_names() -> list[str]:
     return list(SIGNALS[:-1]) + ["drift"] * 3
 
 
+def basis_outside(t: np.ndarray, F: np.ndarray, speed: np.ndarray, sliding: np.ndarray,
+                  weight: np.ndarray, catalog) -> tuple[np.ndarray, list[str]]:
+    """``basis`` without the signals that an effect of ``catalog`` reproduces
+    (``CATALOG_EQUIVALENT``: that effect's parameter, not a structure outside the catalog),
+    weighted per (sample, leg) by ``weight`` (M, 6); returns the columns (M, 6, k) and their
+    signals."""
+    names = column_names()
+    keep = [j for j, name in enumerate(names) if CATALOG_EQUIVALENT.get(name) not in catalog]
+    X = basis(t, F, speed, sliding)[:, :, keep] * weight[:, :, None]
+    return X, [names[j] for j in keep]
+
+
 def test(residual: np.ndarray, X: np.ndarray, whitener: st.Whitener, *, alpha: float,
          min_gap: float, n_blocks: int, n_folds: int, min_fold_share: float,
          names: list[str] | None = None) -> dict:

@@ -166,14 +166,18 @@ def plain_sse(design: Design, f: st.Fit) -> float:
 def gap_closed(design: Design, null: st.Fit, alternative: st.Fit) -> float:
     """RMS change of the fitted residual from null to alternative over the RMS residual left
     (unwhitened, from the design's cross-products)."""
-    k = design.XtX.shape[0]
-    a = np.zeros(k)
+    return _gap(design.XtX, design.Xtr, design.rtr, null, alternative)
+
+
+def _gap(XtX: np.ndarray, Xtr: np.ndarray, rtr: float, null: st.Fit, alternative: st.Fit
+         ) -> float:
+    """``gap_closed`` from the cross-products of any columns (X'X, X'r) and r'r."""
+    a = np.zeros(len(Xtr))
     a[alternative.columns] = alternative.coef
     change = a.copy()
     change[null.columns] -= null.coef
-    closed = change @ design.XtX @ change
-    left = design.rtr - 2 * a @ design.Xtr + a @ design.XtX @ a
-    return float(np.sqrt(max(closed, 0.0) / max(left, 1e-300)))
+    left = rtr - 2 * a @ Xtr + a @ XtX @ a
+    return float(np.sqrt(max(change @ XtX @ change, 0.0) / max(left, 1e-300)))
 
 
 def candidate_values(problem: Problem, design: Design, c: Candidate, fit: st.Fit,
@@ -299,16 +303,12 @@ def generic_competitor(problem: Problem, design: Design, whitener: st.Whitener,
     s = problem.settings
     used = problem.used
     F = problem.model.forces(design.theta)[used]
-    B = lackfit.basis(np.asarray(problem.model.t[used], float), F,
-                      problem.result.D_dot[used], problem.sliding)
     # only what lies outside the catalog as tested: a signal that a candidate (or an effect of
     # the model) reproduces is that effect, not a generic structure
     available = set(screen.tests) | {n.split(".")[0] for n in design.names}
-    names = lackfit.column_names()
-    keep = [j for j, name in enumerate(names)
-            if lackfit.CATALOG_EQUIVALENT.get(name) not in available]
-    B = B[:, :, keep] * problem.weight[:, :, None]
-    names = [names[j] for j in keep]
+    B, names = lackfit.basis_outside(np.asarray(problem.model.t[used], float), F,
+                                     problem.result.D_dot[used], problem.sliding,
+                                     problem.weight, available)
     others = [n for n, t in screen.tests.items() if t.significant and n != winner]
     wcols = design.variants[winner][screen.variant[winner]]
     ocols = [c for n in others for c in design.variants[n][screen.variant[n]]]
@@ -318,14 +318,6 @@ def generic_competitor(problem: Problem, design: Design, whitener: st.Whitener,
     flat = X.reshape(-1, X.shape[2])
     XtX, Xtr = flat.T @ flat, flat.T @ design.r.reshape(-1)
     del X, flat
-
-    def gap(small: st.Fit, large: st.Fit) -> float:     # as gap_closed, unwhitened
-        a = np.zeros(len(Xtr))
-        a[large.columns] = large.coef
-        change = a.copy()
-        change[small.columns] -= small.coef
-        left = design.rtr - 2 * a @ Xtr + a @ XtX @ a
-        return float(np.sqrt(max(change @ XtX @ change, 0.0) / max(left, 1e-300)))
 
     nr, nw, no, nb = len(design.refit), len(wcols), len(ocols), B.shape[2]
     lower = np.r_[design.lower[cols], np.full(nb, -np.inf)]
@@ -347,7 +339,8 @@ def generic_competitor(problem: Problem, design: Design, whitener: st.Whitener,
     for j, name in enumerate(names):
         parts[name] = parts.get(name, 0.0) + float(coef[j] ** 2 * np.sum(B[:, :, j] ** 2))
     main = max(parts, key=parts.get) if parts else None
-    gap_winner, gap_generic = gap(generic, both), gap(catalog, everything)
+    gap_winner = _gap(XtX, Xtr, design.rtr, generic, both)
+    gap_generic = _gap(XtX, Xtr, design.rtr, catalog, everything)
     adds = p_winner < s.alpha and gap_winner >= s.min_gap
     structure = p_generic < level and gap_generic >= s.min_gap
     return {"p_winner_beyond_generic": float(p_winner), "gap_winner_beyond_generic": gap_winner,

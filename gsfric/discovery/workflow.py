@@ -443,14 +443,10 @@ def _lack_of_fit(problem: Problem, theta: np.ndarray, residual: np.ndarray,
     used = problem.used
     F = problem.model.forces(theta)[used]
     t = np.asarray(problem.model.t[used])
-    X = lackfit.basis(t, F, problem.result.D_dot[used], problem.sliding)
     # a signal that an effect of the final model reproduces (a delay's dF/dt once time_offset
     # is in it) is that effect's parameter, refitted already: not a structure outside the model
-    names = lackfit.column_names()
-    keep = [j for j, name in enumerate(names)
-            if lackfit.CATALOG_EQUIVALENT.get(name) not in in_model]
-    X = X[:, :, keep] * problem.weight[:, :, None]
-    names = [names[j] for j in keep]
+    X, names = lackfit.basis_outside(t, F, problem.result.D_dot[used], problem.sliding,
+                                     problem.weight, in_model)
     # the noise model from the residual of the basis fit (largest model), as in each round
     k = X.shape[2]
     flat = X.reshape(-1, k)
@@ -462,9 +458,9 @@ def _lack_of_fit(problem: Problem, theta: np.ndarray, residual: np.ndarray,
     D, speed = problem.result.D[used], problem.result.D_dot[used]
     state = lackfit.state_structure(residual, lackfit.state_features(D, speed, F),
                                     problem.sliding, n_folds=s.n_folds, min_gap=s.min_gap)
-    dynamic = lackfit.dynamic_structure(
-        residual, {"dF/dt": np.gradient(F, t, axis=0), "acceleration": np.gradient(speed, t, axis=0)},
-        problem.sliding, alpha=s.alpha, min_gap=max(s.min_gap, lackfit.DYNAMIC_MIN_GAP))
+    inputs = {"dF/dt": np.gradient(F, t, axis=0), "acceleration": np.gradient(speed, t, axis=0)}
+    dynamic = lackfit.dynamic_structure(residual, inputs, problem.sliding, alpha=s.alpha,
+                                        min_gap=max(s.min_gap, lackfit.DYNAMIC_MIN_GAP))
     out["state"], out["dynamic"] = state, dynamic
     # structure in a form of the basis says most about what it is; else structure that repeats
     # with the state; else structure that follows the motion
