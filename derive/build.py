@@ -38,8 +38,15 @@ REACTION_OUTPUTS = ("F0", "R_E", "R_C", "M_C", "R_3", "M_3", "D", "D_dot", "u", 
                     "omega_rel", "s2")
 FRICTION_OUTPUTS = ("MfrE", "MfrC", "Ffr", "MfrE_s", "MfrC_s", "Ffr_s")
 
-# Functions that also get a SIMD-over-steps version (derive/simd.py): the batch hot paths.
-SIMD_FUNCTIONS = ("actuator", "eval")
+# The combined map with the friction model fixed when deriving (``model.build``'s
+# ``friction_model``), by name suffix: the runtime uses them for a platform of that model (the
+# generic functions, the model read from P at every step, when P varies along a batch).
+FIXED_MODELS = {"coupled": 1, "posthoc": 0}
+
+# Functions that also get a SIMD-over-steps version (derive/simd.py): the batch hot paths (the
+# generic actuator map runs only when the rows of a per-step P mix the two models).
+SIMD_FUNCTIONS = ("eval", *(f"{f}_{suffix}" for suffix in FIXED_MODELS
+                            for f in ("actuator", "eval")))
 
 
 def _layout(specs) -> list[dict]:
@@ -113,6 +120,14 @@ def _functions():
         ca.Function(f"{BASENAME}_jacobian", [x, P, Q],
                     [kin["F"], ca.densify(ca.jacobian(kin["F"], theta))], ["x", "P", "Q"], ["F", "dF"]),
     ]
+    for suffix, model in FIXED_MODELS.items():
+        fixed = translate(mdl.build("kinematic", friction_model=model))
+        funcs += [
+            ca.Function(f"{BASENAME}_eval_{suffix}", [x, P, Q], [fixed[n] for n in out_names],
+                        ["x", "P", "Q"], out_names),
+            ca.Function(f"{BASENAME}_actuator_{suffix}", [x, P, Q], [fixed["F"]],
+                        ["x", "P", "Q"], ["F"]),
+        ]
     shapes = {n: list(s) for n, s, *_ in mdl.OUTPUTS}
     units = {n: u for n, _, u, _ in mdl.OUTPUTS}
     descs = {n: d for n, _, _, d in mdl.OUTPUTS}

@@ -250,13 +250,17 @@ class Model:
     symbols: dict                     # named intermediate quantities, for tests and notebooks
 
 
-def build(mode: str = "kinematic") -> Model:
+def build(mode: str = "kinematic", friction_model: int | None = None) -> Model:
     """Derive the model in ``mode`` ("kinematic" or "paper").
 
     Parameters
     ----------
     mode : {"kinematic", "paper"}
         Where the bodies' accelerations come from (module docstring).
+    friction_model : {None, 0, 1}
+        None: the parameter ``friction_model`` of P chooses the model at every step; 0 or 1:
+        the model fixed when deriving (the input is then unused), so that the paper's model
+        (0) needs no fixed-point iterations.
 
     Returns
     -------
@@ -269,6 +273,8 @@ def build(mode: str = "kinematic") -> Model:
         raise ValueError(f"unknown mode {mode!r}")
     ch = Chain()
     inp = _inputs(ch, mode)
+    if friction_model is not None:
+        inp.P["friction_model"] = sp.Integer(friction_model)
     platform = _platform(ch, inp)
     legs = [_leg(ch, inp, platform, i) for i in range(N_LEGS)]
     A, A_qr, f = _solve(ch, platform, legs)

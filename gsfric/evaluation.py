@@ -49,7 +49,7 @@ import numpy as np
 
 from gsfric import native
 from gsfric.errors import GsfricError, InputError, StepFlagError
-from gsfric.manifest import layout
+from gsfric.manifest import function, layout
 from gsfric.platform import Platform
 from gsfric.trajectory import Motion
 
@@ -87,6 +87,38 @@ def state_array(motion: Motion) -> np.ndarray:
     """
     return state_into(np.empty((len(motion), 24)), motion.position, motion.rotation,
                       motion.velocity, motion.omega, motion.acceleration, motion.alpha)
+
+
+MODEL_FUNCTIONS = {"coupled": "coupled", "paper": "posthoc"}
+"""Suffix of the generated functions derived with the platform's friction model fixed
+(derive/build.py, ``FIXED_MODELS``): the paper's model then has no fixed-point iterations."""
+
+
+@functools.lru_cache(maxsize=None)
+def model_function(name: str, model: str | None) -> str:
+    """The generated function to run for ``name`` ("eval", "actuator") on a platform whose
+    friction model is ``model`` ("coupled", "paper"; None: read from P at every step): the
+    function derived with that model fixed, or the generic one."""
+    suffix = MODEL_FUNCTIONS.get(model)
+    if suffix is None:
+        return name
+    try:
+        function(f"{name}_{suffix}")
+    except GsfricError:  # generated/ without the fixed-model functions
+        return name
+    return f"{name}_{suffix}"
+
+
+def _uniform_model(P: np.ndarray) -> str | None:
+    """The friction model of every row of a per-step parameter input P (N, size), or None
+    when the rows differ."""
+    _, slots = _slots("eval", "P")
+    column = next(start for name, start, _ in slots if name == "friction_model")
+    values = np.asarray(P)[..., column]
+    first = float(values.flat[0]) if values.size else 1.0
+    if first not in (0.0, 1.0) or np.any(values != first):
+        return None
+    return "coupled" if first == 1.0 else "paper"
 
 
 @functools.lru_cache(maxsize=None)
@@ -385,7 +417,10 @@ class Evaluator:
 
             self.K = np.array(pc() if paper_constants is None else paper_constants, float)
             self.K.flags.writeable = False
-        self._full = native.get("eval_paper" if mode == "paper" else "eval")
+        model = platform.friction.model
+        self._actuator = model_function("actuator", model)
+        self._full = native.get("eval_paper" if mode == "paper"
+                                else model_function("eval", model))
         self._stroke = platform.geometry.stroke
         self._flag_spec = None
 
@@ -403,10 +438,11 @@ class Evaluator:
             key = ("actuator", self.n_threads)
             actuator = self._calls.get(key)
             if actuator is None:  # two threads may both build one: either is right
-                actuator = self._calls[key] = native.get("actuator").bound(
+                actuator = self._calls[key] = native.get(self._actuator).bound(
                     [self.P, self.Q], "F", self.n_threads)
             return actuator(x, out)
-        f = native.get("actuator")
+        f = native.get(self._actuator if P is None
+                       else model_function("actuator", _uniform_model(P)))
         res = f([x, self.P if P is None else P, self.Q if Q is None else Q],
                 None if out is None else {"F": out}, self.n_threads)
         return res["F"]
@@ -433,7 +469,7 @@ class Evaluator:
         key = ("forces", self.n_threads)
         call = self._calls.get(key)
         if call is None:  # two threads may both build one: either is right
-            call = self._calls[key] = native.get("actuator").bound_motion(
+            call = self._calls[key] = native.get(self._actuator).bound_motion(
                 [self.P, self.Q], "F", self.n_threads)
         if out is None:
             n = np.shape(position)[0] if np.ndim(position) == 2 else -1

@@ -20,15 +20,20 @@ from helpers import chain_values, perturbed_platform, random_states, with_every_
 ROOT = Path(__file__).resolve().parents[1]
 
 
-def _relative_error(a, b):
-    scale = max(np.max(np.abs(b)), 1e-300)
+def _relative_error(a, b, reference=None):
+    """max |a - b| relative to the largest |b| (or |reference|)."""
+    scale = max(np.max(np.abs(b if reference is None else reference)), 1e-300)
     return np.max(np.abs(a - b)) / scale
 
 
-@pytest.mark.parametrize("mode", ["kinematic", "paper"])
-def test_compiled_equals_lambdified_sympy_at_random_states(rng, mode):
+@pytest.mark.parametrize("mode, model", [("kinematic", "paper"), ("kinematic", "coupled"),
+                                         ("paper", "paper")])
+def test_compiled_equals_lambdified_sympy_at_random_states(rng, mode, model):
+    """Each friction model runs the function derived with it fixed (eval_posthoc,
+    eval_coupled): against the generic symbolic chain, the model read from P."""
     platform = with_every_effect(rng, perturbed_platform(rng, "paper" if mode == "paper"
                                                        else "rigid"))
+    platform = platform.with_friction(model=model)
     x = random_states(rng, 40)
     model = mdl.build(mode)
     K = models.paper_constants() if mode == "paper" else None
@@ -37,7 +42,9 @@ def test_compiled_equals_lambdified_sympy_at_random_states(rng, mode):
     got = ev._full([x, ev.P, ev.Q] + ([ev.K] if K is not None else []))
     assert set(got) == set(expected)
     for name in expected:
-        assert _relative_error(got[name], expected[name]) < 1e-10, name
+        # the last change of a converged iteration is rounding: measured against F0
+        reference = expected["F0"] if name == "coupling_change" else expected[name]
+        assert _relative_error(got[name], expected[name], reference) < 1e-10, name
 
 
 def test_friction_map_equals_the_friction_of_the_full_map(rng):
@@ -62,6 +69,63 @@ def test_actuator_map_equals_the_full_map_also_on_two_threads(rng):
     np.testing.assert_allclose(ev.actuator_forces(x), full["F"], rtol=1e-12, atol=1e-12)
     out = np.empty((x.shape[0], 6))
     assert ev.actuator_forces(x, out=out) is out
+
+
+@pytest.mark.parametrize("model", ["paper", "coupled"])
+def test_fixed_model_functions_equal_the_generic_ones(rng, model):
+    """A platform of each friction model runs the functions derived with its model fixed
+    (no fixed-point iterations for the paper's): every output equals the generic function's,
+    which reads the model from P, and the fixed actuator map equals the fixed full map's F."""
+    platform = with_every_effect(rng, perturbed_platform(rng)).with_friction(model=model)
+    x = random_states(rng, 203)
+    ev = Evaluator(platform)
+    suffix = "posthoc" if model == "paper" else "coupled"
+    assert ev._full.name == f"eval_{suffix}" and ev._actuator == f"actuator_{suffix}"
+    fixed = ev._full([x, ev.P, ev.Q])
+    generic = native.get("eval")([x, ev.P, ev.Q])
+    assert set(fixed) == set(generic)
+    for name, value in generic.items():
+        # the last change of a converged iteration is rounding: measured against F0
+        reference = generic["F0"] if name == "coupling_change" else value
+        assert _relative_error(fixed[name], value, reference) < 1e-12, name
+    F = ev.actuator_forces(x)
+    np.testing.assert_allclose(F, fixed["F"], rtol=1e-12, atol=1e-12)
+    P = np.tile(ev.P, (x.shape[0], 1))
+    np.testing.assert_allclose(ev.actuator_forces(x, P=P), F, rtol=1e-12, atol=1e-12)
+    P[::2, _model_slot()] = 1.0 - P[0, _model_slot()]                # mixed: the generic map
+    mixed = ev.actuator_forces(x, P=P)
+    other = Evaluator(platform.with_friction(model="coupled" if model == "paper" else "paper"))
+    np.testing.assert_allclose(mixed[1::2], F[1::2], rtol=1e-12, atol=1e-12)
+    np.testing.assert_allclose(mixed[::2], other.actuator_forces(x[::2]), rtol=1e-12,
+                               atol=1e-12)
+    assert dbuild.FIXED_MODELS[suffix] == ev.P[_model_slot()]
+
+
+def _model_slot() -> int:
+    from gsfric.evaluation import _slots
+
+    return next(start for name, start, _ in _slots("eval", "P")[1] if name == "friction_model")
+
+
+def test_paper_and_coupled_models_agree_without_joint_and_bushing_friction(rng):
+    """Without joint friction and with no Coulomb friction in the prismatic joint the two
+    models describe the same mechanism: the paper's function (no iterations) and the coupled
+    one (six of them) give the same forces and reactions; with joint friction they differ."""
+    base = with_every_effect(rng, perturbed_platform(rng))
+    x = random_states(rng, 101)
+    out = {}
+    for model in ("paper", "coupled"):
+        for joint in (0.0, 0.04):
+            platform = base.with_friction(model=model, joint_coulomb=joint,
+                                          joint_viscous=joint / 2, prismatic_coulomb=0.0)
+            ev = Evaluator(platform)
+            out[model, joint] = ev._full([x, ev.P, ev.Q])
+    for name in ("F", "F0", "Ffr", "R_E", "R_C", "M_C", "R_3", "M_3", "F_joint"):
+        scale = max(np.abs(out["paper", 0.0][name]).max(), 1.0)
+        np.testing.assert_allclose(out["coupled", 0.0][name], out["paper", 0.0][name],
+                                   rtol=0, atol=1e-11 * scale, err_msg=name)
+    assert np.abs(out["coupled", 0.0]["F_joint"]).max() == 0.0
+    assert np.abs(out["coupled", 0.04]["F"] - out["paper", 0.04]["F"]).max() > 1e-3
 
 
 def test_parameter_jacobian_equals_finite_differences(rng):
@@ -189,7 +253,7 @@ def test_bound_hot_path_equals_the_general_call_and_checks_its_buffers(rng):
     ev = Evaluator(platform)
     out = np.empty((13, 6))
     assert ev.actuator_forces(x, out=out) is out
-    np.testing.assert_array_equal(out, native.get("actuator")([x, ev.P, ev.Q])["F"])
+    np.testing.assert_array_equal(out, native.get(ev._actuator)([x, ev.P, ev.Q])["F"])
     with pytest.raises(GsfricError, match="C-contiguous float64"):
         ev.actuator_forces(np.asfortranarray(x), out=out)
     with pytest.raises(GsfricError, match="C-contiguous float64"):
@@ -225,7 +289,7 @@ def test_motion_input_in_blocks_equals_the_state_array(rng, threads):
     assert not set(DETAILS) & set(result.arrays.kept())
     assert {1, 2, 4} <= {b for b in (1, 2, 4) if (result.flag & b).any()}
     x = state_array(motion)
-    raw = native.get("eval")([x, ev.P, ev.Q], n_threads=threads)
+    raw = ev._full([x, ev.P, ev.Q], n_threads=threads)
     np.testing.assert_array_equal(ev._flags(x, raw), result.flag)   # NaN where non-finite
     for name, value in raw.items():
         np.testing.assert_array_equal(value.reshape(result.arrays[name].shape),
@@ -235,7 +299,7 @@ def test_motion_input_in_blocks_equals_the_state_array(rng, threads):
     assert np.isnan(result.N_bushing[bad]).all() and np.isfinite(result.N_bushing[~bad]).all()
     F = ev.forces(motion.position, motion.rotation, motion.velocity, motion.omega,
                   motion.acceleration, motion.alpha)
-    np.testing.assert_array_equal(F, native.get("actuator")([x, ev.P, ev.Q])["F"])
+    np.testing.assert_array_equal(F, native.get(ev._actuator)([x, ev.P, ev.Q])["F"])
 
 
 def test_control_loop_calls_read_views_and_slices_as_the_general_call(rng):
@@ -247,14 +311,14 @@ def test_control_loop_calls_read_views_and_slices_as_the_general_call(rng):
     motion = models.random_motion(rng, np.sort(rng.uniform(0, 5, 50)))
     ev = Evaluator(perturbed_platform(rng))
     x = state_array(motion)
-    expected = native.get("actuator")([x[7:47], ev.P, ev.Q])["F"]
+    expected = native.get(ev._actuator)([x[7:47], ev.P, ev.Q])["F"]
     out = np.zeros((60, 6))[10:50]
     assert ev.actuator_forces(x[7:47], out=out) is out
     np.testing.assert_array_equal(out, expected)
     parts = [motion.position[7:47], motion.rotation[7:47], motion.velocity[7:47].tolist(),
              np.asfortranarray(motion.omega[7:47]), motion.acceleration[7:47].astype(np.float32)
              .astype(np.float64), motion.alpha[7:47]]
-    rounded = native.get("actuator")([native.state_of(parts), ev.P, ev.Q])["F"]
+    rounded = native.get(ev._actuator)([native.state_of(parts), ev.P, ev.Q])["F"]
     np.testing.assert_array_equal(ev.forces(*parts), rounded)
     with pytest.raises(GsfricError, match=r"rotation \(N, 3, 3\)"):
         ev.forces(*parts[:1], parts[1][:-1], *parts[2:])
