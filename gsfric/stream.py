@@ -288,7 +288,8 @@ def _differentiate(t, position, q, windows, polyorder, step, core: slice,
         raise InputError(f"{where[0]}: rows {where[1] + bad[0] + 1}-{where[1] + bad[-1] + 1}: "
                          "differentiation gave non-finite values (values or time steps out "
                          "of range)")
-    return Motion(t[core], p0, rotation_from_quaternion(q0), p1, omega, p2, alpha)
+    # every value checked above (t by the reader): no second validation pass
+    return Motion._trusted(t[core], p0, rotation_from_quaternion(q0), p1, omega, p2, alpha)
 
 
 def iter_motions(path: str | os.PathLike[str], *, chunk: int = DEFAULT_CHUNK,

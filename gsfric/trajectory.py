@@ -435,6 +435,20 @@ class Motion:
         return cls(t, position, rotation, velocity, omega, acceleration, alpha)
 
     @classmethod
+    def _trusted(cls, t, position, rotation, velocity, omega, acceleration, alpha) -> Motion:
+        """A motion from float64 arrays of the attributes' shapes that the caller has already
+        checked (finite; rotations built from unit quaternions): no validation pass. Private:
+        for the streamed reader, which checks every value once as it builds them."""
+        motion = object.__new__(cls)
+        for name, value in zip(("t", "position", "rotation", "velocity", "omega",
+                                "acceleration", "alpha"),
+                               (t, position, rotation, velocity, omega, acceleration, alpha)):
+            value = np.ascontiguousarray(value, dtype=np.float64)
+            value.flags.writeable = False
+            object.__setattr__(motion, name, value)
+        return motion
+
+    @classmethod
     def from_samples(cls, t: np.ndarray, position: np.ndarray, *,
                      euler: np.ndarray | None = None, quaternion: np.ndarray | None = None,
                      window: int | None = None, polyorder: int = DEFAULT_POLYORDER,
