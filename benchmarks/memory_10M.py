@@ -18,7 +18,6 @@ from __future__ import annotations
 import argparse
 import json
 import os
-import resource
 import subprocess
 import sys
 import tempfile
@@ -39,30 +38,11 @@ def write_trajectory(path: Path, steps: int, rows_per_group: int = ROWS_PER_GROU
 
 def run_simulate(trajectory: Path, out: Path, chunk: int, threads: int = 1,
                  extra: tuple[str, ...] = ()) -> dict:
-    """Run ``gsfric simulate`` in a subprocess; its exit code, wall time and peak RSS.
+    """``gsfric simulate`` in a subprocess (``gsfric.bench.run_simulate``, the runner of
+    ``gsfric bench``'s simulate case): exit code, output, wall and CPU time, peak RSS."""
+    from gsfric.bench import run_simulate as run
 
-    ``peak_rss_mb`` is the child's own ``ru_maxrss`` (from ``os.wait4``: the figure that
-    ``getrusage(RUSAGE_CHILDREN)`` gives for a lone child); ``children_max_rss_mb`` is
-    ``getrusage(RUSAGE_CHILDREN).ru_maxrss`` of this process afterwards, the largest of all
-    its waited-for children (the trajectory generator too) and of their forked-off RSS.
-    """
-    cmd = [sys.executable, "-m", "gsfric.cli", "simulate", "--trajectory", str(trajectory),
-           "--out", str(out), "--chunk", str(chunk), "--threads", str(threads),
-           "--no-progress", *extra]
-    start = time.perf_counter()
-    with tempfile.TemporaryFile("w+") as stdout, tempfile.TemporaryFile("w+") as stderr:
-        child = subprocess.Popen(cmd, stdout=stdout, stderr=stderr, text=True)
-        _, status, usage = os.wait4(child.pid, 0)
-        child.returncode = os.waitstatus_to_exitcode(status)
-        wall = time.perf_counter() - start
-        stdout.seek(0)
-        stderr.seek(0)
-        out_text, err_text = stdout.read(), stderr.read()
-    children = resource.getrusage(resource.RUSAGE_CHILDREN).ru_maxrss   # kB on Linux
-    return {"command": " ".join(["gsfric", *cmd[3:]]), "returncode": child.returncode,
-            "stdout": out_text.strip(), "stderr": err_text.strip(), "wall_s": wall,
-            "peak_rss_mb": usage.ru_maxrss / 1024.0, "children_max_rss_mb": children / 1024.0,
-            "cpu_s": usage.ru_utime + usage.ru_stime}
+    return run(trajectory, out, chunk=chunk, threads=threads, extra=extra)
 
 
 def main(argv: list[str] | None = None) -> int:

@@ -349,7 +349,7 @@ def build_library() -> Path:
         for stale in folder.glob(".libgsfric.*"):   # left by a killed build (SIGKILL)
             stale.unlink(missing_ok=True)
         tmp = folder / f".libgsfric.{os.getpid()}.so"
-        print(f"gsfric: compiling the generated model (once, about 30 s) into {folder}",
+        print(f"gsfric: compiling the generated model (once, 1-2 minutes) into {folder}",
               file=sys.stderr)
         error = "(no message)"
         try:
