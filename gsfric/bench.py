@@ -546,7 +546,10 @@ def _machine() -> dict:
     from gsfric.manifest import function, manifest
 
     compiled = native.is_compiled()
-    simd = bool(function("actuator").get("simd", False))
+    from gsfric.evaluation import model_function
+
+    # the actuator map the reference platform runs (its friction model's, derive/build.py)
+    simd = bool(function(model_function("actuator", "coupled")).get("simd", False))
     return {"cpu": model, "cores": os.cpu_count(), "python": _platform.python_version(),
             "numpy": np.__version__, "os": _platform.platform(),
             "compiled": compiled,

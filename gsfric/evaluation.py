@@ -83,10 +83,11 @@ another frame, and the parts of sums that are kept (``Ffr``)."""
 def state_array(motion: Motion) -> np.ndarray:
     """The generated functions' state input, (N, 24): p, T (row-major), v, omega, a, alpha.
 
-    Laid out by ``state_into``.
+    Laid out by ``native.state_of``, the one Python layout of the states (the compiled code
+    lays them out itself, block by block, in ``_native/batch.c``).
     """
-    return state_into(np.empty((len(motion), 24)), motion.position, motion.rotation,
-                      motion.velocity, motion.omega, motion.acceleration, motion.alpha)
+    return native.state_of((motion.position, motion.rotation, motion.velocity, motion.omega,
+                            motion.acceleration, motion.alpha))
 
 
 MODEL_FUNCTIONS = {"coupled": "coupled", "paper": "posthoc"}
@@ -135,19 +136,6 @@ def _pack(slots: tuple, values: dict) -> np.ndarray:
     out = np.zeros(size)
     for name, start, stop in where:
         out[start:stop] = np.ravel(values[name])
-    return out
-
-
-def state_into(out: np.ndarray, position, rotation, velocity, omega, acceleration,
-               alpha) -> np.ndarray:
-    """Lay out states into ``out`` (N, 24): p, T (row-major), v, omega, a, alpha; the one
-    place where the step-leading arrays of a motion are laid out for C."""
-    out[:, 0:3] = position
-    out[:, 3:12] = np.reshape(rotation, (-1, 9))
-    out[:, 12:15] = velocity
-    out[:, 15:18] = omega
-    out[:, 18:21] = acceleration
-    out[:, 21:24] = alpha
     return out
 
 
@@ -557,20 +545,25 @@ class Evaluator:
     def _inputs(self) -> list:
         return [self.P, self.Q] + ([self.K] if self.K is not None else [])
 
-    def _run(self, motion: Motion, s: int, e: int, view: dict, flag: np.ndarray) -> None:
-        """Steps s..e-1 of ``motion`` into the output views and ``flag`` (flags set)."""
+    def _run(self, motion: Motion, s: int, e: int, view: dict,
+             flag: np.ndarray | None = None) -> None:
+        """Steps s..e-1 of ``motion`` into the output views and, given ``flag``, the step
+        flags (non-finite steps' outputs NaN)."""
         m = motion
         parts = (m.position[s:e], m.rotation[s:e], m.velocity[s:e], m.omega[s:e],
                  m.acceleration[s:e], m.alpha[s:e])
         if native.is_compiled():
             self._full([None] + self._inputs(), view, self.n_threads, select=view,
-                       flags=self.flag_spec(), flag=flag, motion=parts)
-        else:
-            xs = native.state_of(parts)
-            every = self._full([xs] + self._inputs(), None, self.n_threads)
+                       flags=None if flag is None else self.flag_spec(), flag=flag,
+                       motion=parts)
+            return
+        xs = native.state_of(parts)
+        every = self._full([xs] + self._inputs(), None, self.n_threads,
+                           select=view if flag is None else None)
+        if flag is not None:
             flag[:] = self._flags(xs, every)
-            for k, v in view.items():
-                v[...] = every[k]
+        for k, v in view.items():
+            v[...] = every[k]
 
     def details(self, motion: Motion, names, flag: np.ndarray) -> dict[str, np.ndarray]:
         """The outputs ``names`` at every step of ``motion`` (flags as computed with the kept
@@ -579,20 +572,9 @@ class Evaluator:
         n = len(motion)
         shapes = {name: (size, shape) for name, size, shape in self._full.outputs}
         outs = {name: np.empty((n, shapes[name][0])) for name in names}
-        m = motion
         for s in range(0, n, CHUNK):
             e = min(n, s + CHUNK)
-            parts = (m.position[s:e], m.rotation[s:e], m.velocity[s:e], m.omega[s:e],
-                     m.acceleration[s:e], m.alpha[s:e])
-            view = {k: v[s:e] for k, v in outs.items()}
-            if native.is_compiled():
-                self._full([None] + self._inputs(), view, self.n_threads, select=view,
-                           motion=parts)
-            else:
-                every = self._full([native.state_of(parts)] + self._inputs(), None,
-                                   self.n_threads, select=view)
-                for k, v in view.items():
-                    v[...] = every[k]
+            self._run(motion, s, e, {k: v[s:e] for k, v in outs.items()})
         bad = (flag & FLAG_NONFINITE) != 0
         for v in outs.values():
             v[bad] = np.nan

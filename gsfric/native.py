@@ -623,7 +623,8 @@ def _motion_arrays(name: str, motion) -> list[np.ndarray]:
 
 def state_of(motion) -> np.ndarray:
     """The (N, 24) state array of a motion's six arrays (p, T row-major, v, omega, a,
-    alpha): for the CasADi fallback."""
+    alpha): the one layout in Python (``evaluation.state_array``, the CasADi fallback), the
+    same as ``layout_states`` in ``_native/batch.c``."""
     parts = _motion_arrays("motion", motion)
     n = parts[0].shape[0]
     return np.concatenate([p.reshape(n, -1) for p in parts], axis=1)
