@@ -600,8 +600,8 @@ class _Evaluation:
             for s in range(0, n, block.size):
                 e = min(n, s + block.size)
                 block.use(e - s)
-                block.fn([x[s:e], ev.P, ev.Q], block.out, 1, select=block.names, flags=spec,
-                         flag=block.flag)
+                ev._full([x[s:e], ev.P, ev.Q], block.out, 1, select=block.names, flags=spec,
+                         flag=block.flag)   # the platform's own full map, as evaluate's
                 yield s, e
             return
         from gsfric.trajectory import Motion
