@@ -133,3 +133,24 @@ def test_streamed_sensor_delay_equals_the_whole_record(tmp_path, delay):
     per_chunk = np.vstack([apply_sensor(t[s:s + 200], plain[names].to_numpy()[s:s + 200],
                                         gains, delay) for s in range(0, 700, 200)])
     assert np.abs(per_chunk - expected).max() > 1e-3
+
+
+def test_streamed_motions_are_the_validated_motions(full):
+    """The reader builds its Motions without a second validation pass (``Motion._trusted``):
+    each equals the Motion validated from the same arrays, read-only and C-contiguous, and
+    its rotations are rotations."""
+    from gsfric.trajectory import Motion
+
+    path, _, _ = full
+    chunks = list(stream.iter_motions(path, chunk=200, window=9))
+    assert sum(len(m) for _, m in chunks) == 700
+    for _, motion in chunks:
+        fields = ("t", "position", "rotation", "velocity", "omega", "acceleration", "alpha")
+        checked = Motion(*(np.array(getattr(motion, f)) for f in fields))
+        assert checked == motion
+        for f in fields:
+            a = getattr(motion, f)
+            assert a.dtype == np.float64 and a.flags.c_contiguous and not a.flags.writeable
+        R = motion.rotation
+        np.testing.assert_allclose(np.einsum("nji,njk->nik", R, R),
+                                   np.broadcast_to(np.eye(3), R.shape), atol=1e-12)
