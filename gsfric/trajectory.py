@@ -308,50 +308,63 @@ def white_noise_std(y: np.ndarray) -> np.ndarray:
     return mad / np.sqrt(comb(2 * m, m))
 
 
-def _bias_degree(polyorder: int) -> int:
-    """Lowest power of the time that a symmetric Savitzky-Golay second-derivative filter of
-    ``polyorder`` does not reproduce (even powers only reach an even-derivative filter)."""
-    return polyorder + 1 if (polyorder + 1) % 2 == 0 else polyorder + 2
+def _bias_degree(polyorder: int, deriv: int) -> int:
+    """Lowest power of the time whose ``deriv``-th derivative a symmetric Savitzky-Golay filter
+    of ``polyorder`` does not reproduce: the first power above ``polyorder`` of the parity of
+    ``deriv`` (the filter is symmetric for even derivatives, antisymmetric for odd ones, so
+    the powers of the other parity give the true value, zero)."""
+    return polyorder + 1 if (polyorder + 1 - deriv) % 2 == 0 else polyorder + 2
 
 
-def adaptive_windows(y: np.ndarray, polyorder: int = DEFAULT_POLYORDER,
-                     sigma: np.ndarray | None = None) -> np.ndarray:
-    """The Savitzky-Golay window of every sample: the one minimizing a local estimate of the
-    mean squared error of the second derivative (bias squared plus noise variance).
+BIAS_WEIGHT = 4.0
 
-    Candidate windows w_1 < w_2 < ... (``_candidate_windows``, ratio about 1.25). For the
-    second-derivative estimate a_w of window w:
 
-    * its noise variance is ``sigma^2 ||h_w||^2`` (h_w the filter's coefficients, sigma the
-      white pose noise, ``white_noise_std``);
-    * its bias is, to leading order, ``c_w y^(m)`` with m = ``_bias_degree(polyorder)`` (6
-      for order 4) and ``c_w = sum_j h_w[j] j^m / m!`` known exactly, so the bias of the next
-      window is ``c_{w'} / c_w`` (about 1.25^4) times as large and the difference
-      ``a_w - a_{w'}`` has the mean ``(1 - c_{w'}/c_w) bias_w`` and the exactly known noise
-      variance ``sigma^2 ||h_w - h_{w'}||^2``. Averaging its square over the window's own
-      span and subtracting that variance gives an unbiased estimate of
-      ``(1 - c_{w'}/c_w)^2 bias_w^2`` there.
+def adaptive_filters(y: np.ndarray, polyorder: int = DEFAULT_POLYORDER,
+                     sigma: np.ndarray | None = None, deriv: int = 2
+                     ) -> tuple[np.ndarray, np.ndarray]:
+    """The Savitzky-Golay filter (polynomial order and window) of every sample for the
+    ``deriv``-th derivative: the one minimizing a local estimate of that derivative's mean
+    squared error (bias squared plus noise variance).
 
-    Each sample takes the window of least estimated error summed over the columns (the mean
-    squared error of the vector's second derivative). The choice is local, so a motion whose frequency content
-    changes along the record (a chirp, moves and rests) gets long windows where it is slow
-    and short ones where it is fast; noise-free samples get the shortest window.
+    Candidates: the orders ``polyorder`` and ``polyorder + 2``, each with the windows
+    w_1 < w_2 < ... of ``_candidate_windows`` (ratio about 1.25). For the estimate a_w of
+    order p and window w (filter coefficients h_w):
+
+    * its noise variance is ``sigma^2 ||h_w||^2`` (sigma the white pose noise,
+      ``white_noise_std``);
+    * its bias is, to leading order, ``c_w y^(m)`` with m = ``_bias_degree(p, deriv)`` (5 for
+      the velocity, 6 for the acceleration with order 4) and ``c_w = sum_j h_w[j] j^m / m!``
+      known exactly. So the next window's bias is ``g = c_{w'} / c_w`` (about 1.25^(m - deriv))
+      times as large, and the difference ``a_w - a_{w'}`` has the mean ``(1 - g) bias_w`` and
+      the exactly known noise variance ``sigma^2 ||h_w - h_{w'}||^2``. Its square averaged
+      over the span of w', minus that variance, divided by ``(1 - g)^2``, estimates
+      ``bias_w^2`` there without a pilot estimate of y^(m).
+
+    Each sample takes the filter of least estimated error summed over the columns (the mean
+    squared error of the vector's derivative). The choice is local, so a motion whose
+    frequency content changes along the record (a chirp, moves and rests) gets long windows
+    where it is slow and short ones where it is fast; noise-free samples get the shortest.
+    The higher order has a smaller bias for a given window and a larger noise: it wins on
+    fast smooth motion. The velocity's variance falls more slowly with the window than the
+    acceleration's (w^-3 against w^-5) while their biases grow alike, so the velocity's
+    windows are the shorter.
 
     Parameters
     ----------
     y : ndarray, shape (N, k)
         Uniformly sampled signal.
     polyorder : int
+        The lower of the two orders.
     sigma : ndarray, shape (k,), optional
         White-noise standard deviation of each column (default: ``white_noise_std``).
+    deriv : int
+        1 (velocity) or 2 (acceleration).
 
     Returns
     -------
-    ndarray of int, shape (N,)
-        Odd windows, ``polyorder < w <= min(N, MAX_AUTO_WINDOW)``.
+    orders, windows : ndarray of int, shape (N,) each
+        Odd windows, ``order < w <= min(N, MAX_AUTO_WINDOW)``.
     """
-    from math import factorial
-
     from scipy.ndimage import uniform_filter1d
     from scipy.signal import savgol_coeffs, savgol_filter
 
@@ -361,45 +374,63 @@ def adaptive_windows(y: np.ndarray, polyorder: int = DEFAULT_POLYORDER,
         sigma = white_noise_std(y)
     scale = np.maximum(np.abs(y).max(axis=0), 1.0)
     variance = np.maximum(np.asarray(sigma, float), 1e-13 * scale) ** 2
-    windows = _candidate_windows(n, polyorder)
-    if len(windows) < 2:
-        return np.full(n, windows[0])
-    m = _bias_degree(polyorder)
-    width = windows[-1]
-
-    def coefficients(w: int) -> np.ndarray:
-        h = np.zeros(width)
-        h[(width - w) // 2:(width + w) // 2] = savgol_coeffs(w, polyorder, deriv=2, use="dot")
-        return h
-
-    j = np.arange(width) - width // 2
+    first = _candidate_windows(n, polyorder)
     best = np.full(n, np.inf)
-    chosen = np.full(n, windows[0])
-    previous = savgol_filter(y, windows[0], polyorder, deriv=2, axis=0, mode="interp")
-    for w, w_next in zip(windows[:-1], windows[1:]):
-        h, h_next = coefficients(w), coefficients(w_next)
-        following = savgol_filter(y, w_next, polyorder, deriv=2, axis=0, mode="interp")
-        growth = float(np.sum(h_next * j ** m) / np.sum(h * j ** m))
-        spread = uniform_filter1d((previous - following) ** 2, size=w_next, axis=0,
-                                  mode="nearest")
-        bias2 = np.maximum(spread - variance * float(np.sum((h - h_next) ** 2)), 0.0) \
-            / (1.0 - growth) ** 2
-        risk = np.sum(bias2 + variance * float(np.sum(h ** 2)), axis=1)
-        better = risk < best
-        best[better] = risk[better]
-        chosen[better] = w
-        previous = following
-    return chosen
+    orders = np.full(n, polyorder)
+    windows = np.full(n, first[0])
+    for p in (polyorder, polyorder + 2):
+        candidates = _candidate_windows(n, p)
+        if len(candidates) < 2:
+            continue
+        m = _bias_degree(p, deriv)
+        width = candidates[-1]
+
+        def coefficients(w: int) -> np.ndarray:
+            h = np.zeros(width)
+            h[(width - w) // 2:(width + w) // 2] = savgol_coeffs(w, p, deriv=deriv, use="dot")
+            return h
+
+        j = (np.arange(width) - width // 2).astype(float)
+        previous = savgol_filter(y, candidates[0], p, deriv=deriv, axis=0, mode="interp")
+        for w, w_next in zip(candidates[:-1], candidates[1:]):
+            h, h_next = coefficients(w), coefficients(w_next)
+            following = savgol_filter(y, w_next, p, deriv=deriv, axis=0, mode="interp")
+            growth = float(np.sum(h_next * j ** m) / np.sum(h * j ** m))
+            spread = uniform_filter1d((previous - following) ** 2, size=w_next, axis=0,
+                                      mode="nearest")
+            bias2 = np.maximum(spread - variance * float(np.sum((h - h_next) ** 2)), 0.0) \
+                / (1.0 - growth) ** 2
+            risk = np.sum(BIAS_WEIGHT * bias2 + variance * float(np.sum(h ** 2)), axis=1)
+            better = risk < best
+            best[better] = risk[better]
+            orders[better] = p
+            windows[better] = w
+            previous = following
+    return orders, windows
 
 
-def _savgol_adaptive(y: np.ndarray, windows: np.ndarray, polyorder: int,
-                     step: float) -> list[np.ndarray]:
-    """``_savgol`` with each sample's own window (windows, shape (N,))."""
+def motion_filters(y: np.ndarray, polyorder: int = DEFAULT_POLYORDER
+                   ) -> tuple[tuple[np.ndarray, np.ndarray], tuple[np.ndarray, np.ndarray]]:
+    """The filters ``Motion.from_samples`` uses at each sample of a uniformly sampled signal
+    (N, k) when it chooses them (``adaptive_filters``): ((orders, windows) for the value and
+    the first derivative, (orders, windows) for the second derivative), each array (N,)."""
+    sigma = white_noise_std(y)
+    return (adaptive_filters(y, polyorder, sigma, deriv=1),
+            adaptive_filters(y, polyorder, sigma, deriv=2))
+
+
+def _savgol_adaptive(y: np.ndarray, filters, step: float) -> list[np.ndarray]:
+    """``_savgol`` with each sample's own filters (``motion_filters``)."""
+    from scipy.signal import savgol_filter
+
     out = [np.empty_like(y, dtype=float) for _ in range(3)]
-    for w in np.unique(windows):
-        rows = windows == w
-        for o, values in zip(out, _savgol(y, int(w), polyorder, step)):
-            o[rows] = values[rows]
+    for derivatives, (orders, windows) in (((0, 1), filters[0]), ((2,), filters[1])):
+        pairs = np.unique(np.stack([orders, windows], axis=1), axis=0)
+        for p, w in pairs:
+            rows = (orders == p) & (windows == w)
+            for k in derivatives:
+                values = savgol_filter(y, int(w), int(p), deriv=k, axis=0, mode="interp")
+                out[k][rows] = values[rows] / step**k
     return out
 
 
@@ -679,10 +710,9 @@ class Motion:
         uniform = np.all(np.abs(steps - mean_step) <= UNIFORM_RTOL * mean_step)
         if uniform:
             if window is None:
-                p0, p1, p2 = _savgol_adaptive(position, adaptive_windows(position, polyorder),
-                                              polyorder, mean_step)
-                q0, q1, q2 = _savgol_adaptive(q, adaptive_windows(q, polyorder), polyorder,
+                p0, p1, p2 = _savgol_adaptive(position, motion_filters(position, polyorder),
                                               mean_step)
+                q0, q1, q2 = _savgol_adaptive(q, motion_filters(q, polyorder), mean_step)
             else:
                 _check_window(window, polyorder, n)
                 p0, p1, p2 = _savgol(position, window, polyorder, mean_step)

@@ -120,12 +120,13 @@ class Problem:
         if poses is None:
             poses = (np.asarray(motion.position, float), np.asarray(motion.rotation, float))
         uniform = np.ptp(np.diff(t)) <= 1e-6 * np.mean(np.diff(t))
-        self.sigma_v, self.reach = np.zeros(6), 0
+        sigma_v, self.reach = np.zeros((n, 6)), np.zeros(n, int)
         if uniform:
-            short, long = rest.differentiator_windows(*poses)
-            self.sigma_v = rest.speed_uncertainty(platform, t, *poses, window=short)
-            self.reach = long // 2
-        self.sliding = rest.sliding_mask(self.result.D_dot, self.sigma_v, 3 * PRISMATIC_EPS,
+            gain, self.reach = rest.differentiator(*poses)
+            sigma_v = rest.speed_uncertainty(platform, t, *poses, gain=gain)
+        # per leg, the median over the used samples (the band itself is per sample)
+        self.sigma_v = np.median(sigma_v[self.used], axis=0)
+        self.sliding = rest.sliding_mask(self.result.D_dot, sigma_v, 3 * PRISMATIC_EPS,
                                          reach=self.reach)[self.used]
         self.weight = self.sliding.astype(float)
         self.force_noise = rest.force_noise(forces[self.used])
