@@ -509,18 +509,30 @@ def _smoothing_splines(t: np.ndarray, y: np.ndarray, penalties: list[float]):
     return BSpline.construct_fast(k, coefficients, 3, axis=0)
 
 
+def spline_penalties(t: np.ndarray, y: np.ndarray, lam: float | None = None
+                     ) -> list[float] | None:
+    """The smoothing-spline penalty of each column of y (N, k) that ``Motion.from_samples``
+    uses on a non-uniform time base t (N,) of more than ``SPLINE_GCV_ROWS`` samples (None when
+    it falls back to ``make_smoothing_spline``'s own choice)."""
+    n = len(t)
+    if n <= SPLINE_GCV_ROWS:
+        return None
+    if lam is None:
+        start = (n - SPLINE_GCV_ROWS) // 2
+        block = slice(start, start + SPLINE_GCV_ROWS)
+        penalties = [_gcv_penalty(t[block], y[block, j]) for j in range(y.shape[1])]
+    else:
+        penalties = [lam] * y.shape[1]
+    return penalties if all(p is not None for p in penalties) else None
+
+
 def _spline(t: np.ndarray, y: np.ndarray, lam: float | None) -> list[np.ndarray]:
     from scipy.interpolate import make_smoothing_spline
 
     n = len(t)
     if n > SPLINE_GCV_ROWS:
-        if lam is None:
-            start = (n - SPLINE_GCV_ROWS) // 2
-            block = slice(start, start + SPLINE_GCV_ROWS)
-            penalties = [_gcv_penalty(t[block], y[block, j]) for j in range(y.shape[1])]
-        else:
-            penalties = [lam] * y.shape[1]
-        if all(p is not None for p in penalties):
+        penalties = spline_penalties(t, y, lam)
+        if penalties is not None:
             spline = _smoothing_splines(t, y, penalties)
             return [spline.derivative(k)(t) if k else spline(t) for k in (0, 1, 2)]
     columns = [make_smoothing_spline(t, y[:, j], lam=lam) for j in range(y.shape[1])]

@@ -124,6 +124,13 @@ class Problem:
         if uniform:
             gain, self.reach = rest.differentiator(*poses)
             sigma_v = rest.speed_uncertainty(platform, t, *poses, gain=gain)
+        else:
+            # jittered times: the smoothing splines' own noise gain, on divided differences
+            spline = rest.spline_differentiator(t, *poses)
+            if spline is not None:
+                gain, self.reach = spline
+                D = rest.leg_lengths(platform, *poses)
+                sigma_v = gain[:, None] * rest.divided_noise_std(t, D)[None, :]
         # per leg, the median over the used samples (the band itself is per sample)
         self.sigma_v = np.median(sigma_v[self.used], axis=0)
         self.sliding = rest.sliding_mask(self.result.D_dot, sigma_v, 3 * PRISMATIC_EPS,

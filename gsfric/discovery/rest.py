@@ -99,6 +99,70 @@ def differentiator(position: np.ndarray, rotation: np.ndarray, polyorder: int | 
     return np.maximum(*gains), np.maximum(*reaches)
 
 
+SPLINE_NOISE_DRAWS = 8
+"""Unit white-noise records through which the smoothing spline's velocity noise gain is
+measured on a non-uniform time base (``spline_differentiator``)."""
+
+
+def divided_noise_std(t: np.ndarray, y: np.ndarray) -> np.ndarray:
+    """White-noise standard deviation of each column of y (N, k) sampled at the non-uniform
+    times t (N,): from the 6th divided differences, whose noise variance is
+    ``sigma^2 sum_k w_k^2`` (w their weights) and whose signal part, ``y^(6) / 6!``, does not
+    grow with a jitter of the times (differences on a jittered time base would count the
+    motion times the jitter as noise). Robust scale (median of the normalised squares)."""
+    from numpy.lib.stride_tricks import sliding_window_view
+
+    from gsfric.trajectory import NOISE_DIFFERENCE_ORDER, _divided_difference_coefficients
+
+    t, y = np.asarray(t, float), np.asarray(y, float)
+    m = NOISE_DIFFERENCE_ORDER
+    if len(t) <= m:
+        return np.zeros(y.shape[1])
+    scale = (t[-1] - t[0]) / (len(t) - 1)
+    w = _divided_difference_coefficients((t - t[0]) / scale, m + 1)      # (N - m, m + 1)
+    d = np.einsum("nkj,nj->nk", sliding_window_view(y, m + 1, axis=0), w)
+    z2 = d ** 2 / np.sum(w ** 2, axis=1)[:, None]
+    return np.sqrt(np.median(z2, axis=0) / 0.454936)     # median of chi-square(1)
+
+
+def spline_differentiator(t: np.ndarray, position: np.ndarray, rotation: np.ndarray
+                          ) -> tuple[np.ndarray, np.ndarray] | None:
+    """``differentiator`` for a non-uniform time base, where ``Motion.from_samples`` fits
+    smoothing splines: the velocity noise gain (N,), 1/s, of unit white noise through the same
+    splines (same penalties; the larger of position and orientation; measured on
+    ``SPLINE_NOISE_DRAWS`` draws, averaged over 51 samples), and the reach (N,), the half
+    window of the order-4 Savitzky-Golay filter of the same gain at the mean step. None when
+    the spline's penalties are not available (short records)."""
+    from scipy.ndimage import uniform_filter1d
+
+    from gsfric.trajectory import (DEFAULT_POLYORDER, _candidate_windows, _continuous,
+                                   _smoothing_splines, quaternion_from_rotation,
+                                   spline_penalties)
+
+    t = np.asarray(t, float)
+    n = len(t)
+    q = _continuous(quaternion_from_rotation(np.asarray(rotation, float)))
+    rng = np.random.default_rng(0)
+    gain = np.zeros(n)
+    for signal in (np.asarray(position, float), q):
+        penalties = spline_penalties(t, signal)
+        if penalties is None:
+            return None
+        power = np.zeros(n)
+        for _ in range(SPLINE_NOISE_DRAWS):
+            noise = rng.standard_normal(signal.shape)
+            power += np.mean(_smoothing_splines(t, noise, penalties).derivative(1)(t) ** 2,
+                             axis=1)
+        gain = np.maximum(gain, np.sqrt(uniform_filter1d(power / SPLINE_NOISE_DRAWS, 51,
+                                                         mode="nearest")))
+    step = (t[-1] - t[0]) / (n - 1)
+    windows = np.array(_candidate_windows(n, DEFAULT_POLYORDER))
+    gains = np.array([np.linalg.norm(savgol_coeffs(int(w), DEFAULT_POLYORDER, deriv=1))
+                      for w in windows]) / step                           # decreasing
+    index = np.clip(np.searchsorted(-gains, -gain), 0, len(windows) - 1)
+    return gain, windows[index] // 2
+
+
 def speed_uncertainty(platform, t: np.ndarray, position: np.ndarray, rotation: np.ndarray,
                       window: int | None = None, polyorder: int | None = None,
                       gain: np.ndarray | None = None) -> np.ndarray:
