@@ -621,9 +621,12 @@ class Motion:
         * Uniform sampling (every step within ``UNIFORM_RTOL`` of the mean step): a
           Savitzky-Golay filter (``scipy.signal.savgol_filter``, ``mode="interp"``, orders 0,
           1 and 2) of ``window`` samples and polynomial order ``polyorder``. With
-          ``window=None`` the window is chosen separately for position and quaternion by
-          generalized cross-validation among odd windows up to ``MAX_AUTO_WINDOW`` samples:
-          the shortest window for noise-free data, longer ones as noise grows.
+          ``window=None`` the filter (order ``polyorder`` or ``polyorder + 2``, odd window up
+          to ``MAX_AUTO_WINDOW`` samples) is chosen per sample, separately for position and
+          quaternion and for the velocity (which position and velocity use) and the
+          acceleration, as the one of least estimated mean squared error
+          (``adaptive_filters``): short filters where the motion is fast or the pose
+          noise-free, long ones where it is slow or noisy.
         * Non-uniform sampling: a cubic smoothing spline of every component
           (``scipy.interpolate.make_smoothing_spline``) with penalty ``lam``, chosen by
           generalized cross-validation when None. Being natural splines, their second

@@ -104,7 +104,6 @@ def test_seal_force_on_a_jittered_log_with_rests_is_named():
     residual is at the noise (without a band, the friction flipping at rest leaves a residual
     twice the noise, named as other effects)."""
     from gsfric.discovery import discover
-    from gsfric.synth import synthesize
 
     rng = np.random.default_rng(3)
     step, n = 1 / 200.0, 4000
