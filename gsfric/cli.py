@@ -242,8 +242,9 @@ def paper(out_dir, mode, platform_file, no_plots):
               help="Steps read, differentiated and evaluated at a time (memory grows with "
                    "it); a file of at most this many rows is read whole.")
 @click.option("--window", type=int, default=None,
-              help="Savitzky-Golay window, odd, samples [default: chosen by cross-validation "
-                   "on the first chunk].")
+              help="Savitzky-Golay window, odd, samples [default: a filter per sample for a "
+                   "file read whole, one window by cross-validation on the first chunk for a "
+                   "streamed one].")
 @click.option("--progress/--no-progress", default=None,
               help="A progress bar on stderr, with total and ETA [default: when stderr is a "
                    "terminal].")

@@ -120,12 +120,20 @@ class Problem:
         if poses is None:
             poses = (np.asarray(motion.position, float), np.asarray(motion.rotation, float))
         uniform = np.ptp(np.diff(t)) <= 1e-6 * np.mean(np.diff(t))
-        self.sigma_v, self.reach = np.zeros(6), 0
+        sigma_v, self.reach = np.zeros((n, 6)), np.zeros(n, int)
         if uniform:
-            short, long = rest.differentiator_windows(*poses)
-            self.sigma_v = rest.speed_uncertainty(platform, t, *poses, window=short)
-            self.reach = long // 2
-        self.sliding = rest.sliding_mask(self.result.D_dot, self.sigma_v, 3 * PRISMATIC_EPS,
+            gain, self.reach = rest.differentiator(*poses)
+            sigma_v = rest.speed_uncertainty(platform, t, *poses, gain=gain)
+        else:
+            # jittered times: the smoothing splines' own noise gain, on divided differences
+            spline = rest.spline_differentiator(t, *poses)
+            if spline is not None:
+                gain, self.reach = spline
+                D = rest.leg_lengths(platform, *poses)
+                sigma_v = gain[:, None] * rest.divided_noise_std(t, D)[None, :]
+        # per leg, the median over the used samples (the band itself is per sample)
+        self.sigma_v = np.median(sigma_v[self.used], axis=0)
+        self.sliding = rest.sliding_mask(self.result.D_dot, sigma_v, 3 * PRISMATIC_EPS,
                                          reach=self.reach)[self.used]
         self.weight = self.sliding.astype(float)
         self.force_noise = rest.force_noise(forces[self.used])

@@ -68,23 +68,109 @@ def leg_lengths(platform, position: np.ndarray, rotation: np.ndarray) -> np.ndar
                           axis=2)
 
 
-def differentiator_windows(position: np.ndarray, rotation: np.ndarray,
-                           polyorder: int | None = None) -> tuple[int, int]:
-    """The Savitzky-Golay windows (samples) that ``Motion.from_samples`` chooses for the
-    recorded positions (N, 3) and orientations (N, 3, 3): (shorter, longer)."""
-    from gsfric.trajectory import (DEFAULT_POLYORDER, _continuous, _gcv_window,
+def differentiator(position: np.ndarray, rotation: np.ndarray, polyorder: int | None = None
+                   ) -> tuple[np.ndarray, np.ndarray]:
+    """The velocity filters ``Motion.from_samples`` chooses at each sample for the recorded
+    positions (N, 3) and orientations (N, 3, 3) (``trajectory.motion_filters``).
+
+    Returns
+    -------
+    gain : ndarray, shape (N,)
+        The larger (position or orientation) noise gain ``||h||`` of the first-derivative
+        filter, per sample step: a white noise sigma becomes a velocity noise
+        ``sigma gain / step``.
+    reach : ndarray of int, shape (N,)
+        Half the longer of the two windows, samples.
+    """
+    from gsfric.trajectory import (DEFAULT_POLYORDER, _continuous, motion_filters,
                                    quaternion_from_rotation)
 
     polyorder = DEFAULT_POLYORDER if polyorder is None else int(polyorder)
     q = _continuous(quaternion_from_rotation(np.asarray(rotation, float)))
-    a = _gcv_window(np.asarray(position, float), polyorder)
-    b = _gcv_window(q, polyorder)
-    return min(a, b), max(a, b)
+    gains, reaches = [], []
+    for signal in (np.asarray(position, float), q):
+        orders, windows = motion_filters(signal, polyorder)[0]
+        gain = np.empty(len(windows))
+        for p, w in np.unique(np.stack([orders, windows], axis=1), axis=0):
+            rows = (orders == p) & (windows == w)
+            gain[rows] = np.linalg.norm(savgol_coeffs(int(w), int(p), deriv=1))
+        gains.append(gain)
+        reaches.append(windows // 2)
+    return np.maximum(*gains), np.maximum(*reaches)
+
+
+SPLINE_NOISE_DRAWS = 8
+"""Unit white-noise records through which the smoothing spline's velocity noise gain is
+measured on a non-uniform time base (``spline_differentiator``)."""
+
+
+def divided_noise_std(t: np.ndarray, y: np.ndarray) -> np.ndarray:
+    """White-noise standard deviation of each column of y (N, k) sampled at the non-uniform
+    times t (N,): from the 6th divided differences, whose noise variance is
+    ``sigma^2 sum_k w_k^2`` (w their weights) and whose signal part, ``y^(6) / 6!``, does not
+    grow with a jitter of the times (differences on a jittered time base would count the
+    motion times the jitter as noise). Robust scale (median of the normalised squares)."""
+    from numpy.lib.stride_tricks import sliding_window_view
+
+    from gsfric.trajectory import NOISE_DIFFERENCE_ORDER, _divided_difference_coefficients
+
+    t, y = np.asarray(t, float), np.asarray(y, float)
+    m = NOISE_DIFFERENCE_ORDER
+    if len(t) <= m:
+        return np.zeros(y.shape[1])
+    scale = (t[-1] - t[0]) / (len(t) - 1)
+    w = _divided_difference_coefficients((t - t[0]) / scale, m + 1)      # (N - m, m + 1)
+    d = np.einsum("nkj,nj->nk", sliding_window_view(y, m + 1, axis=0), w)
+    z2 = d ** 2 / np.sum(w ** 2, axis=1)[:, None]
+    return np.sqrt(np.median(z2, axis=0) / 0.454936)     # median of chi-square(1)
+
+
+def spline_differentiator(t: np.ndarray, position: np.ndarray, rotation: np.ndarray
+                          ) -> tuple[np.ndarray, np.ndarray] | None:
+    """``differentiator`` for a non-uniform time base, where ``Motion.from_samples`` fits
+    smoothing splines: the velocity noise gain (N,), 1/s, of unit white noise through the same
+    splines (same penalties; the larger of position and orientation; measured on
+    ``SPLINE_NOISE_DRAWS`` draws, averaged over 51 samples), and the reach (N,), the half
+    window of the order-4 Savitzky-Golay filter of the same gain at the mean step. None when
+    the spline's penalties are not available (short records)."""
+    from scipy.ndimage import uniform_filter1d
+
+    from gsfric.trajectory import (DEFAULT_POLYORDER, _candidate_windows, _continuous,
+                                   _smoothing_splines, quaternion_from_rotation,
+                                   spline_penalties)
+
+    t = np.asarray(t, float)
+    n = len(t)
+    q = _continuous(quaternion_from_rotation(np.asarray(rotation, float)))
+    rng = np.random.default_rng(0)
+    gain = np.zeros(n)
+    for signal in (np.asarray(position, float), q):
+        penalties = spline_penalties(t, signal)
+        if penalties is None:
+            return None
+        power = np.zeros(n)
+        for _ in range(SPLINE_NOISE_DRAWS):
+            noise = rng.standard_normal(signal.shape)
+            power += np.mean(_smoothing_splines(t, noise, penalties).derivative(1)(t) ** 2,
+                             axis=1)
+        gain = np.maximum(gain, np.sqrt(uniform_filter1d(power / SPLINE_NOISE_DRAWS, 51,
+                                                         mode="nearest")))
+    step = (t[-1] - t[0]) / (n - 1)
+    windows = np.array(_candidate_windows(n, DEFAULT_POLYORDER))
+    gains = np.array([np.linalg.norm(savgol_coeffs(int(w), DEFAULT_POLYORDER, deriv=1))
+                      for w in windows]) / step                           # decreasing
+    index = np.clip(np.searchsorted(-gains, -gain), 0, len(windows) - 1)
+    return gain, windows[index] // 2
 
 
 def speed_uncertainty(platform, t: np.ndarray, position: np.ndarray, rotation: np.ndarray,
-                      window: int | None = None, polyorder: int | None = None) -> np.ndarray:
-    """Standard deviation of each leg's differentiated speed due to pose noise (6,), m/s.
+                      window: int | None = None, polyorder: int | None = None,
+                      gain: np.ndarray | None = None) -> np.ndarray:
+    """Standard deviation of each leg's differentiated speed due to pose noise, m/s.
+
+    ``sigma_D ||h|| / step``: sigma_D the white noise of the leg length computed from the
+    recorded poses (``trajectory.white_noise_std``, the estimator the filter choice uses),
+    h the Savitzky-Golay first-derivative filter of the sample.
 
     Parameters
     ----------
@@ -96,23 +182,32 @@ def speed_uncertainty(platform, t: np.ndarray, position: np.ndarray, rotation: n
     rotation : ndarray, shape (N, 3, 3)
         Recorded (unsmoothed) orientations.
     window, polyorder : int, optional
-        The Savitzky-Golay differentiator (default: the shorter of the windows
-        ``Motion.from_samples`` chooses for positions and orientations: the larger gain).
+        One fixed differentiator for every sample (``Motion.from_samples(window=...)``).
+    gain : ndarray, shape (N,), optional
+        The per-sample gain of ``differentiator`` (computed when neither it nor ``window`` is
+        given: the filters ``Motion.from_samples`` chooses).
+
+    Returns
+    -------
+    ndarray, shape (N, 6)
+        Per sample and leg; (6,) with a fixed ``window``.
     """
-    from gsfric.trajectory import DEFAULT_POLYORDER
+    from gsfric.trajectory import DEFAULT_POLYORDER, white_noise_std
 
     polyorder = DEFAULT_POLYORDER if polyorder is None else int(polyorder)
     D = leg_lengths(platform, np.asarray(position, float), np.asarray(rotation, float))
-    sigma_D = high_frequency_std(D)
-    if window is None:
-        window = differentiator_windows(position, rotation, polyorder)[0]
+    sigma_D = white_noise_std(D)
     step = float(np.mean(np.diff(t)))
-    h = savgol_coeffs(int(window), polyorder, deriv=1, delta=step)
-    return sigma_D * float(np.sqrt(np.sum(h ** 2)))
+    if window is not None:
+        return sigma_D * float(np.linalg.norm(savgol_coeffs(int(window), polyorder,
+                                                            deriv=1))) / step
+    if gain is None:
+        gain = differentiator(position, rotation, polyorder)[0]
+    return np.asarray(gain, float)[:, None] * sigma_D[None, :] / step
 
 
 def sliding_mask(speed: np.ndarray, sigma_v: np.ndarray, floor: float,
-                 reach: int = 0) -> np.ndarray:
+                 reach: int | np.ndarray = 0) -> np.ndarray:
     """(N, 6) True where a leg is known to slide.
 
     A pair (sample, leg) slides where ``|speed|`` exceeds ``REST_BAND`` sigma_v (and
@@ -120,7 +215,9 @@ def sliding_mask(speed: np.ndarray, sigma_v: np.ndarray, floor: float,
     differentiator window reaches into a rest. A rest is a run of at least ``reach`` samples
     inside the band, with excursions out of the band shorter than ``reach`` samples (the
     differentiated noise is correlated over the window: such an excursion is one noise event,
-    or the pull of the next move on the window, not a move).
+    or the pull of the next move on the window, not a move). With a reach per sample (the
+    differentiator's window varies along the record), each sample looks as far as its own
+    window reaches, and a rest is a run at least as long as the median reach.
 
     Why: the differentiator (a local polynomial fit over ``2 reach + 1`` samples) is unbiased
     where the motion is a polynomial over its window, as at a smooth reversal, whose passage
@@ -133,26 +230,34 @@ def sliding_mask(speed: np.ndarray, sigma_v: np.ndarray, floor: float,
     ----------
     speed : ndarray, shape (N, 6)
         Differentiated leg speeds, m/s.
-    sigma_v : ndarray, shape (6,)
+    sigma_v : ndarray, shape (6,) or (N, 6)
         Their standard deviation due to pose noise, m/s.
     floor : float
         Smallest half-width of the band, m/s.
-    reach : int
+    reach : int or ndarray of int, shape (N,)
         Half-width of the differentiator's window, samples (0: no rest widening).
     """
+    speed = np.asarray(speed, float)
     band = np.maximum(REST_BAND * np.asarray(sigma_v, float), floor)
-    inside = np.abs(speed) <= band[None, :]
-    if reach <= 0:
+    inside = np.abs(speed) <= np.broadcast_to(band, speed.shape)
+    reach = np.asarray(reach, int)
+    if not reach.any():
         return ~inside
-    from scipy.ndimage import binary_closing, binary_dilation, binary_opening
+    from scipy.ndimage import binary_closing, binary_opening
 
-    reach = int(reach)
-    structure = np.ones((reach, 1), bool)
-    # a rest: in the band for at least `reach` samples, excursions shorter than `reach`
+    run = max(int(np.median(reach)), 1)
+    structure = np.ones((run, 1), bool)
+    # a rest: in the band for at least `run` samples, excursions shorter than `run`
     # (one correlated noise event of the differentiator) included
     rests = binary_opening(binary_closing(inside, structure=structure), structure=structure)
-    widened = binary_dilation(rests, structure=np.ones((2 * reach + 1, 1), bool))
-    return ~(inside | widened)
+    n = len(speed)
+    i = np.arange(n)
+    reach = np.broadcast_to(reach, (n,))
+    counts = np.concatenate([np.zeros((1, speed.shape[1]), int),
+                             np.cumsum(rests, axis=0)])
+    lo, hi = np.clip(i - reach, 0, n), np.clip(i + reach + 1, 0, n)
+    near = (counts[hi] - counts[lo]) > 0
+    return ~(inside | near)
 
 
 def force_noise(forces: np.ndarray) -> np.ndarray:

@@ -1,0 +1,172 @@
+"""The motion estimated from noisy poses: closed-form motions whose derivatives are known,
+differentiated from their noisy samples; the force error of the true model evaluated on the
+estimate must stay well below the force noise (docs/discovery.md, "The motion estimate")."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+from scipy.spatial.transform import Rotation
+
+from gsfric.errors import InputError
+from gsfric.models import reference_platform
+from gsfric.synth import read_forces
+from gsfric.trajectory import (
+    Motion,
+    _gcv_window,
+    adaptive_filters,
+    motion_filters,
+    quaternion_from_rotation,
+    white_noise_std,
+)
+
+AXIS = np.array([2.0, -1.0, 2.0]) / 3
+R0 = Rotation.from_euler("zxz", [0.3, 0.2, -0.4]).as_matrix()
+FORCE_NOISE = 0.2
+"""Force noise, N, against which the motion estimate's force error is judged."""
+
+
+def chirp(t: np.ndarray, f0, f1, amplitude, phase):
+    """Linear chirps from f0 to f1 Hz over t (columns): value, first, second derivative."""
+    t = t[:, None]
+    span = t[-1, 0] - t[0, 0]
+    angle = 2 * np.pi * (f0 * t + (f1 - f0) * t ** 2 / (2 * span)) + phase
+    rate = 2 * np.pi * (f0 + (f1 - f0) * t / span)
+    slope = 2 * np.pi * (f1 - f0) / span
+    s, c = np.sin(angle), np.cos(angle)
+    return amplitude * s, amplitude * c * rate, amplitude * (c * slope - s * rate ** 2)
+
+
+def chirp_motion(rng, samples: int, rate: float, high: float, height: float = 0.95) -> Motion:
+    """Position chirps on x, y, z and a rotation chirp about a fixed axis, from 0.05-0.2 Hz up
+    to ``high`` Hz, with their exact derivatives (omega = angle' AXIS in the base frame)."""
+    t = np.arange(samples) / rate
+    f0, f1 = rng.uniform(0.05, 0.2, 4), high * rng.uniform(0.8, 1.0, 4)
+    value, first, second = chirp(t, f0, f1, np.array([0.03, 0.03, 0.02, 0.05]),
+                                 rng.uniform(0, 2 * np.pi, 4))
+    rotation = Rotation.from_rotvec(value[:, 3:] * AXIS).as_matrix() @ R0
+    return Motion.from_arrays(t, value[:, :3] + [0.0, 0.0, height], rotation, first[:, :3],
+                              first[:, 3:] * AXIS, second[:, :3], second[:, 3:] * AXIS)
+
+
+def noisy_poses(rng, motion: Motion, sigma: float) -> tuple[np.ndarray, np.ndarray]:
+    """Positions with N(0, sigma^2) noise, m, and quaternions turned by random rotation
+    vectors of N(0, sigma^2) components, rad."""
+    n = len(motion)
+    position = motion.position + rng.normal(0.0, sigma, (n, 3))
+    rotation = Rotation.from_rotvec(rng.normal(0.0, sigma, (n, 3))).as_matrix() \
+        @ motion.rotation
+    return position, quaternion_from_rotation(rotation)
+
+
+def force_error(platform, exact: Motion, estimate: Motion) -> float:
+    """RMS over the interior (a twentieth left out at each end) of the forces of the true
+    model on the estimated motion minus those on the exact motion, N."""
+    n = len(exact)
+    inner = slice(n // 20, n - n // 20)
+    e = (read_forces(platform, estimate) - read_forces(platform, exact))[inner]
+    return float(np.sqrt(np.mean(e ** 2)))
+
+
+def heavy():
+    ref = reference_platform(friction_model="paper")
+    return ref.with_body(payload_mass=1.5 * ref.platform.payload_mass).with_friction(
+        prismatic_viscous=2 * ref.friction.prismatic_viscous)
+
+
+@pytest.mark.parametrize("platform, rate, high, seed", [
+    (reference_platform(friction_model="paper"), 200.0, 2.0, 0),
+    (reference_platform(friction_model="paper"), 200.0, 2.0, 1),
+    (heavy(), 200.0, 3.0, 2),
+    (reference_platform(friction_model="paper"), 500.0, 4.0, 3),
+])
+def test_chirp_true_model_within_the_noise(platform, rate, high, seed):
+    """On a chirp up to the band the pose sampling supports (1e-5 pose noise), the true model
+    on the estimated motion leaves a residual within 1.15 times a 0.2 N force noise:
+    sqrt(noise^2 + error^2) <= 1.15 noise, an error below 0.57 times the noise."""
+    rng = np.random.default_rng(seed)
+    exact = chirp_motion(rng, 3000, rate, high)
+    position, quaternion = noisy_poses(rng, exact, 1e-5)
+    estimate = Motion.from_samples(exact.t, position, quaternion=quaternion)
+    error = force_error(platform, exact, estimate)
+    assert np.hypot(FORCE_NOISE, error) <= 1.15 * FORCE_NOISE, error
+
+
+def test_local_choice_beats_every_single_window():
+    """A chirp's content changes along the record: no single window suits all of it. The
+    per-sample choice gives a smaller force error than the best fixed window of order 4
+    (and than the generalized cross-validation window of the smoothed pose)."""
+    rng = np.random.default_rng(5)
+    platform = reference_platform(friction_model="paper")
+    exact = chirp_motion(rng, 3000, 200.0, 3.0)
+    position, quaternion = noisy_poses(rng, exact, 1e-5)
+    adaptive = force_error(platform, exact,
+                           Motion.from_samples(exact.t, position, quaternion=quaternion))
+    fixed = {w: force_error(platform, exact, Motion.from_samples(
+        exact.t, position, quaternion=quaternion, window=w)) for w in range(21, 122, 10)}
+    assert adaptive < 0.8 * min(fixed.values()), (adaptive, fixed)
+    gcv = _gcv_window(position, 4)
+    assert adaptive < 0.8 * force_error(platform, exact, Motion.from_samples(
+        exact.t, position, quaternion=quaternion, window=gcv))
+
+
+def test_windows_follow_the_frequency_and_the_noise():
+    """Long windows where the chirp is slow, short ones where it is fast; shorter for the
+    velocity than for the acceleration; the shortest for noise-free samples; longer for more
+    noise."""
+    rng = np.random.default_rng(3)
+    exact = chirp_motion(rng, 3000, 200.0, 3.0)
+    position, _ = noisy_poses(rng, exact, 1e-5)
+    (_, w1), (_, w2) = motion_filters(position)
+    fifth = len(position) // 5
+    assert np.median(w2[:fifth]) >= 1.5 * np.median(w2[-fifth:])
+    assert np.median(w1) <= np.median(w2)
+    _, clean = adaptive_filters(exact.position, deriv=2)
+    assert np.median(clean) < np.median(w2)
+    louder, _ = noisy_poses(np.random.default_rng(3), exact, 1e-4)
+    _, loud = adaptive_filters(louder, deriv=2)
+    assert np.median(loud) > np.median(w2)
+
+
+@pytest.mark.parametrize("sigma", [1e-6, 1e-5, 1e-4])
+def test_white_noise_std_recovers_the_pose_noise(sigma):
+    """The noise estimate behind the filter choice and the speed band: within 10 % on a
+    resolved motion, and (almost) nothing on noise-free samples."""
+    rng = np.random.default_rng(7)
+    exact = chirp_motion(rng, 4000, 200.0, 2.0)
+    position, _ = noisy_poses(rng, exact, sigma)
+    np.testing.assert_allclose(white_noise_std(position), sigma, rtol=0.1)
+    assert np.all(white_noise_std(exact.position) < 1e-8)
+
+
+def test_jittered_log_times_are_differentiated_on_their_own_time_base():
+    """A log whose sample times jitter (+-20 % of the step) is differentiated on its actual
+    times (smoothing spline): its velocity error is well below that of pretending the times
+    were uniform (a pose error of the speed times the jitter)."""
+    rng = np.random.default_rng(11)
+    step = 1 / 200.0
+    t = np.arange(2000) * step + rng.uniform(-0.2, 0.2, 2000) * step
+    t[0] = 0.0
+    angle = 0.05 * np.sin(2 * np.pi * 0.7 * t)
+    position = np.stack([0.03 * np.sin(2 * np.pi * 0.5 * t), 0.02 * np.cos(2 * np.pi * t),
+                         0.95 + 0 * t], axis=1)
+    velocity = np.stack([0.03 * np.pi * np.cos(2 * np.pi * 0.5 * t),
+                         -0.04 * np.pi * np.sin(2 * np.pi * t), 0 * t], axis=1)
+    rotation = Rotation.from_rotvec(angle[:, None] * AXIS).as_matrix() @ R0
+    noisy = position + rng.normal(0, 1e-5, position.shape)
+    motion = Motion.from_samples(t, noisy, quaternion=quaternion_from_rotation(rotation))
+    inner = slice(100, -100)
+    error = np.sqrt(np.mean((motion.velocity - velocity)[inner] ** 2))
+    assert error < 5e-4
+    as_if_uniform = Motion.from_samples(np.arange(2000) * step, noisy,
+                                        quaternion=quaternion_from_rotation(rotation))
+    assert error < 0.75 * np.sqrt(np.mean((as_if_uniform.velocity - velocity)[inner] ** 2))
+
+
+def test_repeated_time_stamp_names_the_row():
+    t = np.arange(50) / 100.0
+    t[17] = t[16]
+    position = np.zeros((50, 3)) + [0.0, 0.0, 0.95]
+    quaternion = np.tile([1.0, 0.0, 0.0, 0.0], (50, 1))
+    with pytest.raises(InputError, match=r"^log.csv: row 18: t does not increase$"):
+        Motion.from_samples(t, position, quaternion=quaternion, source="log.csv")
