@@ -20,6 +20,7 @@ import sys
 from pathlib import Path
 
 from . import effects as fx
+from . import envelope
 from . import model as mdl
 from . import simd
 from .sources import source_hash
@@ -39,7 +40,7 @@ REACTION_OUTPUTS = ("F0", "R_E", "R_C", "M_C", "R_3", "M_3", "D", "D_dot", "u", 
 FRICTION_OUTPUTS = ("MfrE", "MfrC", "Ffr", "MfrE_s", "MfrC_s", "Ffr_s")
 
 # Functions that also get a SIMD-over-steps version (derive/simd.py): the batch hot paths.
-SIMD_FUNCTIONS = ("actuator", "eval")
+SIMD_FUNCTIONS = ("actuator", "eval", "envelope")
 
 
 def _layout(specs) -> list[dict]:
@@ -112,6 +113,7 @@ def _functions():
                     list(fric_in) + ["P", "Q"], list(FRICTION_OUTPUTS)),
         ca.Function(f"{BASENAME}_jacobian", [x, P, Q],
                     [kin["F"], ca.densify(ca.jacobian(kin["F"], theta))], ["x", "P", "Q"], ["F", "dF"]),
+        envelope.function(f"{BASENAME}_envelope", kin, x, P, Q),
     ]
     shapes = {n: list(s) for n, s, *_ in mdl.OUTPUTS}
     units = {n: u for n, _, u, _ in mdl.OUTPUTS}
@@ -120,6 +122,9 @@ def _functions():
         shapes.setdefault(n, list(s))
         units.setdefault(n, u)
         descs.setdefault(n, d)
+    shapes.update(envelope.SHAPES)
+    units.update(envelope.UNITS)
+    descs.update(envelope.DESCRIPTIONS)
     shapes["dF"] = [6, len(theta_names)]
     units["dF"] = "N per unit of each parameter"
     descs["dF"] = "Jacobian of F with respect to theta (see jacobian_parameters)"

@@ -125,6 +125,24 @@ int gsfric_model_jacobian_work_bytes(casadi_int *sz_arg, casadi_int* sz_res, cas
 #define gsfric_model_jacobian_SZ_RES 2
 #define gsfric_model_jacobian_SZ_IW 0
 #define gsfric_model_jacobian_SZ_W 0
+int gsfric_model_envelope(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem);
+int gsfric_model_envelope_checkout(void);
+void gsfric_model_envelope_release(int mem);
+void gsfric_model_envelope_incref(void);
+void gsfric_model_envelope_decref(void);
+casadi_int gsfric_model_envelope_n_in(void);
+casadi_int gsfric_model_envelope_n_out(void);
+casadi_real gsfric_model_envelope_default_in(casadi_int i);
+const char* gsfric_model_envelope_name_in(casadi_int i);
+const char* gsfric_model_envelope_name_out(casadi_int i);
+const casadi_int* gsfric_model_envelope_sparsity_in(casadi_int i);
+const casadi_int* gsfric_model_envelope_sparsity_out(casadi_int i);
+int gsfric_model_envelope_work(casadi_int *sz_arg, casadi_int* sz_res, casadi_int *sz_iw, casadi_int *sz_w);
+int gsfric_model_envelope_work_bytes(casadi_int *sz_arg, casadi_int* sz_res, casadi_int *sz_iw, casadi_int *sz_w);
+#define gsfric_model_envelope_SZ_ARG 3
+#define gsfric_model_envelope_SZ_RES 6
+#define gsfric_model_envelope_SZ_IW 0
+#define gsfric_model_envelope_SZ_W 0
 void gsfric_model_casadi_version(int* major, int* minor, int* patch);
 int gsfric_model_casadi_int_size(void);
 int gsfric_model_casadi_real_size(void);
