@@ -49,7 +49,7 @@ for _name in ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS"):
 
 import numpy as np  # noqa: E402
 
-PATHS = ("evaluate", "eval-only", "direct", "serial", "dask-1", "dask-2")
+PATHS = ("evaluate", "eval-only", "envelope-only", "direct", "serial", "dask-1", "dask-2")
 
 
 def workspace(steps: int, states: int = 8):
@@ -102,8 +102,37 @@ def evaluate(ws) -> tuple[int, float]:
     return steps, time.perf_counter() - start
 
 
+NEEDED = ("R_E", "R_C", "R_3", "M_3", "MfrE", "MfrC", "omega_rel", "omega_leg", "M_C", "F",
+          "Ffr", "D_dot", "D", "s2", "h", "coupling_change", "F0")
+"""The outputs of ``eval`` an envelope is made of (loads, friction, rates) or flagged by."""
+
+
+def eval_only(ws) -> tuple[int, float]:
+    """The model's compiled ``eval`` on the outputs an envelope needs (``NEEDED``), with the
+    step flags, block by block into reused buffers; no reduction."""
+    from gsfric import models, native
+    from gsfric import sweep as sw
+    from gsfric.evaluation import Evaluator
+
+    poses = ws.poses()
+    ev = Evaluator(models.reference_platform(), n_threads=1)
+    fn, spec = native.get("eval"), ev.flag_spec()
+    sizes = {name: size for name, size, _ in fn.outputs}
+    flat = {k: np.empty(sw.BLOCK_STEPS * sizes[k]) for k in NEEDED}
+    flag = np.empty(sw.BLOCK_STEPS, dtype=np.int64)
+    steps = 0
+    start = time.perf_counter()
+    for _, x, _ in _blocks(ws, poses):
+        n = len(x)
+        out = {k: v[:n * sizes[k]].reshape(n, sizes[k]) for k, v in flat.items()}
+        fn([x, ev.P, ev.Q], out, 1, select=NEEDED, flags=spec, flag=flag[:n])
+        steps += n
+    return steps, time.perf_counter() - start
+
+
 def direct(ws, reduce: bool) -> tuple[int, float]:
-    """The sweep's block evaluation (and, with ``reduce``, its reduction) in one loop."""
+    """The sweep's block evaluation (generated ``envelope``) and, with ``reduce``, its fold
+    into the running envelope, in one loop."""
     from gsfric import models
     from gsfric import sweep as sw
 
@@ -183,7 +212,9 @@ def main() -> None:
         cpu0 = cpu_seconds()
         if name == "evaluate":
             steps, sec = evaluate(ws)
-        elif name in ("eval-only", "direct"):
+        elif name == "eval-only":
+            steps, sec = eval_only(ws)
+        elif name in ("envelope-only", "direct"):
             steps, sec = direct(ws, reduce=name == "direct")
         elif name == "serial":
             steps, sec, info = swept(ws, args.chunk, "serial")
@@ -209,11 +240,11 @@ def main() -> None:
         rows[name] = (steps, sec, 1 if not name.startswith("dask") else int(name[-1]))
     print(f"sweep of {steps} steps ({ws.samples} poses x {ws.states} states), "
           f"{args.chunk} steps per task ({tasks} tasks), {sw.BLOCK_STEPS} steps per block")
-    print(f"{'path':<10} {'workers':>7} {'seconds':>9} {'steps/s':>10} {'steps/s/core':>13}"
+    print(f"{'path':<14} {'workers':>7} {'seconds':>9} {'steps/s':>10} {'steps/s/core':>13}"
           f" {'cpu s':>8} {'steps/cpu-s':>12} {'client cpu s':>13}")
     for name, (steps, sec, n) in rows.items():
         work, client_cpu = cpu[name]
-        print(f"{name:<10} {n:>7} {sec:>9.2f} {steps / sec:>10.0f} {steps / sec / n:>13.0f}"
+        print(f"{name:<14} {n:>7} {sec:>9.2f} {steps / sec:>10.0f} {steps / sec / n:>13.0f}"
               f" {work:>8.2f} {steps / work:>12.0f} {client_cpu:>13.2f}")
     print("(cpu s: CPU time of the process(es) doing the work: this one, or the Dask workers "
           "together; client cpu s: this process while the workers ran)")

@@ -310,23 +310,37 @@ def _angles(rotation: np.ndarray) -> np.ndarray:
         return Rotation.from_matrix(rotation).as_euler("ZYX")[:, ::-1]
 
 
+_LENGTH_BLOCK = 8192
+"""Poses whose leg lengths are computed at a time (their work arrays stay in the cache)."""
+
+
 def _leg_lengths(platform: Platform, poses: np.ndarray) -> np.ndarray:
     """Leg lengths |p + R e_i - c_i| (n, 6), m, of poses (n, 6) (``POSE`` columns).
 
     The formula of ``gsfric.discovery.rest.leg_lengths``, with every ``R e_i`` of a pose as one
-    matrix product (the rotation's 9 entries times a (9, 18) matrix of the joints): five times
-    faster, which a workspace of a million poses, checked before its sweep starts, needs.
+    matrix product (the rotation's 9 entries times a (9, 18) matrix of the joints), over
+    blocks of ``_LENGTH_BLOCK`` poses: a workspace of a million poses is checked before its
+    sweep starts.
     """
     g = platform.geometry
     n = len(poses)
     joints = np.zeros((3, 3, 6, 3))           # R[i, j] e[k, j] -> component i of joint k
     for i in range(3):
         joints[i, :, :, i] = g.platform_joints.T
-    legs = (_rotation(poses).reshape(n, 9) @ joints.reshape(9, 18)).reshape(n, 6, 3)
-    legs += poses[:, None, :3]
-    legs -= g.base_joints
-    np.square(legs, out=legs)
-    return np.sqrt(legs @ np.ones(3))
+    joints = joints.reshape(9, 18)
+    out = np.empty((n, 6))
+    work = np.empty((min(n, _LENGTH_BLOCK), 18))
+    for s in range(0, n, _LENGTH_BLOCK):
+        part = poses[s:s + _LENGTH_BLOCK]
+        m = len(part)
+        legs = work[:m]
+        np.matmul(_rotation(part).reshape(m, 9), joints, out=legs)
+        legs3 = legs.reshape(m, 6, 3)
+        legs3 += part[:, None, :3]
+        legs3 -= g.base_joints
+        np.square(legs, out=legs)
+        np.sqrt(legs3 @ np.ones(3), out=out[s:s + m])
+    return out
 
 
 def check_reachable(platform: Platform, poses: np.ndarray, source: str = "workspace") -> None:

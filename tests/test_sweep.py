@@ -300,7 +300,10 @@ def _platforms():
     locking = models.reference_platform("coupled").with_friction(
         model="coupled", joint_radius=0.05, joint_coulomb=0.05 / 0.05)
     sensor = reference.with_effect("force_scale", g1=0.1, g4=-0.05)
-    return {"reference": reference, "coupled, locking": locking, "load-cell gains": sensor}
+    paper = models.reference_platform("paper").with_effect("stribeck", static=3.0) \
+        .with_effect("payload_offset", x=0.02, z=0.01).with_effect("sensor_bias", b2=0.7)
+    return {"reference": reference, "coupled, locking": locking, "load-cell gains": sensor,
+            "paper friction, effects": paper}
 
 
 def _expected_values(r):
@@ -347,6 +350,30 @@ def test_block_evaluation_is_evaluate_quiet(name):
         assert np.all(np.abs(block.values[ok] - G[s:e][ok]) <= 1e-12 * scale)
         seen = e
     assert seen == n
+
+
+def test_sweep_with_the_paper_friction_model_and_effects(inputs, tmp_path):
+    """A platform file of the paper's friction model with effects: every motion envelope is
+    the extreme of evaluate() on that platform, and its friction differs from the nominal's."""
+    import glob
+
+    platform = models.reference_platform("paper").with_effect("stribeck", static=3.0) \
+        .with_effect("sensor_bias", b1=1.5)
+    platform.to_toml(tmp_path / "paper.toml")
+    result = sw.sweep(tmp_path / "out", trajectories=inputs["trajectories"],
+                      platform=tmp_path / "paper.toml", scheduler="serial", plots=False)
+    env = result.envelopes.set_index(["motion", "quantity", "leg"])
+    for path in sorted(glob.glob(inputs["trajectories"])):
+        motion = io.read_trajectory(path)
+        r = evaluate(platform, motion)
+        name = os.path.basename(path)
+        for q, s in {"R_C": np.linalg.norm(r.R_C, axis=2), "F_max": r.F, "F_min": r.F,
+                     "Ffr": np.abs(r.Ffr)}.items():
+            extreme = s.min(axis=0) if q == "F_min" else s.max(axis=0)
+            got = np.array([env.loc[(name, q, leg), "value"] for leg in range(1, 7)])
+            np.testing.assert_allclose(got, extreme, rtol=1e-12)
+    nominal = evaluate(models.reference_platform("paper"), motion)
+    assert np.abs(nominal.Ffr).max() < np.abs(r.Ffr).max()      # the Stribeck peak counts
 
 
 def test_workspace_envelope_leaves_the_flagged_steps_out(monkeypatch):
