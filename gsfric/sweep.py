@@ -1187,7 +1187,7 @@ def sweep(out: str | os.PathLike, trajectories=None,
                     return fut
 
                 queue = as_completed([submit(t) for t in itertools.islice(pending, window)],
-                                     with_results=True)
+                                     loop=client.loop, with_results=True)
                 for fut, frame in queue:
                     finish(by_key.pop(fut.key), frame)
                     nxt = next(pending, None)
