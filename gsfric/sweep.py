@@ -9,8 +9,10 @@ the motion, step, time and pose where it occurs. Only these envelopes leave a wo
 Work is cut into *tasks* of about ``chunk_steps`` evaluated steps (a second or more each): one
 trajectory file or one block of workspace poses, on a range of variants. Inside a task, steps
 are evaluated and reduced ``BLOCK_STEPS`` at a time into reused buffers: the compiled code
-computes only the outputs the envelopes need, and a block's magnitudes are reduced in a few
-vectorised passes while they are still in the core's cache. Tasks run in this
+(generated function ``envelope``, derive/envelope.py) writes per step only the 78 values the
+envelopes maximise (squared load magnitudes, forces, friction powers) with the step flags, and
+a block is folded into the running extremes in one pass while it is still in the core's cache.
+Tasks run in this
 process (``scheduler="serial"``), on a Dask ``LocalCluster`` of one single-threaded worker
 process per core (``"local"``), or on a running Dask cluster (``"tcp://host:port"`` or the
 ``DASK_SCHEDULER_ADDRESS`` variable). The result does not depend on where a task runs: a task's
