@@ -151,11 +151,14 @@ def direct(ws, reduce: bool) -> tuple[int, float]:
 
 
 def warm() -> None:
-    """A worker's one-time cost: import the sweep and load (or compile) the library."""
-    import gsfric.sweep  # noqa: F401
-    from gsfric import native
+    """A worker's one-time cost: a task of one pose (imports: gsfric, pandas, SciPy's
+    rotations; the compiled library loaded, or compiled, from the cache)."""
+    from gsfric import models
+    from gsfric import sweep as sw
 
-    native.get("eval")
+    ws = workspace(8)
+    sw.run_task(sw.Task(0, "workspace", [0], [models.reference_platform()], 8,
+                        poses=ws.poses()[:1], workspace=ws))
 
 
 def peak_rss_mb() -> float:
@@ -192,7 +195,7 @@ def swept(ws, chunk: int, scheduler) -> tuple[int, float, dict]:
         return result.info["steps"], time.perf_counter() - start, result.info
 
 
-def run_path(name: str, ws, chunk: int, clients: dict) -> dict:
+def run_path(name: str, ws, chunk: int) -> dict:
     """One run of path ``name``: steps, seconds, CPU s of the process(es) doing the work and of
     this process (the client) besides."""
     cpu0 = cpu_seconds()
@@ -207,14 +210,25 @@ def run_path(name: str, ws, chunk: int, clients: dict) -> dict:
         steps, sec, info = swept(ws, chunk, "serial")
         out["tasks"] = info["tasks"]
     else:
-        client = clients[int(name[-1])]
-        before = client.run(cpu_seconds)
-        cpu0 = cpu_seconds()
-        steps, sec, info = swept(ws, chunk, client)
-        client_cpu = cpu_seconds() - cpu0
-        after = client.run(cpu_seconds)
-        out.update(tasks=info["tasks"], work_cpu=sum(after[w] - before[w] for w in after),
-                   client_cpu=client_cpu)
+        from distributed import Client
+
+        from gsfric import sweep as sw
+
+        n = int(name[-1])
+        t0 = time.perf_counter()
+        # one cluster at a time: an idle one's scheduler and nannies would run in this process
+        with sw.local_cluster(n) as cluster, Client(cluster, set_as_default=False) as client:
+            client.wait_for_workers(n)
+            client.run(warm)       # import gsfric and load the cached compiled library
+            out["startup"] = time.perf_counter() - t0
+            before = client.run(cpu_seconds)
+            cpu0 = cpu_seconds()
+            steps, sec, info = swept(ws, chunk, client)
+            client_cpu = cpu_seconds() - cpu0
+            after = client.run(cpu_seconds)
+            out.update(tasks=info["tasks"], work_cpu=sum(after[w] - before[w] for w in after),
+                       client_cpu=client_cpu, memory=max(client.run(peak_rss_mb).values()),
+                       threads=next(iter(client.run(worker_threads).values())))
     if "work_cpu" not in out:
         out.update(work_cpu=cpu_seconds() - cpu0, client_cpu=0.0)
     out.update(steps=steps, seconds=sec, workers=int(name[-1]) if name.startswith("dask")
@@ -234,33 +248,18 @@ def main() -> None:
                         "round); the fastest run of each is compared, the spread printed")
     parser.add_argument("--json", type=Path, help="also write the figures as JSON")
     args = parser.parse_args()
-    import contextlib
-
-    from distributed import Client
-
     from gsfric import native
 
     native.is_compiled()
     ws = workspace(int(args.steps))
-    startup, clients = {}, {}
     runs: dict[str, list[dict]] = {name: [] for name in args.paths}
-    with contextlib.ExitStack() as stack:
+    for _ in range(args.repeat):
         for name in args.paths:
-            if name.startswith("dask"):
-                n = int(name[-1])
-                t0 = time.perf_counter()
-                cluster = stack.enter_context(sw.local_cluster(n))
-                client = stack.enter_context(Client(cluster, set_as_default=False))
-                client.wait_for_workers(n)
-                client.run(warm)       # import gsfric and load the cached compiled library
-                startup[n] = time.perf_counter() - t0
-                clients[n] = client
-        for _ in range(args.repeat):
-            for name in args.paths:
-                runs[name].append(run_path(name, ws, args.chunk, clients))
-        memory = {f"dask-{n}": max(c.run(peak_rss_mb).values()) for n, c in clients.items()}
-        threads = {f"dask-{n}": next(iter(c.run(worker_threads).values()))
-                   for n, c in clients.items()}
+            runs[name].append(run_path(name, ws, args.chunk))
+    startup = {int(k[-1]): min(r["startup"] for r in v) for k, v in runs.items()
+               if k.startswith("dask")}
+    memory = {k: max(r["memory"] for r in v) for k, v in runs.items() if k.startswith("dask")}
+    threads = {k: v[0]["threads"] for k, v in runs.items() if k.startswith("dask")}
     first = next(iter(runs.values()))[0]
     steps = first["steps"]
     tasks = next((r[0]["tasks"] for r in runs.values() if r[0]["tasks"]), None)

@@ -1021,17 +1021,24 @@ def _client(scheduler, workers: int | None = None):
     return Client(scheduler), None
 
 
+LOCAL_CLUSTER_CONFIG = {"distributed.worker.profile.enabled": False,
+                        "distributed.admin.tick.interval": "1s"}
+"""Dask settings of the local cluster: no statistical profiler in the workers (it samples the
+running task's stack 100 times a second: about 5 % of a task's CPU time), and the event loops'
+tick (a check that a loop is not blocked) once a second, not every 20 ms: the tick cost an
+idle worker 2 % of a core and this process, which runs the scheduler and the workers'
+nannies, 3 % per worker; once a second, 0.3 % and 0.7 % (docs/sizing.md)."""
+
+
 def local_cluster(workers: int):
     """The ``LocalCluster`` of ``scheduler="local"``: ``workers`` processes with one thread
-    each, one per core (nothing shared between cores), without the workers' statistical
-    profiler (it samples the running task's stack 100 times a second: about 5 % of a task's
-    CPU time measured here, docs/sizing.md)."""
+    each, one per core (nothing shared between cores), with ``LOCAL_CLUSTER_CONFIG``."""
     import logging
 
     import dask
     from distributed import LocalCluster
 
-    with dask.config.set({"distributed.worker.profile.enabled": False}):
+    with dask.config.set(LOCAL_CLUSTER_CONFIG):
         return LocalCluster(n_workers=workers, threads_per_worker=1, processes=True,
                             dashboard_address=None, silence_logs=logging.ERROR)
 
