@@ -1,34 +1,38 @@
-"""Throughput of ``gsfric sweep``: the evaluator alone, with the reduction, and on Dask workers.
+"""Throughput of ``gsfric sweep``: the model's evaluation alone, with the reduction, and on Dask.
 
 One workspace sweep (Latin-hypercube poses x dynamic states on the reference platform) is run
-in up to six ways on the same steps, each in one thread (one core):
+in up to seven ways on the same steps, each in one thread (one core), the states built as the
+sweep builds them:
 
-* ``evaluate``: the states built as the sweep builds them, ``Evaluator.evaluate_quiet`` on them
-  ``BLOCK_STEPS`` at a time into reused buffers (every output): what a user calling the
-  evaluator's public API in a loop gets; no reduction;
-* ``eval-only``: the same states, the compiled evaluation the sweep makes (only the outputs the
-  envelopes need, with the step flags), block by block; no reduction;
-* ``direct``: ``eval-only`` plus the same reduction to envelopes, folded block by block, in one
+* ``evaluate``: ``Evaluator.evaluate_quiet`` ``BLOCK_STEPS`` steps at a time into reused
+  buffers (every output): a loop over the evaluator's public call; no reduction;
+* ``eval-only``: the model's compiled ``eval`` on the outputs an envelope is made of or flagged
+  by (``NEEDED``: loads, friction, rates, flags' inputs), with the step flags, block by block
+  into reused buffers; no reduction: **direct evaluation**, the reference of the target;
+* ``envelope-only``: the generated function the sweep evaluates (``envelope``: the 78 values
+  per step an envelope maximises, with the step flags), block by block; no reduction;
+* ``direct``: ``envelope-only`` and the fold of each block into the running envelope, in one
   loop in this process: the sweep's arithmetic without tasks, files or Dask;
-* ``serial``: ``gsfric.sweep(scheduler="serial")``: the tasks in this process, with the task
-  envelopes, the chunk files and the merge;
+* ``serial``: ``gsfric.sweep(scheduler="serial")``: the plan (poses, reachability), the tasks
+  in this process, the task envelopes, the chunk files and the merge;
 * ``dask-1`` and ``dask-2``: ``gsfric.sweep`` on the ``LocalCluster`` of ``scheduler="local"``
-  (``gsfric.sweep.local_cluster``) with 1 and 2 single-threaded worker processes (cluster
-  start-up and the workers' imports timed apart: paid once per sweep); the workers' peak
-  memory (resident set) is printed.
+  (``gsfric.sweep.local_cluster``) with 1 and 2 single-threaded worker processes, started
+  for the run and warmed by a one-pose task (start-up timed apart: paid once per sweep); one
+  cluster at a time; the workers' peak memory (resident set) is printed.
 
-It prints wall-clock steps/s of each and the CPU time of the process(es) doing the work (the
-figure to read on a shared machine), the time per step of the Dask path per core against
-``eval-only`` (the cost of the reduction and of Dask together: target <= 1.3x on >= 1e7 steps)
-and against ``direct`` (Dask's and the tasks' own cost), and the speed-up of 2 workers over 1
-(target >= 1.7x)::
+With ``--repeat N`` every path runs N times, interleaved (each path once, then again), and the
+fastest run of each is compared, with the spread (slowest over fastest) printed: on a shared
+machine the fastest run is the least disturbed. It prints wall-clock steps/s of each and the
+CPU time of the process(es) doing the work (the figure to read on a shared machine), the time
+per step per core against ``eval-only`` (the target: the Dask path within 1.3x on >= 1e7
+steps), against ``direct`` (what tasks and Dask add) and against ``evaluate``, and the speed-up
+of 2 workers over 1 (target >= 1.7x), fastest over fastest and run by run::
 
     .venv/bin/python benchmarks/sweep_scaling.py                    # 1e6 steps
-    .venv/bin/python benchmarks/sweep_scaling.py --steps 10000000   # the target's size
+    .venv/bin/python benchmarks/sweep_scaling.py --steps 1e7 --repeat 3   # the target's size
     .venv/bin/python benchmarks/sweep_scaling.py --steps 2e6 --paths dask-1 --json out.json
 
-The machine it runs on should be otherwise idle; docs/sizing.md has the figures of one run and
-the cost of a 1e10-step sweep computed from them.
+docs/sizing.md has the figures of one run and the cost of a 1e10-step sweep computed from them.
 """
 
 from __future__ import annotations
@@ -156,9 +160,9 @@ def warm() -> None:
     from gsfric import models
     from gsfric import sweep as sw
 
-    ws = workspace(8)
     sw.run_task(sw.Task(0, "workspace", [0], [models.reference_platform()], 8,
-                        poses=ws.poses()[:1], workspace=ws))
+                        poses=np.array([[0.0, 0.0, 0.7, 0.0, 0.0, 0.0]]),
+                        workspace=workspace(8)))
 
 
 def peak_rss_mb() -> float:
