@@ -110,8 +110,8 @@ CHUNK_STEPS = 1_000_000
 
 SERIAL_BELOW = 2_000_000
 """``scheduler="auto"`` runs sweeps of fewer steps in this process: below two tasks a cluster
-has nothing to share out, and starting one (1-3 s with the workers' imports) costs about what
-a second core saves on a million steps (docs/sizing.md)."""
+has nothing to share out, and starting one (0.5-5 s with the workers' imports and first task)
+costs about what a second core saves on a million steps (docs/sizing.md)."""
 
 STREAM_CHUNK = 50_000
 """Steps of a trajectory file read and evaluated at a time inside a task (bounds memory)."""
