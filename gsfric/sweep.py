@@ -515,9 +515,6 @@ magnitudes of the six vector loads (the square root is taken of the extremes onl
 -F (the largest -F is the smallest F), |Ffr| and the three dissipated friction powers. The
 compiled code computes them per step (generated function ``envelope``, derive/envelope.py)."""
 
-_FLAG_OUTPUTS = ("D", "s2", "h", "coupling_change", "F0")
-"""The outputs of ``envelope`` the step flags read (computed in C, not written out)."""
-
 _NONE = np.zeros(0, dtype=np.int64)
 _NONE.flags.writeable = False      # shared by every task of a process
 
