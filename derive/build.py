@@ -20,6 +20,7 @@ import sys
 from pathlib import Path
 
 from . import effects as fx
+from . import envelope
 from . import model as mdl
 from . import simd
 from .sources import source_hash
@@ -46,7 +47,7 @@ FIXED_MODELS = {"coupled": 1, "posthoc": 0}
 # Functions that also get a SIMD-over-steps version (derive/simd.py): the batch hot paths (the
 # generic actuator map runs only when the rows of a per-step P mix the two models).
 SIMD_FUNCTIONS = ("eval", *(f"{f}_{suffix}" for suffix in FIXED_MODELS
-                            for f in ("actuator", "eval")))
+                            for f in ("actuator", "eval", "envelope")))
 
 
 def _layout(specs) -> list[dict]:
@@ -127,6 +128,7 @@ def _functions():
                         ["x", "P", "Q"], out_names),
             ca.Function(f"{BASENAME}_actuator_{suffix}", [x, P, Q], [fixed["F"]],
                         ["x", "P", "Q"], ["F"]),
+            envelope.function(f"{BASENAME}_envelope_{suffix}", fixed, x, P, Q),
         ]
     shapes = {n: list(s) for n, s, *_ in mdl.OUTPUTS}
     units = {n: u for n, _, u, _ in mdl.OUTPUTS}
@@ -135,6 +137,9 @@ def _functions():
         shapes.setdefault(n, list(s))
         units.setdefault(n, u)
         descs.setdefault(n, d)
+    shapes.update(envelope.SHAPES)
+    units.update(envelope.UNITS)
+    descs.update(envelope.DESCRIPTIONS)
     shapes["dF"] = [6, len(theta_names)]
     units["dF"] = "N per unit of each parameter"
     descs["dF"] = "Jacobian of F with respect to theta (see jacobian_parameters)"

@@ -11,9 +11,9 @@ from pathlib import Path
 DERIVE = Path(__file__).resolve().parent
 
 GENERATING = ("build.py", "bushing.py", "chain.py", "conditioning.py", "coupled.py",
-              "effects.py", "friction.py", "kinematics.py", "leg_frames.py", "legs.py",
-              "mechanics.py", "model.py", "platform.py", "prismatic.py", "simd.py", "sources.py",
-              "vectors.py")
+              "effects.py", "envelope.py", "friction.py", "kinematics.py", "leg_frames.py",
+              "legs.py", "mechanics.py", "model.py", "platform.py", "prismatic.py", "simd.py",
+              "sources.py", "vectors.py")
 """The derive/ modules whose content determines generated/ (``derive.build`` and its imports)."""
 
 

@@ -161,6 +161,24 @@ int gsfric_model_actuator_coupled_work_bytes(casadi_int *sz_arg, casadi_int* sz_
 #define gsfric_model_actuator_coupled_SZ_RES 1
 #define gsfric_model_actuator_coupled_SZ_IW 0
 #define gsfric_model_actuator_coupled_SZ_W 0
+int gsfric_model_envelope_coupled(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem);
+int gsfric_model_envelope_coupled_checkout(void);
+void gsfric_model_envelope_coupled_release(int mem);
+void gsfric_model_envelope_coupled_incref(void);
+void gsfric_model_envelope_coupled_decref(void);
+casadi_int gsfric_model_envelope_coupled_n_in(void);
+casadi_int gsfric_model_envelope_coupled_n_out(void);
+casadi_real gsfric_model_envelope_coupled_default_in(casadi_int i);
+const char* gsfric_model_envelope_coupled_name_in(casadi_int i);
+const char* gsfric_model_envelope_coupled_name_out(casadi_int i);
+const casadi_int* gsfric_model_envelope_coupled_sparsity_in(casadi_int i);
+const casadi_int* gsfric_model_envelope_coupled_sparsity_out(casadi_int i);
+int gsfric_model_envelope_coupled_work(casadi_int *sz_arg, casadi_int* sz_res, casadi_int *sz_iw, casadi_int *sz_w);
+int gsfric_model_envelope_coupled_work_bytes(casadi_int *sz_arg, casadi_int* sz_res, casadi_int *sz_iw, casadi_int *sz_w);
+#define gsfric_model_envelope_coupled_SZ_ARG 3
+#define gsfric_model_envelope_coupled_SZ_RES 6
+#define gsfric_model_envelope_coupled_SZ_IW 0
+#define gsfric_model_envelope_coupled_SZ_W 0
 int gsfric_model_eval_posthoc(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem);
 int gsfric_model_eval_posthoc_checkout(void);
 void gsfric_model_eval_posthoc_release(int mem);
@@ -197,6 +215,24 @@ int gsfric_model_actuator_posthoc_work_bytes(casadi_int *sz_arg, casadi_int* sz_
 #define gsfric_model_actuator_posthoc_SZ_RES 1
 #define gsfric_model_actuator_posthoc_SZ_IW 0
 #define gsfric_model_actuator_posthoc_SZ_W 0
+int gsfric_model_envelope_posthoc(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem);
+int gsfric_model_envelope_posthoc_checkout(void);
+void gsfric_model_envelope_posthoc_release(int mem);
+void gsfric_model_envelope_posthoc_incref(void);
+void gsfric_model_envelope_posthoc_decref(void);
+casadi_int gsfric_model_envelope_posthoc_n_in(void);
+casadi_int gsfric_model_envelope_posthoc_n_out(void);
+casadi_real gsfric_model_envelope_posthoc_default_in(casadi_int i);
+const char* gsfric_model_envelope_posthoc_name_in(casadi_int i);
+const char* gsfric_model_envelope_posthoc_name_out(casadi_int i);
+const casadi_int* gsfric_model_envelope_posthoc_sparsity_in(casadi_int i);
+const casadi_int* gsfric_model_envelope_posthoc_sparsity_out(casadi_int i);
+int gsfric_model_envelope_posthoc_work(casadi_int *sz_arg, casadi_int* sz_res, casadi_int *sz_iw, casadi_int *sz_w);
+int gsfric_model_envelope_posthoc_work_bytes(casadi_int *sz_arg, casadi_int* sz_res, casadi_int *sz_iw, casadi_int *sz_w);
+#define gsfric_model_envelope_posthoc_SZ_ARG 3
+#define gsfric_model_envelope_posthoc_SZ_RES 6
+#define gsfric_model_envelope_posthoc_SZ_IW 0
+#define gsfric_model_envelope_posthoc_SZ_W 0
 void gsfric_model_casadi_version(int* major, int* minor, int* patch);
 int gsfric_model_casadi_int_size(void);
 int gsfric_model_casadi_real_size(void);
