@@ -36,7 +36,7 @@ from gsfric.discovery.regimes import bands as regime_bands
 from gsfric.discovery.residuals import Problem
 from gsfric.discovery.settings import Settings
 from gsfric.discovery.selection import (CandidateTest, bootstrap_share, generic_competitor,
-                                        indistinguishable,
+                                        half_stability, indistinguishable,
                                         noise_model, refine, refit_alternatives,
                                         screen_candidates, winner_of)
 from gsfric.platform import Platform
@@ -357,6 +357,9 @@ def discover(motion: Motion, forces: np.ndarray, platform: Platform | None = Non
     residual_after = r
     whitener = st.Whitener.fit(residual_after, valid=problem.sliding)
     intervals = _intervals(problem, J, names, whitener, residual_after, rng, theta)
+    for name in active:
+        findings_evidence[name]["stability"] = half_stability(
+            problem, J, residual_after, names, name, whitener)
     n_fitted = len(names)
     rows = int(np.count_nonzero(sliding))
     noise = float(np.sqrt(np.sum(residual_after ** 2) / max(rows - n_fitted, 1)))
