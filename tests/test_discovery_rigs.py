@@ -4,6 +4,7 @@ channels, and the fitted model written back (docs/discovery.md)."""
 from __future__ import annotations
 
 import json
+import re
 
 import numpy as np
 import pytest
@@ -74,11 +75,8 @@ def test_speed_uncertainty_follows_the_pose_noise():
     assert np.allclose(out[1] / out[0], 4.0, rtol=0.3)
 
 
-@pytest.mark.parametrize("problem, expected", [
-    ("constant", "F2: constant"), ("saturated", "F4: saturated"), ("dropout", "t: dropout"),
-    ("nan", "F3: no finite value")])
-def test_bad_channels_are_data_problems(problem, expected):
-    data = synthesize(PAPER, samples=2000, noise=0.1, seed=1)
+def spoil(data, problem: str) -> tuple[np.ndarray, np.ndarray]:
+    """The times and forces of ``data`` with one kind of bad measurement."""
     t = data.frame.t.values.copy()
     F = data.frame[FORCES].values.copy()
     if problem == "constant":
@@ -87,19 +85,61 @@ def test_bad_channels_are_data_problems(problem, expected):
         F[:, 3] = np.minimum(F[:, 3], np.quantile(F[:, 3], 0.9))
     elif problem == "dropout":
         t[1000:] += 0.5
+    elif problem == "held":          # a dropout recorded as the last value, one channel
+        F[1000:1040, 4] = F[999, 4]
+    elif problem == "zeroed":        # a dropout recorded as zeros, every channel
+        F[1000:1040] = 0.0
     else:
         F[:, 2] = np.nan
+    return t, F
+
+
+BAD = [("constant", "F2: constant"), ("saturated", "F4: saturated"), ("dropout", "t: dropout"),
+       ("held", "F5: the same value"), ("zeroed", "F1: the same value (0 N) in 40 rows"),
+       ("nan", "F3: no finite value")]
+
+
+@pytest.mark.parametrize("problem, expected", BAD)
+def test_bad_channels_are_data_problems(problem, expected):
+    data = synthesize(PAPER, samples=2000, noise=0.1, seed=1)
+    t, F = spoil(data, problem)
     found = data_problems(t, F)
-    assert len(found) == 1 and found[0].startswith(expected)
-    if problem in ("constant", "saturated"):
+    assert found[0].startswith(expected)
+    assert len(found) == (6 if problem == "zeroed" else 1)
+    if problem in ("constant", "saturated", "held", "zeroed"):
         motion, _, poses = recorded(data)
-        with pytest.raises(InputError, match=expected.replace("(", r"\(")):
+        with pytest.raises(InputError, match=re.escape(expected)):
             discover(motion, F, data.model, poses=poses)
+
+
+@pytest.mark.parametrize("problem, expected", BAD)
+def test_bad_measured_data_through_the_cli(tmp_path, problem, expected):
+    """Every kind of bad measurement stops `gsfric discover` with one line naming the channel
+    (or the time column) and exit code 2, and nothing is written: never a discovered effect."""
+    data = synthesize(PAPER, ["stribeck:static=2,velocity=0.01"], samples=2000, noise=0.1,
+                      pose_noise=1e-5, seed=1)
+    t, F = spoil(data, problem)
+    frame = data.frame.copy()
+    frame["t"] = t
+    frame[FORCES] = F
+    measured = tmp_path / "measured.csv"
+    frame.to_csv(measured, index=False)
+    out = tmp_path / "out"
+    res = CliRunner().invoke(main, ["discover", "--measured", str(measured), "--out", str(out)])
+    assert res.exit_code == 2
+    lines = res.output.strip().splitlines()
+    assert len(lines) == 1 and lines[0].startswith("gsfric: error:")
+    # the reader names a NaN column itself; the workflow names the channel's problem
+    assert (expected if problem != "nan" else "'F3'") in lines[0]
+    assert not out.exists() or not (out / "summary.json").exists()
 
 
 def test_clean_data_has_no_data_problem():
     data = synthesize(PAPER, samples=2000, noise=0.1, seed=2)
     assert data_problems(data.frame.t.values, data.frame[FORCES].values) == []
+    # a coarsely quantised load cell repeats values everywhere: not a dropout
+    coarse = np.round(data.frame[FORCES].values / 0.2) * 0.2
+    assert data_problems(data.frame.t.values, coarse) == []
 
 
 def point_to_point(samples=6000, rate=200.0, seed=0) -> Motion:

@@ -30,6 +30,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from gsfric.discovery import lackfit
 from gsfric.discovery import statistics as st
 from gsfric.discovery.candidates import CANDIDATES
 from gsfric.discovery.regimes import bands as regime_bands
@@ -401,7 +402,16 @@ def discover(motion: Motion, forces: np.ndarray, platform: Platform | None = Non
         "speed_uncertainty": [float(v) for v in problem.sigma_v],
         "not_sliding_share": float(1.0 - sliding.mean()),
     }
-    if lof["significant"] or any(rnd.generic.get("blocked") for rnd in rounds):
+    imitators = [rnd.winner for rnd in rounds if rnd.winner and rnd.generic.get("imitates")]
+    for name in imitators:
+        rnd = next(x for x in rounds if x.winner == name)
+        notes.append(
+            f"round {rnd.index}: {name} explains nothing that a generic out-of-catalog structure "
+            f"(mainly {rnd.generic['main_signal']}: {lackfit.MEANING.get(rnd.generic['main_signal'], '')}) "
+            "does not, and that structure explains significantly more: the data cannot tell "
+            f"{name} from an error outside the catalog; it is named as the simpler explanation, "
+            "the verdict is not 'explained'")
+    if lof["significant"] or imitators or any(rnd.generic.get("blocked") for rnd in rounds):
         verdict = "unexplained_discrepancy"
     elif active:
         verdict = "explained"
@@ -440,7 +450,6 @@ def _noise_whitener(design, problem: Problem) -> st.Whitener:
 def _lack_of_fit(problem: Problem, theta: np.ndarray, residual: np.ndarray,
                  whitener: st.Whitener, in_model: Sequence[str] = ()) -> dict:
     """The lack-of-fit test of the final residual (``lackfit``), with where it lives."""
-    from gsfric.discovery import lackfit
 
     s = problem.settings
     used = problem.used
