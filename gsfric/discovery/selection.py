@@ -316,13 +316,20 @@ def generic_competitor(problem: Problem, design: Design, whitener: st.Whitener,
     wcols = design.variants[winner][screen.variant[winner]]
     ocols = [c for n in others for c in design.variants[n][screen.variant[n]]]
     cols = design.refit + wcols + ocols
-    X = np.concatenate([design.X[:, :, cols], B], axis=2)
+    # one array for the model's columns and the basis (the largest temporary of a round)
+    X = np.empty(B.shape[:2] + (len(cols) + B.shape[2],))
+    X[:, :, len(cols):] = B
+    nb = B.shape[2]
+    B = None
+    for j, c in enumerate(cols):
+        X[:, :, j] = design.X[:, :, c]
     blocks = st.Blocks.whitened(whitener, X, design.r, s.n_blocks)
     flat = X.reshape(-1, X.shape[2])
     XtX, Xtr = flat.T @ flat, flat.T @ design.r.reshape(-1)
+    basis_sq = np.einsum("ij,ij->j", flat[:, len(cols):], flat[:, len(cols):])
     del X, flat
 
-    nr, nw, no, nb = len(design.refit), len(wcols), len(ocols), B.shape[2]
+    nr, nw, no = len(design.refit), len(wcols), len(ocols)
     lower = np.r_[design.lower[cols], np.full(nb, -np.inf)]
     upper = np.r_[design.upper[cols], np.full(nb, np.inf)]
     R = list(range(nr))
@@ -340,7 +347,7 @@ def generic_competitor(problem: Problem, design: Design, whitener: st.Whitener,
     parts = {}
     coef = everything.coef[len(R + W + O):]
     for j, name in enumerate(names):
-        parts[name] = parts.get(name, 0.0) + float(coef[j] ** 2 * np.sum(B[:, :, j] ** 2))
+        parts[name] = parts.get(name, 0.0) + float(coef[j] ** 2 * basis_sq[j])
     main = max(parts, key=parts.get) if parts else None
     gap_winner = _gap(XtX, Xtr, design.rtr, generic, both)
     gap_generic = _gap(XtX, Xtr, design.rtr, catalog, everything)

@@ -45,18 +45,17 @@ def _autocovariance(e: np.ndarray, max_lag: int, valid: np.ndarray | None = None
     With ``valid`` (N, k) bool, only valid samples count: each lag's sum of products over the
     valid pairs, over the number of such pairs (the estimator for series with gaps)."""
     n = e.shape[0]
-    size = 1 << int(np.ceil(np.log2(2 * n)))
     if valid is None:
         e = e - e.mean(axis=0)
-        f = np.fft.rfft(e, size, axis=0)
-        return np.fft.irfft(f * np.conj(f), size, axis=0)[:max_lag + 1] / n
+        return np.stack([np.einsum("ij,ij->j", e[lag:], e[:n - lag])
+                         for lag in range(max_lag + 1)]) / n
+    # sums over lags directly (max_lag is small): no transform of twice the series' length
     w = valid.astype(float)
     count = np.maximum(w.sum(axis=0), 1.0)
     e = (e - (e * w).sum(axis=0) / count) * w
-    f = np.fft.rfft(e, size, axis=0)
-    g = np.fft.rfft(w, size, axis=0)
-    num = np.fft.irfft(f * np.conj(f), size, axis=0)[:max_lag + 1]
-    pairs = np.fft.irfft(g * np.conj(g), size, axis=0)[:max_lag + 1]
+    num = np.stack([np.einsum("ij,ij->j", e[lag:], e[:n - lag]) for lag in range(max_lag + 1)])
+    pairs = np.stack([np.einsum("ij,ij->j", w[lag:], w[:n - lag])
+                      for lag in range(max_lag + 1)])
     return num / np.maximum(np.round(pairs), 1.0) * (1.0 - np.arange(max_lag + 1) / n)[:, None]
 
 

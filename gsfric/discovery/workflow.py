@@ -457,8 +457,10 @@ def _lack_of_fit(problem: Problem, theta: np.ndarray, residual: np.ndarray,
     t = np.asarray(problem.model.t[used])
     # a signal that an effect of the final model reproduces (a delay's dF/dt once time_offset
     # is in it) is that effect's parameter, refitted already: not a structure outside the model
-    X, names = lackfit.basis_outside(t, F, problem.result.D_dot[used], problem.sliding,
-                                     problem.weight, in_model)
+    speed = problem.result.D_dot[used]
+    dF, acceleration = lackfit.rates(t, F, speed)     # once: the basis and the dynamic test
+    X, names = lackfit.basis_outside(t, F, speed, problem.sliding, problem.weight, in_model,
+                                     derivatives=(dF, acceleration))
     # the noise model from the residual of the basis fit (largest model), as in each round
     k = X.shape[2]
     flat = X.reshape(-1, k)
@@ -467,10 +469,11 @@ def _lack_of_fit(problem: Problem, theta: np.ndarray, residual: np.ndarray,
     out = lackfit.test(residual, X, whitener, alpha=s.alpha, min_gap=s.min_gap,
                        n_blocks=s.n_blocks, n_folds=s.n_folds,
                        min_fold_share=s.min_fold_share, names=names)
-    D, speed = problem.result.D[used], problem.result.D_dot[used]
+    X = flat = None
+    D = problem.result.D[used]
     state = lackfit.state_structure(residual, lackfit.state_features(D, speed, F),
                                     problem.sliding, n_folds=s.n_folds, min_gap=s.min_gap)
-    inputs = {"dF/dt": np.gradient(F, t, axis=0), "acceleration": np.gradient(speed, t, axis=0)}
+    inputs = {"dF/dt": dF, "acceleration": acceleration}
     dynamic = lackfit.dynamic_structure(residual, inputs, problem.sliding, alpha=s.alpha,
                                         min_gap=max(s.min_gap, lackfit.DYNAMIC_MIN_GAP))
     out["state"], out["dynamic"] = state, dynamic
