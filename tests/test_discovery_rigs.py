@@ -279,3 +279,28 @@ def test_whitened_blocks_equal_the_whitened_design():
     b = st.Blocks.whitened(w, X, e, 40)
     for name in ("XtX", "Xtz", "ztz", "rows"):
         assert np.allclose(getattr(a, name), getattr(b, name), rtol=1e-12, atol=1e-9)
+    # the design given as columns side by side (not joined): the same numbers
+    c = st.Blocks.whitened(w, [X[:, :, :2], X[:, :, 2:]], e, 40)
+    for name in ("XtX", "Xtz", "ztz", "rows"):
+        assert np.allclose(getattr(a, name), getattr(c, name), rtol=1e-12, atol=1e-9)
+
+
+def test_autocovariance_with_gaps_counts_only_valid_pairs():
+    """The autocovariance over valid pairs equals the plain estimate of the valid stretch
+    alone when the gap is at one end, and the lag-k value of an AR(1) series is phi^k times
+    the variance."""
+    from gsfric.discovery import statistics as st
+
+    rng = np.random.default_rng(2)
+    n, phi = 40000, 0.8
+    e = np.zeros((n, 6))
+    for i in range(1, n):
+        e[i] = phi * e[i - 1] + rng.normal(size=6)
+    valid = np.ones((n, 6), bool)
+    valid[n // 2:] = False
+    gapped = st._autocovariance(e, 3, valid)
+    alone = st._autocovariance(e[:n // 2], 3)
+    assert np.allclose(gapped * (1 - np.arange(4) / (n // 2))[:, None],
+                       alone * (1 - np.arange(4) / n)[:, None], rtol=1e-9)
+    full = st._autocovariance(e, 3)
+    assert np.allclose(full[1:] / full[0], phi ** np.arange(1, 4)[:, None], atol=0.03)

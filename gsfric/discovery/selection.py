@@ -316,18 +316,17 @@ def generic_competitor(problem: Problem, design: Design, whitener: st.Whitener,
     wcols = design.variants[winner][screen.variant[winner]]
     ocols = [c for n in others for c in design.variants[n][screen.variant[n]]]
     cols = design.refit + wcols + ocols
-    # one array for the model's columns and the basis (the largest temporary of a round)
-    X = np.empty(B.shape[:2] + (len(cols) + B.shape[2],))
-    X[:, :, len(cols):] = B
+    # the model's columns and the basis side by side, never joined into one array (at
+    # 400,000 samples that copy was the largest temporary of a round)
     nb = B.shape[2]
-    B = None
-    for j, c in enumerate(cols):
-        X[:, :, j] = design.X[:, :, c]
-    blocks = st.Blocks.whitened(whitener, X, design.r, s.n_blocks)
-    flat = X.reshape(-1, X.shape[2])
-    XtX, Xtr = flat.T @ flat, flat.T @ design.r.reshape(-1)
-    basis_sq = np.einsum("ij,ij->j", flat[:, len(cols):], flat[:, len(cols):])
-    del X, flat
+    Xc = design.X[:, :, cols]
+    blocks = st.Blocks.whitened(whitener, [Xc, B], design.r, s.n_blocks)
+    fc, fb, z = Xc.reshape(-1, len(cols)), B.reshape(-1, nb), design.r.reshape(-1)
+    cross = fc.T @ fb
+    XtX = np.block([[fc.T @ fc, cross], [cross.T, fb.T @ fb]])
+    Xtr = np.concatenate([fc.T @ z, fb.T @ z])
+    basis_sq = np.diag(XtX)[len(cols):]
+    del Xc, B, fc, fb
 
     nr, nw, no = len(design.refit), len(wcols), len(ocols)
     lower = np.r_[design.lower[cols], np.full(nb, -np.inf)]

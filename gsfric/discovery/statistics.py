@@ -221,13 +221,16 @@ class Blocks:
         return cls(XtX, Xtz, ztz, rows)
 
     @classmethod
-    def whitened(cls, whitener: "Whitener", X: np.ndarray, z: np.ndarray, n_blocks: int
-                 ) -> Blocks:
+    def whitened(cls, whitener: "Whitener", X: np.ndarray | Sequence[np.ndarray], z: np.ndarray,
+                 n_blocks: int) -> Blocks:
         """``build(whitener.apply(X), whitener.apply(z), n_blocks)``, block by block: the same
         numbers without holding a whitened copy of X (the filter is a short FIR filter, so
-        each block needs only ``order`` samples before it)."""
+        each block needs only ``order`` samples before it). X may be a sequence of arrays
+        (M, 6, k_i), the design's columns side by side, without joining them."""
         p = whitener.order
-        m, legs, k = X.shape
+        parts = [X] if isinstance(X, np.ndarray) else list(X)
+        m, legs = parts[0].shape[:2]
+        k = sum(a.shape[2] for a in parts)
         rows_w = m - p
         length = rows_w // n_blocks
         XtX = np.empty((n_blocks, k, k))
@@ -238,7 +241,9 @@ class Blocks:
             start = b * length
             stop = rows_w if b == n_blocks - 1 else start + length
             v = None if whitener.valid is None else whitener.valid[start:stop + p]
-            Xb = whitener.apply(X[start:stop + p], v).reshape(-1, k)
+            Xb = np.concatenate([whitener.apply(a[start:stop + p], v) for a in parts],
+                                axis=2).reshape(-1, k) if len(parts) > 1 else \
+                whitener.apply(parts[0][start:stop + p], v).reshape(-1, k)
             zb = whitener.apply(z[start:stop + p], v).reshape(-1)
             XtX[b] = Xb.T @ Xb
             Xtz[b] = Xb.T @ zb
