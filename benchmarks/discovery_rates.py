@@ -7,7 +7,9 @@ at effect-to-noise 2-10, null cases, pairs and out-of-catalog cases (a delay whe
 time_offset is left out of the candidates; a load cell with a quadratic characteristic).
 Prints the table of rates and, for the cases named correctly, the largest rms_after over the
 true noise and over the residual of the true model on the recorded motion (the best any model
-can do when the motion is differentiated from noisy poses).
+can do when the motion is differentiated from noisy poses), the misses that the result itself
+reports as ambiguous (the hidden effect listed as indistinguishable from what was fitted), and
+the out-of-catalog cases confidently misnamed (a catalog name with the verdict "explained").
 
     python benchmarks/discovery_rates.py                 # the full table (long)
     python benchmarks/discovery_rates.py --per-cell 2 --samples 3000   # a quick look
