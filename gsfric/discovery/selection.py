@@ -316,8 +316,8 @@ def generic_competitor(problem: Problem, design: Design, whitener: st.Whitener,
     wcols = design.variants[winner][screen.variant[winner]]
     ocols = [c for n in others for c in design.variants[n][screen.variant[n]]]
     cols = design.refit + wcols + ocols
-    # the model's columns and the basis side by side, never joined into one array (at
-    # 400,000 samples that copy was the largest temporary of a round)
+    # the model's columns and the basis side by side, never joined into one array (that copy
+    # was the largest temporary of a round)
     nb = B.shape[2]
     Xc = design.X[:, :, cols]
     blocks = st.Blocks.whitened(whitener, [Xc, B], design.r, s.n_blocks)
@@ -440,7 +440,7 @@ def half_stability(problem: Problem, J: np.ndarray, r: np.ndarray, names: list[s
     s = problem.settings
     cols = [k for k, n in enumerate(names) if n.startswith(effect + ".")]
     if not cols or J.shape[2] == 0:
-        return {"p_value": 1.0, "change": 0.0, "halves": [], "stable": True}
+        return {"p_value": 1.0, "change": 0.0, "half_steps": [], "stable": True}
     blocks = st.Blocks.whitened(whitener, J, r, s.n_blocks)
     half = len(blocks.ztz) // 2
     k = J.shape[2]
