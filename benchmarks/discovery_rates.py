@@ -7,7 +7,9 @@ at effect-to-noise 2-10, null cases, pairs and out-of-catalog cases (a delay whe
 time_offset is left out of the candidates; a load cell with a quadratic characteristic).
 Prints the table of rates and, for the cases named correctly, the largest rms_after over the
 true noise and over the residual of the true model on the recorded motion (the best any model
-can do when the motion is differentiated from noisy poses).
+can do when the motion is differentiated from noisy poses), the misses that the result itself
+reports as ambiguous (the hidden effect listed as indistinguishable from what was fitted), and
+the out-of-catalog cases confidently misnamed (a catalog name with the verdict "explained").
 
     python benchmarks/discovery_rates.py                 # the full table (long)
     python benchmarks/discovery_rates.py --per-cell 2 --samples 3000   # a quick look
@@ -174,6 +176,18 @@ def cases(per_cell, sizes):
     return out
 
 
+def ambiguities(r) -> list[tuple[str, ...]]:
+    """The explanations a result reports as indistinguishable on its data: a named effect and
+    the candidates it cannot be told from, a refitted parameter and the candidates that could
+    replace its change."""
+    out = [tuple([rnd.winner] + list(rnd.indistinguishable)) for rnd in r.rounds
+           if rnd.winner and rnd.indistinguishable]
+    for name, entry in r.refit.get("parameters", {}).items():
+        for alt in entry.get("alternatives", []):
+            out.append((f"refit:{name}", alt))
+    return out
+
+
 def memory(n):
     """Peak traced memory (NumPy arrays included) and time of one discover on n samples."""
     import tracemalloc
@@ -231,8 +245,9 @@ def main():
         todo = [c for c in todo if c[2] in a.families]
     if a.effects:
         todo = [c for c in todo if c[0] not in ("single", "pair") or set(c[1]) & set(a.effects)]
-    rows = defaultdict(lambda: [0, 0, 0.0, 0.0])
+    rows = defaultdict(lambda: [0, 0, 0.0, 0.0, 0])
     start = time.time()
+    confident = []     # out-of-catalog cases given a catalog name with the verdict "explained"
     for kind, names, family, plat, phi, size, seed in todo:
         r, noise, true_rms = one_case(kind, names, family, plat, phi, size, seed, a.samples)
         if kind == "null":
@@ -243,22 +258,33 @@ def main():
             key, ok = ("pair: both named", "+".join(names)), set(names) <= set(r.names)
         else:
             key, ok = (f"{kind}: unexplained", family), r.verdict == "unexplained_discrepancy"
+        pairs = ambiguities(r)
+        # a hidden effect not named but reported as indistinguishable from what was fitted
+        # (a named effect or a refitted parameter of the model): missed, and said so
+        missed_reported = kind in ("single", "pair") and not ok and any(
+            n in p for p in pairs for n in names if n not in r.names)
         if a.verbose:
             print(f"{kind:17s} {'+'.join(names) or '-':40s} {family:7s} {plat:9s} phi={phi:<4g} "
                   f"size={size:<4g} seed={seed:<4d} -> {ok!s:5s} {','.join(r.names) or '-':40s}"
-                  f" {r.verdict:24s} {r.rms_after / noise:.3f} {true_rms / noise:.3f}",
-                  flush=True)
+                  f" {r.verdict:24s} {r.rms_after / noise:.3f} {true_rms / noise:.3f}"
+                  f" ambiguous={';'.join('/'.join(p) for p in pairs) or '-'}", flush=True)
         rows[key][0] += int(ok)
         rows[key][1] += 1
+        rows[key][4] += int(missed_reported)
+        if kind in ("delay_outside", "nonlinear_sensor") and r.names and r.verdict == "explained":
+            confident.append((kind, family, seed, r.names))
         if kind in ("single", "pair") and ok:
             rows[key][2] = max(rows[key][2], r.rms_after / noise)
             rows[key][3] = max(rows[key][3], r.rms_after / true_rms)
     print(f"{len(todo)} cases, {a.samples} samples each, base model {MODEL}, "
           f"{time.time() - start:.0f} s")
     print(f"{'case':40s} {'family':28s} {'rate':>7s} {'n':>4s} {'max rms_after/noise':>20s} "
-          f"{'max rms_after/true model':>25s}")
-    for (name, family), (k, n, worst, worst_true) in sorted(rows.items()):
-        print(f"{name:40s} {family:28s} {k / n:7.0%} {n:4d} {worst:20.3f} {worst_true:25.3f}")
+          f"{'max rms_after/true model':>25s} {'missed, reported ambiguous':>27s}")
+    for (name, family), (k, n, worst, worst_true, amb) in sorted(rows.items()):
+        print(f"{name:40s} {family:28s} {k / n:7.0%} {n:4d} {worst:20.3f} {worst_true:25.3f}"
+              f" {amb:27d}")
+    print(f"out-of-catalog cases confidently misnamed (a catalog name, verdict explained): "
+          f"{len(confident)} {confident}")
 
 
 if __name__ == "__main__":

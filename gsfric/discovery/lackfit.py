@@ -98,17 +98,19 @@ def state_meaning(variable: str) -> str:
     return STATE_MEANING.get(variable, "")
 
 
-def basis(t: np.ndarray, F: np.ndarray, speed: np.ndarray, sliding: np.ndarray
-          ) -> np.ndarray:
-    """The generic columns (M, 6, k) of ``SIGNALS`` (drift: three columns)."""
+def basis(t: np.ndarray, F: np.ndarray, speed: np.ndarray, sliding: np.ndarray,
+          derivatives: tuple[np.ndarray, np.ndarray] | None = None) -> np.ndarray:
+    """The generic columns (M, 6, k) of ``SIGNALS`` (drift: three columns); ``derivatives``,
+    if given, are dF/dt and the legs' acceleration (from ``rates``), not computed again."""
     t = np.asarray(t, float)
     X = np.empty(F.shape + (9,))
-    X[:, :, 0] = np.gradient(F, t, axis=0)
+    dF, acceleration = derivatives if derivatives is not None else rates(t, F, speed)
+    X[:, :, 0] = dF
     X[:, :, 1] = F * np.abs(F)
     X[:, :, 2] = F ** 3
     X[:, :, 3] = F
     X[:, :, 4] = np.sign(speed) * sliding
-    X[:, :, 5] = np.gradient(speed, t, axis=0)
+    X[:, :, 5] = acceleration
     tau = 2 * (t - t[0]) / max(t[-1] - t[0], 1e-300) - 1
     for p in (1, 2, 3):
         X[:, :, 5 + p] = np.polynomial.legendre.legval(tau, [0] * p + [1])[:, None]
@@ -118,20 +120,31 @@ def basis(t: np.ndarray, F: np.ndarray, speed: np.ndarray, sliding: np.ndarray
     return X
 
 
+def rates(t: np.ndarray, F: np.ndarray, speed: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """dF/dt (N/s) and the legs' acceleration (m/s^2), each (M, 6), by central differences."""
+    t = np.asarray(t, float)
+    return np.gradient(F, t, axis=0), np.gradient(speed, t, axis=0)
+
+
 def column_names() -> list[str]:
     """The signal of each column of ``basis`` (drift: three columns)."""
     return list(SIGNALS[:-1]) + ["drift"] * 3
 
 
 def basis_outside(t: np.ndarray, F: np.ndarray, speed: np.ndarray, sliding: np.ndarray,
-                  weight: np.ndarray, catalog) -> tuple[np.ndarray, list[str]]:
+                  weight: np.ndarray, catalog,
+                  derivatives: tuple[np.ndarray, np.ndarray] | None = None
+                  ) -> tuple[np.ndarray, list[str]]:
     """``basis`` without the signals that an effect of ``catalog`` reproduces
     (``CATALOG_EQUIVALENT``: that effect's parameter, not a structure outside the catalog),
     weighted per (sample, leg) by ``weight`` (M, 6); returns the columns (M, 6, k) and their
     signals."""
     names = column_names()
     keep = [j for j, name in enumerate(names) if CATALOG_EQUIVALENT.get(name) not in catalog]
-    X = basis(t, F, speed, sliding)[:, :, keep] * weight[:, :, None]
+    X = basis(t, F, speed, sliding, derivatives)
+    if len(keep) < X.shape[2]:
+        X = X[:, :, keep]
+    X *= weight[:, :, None]
     return X, [names[j] for j in keep]
 
 

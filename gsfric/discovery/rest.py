@@ -280,11 +280,34 @@ def poses_from_columns(columns) -> tuple[np.ndarray, np.ndarray]:
     return position, rotation
 
 
+HELD_RUN = 5
+"""Consecutive equal values of a force channel that make a dropout (``data_problems``)."""
+
+
+def _held_run(f: np.ndarray) -> tuple[int, int] | None:
+    """The longest run (first index, length) of at least ``HELD_RUN`` equal consecutive values
+    of a channel whose neighbouring samples otherwise differ (a noisy load cell: fewer than 1%
+    equal neighbours; a coarsely quantised channel repeats values and is not judged)."""
+    same = np.diff(f) == 0
+    edges = np.diff(np.r_[0, same.astype(np.int8), 0])
+    starts, stops = np.flatnonzero(edges == 1), np.flatnonzero(edges == -1)
+    if starts.size == 0:
+        return None
+    runs = stops - starts + 1                     # samples in each run of equal values
+    short = runs < HELD_RUN
+    if np.sum(runs[short] - 1) > 0.01 * same.size or short.all():
+        return None                               # quantised, or nothing held
+    k = int(np.argmax(runs))
+    return int(starts[k]), int(runs[k])
+
+
 def data_problems(t: np.ndarray, forces: np.ndarray) -> list[str]:
     """Problems of measured force data that no model effect can explain, one line each.
 
     A channel that is constant, or that sits at its extreme value on a run of samples
-    (saturation), or a gap in the sample times (dropout: a step above 1.5 times the median).
+    (saturation), or that repeats one value on a run of samples where it otherwise never
+    does (a dropout recorded as held or zeroed samples), or a gap in the sample times
+    (dropout: a step above 1.5 times the median).
     """
     out = []
     forces = np.asarray(forces, float)
@@ -298,6 +321,7 @@ def data_problems(t: np.ndarray, forces: np.ndarray) -> list[str]:
         if spread <= 1e-12 * max(1.0, float(np.abs(f).max())):
             out.append(f"{name}: constant ({f[0]:.6g} N in every row): a dead channel")
             continue
+        saturated = False
         for edge in (f.max(), f.min()):
             at = f == edge
             if at.sum() >= max(5, len(f) // 200):
@@ -306,7 +330,13 @@ def data_problems(t: np.ndarray, forces: np.ndarray) -> list[str]:
                     row = int(np.flatnonzero(at)[0]) + 1
                     out.append(f"{name}: saturated at {edge:.6g} N ({int(at.sum())} rows, "
                                f"first row {row})")
+                    saturated = True
                     break
+        held = None if saturated else _held_run(f)
+        if held is not None:
+            row, length = held
+            out.append(f"{name}: the same value ({f[row]:.6g} N) in {length} rows from row "
+                       f"{row + 1}: a dropout (held or zeroed samples)")
     steps = np.diff(np.asarray(t, float))
     if steps.size:
         median = float(np.median(steps))

@@ -295,8 +295,11 @@ def generic_competitor(problem: Problem, design: Design, whitener: st.Whitener,
     (p >= alpha, or a gap below ``min_gap`` times the noise, with the refitted model in both),
     while the generic basis adds something significant (p < alpha / K and a gap of at least
     ``min_gap``) to the winner and every other accepted candidate of the round: the structure
-    is then a generic, out-of-catalog one that the winner only imitates in part. Returns the
-    p-values and gaps both ways, ``blocked`` and the generic signal that carries most.
+    is then a generic, out-of-catalog one that the winner only imitates in part. When the
+    generic basis adds a significant part smaller than ``min_gap``, the winner *imitates*: it
+    is named (the simpler explanation) but cannot be told from an error outside the catalog,
+    and the verdict is not ``explained``. Returns the p-values and gaps both ways,
+    ``blocked``, ``imitates`` and the generic signal that carries most.
     """
     from gsfric.discovery import lackfit
 
@@ -313,13 +316,19 @@ def generic_competitor(problem: Problem, design: Design, whitener: st.Whitener,
     wcols = design.variants[winner][screen.variant[winner]]
     ocols = [c for n in others for c in design.variants[n][screen.variant[n]]]
     cols = design.refit + wcols + ocols
-    X = np.concatenate([design.X[:, :, cols], B], axis=2)
-    blocks = st.Blocks.whitened(whitener, X, design.r, s.n_blocks)
-    flat = X.reshape(-1, X.shape[2])
-    XtX, Xtr = flat.T @ flat, flat.T @ design.r.reshape(-1)
-    del X, flat
+    # the model's columns and the basis side by side, never joined into one array (that copy
+    # was the largest temporary of a round)
+    nb = B.shape[2]
+    Xc = design.X[:, :, cols]
+    blocks = st.Blocks.whitened(whitener, [Xc, B], design.r, s.n_blocks)
+    fc, fb, z = Xc.reshape(-1, len(cols)), B.reshape(-1, nb), design.r.reshape(-1)
+    cross = fc.T @ fb
+    XtX = np.block([[fc.T @ fc, cross], [cross.T, fb.T @ fb]])
+    Xtr = np.concatenate([fc.T @ z, fb.T @ z])
+    basis_sq = np.diag(XtX)[len(cols):]
+    del Xc, B, fc, fb
 
-    nr, nw, no, nb = len(design.refit), len(wcols), len(ocols), B.shape[2]
+    nr, nw, no = len(design.refit), len(wcols), len(ocols)
     lower = np.r_[design.lower[cols], np.full(nb, -np.inf)]
     upper = np.r_[design.upper[cols], np.full(nb, np.inf)]
     R = list(range(nr))
@@ -337,16 +346,21 @@ def generic_competitor(problem: Problem, design: Design, whitener: st.Whitener,
     parts = {}
     coef = everything.coef[len(R + W + O):]
     for j, name in enumerate(names):
-        parts[name] = parts.get(name, 0.0) + float(coef[j] ** 2 * np.sum(B[:, :, j] ** 2))
+        parts[name] = parts.get(name, 0.0) + float(coef[j] ** 2 * basis_sq[j])
     main = max(parts, key=parts.get) if parts else None
     gap_winner = _gap(XtX, Xtr, design.rtr, generic, both)
     gap_generic = _gap(XtX, Xtr, design.rtr, catalog, everything)
     adds = p_winner < s.alpha and gap_winner >= s.min_gap
     structure = p_generic < level and gap_generic >= s.min_gap
+    # the generic basis explains everything the winner does and significantly more, if less
+    # than min_gap: the winner stands in for an error outside the catalog as well as it could
+    # be one of its own; named (the catalog term is the simpler explanation), never confidently
+    imitates = not adds and p_generic < level
     return {"p_winner_beyond_generic": float(p_winner), "gap_winner_beyond_generic": gap_winner,
             "p_generic_beyond_catalog": float(p_generic),
             "gap_generic_beyond_catalog": gap_generic,
-            "blocked": bool(structure and not adds), "main_signal": main}
+            "blocked": bool(structure and not adds), "imitates": bool(imitates and not structure),
+            "main_signal": main}
 
 
 # -- Gauss-Newton refinement on the compiled model ---------------------------------------------
@@ -395,3 +409,62 @@ def refine(problem: Problem, theta: np.ndarray, names: list[str], whitener: st.W
         if gain < 1e-5:
             break
     return theta, r, J
+
+
+# -- stability of a named effect across the halves of the record --------------------------------
+
+
+def half_stability(problem: Problem, J: np.ndarray, r: np.ndarray, names: list[str],
+                   effect: str, whitener: st.Whitener) -> dict:
+    """Is the effect the same in both halves of the record?
+
+    A physical effect has one value of its parameters over the record; a catalog term that
+    imitates an error outside the catalog (per-leg offsets standing in for a nonlinear load
+    cell, a delay standing in for a ringing mode) fits whatever that error looks like on each
+    stretch of motion, and the stretches differ. The model, linearised at the final
+    parameters (J (M, 6, k) with respect to ``names``, residual r (M, 6)), is fitted on the
+    first and on the second half of the blocks separately, every parameter free; the
+    difference of the effect's parameters is tested by a Wald test (chi-square, the two halves'
+    prewhitened covariances summed), and its size is the RMS change of F it makes (N, plain,
+    sliding pairs) over the RMS of the final residual.
+
+    Returns
+    -------
+    dict
+        ``p_value``, ``change`` (RMS change of F between the halves over the RMS residual),
+        ``half_steps`` (the effect's parameters fitted on each half, as steps from the final
+        values), ``stable``.
+    """
+    from scipy.stats import chi2
+
+    s = problem.settings
+    cols = [k for k, n in enumerate(names) if n.startswith(effect + ".")]
+    if not cols or J.shape[2] == 0:
+        return {"p_value": 1.0, "change": 0.0, "half_steps": [], "stable": True}
+    blocks = st.Blocks.whitened(whitener, J, r, s.n_blocks)
+    half = len(blocks.ztz) // 2
+    k = J.shape[2]
+    est = []
+    for g in (slice(0, half), slice(half, None)):
+        A, b = blocks.XtX[g].sum(0), blocks.Xtz[g].sum(0)
+        c, rows = float(blocks.ztz[g].sum()), float(blocks.rows[g].sum())
+        inv = np.linalg.pinv(A)
+        delta = inv @ b
+        s2 = max(c - 2 * delta @ b + delta @ A @ delta, 0.0) / max(rows - k, 1.0)
+        est.append((delta, s2 * inv))
+    d = est[0][0][cols] - est[1][0][cols]
+    V = est[0][1][np.ix_(cols, cols)] + est[1][1][np.ix_(cols, cols)]
+    W = float(d @ np.linalg.pinv(V) @ d)
+    p = float(chi2.sf(W, len(cols)))
+    sliding = problem.sliding
+    change_f = J[:, :, cols] @ d
+    left = float(np.sqrt(np.mean(r[sliding] ** 2)))
+    change = float(np.sqrt(np.mean(change_f[sliding] ** 2))) / max(left, 1e-300)
+    steps = [{names[j].split(".", 1)[1]: float(e[0][j]) for j in cols} for e in est]
+    stable = not (p < s.alpha and change >= STABILITY_MIN_CHANGE)
+    return {"p_value": p, "change": change, "half_steps": steps, "stable": bool(stable)}
+
+
+STABILITY_MIN_CHANGE = 0.3
+"""Smallest change of an effect's contribution between the halves of the record, relative to
+the residual left, that makes it unstable (with a Wald test p < alpha)."""

@@ -45,18 +45,17 @@ def _autocovariance(e: np.ndarray, max_lag: int, valid: np.ndarray | None = None
     With ``valid`` (N, k) bool, only valid samples count: each lag's sum of products over the
     valid pairs, over the number of such pairs (the estimator for series with gaps)."""
     n = e.shape[0]
-    size = 1 << int(np.ceil(np.log2(2 * n)))
     if valid is None:
         e = e - e.mean(axis=0)
-        f = np.fft.rfft(e, size, axis=0)
-        return np.fft.irfft(f * np.conj(f), size, axis=0)[:max_lag + 1] / n
+        return np.stack([np.einsum("ij,ij->j", e[lag:], e[:n - lag])
+                         for lag in range(max_lag + 1)]) / n
+    # sums over lags directly (max_lag is small): no transform of twice the series' length
     w = valid.astype(float)
     count = np.maximum(w.sum(axis=0), 1.0)
     e = (e - (e * w).sum(axis=0) / count) * w
-    f = np.fft.rfft(e, size, axis=0)
-    g = np.fft.rfft(w, size, axis=0)
-    num = np.fft.irfft(f * np.conj(f), size, axis=0)[:max_lag + 1]
-    pairs = np.fft.irfft(g * np.conj(g), size, axis=0)[:max_lag + 1]
+    num = np.stack([np.einsum("ij,ij->j", e[lag:], e[:n - lag]) for lag in range(max_lag + 1)])
+    pairs = np.stack([np.einsum("ij,ij->j", w[lag:], w[:n - lag])
+                      for lag in range(max_lag + 1)])
     return num / np.maximum(np.round(pairs), 1.0) * (1.0 - np.arange(max_lag + 1) / n)[:, None]
 
 
@@ -222,13 +221,16 @@ class Blocks:
         return cls(XtX, Xtz, ztz, rows)
 
     @classmethod
-    def whitened(cls, whitener: "Whitener", X: np.ndarray, z: np.ndarray, n_blocks: int
-                 ) -> Blocks:
+    def whitened(cls, whitener: "Whitener", X: np.ndarray | Sequence[np.ndarray], z: np.ndarray,
+                 n_blocks: int) -> Blocks:
         """``build(whitener.apply(X), whitener.apply(z), n_blocks)``, block by block: the same
         numbers without holding a whitened copy of X (the filter is a short FIR filter, so
-        each block needs only ``order`` samples before it)."""
+        each block needs only ``order`` samples before it). X may be a sequence of arrays
+        (M, 6, k_i), the design's columns side by side, without joining them."""
         p = whitener.order
-        m, legs, k = X.shape
+        parts = [X] if isinstance(X, np.ndarray) else list(X)
+        m, legs = parts[0].shape[:2]
+        k = sum(a.shape[2] for a in parts)
         rows_w = m - p
         length = rows_w // n_blocks
         XtX = np.empty((n_blocks, k, k))
@@ -239,7 +241,9 @@ class Blocks:
             start = b * length
             stop = rows_w if b == n_blocks - 1 else start + length
             v = None if whitener.valid is None else whitener.valid[start:stop + p]
-            Xb = whitener.apply(X[start:stop + p], v).reshape(-1, k)
+            Xb = np.concatenate([whitener.apply(a[start:stop + p], v) for a in parts],
+                                axis=2).reshape(-1, k) if len(parts) > 1 else \
+                whitener.apply(parts[0][start:stop + p], v).reshape(-1, k)
             zb = whitener.apply(z[start:stop + p], v).reshape(-1)
             XtX[b] = Xb.T @ Xb
             Xtz[b] = Xb.T @ zb

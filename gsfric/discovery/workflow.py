@@ -30,13 +30,14 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from gsfric.discovery import lackfit
 from gsfric.discovery import statistics as st
 from gsfric.discovery.candidates import CANDIDATES
 from gsfric.discovery.regimes import bands as regime_bands
 from gsfric.discovery.residuals import Problem
 from gsfric.discovery.settings import Settings
 from gsfric.discovery.selection import (CandidateTest, bootstrap_share, generic_competitor,
-                                        indistinguishable,
+                                        half_stability, indistinguishable,
                                         noise_model, refine, refit_alternatives,
                                         screen_candidates, winner_of)
 from gsfric.platform import Platform
@@ -357,6 +358,9 @@ def discover(motion: Motion, forces: np.ndarray, platform: Platform | None = Non
     residual_after = r
     whitener = st.Whitener.fit(residual_after, valid=problem.sliding)
     intervals = _intervals(problem, J, names, whitener, residual_after, rng, theta)
+    for name in active:
+        findings_evidence[name]["stability"] = half_stability(
+            problem, J, residual_after, names, name, whitener)
     n_fitted = len(names)
     rows = int(np.count_nonzero(sliding))
     noise = float(np.sqrt(np.sum(residual_after ** 2) / max(rows - n_fitted, 1)))
@@ -398,7 +402,16 @@ def discover(motion: Motion, forces: np.ndarray, platform: Platform | None = Non
         "speed_uncertainty": [float(v) for v in problem.sigma_v],
         "not_sliding_share": float(1.0 - sliding.mean()),
     }
-    if lof["significant"] or any(rnd.generic.get("blocked") for rnd in rounds):
+    imitators = [rnd.winner for rnd in rounds if rnd.winner and rnd.generic.get("imitates")]
+    for name in imitators:
+        rnd = next(x for x in rounds if x.winner == name)
+        notes.append(
+            f"round {rnd.index}: {name} explains nothing that a generic out-of-catalog structure "
+            f"(mainly {rnd.generic['main_signal']}: {lackfit.MEANING.get(rnd.generic['main_signal'], '')}) "
+            "does not, and that structure explains significantly more: the data cannot tell "
+            f"{name} from an error outside the catalog; it is named as the simpler explanation, "
+            "the verdict is not 'explained'")
+    if lof["significant"] or imitators or any(rnd.generic.get("blocked") for rnd in rounds):
         verdict = "unexplained_discrepancy"
     elif active:
         verdict = "explained"
@@ -437,7 +450,6 @@ def _noise_whitener(design, problem: Problem) -> st.Whitener:
 def _lack_of_fit(problem: Problem, theta: np.ndarray, residual: np.ndarray,
                  whitener: st.Whitener, in_model: Sequence[str] = ()) -> dict:
     """The lack-of-fit test of the final residual (``lackfit``), with where it lives."""
-    from gsfric.discovery import lackfit
 
     s = problem.settings
     used = problem.used
@@ -445,8 +457,10 @@ def _lack_of_fit(problem: Problem, theta: np.ndarray, residual: np.ndarray,
     t = np.asarray(problem.model.t[used])
     # a signal that an effect of the final model reproduces (a delay's dF/dt once time_offset
     # is in it) is that effect's parameter, refitted already: not a structure outside the model
-    X, names = lackfit.basis_outside(t, F, problem.result.D_dot[used], problem.sliding,
-                                     problem.weight, in_model)
+    speed = problem.result.D_dot[used]
+    dF, acceleration = lackfit.rates(t, F, speed)     # once: the basis and the dynamic test
+    X, names = lackfit.basis_outside(t, F, speed, problem.sliding, problem.weight, in_model,
+                                     derivatives=(dF, acceleration))
     # the noise model from the residual of the basis fit (largest model), as in each round
     k = X.shape[2]
     flat = X.reshape(-1, k)
@@ -455,10 +469,11 @@ def _lack_of_fit(problem: Problem, theta: np.ndarray, residual: np.ndarray,
     out = lackfit.test(residual, X, whitener, alpha=s.alpha, min_gap=s.min_gap,
                        n_blocks=s.n_blocks, n_folds=s.n_folds,
                        min_fold_share=s.min_fold_share, names=names)
-    D, speed = problem.result.D[used], problem.result.D_dot[used]
+    X = flat = None
+    D = problem.result.D[used]
     state = lackfit.state_structure(residual, lackfit.state_features(D, speed, F),
                                     problem.sliding, n_folds=s.n_folds, min_gap=s.min_gap)
-    inputs = {"dF/dt": np.gradient(F, t, axis=0), "acceleration": np.gradient(speed, t, axis=0)}
+    inputs = {"dF/dt": dF, "acceleration": acceleration}
     dynamic = lackfit.dynamic_structure(residual, inputs, problem.sliding, alpha=s.alpha,
                                         min_gap=max(s.min_gap, lackfit.DYNAMIC_MIN_GAP))
     out["state"], out["dynamic"] = state, dynamic
