@@ -102,6 +102,16 @@ class _Group(click.Group):
         except OSError as exc:
             where = f"{exc.filename}: " if exc.filename else ""
             _fail(f"{where}{exc.strerror or exc}", EXIT_INTERNAL)
+        except Exception as exc:
+            # a stop signal that arrived inside an import or a cleanup comes out as the error
+            # it caused there (an ImportError "from" the KeyboardInterrupt): still a stop
+            stop = _stop_in_chain(exc)
+            if stop is None:
+                raise
+            if isinstance(stop, Interrupted):
+                name = signal.Signals(stop.signum).name
+                _fail(f"stopped by {name}; no output was left half-written", 128 + stop.signum)
+            _fail("interrupted; no output was left half-written", 130)
 
     def main(self, args=None, prog_name=None, **kwargs):
         """Usage errors (unknown option, missing argument) as one line too, exit 2."""
@@ -124,6 +134,19 @@ class _Group(click.Group):
             _fail("aborted", EXIT_CHECK)
         except click.ClickException as exc:
             _fail(exc.format_message(), EXIT_INPUT)
+
+
+def _stop_in_chain(exc: BaseException) -> BaseException | None:
+    """The Interrupted or KeyboardInterrupt among the causes and contexts of ``exc``, if any."""
+    from gsfric.errors import Interrupted
+
+    seen = set()
+    while exc is not None and id(exc) not in seen:
+        if isinstance(exc, (Interrupted, KeyboardInterrupt)):
+            return exc
+        seen.add(id(exc))
+        exc = exc.__cause__ or exc.__context__
+    return None
 
 
 def _log_options(command=None, *, keep=True):

@@ -278,6 +278,13 @@ NOISE_DIFFERENCE_ORDER = 6
 signal."""
 
 
+def robust_std(e: np.ndarray) -> np.ndarray:
+    """Standard deviation of each column of e (N, k) from its median absolute deviation
+    (1.4826 MAD: the standard deviation for Gaussian samples, unmoved by a few outliers)."""
+    med = np.median(e, axis=0)
+    return 1.4826 * np.median(np.abs(e - med), axis=0)
+
+
 def white_noise_std(y: np.ndarray) -> np.ndarray:
     """Standard deviation of white noise on each column of a uniformly sampled signal.
 
@@ -303,9 +310,7 @@ def white_noise_std(y: np.ndarray) -> np.ndarray:
     m = NOISE_DIFFERENCE_ORDER
     if len(y) <= m:
         return np.zeros(y.shape[1:])
-    d = np.diff(y, n=m, axis=0)
-    mad = 1.4826 * np.median(np.abs(d - np.median(d, axis=0)), axis=0)
-    return mad / np.sqrt(comb(2 * m, m))
+    return robust_std(np.diff(y, n=m, axis=0)) / np.sqrt(comb(2 * m, m))
 
 
 def _bias_degree(polyorder: int, deriv: int) -> int:

@@ -521,3 +521,24 @@ def test_sigterm_while_compiling_kills_the_compilers(tmp_path):
                                                       "left half-written")
     assert all_gone(pids.read_text().split())
     assert not (tmp_path / "pp").exists()
+
+
+def test_a_stop_inside_an_import_is_still_a_stop():
+    """A signal that lands inside an import surfaces as the ImportError it caused there; the
+    CLI finds the stop in the exception's chain (exit 130 or 128 + signal, not a traceback)."""
+    from gsfric.cli import _stop_in_chain
+    from gsfric.errors import Interrupted
+
+    def raised(inner: BaseException) -> BaseException:
+        try:
+            try:
+                raise inner
+            except BaseException:
+                raise ImportError("numpy._core.multiarray failed to import")
+        except ImportError as exc:
+            return exc
+
+    assert isinstance(_stop_in_chain(raised(KeyboardInterrupt())), KeyboardInterrupt)
+    stop = _stop_in_chain(raised(Interrupted(signal.SIGTERM)))
+    assert isinstance(stop, Interrupted) and stop.signum == signal.SIGTERM
+    assert _stop_in_chain(raised(ValueError("a real import problem"))) is None

@@ -26,16 +26,13 @@ from __future__ import annotations
 import numpy as np
 from scipy.signal import savgol_coeffs, savgol_filter
 
+from gsfric.trajectory import robust_std
+
 REST_BAND = 5.0
 """Half-width of the not-sliding band, in standard deviations of the speed estimate."""
 
 NOISE_WINDOW = 15
 """Window (samples) of the local cubic fit whose residual measures the noise."""
-
-
-def _robust_std(e: np.ndarray) -> np.ndarray:
-    med = np.median(e, axis=0)
-    return 1.4826 * np.median(np.abs(e - med), axis=0)
 
 
 def high_frequency_std(y: np.ndarray, window: int = NOISE_WINDOW) -> np.ndarray:
@@ -57,7 +54,7 @@ def high_frequency_std(y: np.ndarray, window: int = NOISE_WINDOW) -> np.ndarray:
     smooth = savgol_filter(y, window, 3, axis=0, mode="interp")
     h0 = savgol_coeffs(window, 3)[window // 2]
     core = slice(window, len(y) - window) if len(y) > 3 * window else slice(None)
-    return _robust_std((y - smooth)[core]) / np.sqrt(1.0 - h0)
+    return robust_std((y - smooth)[core]) / np.sqrt(1.0 - h0)
 
 
 def leg_lengths(platform, position: np.ndarray, rotation: np.ndarray) -> np.ndarray:
