@@ -1,0 +1,153 @@
+"""The hot path of an earlier source against the current one, in one run.
+
+Usage::
+
+    .venv/bin/python benchmarks/hot_path_history.py [--ref ef651e9] [--steps 100000]
+                                                     [--rounds 3] [--calls 15]
+
+The earlier source (``git archive`` of ``--ref``) is unpacked once into ``--workdir`` (default
+``$TMPDIR/gsfric-history-<commit>``) and compiles its library into a cache of its own there, so
+that neither source's cache sees the other's build. Then, in interleaved rounds, each variant
+runs in a fresh process with its own source first on ``sys.path``:
+
+* ``<ref> default``: the earlier source's ``reference_platform()`` (at ``ef651e9`` its default
+  friction model was the paper's post-hoc one);
+* ``current paper``: this source's ``reference_platform("paper")`` (``actuator_posthoc``);
+* ``current coupled``: this source's ``reference_platform()`` (``actuator_coupled``).
+
+Each process times ``Evaluator(platform).actuator_forces(x, out)`` on one thread at N steps of
+the same states (one array, written once by this script), ``--calls`` calls, and reports the
+fastest call's time of the calling thread's CPU (``time.thread_time``), which other load on the
+machine disturbs less than the wall clock. The best of the rounds gives the steps per CPU second
+of each variant, and the ratios to the earlier source. The forces of the earlier default and
+of the current paper model are compared too: the same friction model, but the reference
+platform's legs and joints have changed since ``ef651e9`` (``models.reference_leg``), so they
+differ by far more than rounding; the time per step hardly depends on the parameters' values.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import subprocess
+import sys
+import tarfile
+import tempfile
+from pathlib import Path
+
+import numpy as np
+
+ROOT = Path(__file__).resolve().parents[1]
+
+CHILD = """
+import json, sys, time
+sys.path.insert(0, sys.argv[1])
+import numpy as np
+import gsfric
+from gsfric import models
+from gsfric.evaluation import Evaluator
+assert gsfric.__file__.startswith(sys.argv[1]), gsfric.__file__
+model, states, calls, forces = sys.argv[2], sys.argv[3], int(sys.argv[4]), sys.argv[5]
+x = np.load(states)
+platform = models.reference_platform() if model == "default" else models.reference_platform(model)
+ev = Evaluator(platform, n_threads=1)
+out = np.empty((len(x), 6))
+ev.actuator_forces(x, out)
+best = float("inf")
+for _ in range(calls):
+    t0 = time.thread_time()
+    ev.actuator_forces(x, out)
+    best = min(best, time.thread_time() - t0)
+if forces != "-":
+    np.save(forces, out)
+print(json.dumps({"cpu_s": best}))
+"""
+
+
+def _unpack(ref: str, workdir: Path) -> Path:
+    """The source of ``ref`` under workdir/src (unpacked once)."""
+    src = workdir / "src"
+    if not (src / "gsfric" / "__init__.py").exists():
+        workdir.mkdir(parents=True, exist_ok=True)
+        archive = subprocess.run(["git", "-C", str(ROOT), "archive", ref], check=True,
+                                 capture_output=True).stdout
+        tmp = Path(tempfile.mkdtemp(dir=workdir))
+        with tarfile.open(fileobj=__import__("io").BytesIO(archive)) as tar:
+            tar.extractall(tmp, filter="data")
+        tmp.rename(src)
+    return src
+
+
+def _run(source: Path, cache: Path, model: str, states: Path, calls: int,
+         forces: str = "-") -> float:
+    env = dict(os.environ, GSFRIC_CACHE=str(cache), OMP_NUM_THREADS="1")
+    env.pop("PYTHONPATH", None)
+    env.pop("GSFRIC_GENERATED", None)
+    run = subprocess.run([sys.executable, "-c", CHILD, str(source), model, str(states),
+                          str(calls), forces], env=env, capture_output=True, text=True,
+                         cwd=str(states.parent))
+    if run.returncode:
+        raise SystemExit(f"{source} ({model}): {run.stderr.strip().splitlines()[-1]}")
+    return json.loads(run.stdout.strip().splitlines()[-1])["cpu_s"]
+
+
+def main(argv=None) -> None:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--ref", default="ef651e9", help="the earlier source (a git commit)")
+    parser.add_argument("--steps", type=int, default=100_000)
+    parser.add_argument("--rounds", type=int, default=3)
+    parser.add_argument("--calls", type=int, default=15)
+    parser.add_argument("--workdir", type=Path, default=None)
+    args = parser.parse_args(argv)
+
+    commit = subprocess.run(["git", "-C", str(ROOT), "rev-parse", "--short", args.ref],
+                            check=True, capture_output=True, text=True).stdout.strip()
+    head = subprocess.run(["git", "-C", str(ROOT), "rev-parse", "--short", "HEAD"],
+                          capture_output=True, text=True).stdout.strip() or "?"
+    workdir = args.workdir or Path(tempfile.gettempdir()) / f"gsfric-history-{commit}"
+    old_src = _unpack(commit, workdir)
+    old_cache = workdir / "cache"
+    new_cache = Path(os.environ.get("GSFRIC_CACHE") or workdir / "cache-current")
+
+    from gsfric import bench
+
+    states = workdir / f"states-{args.steps}.npy"
+    np.save(states, bench.states(args.steps))
+
+    variants = {
+        f"{commit} default (paper model)": (old_src, old_cache, "default"),
+        "current paper (actuator_posthoc)": (ROOT, new_cache, "paper"),
+        "current coupled (actuator_coupled)": (ROOT, new_cache, "coupled"),
+    }
+    # a first pass builds (or finds) each source's library and keeps the forces to compare
+    names = list(variants)
+    saved = {}
+    for name in names[:2]:
+        src, cache, model = variants[name]
+        saved[name] = workdir / f"forces-{model}-{'old' if src != ROOT else 'new'}.npy"
+        _run(src, cache, model, states, 1, str(saved[name]))
+    _run(*variants[names[2]], states, 1)
+    old_f, new_f = (np.load(saved[n]) for n in names[:2])
+    diff = float(np.max(np.abs(old_f - new_f) / (1.0 + np.abs(old_f))))
+
+    best = {name: np.inf for name in names}
+    for r in range(args.rounds):
+        order = names if r % 2 == 0 else names[::-1]
+        for name in order:
+            best[name] = min(best[name], _run(*variants[name], states, args.calls))
+            print(f"round {r + 1}: {name}: {args.steps / best[name] / 1e6:.3f} M steps per "
+                  f"CPU second (best so far)", file=sys.stderr, flush=True)
+    base = best[names[0]]
+    print(f"hot path Evaluator.actuator_forces(x, out), N = {args.steps:,}, one thread; "
+          f"{commit} against {head}; steps per CPU second, best of {args.rounds} interleaved "
+          f"rounds x {args.calls} calls, each round a fresh process per variant")
+    for name in names:
+        print(f"  {name:<36} {args.steps / best[name] / 1e6:6.3f} M   "
+              f"{base / best[name]:.2f}x {commit}")
+    print(f"  forces of {names[0]} against current paper: largest |difference| / (1 N + |F|) "
+          f"= {diff:.1e}")
+
+
+if __name__ == "__main__":
+    main()
