@@ -149,6 +149,28 @@ def _header() -> str:
         "#define STREAM(p, v) (*(p) = (v))",
         "#define STREAM_FENCE() ((void)0)",
         "#endif",
+        "",
+        "/* With 8 lanes on AVX-512, a full group's rows of one output (8 steps of `size` values:",
+        " * 8 * size doubles, contiguous in the output) are written as `size` whole vectors, each",
+        " * gathered from the group's transposed outputs y (entry o of lane l at y[8 o + l]) by an",
+        " * index table (idx[f] = 8 (f % size) + f / size for flat entry f of the rows): one",
+        " * 64-byte store per vector instead of eight scalar ones; non-temporal where the rows are",
+        " * 64-byte aligned. */",
+        "#if GSFRIC_LANES == 8 && defined(__AVX512F__)",
+        "#define VSTORE 1",
+        "#include <stdint.h>",
+        "static inline void v_store_rows(double *dst, const double *y, const long long *idx,",
+        "                                int size, int stream)",
+        "{",
+        "    for (int q = 0; q < size; ++q) {",
+        "        __m512d v = _mm512_i64gather_pd(_mm512_loadu_si512(idx + 8 * q), y, 8);",
+        "        if (stream)",
+        "            _mm512_stream_pd(dst + 8 * q, v);",
+        "        else",
+        "            _mm512_storeu_pd(dst + 8 * q, v);",
+        "    }",
+        "}",
+        "#endif",
     ]
     lines.append(_VECTOR)
     for name, body in _LANEWISE.items():
@@ -179,6 +201,21 @@ def _opnames():
 
     return {getattr(ca, n): n for n in dir(ca) if n.startswith("OP_")
             and isinstance(getattr(ca, n), int)}
+
+
+def _gather_tables(sizes: list[int]) -> list[str]:
+    """C lines of ``gidx`` (the index tables of ``v_store_rows``, one per distinct output
+    size, 8 entries per value) and ``goff`` (each output's table in it)."""
+    distinct = sorted(set(sizes))
+    start, table = {}, []
+    for k in distinct:
+        start[k] = len(table)
+        table += [8 * (f % k) + f // k for f in range(8 * k)]
+    rows = [", ".join(map(str, table[i:i + 16])) for i in range(0, len(table), 16)]
+    return [f"    static const long long gidx[{len(table)}] __attribute__((aligned(64))) = {{",
+            *[f"        {r}," for r in rows], "    };",
+            f"    static const int goff[{len(sizes)}] = "
+            f"{{{', '.join(str(start[k]) for k in sizes)}}};"]
 
 
 def batch_source(f, prefix: str) -> str:
@@ -231,6 +268,13 @@ def batch_source(f, prefix: str) -> str:
         f"    double xt[{n_x}][GSFRIC_LANES] __attribute__((aligned(8 * GSFRIC_LANES)));",
         f"    double yt[{sum(sizes)}][GSFRIC_LANES] __attribute__((aligned(8 * GSFRIC_LANES)));",
         "    int stream = n >= STREAM_STEPS;",
+        "#ifdef VSTORE",
+        *_gather_tables(sizes),
+        f"    int vec[{len(sizes)}];",
+        f"    for (int j = 0; j < {len(sizes)}; ++j)  /* whole rows, aligned if streamed */",
+        "        vec[j] = out[j] && out_stride[j] == size[j]",
+        "                 && (!stream || ((uintptr_t)out[j] & 63) == 0);",
+        "#endif",
         "    for (long long s0 = 0; s0 < n; s0 += GSFRIC_LANES) {",
         "        int m = (int)(n - s0 < GSFRIC_LANES ? n - s0 : GSFRIC_LANES);",
         "        for (int l = 0; l < GSFRIC_LANES; ++l) {",
@@ -249,6 +293,13 @@ def batch_source(f, prefix: str) -> str:
         "        /* outputs: one loop, rows of each step written whole */",
         f"        for (int j = 0, b = 0; j < {len(sizes)}; b += size[j], ++j) {{",
         "            if (!out[j]) continue;",
+        "#ifdef VSTORE",
+        "            if (m == GSFRIC_LANES && vec[j]) {",
+        "                v_store_rows(out[j] + s0 * out_stride[j], yt[b], gidx + goff[j],",
+        "                             size[j], stream);",
+        "                continue;",
+        "            }",
+        "#endif",
         "            for (int l = 0; l < m; ++l) {",
         "                double *row = out[j] + (s0 + l) * out_stride[j];",
         "                if (stream)",

@@ -26,6 +26,28 @@ typedef long long vl __attribute__((vector_size(8 * GSFRIC_LANES)));
 #define STREAM_FENCE() ((void)0)
 #endif
 
+/* With 8 lanes on AVX-512, a full group's rows of one output (8 steps of `size` values:
+ * 8 * size doubles, contiguous in the output) are written as `size` whole vectors, each
+ * gathered from the group's transposed outputs y (entry o of lane l at y[8 o + l]) by an
+ * index table (idx[f] = 8 (f % size) + f / size for flat entry f of the rows): one
+ * 64-byte store per vector instead of eight scalar ones; non-temporal where the rows are
+ * 64-byte aligned. */
+#if GSFRIC_LANES == 8 && defined(__AVX512F__)
+#define VSTORE 1
+#include <stdint.h>
+static inline void v_store_rows(double *dst, const double *y, const long long *idx,
+                                int size, int stream)
+{
+    for (int q = 0; q < size; ++q) {
+        __m512d v = _mm512_i64gather_pd(_mm512_loadu_si512(idx + 8 * q), y, 8);
+        if (stream)
+            _mm512_stream_pd(dst + 8 * q, v);
+        else
+            _mm512_storeu_pd(dst + 8 * q, v);
+    }
+}
+#endif
+
 #define ONE_BITS ((vl)v_splat(1.0))
 static inline vd v_splat(double c) { vd r; for (int i = 0; i < GSFRIC_LANES; ++i) r[i] = c; return r; }
 static inline vd v_mask(vl m) { return (vd)(m & ONE_BITS); }
@@ -384,6 +406,34 @@ void gsfric_model_eval_batch(const double **in, const long long *in_stride,
     double xt[24][GSFRIC_LANES] __attribute__((aligned(8 * GSFRIC_LANES)));
     double yt[313][GSFRIC_LANES] __attribute__((aligned(8 * GSFRIC_LANES)));
     int stream = n >= STREAM_STEPS;
+#ifdef VSTORE
+    static const long long gidx[296] __attribute__((aligned(64))) = {
+        0, 1, 2, 3, 4, 5, 6, 7, 0, 8, 16, 24, 32, 40, 1, 9,
+        17, 25, 33, 41, 2, 10, 18, 26, 34, 42, 3, 11, 19, 27, 35, 43,
+        4, 12, 20, 28, 36, 44, 5, 13, 21, 29, 37, 45, 6, 14, 22, 30,
+        38, 46, 7, 15, 23, 31, 39, 47, 0, 8, 16, 24, 32, 40, 48, 56,
+        64, 72, 80, 88, 1, 9, 17, 25, 33, 41, 49, 57, 65, 73, 81, 89,
+        2, 10, 18, 26, 34, 42, 50, 58, 66, 74, 82, 90, 3, 11, 19, 27,
+        35, 43, 51, 59, 67, 75, 83, 91, 4, 12, 20, 28, 36, 44, 52, 60,
+        68, 76, 84, 92, 5, 13, 21, 29, 37, 45, 53, 61, 69, 77, 85, 93,
+        6, 14, 22, 30, 38, 46, 54, 62, 70, 78, 86, 94, 7, 15, 23, 31,
+        39, 47, 55, 63, 71, 79, 87, 95, 0, 8, 16, 24, 32, 40, 48, 56,
+        64, 72, 80, 88, 96, 104, 112, 120, 128, 136, 1, 9, 17, 25, 33, 41,
+        49, 57, 65, 73, 81, 89, 97, 105, 113, 121, 129, 137, 2, 10, 18, 26,
+        34, 42, 50, 58, 66, 74, 82, 90, 98, 106, 114, 122, 130, 138, 3, 11,
+        19, 27, 35, 43, 51, 59, 67, 75, 83, 91, 99, 107, 115, 123, 131, 139,
+        4, 12, 20, 28, 36, 44, 52, 60, 68, 76, 84, 92, 100, 108, 116, 124,
+        132, 140, 5, 13, 21, 29, 37, 45, 53, 61, 69, 77, 85, 93, 101, 109,
+        117, 125, 133, 141, 6, 14, 22, 30, 38, 46, 54, 62, 70, 78, 86, 94,
+        102, 110, 118, 126, 134, 142, 7, 15, 23, 31, 39, 47, 55, 63, 71, 79,
+        87, 95, 103, 111, 119, 127, 135, 143,
+    };
+    static const int goff[30] = {8, 8, 152, 152, 8, 152, 152, 152, 152, 8, 8, 8, 8, 8, 8, 152, 152, 152, 8, 152, 152, 0, 8, 8, 8, 8, 8, 8, 8, 56};
+    int vec[30];
+    for (int j = 0; j < 30; ++j)  /* whole rows, aligned if streamed */
+        vec[j] = out[j] && out_stride[j] == size[j]
+                 && (!stream || ((uintptr_t)out[j] & 63) == 0);
+#endif
     for (long long s0 = 0; s0 < n; s0 += GSFRIC_LANES) {
         int m = (int)(n - s0 < GSFRIC_LANES ? n - s0 : GSFRIC_LANES);
         for (int l = 0; l < GSFRIC_LANES; ++l) {
@@ -14154,6 +14204,13 @@ void gsfric_model_eval_batch(const double **in, const long long *in_stride,
         /* outputs: one loop, rows of each step written whole */
         for (int j = 0, b = 0; j < 30; b += size[j], ++j) {
             if (!out[j]) continue;
+#ifdef VSTORE
+            if (m == GSFRIC_LANES && vec[j]) {
+                v_store_rows(out[j] + s0 * out_stride[j], yt[b], gidx + goff[j],
+                             size[j], stream);
+                continue;
+            }
+#endif
             for (int l = 0; l < m; ++l) {
                 double *row = out[j] + (s0 + l) * out_stride[j];
                 if (stream)
@@ -14431,6 +14488,34 @@ void gsfric_model_eval_coupled_batch(const double **in, const long long *in_stri
     double xt[24][GSFRIC_LANES] __attribute__((aligned(8 * GSFRIC_LANES)));
     double yt[313][GSFRIC_LANES] __attribute__((aligned(8 * GSFRIC_LANES)));
     int stream = n >= STREAM_STEPS;
+#ifdef VSTORE
+    static const long long gidx[296] __attribute__((aligned(64))) = {
+        0, 1, 2, 3, 4, 5, 6, 7, 0, 8, 16, 24, 32, 40, 1, 9,
+        17, 25, 33, 41, 2, 10, 18, 26, 34, 42, 3, 11, 19, 27, 35, 43,
+        4, 12, 20, 28, 36, 44, 5, 13, 21, 29, 37, 45, 6, 14, 22, 30,
+        38, 46, 7, 15, 23, 31, 39, 47, 0, 8, 16, 24, 32, 40, 48, 56,
+        64, 72, 80, 88, 1, 9, 17, 25, 33, 41, 49, 57, 65, 73, 81, 89,
+        2, 10, 18, 26, 34, 42, 50, 58, 66, 74, 82, 90, 3, 11, 19, 27,
+        35, 43, 51, 59, 67, 75, 83, 91, 4, 12, 20, 28, 36, 44, 52, 60,
+        68, 76, 84, 92, 5, 13, 21, 29, 37, 45, 53, 61, 69, 77, 85, 93,
+        6, 14, 22, 30, 38, 46, 54, 62, 70, 78, 86, 94, 7, 15, 23, 31,
+        39, 47, 55, 63, 71, 79, 87, 95, 0, 8, 16, 24, 32, 40, 48, 56,
+        64, 72, 80, 88, 96, 104, 112, 120, 128, 136, 1, 9, 17, 25, 33, 41,
+        49, 57, 65, 73, 81, 89, 97, 105, 113, 121, 129, 137, 2, 10, 18, 26,
+        34, 42, 50, 58, 66, 74, 82, 90, 98, 106, 114, 122, 130, 138, 3, 11,
+        19, 27, 35, 43, 51, 59, 67, 75, 83, 91, 99, 107, 115, 123, 131, 139,
+        4, 12, 20, 28, 36, 44, 52, 60, 68, 76, 84, 92, 100, 108, 116, 124,
+        132, 140, 5, 13, 21, 29, 37, 45, 53, 61, 69, 77, 85, 93, 101, 109,
+        117, 125, 133, 141, 6, 14, 22, 30, 38, 46, 54, 62, 70, 78, 86, 94,
+        102, 110, 118, 126, 134, 142, 7, 15, 23, 31, 39, 47, 55, 63, 71, 79,
+        87, 95, 103, 111, 119, 127, 135, 143,
+    };
+    static const int goff[30] = {8, 8, 152, 152, 8, 152, 152, 152, 152, 8, 8, 8, 8, 8, 8, 152, 152, 152, 8, 152, 152, 0, 8, 8, 8, 8, 8, 8, 8, 56};
+    int vec[30];
+    for (int j = 0; j < 30; ++j)  /* whole rows, aligned if streamed */
+        vec[j] = out[j] && out_stride[j] == size[j]
+                 && (!stream || ((uintptr_t)out[j] & 63) == 0);
+#endif
     for (long long s0 = 0; s0 < n; s0 += GSFRIC_LANES) {
         int m = (int)(n - s0 < GSFRIC_LANES ? n - s0 : GSFRIC_LANES);
         for (int l = 0; l < GSFRIC_LANES; ++l) {
@@ -27235,6 +27320,13 @@ void gsfric_model_eval_coupled_batch(const double **in, const long long *in_stri
         /* outputs: one loop, rows of each step written whole */
         for (int j = 0, b = 0; j < 30; b += size[j], ++j) {
             if (!out[j]) continue;
+#ifdef VSTORE
+            if (m == GSFRIC_LANES && vec[j]) {
+                v_store_rows(out[j] + s0 * out_stride[j], yt[b], gidx + goff[j],
+                             size[j], stream);
+                continue;
+            }
+#endif
             for (int l = 0; l < m; ++l) {
                 double *row = out[j] + (s0 + l) * out_stride[j];
                 if (stream)
@@ -27444,6 +27536,18 @@ void gsfric_model_actuator_coupled_batch(const double **in, const long long *in_
     double xt[24][GSFRIC_LANES] __attribute__((aligned(8 * GSFRIC_LANES)));
     double yt[6][GSFRIC_LANES] __attribute__((aligned(8 * GSFRIC_LANES)));
     int stream = n >= STREAM_STEPS;
+#ifdef VSTORE
+    static const long long gidx[48] __attribute__((aligned(64))) = {
+        0, 8, 16, 24, 32, 40, 1, 9, 17, 25, 33, 41, 2, 10, 18, 26,
+        34, 42, 3, 11, 19, 27, 35, 43, 4, 12, 20, 28, 36, 44, 5, 13,
+        21, 29, 37, 45, 6, 14, 22, 30, 38, 46, 7, 15, 23, 31, 39, 47,
+    };
+    static const int goff[1] = {0};
+    int vec[1];
+    for (int j = 0; j < 1; ++j)  /* whole rows, aligned if streamed */
+        vec[j] = out[j] && out_stride[j] == size[j]
+                 && (!stream || ((uintptr_t)out[j] & 63) == 0);
+#endif
     for (long long s0 = 0; s0 < n; s0 += GSFRIC_LANES) {
         int m = (int)(n - s0 < GSFRIC_LANES ? n - s0 : GSFRIC_LANES);
         for (int l = 0; l < GSFRIC_LANES; ++l) {
@@ -38900,6 +39004,13 @@ void gsfric_model_actuator_coupled_batch(const double **in, const long long *in_
         /* outputs: one loop, rows of each step written whole */
         for (int j = 0, b = 0; j < 1; b += size[j], ++j) {
             if (!out[j]) continue;
+#ifdef VSTORE
+            if (m == GSFRIC_LANES && vec[j]) {
+                v_store_rows(out[j] + s0 * out_stride[j], yt[b], gidx + goff[j],
+                             size[j], stream);
+                continue;
+            }
+#endif
             for (int l = 0; l < m; ++l) {
                 double *row = out[j] + (s0 + l) * out_stride[j];
                 if (stream)
@@ -39165,6 +39276,58 @@ void gsfric_model_envelope_coupled_batch(const double **in, const long long *in_
     double xt[24][GSFRIC_LANES] __attribute__((aligned(8 * GSFRIC_LANES)));
     double yt[103][GSFRIC_LANES] __attribute__((aligned(8 * GSFRIC_LANES)));
     int stream = n >= STREAM_STEPS;
+#ifdef VSTORE
+    static const long long gidx[680] __attribute__((aligned(64))) = {
+        0, 1, 2, 3, 4, 5, 6, 7, 0, 8, 16, 24, 32, 40, 1, 9,
+        17, 25, 33, 41, 2, 10, 18, 26, 34, 42, 3, 11, 19, 27, 35, 43,
+        4, 12, 20, 28, 36, 44, 5, 13, 21, 29, 37, 45, 6, 14, 22, 30,
+        38, 46, 7, 15, 23, 31, 39, 47, 0, 8, 16, 24, 32, 40, 48, 56,
+        64, 72, 80, 88, 96, 104, 112, 120, 128, 136, 144, 152, 160, 168, 176, 184,
+        192, 200, 208, 216, 224, 232, 240, 248, 256, 264, 272, 280, 288, 296, 304, 312,
+        320, 328, 336, 344, 352, 360, 368, 376, 384, 392, 400, 408, 416, 424, 432, 440,
+        448, 456, 464, 472, 480, 488, 496, 504, 512, 520, 528, 536, 544, 552, 560, 568,
+        576, 584, 592, 600, 608, 616, 1, 9, 17, 25, 33, 41, 49, 57, 65, 73,
+        81, 89, 97, 105, 113, 121, 129, 137, 145, 153, 161, 169, 177, 185, 193, 201,
+        209, 217, 225, 233, 241, 249, 257, 265, 273, 281, 289, 297, 305, 313, 321, 329,
+        337, 345, 353, 361, 369, 377, 385, 393, 401, 409, 417, 425, 433, 441, 449, 457,
+        465, 473, 481, 489, 497, 505, 513, 521, 529, 537, 545, 553, 561, 569, 577, 585,
+        593, 601, 609, 617, 2, 10, 18, 26, 34, 42, 50, 58, 66, 74, 82, 90,
+        98, 106, 114, 122, 130, 138, 146, 154, 162, 170, 178, 186, 194, 202, 210, 218,
+        226, 234, 242, 250, 258, 266, 274, 282, 290, 298, 306, 314, 322, 330, 338, 346,
+        354, 362, 370, 378, 386, 394, 402, 410, 418, 426, 434, 442, 450, 458, 466, 474,
+        482, 490, 498, 506, 514, 522, 530, 538, 546, 554, 562, 570, 578, 586, 594, 602,
+        610, 618, 3, 11, 19, 27, 35, 43, 51, 59, 67, 75, 83, 91, 99, 107,
+        115, 123, 131, 139, 147, 155, 163, 171, 179, 187, 195, 203, 211, 219, 227, 235,
+        243, 251, 259, 267, 275, 283, 291, 299, 307, 315, 323, 331, 339, 347, 355, 363,
+        371, 379, 387, 395, 403, 411, 419, 427, 435, 443, 451, 459, 467, 475, 483, 491,
+        499, 507, 515, 523, 531, 539, 547, 555, 563, 571, 579, 587, 595, 603, 611, 619,
+        4, 12, 20, 28, 36, 44, 52, 60, 68, 76, 84, 92, 100, 108, 116, 124,
+        132, 140, 148, 156, 164, 172, 180, 188, 196, 204, 212, 220, 228, 236, 244, 252,
+        260, 268, 276, 284, 292, 300, 308, 316, 324, 332, 340, 348, 356, 364, 372, 380,
+        388, 396, 404, 412, 420, 428, 436, 444, 452, 460, 468, 476, 484, 492, 500, 508,
+        516, 524, 532, 540, 548, 556, 564, 572, 580, 588, 596, 604, 612, 620, 5, 13,
+        21, 29, 37, 45, 53, 61, 69, 77, 85, 93, 101, 109, 117, 125, 133, 141,
+        149, 157, 165, 173, 181, 189, 197, 205, 213, 221, 229, 237, 245, 253, 261, 269,
+        277, 285, 293, 301, 309, 317, 325, 333, 341, 349, 357, 365, 373, 381, 389, 397,
+        405, 413, 421, 429, 437, 445, 453, 461, 469, 477, 485, 493, 501, 509, 517, 525,
+        533, 541, 549, 557, 565, 573, 581, 589, 597, 605, 613, 621, 6, 14, 22, 30,
+        38, 46, 54, 62, 70, 78, 86, 94, 102, 110, 118, 126, 134, 142, 150, 158,
+        166, 174, 182, 190, 198, 206, 214, 222, 230, 238, 246, 254, 262, 270, 278, 286,
+        294, 302, 310, 318, 326, 334, 342, 350, 358, 366, 374, 382, 390, 398, 406, 414,
+        422, 430, 438, 446, 454, 462, 470, 478, 486, 494, 502, 510, 518, 526, 534, 542,
+        550, 558, 566, 574, 582, 590, 598, 606, 614, 622, 7, 15, 23, 31, 39, 47,
+        55, 63, 71, 79, 87, 95, 103, 111, 119, 127, 135, 143, 151, 159, 167, 175,
+        183, 191, 199, 207, 215, 223, 231, 239, 247, 255, 263, 271, 279, 287, 295, 303,
+        311, 319, 327, 335, 343, 351, 359, 367, 375, 383, 391, 399, 407, 415, 423, 431,
+        439, 447, 455, 463, 471, 479, 487, 495, 503, 511, 519, 527, 535, 543, 551, 559,
+        567, 575, 583, 591, 599, 607, 615, 623,
+    };
+    static const int goff[6] = {56, 8, 8, 0, 8, 8};
+    int vec[6];
+    for (int j = 0; j < 6; ++j)  /* whole rows, aligned if streamed */
+        vec[j] = out[j] && out_stride[j] == size[j]
+                 && (!stream || ((uintptr_t)out[j] & 63) == 0);
+#endif
     for (long long s0 = 0; s0 < n; s0 += GSFRIC_LANES) {
         int m = (int)(n - s0 < GSFRIC_LANES ? n - s0 : GSFRIC_LANES);
         for (int l = 0; l < GSFRIC_LANES; ++l) {
@@ -51153,6 +51316,13 @@ void gsfric_model_envelope_coupled_batch(const double **in, const long long *in_
         /* outputs: one loop, rows of each step written whole */
         for (int j = 0, b = 0; j < 6; b += size[j], ++j) {
             if (!out[j]) continue;
+#ifdef VSTORE
+            if (m == GSFRIC_LANES && vec[j]) {
+                v_store_rows(out[j] + s0 * out_stride[j], yt[b], gidx + goff[j],
+                             size[j], stream);
+                continue;
+            }
+#endif
             for (int l = 0; l < m; ++l) {
                 double *row = out[j] + (s0 + l) * out_stride[j];
                 if (stream)
@@ -51418,6 +51588,34 @@ void gsfric_model_eval_posthoc_batch(const double **in, const long long *in_stri
     double xt[24][GSFRIC_LANES] __attribute__((aligned(8 * GSFRIC_LANES)));
     double yt[313][GSFRIC_LANES] __attribute__((aligned(8 * GSFRIC_LANES)));
     int stream = n >= STREAM_STEPS;
+#ifdef VSTORE
+    static const long long gidx[296] __attribute__((aligned(64))) = {
+        0, 1, 2, 3, 4, 5, 6, 7, 0, 8, 16, 24, 32, 40, 1, 9,
+        17, 25, 33, 41, 2, 10, 18, 26, 34, 42, 3, 11, 19, 27, 35, 43,
+        4, 12, 20, 28, 36, 44, 5, 13, 21, 29, 37, 45, 6, 14, 22, 30,
+        38, 46, 7, 15, 23, 31, 39, 47, 0, 8, 16, 24, 32, 40, 48, 56,
+        64, 72, 80, 88, 1, 9, 17, 25, 33, 41, 49, 57, 65, 73, 81, 89,
+        2, 10, 18, 26, 34, 42, 50, 58, 66, 74, 82, 90, 3, 11, 19, 27,
+        35, 43, 51, 59, 67, 75, 83, 91, 4, 12, 20, 28, 36, 44, 52, 60,
+        68, 76, 84, 92, 5, 13, 21, 29, 37, 45, 53, 61, 69, 77, 85, 93,
+        6, 14, 22, 30, 38, 46, 54, 62, 70, 78, 86, 94, 7, 15, 23, 31,
+        39, 47, 55, 63, 71, 79, 87, 95, 0, 8, 16, 24, 32, 40, 48, 56,
+        64, 72, 80, 88, 96, 104, 112, 120, 128, 136, 1, 9, 17, 25, 33, 41,
+        49, 57, 65, 73, 81, 89, 97, 105, 113, 121, 129, 137, 2, 10, 18, 26,
+        34, 42, 50, 58, 66, 74, 82, 90, 98, 106, 114, 122, 130, 138, 3, 11,
+        19, 27, 35, 43, 51, 59, 67, 75, 83, 91, 99, 107, 115, 123, 131, 139,
+        4, 12, 20, 28, 36, 44, 52, 60, 68, 76, 84, 92, 100, 108, 116, 124,
+        132, 140, 5, 13, 21, 29, 37, 45, 53, 61, 69, 77, 85, 93, 101, 109,
+        117, 125, 133, 141, 6, 14, 22, 30, 38, 46, 54, 62, 70, 78, 86, 94,
+        102, 110, 118, 126, 134, 142, 7, 15, 23, 31, 39, 47, 55, 63, 71, 79,
+        87, 95, 103, 111, 119, 127, 135, 143,
+    };
+    static const int goff[30] = {8, 8, 152, 152, 8, 152, 152, 152, 152, 8, 8, 8, 8, 8, 8, 152, 152, 152, 8, 152, 152, 0, 8, 8, 8, 8, 8, 8, 8, 56};
+    int vec[30];
+    for (int j = 0; j < 30; ++j)  /* whole rows, aligned if streamed */
+        vec[j] = out[j] && out_stride[j] == size[j]
+                 && (!stream || ((uintptr_t)out[j] & 63) == 0);
+#endif
     for (long long s0 = 0; s0 < n; s0 += GSFRIC_LANES) {
         int m = (int)(n - s0 < GSFRIC_LANES ? n - s0 : GSFRIC_LANES);
         for (int l = 0; l < GSFRIC_LANES; ++l) {
@@ -57778,6 +57976,13 @@ void gsfric_model_eval_posthoc_batch(const double **in, const long long *in_stri
         /* outputs: one loop, rows of each step written whole */
         for (int j = 0, b = 0; j < 30; b += size[j], ++j) {
             if (!out[j]) continue;
+#ifdef VSTORE
+            if (m == GSFRIC_LANES && vec[j]) {
+                v_store_rows(out[j] + s0 * out_stride[j], yt[b], gidx + goff[j],
+                             size[j], stream);
+                continue;
+            }
+#endif
             for (int l = 0; l < m; ++l) {
                 double *row = out[j] + (s0 + l) * out_stride[j];
                 if (stream)
@@ -57973,6 +58178,18 @@ void gsfric_model_actuator_posthoc_batch(const double **in, const long long *in_
     double xt[24][GSFRIC_LANES] __attribute__((aligned(8 * GSFRIC_LANES)));
     double yt[6][GSFRIC_LANES] __attribute__((aligned(8 * GSFRIC_LANES)));
     int stream = n >= STREAM_STEPS;
+#ifdef VSTORE
+    static const long long gidx[48] __attribute__((aligned(64))) = {
+        0, 8, 16, 24, 32, 40, 1, 9, 17, 25, 33, 41, 2, 10, 18, 26,
+        34, 42, 3, 11, 19, 27, 35, 43, 4, 12, 20, 28, 36, 44, 5, 13,
+        21, 29, 37, 45, 6, 14, 22, 30, 38, 46, 7, 15, 23, 31, 39, 47,
+    };
+    static const int goff[1] = {0};
+    int vec[1];
+    for (int j = 0; j < 1; ++j)  /* whole rows, aligned if streamed */
+        vec[j] = out[j] && out_stride[j] == size[j]
+                 && (!stream || ((uintptr_t)out[j] & 63) == 0);
+#endif
     for (long long s0 = 0; s0 < n; s0 += GSFRIC_LANES) {
         int m = (int)(n - s0 < GSFRIC_LANES ? n - s0 : GSFRIC_LANES);
         for (int l = 0; l < GSFRIC_LANES; ++l) {
@@ -62841,6 +63058,13 @@ void gsfric_model_actuator_posthoc_batch(const double **in, const long long *in_
         /* outputs: one loop, rows of each step written whole */
         for (int j = 0, b = 0; j < 1; b += size[j], ++j) {
             if (!out[j]) continue;
+#ifdef VSTORE
+            if (m == GSFRIC_LANES && vec[j]) {
+                v_store_rows(out[j] + s0 * out_stride[j], yt[b], gidx + goff[j],
+                             size[j], stream);
+                continue;
+            }
+#endif
             for (int l = 0; l < m; ++l) {
                 double *row = out[j] + (s0 + l) * out_stride[j];
                 if (stream)
@@ -63092,6 +63316,58 @@ void gsfric_model_envelope_posthoc_batch(const double **in, const long long *in_
     double xt[24][GSFRIC_LANES] __attribute__((aligned(8 * GSFRIC_LANES)));
     double yt[103][GSFRIC_LANES] __attribute__((aligned(8 * GSFRIC_LANES)));
     int stream = n >= STREAM_STEPS;
+#ifdef VSTORE
+    static const long long gidx[680] __attribute__((aligned(64))) = {
+        0, 1, 2, 3, 4, 5, 6, 7, 0, 8, 16, 24, 32, 40, 1, 9,
+        17, 25, 33, 41, 2, 10, 18, 26, 34, 42, 3, 11, 19, 27, 35, 43,
+        4, 12, 20, 28, 36, 44, 5, 13, 21, 29, 37, 45, 6, 14, 22, 30,
+        38, 46, 7, 15, 23, 31, 39, 47, 0, 8, 16, 24, 32, 40, 48, 56,
+        64, 72, 80, 88, 96, 104, 112, 120, 128, 136, 144, 152, 160, 168, 176, 184,
+        192, 200, 208, 216, 224, 232, 240, 248, 256, 264, 272, 280, 288, 296, 304, 312,
+        320, 328, 336, 344, 352, 360, 368, 376, 384, 392, 400, 408, 416, 424, 432, 440,
+        448, 456, 464, 472, 480, 488, 496, 504, 512, 520, 528, 536, 544, 552, 560, 568,
+        576, 584, 592, 600, 608, 616, 1, 9, 17, 25, 33, 41, 49, 57, 65, 73,
+        81, 89, 97, 105, 113, 121, 129, 137, 145, 153, 161, 169, 177, 185, 193, 201,
+        209, 217, 225, 233, 241, 249, 257, 265, 273, 281, 289, 297, 305, 313, 321, 329,
+        337, 345, 353, 361, 369, 377, 385, 393, 401, 409, 417, 425, 433, 441, 449, 457,
+        465, 473, 481, 489, 497, 505, 513, 521, 529, 537, 545, 553, 561, 569, 577, 585,
+        593, 601, 609, 617, 2, 10, 18, 26, 34, 42, 50, 58, 66, 74, 82, 90,
+        98, 106, 114, 122, 130, 138, 146, 154, 162, 170, 178, 186, 194, 202, 210, 218,
+        226, 234, 242, 250, 258, 266, 274, 282, 290, 298, 306, 314, 322, 330, 338, 346,
+        354, 362, 370, 378, 386, 394, 402, 410, 418, 426, 434, 442, 450, 458, 466, 474,
+        482, 490, 498, 506, 514, 522, 530, 538, 546, 554, 562, 570, 578, 586, 594, 602,
+        610, 618, 3, 11, 19, 27, 35, 43, 51, 59, 67, 75, 83, 91, 99, 107,
+        115, 123, 131, 139, 147, 155, 163, 171, 179, 187, 195, 203, 211, 219, 227, 235,
+        243, 251, 259, 267, 275, 283, 291, 299, 307, 315, 323, 331, 339, 347, 355, 363,
+        371, 379, 387, 395, 403, 411, 419, 427, 435, 443, 451, 459, 467, 475, 483, 491,
+        499, 507, 515, 523, 531, 539, 547, 555, 563, 571, 579, 587, 595, 603, 611, 619,
+        4, 12, 20, 28, 36, 44, 52, 60, 68, 76, 84, 92, 100, 108, 116, 124,
+        132, 140, 148, 156, 164, 172, 180, 188, 196, 204, 212, 220, 228, 236, 244, 252,
+        260, 268, 276, 284, 292, 300, 308, 316, 324, 332, 340, 348, 356, 364, 372, 380,
+        388, 396, 404, 412, 420, 428, 436, 444, 452, 460, 468, 476, 484, 492, 500, 508,
+        516, 524, 532, 540, 548, 556, 564, 572, 580, 588, 596, 604, 612, 620, 5, 13,
+        21, 29, 37, 45, 53, 61, 69, 77, 85, 93, 101, 109, 117, 125, 133, 141,
+        149, 157, 165, 173, 181, 189, 197, 205, 213, 221, 229, 237, 245, 253, 261, 269,
+        277, 285, 293, 301, 309, 317, 325, 333, 341, 349, 357, 365, 373, 381, 389, 397,
+        405, 413, 421, 429, 437, 445, 453, 461, 469, 477, 485, 493, 501, 509, 517, 525,
+        533, 541, 549, 557, 565, 573, 581, 589, 597, 605, 613, 621, 6, 14, 22, 30,
+        38, 46, 54, 62, 70, 78, 86, 94, 102, 110, 118, 126, 134, 142, 150, 158,
+        166, 174, 182, 190, 198, 206, 214, 222, 230, 238, 246, 254, 262, 270, 278, 286,
+        294, 302, 310, 318, 326, 334, 342, 350, 358, 366, 374, 382, 390, 398, 406, 414,
+        422, 430, 438, 446, 454, 462, 470, 478, 486, 494, 502, 510, 518, 526, 534, 542,
+        550, 558, 566, 574, 582, 590, 598, 606, 614, 622, 7, 15, 23, 31, 39, 47,
+        55, 63, 71, 79, 87, 95, 103, 111, 119, 127, 135, 143, 151, 159, 167, 175,
+        183, 191, 199, 207, 215, 223, 231, 239, 247, 255, 263, 271, 279, 287, 295, 303,
+        311, 319, 327, 335, 343, 351, 359, 367, 375, 383, 391, 399, 407, 415, 423, 431,
+        439, 447, 455, 463, 471, 479, 487, 495, 503, 511, 519, 527, 535, 543, 551, 559,
+        567, 575, 583, 591, 599, 607, 615, 623,
+    };
+    static const int goff[6] = {56, 8, 8, 0, 8, 8};
+    int vec[6];
+    for (int j = 0; j < 6; ++j)  /* whole rows, aligned if streamed */
+        vec[j] = out[j] && out_stride[j] == size[j]
+                 && (!stream || ((uintptr_t)out[j] & 63) == 0);
+#endif
     for (long long s0 = 0; s0 < n; s0 += GSFRIC_LANES) {
         int m = (int)(n - s0 < GSFRIC_LANES ? n - s0 : GSFRIC_LANES);
         for (int l = 0; l < GSFRIC_LANES; ++l) {
@@ -68408,6 +68684,13 @@ void gsfric_model_envelope_posthoc_batch(const double **in, const long long *in_
         /* outputs: one loop, rows of each step written whole */
         for (int j = 0, b = 0; j < 6; b += size[j], ++j) {
             if (!out[j]) continue;
+#ifdef VSTORE
+            if (m == GSFRIC_LANES && vec[j]) {
+                v_store_rows(out[j] + s0 * out_stride[j], yt[b], gidx + goff[j],
+                             size[j], stream);
+                continue;
+            }
+#endif
             for (int l = 0; l < m; ++l) {
                 double *row = out[j] + (s0 + l) * out_stride[j];
                 if (stream)

@@ -459,9 +459,6 @@ class Evaluator:
         if call is None:  # two threads may both build one: either is right
             call = self._calls[key] = native.get(self._actuator).bound_motion(
                 [self.P, self.Q], "F", self.n_threads)
-        if out is None:
-            n = np.shape(position)[0] if np.ndim(position) == 2 else -1
-            out = np.empty((max(n, 0), 6))
         return call(position, rotation, velocity, omega, acceleration, alpha, out)
 
     def jacobian(self, x: np.ndarray, Q=None) -> tuple[np.ndarray, np.ndarray]:
@@ -515,13 +512,13 @@ class Evaluator:
         details = [name for name, _, _ in self._full.outputs if name in DETAILS]
         kept = [(name, size) for name, size, _ in self._full.outputs if name not in DETAILS]
         if buffers is None:
-            outs = {name: np.empty((n, size)) for name, size in kept}
+            outs = {name: _aligned_empty(n, size) for name, size in kept}
         else:
             outs = {}
             for name, size in kept:
                 buf = buffers.get(name)
                 if buf is None or buf.shape[0] < n:
-                    buf = buffers[name] = np.empty((n, size))
+                    buf = buffers[name] = _aligned_empty(n, size)
                 outs[name] = buf[:n]
         flag = np.empty(n, dtype=np.int64)
         starts = range(0, n, chunk)
@@ -631,6 +628,16 @@ class Evaluator:
         for v in arrays.values():
             v[~finite] = np.nan
         return flag
+
+
+def _aligned_empty(n: int, size: int) -> np.ndarray:
+    """An uninitialised C-contiguous float64 array (n, size) whose data starts on a 64-byte
+    boundary (a cache line): the compiled code then writes whole lines of it with vector
+    non-temporal stores (derive/simd.py). A view of a slightly larger buffer."""
+    count = n * size
+    raw = np.empty(count + 8)
+    start = (-raw.ctypes.data % 64) // 8
+    return raw[start:start + count].reshape(n, size)
 
 
 def _index_list(idx: np.ndarray, limit: int = 10) -> str:

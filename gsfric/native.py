@@ -376,6 +376,14 @@ class _Fn(ctypes.Structure):
                 ("n_in", ctypes.c_int), ("n_out", ctypes.c_int)]
 
 
+class _Bound(ctypes.Structure):
+    """The fixed arguments of a control-loop call (``gsfric_bound`` in ``_native/batch.c``)."""
+
+    _fields_ = [("fn", ctypes.POINTER(_Fn)), ("fixed", ctypes.c_void_p),
+                ("in_stride", ctypes.c_void_p), ("out_stride", ctypes.c_void_p),
+                ("index", ctypes.c_int), ("n_threads", ctypes.c_int)]
+
+
 class FlagSpec(ctypes.Structure):
     """Settings of the step flags computed in C (``gsfric_flags`` in ``_native/batch.c``)."""
 
@@ -525,6 +533,12 @@ class CompiledFunction:
         out_strides, name, threads = self._out_strides, self.name, int(n_threads)
         by_object = _objects_readable(self._lib)
         run_one = self._lib.gsfric_run_one_objects if by_object else self._lib.gsfric_run_one
+        bound = _Bound(ctypes.pointer(self._fn), ctypes.cast(fixed_ptrs, ctypes.c_void_p),
+                       ctypes.cast(in_strides, ctypes.c_void_p),
+                       ctypes.cast(out_strides, ctypes.c_void_p), index, threads)
+        bound_ref = ctypes.byref(bound)
+        tuples = by_object and _tuples_readable(self._lib)
+        run_tuple = self._lib.gsfric_bound_states
 
         def call(x: np.ndarray, out: np.ndarray) -> np.ndarray:
             if (x.dtype != np.float64 or x.ndim != 2 or x.shape[1] != size_x
@@ -532,7 +546,9 @@ class CompiledFunction:
                     or out.shape != (x.shape[0], size_out) or not out.flags.c_contiguous):
                 raise GsfricError(f"{name}: x must be C-contiguous float64 (N, {size_x}) "
                                   f"and out (N, {size_out})")
-            if by_object:
+            if tuples:
+                run_tuple(bound_ref, (x, out), x.shape[0])
+            elif by_object:
                 run_one(fn, fixed_ptrs, in_strides, out_strides, x, index, out, x.shape[0],
                         threads)
             else:
@@ -540,13 +556,14 @@ class CompiledFunction:
                         out.ctypes.data, x.shape[0], threads)
             return out
 
-        call.keep = (fixed, fixed_ptrs, in_strides, self)  # alive as long as the callable
+        call.keep = (fixed, fixed_ptrs, in_strides, bound, self)  # alive with the callable
         return call
 
     def bound_motion(self, constants: list[np.ndarray], output: str, n_threads: int = 1):
         """``bound``'s callable from a motion's arrays: ``f(position, rotation, velocity,
-        omega, acceleration, alpha, out)``, shapes (N, 3) and rotation (N, 3, 3); arrays that
-        are not C-contiguous float64 are converted. The states are laid out in C."""
+        omega, acceleration, alpha, out=None)``, shapes (N, 3) and rotation (N, 3, 3); arrays
+        that are not C-contiguous float64 are converted; ``out`` (N, size) is allocated when
+        not given. The states are laid out in C."""
         fixed = [np.ascontiguousarray(c, dtype=np.float64) for c in constants]
         n_in = len(self.inputs)
         if self.inputs[0][1] != 24:
@@ -561,8 +578,15 @@ class CompiledFunction:
         by_object = _objects_readable(self._lib)
         run = self._lib.gsfric_run_one_motion_objects if by_object else \
             self._lib.gsfric_run_one_motion
+        bound = _Bound(ctypes.pointer(self._fn), ctypes.cast(fixed_ptrs, ctypes.c_void_p),
+                       ctypes.cast(in_strides, ctypes.c_void_p),
+                       ctypes.cast(out_strides, ctypes.c_void_p), index, threads)
+        bound_ref = ctypes.byref(bound)
+        tuples = by_object and _tuples_readable(self._lib)
+        run_tuple = self._lib.gsfric_bound_motion
+        empty = np.empty
 
-        def call(position, rotation, velocity, omega, acceleration, alpha, out):
+        def call(position, rotation, velocity, omega, acceleration, alpha, out=None):
             p = np.ascontiguousarray(position, dtype=f64)
             T = np.ascontiguousarray(rotation, dtype=f64)
             v = np.ascontiguousarray(velocity, dtype=f64)
@@ -571,14 +595,18 @@ class CompiledFunction:
             al = np.ascontiguousarray(alpha, dtype=f64)
             n = p.shape[0] if p.ndim == 2 else -1
             three = (n, 3)
-            if (p.shape != three or v.shape != three or w.shape != three or a.shape != three
-                    or al.shape != three or T.shape != (n, 3, 3)):
+            if (p.shape, v.shape, w.shape, a.shape, al.shape, T.shape) != \
+                    (three, three, three, three, three, (n, 3, 3)):
                 raise GsfricError(f"{name}: position, velocity, omega, acceleration, alpha "
                                   "must be (N, 3) and rotation (N, 3, 3) with the same N; got "
                                   f"{[x.shape for x in (p, T, v, w, a, al)]}")
-            if out.dtype != f64 or out.shape != (n, size_out) or not out.flags.c_contiguous:
+            if out is None:
+                out = empty((n, size_out))
+            elif out.dtype != f64 or out.shape != (n, size_out) or not out.flags.c_contiguous:
                 raise GsfricError(f"{name}: out must be C-contiguous float64 ({n}, {size_out})")
-            if by_object:
+            if tuples:
+                run_tuple(bound_ref, (p, T, v, w, a, al, out), n)
+            elif by_object:
                 run(fn, fixed_ptrs, in_strides, out_strides, p, T, v, w, a, al, index, out, n,
                     threads)
             else:
@@ -587,8 +615,20 @@ class CompiledFunction:
                     out.ctypes.data, n, threads)
             return out
 
-        call.keep = (fixed, fixed_ptrs, in_strides, self)  # alive as long as the callable
+        call.keep = (fixed, fixed_ptrs, in_strides, bound, self)  # alive with the callable
         return call
+
+
+@functools.lru_cache(maxsize=None)
+def _tuples_readable(lib) -> bool:
+    """True when the library reads a tuple's items as Python does (``gsfric_tuple_item``,
+    _native/batch.c): the control loop's calls then pass their arrays as one tuple."""
+    samples = [(np.zeros(1), np.zeros((2, 3))), tuple(np.zeros(3) for _ in range(7))]
+    try:
+        return all(lib.gsfric_tuple_item(t, k) == id(t[k]) for t in samples
+                   for k in range(len(t)))
+    except Exception:  # noqa: BLE001 - any failure: one argument per array
+        return False
 
 
 @functools.lru_cache(maxsize=None)
@@ -673,10 +713,12 @@ class CasadiFunction:
 
     def bound_motion(self, constants: list[np.ndarray], output: str, n_threads: int = 1):
         """``CompiledFunction.bound_motion``'s interface, evaluated by CasADi."""
-        def call(position, rotation, velocity, omega, acceleration, alpha, out):
+        def call(position, rotation, velocity, omega, acceleration, alpha, out=None):
             x = state_of((position, rotation, velocity, omega, acceleration, alpha))
-            out[...] = self([x] + list(constants), n_threads=n_threads,
-                            select=(output,))[output]
+            value = self([x] + list(constants), n_threads=n_threads, select=(output,))[output]
+            if out is None:
+                return value
+            out[...] = value
             return out
 
         return call
@@ -734,6 +776,11 @@ def _library():
     lib.gsfric_run_one_motion_objects.restype = ctypes.c_longlong
     lib.gsfric_run_one_motion_objects.argtypes = objects + [ctypes.py_object] * 6 + [
         ctypes.c_int, ctypes.py_object, ctypes.c_longlong, ctypes.c_int]
+    for bound in (lib.gsfric_bound_states, lib.gsfric_bound_motion):
+        bound.restype = ctypes.c_longlong
+        bound.argtypes = [ctypes.c_void_p, ctypes.py_object, ctypes.c_longlong]
+    lib.gsfric_tuple_item.restype = ctypes.c_longlong
+    lib.gsfric_tuple_item.argtypes = [ctypes.py_object, ctypes.c_int]
     lib.gsfric_array_data.restype = ctypes.c_longlong
     lib.gsfric_array_data.argtypes = [ctypes.py_object]
     lib.gsfric_simd_lanes.restype = ctypes.c_int

@@ -301,9 +301,13 @@ long long gsfric_run(const gsfric_fn *fn, const double **in, const long long *in
     range_task tasks[MAX_THREADS];
     pthread_t threads[MAX_THREADS];
     int started[MAX_THREADS] = {0};
+    /* range boundaries on multiples of 8 steps: every range's groups of steps then start
+     * where the first range's do (whole 64-byte lines of every output row) */
     for (int k = 0; k < n_threads; ++k) {
+        long long lo = k ? (n * k / n_threads) & ~7LL : 0;
+        long long hi = k + 1 < n_threads ? (n * (k + 1) / n_threads) & ~7LL : n;
         tasks[k] = (range_task){fn, in, in_stride, out, out_stride, flags, flag, use_simd,
-                                n * k / n_threads, n * (k + 1) / n_threads, 0, motion};
+                                lo, hi, 0, motion};
     }
     for (int k = 1; k < n_threads; ++k)
         started[k] = pthread_create(&threads[k], NULL, run_range, &tasks[k]) == 0;
@@ -386,4 +390,44 @@ long long gsfric_run_one_motion_objects(const gsfric_fn *fn, const double **fixe
     return gsfric_run_one_motion(fn, fixed, in_stride, out_stride, array_data(p),
                                  array_data(T), array_data(v), array_data(w), array_data(a),
                                  array_data(alpha), index, array_data(y), n, n_threads);
+}
+
+/* The control loop's call with its fixed arguments in one structure, built once per bound
+ * callable (read only), and the arrays in one Python tuple: the fewer arguments ctypes
+ * converts per call, the shorter the call. The tuple's items are read from CPython's tuple
+ * structure (the object header, the size, then the item pointers); gsfric/native.py checks
+ * at load time that this reads the same objects as Python does, and uses the calls above
+ * otherwise. */
+typedef struct {
+    const gsfric_fn *fn;
+    const double **fixed;
+    const long long *in_stride;
+    const long long *out_stride;
+    int index;
+    int n_threads;
+} gsfric_bound;
+
+static const void *tuple_item(const void *tuple, int k)
+{
+    return ((const void *const *)((const char *)tuple + 3 * sizeof(void *)))[k];
+}
+
+long long gsfric_tuple_item(const void *tuple, int k) { return (long long)tuple_item(tuple, k); }
+
+/* arrays: (x, out) */
+long long gsfric_bound_states(const gsfric_bound *b, const void *arrays, long long n)
+{
+    return gsfric_run_one(b->fn, b->fixed, b->in_stride, b->out_stride,
+                          array_data(tuple_item(arrays, 0)), b->index,
+                          array_data(tuple_item(arrays, 1)), n, b->n_threads);
+}
+
+/* arrays: (position, rotation, velocity, omega, acceleration, alpha, out) */
+long long gsfric_bound_motion(const gsfric_bound *b, const void *arrays, long long n)
+{
+    const double *m[6];
+    for (int k = 0; k < 6; ++k) m[k] = array_data(tuple_item(arrays, k));
+    return gsfric_run_one_motion(b->fn, b->fixed, b->in_stride, b->out_stride, m[0], m[1],
+                                 m[2], m[3], m[4], m[5], b->index,
+                                 array_data(tuple_item(arrays, 6)), n, b->n_threads);
 }
