@@ -23,6 +23,13 @@ of each variant, and the ratios to the earlier source. The forces of the earlier
 of the current paper model are compared too: the same friction model, but the reference
 platform's legs and joints have changed since ``ef651e9`` (``models.reference_leg``), so they
 differ by far more than rounding; the time per step hardly depends on the parameters' values.
+
+``--paths`` also times, in the same processes, ``gsfric.evaluate`` at N steps with fresh result
+arrays and into reused ones (``evaluate_quiet(buffers=...)``), and the README's control loop (a
+new ``Evaluator`` and ``forces`` on a 40-step motion: the median of 15 runs of 1000 calls), per
+CPU second; for a ``--ref`` that has these (e.g. the source a change started from)::
+
+    .venv/bin/python benchmarks/hot_path_history.py --ref 224f3ea --paths
 """
 
 from __future__ import annotations
@@ -61,7 +68,26 @@ for _ in range(calls):
     best = min(best, time.thread_time() - t0)
 if forces != "-":
     np.save(forces, out)
-print(json.dumps({"cpu_s": best}))
+res = {"cpu_s": best}
+if len(sys.argv) > 6:  # the paths around the hot path (a source with Evaluator.forces)
+    from gsfric.bench import _motion
+    motion = _motion(len(x))
+    def fastest(f, calls):
+        f()
+        times = []
+        for _ in range(calls):
+            t0 = time.thread_time()
+            f()
+            times.append(time.thread_time() - t0)
+        return times
+    res["evaluate_cpu_s"] = min(fastest(lambda: gsfric.evaluate(platform, motion), 5))
+    buffers = {}
+    res["reused_cpu_s"] = min(fastest(lambda: ev.evaluate_quiet(motion, buffers=buffers), 5))
+    m40 = _motion(40)
+    args = (m40.position, m40.rotation, m40.velocity, m40.omega, m40.acceleration, m40.alpha)
+    loop = fastest(lambda: [Evaluator(platform).forces(*args) for _ in range(1000)], 15)
+    res["control_40_cpu_s"] = sorted(loop)[len(loop) // 2] / 1000
+print(json.dumps(res))
 """
 
 
@@ -80,16 +106,16 @@ def _unpack(ref: str, workdir: Path) -> Path:
 
 
 def _run(source: Path, cache: Path, model: str, states: Path, calls: int,
-         forces: str = "-") -> float:
+         forces: str = "-", paths: bool = False) -> dict:
     env = dict(os.environ, GSFRIC_CACHE=str(cache), OMP_NUM_THREADS="1")
     env.pop("PYTHONPATH", None)
     env.pop("GSFRIC_GENERATED", None)
     run = subprocess.run([sys.executable, "-c", CHILD, str(source), model, str(states),
-                          str(calls), forces], env=env, capture_output=True, text=True,
-                         cwd=str(states.parent))
+                          str(calls), forces] + (["paths"] if paths else []), env=env,
+                         capture_output=True, text=True, cwd=str(states.parent))
     if run.returncode:
         raise SystemExit(f"{source} ({model}): {run.stderr.strip().splitlines()[-1]}")
-    return json.loads(run.stdout.strip().splitlines()[-1])["cpu_s"]
+    return json.loads(run.stdout.strip().splitlines()[-1])
 
 
 def main(argv=None) -> None:
@@ -99,6 +125,10 @@ def main(argv=None) -> None:
     parser.add_argument("--rounds", type=int, default=3)
     parser.add_argument("--calls", type=int, default=15)
     parser.add_argument("--workdir", type=Path, default=None)
+    parser.add_argument("--paths", action="store_true",
+                        help="also time gsfric.evaluate (fresh and reused arrays) and the "
+                             "README's 40-step control loop of each source (a --ref that has "
+                             "Evaluator.forces)")
     args = parser.parse_args(argv)
 
     commit = subprocess.run(["git", "-C", str(ROOT), "rev-parse", "--short", args.ref],
@@ -116,7 +146,7 @@ def main(argv=None) -> None:
     np.save(states, bench.states(args.steps))
 
     variants = {
-        f"{commit} default (paper model)": (old_src, old_cache, "default"),
+        f"{commit} reference_platform()": (old_src, old_cache, "default"),
         "current paper (actuator_posthoc)": (ROOT, new_cache, "paper"),
         "current coupled (actuator_coupled)": (ROOT, new_cache, "coupled"),
     }
@@ -131,13 +161,17 @@ def main(argv=None) -> None:
     old_f, new_f = (np.load(saved[n]) for n in names[:2])
     diff = float(np.max(np.abs(old_f - new_f) / (1.0 + np.abs(old_f))))
 
-    best = {name: np.inf for name in names}
+    keys = ("cpu_s", "evaluate_cpu_s", "reused_cpu_s", "control_40_cpu_s")
+    best = {name: dict.fromkeys(keys, np.inf) for name in names}
     for r in range(args.rounds):
         order = names if r % 2 == 0 else names[::-1]
         for name in order:
-            best[name] = min(best[name], _run(*variants[name], states, args.calls))
-            print(f"round {r + 1}: {name}: {args.steps / best[name] / 1e6:.3f} M steps per "
-                  f"CPU second (best so far)", file=sys.stderr, flush=True)
+            res = _run(*variants[name], states, args.calls, paths=args.paths)
+            for key, value in res.items():
+                best[name][key] = min(best[name][key], value)
+            print(f"round {r + 1}: {name}: {res}", file=sys.stderr, flush=True)
+    timings = best
+    best = {name: timings[name]["cpu_s"] for name in names}
     base = best[names[0]]
     print(f"hot path Evaluator.actuator_forces(x, out), N = {args.steps:,}, one thread; "
           f"{commit} against {head}; steps per CPU second, best of {args.rounds} interleaved "
@@ -146,7 +180,16 @@ def main(argv=None) -> None:
         print(f"  {name:<36} {args.steps / best[name] / 1e6:6.3f} M   "
               f"{base / best[name]:.2f}x {commit}")
     print(f"  forces of {names[0]} against current paper: largest |difference| / (1 N + |F|) "
-          f"= {diff:.1e}")
+          f"= {diff:.1e} (a different platform unless the earlier default is the same)")
+    if args.paths:
+        print(f"paths (best of the rounds; per CPU second): gsfric.evaluate N = {args.steps:,} "
+              "fresh arrays / into reused arrays (evaluate_quiet(buffers=...)), and the README's "
+              "control loop (new Evaluator + forces, 40 steps, median of 15 x 1000 calls)")
+        for name in names:
+            t = timings[name]
+            print(f"  {name:<36} evaluate {args.steps / t['evaluate_cpu_s'] / 1e6:.3f} M, "
+                  f"reused {args.steps / t['reused_cpu_s'] / 1e6:.3f} M, control loop "
+                  f"{t['control_40_cpu_s'] * 1e6:.2f} us")
 
 
 if __name__ == "__main__":

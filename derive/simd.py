@@ -26,8 +26,11 @@ Step s reads input 0 at ``in[0] + s * in_stride[0]`` and every other input k at 
 (its stride must be 0: the caller uses CasADi's per-step function otherwise), and writes
 output j at ``out[j] + s * out_stride[j]`` (a NULL output is skipped). A group of steps is
 read into, and its outputs written from, small transposed arrays (one vector per entry) by
-short loops, which keeps the loop body's code small. Unless ``bad`` is NULL, ``bad[s]`` is set
-to 1 where some output of step s is infinite or NaN, else 0.
+short loops, which keeps the loop body's code small. With 8 lanes on AVX-512, a full group's
+rows of an output (8 steps x its size, contiguous when its stride is its size) are written as
+whole 64-byte vectors gathered from the transposed array (``v_store_rows``), non-temporal when
+the batch is long and the output starts on a 64-byte boundary. Unless ``bad`` is NULL,
+``bad[s]`` is set to 1 where some output of step s is infinite or NaN, else 0.
 """
 
 from __future__ import annotations
