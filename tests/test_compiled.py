@@ -324,3 +324,62 @@ def test_control_loop_calls_read_views_and_slices_as_the_general_call(rng):
         ev.forces(*parts[:1], parts[1][:-1], *parts[2:])
     with pytest.raises(GsfricError, match="out must be"):
         ev.forces(*parts, out=np.empty((40, 5)))
+
+
+def _offset_empty(n, size, offset):
+    """An uninitialised C-contiguous (n, size) float64 array whose data starts ``offset``
+    bytes (a multiple of 8) past a 64-byte boundary."""
+    raw = np.empty(n * size + 16)
+    start = (-raw.ctypes.data % 64 + offset) // 8
+    return raw[start:start + n * size].reshape(n, size)
+
+
+@pytest.mark.parametrize("n, threads", [(37, 1), (4096 + 13, 1), (2 * 4096 + 21, 2)])
+def test_vector_row_stores_equal_the_scalar_ones(rng, n, threads):
+    """A full group's output rows are written with vector stores into 64-byte aligned outputs
+    (streamed past the caches from 4096 steps on) and row by row otherwise: the numbers are the
+    same bit for bit, the partial last group and the second thread's range included."""
+    motion = _motion_with_bad_steps(rng, n)
+    ev = Evaluator(perturbed_platform(rng), n_threads=threads)
+    from gsfric.evaluation import state_array
+
+    x = state_array(motion)
+    f = ev._full
+    results = []
+    for offset in (0, 8, 24):
+        outs = {name: _offset_empty(n, size, offset) for name, size, _ in f.outputs}
+        flag = np.empty(n, dtype=np.int64)
+        f([x, ev.P, ev.Q], outs, threads, flags=ev.flag_spec(), flag=flag)
+        results.append((outs, flag))
+    (aligned, flag0), others = results[0], results[1:]
+    assert (flag0 & 1).any() and np.isfinite(aligned["F"][flag0 == 0]).all()
+    for outs, flag in others:
+        np.testing.assert_array_equal(flag, flag0)
+        for name in aligned:
+            np.testing.assert_array_equal(outs[name], aligned[name], err_msg=name)
+
+
+def test_evaluate_keeps_c_contiguous_aligned_result_arrays(rng):
+    """Result arrays keep their public shapes, C-contiguous, on 64-byte boundaries (whole
+    lines for the vector stores), fresh and reused alike."""
+    motion = models.random_motion(rng, np.linspace(0.0, 1.0, 101))
+    ev = Evaluator(models.reference_platform())
+    fresh = ev.evaluate_quiet(motion)
+    reused = ev.evaluate_quiet(motion, buffers={})
+    for result in (fresh, reused):
+        for name, value in result.arrays.kept().items():
+            assert value.flags.c_contiguous and value.ctypes.data % 64 == 0, name
+        assert result.F.shape == (101, 6) and result.R_E.shape == (101, 6, 3)
+        np.testing.assert_array_equal(result.F, fresh.F)
+
+
+@pytest.mark.skipif(sys.implementation.name != "cpython", reason="reads CPython's tuples")
+def test_control_loop_calls_pass_their_arrays_as_one_tuple():
+    """On CPython the bound calls hand C one tuple of arrays (fewest ctypes conversions):
+    the library reads the tuple's items as Python does."""
+    lib = native._library()
+    if lib is None:
+        pytest.skip("no compiled library")
+    assert native._tuples_readable(lib)
+    t = (np.zeros(2), np.ones((3, 4)), None)
+    assert [lib.gsfric_tuple_item(t, k) for k in range(3)] == [id(v) for v in t]
