@@ -13,7 +13,8 @@ runs in a fresh process with its own source first on ``sys.path``:
 * ``<ref> default``: the earlier source's ``reference_platform()`` (at ``ef651e9`` its default
   friction model was the paper's post-hoc one);
 * ``current paper``: this source's ``reference_platform("paper")`` (``actuator_posthoc``);
-* ``current coupled``: this source's ``reference_platform()`` (``actuator_coupled``).
+* ``current coupled``: this source's ``reference_platform()`` (``actuator_coupled``);
+* with ``--ref-paper``, ``<ref> paper``: the earlier source's ``reference_platform("paper")``.
 
 Each process times ``Evaluator(platform).actuator_forces(x, out)`` on one thread at N steps of
 the same states (one array, written once by this script), ``--calls`` calls, and reports the
@@ -125,6 +126,9 @@ def main(argv=None) -> None:
     parser.add_argument("--rounds", type=int, default=3)
     parser.add_argument("--calls", type=int, default=15)
     parser.add_argument("--workdir", type=Path, default=None)
+    parser.add_argument("--ref-paper", action="store_true",
+                        help="also time the earlier source's reference_platform(\"paper\") "
+                             "(a --ref whose reference_platform takes the friction model)")
     parser.add_argument("--paths", action="store_true",
                         help="also time gsfric.evaluate (fresh and reused arrays) and the "
                              "README's 40-step control loop of each source (a --ref that has "
@@ -150,6 +154,8 @@ def main(argv=None) -> None:
         "current paper (actuator_posthoc)": (ROOT, new_cache, "paper"),
         "current coupled (actuator_coupled)": (ROOT, new_cache, "coupled"),
     }
+    if args.ref_paper:
+        variants[f"{commit} paper"] = (old_src, old_cache, "paper")
     # a first pass builds (or finds) each source's library and keeps the forces to compare
     names = list(variants)
     saved = {}
@@ -157,7 +163,8 @@ def main(argv=None) -> None:
         src, cache, model = variants[name]
         saved[name] = workdir / f"forces-{model}-{'old' if src != ROOT else 'new'}.npy"
         _run(src, cache, model, states, 1, str(saved[name]))
-    _run(*variants[names[2]], states, 1)
+    for name in names[2:]:
+        _run(*variants[name], states, 1)
     old_f, new_f = (np.load(saved[n]) for n in names[:2])
     diff = float(np.max(np.abs(old_f - new_f) / (1.0 + np.abs(old_f))))
 
