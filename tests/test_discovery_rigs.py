@@ -372,3 +372,66 @@ def test_large_and_small_delays_are_recovered(family, delay, platform, noise, ph
     assert found == pytest.approx(delay, abs=0.02 * abs(delay) + 1e-4)
     true_noise = float(np.sqrt(np.mean(data.noise ** 2)))
     assert result.rms_after <= 1.15 * true_noise
+
+
+def test_time_offset_columns_computed_when_asked_equal_the_held_ones():
+    """The time_offset secant columns computed from the shifted forces when asked for
+    (``Columns``) give the design, the prewhitened blocks, the screening and the whole
+    discovery of the reference path that holds them in the array."""
+    from gsfric.discovery import statistics as st
+    from gsfric.discovery.residuals import Columns, Problem
+    from gsfric.discovery.selection import screen_candidates
+    from gsfric.discovery.settings import Settings
+
+    data = synthesize(PAPER, ["time_offset:delay=0.02", "seal_friction:force=1.5"],
+                      motion=_smooth_motion("chirps", 3, samples=2000), noise=0.1,
+                      noise_correlation=0.6, pose_noise=1e-5, seed=4)
+    motion, forces, poses = recorded(data)
+    problem = Problem(motion, forces, data.model, Settings(n_threads=1), poses=poses)
+    theta = problem.model.theta0
+    designs = []
+    for lazy in (False, True):
+        problem.lazy = lazy
+        designs.append(problem.linearise(theta, [], problem.candidates))
+    held, lazy = designs
+    assert isinstance(lazy.X, Columns) and not isinstance(held.X, Columns)
+    assert lazy.X.shape == held.X.shape and lazy.X.stored.shape[2] == held.X.shape[2] - 10
+    assert lazy.names == held.names and lazy.variants == held.variants
+    # the same numbers: the shifted forces of the compiled force map, as the secant's
+    # evaluation gives them
+    assert np.array_equal(lazy.X[:, :, list(range(held.X.shape[2]))], held.X)
+    assert np.array_equal(lazy.X[100:300], held.X[100:300])
+    assert np.array_equal(lazy.X[:, :, -1], held.X[:, :, -1])
+    assert np.array_equal(lazy.X[:, :, [0, -3]], held.X[:, :, [0, -3]])
+    # cross-products summed by chunks: to 1e-12 of their Cauchy-Schwarz scale
+    d = np.sqrt(np.diag(held.XtX))
+    assert np.all(np.abs(lazy.XtX - held.XtX) <= 1e-12 * np.outer(d, d))
+    assert np.all(np.abs(lazy.Xtr - held.Xtr) <= 1e-12 * d * np.sqrt(held.rtr))
+    w = st.Whitener.fit(held.r, valid=problem.sliding)
+    a = st.Blocks.whitened(w, lazy.X, lazy.r, 10)
+    b = st.Blocks.whitened(w, held.X, held.r, 10)
+    assert np.array_equal(a.XtX, b.XtX) and np.array_equal(a.Xtz, b.Xtz)
+    sa = screen_candidates(problem, lazy, w, problem.candidates)
+    sb = screen_candidates(problem, held, w, problem.candidates)
+    for name, test in sb.tests.items():
+        assert sa.tests[name].significant == test.significant
+        assert sa.variant[name] == sb.variant[name]
+        assert sa.tests[name].F == pytest.approx(test.F, rel=1e-9, abs=1e-9)
+    results = []
+    for lazy_path in (False, True):
+        import gsfric.discovery.residuals as residuals
+
+        original = residuals.Problem.__init__
+
+        def init(self, *args, _lazy=lazy_path, **kw):
+            original(self, *args, **kw)
+            self.lazy = _lazy
+
+        residuals.Problem.__init__ = init
+        try:
+            results.append(discover(motion, forces, data.model, poses=poses, n_bootstrap=20,
+                                    n_threads=1))
+        finally:
+            residuals.Problem.__init__ = original
+    assert results[0].names == results[1].names
+    assert results[1].rms_after == pytest.approx(results[0].rms_after, rel=1e-9)
