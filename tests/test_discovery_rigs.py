@@ -358,7 +358,7 @@ def _smooth_motion(family: str, seed: int, samples: int = 3000, rate: float = 20
     ("chirps", 0.0023, COUPLED, 0.05, 0.9),     # half a sample
 ])
 def test_large_and_small_delays_are_recovered(family, delay, platform, noise, phi):
-    """The delay's estimate is global (a profile over +-0.25 s, then Gauss-Newton): delays of
+    """The delay's estimate is global (a profile over +-0.5 s, then Gauss-Newton): delays of
     many samples and fractions of one, either sign, are recovered, and the residual left is
     the noise (before: a delay of 2.5 samples under AR(0.95) noise on the coupled model was
     refined to a local optimum where viscous friction took part of the shifted force, 5.8x

@@ -417,12 +417,12 @@ def refine(problem: Problem, theta: np.ndarray, names: list[str], whitener: st.W
 
 DELAY = "time_offset.delay"
 
-DELAY_RANGE = 0.25
+DELAY_RANGE = 0.5
 """Half-width (s) of the delays the profile of ``delay_profile`` searches (capped by the
 candidate's bounds and a quarter of the record): the largest plausible delay between the pose
 and force channels of a rig (buffering, filters, clock offsets)."""
 
-DELAY_GRID = 100
+DELAY_GRID = 200
 """Number of steps of the profile's coarse grid over +-``DELAY_RANGE`` (never finer than one
 sample)."""
 
@@ -439,8 +439,9 @@ def delay_profile(problem: Problem, theta: np.ndarray, names: list[str],
     and masses take over part of the shifted force. Here the forces and the derivatives of the
     other parameters are computed once at zero delay and shifted, so each point of the
     profile costs a shift and a small bounded least-squares fit: a coarse grid of
-    ``DELAY_GRID`` steps (at least one sample) over +-``DELAY_RANGE`` (and the current value),
-    then a bounded scalar search within one grid step either side of the best point.
+    ``DELAY_GRID`` steps (at least one sample) over +-``DELAY_RANGE``, then a bounded scalar
+    search within one grid step either side of the best point; the current value is kept
+    unless the profile's minimum is lower.
 
     Returns
     -------
@@ -483,7 +484,7 @@ def delay_profile(problem: Problem, theta: np.ndarray, names: list[str],
     dt = float(np.median(np.diff(t)))
     h = max(dt, (d_hi - d_lo) / DELAY_GRID)
     delays = np.arange(d_lo, d_hi + 0.5 * h, h)
-    current = float(np.clip(theta[j], d_lo, d_hi))
+    current = float(theta[j])
     profile = np.array([value(float(d))[0] for d in delays])
     best = float(delays[int(np.argmin(profile))])
     found = minimize_scalar(lambda d: value(d)[0], bounds=(max(d_lo, best - h),
