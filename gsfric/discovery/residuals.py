@@ -101,7 +101,7 @@ class Columns:
             return self.rows(rows, [cols])[:, :, 0]
         return self.rows(rows, cols)
 
-    def chunks(self, size: int = 20000):
+    def chunks(self, size: int = 2000):
         """Row slices of at most ``size`` samples covering the columns."""
         m = self.shape[0]
         for a in range(0, m, size):
@@ -212,12 +212,18 @@ class Problem:
         from gsfric.evaluation import PRISMATIC_EPS
 
         t = np.asarray(motion.t, float)
+        recorded = poses is not None
         if poses is None:
             poses = (np.asarray(motion.position, float), np.asarray(motion.rotation, float))
         uniform = np.ptp(np.diff(t)) <= 1e-6 * np.mean(np.diff(t))
         sigma_v, self.reach = np.zeros((n, 6)), np.zeros(n, int)
         if uniform:
-            gain, self.reach = rest.differentiator(*poses)
+            # the filters the motion was differentiated with, when it was made from these
+            # samples (not chosen a second time)
+            filters = motion.sample_filters() if recorded else None
+            if filters is not None and len(filters[0][0][0]) != n:
+                filters = None
+            gain, self.reach = rest.differentiator(*poses, filters=filters)
             sigma_v = rest.speed_uncertainty(platform, t, *poses, gain=gain)
         else:
             # jittered times: the smoothing splines' own noise gain, on divided differences
