@@ -499,7 +499,9 @@ def delay_profile(problem: Problem, theta: np.ndarray, names: list[str],
         _, step = value(delay)
         new = theta.copy()
         new[j] = delay
-        new[cols] = theta[cols] + step
+        # within the bounds exactly (the step's bounds were relative to theta: rounding)
+        bounds = np.array([problem.bounds(n) for n in others]).reshape(-1, 2)
+        new[cols] = np.clip(theta[cols] + step, bounds[:, 0], bounds[:, 1])
         out.update(theta=new, delay=delay, sse=sse_best)
     return out
 
