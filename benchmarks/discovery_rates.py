@@ -225,6 +225,8 @@ def main():
                     help="only cases of these motion families")
     ap.add_argument("--effects", nargs="+", default=None, choices=CANDIDATE_NAMES,
                     help="only single and pair cases with these effects")
+    ap.add_argument("--seeds", nargs="+", type=int, default=None,
+                    help="only the cases of these seeds (as printed by --verbose)")
     ap.add_argument("--verbose", action="store_true",
                     help="one line per case: names, verdict, rms_after over the noise")
     ap.add_argument("--memory", type=int, default=None, metavar="N",
@@ -245,6 +247,8 @@ def main():
         todo = [c for c in todo if c[2] in a.families]
     if a.effects:
         todo = [c for c in todo if c[0] not in ("single", "pair") or set(c[1]) & set(a.effects)]
+    if a.seeds:
+        todo = [c for c in todo if c[6] in a.seeds]
     rows = defaultdict(lambda: [0, 0, 0.0, 0.0, 0])
     start = time.time()
     confident = []     # out-of-catalog cases given a catalog name with the verdict "explained"

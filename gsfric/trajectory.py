@@ -744,9 +744,9 @@ class Motion:
         uniform = np.all(np.abs(steps - mean_step) <= UNIFORM_RTOL * mean_step)
         if uniform:
             if window is None:
-                p0, p1, p2 = _savgol_adaptive(position, motion_filters(position, polyorder),
-                                              mean_step)
-                q0, q1, q2 = _savgol_adaptive(q, motion_filters(q, polyorder), mean_step)
+                filters = (motion_filters(position, polyorder), motion_filters(q, polyorder))
+                p0, p1, p2 = _savgol_adaptive(position, filters[0], mean_step)
+                q0, q1, q2 = _savgol_adaptive(q, filters[1], mean_step)
             else:
                 _check_window(window, polyorder, n)
                 p0, p1, p2 = _savgol(position, window, polyorder, mean_step)
@@ -770,7 +770,20 @@ class Motion:
         if not all(np.isfinite(r).all() for r in results):
             raise InputError("differentiation gave non-finite values (values or time steps "
                              "out of range)")
-        return cls(t, p0, rotation, p1, omega, p2, alpha)
+        motion = cls(t, p0, rotation, p1, omega, p2, alpha)
+        if uniform and window is None:
+            object.__setattr__(motion, "_filters", (int(polyorder), filters))
+        return motion
+
+    def sample_filters(self, polyorder: int = DEFAULT_POLYORDER):
+        """The per-sample Savitzky-Golay filters ``from_samples`` chose for this motion
+        (``motion_filters`` of the position and of the quaternion: ``(position, quaternion)``,
+        each ``((orders, windows), (orders, windows))`` of arrays (N,)), or None: a motion not
+        made by ``from_samples`` with chosen filters of order ``polyorder``, or a slice."""
+        chosen = getattr(self, "_filters", None)
+        if chosen is None or chosen[0] != int(polyorder):
+            return None
+        return chosen[1]
 
     def slice(self, start: int | None = None, stop: int | None = None) -> Motion:
         """Steps ``start:stop`` (Python slice semantics) as a new Motion (at least one step)."""

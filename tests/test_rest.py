@@ -133,3 +133,26 @@ def test_seal_force_on_a_jittered_log_with_rests_is_named():
     assert result.names == ["seal_friction"]
     assert result.noise["not_sliding_share"] > 0.25
     assert result.rms_after < 1.15 * float(np.sqrt(np.mean(data.noise ** 2)))
+
+
+def test_differentiator_from_the_motions_own_filters():
+    """The gains and reaches from the filters ``Motion.from_samples`` chose for the recorded
+    samples are those chosen again from the recorded poses (the filters are chosen once)."""
+    platform = reference_platform(friction_model="paper")
+    data = synthesize(platform, motion=point_to_point(np.random.default_rng(5), 3000),
+                      noise=0.1, pose_noise=1e-5, seed=5)
+    fr = data.frame
+    position = fr[["x", "y", "z"]].to_numpy()
+    estimate = Motion.from_samples(fr.t.to_numpy(), position,
+                                   quaternion=fr[["qw", "qx", "qy", "qz"]].to_numpy())
+    _, rotation = poses_from_columns(fr)
+    filters = estimate.sample_filters()
+    assert filters is not None and estimate.slice(0, 100).sample_filters() is None
+    assert estimate.sample_filters(polyorder=2) is None
+    again = differentiator(position, rotation)
+    once = differentiator(position, rotation, filters=filters)
+    assert np.array_equal(again[0], once[0]) and np.array_equal(again[1], once[1])
+    # a motion given its own window chose none
+    fixed = Motion.from_samples(fr.t.to_numpy(), position, window=31,
+                                quaternion=fr[["qw", "qx", "qy", "qz"]].to_numpy())
+    assert fixed.sample_filters() is None

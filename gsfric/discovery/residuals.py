@@ -25,6 +25,88 @@ from gsfric.errors import InputError
 from gsfric.platform import Platform
 from gsfric.trajectory import MAX_AUTO_WINDOW, Motion
 
+DELAY = "time_offset.delay"
+
+
+class Columns:
+    """The design's derivative columns, (M, 6, k), over the used samples.
+
+    Columns that need the compiled model are held in an array (``stored``, the first
+    ``stored.shape[2]`` columns); the secant columns of ``time_offset`` are not: a delay only
+    shifts the model's forces in time (``gsfric.catalog``), so each such column,
+    ``(F(t - delay) - F(t)) / size`` times the sliding weight, is computed from the forces F
+    of the whole record (N, 6) for the rows asked for, when asked for (``base``, (M, 6): F(t)
+    over the used samples, default F's). The largest array of a
+    round then holds only the columns that cost a model evaluation.
+
+    Indexing as an array: ``columns[a:b]`` gives rows a..b of every column, (b - a, 6, k);
+    ``columns[:, :, j]`` one column (M, 6), ``columns[:, :, [j, ...]]`` several.
+    """
+
+    ndim = 3
+
+    def __init__(self, stored: np.ndarray, t: np.ndarray, F: np.ndarray, used: slice,
+                 weight: np.ndarray, delays: Sequence[tuple[float, float]] = (),
+                 base: np.ndarray | None = None) -> None:
+        self.stored = stored
+        self.t = t
+        self.F = F
+        self.base = F[used] if base is None else base
+        self.used = used
+        self.weight = weight
+        self.delays = [(float(d), float(size)) for d, size in delays]
+
+    @property
+    def shape(self) -> tuple[int, int, int]:
+        m, legs, k = self.stored.shape
+        return (m, legs, k + len(self.delays))
+
+    def _shifted(self, j: int, rows: slice) -> np.ndarray:
+        delay, size = self.delays[j]
+        r0, r1, _ = rows.indices(self.stored.shape[0])
+        g0 = self.used.start + r0
+        g1 = self.used.start + r1
+        x = self.t[g0:g1] - delay
+        out = np.empty((g1 - g0, self.F.shape[1]))
+        for i in range(self.F.shape[1]):
+            out[:, i] = np.interp(x, self.t, self.F[:, i])
+        out -= self.base[r0:r1]
+        out /= size
+        out *= self.weight[r0:r1]
+        return out
+
+    def rows(self, rows: slice, cols: Sequence[int] | None = None) -> np.ndarray:
+        """Columns ``cols`` (default all) at ``rows``, (m, 6, len(cols))."""
+        k0 = self.stored.shape[2]
+        k = self.shape[2]
+        cols = list(range(k)) if cols is None else [int(c) % k for c in cols]
+        if all(c < k0 for c in cols):
+            if cols == list(range(k0)):
+                return self.stored[rows]
+            return self.stored[rows][:, :, cols]
+        m = len(range(*rows.indices(self.stored.shape[0])))
+        out = np.empty((m, self.stored.shape[1], len(cols)))
+        for k, c in enumerate(cols):
+            out[:, :, k] = self.stored[rows][:, :, c] if c < k0 else self._shifted(c - k0,
+                                                                                  rows)
+        return out
+
+    def __getitem__(self, key):
+        if isinstance(key, slice):
+            return self.rows(key)
+        rows, legs, cols = key
+        if not isinstance(rows, slice) or legs != slice(None):
+            raise IndexError("Columns: index as [a:b] or [:, :, columns]")
+        if np.ndim(cols) == 0:
+            return self.rows(rows, [cols])[:, :, 0]
+        return self.rows(rows, cols)
+
+    def chunks(self, size: int = 2000):
+        """Row slices of at most ``size`` samples covering the columns."""
+        m = self.shape[0]
+        for a in range(0, m, size):
+            yield slice(a, min(m, a + size))
+
 
 @dataclass
 class Design:
@@ -38,7 +120,7 @@ class Design:
 
     theta: np.ndarray
     r: np.ndarray                 # (M, 6) residual at theta
-    X: np.ndarray                 # (M, 6, k) derivative columns
+    X: np.ndarray | Columns       # (M, 6, k) derivative columns
     names: list[str]              # Jacobian parameter of each column
     lower: np.ndarray             # bounds of the step from theta, per column
     upper: np.ndarray
@@ -53,10 +135,20 @@ class Design:
     def __post_init__(self) -> None:
         if self.signs is None:
             self.signs = np.ones(len(self.names))
-        X = self.X.reshape(-1, self.X.shape[2])
+        if isinstance(self.X, np.ndarray):
+            X = self.X.reshape(-1, self.X.shape[2])
+            r = self.r.reshape(-1)
+            self.XtX = np.einsum("ik,il->kl", X, X)
+            self.Xtr = np.einsum("ik,i->k", X, r)
+        else:
+            k = self.X.shape[2]
+            self.XtX, self.Xtr = np.zeros((k, k)), np.zeros(k)
+            for rows in self.X.chunks():
+                X = self.X[rows].reshape(-1, k)
+                r = self.r[rows].reshape(-1)
+                self.XtX += np.einsum("ik,il->kl", X, X)
+                self.Xtr += np.einsum("ik,i->k", X, r)
         r = self.r.reshape(-1)
-        self.XtX = np.einsum("ik,il->kl", X, X)
-        self.Xtr = np.einsum("ik,i->k", X, r)
         self.rtr = float(r @ r)
 
 
@@ -102,6 +194,9 @@ class Problem:
                 raise InputError(f"candidates: unknown effect {name!r}"
                                  f"{suggest(name, CANDIDATE_NAMES)}")
         self.settings = settings
+        self.lazy = True
+        """Whether ``linearise`` computes the time_offset secant columns when asked for
+        (``Columns``) rather than holding them (the reference path, for the tests)."""
         self.used = slice(trim, n - trim)
         threads = settings.n_threads or os.cpu_count() or 1
         self.model = ParametricModel(platform, motion, n_threads=threads)
@@ -117,12 +212,18 @@ class Problem:
         from gsfric.evaluation import PRISMATIC_EPS
 
         t = np.asarray(motion.t, float)
+        recorded = poses is not None
         if poses is None:
             poses = (np.asarray(motion.position, float), np.asarray(motion.rotation, float))
         uniform = np.ptp(np.diff(t)) <= 1e-6 * np.mean(np.diff(t))
         sigma_v, self.reach = np.zeros((n, 6)), np.zeros(n, int)
         if uniform:
-            gain, self.reach = rest.differentiator(*poses)
+            # the filters the motion was differentiated with, when it was made from these
+            # samples (not chosen a second time)
+            filters = motion.sample_filters() if recorded else None
+            if filters is not None and len(filters[0][0][0]) != n:
+                filters = None
+            gain, self.reach = rest.differentiator(*poses, filters=filters)
             sigma_v = rest.speed_uncertainty(platform, t, *poses, gain=gain)
         else:
             # jittered times: the smoothing splines' own noise gain, on divided differences
@@ -224,7 +325,7 @@ class Problem:
             variants[c.name] = [list(range(k, k + len(c.columns)))]
             grid[c.name] = [{}]
             k += len(c.columns)
-        steps, owners, sizes = [], [], []
+        steps, owners, sizes, delays = [], [], [], []
         for c in candidates:
             if not c.stepped:
                 continue
@@ -238,19 +339,31 @@ class Problem:
                 for gname, v in values.items():
                     step[index[f"{c.name}.{gname}"]] = v
                 step[index[amp]] += sign * size
-                steps.append(step)
-                sizes.append(size)
+                if self.lazy and amp == DELAY and theta[index[amp]] == 0.0:
+                    # a shift of F in time: computed when asked for (``Columns``)
+                    delays.append((sign * size, size))
+                else:
+                    steps.append(step)
+                    sizes.append(size)
                 variants[c.name].append([k])
                 grid[c.name].append(values)
                 names.append(amp)
                 signs.append(sign)
                 owners.append(c.name)
                 k += 1
-        X = np.empty((len(self.y), 6, len(names)))
+        if delays and owners[-len(delays):] != [DELAY.split(".")[0]] * len(delays):
+            raise AssertionError("the time_offset secant columns must come last")
+        X = np.empty((len(self.y), 6, len(names) - len(delays)))
         F, _ = self.model.jacobian(theta, columns, rows=self.used,
                                    out=X[:, :, :len(columns)])
         for j, step in enumerate(steps):
             X[:, :, len(columns) + j] = (self.model.forces(step) - F)[self.used] / sizes[j]
+        X *= self.weight[:, :, None]
+        if delays:
+            # the forces at theta as the compiled model's force map gives them (what a
+            # secant's model evaluation would shift), against F of the Jacobian's pass
+            X = Columns(X, np.asarray(self.model.t, float), self.model.forces(theta),
+                        self.used, self.weight, delays, base=F[self.used])
         signs = np.array(signs)
         lower = np.empty(len(names))
         upper = np.empty(len(names))
@@ -262,6 +375,5 @@ class Problem:
                 lo, hi = (lo, hi) if signs[j] > 0 else (-hi, -lo)
                 lo = max(lo, 0.0)
             lower[j], upper[j] = lo, hi
-        X *= self.weight[:, :, None]
         return Design(theta, self.mask(self.y - F[self.used]), X, names, lower, upper,
                        list(range(len(refit))), variants, grid, signs)

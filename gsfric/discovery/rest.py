@@ -65,10 +65,12 @@ def leg_lengths(platform, position: np.ndarray, rotation: np.ndarray) -> np.ndar
                           axis=2)
 
 
-def differentiator(position: np.ndarray, rotation: np.ndarray, polyorder: int | None = None
-                   ) -> tuple[np.ndarray, np.ndarray]:
+def differentiator(position: np.ndarray, rotation: np.ndarray, polyorder: int | None = None,
+                   filters=None) -> tuple[np.ndarray, np.ndarray]:
     """The velocity filters ``Motion.from_samples`` chooses at each sample for the recorded
-    positions (N, 3) and orientations (N, 3, 3) (``trajectory.motion_filters``).
+    positions (N, 3) and orientations (N, 3, 3) (``trajectory.motion_filters``), or their
+    gains and reaches from the ``filters`` it chose (``Motion.sample_filters``: the motion
+    made from these poses), without choosing them again.
 
     Returns
     -------
@@ -83,10 +85,13 @@ def differentiator(position: np.ndarray, rotation: np.ndarray, polyorder: int | 
                                    quaternion_from_rotation)
 
     polyorder = DEFAULT_POLYORDER if polyorder is None else int(polyorder)
-    q = _continuous(quaternion_from_rotation(np.asarray(rotation, float)))
+    if filters is None:
+        q = _continuous(quaternion_from_rotation(np.asarray(rotation, float)))
+        filters = [motion_filters(signal, polyorder) for signal in
+                   (np.asarray(position, float), q)]
     gains, reaches = [], []
-    for signal in (np.asarray(position, float), q):
-        orders, windows = motion_filters(signal, polyorder)[0]
+    for chosen in filters:
+        orders, windows = chosen[0]
         gain = np.empty(len(windows))
         for p, w in np.unique(np.stack([orders, windows], axis=1), axis=0):
             rows = (orders == p) & (windows == w)

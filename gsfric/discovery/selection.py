@@ -381,6 +381,10 @@ def refine(problem: Problem, theta: np.ndarray, names: list[str], whitener: st.W
     theta = theta.copy()
     inside = bool(np.all((theta[cols] >= lo) & (theta[cols] <= hi)))
     theta[cols] = np.clip(theta[cols], lo, hi)
+    if DELAY in names:
+        profiled = delay_profile(problem, theta, names, whitener)
+        if profiled["theta"] is not None:
+            theta, inside = profiled["theta"], False
 
     def at(th):
         F, J = model.jacobian(th, names, rows=problem.used)
@@ -409,6 +413,97 @@ def refine(problem: Problem, theta: np.ndarray, names: list[str], whitener: st.W
         if gain < 1e-5:
             break
     return theta, r, J
+
+
+DELAY = "time_offset.delay"
+
+DELAY_RANGE = 0.5
+"""Half-width (s) of the delays the profile of ``delay_profile`` searches (capped by the
+candidate's bounds and a quarter of the record): the largest plausible delay between the pose
+and force channels of a rig (buffering, filters, clock offsets)."""
+
+DELAY_GRID = 200
+"""Number of steps of the profile's coarse grid over +-``DELAY_RANGE`` (never finer than one
+sample)."""
+
+
+def delay_profile(problem: Problem, theta: np.ndarray, names: list[str],
+                  whitener: st.Whitener) -> dict:
+    """The global estimate of ``time_offset.delay``: the profile of the prewhitened residual
+    sum of squares over the delay, the other parameters of ``names`` refitted linearly at each.
+
+    F depends on the delay only through a shift of the model's forces in time (``catalog``:
+    linear interpolation), which moves friction steps and load peaks by whole samples: the
+    sum of squares is a rough, many-valleyed function of the delay, and a Gauss-Newton step
+    from a secant's estimate stops in the nearest valley while the refitted viscous friction
+    and masses take over part of the shifted force. Here the forces and the derivatives of the
+    other parameters are computed once at zero delay and shifted, so each point of the
+    profile costs a shift and a small bounded least-squares fit: a coarse grid of
+    ``DELAY_GRID`` steps (at least one sample) over +-``DELAY_RANGE``, then a bounded scalar
+    search within one grid step either side of the best point; the current value is kept
+    unless the profile's minimum is lower.
+
+    Returns
+    -------
+    dict
+        ``theta`` (the parameters at the profile's minimum, the others stepped by their linear
+        refit; None when the current value is already best), ``delay`` (s), ``sse`` and
+        ``sse_current`` (prewhitened sums of squares at the minimum and at the current delay),
+        ``delays`` and ``profile`` (the coarse grid and its sums of squares).
+    """
+    from scipy.optimize import minimize_scalar
+
+    from gsfric.catalog import _shift as shift
+
+    model = problem.model
+    j = model.index[DELAY]
+    others = [n for n in names if n != DELAY]
+    cols = [model.index[n] for n in others]
+    lo = np.array([problem.bounds(n)[0] for n in others]) - theta[cols]
+    hi = np.array([problem.bounds(n)[1] for n in others]) - theta[cols]
+    d_lo, d_hi = problem.bounds(DELAY)
+    t = model.t
+    span = min(DELAY_RANGE, 0.25 * float(t[-1] - t[0]))
+    d_lo, d_hi = max(d_lo, -span), min(d_hi, span)
+    at_zero = theta.copy()
+    at_zero[j] = 0.0
+    F, J = model.jacobian(at_zero, others)
+    n, k = len(t), len(others)
+    FJ = np.concatenate([F[:, :, None], J], axis=2).reshape(n, -1)
+    del F, J
+    used, weight = problem.used, problem.weight
+
+    def value(d: float) -> tuple[float, np.ndarray]:
+        moved = shift(t, FJ, d)[used].reshape(-1, 6, k + 1)
+        r = problem.mask(problem.y - moved[:, :, 0])
+        X = moved[:, :, 1:] * weight[:, :, None]
+        A, b, c, _ = st.Blocks.whitened(whitener, X, r, 1).total()
+        step = st.solve(A, b, lo, hi)
+        return st.sse(A, b, c, step), step
+
+    dt = float(np.median(np.diff(t)))
+    h = max(dt, (d_hi - d_lo) / DELAY_GRID)
+    delays = np.arange(d_lo, d_hi + 0.5 * h, h)
+    current = float(theta[j])
+    profile = np.array([value(float(d))[0] for d in delays])
+    best = float(delays[int(np.argmin(profile))])
+    found = minimize_scalar(lambda d: value(d)[0], bounds=(max(d_lo, best - h),
+                                                           min(d_hi, best + h)),
+                            method="bounded", options={"xatol": 1e-3 * dt})
+    candidates = [(float(profile.min()), best), (float(found.fun), float(found.x))]
+    sse_current = value(current)[0]
+    sse_best, delay = min(candidates)
+    out = {"theta": None, "delay": current, "sse": sse_current, "sse_current": sse_current,
+           "delays": delays, "profile": profile}
+    if sse_best < sse_current:
+        _, step = value(delay)
+        new = theta.copy()
+        new[j] = delay
+        # within the bounds exactly (the step's bounds were relative to theta: rounding)
+        bounds = np.array([problem.bounds(n) for n in others]).reshape(-1, 2)
+        new[cols] = np.clip(theta[cols] + step, bounds[:, 0], bounds[:, 1])
+        out.update(theta=new, delay=delay, sse=sse_best)
+    return out
 
 
 # -- stability of a named effect across the halves of the record --------------------------------

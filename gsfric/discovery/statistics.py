@@ -228,7 +228,7 @@ class Blocks:
         each block needs only ``order`` samples before it). X may be a sequence of arrays
         (M, 6, k_i), the design's columns side by side, without joining them."""
         p = whitener.order
-        parts = [X] if isinstance(X, np.ndarray) else list(X)
+        parts = list(X) if isinstance(X, (list, tuple)) else [X]
         m, legs = parts[0].shape[:2]
         k = sum(a.shape[2] for a in parts)
         rows_w = m - p
