@@ -296,9 +296,11 @@ def generic_competitor(problem: Problem, design: Design, whitener: st.Whitener,
     while the generic basis adds something significant (p < alpha / K and a gap of at least
     ``min_gap``) to the winner and every other accepted candidate of the round: the structure
     is then a generic, out-of-catalog one that the winner only imitates in part. When the
-    generic basis adds a significant part smaller than ``min_gap``, the winner *imitates*: it
-    is named (the simpler explanation) but cannot be told from an error outside the catalog,
-    and the verdict is not ``explained``. Returns the p-values and gaps both ways,
+    winner adds nothing worth naming to the generic basis and the basis adds nothing worth
+    naming to the winner (nothing, or a significant part smaller than ``min_gap``), the winner
+    *imitates*: the data cannot tell it from an error outside the catalog, as they cannot
+    tell two indistinguishable candidates apart; it is named (the simpler explanation), but
+    the verdict is not ``explained``. Returns the p-values and gaps both ways,
     ``blocked``, ``imitates`` and the generic signal that carries most.
     """
     from gsfric.discovery import lackfit
@@ -352,10 +354,11 @@ def generic_competitor(problem: Problem, design: Design, whitener: st.Whitener,
     gap_generic = _gap(XtX, Xtr, design.rtr, catalog, everything)
     adds = p_winner < s.alpha and gap_winner >= s.min_gap
     structure = p_generic < level and gap_generic >= s.min_gap
-    # the generic basis explains everything the winner does and significantly more, if less
-    # than min_gap: the winner stands in for an error outside the catalog as well as it could
-    # be one of its own; named (the catalog term is the simpler explanation), never confidently
-    imitates = not adds and p_generic < level
+    # the generic basis explains everything the winner does (and perhaps more, if less than
+    # min_gap): the data cannot tell the winner from an error outside the catalog, as it
+    # cannot tell two indistinguishable candidates apart; named (the catalog term is the
+    # simpler explanation), never confidently
+    imitates = not adds
     return {"p_winner_beyond_generic": float(p_winner), "gap_winner_beyond_generic": gap_winner,
             "p_generic_beyond_catalog": float(p_generic),
             "gap_generic_beyond_catalog": gap_generic,
