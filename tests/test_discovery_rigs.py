@@ -404,3 +404,6 @@ def test_offsets_as_good_as_a_quadratic_load_cell_under_slow_noise_are_not_expla
     result = discover(motion, bent, heavy, poses=poses, n_bootstrap=20, n_threads=1)
     assert result.verdict == "unexplained_discrepancy"
     assert all(rnd.generic["imitates"] for rnd in result.rounds if rnd.winner)
+    summary = result.summary()
+    assert [e["name"] for e in summary["effects"] if e["partial"]] == result.names
+    assert summary["unexplained"]["partial_effects"] == result.names

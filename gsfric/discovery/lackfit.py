@@ -38,6 +38,12 @@ and an AR noise model can mimic the filter's spectrum, so whitening hides it fro
 motion (the model force's rate and the legs' acceleration, now and a few samples back) predict
 the residual *beyond the residual's own past*? The residual's past absorbs coloured noise
 however slow; an input-driven part, delayed, filtered or resonant, is predicted by the input.
+
+All three read only the sliding pairs. What a stop causes (a mode ringing on, a creep of the
+load cell, the controller settling) lives in the rests, where friction is static and not given
+by the speed's sign. ``rest_transients`` looks there without the model's friction: within a
+rest the force is a constant plus noise, the noise's lagged differences are as large at the
+start of a rest as at its end, and a transient after the stop makes them larger at the start.
 """
 
 from __future__ import annotations

@@ -408,7 +408,7 @@ def discover(motion: Motion, forces: np.ndarray, platform: Platform | None = Non
         notes.append(
             f"round {rnd.index}: {name} explains nothing that a generic out-of-catalog structure "
             f"(mainly {rnd.generic['main_signal']}: {lackfit.MEANING.get(rnd.generic['main_signal'], '')}) "
-            "does not, and that structure explains significantly more: the data cannot tell "
+            "does not explain as well or better: the data cannot tell "
             f"{name} from an error outside the catalog; it is named as the simpler explanation, "
             "the verdict is not 'explained'")
     if lof["significant"] or imitators or any(rnd.generic.get("blocked") for rnd in rounds):
