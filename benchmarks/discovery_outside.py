@@ -153,7 +153,7 @@ def ooc(kind, res, t, rng, target_rms):
         delay = rng.permutation([0.0, 0.002, 0.004, 0.006, 0.009, 0.012])
         x = np.stack([np.interp(t - d, t, F[:, i]) - F[:, i] for i, d in enumerate(delay)],
                      axis=1)
-    x = x - x.mean(axis=0) * (kind in ("cogging", "resonance", "presliding"))
+    x = x - x.mean(axis=0) * (kind in ("cogging", "resonance"))
     return x * target_rms / np.sqrt(np.mean(x ** 2))
 
 

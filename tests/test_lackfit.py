@@ -134,7 +134,7 @@ def test_rest_cores_leave_out_the_ends_of_the_moves():
     assert {(a, b) for _, a, b in runs} == {(s + 2 * REACH, s + 220 - 2 * REACH) for s in stops}
     sliding[:50, 2] = False                      # standing at the start of the record
     assert len(lackfit.rest_runs(sliding, REACH)) == 3 * 6
-    assert lackfit.rest_runs(sliding, 100) == []     # cores shorter than REST_MIN_RUN
+    assert lackfit.rest_runs(sliding, 45) == []      # cores shorter than REST_MIN_RUN
 
 
 @pytest.mark.parametrize("phi", [0.0, 0.9, 0.995])

@@ -8,11 +8,14 @@ out-of-model errors of a rig produce, none of them a catalog term in this form:
 * ``F`` (a gain error),
 * ``sgn(v)`` on sliding samples (friction of another law),
 * ``a`` the leg's acceleration (an inertia or timing error),
-* a cubic drift in time (a thermal drift of the load cells).
+* a cubic drift in time (a thermal drift of the load cells),
+* ``dF/dt`` with coefficients that sum to zero over the legs (five contrasts: leg k's against
+  leg 6's; a delay that differs between the force channels beyond their common delay).
 
-Each column is shared by the six legs (one coefficient, scaled to unit RMS over all legs): the
-load cells of a rig are alike, and a delay or a nonlinearity common to them is then one
-column. The residual and the columns are prewhitened with an AR model of the residual left by
+Each other column is shared by the six legs (one coefficient, scaled to unit RMS over all
+legs): the load cells of a rig are alike, and a delay or a nonlinearity common to them is then
+one column. The contrasts reproduce no common delay, so they stay outside the catalog when
+``time_offset`` is in it. The residual and the columns are prewhitened with an AR model of the residual left by
 the basis fit, and the basis is accepted as *structure* under the rules of a candidate
 effect but one (F-test at ``alpha``, a lower held-out error of the block cross-validation in
 total, a gap of at least ``min_gap`` times the noise; not "in most folds": a discrepancy
@@ -52,7 +55,7 @@ import numpy as np
 
 from gsfric.discovery import statistics as st
 
-SIGNALS = ("dF/dt", "F|F|", "F^3", "F", "sgn(v)", "acceleration", "drift")
+SIGNALS = ("dF/dt", "F|F|", "F^3", "F", "sgn(v)", "acceleration", "drift", "dF/dt between legs")
 
 CATALOG_EQUIVALENT = {"dF/dt": "time_offset", "F": "force_scale", "sgn(v)": "seal_friction"}
 """Signals that a catalog effect reproduces (a common delay, a common gain, a common Coulomb
@@ -67,6 +70,8 @@ MEANING = {
     "sgn(v)": "friction-like, following the sign of the leg speed with a law outside the catalog",
     "acceleration": "correlated with the legs' acceleration: an inertia or timing error",
     "drift": "a slow drift in time: a thermal drift or a zero shift of the load cells",
+    "dF/dt between legs": "correlated with the rate of change of the force, differently on each "
+                          "leg: a delay that differs between the force channels",
 }
 
 
@@ -106,10 +111,12 @@ def state_meaning(variable: str) -> str:
 
 def basis(t: np.ndarray, F: np.ndarray, speed: np.ndarray, sliding: np.ndarray,
           derivatives: tuple[np.ndarray, np.ndarray] | None = None) -> np.ndarray:
-    """The generic columns (M, 6, k) of ``SIGNALS`` (drift: three columns); ``derivatives``,
-    if given, are dF/dt and the legs' acceleration (from ``rates``), not computed again."""
+    """The generic columns (M, 6, k) of ``SIGNALS`` (drift: three columns; dF/dt between legs:
+    five); ``derivatives``, if given, are dF/dt and the legs' acceleration (from ``rates``),
+    not computed again."""
     t = np.asarray(t, float)
-    X = np.empty(F.shape + (9,))
+    legs = F.shape[1]
+    X = np.zeros(F.shape + (9 + legs - 1,))
     dF, acceleration = derivatives if derivatives is not None else rates(t, F, speed)
     X[:, :, 0] = dF
     X[:, :, 1] = F * np.abs(F)
@@ -120,7 +127,10 @@ def basis(t: np.ndarray, F: np.ndarray, speed: np.ndarray, sliding: np.ndarray,
     tau = 2 * (t - t[0]) / max(t[-1] - t[0], 1e-300) - 1
     for p in (1, 2, 3):
         X[:, :, 5 + p] = np.polynomial.legendre.legval(tau, [0] * p + [1])[:, None]
-    for j in range(9):     # unit RMS per signal over all legs (one coefficient: one cause)
+    for k in range(legs - 1):     # leg k's delay against the last leg's: sum zero
+        X[:, k, 9 + k] = dF[:, k]
+        X[:, legs - 1, 9 + k] = -dF[:, legs - 1]
+    for j in range(X.shape[2]):     # unit RMS per signal over all legs (one coefficient: one cause)
         scale = float(np.sqrt(np.mean(X[:, :, j] ** 2)))
         X[:, :, j] /= scale if scale > 0 else 1.0
     return X
@@ -133,8 +143,9 @@ def rates(t: np.ndarray, F: np.ndarray, speed: np.ndarray) -> tuple[np.ndarray, 
 
 
 def column_names() -> list[str]:
-    """The signal of each column of ``basis`` (drift: three columns)."""
-    return list(SIGNALS[:-1]) + ["drift"] * 3
+    """The signal of each column of ``basis`` (drift: three columns; dF/dt between legs:
+    five)."""
+    return list(SIGNALS[:-2]) + ["drift"] * 3 + ["dF/dt between legs"] * 5
 
 
 def basis_outside(t: np.ndarray, F: np.ndarray, speed: np.ndarray, sliding: np.ndarray,
@@ -411,8 +422,12 @@ def dynamic_structure(residual: np.ndarray, inputs: dict[str, np.ndarray], valid
 # -- rests: what the tests on sliding pairs cannot see ----------------------------------------
 
 
-REST_MIN_RUN = 24
-"""Shortest rest core (samples) that ``rest_runs`` keeps: three windows of eight samples."""
+REST_MIN_RUN = 48
+"""Shortest rest core (samples) that ``rest_runs`` keeps: three windows of 16 samples (the
+mean square of fewer lagged differences is too uncertain to compare)."""
+REST_MIN_RESTS = 6
+"""Fewest rests (groups of overlapping cores) that ``rest_transients`` tests: a t-test on
+fewer group means rests on too few numbers to trust its tail."""
 
 
 def rest_runs(sliding: np.ndarray, reach: int, min_run: int = REST_MIN_RUN
@@ -521,7 +536,7 @@ def rest_transients(residual: np.ndarray, runs: list[tuple[int, int, int]], *, a
             g += 1
         group[i] = g
         end = max(end, b)
-    if g + 1 < 3:
+    if g + 1 < REST_MIN_RESTS:
         return {**empty, "rests": g + 1}
     best = None
     for h in lags:
@@ -542,7 +557,7 @@ def rest_transients(residual: np.ndarray, runs: list[tuple[int, int, int]], *, a
         u = np.where(e0 + e1 > 0, (e0 - e1) / np.maximum(e0 + e1, 1e-300), 0.0)
         gk = group[keep]
         means = np.array([u[gk == k].mean() for k in np.unique(gk)])
-        if len(means) < 3 or np.ptp(means) == 0:
+        if len(means) < REST_MIN_RESTS or np.ptp(means) == 0:
             continue
         p = float(stats.ttest_1samp(means, 0.0, alternative="greater").pvalue)
         excess = max(float(e0.mean() - e1.mean()), 0.0)
