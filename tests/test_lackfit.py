@@ -101,3 +101,75 @@ def test_samples_left_out_are_not_used():
     out = lackfit.state_structure(r, lackfit.state_features(D, v, F), valid, n_folds=8,
                                   min_gap=0.3)
     assert not out["significant"]
+
+
+# -- rests ----------------------------------------------------------------------------------
+
+REACH = 20
+
+
+def _rests(rng, rests=16, rest=220, move=160):
+    """A sliding mask (M, 6) of moves and rests (all legs stop together), its rest cores, and
+    the sample where each rest begins."""
+    period = rest + move
+    m = rests * period + move
+    sliding = np.ones((m, 6), bool)
+    stops = []
+    for k in range(rests):
+        a = move + k * period
+        sliding[a:a + rest] = False
+        stops.append(a)
+    return sliding, lackfit.rest_runs(sliding, REACH), np.array(stops)
+
+
+def _transients(r, runs):
+    return lackfit.rest_transients(r, runs, alpha=0.01, min_gap=0.3)
+
+
+def test_rest_cores_leave_out_the_ends_of_the_moves():
+    """A core is the run of not-sliding pairs less twice the differentiator's reach at each
+    end; a run touching an end of the record is no rest between two moves."""
+    sliding, runs, stops = _rests(np.random.default_rng(0), rests=3)
+    assert len(runs) == 3 * 6
+    assert {(a, b) for _, a, b in runs} == {(s + 2 * REACH, s + 220 - 2 * REACH) for s in stops}
+    sliding[:50, 2] = False                      # standing at the start of the record
+    assert len(lackfit.rest_runs(sliding, REACH)) == 3 * 6
+    assert lackfit.rest_runs(sliding, 45) == []      # cores shorter than REST_MIN_RUN
+
+
+@pytest.mark.parametrize("phi", [0.0, 0.9, 0.995])
+def test_noise_at_rests_has_no_transient(phi):
+    """Noise, white or as slow as AR(1) with phi = 0.995, plus a static friction of its own
+    in each rest (up to 2 N, constant while the leg stands still), is as large at the start of
+    a rest as at its end."""
+    fired = 0
+    for seed in range(10):
+        rng = np.random.default_rng(seed)
+        sliding, runs, stops = _rests(rng)
+        r = np.zeros(sliding.shape)
+        for s in stops:
+            r[s:s + 220] += rng.uniform(-2, 2, 6)
+        e = rng.normal(0, 0.2 * np.sqrt(1 - phi ** 2), r.shape)
+        r += lfilter([1.0], [1.0, -phi], e, axis=0)
+        out = _transients(r, runs)
+        assert out["rests"] == 16 and out["cores"] == 96
+        fired += out["significant"]
+    assert fired == 0
+
+
+@pytest.mark.parametrize("phi", [0.0, 0.95])
+def test_a_mode_ringing_after_each_stop_is_a_transient(phi):
+    """A 7 Hz mode with 5 % damping rings after each stop, with the sign and size of the
+    deceleration that excites it: of zero mean over the rests, and an AR model of the
+    residual could mimic its spectrum; it is largest at the start of each rest."""
+    rng = np.random.default_rng(5)
+    sliding, runs, stops = _rests(rng)
+    r = np.zeros(sliding.shape)
+    tau = np.arange(220) / RATE
+    ring = np.exp(-0.05 * 2 * np.pi * 7 * tau) * np.sin(2 * np.pi * 7 * tau)
+    for s in stops:
+        r[s:s + 220] += ring[:, None] * rng.normal(0, 0.5, 6)
+    e = rng.normal(0, 0.2 * np.sqrt(1 - phi ** 2), r.shape)
+    out = _transients(r + lfilter([1.0], [1.0, -phi], e, axis=0), runs)
+    assert out["significant"] and out["p_value"] < 1e-4
+    assert out["gap"] > 0.5

@@ -8,11 +8,14 @@ out-of-model errors of a rig produce, none of them a catalog term in this form:
 * ``F`` (a gain error),
 * ``sgn(v)`` on sliding samples (friction of another law),
 * ``a`` the leg's acceleration (an inertia or timing error),
-* a cubic drift in time (a thermal drift of the load cells).
+* a cubic drift in time (a thermal drift of the load cells),
+* ``dF/dt`` with coefficients that sum to zero over the legs (five contrasts: leg k's against
+  leg 6's; a delay that differs between the force channels beyond their common delay).
 
-Each column is shared by the six legs (one coefficient, scaled to unit RMS over all legs): the
-load cells of a rig are alike, and a delay or a nonlinearity common to them is then one
-column. The residual and the columns are prewhitened with an AR model of the residual left by
+Each other column is shared by the six legs (one coefficient, scaled to unit RMS over all
+legs): the load cells of a rig are alike, and a delay or a nonlinearity common to them is then
+one column. The contrasts reproduce no common delay, so they stay outside the catalog when
+``time_offset`` is in it. The residual and the columns are prewhitened with an AR model of the residual left by
 the basis fit, and the basis is accepted as *structure* under the rules of a candidate
 effect but one (F-test at ``alpha``, a lower held-out error of the block cross-validation in
 total, a gap of at least ``min_gap`` times the noise; not "in most folds": a discrepancy
@@ -38,6 +41,12 @@ and an AR noise model can mimic the filter's spectrum, so whitening hides it fro
 motion (the model force's rate and the legs' acceleration, now and a few samples back) predict
 the residual *beyond the residual's own past*? The residual's past absorbs coloured noise
 however slow; an input-driven part, delayed, filtered or resonant, is predicted by the input.
+
+All three read only the sliding pairs. What a stop causes (a mode ringing on, a creep of the
+load cell, the controller settling) lives in the rests, where friction is static and not given
+by the speed's sign. ``rest_transients`` looks there without the model's friction: within a
+rest the force is a constant plus noise, the noise's lagged differences are as large at the
+start of a rest as at its end, and a transient after the stop makes them larger at the start.
 """
 
 from __future__ import annotations
@@ -46,7 +55,7 @@ import numpy as np
 
 from gsfric.discovery import statistics as st
 
-SIGNALS = ("dF/dt", "F|F|", "F^3", "F", "sgn(v)", "acceleration", "drift")
+SIGNALS = ("dF/dt", "F|F|", "F^3", "F", "sgn(v)", "acceleration", "drift", "dF/dt between legs")
 
 CATALOG_EQUIVALENT = {"dF/dt": "time_offset", "F": "force_scale", "sgn(v)": "seal_friction"}
 """Signals that a catalog effect reproduces (a common delay, a common gain, a common Coulomb
@@ -61,6 +70,8 @@ MEANING = {
     "sgn(v)": "friction-like, following the sign of the leg speed with a law outside the catalog",
     "acceleration": "correlated with the legs' acceleration: an inertia or timing error",
     "drift": "a slow drift in time: a thermal drift or a zero shift of the load cells",
+    "dF/dt between legs": "correlated with the rate of change of the force, differently on each "
+                          "leg: a delay that differs between the force channels",
 }
 
 
@@ -100,10 +111,12 @@ def state_meaning(variable: str) -> str:
 
 def basis(t: np.ndarray, F: np.ndarray, speed: np.ndarray, sliding: np.ndarray,
           derivatives: tuple[np.ndarray, np.ndarray] | None = None) -> np.ndarray:
-    """The generic columns (M, 6, k) of ``SIGNALS`` (drift: three columns); ``derivatives``,
-    if given, are dF/dt and the legs' acceleration (from ``rates``), not computed again."""
+    """The generic columns (M, 6, k) of ``SIGNALS`` (drift: three columns; dF/dt between legs:
+    five); ``derivatives``, if given, are dF/dt and the legs' acceleration (from ``rates``),
+    not computed again."""
     t = np.asarray(t, float)
-    X = np.empty(F.shape + (9,))
+    legs = F.shape[1]
+    X = np.zeros(F.shape + (9 + legs - 1,))
     dF, acceleration = derivatives if derivatives is not None else rates(t, F, speed)
     X[:, :, 0] = dF
     X[:, :, 1] = F * np.abs(F)
@@ -114,7 +127,10 @@ def basis(t: np.ndarray, F: np.ndarray, speed: np.ndarray, sliding: np.ndarray,
     tau = 2 * (t - t[0]) / max(t[-1] - t[0], 1e-300) - 1
     for p in (1, 2, 3):
         X[:, :, 5 + p] = np.polynomial.legendre.legval(tau, [0] * p + [1])[:, None]
-    for j in range(9):     # unit RMS per signal over all legs (one coefficient: one cause)
+    for k in range(legs - 1):     # leg k's delay against the last leg's: sum zero
+        X[:, k, 9 + k] = dF[:, k]
+        X[:, legs - 1, 9 + k] = -dF[:, legs - 1]
+    for j in range(X.shape[2]):     # unit RMS per signal over all legs (one coefficient: one cause)
         scale = float(np.sqrt(np.mean(X[:, :, j] ** 2)))
         X[:, :, j] /= scale if scale > 0 else 1.0
     return X
@@ -127,8 +143,9 @@ def rates(t: np.ndarray, F: np.ndarray, speed: np.ndarray) -> tuple[np.ndarray, 
 
 
 def column_names() -> list[str]:
-    """The signal of each column of ``basis`` (drift: three columns)."""
-    return list(SIGNALS[:-1]) + ["drift"] * 3
+    """The signal of each column of ``basis`` (drift: three columns; dF/dt between legs:
+    five)."""
+    return list(SIGNALS[:-2]) + ["drift"] * 3 + ["dF/dt between legs"] * 5
 
 
 def basis_outside(t: np.ndarray, F: np.ndarray, speed: np.ndarray, sliding: np.ndarray,
@@ -400,3 +417,174 @@ def dynamic_structure(residual: np.ndarray, inputs: dict[str, np.ndarray], valid
             "per_leg_rms": [float(np.sqrt(np.mean(driven[mask[:, j], j] ** 2)))
                             if mask[:, j].any() else 0.0 for j in range(legs)],
             "inputs": {n: v / total for n, v in shares.items()}}
+
+
+# -- rests: what the tests on sliding pairs cannot see ----------------------------------------
+
+
+REST_MIN_RUN = 48
+"""Shortest rest core (samples) that ``rest_runs`` keeps: three windows of 16 samples (the
+mean square of fewer lagged differences is too uncertain to compare)."""
+REST_MIN_RESTS = 6
+"""Fewest rests (groups of overlapping cores) that ``rest_transients`` tests: a t-test on
+fewer group means rests on too few numbers to trust its tail."""
+
+
+def rest_runs(sliding: np.ndarray, reach: int, min_run: int = REST_MIN_RUN
+              ) -> list[tuple[int, int, int]]:
+    """The rest cores of each leg: runs of not-sliding pairs with ``2 reach`` samples cut from
+    each end, at least ``min_run`` samples long.
+
+    A run of not-sliding pairs is a rest widened by the differentiator's ``reach`` on each
+    side (``rest.sliding_mask``), and the rest itself begins where the differentiated speed
+    enters the noise band: the last and first few samples of the moves, where the true speed
+    is below the band but friction is already sliding friction and the inertia force is still
+    changing, belong to it. A second ``reach`` cut from each end leaves where the leg stood
+    still.
+
+    Parameters
+    ----------
+    sliding : ndarray of bool, shape (M, 6)
+        The sliding pairs (``rest.sliding_mask``).
+    reach : int
+        Half-width of the differentiator's window, samples.
+    min_run : int
+        Shortest core kept.
+
+    Returns
+    -------
+    list of (leg, start, stop)
+        Sample ranges ``start:stop`` of the cores; a run that touches either end of the record
+        is not a rest between two moves and is left out.
+    """
+    out = []
+    m = sliding.shape[0]
+    cut = 2 * max(int(reach), 0)
+    for leg in range(sliding.shape[1]):
+        still = np.r_[False, ~sliding[:, leg], False].astype(np.int8)
+        edges = np.flatnonzero(np.diff(still))
+        for a, b in zip(edges[::2], edges[1::2]):
+            if a == 0 or b == m:
+                continue
+            a, b = a + cut, b - cut
+            if b - a >= min_run:
+                out.append((leg, int(a), int(b)))
+    return out
+
+
+REST_WINDOW = 1 / 3
+"""Share of each rest core compared at its start and at its end in ``rest_transients``."""
+REST_LAGS = (1, 4, 16)
+"""Lags (samples) of the differences whose energy ``rest_transients`` compares: fast and slow
+transients."""
+
+
+def rest_transients(residual: np.ndarray, runs: list[tuple[int, int, int]], *, alpha: float,
+                    min_gap: float, window: float = REST_WINDOW,
+                    lags: tuple[int, ...] = REST_LAGS) -> dict:
+    """Does something happen after each stop that the noise does not do? A model-free test on
+    the rests, where friction is not given by the speed's sign.
+
+    Within a rest nothing of the model changes: the pose is fixed, the rigid-body force and the
+    static friction (whatever it is, up to its static level) are constants. So the residual's
+    differences over a lag h, ``x_t - x_{t-h}``, are differences of noise there, and for any
+    stationary noise, white or as slow as it comes, their mean square is the same at every
+    time. A mode ringing after the stop, a creep or a relaxation of the load cell, the
+    controller settling are largest just after the stop. For each core and lag,
+    ``u = (e_start - e_end) / (e_start + e_end)``, with ``e`` the mean square of the lagged
+    differences over the first and the last ``window`` of the core; noise gives u of mean 0.
+    The cores are grouped by rest (the legs' cores that overlap in time: one stop of the
+    platform), the groups' mean u is tested against 0 (one-sided t-test, at ``alpha`` over the
+    number of lags), and the size is the RMS excess of the differences at the start over their
+    level at the end (relative, the lag of the largest); the lag with the smallest p-value
+    reports.
+
+    Parameters
+    ----------
+    residual : ndarray, shape (M, 6)
+        Residual per leg at the rest cores (measured force less the model's frictionless force),
+        N; other pairs are not read.
+    runs : list of (leg, start, stop)
+        The rest cores (``rest_runs``).
+    alpha : float
+        Level of the test.
+    min_gap : float
+        Smallest excess RMS, relative to the level at the end of the rests, that counts.
+
+    Returns
+    -------
+    dict
+        ``significant``, ``p_value``, ``gap`` (excess RMS at the start of the rests over the
+        RMS at their end, relative), ``lag``, ``structure_rms`` (N, the excess RMS of the
+        residual itself at the start, de-meaned per core), ``per_leg_rms`` (N), ``rests``
+        (number of groups), ``cores`` (number of cores), ``u`` (mean u).
+    """
+    from scipy import stats
+
+    legs = residual.shape[1]
+    empty = {"significant": False, "p_value": 1.0, "gap": 0.0, "lag": 0, "structure_rms": 0.0,
+             "per_leg_rms": [0.0] * legs, "rests": 0, "cores": len(runs), "u": 0.0}
+    if len(runs) < 4:
+        return empty
+    # group the cores by rest: overlapping in time = one stop of the platform
+    order = np.argsort([a for _, a, _ in runs])
+    group = np.empty(len(runs), int)
+    g, end = -1, -1
+    for i in order:
+        _, a, b = runs[i]
+        if a >= end:
+            g += 1
+        group[i] = g
+        end = max(end, b)
+    if g + 1 < REST_MIN_RESTS:
+        return {**empty, "rests": g + 1}
+    best = None
+    for h in lags:
+        e0, e1, keep = [], [], []
+        for k, (leg, a, b) in enumerate(runs):
+            w = max(int(round(window * (b - a))), 2)
+            if w <= h + 1:
+                continue
+            x = residual[a:b, leg]
+            d0 = x[h:w] - x[:w - h]                 # lagged differences at the start
+            d1 = x[b - a - w + h:] - x[b - a - w:b - a - h]      # and at the end
+            e0.append(float(np.mean(d0 ** 2)))
+            e1.append(float(np.mean(d1 ** 2)))
+            keep.append(k)
+        if len(e0) < 4:
+            continue
+        e0, e1 = np.asarray(e0), np.asarray(e1)
+        u = np.where(e0 + e1 > 0, (e0 - e1) / np.maximum(e0 + e1, 1e-300), 0.0)
+        gk = group[keep]
+        means = np.array([u[gk == k].mean() for k in np.unique(gk)])
+        if len(means) < REST_MIN_RESTS or np.ptp(means) == 0:
+            continue
+        p = float(stats.ttest_1samp(means, 0.0, alternative="greater").pvalue)
+        excess = max(float(e0.mean() - e1.mean()), 0.0)
+        gap = float(np.sqrt(excess / e1.mean())) if e1.mean() > 0 else 0.0
+        if best is None or p < best["p_value"]:
+            best = {"p_value": p, "gap": gap, "lag": int(h), "u": float(means.mean()),
+                    "rests": int(len(means))}
+    if best is None:
+        return {**empty, "rests": g + 1}
+    # the size of the transient itself: the residual at the start of each core over its end,
+    # each de-meaned
+    s0, s1, legs_of = [], [], []
+    for leg, a, b in runs:
+        w = max(int(round(window * (b - a))), 2)
+        x = residual[a:b, leg]
+        s0.append(float(np.mean((x[:w] - x[:w].mean()) ** 2)))
+        s1.append(float(np.mean((x[-w:] - x[-w:].mean()) ** 2)))
+        legs_of.append(leg)
+    s0, s1, legs_of = np.asarray(s0), np.asarray(s1), np.asarray(legs_of)
+    per_leg = [float(np.sqrt(max(s0[legs_of == k].mean() - s1[legs_of == k].mean(), 0.0)))
+               if np.any(legs_of == k) else 0.0 for k in range(legs)]
+    level = alpha / len(lags)
+    return {"significant": bool(best["p_value"] < level and best["gap"] >= min_gap),
+            **best, "structure_rms": float(np.sqrt(max(s0.mean() - s1.mean(), 0.0))),
+            "per_leg_rms": per_leg, "cores": len(runs)}
+
+
+REST_MEANING = ("largest just after each stop and dying out during the rest: a mode of the "
+                "structure ringing after the stop, a creep or relaxation of the load cells, or "
+                "the controller settling")

@@ -61,6 +61,11 @@ def report(d: Discovery, source: str = "", platform_source: str = "") -> str:
               f"remains, {lof.get('looks_like', '')}. Per leg (N): "
               f"{', '.join(_g(v, 3) for v in lof.get('per_leg_rms', []))}; dominant frequency "
               f"of the residual {_g(lof.get('frequency'), 3)} Hz.", ""]
+    if d.effects and d.verdict == "unexplained_discrepancy":
+        L += ["The effects below are the best candidates for a part of the gap, not a "
+              "confident explanation of it (`partial` in summary.json): structure is left that "
+              "no catalog effect explains, or the named effect explains no more than a generic "
+              "error outside the catalog would.", ""]
     if d.effects:
         for f in d.effects:
             params = ", ".join(f"{k} = {_g(v)}" for k, v in f.parameters.items())

@@ -295,10 +295,13 @@ def generic_competitor(problem: Problem, design: Design, whitener: st.Whitener,
     (p >= alpha, or a gap below ``min_gap`` times the noise, with the refitted model in both),
     while the generic basis adds something significant (p < alpha / K and a gap of at least
     ``min_gap``) to the winner and every other accepted candidate of the round: the structure
-    is then a generic, out-of-catalog one that the winner only imitates in part. When the
-    generic basis adds a significant part smaller than ``min_gap``, the winner *imitates*: it
-    is named (the simpler explanation) but cannot be told from an error outside the catalog,
-    and the verdict is not ``explained``. Returns the p-values and gaps both ways,
+    is then a generic, out-of-catalog one that the winner only imitates in part. The winner
+    *imitates* when it adds nothing significant to the generic basis (p >= alpha), whatever
+    the basis adds to it, or when it adds nothing worth naming and the basis adds a
+    significant part smaller than ``min_gap``: the data cannot tell it from an error outside
+    the catalog, as they cannot tell two indistinguishable candidates apart; it is named (the
+    simpler explanation), but the verdict is not ``explained``. Returns the p-values and gaps
+    both ways,
     ``blocked``, ``imitates`` and the generic signal that carries most.
     """
     from gsfric.discovery import lackfit
@@ -353,9 +356,11 @@ def generic_competitor(problem: Problem, design: Design, whitener: st.Whitener,
     adds = p_winner < s.alpha and gap_winner >= s.min_gap
     structure = p_generic < level and gap_generic >= s.min_gap
     # the generic basis explains everything the winner does and significantly more, if less
-    # than min_gap: the winner stands in for an error outside the catalog as well as it could
-    # be one of its own; named (the catalog term is the simpler explanation), never confidently
-    imitates = not adds and p_generic < level
+    # than min_gap; or the winner adds nothing significant to the generic basis, whatever the
+    # basis adds to it: the data cannot tell the winner from an error outside the catalog, as
+    # they cannot tell two indistinguishable candidates apart; named (the catalog term is the
+    # simpler explanation), never confidently
+    imitates = (not adds and p_generic < level) or p_winner >= s.alpha
     return {"p_winner_beyond_generic": float(p_winner), "gap_winner_beyond_generic": gap_winner,
             "p_generic_beyond_catalog": float(p_generic),
             "gap_generic_beyond_catalog": gap_generic,

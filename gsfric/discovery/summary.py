@@ -42,7 +42,10 @@ def summary(d: Discovery) -> dict:
     for f in d.effects:
         evidence = dict(f.evidence)
         evidence["interval_95"] = {k: list(v) for k, v in f.interval.items()}
+        # with structure left that the catalog does not explain, a named effect is the best
+        # candidate for a part of the gap, not a confident explanation of it
         effects.append({"name": f.name, "parameters": dict(f.parameters),
+                        "partial": d.verdict == "unexplained_discrepancy",
                         "evidence": evidence})
     ambiguous = []
     for rnd in d.rounds:
@@ -84,6 +87,7 @@ def summary(d: Discovery) -> dict:
             "per_leg_rms": lof.get("per_leg_rms"), "time_rms": lof.get("time_rms"),
             "dominant_frequency": lof.get("frequency"), "main_signal": lof.get("main_signal"),
             "looks_like": lof.get("looks_like"),
+            "partial_effects": [f.name for f in d.effects],
             "speed_bands": {b.name: b.rms_after for b in d.regimes if b.regime == "speed"},
             "message": "the catalog does not explain the data: a structured residual of "
                        f"{lof.get('structure_rms', 0.0):.4g} N RMS remains, "

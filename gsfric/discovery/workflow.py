@@ -408,7 +408,7 @@ def discover(motion: Motion, forces: np.ndarray, platform: Platform | None = Non
         notes.append(
             f"round {rnd.index}: {name} explains nothing that a generic out-of-catalog structure "
             f"(mainly {rnd.generic['main_signal']}: {lackfit.MEANING.get(rnd.generic['main_signal'], '')}) "
-            "does not, and that structure explains significantly more: the data cannot tell "
+            "does not explain as well or better: the data cannot tell "
             f"{name} from an error outside the catalog; it is named as the simpler explanation, "
             "the verdict is not 'explained'")
     if lof["significant"] or imitators or any(rnd.generic.get("blocked") for rnd in rounds):
@@ -477,11 +477,12 @@ def _lack_of_fit(problem: Problem, theta: np.ndarray, residual: np.ndarray,
     dynamic = lackfit.dynamic_structure(residual, inputs, problem.sliding, alpha=s.alpha,
                                         min_gap=max(s.min_gap, lackfit.DYNAMIC_MIN_GAP))
     out["state"], out["dynamic"] = state, dynamic
+    out["rest"] = _rest_test(problem, theta)
     # structure in a form of the basis says most about what it is; else structure that repeats
-    # with the state; else structure that follows the motion
-    tests = {"basis": out, "state": state, "dynamic": dynamic}
+    # with the state; else structure that follows the motion; else what happens at the rests
+    tests = {"basis": out, "state": state, "dynamic": dynamic, "rest": out["rest"]}
     by = next((k for k, v in tests.items() if v["significant"]), None)
-    if by in ("state", "dynamic"):
+    if by in ("state", "dynamic", "rest"):
         out.update(significant=True, gap=tests[by]["gap"],
                    structure_rms=tests[by]["structure_rms"], per_leg_rms=tests[by]["per_leg_rms"])
     fitted = out["fitted"]
@@ -496,8 +497,29 @@ def _lack_of_fit(problem: Problem, theta: np.ndarray, residual: np.ndarray,
     elif by == "dynamic":
         main = "driven by the motion"
         out["looks_like"] = lackfit.DYNAMIC_MEANING
+    elif by == "rest":
+        main = "transient at the rests"
+        out["looks_like"] = lackfit.REST_MEANING
     out["main_signal"] = main
     return out
+
+
+def _rest_test(problem: Problem, theta: np.ndarray) -> dict:
+    """``lackfit.rest_transients`` on the rest cores: the measured force less the final
+    model's frictionless force, where friction is static. The load cells' gains and delay
+    are not applied: at rest the force is constant, a gain changes it by a constant and a
+    delay (shorter than the differentiator's reach cut from the cores) not at all, while a
+    delay fitted to imitate something else would put its own transients into the rests."""
+    s = problem.settings
+    used = problem.used
+    reach = int(np.median(problem.reach[used])) if len(problem.reach) else 0
+    runs = lackfit.rest_runs(problem.sliding, reach)
+    if len(runs) < 4:
+        return lackfit.rest_transients(np.zeros_like(problem.y), [], alpha=s.alpha,
+                                       min_gap=s.min_gap)
+    model = problem.model
+    residual = problem.y - model.evaluate(theta, keep=("F0",)).F0[used]
+    return lackfit.rest_transients(residual, runs, alpha=s.alpha, min_gap=s.min_gap)
 
 
 def _contributions(problem: Problem, theta: np.ndarray, active: Sequence[str]
