@@ -275,8 +275,10 @@ def paper(out_dir, mode, platform_file, no_plots):
               help="No progress bar and no summary line (warnings and errors still go to "
                    "stderr).")
 @click.option("--columns", default=None, metavar="GROUP[,GROUP...]",
-              help="Output groups: forces, friction, reactions, frictionless, lengths "
-                   "[default: all]; t and flag are always written.")
+              help="Output groups: forces (F1..F6), friction (the paper's MfrE, MfrC, Ffr), "
+                   "reactions (RE, RC, MC), friction_detail (signed and vector friction), "
+                   "frictionless (F0), lengths (D), or all [default: forces,friction,reactions]; "
+                   "t and flag are always written. `gsfric columns` lists every column.")
 @click.option("--float32", is_flag=True,
               help="Write the outputs as float32 (relative error up to 6e-8, half the size).")
 @click.option("--breakdown", "breakdown_file", type=click.Path(path_type=Path), default=None,

@@ -615,7 +615,7 @@ def test_streamed_simulation_equals_the_whole_evaluation(tmp_path):
     assert {130, 131, 599, 600} <= set(flagged.tolist())
     with pytest.warns(GsfricWarning) as caught:
         summary = stream.simulate_file(path, tmp_path / "out.parquet", platform, chunk=100,
-                                       window=15)
+                                       window=15, columns=("all",))
     message, = [str(w.message) for w in caught]
     shown = ", ".join(str(i) for i in flagged[:10])
     rows = ", ".join(str(i + 1) for i in flagged[:10])

@@ -35,7 +35,7 @@ def full(tmp_path_factory):
     folder = tmp_path_factory.mktemp("full")
     path = _trajectory(folder / "t.csv")
     out = folder / "all.parquet"
-    stream.simulate_file(path, out, chunk=200, window=9)
+    stream.simulate_file(path, out, chunk=200, window=9, columns=("all",))
     return path, pd.read_parquet(out), out
 
 
@@ -52,11 +52,38 @@ def test_column_groups_select_columns_with_the_same_values(full, tmp_path):
     pd.testing.assert_frame_equal(some, every[expected])
 
 
-def test_default_columns_are_every_group_in_the_result_frame_order(full):
+def test_all_columns_are_every_group_in_the_result_frame_order(full):
     _, every, _ = full
     frame_columns = list(gsfric.evaluate(models.reference_platform(),
                                          models.sinusoidal(np.linspace(0, 1, 50))).to_frame())
     assert list(every.columns) == frame_columns
+
+
+CONTRACT = (["t"] + [f"F{i}" for i in range(1, 7)]
+            + [f"{name}{i}" for name in ("MfrE", "MfrC", "Ffr") for i in range(1, 7)]
+            + [f"{name}{a}{i}" for name in ("RE", "RC") for i in range(1, 7) for a in "xyz"]
+            + [f"MC{i}" for i in range(1, 7)] + ["flag"])
+"""The columns a default simulate output promises: 68 values a step."""
+
+
+def test_default_columns_hold_the_documented_set_with_the_same_values(full, tmp_path):
+    path, every, _ = full
+    out = tmp_path / "default.parquet"
+    result = _run("simulate", "--trajectory", path, "--out", out, "--chunk", 200, "--window", 9,
+                  "--quiet")
+    assert result.exit_code == 0, result.output
+    default = pd.read_parquet(out)
+    assert len(CONTRACT) == 68 and sorted(default.columns) == sorted(CONTRACT)
+    assert list(default.columns) == [c for c in every.columns if c in CONTRACT]
+    pd.testing.assert_frame_equal(default, every[list(default.columns)])
+
+
+def test_every_group_but_the_defaults_is_named_in_the_help():
+    result = _run("simulate", "--help")
+    text = " ".join(result.output.split())
+    for group in stream.COLUMN_GROUPS:
+        assert group in text, group
+    assert "[default: " + ",".join(stream.DEFAULT_COLUMN_GROUPS) + "]" in text
 
 
 def test_float32_within_its_documented_error(full, tmp_path):
@@ -92,7 +119,7 @@ def test_unknown_column_group_is_one_line_exit_2(tmp_path):
     assert result.exit_code == 2
     assert result.output.strip().splitlines() == [
         "gsfric: error: --columns: unknown group 'torques'; choose from forces, friction, "
-        "reactions, frictionless, lengths (comma-separated) or all"]
+        "reactions, friction_detail, frictionless, lengths (comma-separated) or all"]
     assert not (tmp_path / "o.csv").exists()
 
 
