@@ -659,13 +659,22 @@ def _transpose_into(out: np.ndarray, rows: np.ndarray) -> None:
                   casting="same_kind")
 
 
+@dataclass
+class _Chunk:
+    """What ``result_columns`` reads of a Result: times (N,), outputs by name, flags (N,)."""
+
+    t: np.ndarray
+    arrays: dict[str, np.ndarray]
+    flag: np.ndarray
+
+
 def result_columns(result, plan, float32: bool = False, reuse: dict | None = None
                    ) -> dict[str, np.ndarray]:
-    """The output columns of one Result, each a contiguous 1-D array (one transposed copy per
-    output array; nothing refers to the Result's buffers). ``reuse`` (a dict, filled on first
-    use) lends the arrays of the columns from call to call: the columns are then valid until
-    the next call with it."""
-    n = len(result)
+    """The output columns of one Result (or ``_Chunk``), each a contiguous 1-D array (one
+    transposed copy per output array; nothing refers to the Result's buffers). ``reuse`` (a
+    dict, filled on first use) lends the arrays of the columns from call to call: the columns
+    are then valid until the next call with it."""
+    n = len(result.t)
     dtype = np.float32 if float32 else np.float64
     keys = list(dict.fromkeys(key for _, key, _, _ in plan))
     blocks: dict[str, np.ndarray] = {}
@@ -876,27 +885,33 @@ def simulate_file(trajectory: str | os.PathLike[str], out: str | os.PathLike[str
     options = {"newline": ""} if kind == "csv" else {}
     from concurrent.futures import ThreadPoolExecutor
 
-    buffers: dict = {}  # the evaluation's output arrays, reused from chunk to chunk
-    slots: tuple[dict, dict] = ({}, {})   # column arrays of even and odd chunks, reused
+    sets: tuple[dict, dict] = ({}, {})   # the evaluation's outputs of even and odd chunks
+    column_arrays: dict = {}             # the columns' arrays (filled by the writing thread)
     from gsfric.catalog import sensor_parameters
-    from gsfric.evaluation import FLAG_NONFINITE
+    from gsfric.evaluation import FLAG_NONFINITE, evaluate_outputs
 
     gains, delay = sensor_parameters(platform.effects)
     # a delay reaches across chunks: applied here, over the record, not per chunk
     shift = _Delay(gains, delay) if delay != 0.0 else None
+    names = list(dict.fromkeys(key for _, key, _, _ in plan))
+    if shift is not None and "F" not in names:
+        names.append("F")
 
-    def process(start: int, motion, carried: dict[str, np.ndarray], slot: dict,
-                slot_free) -> list[dict]:
-        """Evaluate, count the flags, build the columns to write (in the evaluation thread;
-        no warnings issued). ``slot_free``: the write of the chunk that last used ``slot``'s
-        column arrays, waited for before they are overwritten."""
-        result = evaluator.evaluate_quiet(motion, chunk=min(len(motion), DEFAULT_CHUNK),
-                                          buffers=buffers, sensor=shift is None)
-        bad = result.flagged()
+    def process(start: int, motion, carried: dict[str, np.ndarray], buffers: dict,
+                buffers_free) -> list:
+        """Evaluate, count the flags (in the evaluation thread; no warnings issued); what to
+        write: (chunk, carried columns) to be made columns by the writing thread, or, with a
+        sensor delay, the column dicts that are ready. ``buffers_free``: the write of the
+        chunk that last used ``buffers``, waited for before they are overwritten."""
+        if buffers_free is not None:
+            buffers_free.result()
+        arrays, flag = evaluate_outputs(evaluator, motion, names, buffers=buffers,
+                                        sensor=shift is None)
+        bad = np.flatnonzero(flag)
         if bad.size:
             summary.flagged += int(bad.size)
             for bit in FLAG_NAMES:
-                counts[bit] += int(np.count_nonzero(result.flag & bit))
+                counts[bit] += int(np.count_nonzero(flag & bit))
             room = MAX_REPORTED - sum(len(k) for k in kept)
             if room > 0:
                 kept.append(bad[:room] + start)
@@ -907,24 +922,30 @@ def simulate_file(trajectory: str | os.PathLike[str], out: str | os.PathLike[str
                     summary.flag_message(trajectory)
                     + " (--strict: stopped at the first chunk with flagged steps; "
                     "no output written)")
+        chunk_ = _Chunk(np.asarray(motion.t, dtype=np.float64), arrays, flag)
         if shift is None:
-            if slot_free is not None:
-                slot_free.result()
-            ready = [_with_carried(result_columns(result, plan, float32, reuse=slot), carried)]
+            ready = [(chunk_, carried)]
         else:
-            t = np.array(result.t, dtype=np.float64)
-            good = (result.flag & FLAG_NONFINITE) == 0
-            ready = shift.add(t, result.F, good, functools.partial(
-                _delayed_columns, result_columns(result, plan, float32), plan, float32,
+            good = (flag & FLAG_NONFINITE) == 0
+            ready = shift.add(chunk_.t, arrays["F"], good, functools.partial(
+                _delayed_columns, result_columns(chunk_, plan, float32), plan, float32,
                 carried))
         summary.steps = start + len(motion)
         summary.chunks += 1
         bar.update(len(motion))
         return ready
 
+    def write_one(item) -> None:
+        """Write one chunk (in the writing thread): its columns first, from a ``_Chunk``."""
+        if isinstance(item, tuple):
+            chunk_, carried = item
+            item = _with_carried(result_columns(chunk_, plan, float32, reuse=column_arrays),
+                                 carried)
+        writer.write(item)
+
     # three stages in three threads: reading and differentiating chunk k + 2 (this thread),
-    # evaluating chunk k + 1 and building its columns, writing chunk k (the compiled code,
-    # NumPy's copies and the Parquet writer run without the GIL)
+    # evaluating chunk k + 1, building the columns of chunk k and writing them (the compiled
+    # code, NumPy's copies and the Parquet writer run without the GIL)
     try:
         with gio.atomic_write(out, mode_text, **options) as handle, \
                 ThreadPoolExecutor(1, thread_name_prefix="gsfric-evaluate") as evaluation, \
@@ -932,15 +953,15 @@ def simulate_file(trajectory: str | os.PathLike[str], out: str | os.PathLike[str
             writer = _Writer(handle, kind)
             pending = None                  # the evaluation in flight
             writes: list = []               # the writes in flight, oldest first
-            slot_writes: list = [None, None]   # the last write of each slot's columns
+            set_writes: list = [None, None]   # the last write from each set of outputs
 
-            def write(ready: list[dict], slot: int | None) -> None:
-                for columns in ready:
+            def write(ready: list, which: int | None) -> None:
+                for item in ready:
                     while len(writes) >= 2:     # bounded: at most two chunks wait to be written
                         writes.pop(0).result()
-                    writes.append(output.submit(writer.write, columns))
-                    if slot is not None:
-                        slot_writes[slot] = writes[-1]
+                    writes.append(output.submit(write_one, item))
+                    if which is not None:
+                        set_writes[which] = writes[-1]
 
             try:
                 k = 0
@@ -950,8 +971,8 @@ def simulate_file(trajectory: str | os.PathLike[str], out: str | os.PathLike[str
                     if pending is not None:
                         write(pending.result(), (k - 1) % 2 if shift is None else None)
                     pending = evaluation.submit(process, start, motion,
-                                                _take(carry, len(motion)), slots[k % 2],
-                                                slot_writes[k % 2])
+                                                _take(carry, len(motion)), sets[k % 2],
+                                                set_writes[k % 2])
                     k += 1
                     del motion
                 if pending is not None:
