@@ -29,6 +29,9 @@ their global step indices and reported at the end as one warning, or, with ``str
 Output. Rows are appended to a temporary file in the output's directory (a Parquet row group
 or a CSV block per chunk) that is renamed onto the output only when every chunk succeeded;
 on any error or a KeyboardInterrupt it is removed and an existing output is left untouched.
+The columns are those of the chosen groups (``DEFAULT_COLUMN_GROUPS`` unless told; the
+formats are described in docs/formats.md). Reading and differentiating, evaluating, and
+building the columns and writing run in three threads, chunk after chunk.
 """
 
 from __future__ import annotations
