@@ -4,13 +4,14 @@ Writes a long Parquet trajectory (a smooth 6-DoF motion sampled at 1 kHz, quater
 orientation, written row group by row group, in a child process), then runs
 ``gsfric simulate`` on it in a subprocess and reports that child's peak resident set size
 (``ru_maxrss``, from ``os.wait4``; ``resource.getrusage(RUSAGE_CHILDREN).ru_maxrss`` is printed
-too) and the wall time::
+too), the wall time and the user and system CPU time::
 
     .venv/bin/python benchmarks/memory_10M.py                       # 10M steps, chunk 100000
     .venv/bin/python benchmarks/memory_10M.py --steps 200000 --chunk 5000
 
-The figures of a run are in docs/robustness.md. Not part of the test suite (it takes minutes
-and several GB of disk); tests/test_robustness.py runs the same functions on 200k steps.
+The figures of a run are in docs/performance.md (``simulate``) and docs/robustness.md. Not
+part of the test suite (it takes minutes and several GB of disk); tests/test_robustness.py
+runs the same functions on 200k steps.
 """
 
 from __future__ import annotations
@@ -54,6 +55,8 @@ def main(argv: list[str] | None = None) -> int:
                         help="Working directory (default: a temporary one, removed after).")
     parser.add_argument("--keep", action="store_true", help="Keep the files.")
     parser.add_argument("--json", type=Path, help="Also write the figures as JSON.")
+    parser.add_argument("--columns", default=None,
+                        help="simulate's --columns (default: its default columns).")
     parser.add_argument("--generate", type=Path, help=argparse.SUPPRESS)
     args = parser.parse_args(argv)
     if args.generate:
@@ -72,7 +75,8 @@ def main(argv: list[str] | None = None) -> int:
             subprocess.run([sys.executable, __file__, "--generate", str(trajectory),
                             "--steps", str(args.steps)], check=True)
         written = time.perf_counter() - start
-        figures = run_simulate(trajectory, out, args.chunk, args.threads)
+        extra = () if args.columns is None else ("--columns", args.columns)
+        figures = run_simulate(trajectory, out, args.chunk, args.threads, extra)
         if figures["returncode"] != 0:
             print(figures["stderr"], file=sys.stderr)
             return 1
@@ -82,9 +86,12 @@ def main(argv: list[str] | None = None) -> int:
         figures.update(steps=args.steps, chunk=args.chunk, threads=args.threads,
                        rows_written=rows, trajectory_mb=trajectory.stat().st_size / 2**20,
                        output_mb=out.stat().st_size / 2**20, generate_s=written,
-                       steps_per_s=args.steps / figures["wall_s"], cpus=os.cpu_count())
+                       steps_per_s=args.steps / figures["wall_s"],
+                       steps_per_cpu_s=args.steps / max(figures["cpu_s"], 1e-9),
+                       cpus=os.cpu_count())
         for key in ("command", "steps", "chunk", "threads", "rows_written", "peak_rss_mb",
-                    "children_max_rss_mb", "wall_s", "cpu_s", "steps_per_s", "trajectory_mb",
+                    "children_max_rss_mb", "wall_s", "cpu_s", "user_s", "system_s",
+                    "steps_per_s", "steps_per_cpu_s", "trajectory_mb",
                     "output_mb", "cpus"):
             value = figures[key]
             print(f"{key:20s} {value:.1f}" if isinstance(value, float) else f"{key:20s} {value}")

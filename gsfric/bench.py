@@ -377,8 +377,8 @@ def write_trajectory(path: Path, steps: int, group: int = 250_000) -> None:
 def run_simulate(trajectory, out, chunk: int | None = None, threads: int | None = None,
                  extra: tuple[str, ...] = ()) -> dict:
     """Run ``gsfric simulate`` of ``trajectory`` to ``out`` in a child process (default chunk
-    and threads unless given): its exit code, output, wall and CPU seconds and peak resident
-    set size.
+    and threads unless given): its exit code, output, wall and CPU seconds (``cpu_s``, the sum
+    of ``user_s`` and ``system_s``) and peak resident set size.
 
     ``peak_rss_mb`` is the child's own ``ru_maxrss`` (``os.wait4``); ``children_max_rss_mb`` is
     ``getrusage(RUSAGE_CHILDREN).ru_maxrss`` of this process afterwards, the largest of all its
@@ -406,7 +406,8 @@ def run_simulate(trajectory, out, chunk: int | None = None, threads: int | None 
     return {"command": " ".join(["gsfric", *cmd[3:]]),
             "returncode": os.waitstatus_to_exitcode(status), "stdout": out_text.strip(),
             "stderr": err_text.strip(), "wall_s": wall,
-            "cpu_s": usage.ru_utime + usage.ru_stime,
+            "cpu_s": usage.ru_utime + usage.ru_stime, "user_s": usage.ru_utime,
+            "system_s": usage.ru_stime,
             "peak_rss_mb": usage.ru_maxrss * scale / 2**20,
             "children_max_rss_mb": children / 2**20}
 
@@ -418,7 +419,8 @@ def simulate_child(steps: int, trajectory: str, out: str) -> dict | None:
     if run["returncode"] != 0:
         return None
     wall, cpu = run["wall_s"], run["cpu_s"]
-    return {"steps": steps, "wall_s": wall, "cpu_s": cpu, "steps_per_s": steps / wall,
+    return {"steps": steps, "wall_s": wall, "cpu_s": cpu, "user_s": run["user_s"],
+            "system_s": run["system_s"], "steps_per_s": steps / wall,
             "steps_per_cpu_s": steps / max(cpu, 1e-9),
             "peak_rss_gb": run["peak_rss_mb"] * 2**20 / 1e9,
             "output_gb": Path(out).stat().st_size / 1e9}
@@ -784,7 +786,9 @@ def format_report(report: Report) -> str:
         if "simulate" in p:
             sim = p["simulate"]
             lines.append(f"gsfric simulate, {sim['steps']:,} steps Parquet to Parquet (default "
-                         f"columns): {sim['wall_s']:.3g} s wall, {sim['cpu_s']:.3g} s CPU, "
+                         f"columns): {sim['wall_s']:.3g} s wall, {sim['cpu_s']:.3g} s CPU "
+                         f"({sim.get('user_s', float('nan')):.3g} user, "
+                         f"{sim.get('system_s', float('nan')):.3g} system), "
                          f"{sim['steps_per_s']:.3g} steps/s ({sim['steps_per_cpu_s']:.3g} per "
                          f"CPU second), peak RSS {sim['peak_rss_gb']:.3g} GB, output "
                          f"{sim['output_gb']:.3g} GB")

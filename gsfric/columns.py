@@ -79,16 +79,16 @@ COLUMNS: tuple[Column, ...] = (
     Column("D{i}", "m", "length of leg i, C_i to E_i (Result.D)", "lengths", "D"),
     Column("FfrS{i}", "N", "signed friction force of prismatic joint i on the rod along the "
            "leg direction u_i (C_i to E_i): negative while the leg extends, positive while it "
-           "retracts (Result.Ffr)", "friction", "Ffr"),
+           "retracts (Result.Ffr)", "friction_detail", "Ffr"),
     Column("Fjoint{i}", "N", "part of F_i that carries the spherical and universal joints' "
-           "friction moments (coupled model; zero in the paper's post-hoc model)", "friction",
-           "F_joint"),
+           "friction moments (coupled model; zero in the paper's post-hoc model)",
+           "friction_detail", "F_joint"),
     Column("MfrE{a}{i}", "N m", "friction moment vector of spherical joint E_i on the platform, "
            "opposing the platform's rotation relative to the leg; base frame components x, y, z "
-           "(Result.MfrE)", "friction", "MfrE"),
+           "(Result.MfrE)", "friction_detail", "MfrE"),
     Column("MfrC{a}{i}", "N m", "friction moment vector of universal joint C_i on the leg, "
            "opposing the leg's rotation relative to the base; base frame components x, y, z "
-           "(Result.MfrC)", "friction", "MfrC"),
+           "(Result.MfrC)", "friction_detail", "MfrC"),
     Column("flag", "1", "0 for a sound step; else the sum of 1 (non-finite value), 2 (leg "
            "length outside the stroke), 4 (near-singular platform Jacobian), 8 (leg near its "
            "universal joint's first axis), 16 (coupled friction solve not converged)", "flags"),
@@ -106,13 +106,20 @@ MEASURED: tuple[Column, ...] = (
 
 GROUPS = {
     "forces": "F1..F6: actuator forces with friction, N",
-    "friction": "MfrE1..6, MfrC1..6 (N m), Ffr1..6 (N): the paper's signed friction scalars; "
-                "FfrS1..6, Fjoint1..6 (N), MfrEx1..MfrCz6 (N m): signed friction",
+    "friction": "MfrE1..6, MfrC1..6 (N m), Ffr1..6 (N): the paper's friction scalars "
+                "(<= 0, negative = opposing)",
     "reactions": "REx1..REz6, RCx1..RCz6 (N), MC1..MC6 (N m): joint reactions",
+    "friction_detail": "FfrS1..6, Fjoint1..6 (N), MfrEx1..MfrEz6, MfrCx1..MfrCz6 (N m): signed "
+                       "prismatic friction, the joints' share of F, friction moment vectors",
     "frictionless": "F0_1..F0_6: actuator forces of frictionless joints, N",
     "lengths": "D1..D6: leg lengths, m",
 }
 """Output groups of ``simulate --columns``; ``t`` and ``flag`` are always written."""
+
+DEFAULT_GROUPS = ("forces", "friction", "reactions")
+"""The groups ``simulate`` writes unless ``--columns`` says otherwise: with ``t`` and ``flag``
+the 68 values of a step (``t``, F, the paper's friction scalars, the joint reactions, the
+flag); every other group is one ``--columns`` away (``all``: every group)."""
 
 
 def plan(groups=tuple(GROUPS)) -> list[tuple[str, str, int, str]]:

@@ -708,3 +708,48 @@ def evaluate(platform: Platform, motion, mode: str = "kinematic", **kwargs) -> R
 
     evaluation_arguments(platform, motion, kwargs.get("chunk", 1))
     return Evaluator(platform, mode=mode).evaluate(motion, **kwargs)
+
+
+def evaluate_outputs(evaluator: Evaluator, motion: Motion, names, buffers: dict | None = None,
+                     sensor: bool = True) -> tuple[dict[str, np.ndarray], np.ndarray]:
+    """Only the outputs ``names`` of ``motion`` and its step flags, as
+    ``Evaluator.evaluate_quiet`` computes them, without a Result.
+
+    For a caller that writes a few outputs at every step (``gsfric.stream``): the compiled
+    code stores only those (the ones the flags read are computed all the same), about an
+    eighth less time than every output for the 7 of ``simulate``'s default columns.
+
+    Parameters
+    ----------
+    evaluator : Evaluator
+    motion : Motion
+        N steps.
+    names : iterable of str
+        Output names (``Result`` arrays, e.g. "F", "R_E"; not the detail outputs).
+    buffers : dict, optional
+        Lends the output arrays from call to call (filled on first use): the arrays returned
+        are then views into it, valid until the next call with it.
+    sensor : bool
+        Apply the sensor's effects to F (when "F" is among ``names``).
+
+    Returns
+    -------
+    (dict of name -> ndarray (N, size), ndarray (N,) int64)
+        Each output flat per step (R_E: (N, 18), leg i's x, y, z at 3 (i - 1) + 0, 1, 2)
+        and the flags (``FLAG_NAMES``); a non-finite step's outputs are NaN.
+    """
+    n = len(motion)
+    sizes = {name: size for name, size, _ in evaluator._full.outputs}
+    outs: dict[str, np.ndarray] = {}
+    for name in dict.fromkeys(names):
+        buf = None if buffers is None else buffers.get(name)
+        if buf is None or buf.shape[0] < n:
+            buf = np.empty((n, sizes[name]))
+            if buffers is not None:
+                buffers[name] = buf
+        outs[name] = buf[:n]
+    flag = np.empty(n, dtype=np.int64)
+    evaluator._run(motion, 0, n, outs, flag)
+    if sensor and "F" in outs:
+        evaluator._apply_sensor(np.asarray(motion.t, float), outs, flag)
+    return outs, flag

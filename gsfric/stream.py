@@ -29,6 +29,9 @@ their global step indices and reported at the end as one warning, or, with ``str
 Output. Rows are appended to a temporary file in the output's directory (a Parquet row group
 or a CSV block per chunk) that is renamed onto the output only when every chunk succeeded;
 on any error or a KeyboardInterrupt it is removed and an existing output is left untouched.
+The columns are those of the chosen groups (``DEFAULT_COLUMN_GROUPS`` unless told; the
+formats are described in docs/formats.md). Reading and differentiating, evaluating, and
+building the columns and writing run in three threads, chunk after chunk.
 """
 
 from __future__ import annotations
@@ -46,14 +49,15 @@ from typing import Any
 import numpy as np
 
 from gsfric import io as gio
+from gsfric.columns import DEFAULT_GROUPS as DEFAULT_COLUMN_GROUPS   # written by default
 from gsfric.columns import GROUPS as COLUMN_GROUPS   # output groups of --columns
 from gsfric.columns import plan as _column_plan      # the columns from gsfric.columns
 from gsfric.errors import GsfricWarning, InputError, StepFlagError
 from gsfric.evaluation import FLAG_NAMES, Evaluator
 from gsfric.trajectory import (DEFAULT_POLYORDER, GIMBAL_JUMP, GIMBAL_SIN_BETA, MIN_SAMPLES,
                                UNIFORM_RTOL, Motion, _check_window, _conjugate, _continuous,
-                               _gcv_window, _savgol, quaternion_from_euler, quaternion_multiply,
-                               rotation_from_quaternion)
+                               _gcv_window, _savgol, quaternion_from_euler,
+                               quaternion_multiply)
 
 DEFAULT_CHUNK = 100_000
 """Steps per chunk of ``simulate_file`` (about 0.5 GB of working memory)."""
@@ -125,17 +129,30 @@ def _parquet_blocks(path: Path, rows: int):
 
         yield pd.DataFrame({n: [] for n in names})
         return
+    import pandas as pd
+
     batches = source.iter_batches(batch_size=rows)
     while True:
         try:
             batch = next(batches)
-            frame = batch.to_pandas()
+            frame = pd.DataFrame({name: _numpy(batch.column(i)) for i, name in enumerate(names)},
+                                 copy=False)
         except StopIteration:
             return
         except errors as error:
             raise InputError(f"{path}: cannot read as Parquet: {error}") from None
-        frame.columns = [str(c) for c in frame.columns]
         yield frame
+
+
+def _numpy(array):
+    """A column of a record batch as NumPy: floats without nulls as a view of the Arrow buffer
+    (no copy), anything else as pandas converts it (nulls, strings, timestamps...)."""
+    import pyarrow as pa
+
+    if array.null_count == 0 and (pa.types.is_floating(array.type)
+                                  or pa.types.is_integer(array.type)):
+        return array.to_numpy(zero_copy_only=True)
+    return array.to_pandas()
 
 
 @dataclass
@@ -270,26 +287,138 @@ def _whole(path: Path, blocks: list[_Block], window, polyorder) -> Motion:
     return gio._motion(path, columns, orientation, window, polyorder)
 
 
+@functools.lru_cache(maxsize=16)
+def _savgol_coefficients(window: int, polyorder: int) -> np.ndarray:
+    """(3, window) Savitzky-Golay weights of the value and the first two derivatives (unit
+    sample step), applied as ``sum_j c[k, j] y[i - window // 2 + j]``: those of
+    ``scipy.signal.savgol_filter`` away from the ends of the signal. Read-only."""
+    from scipy.signal import savgol_coeffs
+
+    # the weights savgol_filter convolves with, reversed (as scipy.ndimage.convolve1d does)
+    c = np.stack([savgol_coeffs(window, polyorder, deriv=k)[::-1] for k in (0, 1, 2)])
+    c.flags.writeable = False
+    return c
+
+
+def _savgol_core(y: np.ndarray, window: int, polyorder: int, step: float,
+                 lo: int, hi: int) -> list[np.ndarray]:
+    """The value and first two derivatives (``_savgol``) of y (N, k) at rows lo..hi-1, which
+    have ``window // 2`` samples on each side: contiguous (hi - lo, k) arrays.
+
+    The sums are those of ``scipy.ndimage.correlate1d`` (which ``savgol_filter`` runs), term
+    by term in its order, so the values are the same to the last bit: weights even about the
+    middle sample (within the machine epsilon) add each pair of samples at distance j first,
+    odd ones subtract them, others are summed sample by sample."""
+    c = _savgol_coefficients(window, polyorder)
+    h = window // 2
+    y = np.ascontiguousarray(y)
+    shape = (hi - lo, y.shape[1])
+    out = []
+    pair, part = np.empty(shape), np.empty(shape)
+    for k in (0, 1, 2):
+        w = c[k]
+        sign = 1 if np.all(np.abs(w[h + 1:] - w[h - 1::-1]) <= _EPS) else \
+            -1 if np.all(np.abs(w[h + 1:] + w[h - 1::-1]) <= _EPS) else 0
+        if sign:
+            total = np.multiply(y[lo:hi], w[h])
+            combine = np.add if sign > 0 else np.subtract
+            for j in range(h, 0, -1):
+                combine(y[lo - j:hi - j], y[lo + j:hi + j], out=pair)
+                total += np.multiply(pair, w[h - j], out=part)
+        else:
+            total = np.multiply(y[lo + h:hi + h], w[2 * h])
+            for j in range(-h, h):
+                total += np.multiply(y[lo + j:hi + j], w[h + j], out=part)
+        if k:
+            total /= step ** k
+        out.append(total)
+    return out
+
+
+_EPS = float(np.finfo(float).eps)
+
+
+def _cross_into(out: np.ndarray, a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """``out[:] = a x b`` row by row, (N, 3)."""
+    for i, (j, k) in enumerate(((1, 2), (2, 0), (0, 1))):
+        np.subtract(a[:, j] * b[:, k], a[:, k] * b[:, j], out=out[:, i])
+    return out
+
+
+def _rates(q0: np.ndarray, q1: np.ndarray, q2: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Angular velocity and acceleration (N, 3), base frame, from a quaternion signal and its
+    first two derivatives (N, 4), not necessarily of unit length: ``omega = 2 vec(q1 q0*) /
+    |q0|^2``, ``alpha = 2 vec(q2 q0*) / |q0|^2 - omega 2 (q0 . q1) / |q0|^2`` (as
+    ``_differentiate``'s quaternion products), with ``vec(p q0*) = w0 vp - wp v0 + v0 x vp``."""
+    w0, v0 = q0[:, :1], q0[:, 1:]
+    squared = np.einsum("ij,ij->i", q0, q0)[:, None]
+    dot01 = np.einsum("ij,ij->i", q0, q1)[:, None]
+    cross = np.empty((len(q0), 3))
+    omega = w0 * q1[:, 1:]
+    omega -= q1[:, :1] * v0
+    omega += _cross_into(cross, v0, q1[:, 1:])
+    omega *= 2
+    omega /= squared
+    alpha = w0 * q2[:, 1:]
+    alpha -= q2[:, :1] * v0
+    alpha += _cross_into(cross, v0, q2[:, 1:])
+    alpha *= 2
+    alpha /= squared
+    alpha -= omega * (2 * dot01 / squared)
+    return omega, alpha
+
+
+def _rotation(q: np.ndarray) -> np.ndarray:
+    """``rotation_from_quaternion`` (N, 4) -> (N, 3, 3), written in place of its stacks."""
+    q = q / np.linalg.norm(q, axis=-1, keepdims=True)
+    w, x, y, z = q.T
+    xx, yy, zz = x * x, y * y, z * z
+    xy, xz, yz = x * y, x * z, y * z
+    wx, wy, wz = w * x, w * y, w * z
+    r = np.empty((len(q), 3, 3))
+    r[:, 0, 0] = 1 - 2 * (yy + zz)
+    r[:, 0, 1] = 2 * (xy - wz)
+    r[:, 0, 2] = 2 * (xz + wy)
+    r[:, 1, 0] = 2 * (xy + wz)
+    r[:, 1, 1] = 1 - 2 * (xx + zz)
+    r[:, 1, 2] = 2 * (yz - wx)
+    r[:, 2, 0] = 2 * (xz - wy)
+    r[:, 2, 1] = 2 * (yz + wx)
+    r[:, 2, 2] = 1 - 2 * (xx + yy)
+    return r
+
+
 def _differentiate(t, position, q, windows, polyorder, step, core: slice,
                    where: tuple[Path, int]) -> Motion:
-    """Savitzky-Golay smoothing and derivatives as ``Motion.from_samples``; the core steps."""
+    """Savitzky-Golay smoothing and derivatives as ``Motion.from_samples``; the core steps.
+
+    Where the core has half a window of samples on each side (every chunk but those at the
+    ends of the file), the filter is applied to the core only (``_savgol_core``); at the ends
+    of the file, ``scipy.signal.savgol_filter`` fits the edges."""
     wp, wq = windows
-    p0, p1, p2 = (a[core] for a in _savgol(position, wp, polyorder, step))
-    q0, q1, q2 = (a[core] for a in _savgol(q, wq, polyorder, step))
-    squared = np.sum(q0 * q0, axis=1, keepdims=True)
-    omega = 2 * quaternion_multiply(q1, _conjugate(q0))[:, 1:] / squared
-    alpha = (2 * quaternion_multiply(q2, _conjugate(q0))[:, 1:] / squared
-             - omega * 2 * np.sum(q0 * q1, axis=1, keepdims=True) / squared)
-    finite = np.ones(len(q0), dtype=bool)
-    for a in (p0, p1, p2, q0, omega, alpha):
-        finite &= np.isfinite(a).all(axis=1)
-    if not finite.all():
+    lo, hi = core.start, core.stop
+    if lo >= max(windows) // 2 and len(t) - hi >= max(windows) // 2:
+        p0, p1, p2 = _savgol_core(position, wp, polyorder, step, lo, hi)
+        q0, q1, q2 = _savgol_core(q, wq, polyorder, step, lo, hi)
+        omega, alpha = _rates(q0, q1, q2)
+    else:
+        p0, p1, p2 = (a[core] for a in _savgol(position, wp, polyorder, step))
+        q0, q1, q2 = (a[core] for a in _savgol(q, wq, polyorder, step))
+        squared = np.sum(q0 * q0, axis=1, keepdims=True)
+        omega = 2 * quaternion_multiply(q1, _conjugate(q0))[:, 1:] / squared
+        alpha = (2 * quaternion_multiply(q2, _conjugate(q0))[:, 1:] / squared
+                 - omega * 2 * np.sum(q0 * q1, axis=1, keepdims=True) / squared)
+    parts = (p0, p1, p2, q0, omega, alpha)
+    if not all(np.isfinite(a).all() for a in parts):
+        finite = np.ones(len(q0), dtype=bool)
+        for a in parts:
+            finite &= np.isfinite(a).all(axis=1)
         bad = np.flatnonzero(~finite)
         raise InputError(f"{where[0]}: rows {where[1] + bad[0] + 1}-{where[1] + bad[-1] + 1}: "
                          "differentiation gave non-finite values (values or time steps out "
                          "of range)")
     # every value checked above (t by the reader): no second validation pass
-    return Motion._trusted(t[core], p0, rotation_from_quaternion(q0), p1, omega, p2, alpha)
+    return Motion._trusted(t[core], p0, _rotation(q0), p1, omega, p2, alpha)
 
 
 def iter_motions(path: str | os.PathLike[str], *, chunk: int = DEFAULT_CHUNK,
@@ -505,8 +634,11 @@ FLOAT32_RTOL = 2.0 ** -24
 
 
 def parse_columns(text: str | None) -> tuple[str, ...]:
-    """Output groups from ``--columns`` ("forces,friction"; None or "all": every group)."""
-    if text is None or text.strip() == "all":
+    """Output groups from ``--columns`` ("forces,friction"; None: ``DEFAULT_COLUMN_GROUPS``,
+    "all": every group)."""
+    if text is None:
+        return tuple(DEFAULT_COLUMN_GROUPS)
+    if text.strip() == "all":
         return tuple(COLUMN_GROUPS)
     chosen = tuple(dict.fromkeys(g.strip() for g in text.split(",") if g.strip()))
     unknown = [g for g in chosen if g not in COLUMN_GROUPS]
@@ -516,28 +648,50 @@ def parse_columns(text: str | None) -> tuple[str, ...]:
     return chosen
 
 
+TRANSPOSE_BLOCK = 2048
+"""Steps per block of the row-major to column-major copies of ``result_columns``: a block of a
+Result array stays in the cache while its columns are written (twice as fast as one strided
+copy of the whole array)."""
+
+
+def _transpose_into(out: np.ndarray, rows: np.ndarray) -> None:
+    """``out[:] = rows.T`` for rows (N, k) and out (k, N), block by block of steps."""
+    n = rows.shape[0]
+    for s in range(0, n, TRANSPOSE_BLOCK):
+        np.copyto(out[:, s:s + TRANSPOSE_BLOCK], rows[s:s + TRANSPOSE_BLOCK].T,
+                  casting="same_kind")
+
+
+@dataclass
+class _Chunk:
+    """What ``result_columns`` reads of a Result: times (N,), outputs by name, flags (N,)."""
+
+    t: np.ndarray
+    arrays: dict[str, np.ndarray]
+    flag: np.ndarray
+
+
 def result_columns(result, plan, float32: bool = False, reuse: dict | None = None
                    ) -> dict[str, np.ndarray]:
-    """The output columns of one Result, each a contiguous 1-D array (one transposed copy per
-    output array; nothing refers to the Result's buffers). ``reuse`` (a dict, filled on first
-    use) lends the arrays of the columns from call to call: the columns are then valid until
-    the next call with it."""
-    n = len(result)
-    cols = {"t": np.array(result.t, dtype=np.float64)}
-    rows: dict[str, np.ndarray] = {}
+    """The output columns of one Result (or ``_Chunk``), each a contiguous 1-D array (one
+    transposed copy per output array; nothing refers to the Result's buffers). ``reuse`` (a
+    dict, filled on first use) lends the arrays of the columns from call to call: the columns
+    are then valid until the next call with it."""
+    n = len(result.t)
     dtype = np.float32 if float32 else np.float64
-    for column, key, index, _ in plan:
-        if key not in rows:
-            values = result.arrays[key].reshape(n, -1).T
-            if reuse is None:
-                rows[key] = np.array(values, dtype=dtype, order="C")
-            else:
-                buf = reuse.get(key)
-                if buf is None or buf.shape[1] < n or buf.dtype != dtype:
-                    buf = reuse[key] = np.empty((values.shape[0], n), dtype=dtype)
-                rows[key] = buf[:, :n]
-                np.copyto(rows[key], values, casting="same_kind")
-        cols[column] = rows[key][index]
+    keys = list(dict.fromkeys(key for _, key, _, _ in plan))
+    blocks: dict[str, np.ndarray] = {}
+    for key in keys:
+        values = result.arrays[key].reshape(n, -1)
+        buf = None if reuse is None else reuse.get(key)
+        if buf is None or buf.shape[1] < n or buf.dtype != dtype:
+            buf = np.empty((values.shape[1], n), dtype=dtype)
+            if reuse is not None:
+                reuse[key] = buf
+        blocks[key] = buf[:, :n]
+        _transpose_into(blocks[key], values)
+    cols = {"t": np.array(result.t, dtype=np.float64)}
+    cols.update((column, blocks[key][index]) for column, key, index, _ in plan)
     cols["flag"] = np.array(result.flag, dtype=np.int64)
     return cols
 
@@ -593,18 +747,70 @@ class _Delay:
         return done
 
 
+PARQUET_COMPRESSION = "lz4"
+"""Compression of ``simulate``'s Parquet output (docs/formats.md gives the measured choices:
+the outputs' float64 mantissas are close to random bytes, so general-purpose compression
+saves little unless the bytes are split by significance first, ``PARQUET_SPLIT_FLOATS``)."""
+
+PARQUET_SPLIT_FLOATS = True
+"""Write the float columns with Parquet's BYTE_STREAM_SPLIT encoding (pays only with a
+compression)."""
+
+FLUSH_BYTES = 256 * 2**20
+"""Bytes written between two requests to the disk (``_Flusher``)."""
+
+
+class _Flusher:
+    """Hands the written part of a file to the disk while more is being written.
+
+    Every ``FLUSH_BYTES`` (when the previous flush has finished), ``os.fdatasync`` runs in a
+    thread of its own (it waits for the disk, not the processor): the disk writes during the
+    run instead of after it, so that the final ``fsync`` of ``atomic_write`` finds little
+    left. Without it, the kernel holds back up to a tenth of the memory before writing."""
+
+    def __init__(self, handle) -> None:
+        from concurrent.futures import ThreadPoolExecutor
+
+        self.handle = handle
+        self.fileno = handle.fileno()
+        self.sync = getattr(os, "fdatasync", os.fsync)
+        self.pool = ThreadPoolExecutor(1, thread_name_prefix="gsfric-flush")
+        self.pending = None
+        self.flushed = 0
+
+    def written(self) -> None:
+        """Called after each write, from the writing thread."""
+        if self.pending is not None and not self.pending.done():
+            return
+        if self.pending is not None:
+            self.pending.result()
+        position = self.handle.tell()
+        if position - self.flushed >= FLUSH_BYTES:
+            self.handle.flush()
+            self.flushed = position
+            self.pending = self.pool.submit(self.sync, self.fileno)
+
+    def close(self) -> None:
+        self.pool.shutdown(wait=True)
+        pending, self.pending = self.pending, None
+        if pending is not None:
+            pending.result()
+
+
 class _Writer:
     """Appends column dicts to an open binary (Parquet) or text (CSV) handle.
 
-    Parquet: floats in plain encoding without compression (they almost never repeat: a
-    dictionary only costs time and is dropped by the writer when it grows, and general-purpose
-    compression gains a few percent at a third more time), the flag column dictionary-encoded;
-    one row group per chunk."""
+    Parquet: floats in plain encoding (no dictionary: they almost never repeat), compression
+    ``PARQUET_COMPRESSION``, the flag column dictionary-encoded; one row group per chunk.
+    The Arrow arrays are the column arrays themselves (no copy); the schema, with each field's
+    ``unit`` and ``description``, is built once, from the first chunk."""
 
     def __init__(self, handle, kind: str) -> None:
         self.handle, self.kind = handle, kind
         self.parquet = None
+        self.schema = None
         self.header = True
+        self.flusher = _Flusher(handle)
 
     def write(self, columns: dict[str, np.ndarray]) -> None:
         if self.kind == "csv":
@@ -613,24 +819,36 @@ class _Writer:
             pd.DataFrame(columns, copy=False).to_csv(self.handle, index=False,
                                                      header=self.header)
             self.header = False
-            return
+        else:
+            self._write_parquet(columns)
+        self.flusher.written()
+
+    def _write_parquet(self, columns: dict[str, np.ndarray]) -> None:
+        import pyarrow as pa
         import pyarrow.parquet as pq
 
-        from gsfric.columns import arrow_table   # field metadata: unit, description
-
-        table = arrow_table(columns)
+        arrays = [pa.array(values) for values in columns.values()]
         if self.parquet is None:
-            self.parquet = pq.ParquetWriter(self.handle, table.schema, use_dictionary=["flag"],
-                                            compression="none")
-        self.parquet.write_table(table)
+            from gsfric.columns import arrow_table   # field metadata: unit, description
+
+            self.schema = arrow_table(dict(zip(columns, arrays))).schema
+            floats = [f.name for f in self.schema if pa.types.is_floating(f.type)]
+            self.parquet = pq.ParquetWriter(
+                self.handle, self.schema, use_dictionary=["flag"],
+                compression=PARQUET_COMPRESSION,
+                use_byte_stream_split=floats if PARQUET_SPLIT_FLOATS else False)
+        self.parquet.write_table(pa.Table.from_arrays(arrays, schema=self.schema))
 
     def close(self) -> None:
-        if self.parquet is not None:
-            writer, self.parquet = self.parquet, None
-            writer.close()
+        try:
+            if self.parquet is not None:
+                writer, self.parquet = self.parquet, None
+                writer.close()
+        finally:
+            self.flusher.close()
 
     def abandon(self) -> None:
-        with contextlib.suppress(Exception):
+        with contextlib.suppress(BaseException):
             self.close()
 
 
@@ -666,13 +884,17 @@ def simulate_file(trajectory: str | os.PathLike[str], out: str | os.PathLike[str
         F1..F6 (measured data) also gets ``F1_measured..F6_measured`` and the residuals
         ``F1_residual..F6_residual`` (measured minus model) in the output.
     columns : iterable of str, optional
-        Output groups (``COLUMN_GROUPS``); default all. ``t`` and ``flag`` always.
+        Output groups (``COLUMN_GROUPS``); default ``DEFAULT_COLUMN_GROUPS`` (forces, the
+        paper's friction scalars, reactions: 68 values a step). ``t`` and ``flag`` always.
     float32 : bool
         Write the outputs (not ``t``) as float32: relative error up to ``FLOAT32_RTOL``
         (6e-8) of each value, half the file.
 
-    Reading and differentiating chunk k + 1 (this thread) overlaps evaluating and writing
-    chunk k (one worker thread; the compiled code and the Parquet writer run without the GIL).
+    Three stages overlap, each in its own thread: reading and differentiating chunk k + 2
+    (the calling thread), evaluating chunk k + 1 and building its columns, writing chunk k
+    (the compiled code, NumPy's copies and the Parquet writer run without the GIL). The
+    evaluation's outputs and the columns' arrays are reused from chunk to chunk within the
+    call (two sets of columns, one being written while the other is filled).
 
     Returns
     -------
@@ -721,24 +943,33 @@ def simulate_file(trajectory: str | os.PathLike[str], out: str | os.PathLike[str
     options = {"newline": ""} if kind == "csv" else {}
     from concurrent.futures import ThreadPoolExecutor
 
-    buffers: dict = {}  # output arrays reused from chunk to chunk (by the one worker)
-    column_arrays: dict = {}  # and the output columns' arrays
+    sets: tuple[dict, dict] = ({}, {})   # the evaluation's outputs of even and odd chunks
+    column_arrays: dict = {}             # the columns' arrays (filled by the writing thread)
     from gsfric.catalog import sensor_parameters
-    from gsfric.evaluation import FLAG_NONFINITE
+    from gsfric.evaluation import FLAG_NONFINITE, evaluate_outputs
 
     gains, delay = sensor_parameters(platform.effects)
     # a delay reaches across chunks: applied here, over the record, not per chunk
     shift = _Delay(gains, delay) if delay != 0.0 else None
+    names = list(dict.fromkeys(key for _, key, _, _ in plan))
+    if shift is not None and "F" not in names:
+        names.append("F")
 
-    def process(writer, start: int, motion, carried: dict[str, np.ndarray]) -> None:
-        """Evaluate, count the flags, write (in the worker thread; no warnings issued)."""
-        result = evaluator.evaluate_quiet(motion, chunk=min(len(motion), DEFAULT_CHUNK),
-                                          buffers=buffers, sensor=shift is None)
-        bad = result.flagged()
+    def process(start: int, motion, carried: dict[str, np.ndarray], buffers: dict,
+                buffers_free) -> list:
+        """Evaluate, count the flags (in the evaluation thread; no warnings issued); what to
+        write: (chunk, carried columns) to be made columns by the writing thread, or, with a
+        sensor delay, the column dicts that are ready. ``buffers_free``: the write of the
+        chunk that last used ``buffers``, waited for before they are overwritten."""
+        if buffers_free is not None:
+            buffers_free.result()
+        arrays, flag = evaluate_outputs(evaluator, motion, names, buffers=buffers,
+                                        sensor=shift is None)
+        bad = np.flatnonzero(flag)
         if bad.size:
             summary.flagged += int(bad.size)
             for bit in FLAG_NAMES:
-                counts[bit] += int(np.count_nonzero(result.flag & bit))
+                counts[bit] += int(np.count_nonzero(flag & bit))
             room = MAX_REPORTED - sum(len(k) for k in kept)
             if room > 0:
                 kept.append(bad[:room] + start)
@@ -749,43 +980,71 @@ def simulate_file(trajectory: str | os.PathLike[str], out: str | os.PathLike[str
                     summary.flag_message(trajectory)
                     + " (--strict: stopped at the first chunk with flagged steps; "
                     "no output written)")
-        if shift is None:   # written before the next chunk: its column arrays are reused
-            writer.write(_with_carried(
-                result_columns(result, plan, float32, reuse=column_arrays), carried))
+        chunk_ = _Chunk(np.asarray(motion.t, dtype=np.float64), arrays, flag)
+        if shift is None:
+            ready = [(chunk_, carried)]
         else:
-            t = np.array(result.t, dtype=np.float64)
-            good = (result.flag & FLAG_NONFINITE) == 0
-            for ready in shift.add(t, result.F, good, functools.partial(
-                    _delayed_columns, result_columns(result, plan, float32), plan, float32,
-                    carried)):
-                writer.write(ready)
+            good = (flag & FLAG_NONFINITE) == 0
+            ready = shift.add(chunk_.t, arrays["F"], good, functools.partial(
+                _delayed_columns, result_columns(chunk_, plan, float32), plan, float32,
+                carried))
         summary.steps = start + len(motion)
         summary.chunks += 1
         bar.update(len(motion))
+        return ready
 
+    def write_one(item) -> None:
+        """Write one chunk (in the writing thread): its columns first, from a ``_Chunk``."""
+        if isinstance(item, tuple):
+            chunk_, carried = item
+            item = _with_carried(result_columns(chunk_, plan, float32, reuse=column_arrays),
+                                 carried)
+        writer.write(item)
+
+    # three stages in three threads: reading and differentiating chunk k + 2 (this thread),
+    # evaluating chunk k + 1, building the columns of chunk k and writing them (the compiled
+    # code, NumPy's copies and the Parquet writer run without the GIL)
     try:
         with gio.atomic_write(out, mode_text, **options) as handle, \
-                ThreadPoolExecutor(1, thread_name_prefix="gsfric-simulate") as pool:
+                ThreadPoolExecutor(1, thread_name_prefix="gsfric-evaluate") as evaluation, \
+                ThreadPoolExecutor(1, thread_name_prefix="gsfric-write") as output:
             writer = _Writer(handle, kind)
-            pending = None
+            pending = None                  # the evaluation in flight
+            writes: list = []               # the writes in flight, oldest first
+            set_writes: list = [None, None]   # the last write from each set of outputs
+
+            def write(ready: list, which: int | None) -> None:
+                for item in ready:
+                    while len(writes) >= 2:     # bounded: at most two chunks wait to be written
+                        writes.pop(0).result()
+                    writes.append(output.submit(write_one, item))
+                    if which is not None:
+                        set_writes[which] = writes[-1]
+
             try:
+                k = 0
                 for start, motion in motions:
                     if evaluator is None:
                         evaluator = Evaluator(platform, mode=mode, n_threads=n_threads)
                     if pending is not None:
-                        pending.result()
-                    pending = pool.submit(process, writer, start, motion,
-                                          _take(carry, len(motion)))
+                        write(pending.result(), (k - 1) % 2 if shift is None else None)
+                    pending = evaluation.submit(process, start, motion,
+                                                _take(carry, len(motion)), sets[k % 2],
+                                                set_writes[k % 2])
+                    k += 1
                     del motion
                 if pending is not None:
-                    pending.result()
+                    write(pending.result(), None)
+                    pending = None
                 if shift is not None:
-                    for ready in shift.finish():
-                        writer.write(ready)
+                    write(shift.finish(), None)
+                for done in writes:
+                    done.result()
             except BaseException:
-                if pending is not None:
-                    with contextlib.suppress(BaseException):
-                        pending.result()
+                for future in [pending, *writes]:
+                    if future is not None:
+                        with contextlib.suppress(BaseException):
+                            future.result()
                 writer.abandon()
                 raise
             writer.close()

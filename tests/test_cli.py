@@ -19,9 +19,8 @@ import pytest
 import tomli_w
 from click.testing import CliRunner
 
-from gsfric import models
+from gsfric import evaluation, models
 from gsfric.cli import main
-from gsfric.evaluation import Evaluator
 from gsfric.io import read_table, write_table
 from gsfric.trajectory import euler_from_rotation, quaternion_from_rotation
 
@@ -361,16 +360,16 @@ def test_keyboard_interrupt_exit_130_and_no_output(tmp_path, monkeypatch):
     path = tmp_path / "t.csv"
     write_table(trajectory(400), path)
     out = tmp_path / "o.parquet"
-    original = Evaluator.evaluate_quiet
+    original = evaluation.evaluate_outputs     # what simulate evaluates each chunk with
     calls = []
 
-    def interrupted(self, motion, **kwargs):
+    def interrupted(evaluator, motion, *args, **kwargs):
         calls.append(1)
         if len(calls) == 2:
             raise KeyboardInterrupt
-        return original(self, motion, **kwargs)
+        return original(evaluator, motion, *args, **kwargs)
 
-    monkeypatch.setattr(Evaluator, "evaluate_quiet", interrupted)
+    monkeypatch.setattr(evaluation, "evaluate_outputs", interrupted)
     message = error_of(run("simulate", "--trajectory", path, "--out", out, "--chunk", "100"),
                        code=130)
     assert message == "interrupted; no output was left half-written"

@@ -615,7 +615,7 @@ def test_streamed_simulation_equals_the_whole_evaluation(tmp_path):
     assert {130, 131, 599, 600} <= set(flagged.tolist())
     with pytest.warns(GsfricWarning) as caught:
         summary = stream.simulate_file(path, tmp_path / "out.parquet", platform, chunk=100,
-                                       window=15)
+                                       window=15, columns=("all",))
     message, = [str(w.message) for w in caught]
     shown = ", ".join(str(i) for i in flagged[:10])
     rows = ", ".join(str(i + 1) for i in flagged[:10])
@@ -651,15 +651,15 @@ def test_interrupted_run_leaves_no_partial_file(tmp_path, monkeypatch):
     out = tmp_path / "out.parquet"
     out.write_bytes(b"the previous result")
     calls = []
-    original = Evaluator.evaluate_quiet
+    original = gsfric.evaluation.evaluate_outputs     # what simulate evaluates each chunk with
 
-    def interrupted(self, motion, **kwargs):
+    def interrupted(evaluator, motion, *args, **kwargs):
         calls.append(len(motion))
         if len(calls) == 3:
             raise KeyboardInterrupt
-        return original(self, motion, **kwargs)
+        return original(evaluator, motion, *args, **kwargs)
 
-    monkeypatch.setattr(Evaluator, "evaluate_quiet", interrupted)
+    monkeypatch.setattr(gsfric.evaluation, "evaluate_outputs", interrupted)
     with pytest.raises(KeyboardInterrupt):
         stream.simulate_file(path, out, chunk=100, window=9)
     assert len(calls) == 3
@@ -685,10 +685,10 @@ def test_strict_stops_at_the_first_flagged_chunk(tmp_path, monkeypatch):
     write_table(frame, path)
     out = tmp_path / "out.csv"
     seen = []
-    original = Evaluator.evaluate_quiet
-    monkeypatch.setattr(Evaluator, "evaluate_quiet",
-                        lambda self, motion, **kw: seen.append(motion.t[0])
-                        or original(self, motion, **kw))
+    original = gsfric.evaluation.evaluate_outputs     # what simulate evaluates each chunk with
+    monkeypatch.setattr(gsfric.evaluation, "evaluate_outputs",
+                        lambda evaluator, motion, *a, **kw: seen.append(motion.t[0])
+                        or original(evaluator, motion, *a, **kw))
     with pytest.raises(StepFlagError, match=r"^.*t.csv: 1 of 300 steps flagged .*steps 250 "
                                             r"\(data rows 251\) \(--strict"):
         stream.simulate_file(path, out, chunk=100, window=9, strict=True)

@@ -35,7 +35,7 @@ def full(tmp_path_factory):
     folder = tmp_path_factory.mktemp("full")
     path = _trajectory(folder / "t.csv")
     out = folder / "all.parquet"
-    stream.simulate_file(path, out, chunk=200, window=9)
+    stream.simulate_file(path, out, chunk=200, window=9, columns=("all",))
     return path, pd.read_parquet(out), out
 
 
@@ -52,11 +52,38 @@ def test_column_groups_select_columns_with_the_same_values(full, tmp_path):
     pd.testing.assert_frame_equal(some, every[expected])
 
 
-def test_default_columns_are_every_group_in_the_result_frame_order(full):
+def test_all_columns_are_every_group_in_the_result_frame_order(full):
     _, every, _ = full
     frame_columns = list(gsfric.evaluate(models.reference_platform(),
                                          models.sinusoidal(np.linspace(0, 1, 50))).to_frame())
     assert list(every.columns) == frame_columns
+
+
+CONTRACT = (["t"] + [f"F{i}" for i in range(1, 7)]
+            + [f"{name}{i}" for name in ("MfrE", "MfrC", "Ffr") for i in range(1, 7)]
+            + [f"{name}{a}{i}" for name in ("RE", "RC") for i in range(1, 7) for a in "xyz"]
+            + [f"MC{i}" for i in range(1, 7)] + ["flag"])
+"""The columns a default simulate output promises: 68 values a step."""
+
+
+def test_default_columns_hold_the_documented_set_with_the_same_values(full, tmp_path):
+    path, every, _ = full
+    out = tmp_path / "default.parquet"
+    result = _run("simulate", "--trajectory", path, "--out", out, "--chunk", 200, "--window", 9,
+                  "--quiet")
+    assert result.exit_code == 0, result.output
+    default = pd.read_parquet(out)
+    assert len(CONTRACT) == 68 and sorted(default.columns) == sorted(CONTRACT)
+    assert list(default.columns) == [c for c in every.columns if c in CONTRACT]
+    pd.testing.assert_frame_equal(default, every[list(default.columns)])
+
+
+def test_every_group_but_the_defaults_is_named_in_the_help():
+    result = _run("simulate", "--help")
+    text = " ".join(result.output.split())
+    for group in stream.COLUMN_GROUPS:
+        assert group in text, group
+    assert "[default: " + ",".join(stream.DEFAULT_COLUMN_GROUPS) + "]" in text
 
 
 def test_float32_within_its_documented_error(full, tmp_path):
@@ -92,7 +119,7 @@ def test_unknown_column_group_is_one_line_exit_2(tmp_path):
     assert result.exit_code == 2
     assert result.output.strip().splitlines() == [
         "gsfric: error: --columns: unknown group 'torques'; choose from forces, friction, "
-        "reactions, frictionless, lengths (comma-separated) or all"]
+        "reactions, friction_detail, frictionless, lengths (comma-separated) or all"]
     assert not (tmp_path / "o.csv").exists()
 
 
@@ -154,3 +181,80 @@ def test_streamed_motions_are_the_validated_motions(full):
         R = motion.rotation
         np.testing.assert_allclose(np.einsum("nji,njk->nik", R, R),
                                    np.broadcast_to(np.eye(3), R.shape), atol=1e-12)
+
+
+@pytest.mark.parametrize("polyorder", [2, 3, 4])
+@pytest.mark.parametrize("window", [5, 7, 9, 21])
+def test_filter_on_the_core_is_scipys_to_the_bit(window, polyorder):
+    """The three sums of scipy.ndimage (even, odd and general weights) are all exercised by
+    these windows and orders: the streamed filter gives savgol_filter's values exactly."""
+    from scipy.signal import savgol_filter
+
+    rng = np.random.default_rng(window * 10 + polyorder)
+    y = np.cumsum(rng.normal(size=(400, 4)), axis=0) * 0.01 + 0.5
+    step = 0.004
+    h = window // 2
+    got = stream._savgol_core(y, window, polyorder, step, h + 3, 400 - h - 5)
+    for k in (0, 1, 2):
+        expected = savgol_filter(y, window, polyorder, deriv=k, axis=0, mode="interp") / step**k
+        np.testing.assert_array_equal(got[k], expected[h + 3:400 - h - 5], err_msg=str(k))
+        assert got[k].flags.c_contiguous
+
+
+def test_selected_outputs_and_flags_equal_the_full_evaluation():
+    from gsfric.evaluation import Evaluator, evaluate_outputs
+
+    platform = models.reference_platform()
+    motion = models.sinusoidal(np.linspace(0.0, 2.0, 401))
+    evaluator = Evaluator(platform)
+    full = evaluator.evaluate_quiet(motion)
+    buffers: dict = {}
+    for _ in range(2):                                  # the second call reuses the buffers
+        arrays, flag = evaluate_outputs(evaluator, motion, ["R_E", "F", "MfrC_s"],
+                                        buffers=buffers)
+        assert sorted(arrays) == ["F", "MfrC_s", "R_E"]
+        np.testing.assert_array_equal(arrays["R_E"], full.R_E.reshape(401, 18))
+        np.testing.assert_array_equal(arrays["F"], full.F)
+        np.testing.assert_array_equal(arrays["MfrC_s"], full.MfrC_s)
+        np.testing.assert_array_equal(flag, full.flag)
+
+
+def test_default_and_all_columns_flag_the_same_steps(tmp_path):
+    """Fewer outputs evaluated for the default columns: the flags are still every output's."""
+    n = 600
+    t = np.arange(n) / 200.0
+    motion = models.sinusoidal(t)
+    position = motion.position.copy()
+    position[[130, 131, 450], 2] = 1.5                  # legs beyond their stroke
+    q = quaternion_from_rotation(motion.rotation)
+    frame = pd.DataFrame({"t": t, "x": position[:, 0], "y": position[:, 1],
+                          "z": position[:, 2], "qw": q[:, 0], "qx": q[:, 1], "qy": q[:, 2],
+                          "qz": q[:, 3]})
+    path = tmp_path / "t.parquet"
+    write_table(frame, path)
+    with pytest.warns(gsfric.errors.GsfricWarning):
+        a = stream.simulate_file(path, tmp_path / "default.parquet", chunk=150, window=9)
+    with pytest.warns(gsfric.errors.GsfricWarning):
+        b = stream.simulate_file(path, tmp_path / "all.parquet", chunk=150, window=9,
+                                 columns=("all",))
+    assert a.flagged == b.flagged > 0
+    np.testing.assert_array_equal(a.flagged_steps, b.flagged_steps)
+    default = pd.read_parquet(tmp_path / "default.parquet")
+    every = pd.read_parquet(tmp_path / "all.parquet")
+    np.testing.assert_array_equal(default["flag"], every["flag"])
+    pd.testing.assert_frame_equal(default, every[list(default.columns)])
+
+
+def test_flushing_while_writing_changes_nothing_in_the_file(full, tmp_path, monkeypatch):
+    import os
+
+    path, _, out = full
+    monkeypatch.setattr(stream, "FLUSH_BYTES", 1)       # a request to the disk every chunk
+    synced = []
+    sync = getattr(os, "fdatasync", os.fsync)
+    monkeypatch.setattr(os, "fdatasync" if hasattr(os, "fdatasync") else "fsync",
+                        lambda fd: synced.append(fd) or sync(fd))
+    again = tmp_path / "again.parquet"
+    stream.simulate_file(path, again, chunk=200, window=9, columns=("all",))
+    assert 1 <= len(synced) <= 5                        # one at a time, in its own thread
+    assert again.read_bytes() == out.read_bytes()
