@@ -71,7 +71,9 @@ def sensor_parameters(effects: Mapping[str, Mapping[str, float]]) -> tuple[np.nd
     return gains, delay
 
 
-def _shift(t: np.ndarray, F: np.ndarray, delay: float) -> np.ndarray:
+def shift(t: np.ndarray, F: np.ndarray, delay: float) -> np.ndarray:
+    """Forces ``F`` (N, k) sampled at ``t`` (N,) (s) as read ``delay`` s later: ``F(t - delay)``
+    by linear interpolation, held at the record's ends."""
     if delay == 0.0:
         return F
     out = np.empty_like(F)
@@ -94,7 +96,7 @@ def apply_sensor(t: np.ndarray, F: np.ndarray, gains: np.ndarray, delay: float) 
     delay : float
         ``time_offset`` delay, s.
     """
-    return _shift(np.asarray(t, float), np.asarray(F, float), float(delay)) * (1.0 + gains)
+    return shift(np.asarray(t, float), np.asarray(F, float), float(delay)) * (1.0 + gains)
 
 
 def sensor_jacobian(t: np.ndarray, F: np.ndarray, gains: np.ndarray, delay: float
@@ -109,7 +111,7 @@ def sensor_jacobian(t: np.ndarray, F: np.ndarray, gains: np.ndarray, delay: floa
         ``d F_out / d delay = -(1 + g) dF/dt (t - delay)``.
     """
     t = np.asarray(t, float)
-    shifted = _shift(t, np.asarray(F, float), float(delay))
+    shifted = shift(t, np.asarray(F, float), float(delay))
     d_gains = np.zeros(shifted.shape + (6,))
     for j in range(6):
         d_gains[:, j, j] = shifted[:, j]

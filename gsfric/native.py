@@ -533,11 +533,8 @@ class CompiledFunction:
         out_strides, name, threads = self._out_strides, self.name, int(n_threads)
         by_object = _objects_readable(self._lib)
         run_one = self._lib.gsfric_run_one_objects if by_object else self._lib.gsfric_run_one
-        bound = _Bound(ctypes.pointer(self._fn), ctypes.cast(fixed_ptrs, ctypes.c_void_p),
-                       ctypes.cast(in_strides, ctypes.c_void_p),
-                       ctypes.cast(out_strides, ctypes.c_void_p), index, threads)
-        bound_ref = ctypes.byref(bound)
-        tuples = by_object and _tuples_readable(self._lib)
+        bound, bound_ref, tuples = self._bound_struct(fixed_ptrs, in_strides, index, threads,
+                                                      by_object)
         run_tuple = self._lib.gsfric_bound_states
 
         def call(x: np.ndarray, out: np.ndarray) -> np.ndarray:
@@ -559,6 +556,14 @@ class CompiledFunction:
         call.keep = (fixed, fixed_ptrs, in_strides, bound, self)  # alive with the callable
         return call
 
+    def _bound_struct(self, fixed_ptrs, in_strides, index: int, threads: int, by_object: bool):
+        """The fixed arguments of a bound call in one ``_Bound`` (kept alive by the caller),
+        a reference to it, and whether the call may pass its arrays in one tuple."""
+        bound = _Bound(ctypes.pointer(self._fn), ctypes.cast(fixed_ptrs, ctypes.c_void_p),
+                       ctypes.cast(in_strides, ctypes.c_void_p),
+                       ctypes.cast(self._out_strides, ctypes.c_void_p), index, threads)
+        return bound, ctypes.byref(bound), by_object and _tuples_readable(self._lib)
+
     def bound_motion(self, constants: list[np.ndarray], output: str, n_threads: int = 1):
         """``bound``'s callable from a motion's arrays: ``f(position, rotation, velocity,
         omega, acceleration, alpha, out=None)``, shapes (N, 3) and rotation (N, 3, 3); arrays
@@ -578,11 +583,8 @@ class CompiledFunction:
         by_object = _objects_readable(self._lib)
         run = self._lib.gsfric_run_one_motion_objects if by_object else \
             self._lib.gsfric_run_one_motion
-        bound = _Bound(ctypes.pointer(self._fn), ctypes.cast(fixed_ptrs, ctypes.c_void_p),
-                       ctypes.cast(in_strides, ctypes.c_void_p),
-                       ctypes.cast(out_strides, ctypes.c_void_p), index, threads)
-        bound_ref = ctypes.byref(bound)
-        tuples = by_object and _tuples_readable(self._lib)
+        bound, bound_ref, tuples = self._bound_struct(fixed_ptrs, in_strides, index, threads,
+                                                      by_object)
         run_tuple = self._lib.gsfric_bound_motion
         empty = np.empty
 

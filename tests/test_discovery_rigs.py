@@ -222,22 +222,28 @@ def test_out_of_catalog_is_unexplained():
     assert result.lack_of_fit["main_signal"] in ("F|F|", "F^3", "F", "repeats with model force")
 
 
+def _quadratic_load_cell_on_rests(platform, seed: int, phi: float):
+    """discover on point-to-point moves with rests, measured through load cells whose reading
+    adds F |F| (scaled to the forces' size) to the true force F, noise 0.2 N AR(phi)."""
+    from gsfric import models
+
+    rng = np.random.default_rng(seed)
+    motion = models.point_to_point(rng, 3000, 200.0, np.array([0.03, 0.03, 0.02, 0.05, 0.05,
+                                                               0.05]), height=0.95)
+    data = synthesize(platform, {}, motion=motion, noise=0.2, noise_correlation=phi,
+                      pose_noise=1e-5, seed=seed)
+    motion, forces, poses = recorded(data)
+    F = data.forces
+    bent = forces + F * np.abs(F) / np.sqrt(np.mean(F ** 4))
+    return discover(motion, bent, data.model, poses=poses, n_bootstrap=20, n_threads=1)
+
+
 def test_offsets_imitating_a_quadratic_load_cell_are_not_explained():
     """A load cell with a quadratic characteristic over the small force range of
     point-to-point moves: per-leg offsets explain it to within the noise, but no better than
     the generic basis, which explains significantly more. Whatever is named, the verdict must
     not be 'explained' (before the rule: `sensor_bias`, 'explained', rms_after 1.03 x noise)."""
-    from gsfric import models
-
-    rng = np.random.default_rng(192)
-    motion = models.point_to_point(rng, 3000, 200.0, np.array([0.03, 0.03, 0.02, 0.05, 0.05,
-                                                               0.05]), height=0.95)
-    data = synthesize(PAPER, {}, motion=motion, noise=0.2, noise_correlation=0.0,
-                      pose_noise=1e-5, seed=192)
-    motion, forces, poses = recorded(data)
-    F = data.forces
-    bent = forces + 1.0 * F * np.abs(F) / np.sqrt(np.mean(F ** 4))
-    result = discover(motion, bent, data.model, poses=poses, n_bootstrap=20, n_threads=1)
+    result = _quadratic_load_cell_on_rests(PAPER, seed=192, phi=0.0)
     assert result.verdict == "unexplained_discrepancy"
     for rnd in result.rounds:
         if rnd.winner:
@@ -494,19 +500,9 @@ def test_offsets_as_good_as_a_quadratic_load_cell_under_slow_noise_are_not_expla
     phi = 0.9: six offsets and the generic basis explain the same, neither adds to the other
     (before the rule: `sensor_bias`, 'explained', rms_after 0.98 x noise). The data cannot tell
     the catalog term from the error outside the catalog: not 'explained'."""
-    from gsfric import models
-
     heavy = PAPER.with_body(payload_mass=1.5 * PAPER.platform.payload_mass).with_friction(
         prismatic_viscous=2 * PAPER.friction.prismatic_viscous)
-    rng = np.random.default_rng(265)
-    motion = models.point_to_point(rng, 3000, 200.0, np.array([0.03, 0.03, 0.02, 0.05, 0.05,
-                                                               0.05]), height=0.95)
-    data = synthesize(heavy, {}, motion=motion, noise=0.2, noise_correlation=0.9,
-                      pose_noise=1e-5, seed=265)
-    motion, forces, poses = recorded(data)
-    F = data.forces
-    bent = forces + 1.0 * F * np.abs(F) / np.sqrt(np.mean(F ** 4))
-    result = discover(motion, bent, heavy, poses=poses, n_bootstrap=20, n_threads=1)
+    result = _quadratic_load_cell_on_rests(heavy, seed=265, phi=0.9)
     assert result.verdict == "unexplained_discrepancy"
     assert all(rnd.generic["imitates"] for rnd in result.rounds if rnd.winner)
     summary = result.summary()
