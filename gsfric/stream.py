@@ -800,7 +800,7 @@ class _Flusher:
 class _Writer:
     """Appends column dicts to an open binary (Parquet) or text (CSV) handle.
 
-    Parquet: floats in plain encoding (no dictionary: they almost never repeat), compression
+    Parquet: floats BYTE_STREAM_SPLIT (no dictionary: they almost never repeat), compression
     ``PARQUET_COMPRESSION``, the flag column dictionary-encoded; one row group per chunk.
     The Arrow arrays are the column arrays themselves (no copy); the schema, with each field's
     ``unit`` and ``description``, is built once, from the first chunk."""
