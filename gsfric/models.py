@@ -229,11 +229,12 @@ def random_motion(rng: np.random.Generator, t: np.ndarray, scale: float = 1.0) -
 
 def point_to_point(rng: np.random.Generator, samples: int, rate: float = 200.0,
                    amplitude=(0.03, 0.03, 0.02, 0.05, 0.05, 0.05), height: float = HOME_HEIGHT,
-                   tilt: float = 0.2) -> Motion:
+                   tilt: float = 0.2, move=(1.0, 2.0), rest=(0.3, 0.7)) -> Motion:
     """Minimum-jerk moves between random poses, each followed by a rest (about a quarter of
     the time at rest): the motion of a test rig driven from point to point.
 
-    Each move lasts 1-2 s and each rest 0.3-0.7 s; targets are uniform within +-``amplitude``.
+    Each move lasts ``move`` and each rest ``rest`` (s, uniform between the two bounds: by
+    default 1-2 s and 0.3-0.7 s); targets are uniform within +-``amplitude``.
     The motion is differentiated from its samples (``Motion.from_samples``), as measured
     poses would be.
 
@@ -251,19 +252,21 @@ def point_to_point(rng: np.random.Generator, samples: int, rate: float = 200.0,
         z of the centre pose.
     tilt : float, rad
         beta of the centre pose (away from the ZXZ angles' singularity at beta = 0).
+    move, rest : (float, float), s
+        Shortest and longest move and rest.
     """
     t = np.arange(samples) / rate
     pose = np.zeros((samples, 6))
     k, current = 0, np.zeros(6)
     while k < samples:
-        move, rest = int(rng.uniform(1.0, 2.0) * rate), int(rng.uniform(0.3, 0.7) * rate)
+        steps, still = int(rng.uniform(*move) * rate), int(rng.uniform(*rest) * rate)
         target = rng.uniform(-1, 1, 6) * np.asarray(amplitude, float)
-        s = np.linspace(0, 1, move)
+        s = np.linspace(0, 1, steps)
         seg = current + (10 * s ** 3 - 15 * s ** 4 + 6 * s ** 5)[:, None] * (target - current)
-        m = min(move, samples - k)
+        m = min(steps, samples - k)
         pose[k:k + m] = seg[:m]
         k += m
-        m = min(rest, samples - k)
+        m = min(still, samples - k)
         pose[k:k + m] = target
         k += m
         current = target

@@ -445,24 +445,10 @@ def test_time_offset_columns_computed_when_asked_equal_the_held_ones():
 
 def long_rests(samples, rate, rng) -> Motion:
     """Short fast minimum-jerk moves with long rests (about half the time) between them."""
-    from gsfric.trajectory import quaternion_from_rotation, rotation_from_euler
+    from gsfric import models
 
-    amplitude = np.array([0.025, 0.025, 0.02, 0.04, 0.04, 0.06])
-    pose, k, current = np.zeros((samples, 6)), 0, np.zeros(6)
-    while k < samples:
-        move, rest = int(rng.uniform(0.6, 1.2) * rate), int(rng.uniform(0.8, 1.5) * rate)
-        target = rng.uniform(-1, 1, 6) * amplitude
-        s = np.linspace(0, 1, move)
-        segment = current + (10 * s ** 3 - 15 * s ** 4 + 6 * s ** 5)[:, None] * (target - current)
-        m = min(move, samples - k)
-        pose[k:k + m] = segment[:m]
-        k += m
-        m = min(rest, samples - k)
-        pose[k:k + m] = target
-        k, current = k + m, target
-    rotation = rotation_from_euler(pose[:, 3], pose[:, 4] + 0.25, pose[:, 5])
-    return Motion.from_samples(np.arange(samples) / rate, pose[:, :3] + [0, 0, 0.95],
-                               quaternion=quaternion_from_rotation(rotation))
+    return models.point_to_point(rng, samples, rate, (0.025, 0.025, 0.02, 0.04, 0.04, 0.06),
+                                 height=0.95, tilt=0.25, move=(0.6, 1.2), rest=(0.8, 1.5))
 
 
 def test_a_mode_ringing_after_the_stops_is_not_explained():
