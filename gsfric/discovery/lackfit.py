@@ -15,11 +15,11 @@ out-of-model errors of a rig produce, none of them a catalog term in this form:
 Each other column is shared by the six legs (one coefficient, scaled to unit RMS over all
 legs): the load cells of a rig are alike, and a delay or a nonlinearity common to them is then
 one column. The contrasts reproduce no common delay, so they stay outside the catalog when
-``time_offset`` is in it. The residual and the columns are prewhitened with an AR model of the residual left by
-the basis fit, and the basis is accepted as *structure* under the rules of a candidate
-effect but one (F-test at ``alpha``, a lower held-out error of the block cross-validation in
-total, a gap of at least ``min_gap`` times the noise; not "in most folds": a discrepancy
-confined to part of the record is still one).
+``time_offset`` is in it. The residual and the columns are prewhitened with an AR model of
+the residual left by the basis fit, and the basis is accepted as *structure* under the
+rules of a candidate effect but one (F-test at ``alpha``, a lower held-out error of the block
+cross-validation in total, a gap of at least ``min_gap`` times the noise; not "in most
+folds": a discrepancy confined to part of the record is still one).
 A basis that explains the residual means the catalog did not: the verdict is
 ``unexplained_discrepancy``, and the signals that carry the structure say what it looks like.
 
