@@ -303,39 +303,23 @@ def _savgol_coefficients(window: int, polyorder: int) -> np.ndarray:
 def _savgol_core(y: np.ndarray, window: int, polyorder: int, step: float,
                  lo: int, hi: int) -> list[np.ndarray]:
     """The value and first two derivatives (``_savgol``) of y (N, k) at rows lo..hi-1, which
-    have ``window // 2`` samples on each side: contiguous (hi - lo, k) arrays.
+    have ``window // 2`` samples on each side: contiguous (hi - lo, k) arrays, equal to the
+    last bit to ``scipy.signal.savgol_filter``'s there (the same ``scipy.ndimage.correlate1d``
+    with the same weights, run on the rows it needs only)."""
+    from scipy.ndimage import correlate1d
 
-    The sums are those of ``scipy.ndimage.correlate1d`` (which ``savgol_filter`` runs), term
-    by term in its order, so the values are the same to the last bit: weights even about the
-    middle sample (within the machine epsilon) add each pair of samples at distance j first,
-    odd ones subtract them, others are summed sample by sample."""
     c = _savgol_coefficients(window, polyorder)
     h = window // 2
-    y = np.ascontiguousarray(y)
-    shape = (hi - lo, y.shape[1])
+    block = y[lo - h:hi + h]
     out = []
-    pair, part = np.empty(shape), np.empty(shape)
     for k in (0, 1, 2):
-        w = c[k]
-        sign = 1 if np.all(np.abs(w[h + 1:] - w[h - 1::-1]) <= _EPS) else \
-            -1 if np.all(np.abs(w[h + 1:] + w[h - 1::-1]) <= _EPS) else 0
-        if sign:
-            total = np.multiply(y[lo:hi], w[h])
-            combine = np.add if sign > 0 else np.subtract
-            for j in range(h, 0, -1):
-                combine(y[lo - j:hi - j], y[lo + j:hi + j], out=pair)
-                total += np.multiply(pair, w[h - j], out=part)
-        else:
-            total = np.multiply(y[lo + h:hi + h], w[2 * h])
-            for j in range(-h, h):
-                total += np.multiply(y[lo + j:hi + j], w[h + j], out=part)
+        value = correlate1d(block, c[k], axis=0)[h:h + hi - lo]
         if k:
-            total /= step ** k
-        out.append(total)
+            value /= step ** k
+        out.append(value)
     return out
 
 
-_EPS = float(np.finfo(float).eps)
 
 
 def _cross_into(out: np.ndarray, a: np.ndarray, b: np.ndarray) -> np.ndarray:

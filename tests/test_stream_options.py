@@ -186,8 +186,8 @@ def test_streamed_motions_are_the_validated_motions(full):
 @pytest.mark.parametrize("polyorder", [2, 3, 4])
 @pytest.mark.parametrize("window", [5, 7, 9, 21])
 def test_filter_on_the_core_is_scipys_to_the_bit(window, polyorder):
-    """The three sums of scipy.ndimage (even, odd and general weights) are all exercised by
-    these windows and orders: the streamed filter gives savgol_filter's values exactly."""
+    """Windows and orders whose weights are even, odd and neither (scipy.ndimage sums each
+    kind its own way): the streamed filter gives savgol_filter's values exactly."""
     from scipy.signal import savgol_filter
 
     rng = np.random.default_rng(window * 10 + polyorder)
