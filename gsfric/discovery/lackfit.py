@@ -588,3 +588,162 @@ def rest_transients(residual: np.ndarray, runs: list[tuple[int, int, int]], *, a
 REST_MEANING = ("largest just after each stop and dying out during the rest: a mode of the "
                 "structure ringing after the stop, a creep or relaxation of the load cells, or "
                 "the controller settling")
+
+
+# -- reversals: what the speed does not describe ----------------------------------------------
+
+
+def travel_since_reversal(D: np.ndarray, speed: np.ndarray, sliding: np.ndarray
+                          ) -> tuple[np.ndarray, np.ndarray]:
+    """Each leg's direction of travel and its travel since the last reversal of that direction.
+
+    The direction is the sign of the speed on the sliding pairs; a not-sliding stretch (a
+    reversal's noise band, a rest) takes the direction of the sliding pair after it, so a rest
+    between two moves the same way is no reversal (a play stays taken up, a pre-sliding
+    deflection stays developed) and a reversal's band starts the new direction. The travel is
+    measured from the turning point: ``d (D - D_turn)`` with ``D_turn`` the extreme length
+    (lowest when moving out, highest when moving in) reached since the direction began.
+
+    Parameters
+    ----------
+    D : ndarray, shape (M, 6)
+        Leg lengths, m.
+    speed : ndarray, shape (M, 6)
+        Leg speeds dD/dt, m/s.
+    sliding : ndarray of bool, shape (M, 6)
+        The sliding pairs.
+
+    Returns
+    -------
+    direction : ndarray, shape (M, 6)
+        +1 (extending), -1 (retracting), 0 before the first sliding pair of the leg.
+    travel : ndarray, shape (M, 6)
+        Travel since the last reversal, m (NaN where the direction is 0 or no reversal has been
+        seen yet: the travel since an unseen reversal is unknown).
+    """
+    import pandas as pd
+
+    D = np.asarray(D, float)
+    d = pd.DataFrame(np.where(sliding, np.sign(speed), np.nan)).bfill().fillna(0.0).to_numpy()
+    travel = np.full(D.shape, np.nan)
+    for leg in range(D.shape[1]):
+        col = d[:, leg]
+        starts = np.flatnonzero(np.r_[True, col[1:] != col[:-1]])
+        stops = np.r_[starts[1:], len(col)]
+        for i, (a, b) in enumerate(zip(starts, stops)):
+            if col[a] == 0 or i == 0 or col[starts[i - 1]] == 0:
+                continue                # no reversal seen before this run
+            x = col[a] * D[a:b, leg]
+            travel[a:b, leg] = x - np.minimum.accumulate(x)
+    return d, travel
+
+
+TRAVEL_EDGES = np.geomspace(2e-5, 1e-2, 10)
+"""Edges (m) of the bins of travel since a reversal in ``reversal_structure``: geometric, from
+20 um (the smallest play or pre-sliding length resolved at the pose noise of a rig) to 10 mm;
+longer travels form the last bin, the reference where the sliding law holds."""
+
+
+def reversal_structure(residual: np.ndarray, direction: np.ndarray, travel: np.ndarray,
+                       valid: np.ndarray, *, n_folds: int, alpha: float, min_gap: float,
+                       edges: np.ndarray = TRAVEL_EDGES) -> dict:
+    """Does the friction-like residual depend on the travel since the last reversal?
+
+    A friction that the speed describes, whatever its law, is the same at the same speed early
+    and late in a stroke. Play in a joint (no friction while the leg travels through it) and
+    pre-sliding friction (a stiffness before sliding, a hysteresis loop after each reversal)
+    are functions of the travel since the last reversal instead, and their pulses sit right
+    after each reversal and each start in the other direction, where the speed is small and
+    the tests binned by speed see few samples. This test needs no model of either: the
+    residual signed by the direction of travel, ``r d``, is averaged in bins of the travel
+    since the reversal (``TRAVEL_EDGES``), and the bin means of the other contiguous folds
+    predict the held-out fold (as ``state_structure``), against a single level per fold. Noise,
+    white or slow, does not repeat after every reversal in another stretch of time; a pulse
+    that every reversal leaves does. The size is measured on the pairs within the last edge of
+    a reversal, where such a pulse lives (its share of all pairs does not dilute it), and a
+    one-way test of the bins against one level gives the p-value: the pairs of one reversal,
+    leg and bin are averaged to one value first (the unit of independence under slow noise),
+    and each bin keeps its own variance (Alexander-Govern: the units of the short bins near
+    the reversal average fewer pairs than those far from it; the classic F-test's common
+    variance made it fire on 13 % of white-noise records at the 1 % level).
+
+    Parameters
+    ----------
+    residual : ndarray, shape (M, 6)
+        Final residual per leg, N.
+    direction, travel : ndarray, shape (M, 6)
+        From ``travel_since_reversal``.
+    valid : ndarray of bool, shape (M, 6)
+        The pairs to use (sliding pairs).
+    n_folds : int
+        Contiguous folds of the cross-validation.
+    alpha : float
+        Level of the one-way test.
+    min_gap : float
+        Smallest held-out structure near the reversals, relative to the RMS left there, that
+        counts.
+
+    Returns
+    -------
+    dict
+        ``significant``, ``p_value``, ``gap``, ``cv_gain``, ``structure_rms`` (N, the bin means
+        near the reversals), ``per_leg_rms`` (N), ``profile`` (the mean ``r d`` per bin, N,
+        with the bins' upper travel edges, m), ``reversals`` (reversals seen).
+    """
+    from scipy import stats
+
+    r = np.asarray(residual, float)
+    m, legs = r.shape
+    empty = {"significant": False, "p_value": 1.0, "gap": 0.0, "cv_gain": 0.0,
+             "structure_rms": 0.0, "per_leg_rms": [0.0] * legs, "profile": [], "reversals": 0}
+    ok = valid & np.isfinite(travel) & (direction != 0)
+    if np.count_nonzero(ok) < 10 * (len(edges) + 1):
+        return empty
+    fold = np.minimum(np.arange(m) * n_folds // max(m, 1), n_folds - 1)
+    rows, legs_of = np.nonzero(ok)
+    y = r[rows, legs_of] * direction[rows, legs_of]
+    b = np.searchsorted(edges, travel[rows, legs_of])
+    nb = len(edges) + 1
+    f = fold[rows]
+    key = f * nb + b
+    count = np.bincount(key, minlength=n_folds * nb).reshape(n_folds, nb)
+    total = np.bincount(key, y, minlength=n_folds * nb).reshape(n_folds, nb)
+    rest_count = count.sum(0) - count
+    rest_total = total.sum(0) - total
+    mean = np.where(rest_count >= 5, rest_total / np.maximum(rest_count, 1), 0.0)
+    level = rest_total.sum(1) / np.maximum(rest_count.sum(1), 1)
+    near = b < nb - 1
+    if not near.any():
+        return empty
+    held_err = float(np.sum(((y - mean[f, b]) ** 2)[near]))
+    held_null = float(np.sum(((y - level[f]) ** 2)[near]))
+    g = 1.0 - held_err / held_null if held_null > 0 else 0.0
+    gap = float(np.sqrt(g / (1.0 - g))) if 0.0 < g < 1.0 else (np.inf if g >= 1.0 else 0.0)
+    # the one-way test: one value per (reversal, leg, bin), the mean of its pairs
+    turn = np.zeros((m, legs), int)
+    turn[1:] = np.cumsum(direction[1:] != direction[:-1], axis=0)
+    unit = (turn[rows, legs_of] * legs + legs_of) * nb + b
+    _, inv, n_u = np.unique(unit, return_inverse=True, return_counts=True)
+    u_mean = np.bincount(inv, y) / n_u
+    u_bin = np.bincount(inv, b, minlength=len(n_u)) // n_u
+    groups = [u_mean[u_bin == k] for k in range(nb) if np.count_nonzero(u_bin == k) >= 3]
+    p = float(stats.alexandergovern(*groups).pvalue) if len(groups) >= 2 else 1.0
+    p = p if np.isfinite(p) else 1.0
+    all_mean = total.sum(0) / np.maximum(count.sum(0), 1)
+    fitted = np.zeros_like(r)
+    fitted[rows, legs_of] = (all_mean[b] - y.mean()) * direction[rows, legs_of]
+    mask = np.zeros_like(ok)
+    mask[rows[near], legs_of[near]] = True
+    upper = list(edges) + [float(np.nanmax(travel[ok]))]
+    return {"significant": bool(p < alpha and gap >= min_gap), "p_value": p, "gap": gap,
+            "cv_gain": float(g), "structure_rms": float(np.sqrt(np.mean(fitted[mask] ** 2))),
+            "per_leg_rms": [float(np.sqrt(np.mean(fitted[mask[:, k], k] ** 2)))
+                            if mask[:, k].any() else 0.0 for k in range(legs)],
+            "profile": [(float(e), float(v)) for e, v, c in zip(upper, all_mean, count.sum(0))
+                        if c > 0],
+            "reversals": int(turn.max(axis=0).sum())}
+
+
+REVERSAL_MEANING = ("a friction-like force that depends on the travel since the last reversal, "
+                    "not on the speed: play in a joint, a pre-sliding (Dahl-like) friction, or "
+                    "a friction that builds up after each reversal")

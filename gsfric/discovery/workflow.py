@@ -476,13 +476,18 @@ def _lack_of_fit(problem: Problem, theta: np.ndarray, residual: np.ndarray,
     inputs = {"dF/dt": dF, "acceleration": acceleration}
     dynamic = lackfit.dynamic_structure(residual, inputs, problem.sliding, alpha=s.alpha,
                                         min_gap=max(s.min_gap, lackfit.DYNAMIC_MIN_GAP))
-    out["state"], out["dynamic"] = state, dynamic
+    direction, travel = lackfit.travel_since_reversal(D, speed, problem.sliding)
+    reversal = lackfit.reversal_structure(residual, direction, travel, problem.sliding,
+                                          n_folds=s.n_folds, alpha=s.alpha, min_gap=s.min_gap)
+    out["state"], out["dynamic"], out["reversal"] = state, dynamic, reversal
     out["rest"] = _rest_test(problem, theta)
     # structure in a form of the basis says most about what it is; else structure that repeats
-    # with the state; else structure that follows the motion; else what happens at the rests
-    tests = {"basis": out, "state": state, "dynamic": dynamic, "rest": out["rest"]}
+    # with the state; else structure that follows the motion; else after each reversal; else
+    # what happens at the rests
+    tests = {"basis": out, "state": state, "dynamic": dynamic, "reversal": reversal,
+             "rest": out["rest"]}
     by = next((k for k, v in tests.items() if v["significant"]), None)
-    if by in ("state", "dynamic", "rest"):
+    if by in ("state", "dynamic", "reversal", "rest"):
         out.update(significant=True, gap=tests[by]["gap"],
                    structure_rms=tests[by]["structure_rms"], per_leg_rms=tests[by]["per_leg_rms"])
     fitted = out["fitted"]
@@ -497,6 +502,9 @@ def _lack_of_fit(problem: Problem, theta: np.ndarray, residual: np.ndarray,
     elif by == "dynamic":
         main = "driven by the motion"
         out["looks_like"] = lackfit.DYNAMIC_MEANING
+    elif by == "reversal":
+        main = "follows the travel since each reversal"
+        out["looks_like"] = lackfit.REVERSAL_MEANING
     elif by == "rest":
         main = "transient at the rests"
         out["looks_like"] = lackfit.REST_MEANING

@@ -1,0 +1,145 @@
+"""The travel-since-reversal test of the verdict: play in a joint and pre-sliding friction are
+functions of the travel since the last reversal, not of the speed; the test fires on them and
+stays silent on noise, white or slow, with a static friction level of its own at each rest."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+from scipy.signal import lfilter
+
+from gsfric.discovery import lackfit
+
+RATE = 250.0
+M = 6000
+BAND = 2e-3     # m/s: the not-sliding band of these tests
+
+
+def _moves(rng, m=M):
+    """Leg lengths (m) of six legs: minimum-jerk moves to random targets, a rest after each,
+    (m, 6); and the exact speeds (m/s)."""
+    t = np.arange(m) / RATE
+    D = np.empty((m, 6))
+    for leg in range(6):
+        k, cur = 0, 0.0
+        while k < m:
+            mv, rs = int(rng.uniform(0.6, 1.2) * RATE), int(rng.uniform(0.3, 1.0) * RATE)
+            tgt = rng.uniform(-0.03, 0.03)
+            s = np.linspace(0, 1, mv)
+            seg = cur + (10 * s ** 3 - 15 * s ** 4 + 6 * s ** 5) * (tgt - cur)
+            n = min(mv, m - k)
+            D[k:k + n, leg] = seg[:n]
+            k += n
+            n = min(rs, m - k)
+            D[k:k + n, leg] = tgt
+            k += n
+            cur = tgt
+    D += 0.9
+    return t, D, np.gradient(D, t, axis=0)
+
+
+def _ar1(rng, phi, sigma=0.25):
+    e = rng.normal(0, sigma * np.sqrt(1 - phi ** 2), (M, 6))
+    return lfilter([1.0], [1.0, -phi], e, axis=0)
+
+
+def _with_static_levels(rng, r, sliding, level=1.0):
+    """The residual with a random static friction level (|F| <= level, N) on each not-sliding
+    run: friction at rest holds whatever is needed."""
+    out = r.copy()
+    for leg in range(6):
+        still = np.r_[False, ~sliding[:, leg], False].astype(np.int8)
+        edges = np.flatnonzero(np.diff(still))
+        for a, b in zip(edges[::2], edges[1::2]):
+            out[a:b, leg] += rng.uniform(-level, level)
+    return out
+
+
+def _test(residual, D, v, sliding):
+    d, s = lackfit.travel_since_reversal(D, v, sliding)
+    return lackfit.reversal_structure(residual, d, s, sliding, n_folds=8, alpha=0.01,
+                                      min_gap=0.3)
+
+
+def _play(D, v, sliding, play):
+    """-d (1 N of friction missing) while the leg travels through ``play`` (m) after each
+    reversal: the residual a model with Coulomb friction leaves."""
+    d, s = lackfit.travel_since_reversal(D, v, sliding)
+    return np.where(np.isfinite(s) & (s < play), -d, 0.0)
+
+
+def _dahl(D, v, sliding, length):
+    """A Dahl friction (1 N, ``length`` m to develop) less the Coulomb friction sgn(v) on the
+    sliding pairs."""
+    z = np.zeros(6)
+    out = np.zeros_like(D)
+    dD = np.diff(D, axis=0, prepend=D[:1])
+    for k in range(len(D)):
+        z = np.clip(z + dD[k] / length * (1 - z * np.sign(dD[k])), -1, 1)
+        out[k] = z - np.sign(v[k]) * sliding[k]
+    return out
+
+
+def test_travel_is_measured_from_the_turning_point_and_a_rest_is_no_reversal():
+    t = np.arange(1000) / RATE
+    x = np.r_[np.linspace(0, 0.01, 300), np.full(100, 0.01), np.linspace(0.01, 0.02, 200),
+              np.linspace(0.02, 0.005, 400)]
+    D = np.repeat(x[:, None], 6, axis=1)
+    v = np.gradient(D, t, axis=0)
+    sliding = np.abs(v) > 1e-4
+    d, s = lackfit.travel_since_reversal(D, v, sliding)
+    assert np.all(d[:600] == 1) and np.all(d[601:] == -1)
+    assert np.all(np.isnan(s[:600]))        # no reversal seen yet, the rest included
+    np.testing.assert_allclose(s[-1], 0.015, atol=1e-4)
+    np.testing.assert_allclose(s[700], 0.02 - x[700], atol=1e-4)
+
+
+@pytest.mark.parametrize("phi", [0.0, 0.9, 0.995])
+def test_noise_with_static_levels_at_rest_leaves_no_structure(phi):
+    for seed in range(4):
+        rng = np.random.default_rng(seed)
+        t, D, v = _moves(rng)
+        sliding = np.abs(v) > BAND
+        r = _with_static_levels(rng, _ar1(rng, phi), sliding)
+        out = _test(r, D, v, sliding)
+        assert out["reversals"] > 50
+        assert not out["significant"], (seed, out["p_value"], out["gap"])
+
+
+@pytest.mark.parametrize("phi", [0.0, 0.95])
+def test_play_after_each_reversal_is_found(phi):
+    rng = np.random.default_rng(7)
+    t, D, v = _moves(rng)
+    sliding = np.abs(v) > BAND
+    effect = 0.5 * _play(D, v, sliding, 1e-3)
+    r = _with_static_levels(rng, effect + _ar1(rng, phi), sliding)
+    out = _test(r, D, v, sliding)
+    assert out["significant"], (out["p_value"], out["gap"])
+    # the profile: friction missing (r d < 0) within the play, none far beyond it
+    profile = dict(out["profile"])
+    assert min(v_ for e, v_ in profile.items() if e <= 1e-3) < -0.2
+    assert abs(profile[max(profile)]) < 0.1
+
+
+@pytest.mark.parametrize("phi", [0.0, 0.95])
+def test_presliding_friction_is_found(phi):
+    rng = np.random.default_rng(8)
+    t, D, v = _moves(rng)
+    sliding = np.abs(v) > BAND
+    effect = 0.5 * _dahl(D, v, sliding, 3e-4)
+    r = _with_static_levels(rng, effect + _ar1(rng, phi), sliding)
+    assert _test(r, D, v, sliding)["significant"]
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("phi", [0.0, 0.95])
+def test_false_alarm_rate_on_noise(phi):
+    fired = 0
+    n = 100
+    for seed in range(n):
+        rng = np.random.default_rng(100 + seed)
+        t, D, v = _moves(rng)
+        sliding = np.abs(v) > BAND
+        r = _with_static_levels(rng, _ar1(rng, phi), sliding)
+        fired += _test(r, D, v, sliding)["significant"]
+    assert fired <= 2, fired
