@@ -61,6 +61,15 @@ def report(d: Discovery, source: str = "", platform_source: str = "") -> str:
               f"remains, {lof.get('looks_like', '')}. Per leg (N): "
               f"{', '.join(_g(v, 3) for v in lof.get('per_leg_rms', []))}; dominant frequency "
               f"of the residual {_g(lof.get('frequency'), 3)} Hz.", ""]
+        rev = lof.get("reversal", {})
+        if rev.get("significant"):
+            L += ["After each reversal the residual, signed by the direction of travel (negative: "
+                  "less friction than the model), depends on the travel since the reversal "
+                  f"(p = {_g(rev.get('p_value'), 2)}, {rev.get('reversals', 0)} reversals); mean "
+                  "per bin of travel (upper edge, mm: N): "
+                  + ", ".join(f"{1e3 * e:.3g}: {_g(v, 2)}" for e, v in rev.get("profile", []))
+                  + ". Play in a joint or a pre-sliding friction leaves this; a friction given "
+                  "by the speed does not.", ""]
     if d.effects and d.verdict == "unexplained_discrepancy":
         L += ["The effects below are the best candidates for a part of the gap, not a "
               "confident explanation of it (`partial` in summary.json): structure is left that "
