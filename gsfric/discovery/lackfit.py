@@ -47,6 +47,12 @@ load cell, the controller settling) lives in the rests, where friction is static
 by the speed's sign. ``rest_transients`` looks there without the model's friction: within a
 rest the force is a constant plus noise, the noise's lagged differences are as large at the
 start of a rest as at its end, and a transient after the stop makes them larger at the start.
+
+Play in a joint and pre-sliding friction are functions of neither the state nor the speed but
+of the travel since the last reversal, and their pulses sit right after each reversal, where
+the speed is small. ``reversal_structure`` bins the residual, signed by the direction of
+travel, by that travel (``travel_since_reversal``) and asks, as ``state_structure`` does,
+whether the bin means of the other folds predict the held-out fold.
 """
 
 from __future__ import annotations
