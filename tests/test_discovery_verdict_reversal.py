@@ -148,8 +148,9 @@ def test_false_alarm_rate_on_noise(phi):
 @pytest.mark.parametrize("base", ["paper", "coupled"])
 def test_play_in_a_joint_is_not_explained(base):
     """Point-to-point moves with rests, a play of 1 mm after each reversal (the friction of the
-    model's own law missing while the leg travels through it), white force noise: the verdict
-    says the catalog does not explain it, and the reversal test is what says so."""
+    model's own law missing while the leg travels through it), white force noise: through the
+    whole workflow, the verdict says the catalog does not explain it and the reversal test,
+    run on the final residual, finds the missing friction right after the reversals."""
     from gsfric import models
     from gsfric.discovery import discover
     from gsfric.discovery.rest import poses_from_columns
