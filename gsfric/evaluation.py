@@ -42,6 +42,7 @@ import ctypes
 import functools
 import math
 import mmap
+import os
 import warnings
 import weakref
 from collections.abc import MutableMapping
@@ -654,11 +655,16 @@ class _BlockPool:
     inside ``take``)."""
 
     def __init__(self, keep: int) -> None:
-        import threading
-
         self.keep = keep
         self._free: dict[int, list] = {}
         self._kept = 0
+        self._new_lock()
+        if hasattr(os, "register_at_fork"):   # a fork while another thread holds the lock
+            os.register_at_fork(after_in_child=self._new_lock)
+
+    def _new_lock(self) -> None:
+        import threading
+
         self._lock = threading.Lock()
 
     @staticmethod
@@ -705,11 +711,12 @@ class _BlockPool:
         nbytes = n * size * 8
         block = self.take(nbytes)
         owner = (ctypes.c_char * nbytes).from_buffer(block)
-        weakref.finalize(owner, self.give, block)
+        weakref.finalize(owner, self.give, block).atexit = False
         return np.frombuffer(owner, dtype=np.float64).reshape(n, size)
 
 
 _POOL = _BlockPool(POOL_KEEP_BYTES)
+_ANONYMOUS = hasattr(mmap, "MAP_ANONYMOUS")   # POSIX anonymous mappings (not on Windows)
 
 
 def release_memory() -> None:
@@ -724,7 +731,7 @@ def _aligned_empty(n: int, size: int) -> np.ndarray:
     non-temporal stores (derive/simd.py). Large ones (``POOL_MIN_BYTES``) on page-aligned
     blocks of ``_POOL``; small ones a view of a slightly larger NumPy buffer."""
     count = n * size
-    if count * 8 >= POOL_MIN_BYTES:
+    if count * 8 >= POOL_MIN_BYTES and _ANONYMOUS:
         return _POOL.empty(n, size)
     raw = np.empty(count + 8)
     start = (-raw.ctypes.data % 64) // 8
