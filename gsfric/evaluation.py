@@ -29,6 +29,11 @@ evaluation: a Result computes them, all at once, in one more compiled pass over 
 first time one of them is read (``Result.arrays`` holds them from then on). The evaluation then
 writes 229 of the 313 values per step (1.8 kB instead of 2.5 kB).
 
+Memory: result arrays of 1 MiB and more are each on a mapping of whole huge pages of their
+own; the memory of results the caller has dropped is kept (up to ``POOL_KEEP_BYTES``) and
+reused by the next evaluation of the same size, which then neither faults pages in nor has the
+kernel zero them (``release_memory()`` returns it to the system).
+
 Concurrency: an ``Evaluator`` is immutable after construction (its parameter vectors are
 read-only arrays) and every call works on its own buffers, so one Evaluator, or several, may be
 called from any number of threads at once; the compiled code runs without the GIL. An output
