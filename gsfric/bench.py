@@ -464,12 +464,21 @@ def measure_paths(budget: float, memory: bool, progress=print, simulate: bool = 
     best, median, cpu = _best_times(lambda: gsfric.evaluate(platform, motion), budget)
     ev, buffers = Evaluator(platform), {}
     rbest, _, rcpu = _best_times(lambda: ev.evaluate_quiet(motion, buffers=buffers), budget)
+    from gsfric.evaluation import release_memory
+
+    def new_memory():   # no dropped result's memory to reuse: every page mapped anew
+        release_memory()
+        gsfric.evaluate(platform, motion)
+
+    fbest, _, fcpu = _best_times(new_memory, budget)
     x = state_array(motion)
     nbest, _, ncpu = _best_times(lambda: numpy_model.actuator_forces_numpy(platform, x), budget)
     out["evaluate_1e5"] = {"steps_per_s": 1e5 / best, "steps_per_cpu_s": 1e5 / cpu,
                            "numpy_steps_per_s": 1e5 / nbest, "vs_numpy": nbest / best,
                            "vs_numpy_cpu": ncpu / cpu, "reused_steps_per_s": 1e5 / rbest,
-                           "reused_steps_per_cpu_s": 1e5 / rcpu}
+                           "reused_steps_per_cpu_s": 1e5 / rcpu,
+                           "new_memory_steps_per_s": 1e5 / fbest,
+                           "new_memory_steps_per_cpu_s": 1e5 / fcpu}
     paper = gsfric.reference_platform("paper")
     pbest, _, pcpu = _best_times(lambda: gsfric.evaluate(paper, motion), budget)
     out["evaluate_1e5"].update(paper_steps_per_s=1e5 / pbest, paper_steps_per_cpu_s=1e5 / pcpu)
@@ -764,6 +773,11 @@ def format_report(report: Report) -> str:
                          f"({e['vs_numpy_cpu']:.1f}x in CPU time); into reused arrays "
                          f"(evaluate_quiet(buffers=...)): {e['reused_steps_per_s']:.3g} steps/s "
                          f"({e['reused_steps_per_cpu_s']:.3g} per CPU second)")
+            if "new_memory_steps_per_s" in e:
+                lines.append("gsfric.evaluate into memory mapped anew (no dropped result's "
+                             "memory to reuse, evaluation.release_memory() before each call): "
+                             f"{e['new_memory_steps_per_s']:.3g} steps/s "
+                             f"({e['new_memory_steps_per_cpu_s']:.3g} per CPU second)")
             if "paper_steps_per_s" in e:
                 lines.append(f"gsfric.evaluate, paper friction model (no fixed-point "
                              f"iterations), N = 100,000: {e['paper_steps_per_s']:.3g} steps/s "

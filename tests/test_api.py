@@ -144,3 +144,62 @@ def test_every_option_has_help():
             walk(sub, f"{path} {name}")
 
     walk(main, "gsfric")
+
+
+def test_a_dropped_result_memory_is_reused_for_the_next_with_the_same_values(platform):
+    """Large result arrays live on blocks that come back when the caller drops them: the next
+    evaluation of that size writes into the same memory (no new pages), with the values and
+    flags of an evaluation into NumPy's own buffers, and a block in use is never handed out."""
+    import gc
+
+    from gsfric.evaluation import _POOL, POOL_MIN_BYTES, Evaluator, release_memory
+
+    n = POOL_MIN_BYTES // (18 * 8) + 500
+    rng = np.random.default_rng(5)
+    first, second = (models.random_motion(rng, np.linspace(0, 4, n)) for _ in range(2))
+    evaluator = Evaluator(platform)
+    expected = evaluator.evaluate_quiet(second, buffers={})   # NumPy-owned arrays
+    def blocks(result):
+        return {a.ctypes.data for a in result.arrays.kept().values()
+                if a.nbytes >= POOL_MIN_BYTES}
+
+    result = evaluator.evaluate_quiet(first)
+    where = blocks(result)
+    assert where and all(a % 64 == 0 for a in where)
+    assert result.R_E.flags.c_contiguous and result.R_E.flags.writeable
+    kept = evaluator.evaluate_quiet(first)
+    assert not blocks(kept) & where
+    del result
+    gc.collect()
+    again = evaluator.evaluate_quiet(second)
+    assert blocks(again) == where
+    for name, values in expected.arrays.kept().items():
+        assert again.arrays[name].tobytes() == values.tobytes(), name
+    assert again.flag.tobytes() == expected.flag.tobytes()
+    assert np.array_equal(kept.R_E, evaluator.evaluate_quiet(first, buffers={}).R_E)
+    del again, kept
+    gc.collect()
+    assert 0 < _POOL._kept <= _POOL.keep
+    release_memory()
+    assert _POOL._kept == 0
+
+
+def test_the_memory_kept_for_reuse_is_bounded(platform):
+    import gc
+
+    from gsfric.evaluation import _POOL, POOL_MIN_BYTES, Evaluator, release_memory
+
+    evaluator = Evaluator(platform)
+    rng = np.random.default_rng(6)
+    base = POOL_MIN_BYTES // (6 * 8)
+    old = _POOL.keep
+    release_memory()
+    _POOL.keep = 8 * POOL_MIN_BYTES
+    try:
+        for n in (base + 11, 2 * base + 3, 3 * base + 1):
+            evaluator.evaluate_quiet(models.random_motion(rng, np.linspace(0, 4, n)))
+            gc.collect()
+            assert 0 < _POOL._kept <= _POOL.keep
+    finally:
+        _POOL.keep = old
+        release_memory()

@@ -71,3 +71,40 @@ def test_calls_split_into_threads_equal_one_thread():
         split = list(pool.map(lambda m: two.actuator_forces(state_array(m)), motions))
     for a, b in zip(serial, split):
         assert a.tobytes() == b.tobytes()
+
+
+def test_large_results_from_threads_own_their_memory_and_equal_serial():
+    """Results large enough for reused memory blocks (``evaluation._POOL``), from 6 threads with
+    some dropped as others are computed: every one equals the serial result bit for bit, and
+    no two results alive at once share memory."""
+    from gsfric.evaluation import POOL_MIN_BYTES
+
+    rng = np.random.default_rng(23)
+    evaluator = Evaluator(with_every_effect(rng, perturbed_platform(rng)))
+    sizes = [POOL_MIN_BYTES // (18 * 8) + 1000, POOL_MIN_BYTES // (6 * 8) + 7]
+    motions = [models.random_motion(rng, np.linspace(0, 5, sizes[k % 2])) for k in range(24)]
+
+    def flat(result):
+        return np.concatenate([result.F, result.R_E.reshape(len(result), -1),
+                               result.flag[:, None].astype(float)], axis=1)
+
+    serial = [flat(evaluator.evaluate_quiet(m)) for m in motions]
+    alive = []
+
+    def job(k):
+        result = evaluator.evaluate_quiet(motions[k])
+        if k % 3 == 0:
+            alive.append(result)   # kept while the others are computed and dropped
+        return flat(result)
+
+    with ThreadPoolExecutor(6) as pool:
+        concurrent = list(pool.map(job, range(len(motions))))
+    for k, (a, b) in enumerate(zip(serial, concurrent)):
+        assert a.tobytes() == b.tobytes(), k
+    for result in alive:   # still what they were when computed
+        k = next(k for k, m in enumerate(motions) if m is result.source[1])
+        assert flat(result).tobytes() == serial[k].tobytes()
+    arrays = [r.R_E for r in alive] + [r.F for r in alive]
+    for i, a in enumerate(arrays):
+        for b in arrays[i + 1:]:
+            assert not np.shares_memory(a, b)
