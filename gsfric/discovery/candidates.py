@@ -167,7 +167,36 @@ def _leg_weight_applies(platform: Platform) -> str | None:
 
 
 STRIBECK_VELOCITIES = tuple(float(v) for v in np.geomspace(0.002, 0.1, 6))
-"""Starting values of the Stribeck velocity, m/s."""
+"""Starting values of the Stribeck velocity, m/s (those the data resolves, see below)."""
+
+STRIBECK_QUANTILE = 0.9
+"""Quantile of the sliding leg speeds (over the sliding (sample, leg) pairs) above which the
+Stribeck velocity is not fitted. ``exp(-(v / velocity)^2)`` with a velocity above nearly every
+sliding speed stays near 1 on the data: a Stribeck term with such a decay is a friction the
+same at every speed, ``seal_friction`` by another name, and fitting it there would let noise
+choose the two-parameter name over the one-parameter one. Bounded at this quantile, the
+Stribeck peak must decay (below 1/e) on at least a tenth of the sliding samples to be
+named; a speed-independent friction then fits better as ``seal_friction``."""
+
+
+def stribeck_velocity_bound(upper: float, context: dict) -> float:
+    """Largest Stribeck velocity (m/s) fitted on data with this context: ``upper``, lowered to
+    the ``STRIBECK_QUANTILE`` quantile of the sliding leg speeds (``context["sliding_speed"]``),
+    never below the smallest starting value."""
+    resolved = float(context.get("sliding_speed", np.inf))
+    return float(max(min(upper, resolved), STRIBECK_VELOCITIES[0]))
+
+
+def _stribeck_velocities(context: dict) -> dict | None:
+    """The starting Stribeck velocities the data resolves (see ``STRIBECK_QUANTILE``), the
+    bound itself included when it cuts the list. None without data (a data-dependent grid)."""
+    if "sliding_speed" not in context:
+        return None
+    bound = stribeck_velocity_bound(np.inf, context)
+    values = [v for v in STRIBECK_VELOCITIES if v <= bound]
+    if len(values) < len(STRIBECK_VELOCITIES) and bound not in values:
+        values.append(bound)
+    return {"velocity": tuple(values)}
 
 TIME_OFFSET_STEPS = (0.002, 0.006, 0.018, 0.054, 0.162)
 """Delays (s) at which the secant columns of ``time_offset`` are taken, either sign (factors
@@ -177,7 +206,7 @@ secant starts the Gauss-Newton refinement."""
 CANDIDATES: tuple[Candidate, ...] = (
     Candidate("stribeck", ("static", "velocity"), (0.0, 5e-4), (INF, 0.5),
               "friction-like (opposing the leg speed), concentrated at speed reversals",
-              grid={"velocity": STRIBECK_VELOCITIES}, coulomb=True, simpler=2),
+              grid_from=_stribeck_velocities, coulomb=True, simpler=2),
     Candidate("seal_friction", ("force",), (0.0,), (INF,),
               "friction-like, the same at every speed and load", coulomb=True, simpler=0),
     Candidate("quadratic_drag", ("coefficient",), (0.0,), (INF,),

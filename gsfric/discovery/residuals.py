@@ -18,7 +18,8 @@ from itertools import product
 
 import numpy as np
 
-from gsfric.discovery.candidates import CANDIDATE_NAMES, CANDIDATES, REFIT, Candidate
+from gsfric.discovery.candidates import (CANDIDATE_NAMES, CANDIDATES, REFIT, STRIBECK_QUANTILE,
+                                         Candidate, stribeck_velocity_bound)
 from gsfric.discovery.model import BASE_PARAMETERS, ParametricModel
 from gsfric.discovery.settings import Settings
 from gsfric.errors import InputError
@@ -237,6 +238,11 @@ class Problem:
         self.sliding = rest.sliding_mask(self.result.D_dot, sigma_v, 3 * PRISMATIC_EPS,
                                          reach=self.reach)[self.used]
         self.weight = self.sliding.astype(float)
+        # the speeds the sliding samples cover: a Stribeck decay above nearly all of them is
+        # a speed-independent friction on this data (see ``candidates.stribeck_velocities``)
+        speeds = np.abs(self.result.D_dot[self.used])[self.sliding]
+        self.context["sliding_speed"] = (float(np.quantile(speeds, STRIBECK_QUANTILE))
+                                         if speeds.size else np.inf)
         self.force_noise = rest.force_noise(forces[self.used])
         self.candidates = [c for c in CANDIDATES if c.name in settings.candidates
                            and c.name not in platform.effects]
@@ -275,6 +281,8 @@ class Problem:
         for c in CANDIDATES:
             if c.name == effect and param in c.fitted:
                 k = c.fitted.index(param)
+                if name == "stribeck.velocity":
+                    return (c.lower[k], stribeck_velocity_bound(c.upper[k], self.context))
                 return (c.lower[k], c.upper[k])
         return (-np.inf, np.inf)
 
