@@ -121,15 +121,17 @@ static inline vd v_exp(vd x)
 }
 """
 
-# Division, reciprocal, square root and reciprocal square root. With 8 lanes on AVX-512 they
-# do not queue on the divider (one vdivpd or vsqrtpd of 8 lanes occupies it for about 16-24
-# cycles): a 14-bit estimate (vrcp14pd, vrsqrt14pd) refined by Newton-Raphson steps in FMA,
-# ended by one correction step on the residual computed exactly by an FMA (Markstein): the
-# results equal the divider's, correctly rounded (tests/test_lanes.py checks it on random
-# operands of every magnitude; ``v_rsqrt`` equals 1 / sqrt, two roundings). Lanes whose operand
-# or result is outside the range where the residual is exact (0, below 2^-960, subnormal,
-# infinite, NaN, negative for the square roots) take the divider's instruction instead. Elsewhere they are the C
-# operators and the C library's sqrt, lane by lane.
+# Division, reciprocal and reciprocal square root. With 8 lanes on AVX-512 they do not queue
+# on the divider (one vdivpd or vsqrtpd of 8 lanes occupies it for about 16-24 cycles): a 14-bit
+# estimate (vrcp14pd, vrsqrt14pd) refined by Newton-Raphson (Goldschmidt for the square root)
+# steps in FMA, ended by one correction step on the residual computed exactly by an FMA
+# (Markstein). The results equal the divider's, correctly rounded (``v_rsqrt`` equals 1 / sqrt,
+# two roundings): tests/test_lanes.py checks it on random operands of every magnitude and on
+# the special values. Lanes whose operand or result is outside the range where the residual is
+# exact (0, below 2^-960, subnormal, infinite, NaN, negative for the square root) take the
+# divider's instruction instead. A square root that is not only a divisor keeps vsqrtpd (see
+# docs/performance.md). With other lane widths they are the C operators and the C library's
+# sqrt, lane by lane.
 _DIVIDER = r"""
 #if GSFRIC_LANES == 8 && defined(__AVX512F__)
 /* fpclass categories: 0x01 QNaN, 0x02 +0, 0x04 -0, 0x08 +inf, 0x10 -inf, 0x20 subnormal,
@@ -139,34 +141,34 @@ _DIVIDER = r"""
 /* below this the residuals of the correction steps underflow (would cost up to 2 ulp) */
 #define TINY 0x1p-960
 /* 1/b to 56 bits: the estimate's relative error e0 < 2^-14 squares at each step */
-static inline __m512d v_rcp_nr(__m512d b)
+static inline __m512d z_rcp_nr(__m512d b)
 {
     const __m512d one = _mm512_set1_pd(1.0);
     __m512d y = _mm512_rcp14_pd(b);
     y = _mm512_fmadd_pd(y, _mm512_fnmadd_pd(b, y, one), y);
     return _mm512_fmadd_pd(y, _mm512_fnmadd_pd(b, y, one), y);
 }
-static inline vd v_div(vd a, vd b)
+static inline __m512d z_div(__m512d a, __m512d b)
 {
-    __m512d y = v_rcp_nr((__m512d)b), q = _mm512_mul_pd((__m512d)a, y);
-    q = _mm512_fmadd_pd(_mm512_fnmadd_pd((__m512d)b, q, (__m512d)a), y, q);
+    __m512d y = z_rcp_nr(b), q = _mm512_mul_pd(a, y);
+    q = _mm512_fmadd_pd(_mm512_fnmadd_pd(b, q, a), y, q);
     __mmask8 k = _mm512_fpclass_pd_mask(q, NOT_NORMAL) | _mm512_fpclass_pd_mask(y, NOT_NORMAL)
-                 | _mm512_cmp_pd_mask(_mm512_abs_pd((__m512d)a), _mm512_set1_pd(TINY), _CMP_LT_OQ);
-    if (__builtin_expect(k != 0, 0)) q = _mm512_mask_div_pd(q, k, (__m512d)a, (__m512d)b);
-    return (vd)q;
+                 | _mm512_cmp_pd_mask(_mm512_abs_pd(a), _mm512_set1_pd(TINY), _CMP_LT_OQ);
+    if (__builtin_expect(k != 0, 0)) q = _mm512_mask_div_pd(q, k, a, b);
+    return q;
 }
-static inline vd v_rcp(vd b)
+static inline __m512d z_rcp(__m512d b)
 {
     const __m512d one = _mm512_set1_pd(1.0);
-    __m512d y = v_rcp_nr((__m512d)b);
-    y = _mm512_fmadd_pd(y, _mm512_fnmadd_pd((__m512d)b, y, one), y);
+    __m512d y = z_rcp_nr(b);
+    y = _mm512_fmadd_pd(y, _mm512_fnmadd_pd(b, y, one), y);
     __mmask8 k = _mm512_fpclass_pd_mask(y, NOT_NORMAL);
-    if (__builtin_expect(k != 0, 0)) y = _mm512_mask_div_pd(y, k, one, (__m512d)b);
-    return (vd)y;
+    if (__builtin_expect(k != 0, 0)) y = _mm512_mask_div_pd(y, k, one, b);
+    return y;
 }
 /* sqrt(a) as g and 1/(2 sqrt(a)) as h (Goldschmidt), each step squaring the relative error;
  * then g corrected by the exact residual a - g^2 */
-static inline __m512d v_sqrt_gh(__m512d a, __m512d *h)
+static inline __m512d z_sqrt_gh(__m512d a, __m512d *h)
 {
     const __m512d half = _mm512_set1_pd(0.5);
     __m512d y = _mm512_rsqrt14_pd(a), g = _mm512_mul_pd(a, y), hh = _mm512_mul_pd(half, y);
@@ -178,24 +180,27 @@ static inline __m512d v_sqrt_gh(__m512d a, __m512d *h)
     *h = hh;
     return _mm512_fmadd_pd(_mm512_fnmadd_pd(g, g, a), hh, g);
 }
-static inline vd v_sqrt(vd a)
+static inline __mmask8 z_sqrt_special(__m512d a)
 {
-    __m512d h, g = v_sqrt_gh((__m512d)a, &h);
-    __mmask8 k = _mm512_fpclass_pd_mask((__m512d)a, NOT_POSITIVE_NORMAL)
-                 | _mm512_cmp_pd_mask((__m512d)a, _mm512_set1_pd(TINY), _CMP_LT_OQ);
-    if (__builtin_expect(k != 0, 0)) g = _mm512_mask_sqrt_pd(g, k, (__m512d)a);
-    return (vd)g;
+    return _mm512_fpclass_pd_mask(a, NOT_POSITIVE_NORMAL)
+           | _mm512_cmp_pd_mask(a, _mm512_set1_pd(TINY), _CMP_LT_OQ);
 }
 /* 1/sqrt(a): 2h, corrected as a reciprocal of the corrected square root g */
-static inline vd v_rsqrt(vd a)
+static inline __m512d z_rsqrt(__m512d a)
 {
-    __m512d h, g = v_sqrt_gh((__m512d)a, &h), y = _mm512_add_pd(h, h);
-    y = _mm512_fmadd_pd(y, _mm512_fnmadd_pd(g, y, _mm512_set1_pd(1.0)), y);
-    __mmask8 k = _mm512_fpclass_pd_mask((__m512d)a, NOT_POSITIVE_NORMAL)
-                 | _mm512_cmp_pd_mask((__m512d)a, _mm512_set1_pd(TINY), _CMP_LT_OQ);
-    if (__builtin_expect(k != 0, 0)) y = _mm512_mask_div_pd(y, k, _mm512_set1_pd(1.0), _mm512_sqrt_pd((__m512d)a));
-    return (vd)y;
+    const __m512d one = _mm512_set1_pd(1.0);
+    __m512d h, g = z_sqrt_gh(a, &h), y = _mm512_add_pd(h, h);
+    y = _mm512_fmadd_pd(y, _mm512_fnmadd_pd(g, y, one), y);
+    __mmask8 k = z_sqrt_special(a);
+    if (__builtin_expect(k != 0, 0)) y = _mm512_mask_div_pd(y, k, one, _mm512_sqrt_pd(a));
+    return y;
 }
+static inline vd v_div(vd a, vd b) { return (vd)z_div((__m512d)a, (__m512d)b); }
+static inline vd v_rcp(vd b) { return (vd)z_rcp((__m512d)b); }
+/* a square root used otherwise keeps vsqrtpd: its 1 instruction in place of about 15 is
+ * faster in these long bodies, whose time is spent on instructions more than on the divider */
+static inline vd v_sqrt(vd a) { return (vd)_mm512_sqrt_pd((__m512d)a); }
+static inline vd v_rsqrt(vd a) { return (vd)z_rsqrt((__m512d)a); }
 #else
 static inline vd v_div(vd a, vd b) { return a / b; }
 static inline vd v_rcp(vd b) { return 1.0 / b; }
