@@ -171,7 +171,12 @@ static inline vd v_rsqrt(vd a) { return (vd)z_rsqrt((__m512d)a); }
 #else
 static inline vd v_div(vd a, vd b) { return a / b; }
 static inline vd v_rcp(vd b) { return 1.0 / b; }
-static inline vd v_sqrt(vd a) { vd r; for (int i = 0; i < GSFRIC_LANES; ++i) r[i] = sqrt(a[i]); return r; }
+static inline vd v_sqrt(vd a)
+{
+    vd r;
+    for (int i = 0; i < GSFRIC_LANES; ++i) r[i] = sqrt(a[i]);
+    return r;
+}
 static inline vd v_rsqrt(vd a) { return 1.0 / v_sqrt(a); }
 #endif
 static inline vd v_inv(vd a) { return v_rcp(a); }
@@ -209,7 +214,8 @@ void gsfric_simd_divider(int op, const double *a, const double *b, double *y,
             u[l] = a[s + l < n ? s + l : n - 1];
             v[l] = b[s + l < n ? s + l : n - 1];
         }
-        r = op == 0 ? v_div(u, v) : op == 1 ? v_rcp(v) : op == 2 ? v_sqrt(u) : v_rsqrt(u);
+        r = op == 0 ? v_div(u, v) : op == 1 ? v_rcp(v)
+            : op == 2 ? v_sqrt(u) : v_rsqrt(u);
         for (int l = 0; l < GSFRIC_LANES && s + l < n; ++l) y[s + l] = r[l];
     }
 }
