@@ -5,7 +5,11 @@ same chain of operations (CasADi's instruction list) is printed so that every va
 ``GSFRIC_LANES`` steps and every operation acts on a vector of them, which the compiler turns
 into vector instructions. Each value is the same arithmetic as CasADi's code (the same
 operations in the same order), except ``exp``, which is a vector polynomial here (within 2 ulp
-of the C library's, see ``v_exp``).
+of the C library's, see ``v_exp``), and divisions: a square root used only as a divisor is
+printed as its reciprocal (``v_rsqrt``) and the divisions by it as products, a divisor of
+several divisions of the loop, or one that is loop invariant, as one reciprocal and products
+(the rewriting ``-freciprocal-math`` allows the compiler), and a division on its own as
+``v_div`` (see ``_DIVIDER``: on AVX-512 these do not use the divider).
 
 The lane width is chosen when the C is compiled, for the CPU it is compiled for: 8 with
 AVX-512F, 4 with AVX, otherwise 1 (scalar vectors; ``-DGSFRIC_LANES=n`` overrides). The
