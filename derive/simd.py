@@ -129,9 +129,10 @@ static inline vd v_exp(vd x)
 # on the divider (one vdivpd or vsqrtpd of 8 lanes occupies it for about 16-24 cycles): a 14-bit
 # estimate (vrcp14pd, vrsqrt14pd) refined by Newton-Raphson (Goldschmidt for the square root)
 # steps in FMA, ended by one correction step on the residual computed exactly by an FMA
-# (Markstein). The results equal the divider's, correctly rounded (``v_rsqrt`` equals 1 / sqrt,
-# two roundings): tests/test_lanes.py checks it on random operands of every magnitude and on
-# the special values. Lanes whose operand or result is outside the range where the residual is
+# (Markstein). ``v_div`` equals the divider's correctly rounded quotient; ``v_rcp`` and
+# ``v_rsqrt`` are within 1 ulp of 1 / b and of 1 / sqrt (two roundings), equal to them but where
+# the significand is near 2: tests/test_lanes.py checks them on random operands of every
+# magnitude and on the special values. Lanes whose operand or result is outside the range where the residual is
 # exact (0, below 2^-960, subnormal, infinite, NaN, negative for the square root) take the
 # divider's instruction instead. A square root that is not only a divisor keeps vsqrtpd (see
 # docs/performance.md). With other lane widths they are the C operators and the C library's
