@@ -5,7 +5,11 @@ same chain of operations (CasADi's instruction list) is printed so that every va
 ``GSFRIC_LANES`` steps and every operation acts on a vector of them, which the compiler turns
 into vector instructions. Each value is the same arithmetic as CasADi's code (the same
 operations in the same order), except ``exp``, which is a vector polynomial here (within 2 ulp
-of the C library's, see ``v_exp``).
+of the C library's, see ``v_exp``), and divisions: a square root used only as a divisor is
+printed as its reciprocal (``v_rsqrt``) and the divisions by it as products, a divisor of
+several divisions of the loop, or one that is loop invariant, as one reciprocal and products
+(the rewriting ``-freciprocal-math`` allows the compiler), and a division on its own as
+``v_div`` (see ``_DIVIDER``: on AVX-512 these do not use the divider).
 
 The lane width is chosen when the C is compiled, for the CPU it is compiled for: 8 with
 AVX-512F, 4 with AVX, otherwise 1 (scalar vectors; ``-DGSFRIC_LANES=n`` overrides). The
@@ -62,7 +66,7 @@ _LANEWISE = {
     "v_copysign": "copysign(a[i], b[i])",
 }
 _LANEWISE_UNARY = {
-    "v_log": "log(a[i])", "v_sqrt": "sqrt(a[i])", "v_sin": "sin(a[i])", "v_cos": "cos(a[i])",
+    "v_log": "log(a[i])", "v_sin": "sin(a[i])", "v_cos": "cos(a[i])",
     "v_tan": "tan(a[i])", "v_tanh": "tanh(a[i])", "v_floor": "floor(a[i])",
     "v_ceil": "ceil(a[i])",
 }
@@ -82,7 +86,6 @@ static inline vd v_not(vd a) { return v_mask((vl)(a == 0.0)); }
 static inline vd v_if_else_zero(vd a, vd b) { return (vd)((vl)(a != 0.0) & (vl)b); }
 static inline vd v_sign(vd a) { return v_mask((vl)(a > 0.0)) - v_mask((vl)(a < 0.0)); }
 static inline vd v_fabs(vd a) { return (vd)((vl)a & ~(vl)v_splat(-0.0)); }
-static inline vd v_inv(vd a) { return 1.0 / a; }
 /* fmax/fmin as the C library's: a NaN operand gives the other one */
 static inline vd v_fmax(vd a, vd b) { vl m = (vl)(a > b) | (vl)(b != b); return (vd)((m & (vl)a) | (~m & (vl)b)); }
 static inline vd v_fmin(vd a, vd b) { vl m = (vl)(a < b) | (vl)(b != b); return (vd)((m & (vl)a) | (~m & (vl)b)); }
@@ -120,6 +123,101 @@ static inline vd v_exp(vd x)
     y = (vd)(~(vl)(x < lo) & (vl)y);
     return (vd)(((vl)(x != x) & (vl)x) | (~(vl)(x != x) & (vl)y));
 }
+"""
+
+# Division, reciprocal and reciprocal square root. With 8 lanes on AVX-512 they do not queue
+# on the divider (one vdivpd or vsqrtpd of 8 lanes occupies it for about 16-24 cycles): a 14-bit
+# estimate (vrcp14pd, vrsqrt14pd) refined by Newton-Raphson (Goldschmidt for the square root)
+# steps in FMA, ended by one correction step on the residual computed exactly by an FMA
+# (Markstein). ``v_div`` equals the divider's correctly rounded quotient; ``v_rcp`` and
+# ``v_rsqrt`` are within 1 ulp of 1 / b and of 1 / sqrt (two roundings), equal to them but where
+# the significand is near 2: tests/test_lanes.py checks them on random operands of every
+# magnitude and on the special values. Lanes whose operand or result is outside the range where the residual is
+# exact (0, below 2^-960, subnormal, infinite, NaN, negative for the square root) take the
+# divider's instruction instead. A square root that is not only a divisor keeps vsqrtpd (see
+# docs/performance.md). With other lane widths they are the C operators and the C library's
+# sqrt, lane by lane.
+_DIVIDER = r"""
+#if GSFRIC_LANES == 8 && defined(__AVX512F__)
+/* fpclass categories: 0x01 QNaN, 0x02 +0, 0x04 -0, 0x08 +inf, 0x10 -inf, 0x20 subnormal,
+ * 0x40 negative, 0x80 SNaN */
+#define NOT_NORMAL 0xBF            /* zero, subnormal, infinite or NaN */
+#define NOT_POSITIVE_NORMAL 0xFF   /* the same, or negative */
+/* below this the residuals of the correction steps underflow (would cost up to 2 ulp) */
+#define TINY 0x1p-960
+/* 1/b to 56 bits: the estimate's relative error e0 < 2^-14 squares at each step */
+static inline __m512d z_rcp_nr(__m512d b)
+{
+    const __m512d one = _mm512_set1_pd(1.0);
+    __m512d y = _mm512_rcp14_pd(b);
+    y = _mm512_fmadd_pd(y, _mm512_fnmadd_pd(b, y, one), y);
+    return _mm512_fmadd_pd(y, _mm512_fnmadd_pd(b, y, one), y);
+}
+static inline __m512d z_div(__m512d a, __m512d b)
+{
+    __m512d y = z_rcp_nr(b), q = _mm512_mul_pd(a, y);
+    q = _mm512_fmadd_pd(_mm512_fnmadd_pd(b, q, a), y, q);
+    __mmask8 k = _mm512_fpclass_pd_mask(q, NOT_NORMAL) | _mm512_fpclass_pd_mask(y, NOT_NORMAL)
+                 | _mm512_cmp_pd_mask(_mm512_abs_pd(a), _mm512_set1_pd(TINY), _CMP_LT_OQ);
+    if (__builtin_expect(k != 0, 0)) q = _mm512_mask_div_pd(q, k, a, b);
+    return q;
+}
+static inline __m512d z_rcp(__m512d b)
+{
+    const __m512d one = _mm512_set1_pd(1.0);
+    __m512d y = z_rcp_nr(b);
+    y = _mm512_fmadd_pd(y, _mm512_fnmadd_pd(b, y, one), y);
+    __mmask8 k = _mm512_fpclass_pd_mask(y, NOT_NORMAL);
+    if (__builtin_expect(k != 0, 0)) y = _mm512_mask_div_pd(y, k, one, b);
+    return y;
+}
+/* sqrt(a) as g and 1/(2 sqrt(a)) as h (Goldschmidt), each step squaring the relative error;
+ * then g corrected by the exact residual a - g^2 */
+static inline __m512d z_sqrt_gh(__m512d a, __m512d *h)
+{
+    const __m512d half = _mm512_set1_pd(0.5);
+    __m512d y = _mm512_rsqrt14_pd(a), g = _mm512_mul_pd(a, y), hh = _mm512_mul_pd(half, y);
+    for (int i = 0; i < 2; ++i) {
+        __m512d r = _mm512_fnmadd_pd(g, hh, half);
+        g = _mm512_fmadd_pd(g, r, g);
+        hh = _mm512_fmadd_pd(hh, r, hh);
+    }
+    *h = hh;
+    return _mm512_fmadd_pd(_mm512_fnmadd_pd(g, g, a), hh, g);
+}
+static inline __mmask8 z_sqrt_special(__m512d a)
+{
+    return _mm512_fpclass_pd_mask(a, NOT_POSITIVE_NORMAL)
+           | _mm512_cmp_pd_mask(a, _mm512_set1_pd(TINY), _CMP_LT_OQ);
+}
+/* 1/sqrt(a): 2h, corrected as a reciprocal of the corrected square root g */
+static inline __m512d z_rsqrt(__m512d a)
+{
+    const __m512d one = _mm512_set1_pd(1.0);
+    __m512d h, g = z_sqrt_gh(a, &h), y = _mm512_add_pd(h, h);
+    y = _mm512_fmadd_pd(y, _mm512_fnmadd_pd(g, y, one), y);
+    __mmask8 k = z_sqrt_special(a);
+    if (__builtin_expect(k != 0, 0)) y = _mm512_mask_div_pd(y, k, one, _mm512_sqrt_pd(a));
+    return y;
+}
+static inline vd v_div(vd a, vd b) { return (vd)z_div((__m512d)a, (__m512d)b); }
+static inline vd v_rcp(vd b) { return (vd)z_rcp((__m512d)b); }
+/* a square root used otherwise keeps vsqrtpd: its 1 instruction in place of about 15 is
+ * faster in these long bodies, whose time is spent on instructions more than on the divider */
+static inline vd v_sqrt(vd a) { return (vd)_mm512_sqrt_pd((__m512d)a); }
+static inline vd v_rsqrt(vd a) { return (vd)z_rsqrt((__m512d)a); }
+#else
+static inline vd v_div(vd a, vd b) { return a / b; }
+static inline vd v_rcp(vd b) { return 1.0 / b; }
+static inline vd v_sqrt(vd a)
+{
+    vd r;
+    for (int i = 0; i < GSFRIC_LANES; ++i) r[i] = sqrt(a[i]);
+    return r;
+}
+static inline vd v_rsqrt(vd a) { return 1.0 / v_sqrt(a); }
+#endif
+static inline vd v_inv(vd a) { return v_rcp(a); }
 """
 
 
@@ -176,6 +274,7 @@ def _header() -> str:
         "#endif",
     ]
     lines.append(_VECTOR)
+    lines.append(_DIVIDER)
     for name, body in _LANEWISE.items():
         lines.append(f"static inline vd {name}(vd a, vd b) {{ vd r; "
                      f"for (int i = 0; i < GSFRIC_LANES; ++i) r[i] = {body}; return r; }}")
@@ -192,6 +291,22 @@ def _header() -> str:
         "        vd a;",
         "        for (int l = 0; l < GSFRIC_LANES; ++l) a[l] = x[s + l < n ? s + l : n - 1];",
         "        vd r = v_exp(a);",
+        "        for (int l = 0; l < GSFRIC_LANES && s + l < n; ++l) y[s + l] = r[l];",
+        "    }",
+        "}",
+        "/* y = a / b (op 0), 1 / b (1), sqrt(a) (2), 1 / sqrt(a) (3) as the generated code",
+        " * computes them (for the tests) */",
+        "void gsfric_simd_divider(int op, const double *a, const double *b, double *y,",
+        "                         long long n)",
+        "{",
+        "    for (long long s = 0; s < n; s += GSFRIC_LANES) {",
+        "        vd u, v, r;",
+        "        for (int l = 0; l < GSFRIC_LANES; ++l) {",
+        "            u[l] = a[s + l < n ? s + l : n - 1];",
+        "            v[l] = b[s + l < n ? s + l : n - 1];",
+        "        }",
+        "        r = op == 0 ? v_div(u, v) : op == 1 ? v_rcp(v)",
+        "            : op == 2 ? v_sqrt(u) : v_rsqrt(u);",
         "        for (int l = 0; l < GSFRIC_LANES && s + l < n; ++l) y[s + l] = r[l];",
         "    }",
         "}",
@@ -221,20 +336,49 @@ def _gather_tables(sizes: list[int]) -> list[str]:
             f"{{{', '.join(str(start[k]) for k in sizes)}}};"]
 
 
+def _divisor_uses(f, names) -> dict[int, tuple[int, int, int]]:
+    """For each instruction k's value: (its uses, its uses as the divisor of a division, those of
+    them in divisions that are not loop invariant), read from the instruction list (CasADi
+    reuses work slots: a slot's value is the one its last writer gave it)."""
+    writer: dict[int, int] = {}          # work slot -> the instruction that wrote it last
+    invariant: dict[int, bool] = {}
+    count: dict[int, list[int]] = {}
+    for k in range(f.n_instructions()):
+        op = names[f.instruction_id(k)]
+        i = f.instruction_input(k)
+        if op == "OP_OUTPUT":
+            count[writer[i[0]]][0] += 1
+            continue
+        args = [] if op in ("OP_INPUT", "OP_CONST") else \
+            [writer[i[0]], writer[i[1]]] if op in _BINARY else [writer[i[0]]]
+        invariant[k] = i[0] != 0 if op == "OP_INPUT" else all(invariant[a] for a in args)
+        for pos, a in enumerate(args):
+            count[a][0] += 1
+            if op == "OP_DIV" and pos == 1:
+                count[a][1] += 1
+                count[a][2] += not invariant[k]
+        count[k] = [0, 0, 0]
+        writer[f.instruction_output(k)[0]] = k
+    return {k: tuple(c) for k, c in count.items()}
+
+
 def batch_source(f, prefix: str) -> str:
     """C source of ``<prefix>_batch`` for the CasADi SX function ``f``."""
     names = _opnames()
     n_x = f.numel_in(0)
     sizes = [f.numel_out(j) for j in range(f.n_out())]
     base = [sum(sizes[:j]) for j in range(len(sizes))]
+    uses = _divisor_uses(f, names)
     hoisted, body = [], []
-    current: dict[int, tuple[str, bool]] = {}   # work slot -> (C name, loop invariant)
+    current: dict[int, tuple[str, bool, int]] = {}  # work slot -> (C name, invariant, defined by)
+    rsqrt: set[int] = set()        # square roots held as their reciprocals
+    recip: dict[int, str] = {}     # divisors -> the name of their reciprocal
     for k in range(f.n_instructions()):
         op = names[f.instruction_id(k)]
         i = f.instruction_input(k)
         o = f.instruction_output(k)
         if op == "OP_OUTPUT":
-            src, _ = current[i[0]]
+            src, _, _ = current[i[0]]
             body.append(f"        *(vd *)yt[{base[o[0]] + o[1]}] = {src};")
             continue
         if op == "OP_INPUT":
@@ -244,20 +388,33 @@ def batch_source(f, prefix: str) -> str:
                 expr, invariant = f"v_splat(in[{i[0]}][{i[1]}])", True
         elif op == "OP_CONST":
             expr, invariant = f"v_splat({float(f.instruction_constant(k))!r})", True
+        elif op == "OP_DIV" and not (current[i[0]][1] and current[i[1]][1]):
+            (a, _, _), (b, _, d) = current[i[0]], current[i[1]]
+            expr, invariant = (f"{a} * {b}" if d in rsqrt else f"{a} * {recip[d]}"
+                               if d in recip else f"v_div({a}, {b})"), False
         elif op in _BINARY:
-            (a, ia), (b, ib) = current[i[0]], current[i[1]]
+            (a, ia, _), (b, ib, _) = current[i[0]], current[i[1]]
             expr, invariant = _BINARY[op].format(a=a, b=b), ia and ib
+        elif op == "OP_SQRT" and not current[i[0]][1] and uses[k][1] == uses[k][0] > 0:
+            expr, invariant = f"v_rsqrt({current[i[0]][0]})", False
+            rsqrt.add(k)
         elif op in _UNARY:
-            a, ia = current[i[0]]
+            a, ia, _ = current[i[0]]
             expr, invariant = _UNARY[op].format(a=a), ia
         else:
             raise NotImplementedError(f"{f.name()}: no SIMD translation for {op}")
         if invariant:
             hoisted.append(f"    const vd h{k} = {expr};")
-            current[o[0]] = (f"h{k}", True)
+            current[o[0]] = (f"h{k}", True, k)
+            if uses[k][2]:      # a divisor of the loop body's divisions: its reciprocal, once
+                hoisted.append(f"    const vd r{k} = 1.0 / h{k};")
+                recip[k] = f"r{k}"
         else:
             body.append(f"        w{o[0]} = {expr};")
-            current[o[0]] = (f"w{o[0]}", False)
+            current[o[0]] = (f"w{o[0]}", False, k)
+            if k not in rsqrt and uses[k][1] >= 2:
+                body.append(f"        const vd r{k} = v_rcp(w{o[0]});")
+                recip[k] = f"r{k}"
     slots = sorted({int(line.split("=")[0].strip()[1:]) for line in body
                     if line.lstrip().startswith("w")})
     lines = [
