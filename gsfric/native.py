@@ -39,6 +39,7 @@ import shlex
 import signal
 import subprocess
 import sys
+import threading
 import time
 import warnings
 from pathlib import Path
@@ -170,16 +171,41 @@ def _kill(procs: list[subprocess.Popen]) -> None:
             p.wait(timeout=5)
 
 
+def _start(commands: list[list[str]], procs: list[subprocess.Popen]) -> None:
+    """Start the compilers, each in its own process group, appending each to ``procs`` as
+    soon as it runs, in a thread of its own: Python runs signal handlers in the main thread
+    only, so an interrupt cannot land between a compiler's start and its entry in ``procs``
+    (a compiler nobody would kill). An error starting one is raised here."""
+    failure: list[BaseException] = []
+
+    def start() -> None:
+        try:
+            for cmd in commands:
+                procs.append(subprocess.Popen(cmd, stdout=subprocess.PIPE,
+                                              stderr=subprocess.PIPE, stdin=subprocess.DEVNULL,
+                                              text=True, start_new_session=True))
+        except BaseException as exc:  # handed to the caller
+            failure.append(exc)
+
+    starter = threading.Thread(target=start, name="gsfric-compilers")
+    starter.start()
+    try:
+        starter.join()
+    finally:
+        while starter.is_alive():  # an interrupt while starting: wait until procs is complete
+            with contextlib.suppress(BaseException):
+                starter.join()
+    if failure:
+        raise failure[0]
+
+
 def _run(commands: list[list[str]], timeout: float) -> list[str]:
     """Run compiler commands in parallel, each in its own process group; their error texts
     ("" for success). A run past ``timeout`` seconds kills them all (``BuildError``); so does
     any exception (an interrupt, a signal) while waiting: no compiler is left behind."""
     procs: list[subprocess.Popen] = []
     try:
-        for cmd in commands:
-            procs.append(subprocess.Popen(cmd, stdout=subprocess.PIPE, stderr=subprocess.PIPE,
-                                          stdin=subprocess.DEVNULL, text=True,
-                                          start_new_session=True))
+        _start(commands, procs)
         deadline = time.monotonic() + timeout
         errors = []
         for p in procs:
