@@ -239,7 +239,7 @@ class Problem:
                                          reach=self.reach)[self.used]
         self.weight = self.sliding.astype(float)
         # the speeds the sliding samples cover: a Stribeck decay above nearly all of them is
-        # a speed-independent friction on this data (see ``candidates.stribeck_velocities``)
+        # a speed-independent friction on this data (see ``candidates.STRIBECK_QUANTILE``)
         speeds = np.abs(self.result.D_dot[self.used])[self.sliding]
         self.context["sliding_speed"] = (float(np.quantile(speeds, STRIBECK_QUANTILE))
                                          if speeds.size else np.inf)
