@@ -48,6 +48,7 @@ import functools
 import math
 import mmap
 import os
+import threading
 import warnings
 import weakref
 from collections.abc import MutableMapping
@@ -668,8 +669,6 @@ class _BlockPool:
             os.register_at_fork(after_in_child=self._new_lock)
 
     def _new_lock(self) -> None:
-        import threading
-
         self._lock = threading.Lock()
 
     @staticmethod

@@ -106,14 +106,19 @@ def test_noise_with_static_levels_at_rest_leaves_no_structure(phi):
         assert not out["significant"], (seed, out["p_value"], out["gap"])
 
 
-@pytest.mark.parametrize("phi", [0.0, 0.95])
-def test_play_after_each_reversal_is_found(phi):
-    rng = np.random.default_rng(7)
+def _tested(seed, phi, effect):
+    """The test on moves of ``seed`` whose residual is ``0.5 * effect(D, v, sliding)`` (N) plus
+    AR(1) noise ``phi`` and a static level at each rest."""
+    rng = np.random.default_rng(seed)
     t, D, v = _moves(rng)
     sliding = np.abs(v) > BAND
-    effect = 0.5 * _play(D, v, sliding, 1e-3)
-    r = _with_static_levels(rng, effect + _ar1(rng, phi), sliding)
-    out = _test(r, D, v, sliding)
+    r = _with_static_levels(rng, 0.5 * effect(D, v, sliding) + _ar1(rng, phi), sliding)
+    return _test(r, D, v, sliding)
+
+
+@pytest.mark.parametrize("phi", [0.0, 0.95])
+def test_play_after_each_reversal_is_found(phi):
+    out = _tested(7, phi, lambda D, v, sliding: _play(D, v, sliding, 1e-3))
     assert out["significant"], (out["p_value"], out["gap"])
     # the profile: friction missing (r d < 0) within the play, none far beyond it
     profile = dict(out["profile"])
@@ -123,12 +128,7 @@ def test_play_after_each_reversal_is_found(phi):
 
 @pytest.mark.parametrize("phi", [0.0, 0.95])
 def test_presliding_friction_is_found(phi):
-    rng = np.random.default_rng(8)
-    t, D, v = _moves(rng)
-    sliding = np.abs(v) > BAND
-    effect = 0.5 * _dahl(D, v, sliding, 3e-4)
-    r = _with_static_levels(rng, effect + _ar1(rng, phi), sliding)
-    assert _test(r, D, v, sliding)["significant"]
+    assert _tested(8, phi, lambda D, v, sliding: _dahl(D, v, sliding, 3e-4))["significant"]
 
 
 @pytest.mark.slow
