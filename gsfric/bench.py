@@ -173,16 +173,19 @@ def _callable(implementation: str, threads: int, x: np.ndarray):
 
 
 def _time_calls(fn, budget: float, min_calls: int, max_calls: int,
-                cpu: list | None = None) -> list[float]:
+                cpu: list | None = None, setup=None) -> list[float]:
     """Wall-clock seconds of successive calls, until ``budget`` seconds have passed.
 
     With ``cpu``, the CPU seconds of the calling thread for each call are appended to it (the
-    whole cost of a call that runs on one thread).
+    whole cost of a call that runs on one thread). ``setup()``, when given, runs before each
+    call, untimed.
     """
     times: list[float] = []
     start = time.perf_counter()
     while len(times) < max_calls and (len(times) < min_calls
                                       or time.perf_counter() - start < budget):
+        if setup is not None:
+            setup()
         c0 = time.thread_time()
         t0 = time.perf_counter()
         fn()
@@ -315,11 +318,13 @@ def _motion(n: int):
     return models.random_motion(np.random.default_rng(SEED), DT * np.arange(n))
 
 
-def _best_times(fn, budget: float, min_calls: int = 3) -> tuple[float, float, float]:
-    """(best wall, median wall, best CPU of the calling thread) seconds per call."""
+def _best_times(fn, budget: float, min_calls: int = 3,
+                setup=None) -> tuple[float, float, float]:
+    """(best wall, median wall, best CPU of the calling thread) seconds per call
+    (``setup()`` before each call, untimed)."""
     fn()
     cpu: list[float] = []
-    times = _time_calls(fn, budget, min_calls, 100_000, cpu)
+    times = _time_calls(fn, budget, min_calls, 100_000, cpu, setup)
     return min(times), statistics.median(times), min(cpu)
 
 
@@ -466,11 +471,9 @@ def measure_paths(budget: float, memory: bool, progress=print, simulate: bool = 
     rbest, _, rcpu = _best_times(lambda: ev.evaluate_quiet(motion, buffers=buffers), budget)
     from gsfric.evaluation import release_memory
 
-    def new_memory():   # no dropped result's memory to reuse: every page mapped anew
-        release_memory()
-        gsfric.evaluate(platform, motion)
-
-    fbest, _, fcpu = _best_times(new_memory, budget)
+    # no dropped result's memory to reuse: every page mapped anew (the release untimed)
+    fbest, _, fcpu = _best_times(lambda: gsfric.evaluate(platform, motion), budget,
+                                 setup=release_memory)
     x = state_array(motion)
     nbest, _, ncpu = _best_times(lambda: numpy_model.actuator_forces_numpy(platform, x), budget)
     out["evaluate_1e5"] = {"steps_per_s": 1e5 / best, "steps_per_cpu_s": 1e5 / cpu,

@@ -18,6 +18,9 @@ from pathlib import Path
 
 import click
 
+from gsfric.columns import DEFAULT_GROUPS as DEFAULT_COLUMN_GROUPS
+from gsfric.columns import GROUPS as COLUMN_GROUPS
+
 EXIT_CHECK = 1
 EXIT_INPUT = 2
 EXIT_INTERNAL = 3
@@ -62,6 +65,29 @@ def _one_line_warnings():
     with warnings.catch_warnings():
         warnings.showwarning = show
         yield
+
+
+@contextlib.contextmanager
+def _no_cycle_collection():
+    """No cycle collection inside, and the objects left at exit frozen (``simulate``, whose
+    imports it covers as a decorator).
+
+    A streamed run makes no cyclic garbage to speak of, while its imports (SciPy, pandas,
+    pyarrow) create objects that every collection would walk again, and the interpreter's exit
+    would walk them once more: together a tenth of the CPU time of a million-step run.
+    """
+    import atexit
+    import gc
+
+    collecting = gc.isenabled()
+    gc.disable()
+    atexit.unregister(gc.freeze)
+    atexit.register(gc.freeze)
+    try:
+        yield
+    finally:
+        if collecting:
+            gc.enable()
 
 
 def _quiet_broken_pipe() -> None:
@@ -275,10 +301,9 @@ def paper(out_dir, mode, platform_file, no_plots):
               help="No progress bar and no summary line (warnings and errors still go to "
                    "stderr).")
 @click.option("--columns", default=None, metavar="GROUP[,GROUP...]",
-              help="Output groups: forces (F1..F6), friction (the paper's MfrE, MfrC, Ffr), "
-                   "reactions (RE, RC, MC), friction_detail (signed and vector friction), "
-                   "frictionless (F0), lengths (D), or all [default: forces,friction,reactions]; "
-                   "t and flag are always written. `gsfric columns` lists every column.")
+              help=f"Output groups: {', '.join(COLUMN_GROUPS)}, or all [default: "
+                   f"{','.join(DEFAULT_COLUMN_GROUPS)}]; t and flag are always written. "
+                   "`gsfric columns` lists every column with its group.")
 @click.option("--float32", is_flag=True,
               help="Write the outputs as float32 (relative error up to 6e-8, half the size).")
 @click.option("--breakdown", "breakdown_file", type=click.Path(path_type=Path), default=None,
@@ -286,6 +311,7 @@ def paper(out_dir, mode, platform_file, no_plots):
                    "joint friction, prismatic friction by kind, effects) to this CSV or "
                    "Parquet file (kinematic mode; the trajectory is read whole).")
 @_log_options
+@_no_cycle_collection()
 def simulate(trajectory, platform_file, out, mode, strict, threads, chunk, window, progress,
              quiet, columns, float32, breakdown_file, column_map, units_map, angles, keep_columns):
     """Evaluate a motion: actuator forces, reactions and friction at every step.
@@ -298,29 +324,6 @@ def simulate(trajectory, platform_file, out, mode, strict, threads, chunk, windo
     memory. Flagged steps (see the flag column) are reported with their indices in one
     warning at the end, or make the run fail with --strict.
     """
-    import atexit
-    import gc
-
-    # no cycle collection while the command runs: it makes no cyclic garbage to speak of,
-    # while its imports (SciPy, pandas, pyarrow) create objects that every collection would
-    # walk again, and none of them at the interpreter's exit (together a tenth of the CPU
-    # time of a million-step run)
-    collecting = gc.isenabled()
-    gc.disable()
-    atexit.unregister(gc.freeze)
-    atexit.register(gc.freeze)
-    try:
-        _simulate(trajectory, platform_file, out, mode, strict, threads, chunk, window,
-                  progress, quiet, columns, float32, breakdown_file, column_map, units_map,
-                  angles, keep_columns)
-    finally:
-        if collecting:
-            gc.enable()
-
-
-def _simulate(trajectory, platform_file, out, mode, strict, threads, chunk, window, progress,
-              quiet, columns, float32, breakdown_file, column_map, units_map, angles,
-              keep_columns):
     import warnings
 
     from gsfric.stream import parse_columns, simulate_file

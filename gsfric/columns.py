@@ -118,8 +118,8 @@ GROUPS = {
 
 DEFAULT_GROUPS = ("forces", "friction", "reactions")
 """The groups ``simulate`` writes unless ``--columns`` says otherwise: with ``t`` and ``flag``
-the 68 values of a step (``t``, F, the paper's friction scalars, the joint reactions, the
-flag); every other group is one ``--columns`` away (``all``: every group)."""
+(``t``, F, the paper's friction scalars, the joint reactions, the flag: ``len(plan(DEFAULT_GROUPS)) + 2``
+values a step); every other group is one ``--columns`` away (``all``: every group)."""
 
 
 def plan(groups=tuple(GROUPS)) -> list[tuple[str, str, int, str]]:
@@ -145,11 +145,11 @@ def descriptions(measured: bool = True) -> dict[str, str]:
 
 
 def listing(measured: bool = True) -> str:
-    """The plain-text listing of ``gsfric columns``."""
-    rows = [(c.label, c.unit, c.description) for c in all_columns(measured)]
-    width = max(len(r[0]) for r in rows)
-    uw = max(len(r[1]) for r in rows)
-    return "\n".join(f"{n:<{width}}  {u:<{uw}}  {d}" for n, u, d in rows)
+    """The plain-text listing of ``gsfric columns``: column, unit, group, meaning."""
+    rows = [(c.label, c.unit, c.group, c.description) for c in all_columns(measured)]
+    widths = [max(len(r[k]) for r in rows) for k in range(3)]
+    return "\n".join("  ".join(f"{v:<{w}}" for v, w in zip(r[:3], widths)) + f"  {r[3]}"
+                     for r in rows)
 
 
 def markdown_table(measured: bool = True) -> str:

@@ -648,17 +648,19 @@ POOL_KEEP_BYTES = 512 << 20
 
 
 class _BlockPool:
-    """Memory for large result arrays: anonymous mappings of whole huge pages (advised
-    ``MADV_HUGEPAGE``: one page fault per 2 MiB instead of per 4 kB), and the blocks of results
-    the caller has dropped, kept (up to ``POOL_KEEP_BYTES``) for the next evaluation of the same
+    """Memory for large result arrays: anonymous mappings, rounded up to whole huge pages
+    (``HUGE_PAGE``, 2 MiB, advised ``MADV_HUGEPAGE``: one page fault per 2 MiB instead of per
+    4 kB) from 2 MiB up and to whole pages below; and the blocks of results the caller has
+    dropped, kept (up to ``POOL_KEEP_BYTES``) for the next evaluation of the same rounded
     size, which then writes into memory that is already mapped: no page faults, no zeroing by
     the kernel (about 200 ns of every step's 1.8 kB otherwise).
 
     An array handed out is the caller's alone: its block comes back only when the array and
     every view of it are gone (a ``weakref.finalize`` on the buffer object they all keep
-    alive). Thread-safe: lists keyed by size (atomic append and pop) and a lock that a
-    returning block never waits for (it is dropped instead: the garbage collector may run
-    inside ``take``)."""
+    alive). Thread-safe: one lock guards the free lists (keyed by length) and the count of
+    kept bytes. A returning block never waits for it: the finalizer may run inside ``take``
+    while this thread holds the lock (a garbage collection there), so when the lock is taken
+    the block is not kept but unmapped with its last reference."""
 
     def __init__(self, keep: int) -> None:
         self.keep = keep

@@ -584,11 +584,14 @@ class CompiledFunction:
 
     def _bound_struct(self, fixed_ptrs, in_strides, index: int, threads: int, by_object: bool):
         """The fixed arguments of a bound call in one ``_Bound`` (kept alive by the caller),
-        a reference to it, and whether the call may pass its arrays in one tuple."""
+        a reference to it, and whether the call may pass its arrays in one tuple; ``(None,
+        None, False)`` when it may not (the struct is only read by the tuple calls)."""
+        if not (by_object and _tuples_readable(self._lib)):
+            return None, None, False
         bound = _Bound(ctypes.pointer(self._fn), ctypes.cast(fixed_ptrs, ctypes.c_void_p),
                        ctypes.cast(in_strides, ctypes.c_void_p),
                        ctypes.cast(self._out_strides, ctypes.c_void_p), index, threads)
-        return bound, ctypes.byref(bound), by_object and _tuples_readable(self._lib)
+        return bound, ctypes.byref(bound), True
 
     def bound_motion(self, constants: list[np.ndarray], output: str, n_threads: int = 1):
         """``bound``'s callable from a motion's arrays: ``f(position, rotation, velocity,

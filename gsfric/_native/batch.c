@@ -302,7 +302,9 @@ long long gsfric_run(const gsfric_fn *fn, const double **in, const long long *in
     pthread_t threads[MAX_THREADS];
     int started[MAX_THREADS] = {0};
     /* range boundaries on multiples of 8 steps: every range's groups of steps then start
-     * where the first range's do (whole 64-byte lines of every output row) */
+     * where the first range's do (whole 64-byte lines of every output row). No range is
+     * empty: each thread has at least MIN_STEPS_PER_THREAD steps before the rounding, which
+     * moves a boundary by at most 7 */
     for (int k = 0; k < n_threads; ++k) {
         long long lo = k ? (n * k / n_threads) & ~7LL : 0;
         long long hi = k + 1 < n_threads ? (n * (k + 1) / n_threads) & ~7LL : n;
