@@ -483,10 +483,27 @@ def _coupling(ch: Chain, inp: Inputs, legs: list[Leg], A_qr, n_iter: int = cp.N_
     terms = [_joint_friction_terms(ch.scope("33-35", leg.k), P, m, leg.out["omega_rel"],
                                    leg.out["omega_C"], leg.a1, leg.joint.a2) for leg in legs]
 
-    def moments(leg, R_E, R_C, it):
-        return _joint_friction(ch.scope("33-35", leg.k), f"_{it}", terms[leg.k - 1], R_E, R_C)
+    class friction:
+        @staticmethod
+        def loads(leg, R_E, R_C, it):
+            let = ch.scope("33-35", leg.k)
+            return [let(f"load{j}_{it}", v, f"s_{{fr{j}}}^{{({it})}}") for j, v in
+                    enumerate(cp.joint_friction_loads(terms[leg.k - 1], R_E, R_C))]
 
-    df, change = cp.solve(ch, legs, A_qr, cp.coupling_weight(P, Q, inp.mode), moments, m,
+        @staticmethod
+        def moments(leg, loads, it):
+            MfrE, MfrC = cp.joint_friction_from_loads(terms[leg.k - 1], loads)
+            let = ch.scope("33-35", leg.k)
+            return (let(f"MfrE_{it}", MfrE, f"M_{{frE_{it}}}"),
+                    let(f"MfrC_{it}", MfrC, f"M_{{frC_{it}}}"))
+
+        @staticmethod
+        def weights(leg):
+            let = ch.scope("33-35", leg.k)
+            return [let(f"wload{j}", v, f"w_{{fr{j}}}") for j, v in
+                    enumerate(cp.joint_friction_weights(terms[leg.k - 1]))]
+
+    df, change = cp.solve(ch, legs, A_qr, cp.coupling_weight(P, Q, inp.mode), friction, m,
                           n_iter)
     for i, leg in enumerate(legs):
         o, let = leg.out, ch.scope("coupled", leg.k)
