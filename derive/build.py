@@ -69,17 +69,6 @@ def _split(sx, specs, env):
         offset += size
 
 
-def _shared(f):
-    """``f`` with its common subexpressions computed once (CasADi's ``cse``: a value that the
-    translated chain builds twice from the same operations on the same operands, e.g. the
-    change of the reactions shared by R_E and R_C in every iteration, becomes one instruction;
-    the same operations in the same order, so the same results to the bit)."""
-    import casadi as ca
-
-    args = f.sx_in()
-    return ca.Function(f.name(), args, f.call(args), f.name_in(), f.name_out(), {"cse": True})
-
-
 def _functions():
     import casadi as ca
 
@@ -141,7 +130,6 @@ def _functions():
                         ["x", "P", "Q"], ["F"]),
             envelope.function(f"{BASENAME}_envelope_{suffix}", fixed, x, P, Q),
         ]
-    funcs = [_shared(f) for f in funcs]
     shapes = {n: list(s) for n, s, *_ in mdl.OUTPUTS}
     units = {n: u for n, _, u, _ in mdl.OUTPUTS}
     descs = {n: d for n, _, _, d in mdl.OUTPUTS}
