@@ -49,8 +49,7 @@ LANES = 8
 
 def short_solves(n_max: int) -> dict:
     """k -> CasADi function (x, P, Q) -> (F, F0, coupling_change) of the coupled model with k
-    iterations (``model.build(..., n_iter=k)``), common subexpressions merged as in
-    generated/."""
+    iterations (``model.build(..., n_iter=k)``)."""
     import casadi as ca
 
     x = ca.SX.sym("x", mdl.input_size(mdl.STATE))
@@ -65,8 +64,8 @@ def short_solves(n_max: int) -> dict:
         env["effects"] = Q
         o = model.chain.to_casadi(env, {n: model.outputs[n]
                                         for n in ("F", "F0", "coupling_change")})
-        out[k] = dbuild._shared(ca.Function(f"coupled_{k}", [x, P, Q],
-                                            [o["F"], o["F0"], o["coupling_change"]]))
+        out[k] = ca.Function(f"coupled_{k}", [x, P, Q],
+                             [o["F"], o["F0"], o["coupling_change"]])
     return out
 
 
