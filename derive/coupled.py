@@ -25,6 +25,9 @@ acceleration of depth 1 (a secant step on the friction moments of all legs at on
 ``r`` the change friction would make); it is left out (theta = 0, the plain step
 ``x^(k+1) = G^(k)``) at the first update, which has no previous residual, and at the last, so that
 the reported moments are the friction of R^(N-1) and ``coupling_change`` measures a plain step.
+The moments are affine in the joints' loads (``joint_friction_loads``: 3 per leg), so the
+generated code carries the 18 loads as the iterate, with the inner product of the moments
+written in the loads (``joint_friction_weights``): the same iterates, fewer operations.
 The reported reactions are ``R^(N)``, in equilibrium with the reported friction moments
 ``x^(N)``; the output ``coupling_change`` is ``f^(N) - f^(N-1)``, the change the last plain step
 made, which the runtime compares with a tolerance (``gsfric.evaluation.COUPLING_TOLERANCE``) to
