@@ -25,6 +25,9 @@ acceleration of depth 1 (a secant step on the friction moments of all legs at on
 ``r`` the change friction would make); it is left out (theta = 0, the plain step
 ``x^(k+1) = G^(k)``) at the first update, which has no previous residual, and at the last, so that
 the reported moments are the friction of R^(N-1) and ``coupling_change`` measures a plain step.
+The moments are affine in the joints' loads (``joint_friction_loads``: 3 per leg), so the
+generated code carries the 18 loads as the iterate, with the inner product of the moments
+written in the loads (``joint_friction_weights``): the same iterates, fewer operations.
 The reported reactions are ``R^(N)``, in equilibrium with the reported friction moments
 ``x^(N)``; the output ``coupling_change`` is ``f^(N) - f^(N-1)``, the change the last plain step
 made, which the runtime compares with a tolerance (``gsfric.evaluation.COUPLING_TOLERANCE``) to
@@ -92,16 +95,49 @@ def joint_friction_terms(let, w_rel, w_C, a1, a2, c_s, mu, r, eps, m) -> dict:
     return t
 
 
+def joint_friction_loads(t, R_E, R_C) -> list:
+    """The loads the joints' friction moments are affine in, from ``joint_friction_terms``
+    and the reactions R_E, R_C (N): ``|R_E|``, then ``|R_C|`` (vector form, when ``t`` has
+    ``gC``), then ``|a_j x R_C|`` for each bearing axis (per-axis form); N each."""
+    loads = [norm(R_E)]
+    if "gC" in t:
+        loads.append(norm(R_C))
+    loads += [norm(cross(a, R_C)) for a, _ in t["axes"]]
+    return loads
+
+
+def joint_friction_from_loads(t, loads):
+    """(M_frE on the platform, M_frC on the leg), base frame, N m, from ``joint_friction_terms``
+    and the loads of ``joint_friction_loads`` (in its order)."""
+    MfrE = t["vE"] - loads[0] * t["gE"]
+    MfrC = t["vC"]
+    k = 1
+    if "gC" in t:
+        MfrC = MfrC - loads[1] * t["gC"]
+        k = 2
+    for (a, h), load in zip(t["axes"], loads[k:]):
+        MfrC = MfrC - load * h * a
+    return MfrE, MfrC
+
+
+def joint_friction_weights(t) -> list:
+    """Per load of ``joint_friction_loads``, the squared norm of the moment it multiplies,
+    (N m / N)^2: ``|g_E|^2``, ``|g_C|^2``, ``h_j^2`` (the axes a_j are orthogonal unit vectors).
+
+    With them, the squared norm of a change of the friction moments is the weighted sum of the
+    squared changes of the loads (exact when the vector form and the per-axis form are not both
+    weighted, i.e. for the friction models 0 and 1)."""
+    w = [dot(t["gE"], t["gE"])]
+    if "gC" in t:
+        w.append(dot(t["gC"], t["gC"]))
+    w += [h * h for _, h in t["axes"]]
+    return w
+
+
 def joint_friction_moments(t, R_E, R_C):
     """(M_frE on the platform, M_frC on the leg), base frame, N m, from ``joint_friction_terms``
     and the reactions R_E, R_C (N)."""
-    MfrE = t["vE"] - norm(R_E) * t["gE"]
-    MfrC = t["vC"]
-    if "gC" in t:
-        MfrC = MfrC - norm(R_C) * t["gC"]
-    for a, h in t["axes"]:
-        MfrC = MfrC - norm(cross(a, R_C)) * h * a
-    return MfrE, MfrC
+    return joint_friction_from_loads(t, joint_friction_loads(t, R_E, R_C))
 
 
 def universal_joint_friction(w_L, R_C, a1, a2, c_s, mu, r, eps):
@@ -128,8 +164,14 @@ def coupling_weight(P, Q, mode):
     return m + (1 - m) * s
 
 
-def solve(ch, legs, A_qr, weight, moments, m, n_iter=N_ITERATIONS, accelerate=ACCELERATE):
+def solve(ch, legs, A_qr, weight, friction, m, n_iter=N_ITERATIONS, accelerate=ACCELERATE):
     """Unrolled fixed point of the coupled equilibrium; updates every leg's outputs in place.
+
+    The iterate is the vector of every leg's friction loads (``joint_friction_loads``: 3 per
+    leg in the coupled model); the friction moments are affine in them
+    (``joint_friction_from_loads``), so a plain step on the loads is the plain step on the
+    moments, and the Anderson step on the loads, with the inner product weighted by
+    ``joint_friction_weights``, is the Anderson step on the moments.
 
     Parameters
     ----------
@@ -140,9 +182,10 @@ def solve(ch, legs, A_qr, weight, moments, m, n_iter=N_ITERATIONS, accelerate=AC
         The QR factor of the platform's 6x6 system in the axial forces.
     weight : sympy expression
         Weight of the friction moments in the equilibrium (``coupling_weight``).
-    moments : callable
-        ``moments(leg, R_E, R_C, it)``: the friction moments (M_frE, M_frC) of the leg from its
-        reactions, (3, 1) each, N m.
+    friction : object
+        ``friction.loads(leg, R_E, R_C, it)``: the leg's friction loads (list, N) from its
+        reactions; ``friction.moments(leg, loads, it)``: its friction moments (M_frE, M_frC),
+        (3, 1) each, N m, from the loads; ``friction.weights(leg)``: the loads' weights.
     m : sympy expression
         The friction model (1 coupled, 0 paper). Friction is evaluated from the reactions
         ``R^(0) + m (R^(k) - R^(0))`` and the reported reactions are the same: in the paper
@@ -168,7 +211,9 @@ def solve(ch, legs, A_qr, weight, moments, m, n_iter=N_ITERATIONS, accelerate=AC
     R0 = [(leg.out["R_E"], leg.out["R_C"], leg.out["M_C"]) for leg in legs]
     R_E = [r[0] for r in R0]
     R_C = [r[1] for r in R0]
-    mfr = [moments(leg, R_E[i], R_C[i], 0) for i, leg in enumerate(legs)]
+    loads = [friction.loads(leg, R_E[i], R_C[i], 0) for i, leg in enumerate(legs)]
+    mfr = [friction.moments(leg, loads[i], 0) for i, leg in enumerate(legs)]
+    weights = None
     df_prev = sp.zeros(len(legs), 1)
     images = residuals = None
     for it in range(1, n_iter + 1):
@@ -197,13 +242,16 @@ def solve(ch, legs, A_qr, weight, moments, m, n_iter=N_ITERATIONS, accelerate=AC
             break
         R_E, R_C = R_E_new, R_C_new
         df_prev = df
-        image = [moments(leg, R_E[i], R_C[i], it) for i, leg in enumerate(legs)]
-        residual = [(G[0] - x[0], G[1] - x[1]) for G, x in zip(image, mfr)]
+        image = [friction.loads(leg, R_E[i], R_C[i], it) for i, leg in enumerate(legs)]
+        residual = [[G - x for G, x in zip(Gs, xs)] for Gs, xs in zip(image, loads)]
         if accelerate and residuals is not None and it < n_iter - 1:
-            mfr = _anderson_step(ch, it, image, residual, images, residuals)
+            if weights is None:
+                weights = [friction.weights(leg) for leg in legs]
+            loads = _anderson_step(ch, it, image, residual, images, residuals, weights)
         else:
-            mfr = image
+            loads = image
         images, residuals = image, residual
+        mfr = [friction.moments(leg, loads[i], it) for i, leg in enumerate(legs)]
     for i, leg in enumerate(legs):
         let = ch.scope("coupled", leg.k)
         o = leg.out
@@ -216,21 +264,22 @@ def solve(ch, legs, A_qr, weight, moments, m, n_iter=N_ITERATIONS, accelerate=AC
     return df, m * (df - df_prev)
 
 
-def _anderson_step(ch, it, image, residual, images, residuals):
-    """One Anderson step of depth 1 on the friction moments, (ME, MC) per leg.
+def _anderson_step(ch, it, image, residual, images, residuals, weights):
+    """One Anderson step of depth 1 on the friction loads (a list per leg).
 
-    With ``x`` the moments an iteration was solved with, ``G(x)`` the moments of its reactions
-    and ``r = G(x) - x``, the next moments are ``G_k - theta (G_k - G_(k-1))`` with
+    With ``x`` the loads an iteration was solved with, ``G(x)`` the loads of its reactions
+    and ``r = G(x) - x``, the next loads are ``G_k - theta (G_k - G_(k-1))`` with
     ``theta = <r_k, r_k - r_(k-1)> / |r_k - r_(k-1)|^2`` (the secant step that cancels the
-    residual along its last change; 0 when the residual did not change).
+    residual along its last change; 0 when the residual did not change), the inner product
+    weighted by ``weights`` (``joint_friction_weights``: that of the friction moments).
     """
     num = den = sp.S.Zero
-    for (rE, rC), (pE, pC) in zip(residual, residuals):
-        for r, p in ((rE, pE), (rC, pC)):
+    for rs, ps, ws in zip(residual, residuals, weights):
+        for r, p, w in zip(rs, ps, ws):
             d = r - p
-            num += dot(r, d)
-            den += dot(d, d)
+            wd = w * d
+            num += wd * r
+            den += wd * d
     theta = ch.scope("coupled")(f"theta{it}", num / (den + ANDERSON_FLOOR),
                                 rf"\theta^{{({it})}}")
-    return [(G[0] - theta * (G[0] - P[0]), G[1] - theta * (G[1] - P[1]))
-            for G, P in zip(image, images)]
+    return [[G - theta * (G - P) for G, P in zip(Gs, Ps)] for Gs, Ps in zip(image, images)]

@@ -250,7 +250,8 @@ class Model:
     symbols: dict                     # named intermediate quantities, for tests and notebooks
 
 
-def build(mode: str = "kinematic", friction_model: int | None = None) -> Model:
+def build(mode: str = "kinematic", friction_model: int | None = None,
+          n_iter: int = cp.N_ITERATIONS) -> Model:
     """Derive the model in ``mode`` ("kinematic" or "paper").
 
     Parameters
@@ -261,6 +262,9 @@ def build(mode: str = "kinematic", friction_model: int | None = None) -> Model:
         None: the parameter ``friction_model`` of P chooses the model at every step; 0 or 1:
         the model fixed when deriving (the input is then unused), so that the paper's model
         (0) needs no fixed-point iterations.
+    n_iter : int
+        Iterations of the coupled solve (``coupled.N_ITERATIONS``; fewer for the early exit's
+        short solve, ``coupled.N_FAST``).
 
     Returns
     -------
@@ -283,7 +287,7 @@ def build(mode: str = "kinematic", friction_model: int | None = None) -> Model:
         _reactions(ch, inp, leg, f[i], legs[(i + 1) % N_LEGS])
     for leg in legs:
         _friction(ch, inp, leg)
-    df = _coupling(ch, inp, legs, A_qr)
+    df = _coupling(ch, inp, legs, A_qr, n_iter)
     for leg in legs:
         _actuator_force(ch, inp, leg, df[leg.k - 1])
     outputs = {name: sp.Matrix([v for leg in legs for v in _flat(leg.out[name])])
@@ -464,7 +468,7 @@ def _friction(ch: Chain, inp: Inputs, leg: Leg) -> None:
     leg.out["omega_rel"], leg.out["omega_C"] = omega_rel, omega_C
 
 
-def _coupling(ch: Chain, inp: Inputs, legs: list[Leg], A_qr):
+def _coupling(ch: Chain, inp: Inputs, legs: list[Leg], A_qr, n_iter: int = cp.N_ITERATIONS):
     """Joint friction in the equilibrium (derive/coupled.py), then every leg's friction.
 
     Coupled model (kinematic mode, ``friction_model = 1``): the fixed point of the reactions
@@ -479,10 +483,28 @@ def _coupling(ch: Chain, inp: Inputs, legs: list[Leg], A_qr):
     terms = [_joint_friction_terms(ch.scope("33-35", leg.k), P, m, leg.out["omega_rel"],
                                    leg.out["omega_C"], leg.a1, leg.joint.a2) for leg in legs]
 
-    def moments(leg, R_E, R_C, it):
-        return _joint_friction(ch.scope("33-35", leg.k), f"_{it}", terms[leg.k - 1], R_E, R_C)
+    class friction:
+        @staticmethod
+        def loads(leg, R_E, R_C, it):
+            let = ch.scope("33-35", leg.k)
+            return [let(f"load{j}_{it}", v, f"s_{{fr{j}}}^{{({it})}}") for j, v in
+                    enumerate(cp.joint_friction_loads(terms[leg.k - 1], R_E, R_C))]
 
-    df, change = cp.solve(ch, legs, A_qr, cp.coupling_weight(P, Q, inp.mode), moments, m)
+        @staticmethod
+        def moments(leg, loads, it):
+            MfrE, MfrC = cp.joint_friction_from_loads(terms[leg.k - 1], loads)
+            let = ch.scope("33-35", leg.k)
+            return (let(f"MfrE_{it}", MfrE, f"M_{{frE_{it}}}"),
+                    let(f"MfrC_{it}", MfrC, f"M_{{frC_{it}}}"))
+
+        @staticmethod
+        def weights(leg):
+            let = ch.scope("33-35", leg.k)
+            return [let(f"wload{j}", v, f"w_{{fr{j}}}") for j, v in
+                    enumerate(cp.joint_friction_weights(terms[leg.k - 1]))]
+
+    df, change = cp.solve(ch, legs, A_qr, cp.coupling_weight(P, Q, inp.mode), friction, m,
+                          n_iter)
     for i, leg in enumerate(legs):
         o, let = leg.out, ch.scope("coupled", leg.k)
         dR = o["dR_E"]

@@ -218,3 +218,38 @@ def test_iterations_stated_in_the_docs():
     text = (Path(__file__).resolve().parents[1] / "docs" / "friction.md").read_text()
     assert f"{coupled.N_ITERATIONS} iterations" in text
     assert f"mu r <= {MU_R_CONVERGED}" in text
+
+
+@pytest.mark.parametrize("model", [1, 0])
+def test_friction_loads_carry_the_moments_and_their_metric(model):
+    """The solve iterates on the friction loads: the moments are affine in them, their value
+    at the loads of given reactions is the moment formula's, and the squared norm of a change
+    of the moments is the weighted sum of the loads' squared changes (the Anderson step's inner
+    product), for the per-axis (coupled) and the vector (paper) universal joint."""
+    rng = np.random.default_rng(5)
+
+    def vec(scale=1.0):
+        return sp.Matrix(rng.normal(size=3) * scale)
+
+    u = vec()
+    u = u / u.norm()
+    a1 = vec()
+    a1 = a1 / a1.norm()
+    a2 = a1.cross(u)
+    a2 = a2 / a2.norm()
+    terms = coupled.joint_friction_terms(lambda name, value, latex=None: value, vec(0.3),
+                                         vec(0.2), a1, a2, 0.7, 0.04, 0.05, 0.01, model)
+    R_E, R_C = vec(500.0), vec(500.0)
+    loads = coupled.joint_friction_loads(terms, R_E, R_C)
+    assert len(loads) == (3 if model == 1 else 2)   # |R_E|, then |a_j x R_C| or |R_C|
+    direct = coupled.joint_friction_moments(terms, R_E, R_C)
+    from_loads = coupled.joint_friction_from_loads(terms, loads)
+    for a, b in zip(direct, from_loads):
+        assert np.allclose(np.array(a, float), np.array(b, float), rtol=1e-14, atol=1e-12)
+    other = [x + rng.normal() * 10.0 for x in loads]
+    ME0, MC0 = coupled.joint_friction_from_loads(terms, loads)
+    ME1, MC1 = coupled.joint_friction_from_loads(terms, other)
+    change = float(((ME1 - ME0).norm() ** 2 + (MC1 - MC0).norm() ** 2).evalf())
+    weights = coupled.joint_friction_weights(terms)
+    weighted = float(sum(w * (x - y) ** 2 for w, x, y in zip(weights, other, loads)).evalf())
+    assert change > 0 and abs(weighted - change) <= 1e-12 * change
