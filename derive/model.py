@@ -26,6 +26,7 @@ functions through a ``Chain.scope`` so that every named quantity is computed onc
 from __future__ import annotations
 
 from dataclasses import dataclass, field
+from types import SimpleNamespace
 
 import sympy as sp
 
@@ -263,8 +264,8 @@ def build(mode: str = "kinematic", friction_model: int | None = None,
         the model fixed when deriving (the input is then unused), so that the paper's model
         (0) needs no fixed-point iterations.
     n_iter : int
-        Iterations of the coupled solve (``coupled.N_ITERATIONS``; fewer for the early exit's
-        short solve, ``coupled.N_FAST``).
+        Iterations of the coupled solve (``coupled.N_ITERATIONS``; other counts for
+        benchmarks/coupled_early_exit.py).
 
     Returns
     -------
@@ -483,26 +484,23 @@ def _coupling(ch: Chain, inp: Inputs, legs: list[Leg], A_qr, n_iter: int = cp.N_
     terms = [_joint_friction_terms(ch.scope("33-35", leg.k), P, m, leg.out["omega_rel"],
                                    leg.out["omega_C"], leg.a1, leg.joint.a2) for leg in legs]
 
-    class friction:
-        @staticmethod
-        def loads(leg, R_E, R_C, it):
-            let = ch.scope("33-35", leg.k)
-            return [let(f"load{j}_{it}", v, f"s_{{fr{j}}}^{{({it})}}") for j, v in
-                    enumerate(cp.joint_friction_loads(terms[leg.k - 1], R_E, R_C))]
+    def loads(leg, R_E, R_C, it):
+        let = ch.scope("33-35", leg.k)
+        return [let(f"load{j}_{it}", v, f"s_{{fr{j}}}^{{({it})}}") for j, v in
+                enumerate(cp.joint_friction_loads(terms[leg.k - 1], R_E, R_C))]
 
-        @staticmethod
-        def moments(leg, loads, it):
-            MfrE, MfrC = cp.joint_friction_from_loads(terms[leg.k - 1], loads)
-            let = ch.scope("33-35", leg.k)
-            return (let(f"MfrE_{it}", MfrE, f"M_{{frE_{it}}}"),
-                    let(f"MfrC_{it}", MfrC, f"M_{{frC_{it}}}"))
+    def moments(leg, leg_loads, it):
+        MfrE, MfrC = cp.joint_friction_from_loads(terms[leg.k - 1], leg_loads)
+        let = ch.scope("33-35", leg.k)
+        return (let(f"MfrE_{it}", MfrE, f"M_{{frE_{it}}}"),
+                let(f"MfrC_{it}", MfrC, f"M_{{frC_{it}}}"))
 
-        @staticmethod
-        def weights(leg):
-            let = ch.scope("33-35", leg.k)
-            return [let(f"wload{j}", v, f"w_{{fr{j}}}") for j, v in
-                    enumerate(cp.joint_friction_weights(terms[leg.k - 1]))]
+    def weights(leg):
+        let = ch.scope("33-35", leg.k)
+        return [let(f"wload{j}", v, f"w_{{fr{j}}}") for j, v in
+                enumerate(cp.joint_friction_weights(terms[leg.k - 1]))]
 
+    friction = SimpleNamespace(loads=loads, moments=moments, weights=weights)
     df, change = cp.solve(ch, legs, A_qr, cp.coupling_weight(P, Q, inp.mode), friction, m,
                           n_iter)
     for i, leg in enumerate(legs):
