@@ -356,7 +356,7 @@ def run_cli(directory, log, fmt, platform):
 # ---------------------------------------------------------------- cases
 
 
-def one_case(case, model, detail=False):
+def one_case(case, model, keep=None):
     kind, name, size, c, seed = case
     rng = np.random.default_rng(seed)
     platform, home, rb = random_platform(rng, model)
@@ -386,9 +386,12 @@ def one_case(case, model, detail=False):
     rec_pos = position * [scale, scale, 1.0] + rng.normal(0, pose_noise, position.shape)
     rec_rpy = rpy + rng.normal(0, pose_noise, rpy.shape)
     with tempfile.TemporaryDirectory() as d:
+        if keep:
+            d = os.path.join(keep, f"case{c}")
+            os.makedirs(d, exist_ok=True)
         log, fmt, plat = (os.path.join(d, f) for f in ("log.csv", "fmt.toml", "model.toml"))
         with open(fmt, "w") as fh:
-            fh.write(write_log(log, c % 2, t, rec_pos, rec_rpy, F + e, rng))
+            fh.write(write_log(log, (c // 4) % 2, t, rec_pos, rec_rpy, F + e, rng))
         platform.to_toml(plat)
         s = run_cli(d, log, fmt, plat)
     names = [x["name"] for x in s["effects"]]
@@ -449,6 +452,9 @@ def main():
     ap.add_argument("--cases", nargs="+", type=int, default=None,
                     help="only these case numbers (as printed by --verbose)")
     ap.add_argument("--verbose", action="store_true", help="one line per case")
+    ap.add_argument("--keep", default=None, metavar="DIR",
+                    help="keep each case's log, column map, platform and discover output in "
+                         "DIR/caseN")
     a = ap.parse_args()
     todo = cases(a.per_cell, a.seed, a.model)
     if a.only:
@@ -458,7 +464,7 @@ def main():
     start = time.time()
     results = []
     for case in todo:
-        r = one_case(case, a.model)
+        r = one_case(case, a.model, a.keep)
         results.append(r)
         if a.verbose:
             print(f"#{case[3]:<3d} {r['kind']:7s} {r['name']:24s} {r['size']:<4g} "
