@@ -506,15 +506,24 @@ def _divided_noise_std(t: np.ndarray, y: np.ndarray) -> np.ndarray:
     """White-noise standard deviation of each column of y (N, k) at the non-uniform times t
     (N,), from the 6th divided differences (noise variance ``sigma^2 sum w^2``, w their
     weights; the motion's part ``y^(6) / 6!`` does not grow with a jitter of the times);
-    robust scale (median of the normalised squares)."""
+    robust scale (median of the normalised squares), over the windows whose readings change."""
     from numpy.lib.stride_tricks import sliding_window_view
 
     m = NOISE_DIFFERENCE_ORDER
     scale = (t[-1] - t[0]) / (len(t) - 1)
     w = _divided_difference_coefficients((t - t[0]) / scale, m + 1)
-    d = np.einsum("nkj,nj->nk", sliding_window_view(y, m + 1, axis=0), w)
+    windows = sliding_window_view(y, m + 1, axis=0)                     # (N - m, k, m + 1)
+    d = np.einsum("nkj,nj->nk", windows, w)
     z2 = d ** 2 / np.sum(w ** 2, axis=1)[:, None]
-    return np.sqrt(np.median(z2, axis=0) / 0.454936)     # median of chi-square(1)
+    # readings that do not change over a window (a rest logged at a finite resolution) carry
+    # no noise that the motion would see: the noise is that of the windows that change
+    changing = np.ptp(windows, axis=2) > 0.0
+    out = np.zeros(y.shape[1])
+    for j in range(y.shape[1]):
+        changed = z2[:, j][changing[:, j]]
+        if len(changed):
+            out[j] = np.sqrt(np.median(changed) / 0.454936)     # median of chi-square(1)
+    return out
 
 
 def spline_penalties(t: np.ndarray, y: np.ndarray, lam: float | None = None

@@ -186,6 +186,27 @@ def test_jittered_kilohertz_log_keeps_its_accelerations(rate):
         assert np.all(error < 0.01 * amplitude.max()), (sigma, error)
 
 
+def test_log_of_microsecond_stamps_and_rounded_positions_with_rests():
+    """A 1946 Hz log whose times are whole microseconds (so not uniform to 1e-4 of the step) and
+    whose positions are rounded to 0.1 um, moves between rests: the rests read exactly the same
+    value, and the noise behind the spline's penalty is that of the samples that change (a
+    noise of zero from the rests chose no smoothing: accelerations of tens of m/s^2)."""
+    rate, move, rest = 1946.0, 0.6, 1.5
+    t = np.round(np.arange(int(8 * rate)) / rate * 1e6) / 1e6
+    period = move + rest
+    k = (t // period).astype(int)
+    s = np.clip((t - k * period) / move, 0.0, 1.0)
+    moving = (t - k * period) < move
+    step = np.where(k % 2 == 0, 0.03, -0.03)
+    x = np.where(k % 2 == 0, 0.0, 0.03) + step * (10 * s ** 3 - 15 * s ** 4 + 6 * s ** 5)
+    a = step * (60 * s - 180 * s ** 2 + 120 * s ** 3) / move ** 2 * moving
+    position = np.round(np.c_[x, 0 * x, 0.9 + 0 * x] / 1e-7) * 1e-7
+    motion = Motion.from_samples(t, position, quaternion=np.tile([1.0, 0, 0, 0], (len(t), 1)))
+    inner = slice(len(t) // 20, -len(t) // 20)
+    error = np.sqrt(np.mean((motion.acceleration[:, 0] - a)[inner] ** 2))
+    assert error < 0.01 * np.abs(a).max()
+
+
 def test_repeated_time_stamp_names_the_row():
     t = np.arange(50) / 100.0
     t[17] = t[16]
