@@ -262,11 +262,10 @@ def leg_speed_and_travel(platform, motion):
 
 
 def outside_forces(rng, kind, platform, motion, target, t):
-    """Readings (N, 6) with an out-of-catalog effect of RMS ``target`` N, a pose scale (x, y
-    of the log multiplied by it; 1 unless ``pose_scale``), and the effect's RMS."""
+    """Readings (N, 6) with the out-of-catalog force ``kind`` (``hysteresis``,
+    ``friction_drift``) of RMS ``target`` N, and that RMS (``pose_scale`` is made by
+    ``pose_scale_factor``)."""
     base = read_forces(platform, motion)
-    if kind == "pose_scale":
-        return base, None, target   # the scale is set from the recorded motion by the caller
     D, v = leg_speed_and_travel(platform, motion)
     if kind == "hysteresis":
         x0 = rng.uniform(0.002, 0.005)
@@ -280,7 +279,7 @@ def outside_forces(rng, kind, platform, motion, target, t):
         T = t[-1] - t[0]
         shape = np.tanh(v / 0.002) * (0.2 + 1.6 * (t - t[0])[:, None] / T)
     c = shape * target / float(np.sqrt(np.mean(shape ** 2)))
-    return base + c, None, target
+    return base + c, target
 
 
 def pose_scale_factor(platform, motion, position, rpy, t, target):
@@ -303,7 +302,7 @@ def pose_scale_factor(platform, motion, position, rpy, t, target):
 # ---------------------------------------------------------------- logs
 
 
-def write_log(path, style, t, position, rpy, forces, rng):
+def write_log(path, style, t, position, rpy, forces):
     """A controller's log: its own names and units; returns the column-map TOML text."""
     if style == 0:
         names = {"t": "Time [ms]", "x": "PosX [mm]", "y": "PosY [mm]", "z": "PosZ [mm]",
@@ -381,7 +380,7 @@ def one_case(case, model, keep=None):
         e, reached = pose_scale_factor(platform, motion, position, rpy, t, size * sigma)
         scale = 1.0 + e
     else:
-        F, _, reached = outside_forces(rng, name, platform, motion, size * sigma, t)
+        F, reached = outside_forces(rng, name, platform, motion, size * sigma, t)
     e = force_noise(rng, noise_kind, n, rate, sigma)
     rec_pos = position * [scale, scale, 1.0] + rng.normal(0, pose_noise, position.shape)
     rec_rpy = rpy + rng.normal(0, pose_noise, rpy.shape)
@@ -391,7 +390,7 @@ def one_case(case, model, keep=None):
             os.makedirs(d, exist_ok=True)
         log, fmt, plat = (os.path.join(d, f) for f in ("log.csv", "fmt.toml", "model.toml"))
         with open(fmt, "w") as fh:
-            fh.write(write_log(log, (c // 4) % 2, t, rec_pos, rec_rpy, F + e, rng))
+            fh.write(write_log(log, (c // 4) % 2, t, rec_pos, rec_rpy, F + e))
         platform.to_toml(plat)
         s = run_cli(d, log, fmt, plat)
     names = [x["name"] for x in s["effects"]]
