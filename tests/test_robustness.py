@@ -883,9 +883,10 @@ def test_from_samples_with_lam_on_non_uniform_times():
         Motion.from_samples(t, position, quaternion=q, lam=-1.0)
 
 
-def test_long_non_uniform_spline_equals_scipy_with_the_block_penalties():
-    """Above SPLINE_GCV_ROWS, the penalty comes from the middle block and the fit of every
-    sample is make_smoothing_spline's with it (same numbers, one banded set-up)."""
+def test_long_non_uniform_spline_equals_scipy_with_its_penalties():
+    """Above SPLINE_GCV_ROWS, the fit of every sample is make_smoothing_spline's with the
+    penalties ``spline_penalties`` chose (same numbers, one banded set-up), and each penalty
+    is the one of least estimated acceleration error: on a noise-free record the smallest."""
     from scipy.interpolate import make_smoothing_spline
 
     from gsfric import trajectory as tr
@@ -895,18 +896,16 @@ def test_long_non_uniform_spline_equals_scipy_with_the_block_penalties():
     t = np.cumsum(rng.uniform(0.5, 1.5, n)) * 0.01
     y = np.stack([np.sin(t * (j + 1)) + 1e-3 * rng.standard_normal(n) for j in range(3)], 1)
     got = tr._spline(t, y, None)
-    start = (n - tr.SPLINE_GCV_ROWS) // 2
-    block = slice(start, start + tr.SPLINE_GCV_ROWS)
+    penalties = tr.spline_penalties(t, y)
     for j in range(3):
-        lam = tr._gcv_penalty(t[block], y[block, j])
-        whole_block = make_smoothing_spline(t[block], y[block, j])   # GCV inside SciPy
-        np.testing.assert_allclose(make_smoothing_spline(t[block], y[block, j], lam=lam)(t[block]),
-                                   whole_block(t[block]), rtol=0, atol=1e-12)
-        reference = make_smoothing_spline(t, y[:, j], lam=lam)
+        reference = make_smoothing_spline(t, y[:, j], lam=penalties[j])
         for k in range(3):
             expected = reference.derivative(k)(t) if k else reference(t)
             np.testing.assert_allclose(got[k][:, j], expected, rtol=1e-9,
                                        atol=1e-9 * np.abs(expected).max())
+    h = (t[-1] - t[0]) / (n - 1)
+    exact = np.sin(t)[:, None]
+    assert tr.spline_penalties(t, exact)[0] == pytest.approx(h ** 3 * tr.SPLINE_PENALTIES[0])
 
 
 def test_bench_ratio_of_a_zero_time_is_nan():

@@ -110,7 +110,7 @@ def screen_candidates(problem: Problem, design: Design, whitener: st.Whitener,
 
     A candidate is accepted when (a) its F-test gives p < alpha / K, (b) it lowers the
     held-out error of the block cross-validation in total and in at least ``min_fold_share``
-    of the folds, (c) the gap it closes reaches ``min_gap``, (d) it lowers the plain residual
+    of the folds that hold used pairs (``statistics.fold_share``), (c) the gap it closes reaches ``min_gap``, (d) it lowers the plain residual
     as well as the prewhitened one (the prewhitened fit weighs frequencies by the noise
     model; an explanation of the gap must also shrink the gap as measured).
     """
@@ -130,7 +130,7 @@ def screen_candidates(problem: Problem, design: Design, whitener: st.Whitener,
         cv = profile_cv(blocks, null_cols, design.variants[c.name], design.lower,
                          design.upper, s.n_folds)
         cv_gain = float((cv_null.sum() - cv.sum()) / cv_null.sum())
-        share = float(np.mean(cv < cv_null))
+        share = st.fold_share(blocks, cv, cv_null, s.n_folds)
         params = candidate_values(problem, design, c, best, j)
         gap = gap_closed(design, null, best)
         test = CandidateTest(c.name, params, float(F), p, k, cv_gain, share,

@@ -391,6 +391,18 @@ def cross_validate(blocks: Blocks, columns: Sequence[int], lower: np.ndarray,
     return out
 
 
+def fold_share(blocks: Blocks, cv: np.ndarray, cv_null: np.ndarray, n_folds: int) -> float:
+    """Share of the folds whose held-out error ``cv`` is below the null's ``cv_null`` (both
+    (n_folds,), from ``cross_validate``), among the folds that hold observations: a fold
+    without any (a stretch of the record where no pair is used, a long rest) can neither
+    confirm nor refute a candidate."""
+    groups = np.array_split(np.arange(len(blocks.ztz)), n_folds)
+    held = np.array([blocks.rows[g].sum() > 0 for g in groups])
+    if not held.any():
+        return 0.0
+    return float(np.mean((np.asarray(cv) < np.asarray(cv_null))[held]))
+
+
 def bootstrap_weights(rng: np.random.Generator, n_blocks: int, n_draws: int) -> np.ndarray:
     """Counts (n_draws, n_blocks) of blocks drawn with replacement (block bootstrap)."""
     draws = rng.integers(0, n_blocks, size=(n_draws, n_blocks))
