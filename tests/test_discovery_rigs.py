@@ -388,51 +388,6 @@ def test_whitened_blocks_equal_the_whitened_design():
         assert np.allclose(getattr(a, name), getattr(c, name), rtol=1e-12, atol=1e-9)
 
 
-def test_stretches_after_long_gaps_are_whitened_from_their_first_sample():
-    """Stretches of AR(1) noise (phi 0.95) between gaps longer than the noise's memory are
-    independent: their exact whitening keeps each stretch's first sample, scaled by
-    sqrt(1 - phi^2) (the stationary variance to the innovation's), which carries as much
-    about a level as (1 + phi) / (1 - phi) samples inside the stretch. A column of ones
-    then has the GLS information of the stretches; the first samples' whitened noise has the
-    innovation's variance; gaps shorter than the memory still zero the samples after them;
-    and the blocks built block by block equal those of the whitened copy."""
-    from gsfric.discovery import statistics as st
-
-    rng = np.random.default_rng(5)
-    phi, length, gap, n_stretch = 0.95, 40, 200, 60
-    n = n_stretch * (length + gap)
-    e = np.zeros((n, 6))
-    e[0] = rng.normal(size=6) / np.sqrt(1 - phi ** 2)
-    for i in range(1, n):
-        e[i] = phi * e[i - 1] + rng.normal(size=6)
-    valid = np.zeros((n, 6), bool)
-    for k in range(n_stretch):
-        valid[k * (length + gap) + gap:(k + 1) * (length + gap)] = True
-    w = st.Whitener.fit(e, max_order=1, valid=valid)
-    assert w.order == 1
-    f = float(w.coefficients[0][0])
-    assert f == pytest.approx(phi, abs=0.03)
-    ones = w.apply(valid.astype(float)[:, :, None])[:, 0, 0]
-    expected = n_stretch * ((1 - f ** 2) + (length - 1) * (1 - f) ** 2)
-    assert float(np.sum(ones ** 2)) == pytest.approx(expected, rel=1e-9)
-    z = w.apply(e)
-    first = valid[1:] & ~valid[:-1]                      # the first sample of each stretch
-    inner = valid[1:] & valid[:-1]
-    ratio = np.var(z[first]) / np.var(z[inner])
-    assert 0.8 < ratio < 1.25
-    # a short gap inside a stretch: the samples after it stay out
-    holed = valid.copy()
-    holed[gap + 20:gap + 23] = False
-    zh = w.apply(e, valid=holed)
-    assert np.all(zh[gap + 23 - 1] == 0.0)
-    X = rng.normal(size=(n, 6, 3))
-    a = st.Blocks.build(w.apply(X), w.apply(e), 40)
-    b = st.Blocks.whitened(w, X, e, 40)
-    for name in ("XtX", "Xtz", "ztz"):
-        assert np.allclose(getattr(a, name), getattr(b, name), rtol=1e-12, atol=1e-9)
-    assert b.rows.sum() == np.count_nonzero(w.apply(e))
-
-
 def test_autocovariance_with_gaps_counts_only_valid_pairs():
     """The autocovariance over valid pairs equals the plain estimate of the valid stretch
     alone when the gap is at one end, and the lag-k value of an AR(1) series is phi^k times

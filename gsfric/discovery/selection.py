@@ -134,7 +134,7 @@ def screen_candidates(problem: Problem, design: Design, whitener: st.Whitener,
         params = candidate_values(problem, design, c, best, j)
         gap = gap_closed(design, null, best)
         if p < level and cv_gain > 0 and share >= s.min_fold_share and gap < s.min_gap:
-            gap = max(gap, gap_replacing_refit(problem, design, blocks, best))
+            gap = max(gap, gap_replacing_refit(problem, design, blocks, best, k))
         test = CandidateTest(c.name, params, float(F), p, k, cv_gain, share,
                              float((null.sse - best.sse) / null.sse), gap)
         plain = plain_sse(design, best) < plain_sse(design, null)
@@ -183,7 +183,7 @@ def _gap(XtX: np.ndarray, Xtr: np.ndarray, rtr: float, null: st.Fit, alternative
 
 
 def gap_replacing_refit(problem: Problem, design: Design, blocks: st.Blocks,
-                        best: st.Fit) -> float:
+                        best: st.Fit, fitted: int) -> float:
     """The gap a significant candidate closes when it replaces the refit's changes.
 
     The refit comes first (a wrong number, not a missing effect), and a candidate's gap is
@@ -195,7 +195,11 @@ def gap_replacing_refit(problem: Problem, design: Design, blocks: st.Blocks,
     of a parameter (held at the model's value it is not significantly worse: F-test at
     ``alpha``, each parameter alone and those held together), the refit's change was the
     candidate's doing: its gap is measured with those parameters held at the model's values,
-    in the null model and with the candidate. 0 when no refitted change is replaced.
+    in the null model and with the candidate. Only when the candidate, with ``fitted``
+    parameters, replaces at least as many refitted changes: an effect with more parameters
+    than the changes it replaces is not the simpler explanation (six per-leg offsets for a
+    payload mass moved by the bias of the differentiated accelerations), and the refit stays
+    first. 0 when no refitted change is replaced.
     """
     s = problem.settings
     index = problem.model.index
@@ -219,7 +223,7 @@ def gap_replacing_refit(problem: Problem, design: Design, blocks: st.Blocks,
         f = st.fit(blocks, columns, *pinned_bounds([col]))
         if st.f_test(reduced(f, 1), best)[1] >= s.alpha:
             held.append(col)
-    if not held:
+    if not held or len(held) < fitted:
         return 0.0
     lo, hi = pinned_bounds(held)
     alternative = st.fit(blocks, columns, lo, hi)

@@ -76,44 +76,6 @@ def _levinson(r: np.ndarray, order: int) -> tuple[list[np.ndarray], np.ndarray]:
     return phis, np.array(variances)
 
 
-GAP_CORRELATION = 0.05
-"""Correlation of the noise model across a gap below which the stretch after it is whitened
-as a fresh start (``Whitener.apply``)."""
-
-
-def _memory(phi: np.ndarray) -> float:
-    """Samples after which an AR model's autocorrelation has decayed below
-    ``GAP_CORRELATION``: ``log(GAP_CORRELATION) / log(r)``, r the largest modulus of its
-    characteristic roots (inf for a model on the edge of stationarity; 0 for white noise)."""
-    if len(phi) == 0:
-        return 0.0
-    r = float(np.max(np.abs(np.roots(np.concatenate([[1.0], -np.asarray(phi, float)])))))
-    if r >= 1.0:
-        return np.inf
-    if r <= 0.0:
-        return 0.0
-    return float(np.ceil(np.log(GAP_CORRELATION) / np.log(r)))
-
-
-def _runs(ok: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """For each sample of ``ok`` (N, k) bool: how many samples in a row before it are valid,
-    and how long the run of invalid samples before that valid run is (the record's start
-    counts as a gap as long as the samples before it). Both (N, k) int."""
-    ok = np.asarray(ok, bool)
-    n = ok.shape[0]
-    j = np.arange(n)[:, None]
-    # the last invalid sample before each sample (-1: none)
-    last_bad = np.maximum.accumulate(np.where(~ok, j, -1), axis=0)
-    last_bad = np.concatenate([np.full((1, ok.shape[1]), -1), last_bad[:-1]])
-    before = j - 1 - last_bad
-    last_good = np.maximum.accumulate(np.where(ok, j, -1), axis=0)
-    # the gap ending at last_bad: last_bad minus the last valid sample before it
-    safe = np.maximum(last_bad, 0)
-    prior = np.take_along_axis(last_good, safe, axis=0)
-    gap = np.where(last_bad >= 0, last_bad - prior, 0)
-    return before, gap
-
-
 @dataclass
 class Whitener:
     """Per-leg AR(p) prewhitening filters.
@@ -132,16 +94,6 @@ class Whitener:
     innovation_std: np.ndarray
     marginal_std: np.ndarray
     valid: np.ndarray | None = None
-    starts: list[list[tuple[np.ndarray, float]]] | None = None
-    """Per leg, for k = 0 .. order - 1, the order-k predictor of the same AR model (Levinson)
-    and the factor ``sqrt(v_order / v_k)`` that scales its innovation to the model's: how a
-    sample with only k valid samples before it, after a gap, is filtered (``apply``)."""
-    memory: np.ndarray | None = None
-    """Per leg, the gap (samples) after which the model's correlation has decayed below
-    ``GAP_CORRELATION``: a stretch after such a gap starts afresh."""
-    runs: tuple[np.ndarray, np.ndarray] | None = None
-    """``_runs(valid)``: the valid samples in a row before each sample, and the gap before
-    them."""
 
     @property
     def order(self) -> int:
@@ -165,80 +117,44 @@ class Whitener:
         n, legs = residual.shape
         max_order = int(min(max_order, max(1, n // 10)))
         acov = _autocovariance(residual, max_order, valid)
-        coefs, innov, starts, memory = [], [], [], []
+        coefs, innov = [], []
         for i in range(legs):
             phis, var = _levinson(acov[:, i], max_order)
             bic = [n * np.log(max(v, 1e-300)) + p * np.log(n) for p, v in enumerate(var)]
             p = int(np.argmin(bic))
             coefs.append(phis[p])
             innov.append(np.sqrt(max(var[p], 0.0)))
-            starts.append([(phis[k], float(np.sqrt(var[p] / var[k])) if var[k] > 0 else 0.0)
-                           for k in range(p)])
-            memory.append(_memory(phis[p]))
-        valid = None if valid is None else np.asarray(valid, bool)
-        return cls(coefs, np.array(innov), np.sqrt(np.maximum(acov[0], 0.0)), valid, starts,
-                   np.array(memory), None if valid is None else _runs(valid))
+        return cls(coefs, np.array(innov), np.sqrt(np.maximum(acov[0], 0.0)),
+                   None if valid is None else np.asarray(valid, bool))
 
     @classmethod
     def identity(cls, legs: int = 6) -> Whitener:
         """No filtering (white noise)."""
         return cls([np.zeros(0)] * legs, np.ones(legs), np.ones(legs))
 
-    def apply(self, a: np.ndarray, valid: np.ndarray | None = None,
-              rows: slice | None = None) -> np.ndarray:
+    def apply(self, a: np.ndarray, valid: np.ndarray | None = None) -> np.ndarray:
         """Filter ``a`` (N, 6, ...) along time; returns (N - order, 6, ...).
 
-        ``valid`` (N, 6) if given, else the fit's own ``valid`` when ``a`` has its length,
-        marks the samples that count. A filtered sample whose window (the sample and the
-        leg's ``p`` before it) touches an invalid one is zero, but for the first samples of a
-        stretch after a gap longer than the noise model's memory (``memory``): the k-th of
-        them (k < p) is filtered by the order-k predictor of the same model, scaled to the
-        model's innovation (``starts``). That is the exact whitening (the Cholesky factor of
-        the stationary AR covariance) of a stretch independent of what came before it, so the
-        level of each stretch counts: under slowly varying noise (AR(1) of phi 0.95 leaves
-        1 - phi of a level in each filtered sample) the first sample of a stretch carries as
-        much information about a level as ``(1 + phi) / (1 - phi)`` = 39 samples inside it.
-        Where the gaps are short (a reversal's few samples), the stretch before still
-        correlates with the next one, and its first samples stay zero."""
+        Filtered samples whose window (the sample and the ``order`` before it) touches an
+        invalid one are zero: ``valid`` (N, 6) if given, else the fit's own ``valid`` when
+        ``a`` has its length."""
         from scipy.signal import lfilter
 
         p = self.order
-        runs = None
-        if rows is not None and self.valid is not None:
-            # a stretch of the record the model was fitted on (``Blocks.whitened``): its gaps
-            # as the whole record has them
-            valid = self.valid[rows]
-            runs = None if self.runs is None else (self.runs[0][rows], self.runs[1][rows])
-        elif valid is None and self.valid is not None and len(self.valid) == a.shape[0]:
-            valid, runs = self.valid, self.runs
+        if valid is None and self.valid is not None and len(self.valid) == a.shape[0]:
+            valid = self.valid
         out = np.empty((a.shape[0] - p,) + a.shape[1:])
         for i, phi in enumerate(self.coefficients):
             if len(phi) == 0:
                 out[:, i] = a[p:, i]
             else:
                 out[:, i] = lfilter(np.concatenate([[1.0], -phi]), [1.0], a[:, i], axis=0)[p:]
-        if valid is None:
-            return out
-        ok = np.asarray(valid, bool)
-        before, gap = _runs(ok) if runs is None else runs
-        tail = (1,) * (out.ndim - 2)
-        for i, phi in enumerate(self.coefficients):
-            q = len(phi)
-            leg, run = ok[p:, i], before[p:, i]
-            keep = leg & (run >= q)
-            out[:, i] *= keep.reshape(keep.shape + tail)
-            if not q or self.starts is None or self.memory is None:
-                continue
-            fresh = leg & (run < q) & (gap[p:, i] >= self.memory[i])
-            for k in range(q):
-                at = np.flatnonzero(fresh & (run == k)) + p
-                if at.size == 0:
-                    continue
-                lower, scale = self.starts[i][k]
-                value = np.array(a[at, i], dtype=float)
-                for j in range(k):
-                    value -= lower[j] * a[at - 1 - j, i]
-                out[at - p, i] = scale * value
+        if valid is not None:
+            ok = np.asarray(valid, bool)
+            window = ok[p:].copy()
+            for lag in range(1, p + 1):
+                window &= ok[p - lag:len(ok) - lag]
+            out *= window.reshape(window.shape + (1,) * (out.ndim - 2))
         return out
 
     def phi1(self) -> np.ndarray:
@@ -324,11 +240,11 @@ class Blocks:
         for b in range(n_blocks):
             start = b * length
             stop = rows_w if b == n_blocks - 1 else start + length
-            v = None if whitener.valid is None else slice(start, stop + p)
-            Xb = np.concatenate([whitener.apply(a[start:stop + p], rows=v) for a in parts],
+            v = None if whitener.valid is None else whitener.valid[start:stop + p]
+            Xb = np.concatenate([whitener.apply(a[start:stop + p], v) for a in parts],
                                 axis=2).reshape(-1, k) if len(parts) > 1 else \
-                whitener.apply(parts[0][start:stop + p], rows=v).reshape(-1, k)
-            zb = whitener.apply(z[start:stop + p], rows=v).reshape(-1)
+                whitener.apply(parts[0][start:stop + p], v).reshape(-1, k)
+            zb = whitener.apply(z[start:stop + p], v).reshape(-1)
             XtX[b] = Xb.T @ Xb
             Xtz[b] = Xb.T @ zb
             ztz[b] = zb @ zb
