@@ -41,7 +41,8 @@ class CandidateTest:
         Relative reduction of the prewhitened squared error on all data.
     gap : float
         RMS change of the fitted residual when the candidate is added (the gap it closes
-        beyond the refitted model), divided by the RMS of the residual left.
+        beyond the refitted model, or with the refitted changes it replaces held at the
+        model's values: ``gap_replacing_refit``), divided by the RMS of the residual left.
     significant : bool
     reason : str
         Why the candidate was or was not accepted.
@@ -110,7 +111,8 @@ def screen_candidates(problem: Problem, design: Design, whitener: st.Whitener,
 
     A candidate is accepted when (a) its F-test gives p < alpha / K, (b) it lowers the
     held-out error of the block cross-validation in total and in at least ``min_fold_share``
-    of the folds, (c) the gap it closes reaches ``min_gap``, (d) it lowers the plain residual
+    of the folds, (c) the gap it closes reaches ``min_gap`` (counting the refitted changes it
+    replaces, ``gap_replacing_refit``), (d) it lowers the plain residual
     as well as the prewhitened one (the prewhitened fit weighs frequencies by the noise
     model; an explanation of the gap must also shrink the gap as measured).
     """
