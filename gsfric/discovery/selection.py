@@ -41,7 +41,8 @@ class CandidateTest:
         Relative reduction of the prewhitened squared error on all data.
     gap : float
         RMS change of the fitted residual when the candidate is added (the gap it closes
-        beyond the refitted model), divided by the RMS of the residual left.
+        beyond the refitted model, or with the refitted changes it replaces held at the
+        model's values: ``gap_replacing_refit``), divided by the RMS of the residual left.
     significant : bool
     reason : str
         Why the candidate was or was not accepted.
@@ -110,7 +111,9 @@ def screen_candidates(problem: Problem, design: Design, whitener: st.Whitener,
 
     A candidate is accepted when (a) its F-test gives p < alpha / K, (b) it lowers the
     held-out error of the block cross-validation in total and in at least ``min_fold_share``
-    of the folds that hold used pairs (``statistics.fold_share``), (c) the gap it closes reaches ``min_gap``, (d) it lowers the plain residual
+    of the folds that hold used pairs (``statistics.fold_share``), (c) the gap it closes
+    reaches ``min_gap`` (counting the refitted changes it replaces, ``gap_replacing_refit``),
+    (d) it lowers the plain residual
     as well as the prewhitened one (the prewhitened fit weighs frequencies by the noise
     model; an explanation of the gap must also shrink the gap as measured).
     """
@@ -133,6 +136,8 @@ def screen_candidates(problem: Problem, design: Design, whitener: st.Whitener,
         share = st.fold_share(blocks, cv, cv_null, s.n_folds)
         params = candidate_values(problem, design, c, best, j)
         gap = gap_closed(design, null, best)
+        if p < level and cv_gain > 0 and share >= s.min_fold_share and gap < s.min_gap:
+            gap = max(gap, gap_replacing_refit(problem, design, blocks, best, k))
         test = CandidateTest(c.name, params, float(F), p, k, cv_gain, share,
                              float((null.sse - best.sse) / null.sse), gap)
         plain = plain_sse(design, best) < plain_sse(design, null)
@@ -178,6 +183,57 @@ def _gap(XtX: np.ndarray, Xtr: np.ndarray, rtr: float, null: st.Fit, alternative
     change[null.columns] -= null.coef
     left = rtr - 2 * a @ Xtr + a @ XtX @ a
     return float(np.sqrt(max(change @ XtX @ change, 0.0) / max(left, 1e-300)))
+
+
+def gap_replacing_refit(problem: Problem, design: Design, blocks: st.Blocks,
+                        best: st.Fit, fitted: int) -> float:
+    """The gap a significant candidate closes when it replaces the refit's changes.
+
+    The refit comes first (a wrong number, not a missing effect), and a candidate's gap is
+    measured beyond it. Where the refitted parameters' columns nearly span the candidate's
+    (a seal force and the bushings' Coulomb coefficient on moves whose bending loads change
+    little), the refit takes most of a missing effect and the gap left beyond it is small,
+    while the candidate is significant beyond the refit: the refitted model without it is
+    rejected. When, with the candidate present, the data no longer need the refit's change
+    of a parameter (held at the model's value it is not significantly worse: F-test at
+    ``alpha``, each parameter alone and those held together), the refit's change was the
+    candidate's doing: its gap is measured with those parameters held at the model's values,
+    in the null model and with the candidate. Only when the candidate, with ``fitted``
+    parameters, replaces at least as many refitted changes: an effect with more parameters
+    than the changes it replaces is not the simpler explanation (six per-leg offsets for a
+    payload mass moved by the bias of the differentiated accelerations), and the refit stays
+    first. 0 when no refitted change is replaced.
+    """
+    s = problem.settings
+    index = problem.model.index
+    theta0 = problem.model.theta0
+    columns = best.columns
+
+    def pinned_bounds(cols):
+        lo, hi = design.lower.copy(), design.upper.copy()
+        for col in cols:
+            name = design.names[col]
+            lo[col] = hi[col] = theta0[index[name]] - design.theta[index[name]]
+        return lo, hi
+
+    def reduced(f: st.Fit, k: int) -> st.Fit:
+        return st.Fit(f.columns[:len(f.columns) - k], f.coef, f.sse, f.rows)
+
+    held = []
+    for col in design.refit:
+        if design.names[col] not in problem.plausible:
+            continue
+        f = st.fit(blocks, columns, *pinned_bounds([col]))
+        if st.f_test(reduced(f, 1), best)[1] >= s.alpha:
+            held.append(col)
+    if not held or len(held) < fitted:
+        return 0.0
+    lo, hi = pinned_bounds(held)
+    alternative = st.fit(blocks, columns, lo, hi)
+    if st.f_test(reduced(alternative, len(held)), best)[1] < s.alpha:
+        return 0.0
+    null = st.fit(blocks, design.refit, lo, hi)
+    return _gap(design.XtX, design.Xtr, design.rtr, null, alternative)
 
 
 def candidate_values(problem: Problem, design: Design, c: Candidate, fit: st.Fit,
