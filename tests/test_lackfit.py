@@ -117,6 +117,38 @@ def test_a_small_driven_part_under_resonant_noise_is_not_magnified(noise):
         assert out["gap"] < 0.2, seed
 
 
+def test_pink_noise_over_a_few_moves_between_rests_has_no_state_structure():
+    """Three minimum-jerk moves of 0.8 s between long rests, only the moves used, pink (1/f)
+    noise centred on them (as a fitted residual is): most speed and length bins are seen in one
+    fold only, and the other folds' level is pulled away from the held-out fold's by the slow
+    noise. A bin the other folds never visited must predict no better than that level."""
+    for seed in range(6):
+        rng = np.random.default_rng(seed)
+        f = np.fft.rfftfreq(M, 1 / RATE)
+        f[0] = f[1]
+        x = np.fft.irfft(np.fft.rfft(rng.normal(0, 1, (M, 6)), axis=0) / np.sqrt(f)[:, None],
+                         M, axis=0)
+        t = np.arange(M) / RATE
+        D = np.full((M, 6), 0.9)
+        v = np.zeros((M, 6))
+        valid = np.zeros((M, 6), bool)
+        tau = np.linspace(0, 1, 200)
+        for start in np.sort(rng.choice(np.arange(200, M - 400, 400), 3, replace=False)):
+            step = rng.uniform(-0.05, 0.05, 6)
+            D[start:start + 200] = D[start - 1] + step * (10 * tau ** 3 - 15 * tau ** 4
+                                                          + 6 * tau ** 5)[:, None]
+            D[start + 200:] = D[start + 199]
+            v[start:start + 200] = step * (30 * tau ** 2 - 60 * tau ** 3
+                                           + 30 * tau ** 4)[:, None] * RATE / 200
+            valid[start:start + 200] = np.abs(v[start:start + 200]) > 1e-3
+        r = 0.2 * x / x.std()
+        r -= (r * valid).sum(0) / valid.sum(0)
+        F = 50 + 300 * np.gradient(v, t, axis=0)
+        out = lackfit.state_structure(r, lackfit.state_features(D, v, F), valid, n_folds=8,
+                                      min_gap=0.3)
+        assert not out["significant"], (seed, out["variable"], out["gap"])
+
+
 def test_samples_left_out_are_not_used():
     """Pairs marked not valid carry no information: a ripple confined to them is not seen."""
     rng = np.random.default_rng(4)

@@ -275,8 +275,13 @@ def state_structure(residual: np.ndarray, features: dict[str, np.ndarray],
             total = np.bincount(key, ri, minlength=n_folds * nb).reshape(n_folds, nb)
             rest_count = count.sum(0) - count           # the other folds, per fold and bin
             rest_total = total.sum(0) - total
-            mean = np.where(rest_count >= 5, rest_total / np.maximum(rest_count, 1), 0.0)
             level = rest_total.sum(1) / np.maximum(rest_count.sum(1), 1)   # the null: a mean
+            # a bin the other folds did not visit says nothing about the state: it predicts
+            # what the null does (a prediction of zero there beat the null's level whenever
+            # slow noise moved the other folds' level away from zero: a few short moves
+            # between long rests under pink noise, most bins seen in one fold only)
+            mean = np.where(rest_count >= 5, rest_total / np.maximum(rest_count, 1),
+                            level[:, None])
             held_err += float(np.sum((ri - mean[fi, b]) ** 2))
             held_null += float(np.sum((ri - level[fi]) ** 2))
             all_mean = total.sum(0) / np.maximum(count.sum(0), 1)
