@@ -275,8 +275,13 @@ def state_structure(residual: np.ndarray, features: dict[str, np.ndarray],
             total = np.bincount(key, ri, minlength=n_folds * nb).reshape(n_folds, nb)
             rest_count = count.sum(0) - count           # the other folds, per fold and bin
             rest_total = total.sum(0) - total
-            mean = np.where(rest_count >= 5, rest_total / np.maximum(rest_count, 1), 0.0)
             level = rest_total.sum(1) / np.maximum(rest_count.sum(1), 1)   # the null: a mean
+            # a bin the other folds did not visit says nothing about the state: it predicts
+            # what the null does (a prediction of zero there beat the null's level whenever
+            # slow noise moved the other folds' level away from zero: a few short moves
+            # between long rests under pink noise, most bins seen in one fold only)
+            mean = np.where(rest_count >= 5, rest_total / np.maximum(rest_count, 1),
+                            level[:, None])
             held_err += float(np.sum((ri - mean[fi, b]) ** 2))
             held_null += float(np.sum((ri - level[fi]) ** 2))
             all_mean = total.sum(0) / np.maximum(count.sum(0), 1)
@@ -317,8 +322,9 @@ def dynamic_structure(residual: np.ndarray, inputs: dict[str, np.ndarray], valid
 
     An ARX model per leg, ``r_t = sum_k a_k r_{t-k} + sum_u sum_j b_uj u_{t-j} + e_t``, with AR
     coefficients per leg and input coefficients shared by the legs (inputs scaled per leg to
-    unit RMS), against the AR model alone: an F-test of the input block, and the size of the
-    input-driven part, the inputs' term passed through the fitted AR recursion.
+    unit RMS), against the AR model alone: an F-test of the input block, and the gap the
+    input-driven part (the inputs' term passed through the fitted AR recursion) closes: the
+    fall of the residual's mean square when it is taken out, relative to what is left.
 
     Parameters
     ----------
@@ -416,7 +422,14 @@ def dynamic_structure(residual: np.ndarray, inputs: dict[str, np.ndarray], valid
             mask[design[leg], leg] = True
     size = float(np.sqrt(np.mean(driven[mask] ** 2)))
     left = float(np.sqrt(np.mean((r - driven)[mask] ** 2)))
-    gap = size / left if left > 0 else np.inf
+    # the gap the driven part closes: the fall of the residual's mean square when it is taken
+    # out, over what is left. Under resonant or narrow-band noise the AR recursion has poles
+    # near the unit circle and magnifies a small input coefficient into a large "driven part"
+    # that the noise then cancels (taking it out leaves more than before): its RMS alone is
+    # no measure of what it explains.
+    whole = float(np.mean(r[mask] ** 2))
+    closed = max(whole - left ** 2, 0.0)
+    gap = float(np.sqrt(closed) / left) if left > 0 else np.inf
     total = max(sum(shares.values()), 1e-300)
     return {"significant": bool(p < alpha and gap >= min_gap), "p_value": p, "gap": float(gap),
             "structure_rms": size,

@@ -69,6 +69,12 @@ def _levinson(r: np.ndarray, order: int) -> tuple[list[np.ndarray], np.ndarray]:
         if v <= 0:
             break
         k = (r[p] - phi @ r[p - 1:0:-1]) / v if p > 1 else r[1] / v
+        if not abs(k) < 1.0:
+            # the autocovariances of a series with gaps (each lag over its own pairs) need not
+            # be positive definite: from this order on no AR model has them, and the
+            # recursion's innovation variance is zero or negative, an order that BIC, seeing a
+            # log-likelihood without bound, would always pick
+            break
         phi = np.concatenate([phi - k * phi[::-1], [k]])
         v = v * (1 - k * k)
         phis.append(phi.copy())
