@@ -8,27 +8,19 @@ from gsfric.models import reference_platform
 from gsfric.synth import synthesize
 from gsfric.trajectory import Motion
 
+from helpers import minimum_jerk_moves
+
 
 def moves_with_long_rests(rate=200.0, seconds=14.0, move=0.7, rest=3.0, seed=4):
     """Minimum-jerk moves of ``move`` s between random targets, each followed by a rest of
     ``rest`` s (the rests about 80 % of the record), in closed form."""
     rng = np.random.default_rng(seed)
     t = np.arange(int(rate * seconds)) / rate
-    period = move + rest
-    k = (t // period).astype(int)
-    targets = np.c_[rng.uniform(-0.03, 0.03, (k.max() + 2, 2)),
-                    0.95 + rng.uniform(-0.02, 0.02, k.max() + 2)]
+    count = int(t[-1] // (move + rest)) + 2
+    targets = np.c_[rng.uniform(-0.03, 0.03, (count, 2)),
+                    0.95 + rng.uniform(-0.02, 0.02, count)]
     targets[0] = [0.0, 0.0, 0.95]
-    s = np.clip((t - k * period) / move, 0.0, 1.0)
-    moving = (t - k * period) < move
-    d = targets[k + 1] - targets[k]
-    shape = [10 * s ** 3 - 15 * s ** 4 + 6 * s ** 5,
-             (30 * s ** 2 - 60 * s ** 3 + 30 * s ** 4) / move * moving,
-             (60 * s - 180 * s ** 2 + 120 * s ** 3) / move ** 2 * moving]
-    zero = np.zeros((len(t), 3))
-    return Motion.from_arrays(t, targets[k] + shape[0][:, None] * d,
-                              np.tile(np.eye(3), (len(t), 1, 1)), shape[1][:, None] * d, zero,
-                              shape[2][:, None] * d, zero)
+    return minimum_jerk_moves(t, targets, move + rest, move)
 
 
 def test_fold_share_counts_only_folds_with_observations():

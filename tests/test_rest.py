@@ -14,6 +14,8 @@ from gsfric.models import point_to_point, reference_platform
 from gsfric.synth import synthesize
 from gsfric.trajectory import Motion, quaternion_from_rotation
 
+from helpers import minimum_jerk_moves
+
 
 def test_each_sample_looks_as_far_as_its_own_window_reaches():
     n = 600
@@ -110,18 +112,7 @@ def test_seal_force_on_a_jittered_log_with_rests_is_named():
     t = np.arange(n) * step + rng.uniform(-0.2, 0.2, n) * step
     t[0] = 0.0
     targets = np.c_[rng.uniform(-0.02, 0.02, (12, 2)), 0.95 + rng.uniform(-0.01, 0.01, 12)]
-    period, move = 2.0, 1.4
-    k = np.minimum((t // period).astype(int), len(targets) - 2)
-    s = np.clip((t - k * period) / move, 0.0, 1.0)
-    moving = (t - k * period) < move
-    d = targets[k + 1] - targets[k]
-    shape = [10 * s ** 3 - 15 * s ** 4 + 6 * s ** 5,
-             (30 * s ** 2 - 60 * s ** 3 + 30 * s ** 4) / move * moving,
-             (60 * s - 180 * s ** 2 + 120 * s ** 3) / move ** 2 * moving]
-    zero = np.zeros((n, 3))
-    motion = Motion.from_arrays(t, targets[k] + shape[0][:, None] * d,
-                                np.tile(np.eye(3), (n, 1, 1)), shape[1][:, None] * d, zero,
-                                shape[2][:, None] * d, zero)
+    motion = minimum_jerk_moves(t, targets, period=2.0, move=1.4)
     platform = reference_platform(friction_model="paper")
     data = synthesize(platform, ["seal_friction:force=1.0"], motion=motion, noise=0.2,
                       pose_noise=1e-5, seed=2)
