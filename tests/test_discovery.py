@@ -104,16 +104,22 @@ class Case:
 
 def make_case(names, seed: int, size: float | None = None, phi: float | None = None,
               sigma: float | None = None, samples: int = SAMPLES,
-              pose: float | None = None) -> Case:
+              pose: float | None = None, hinge: bool = False) -> Case:
     """A synthetic measured record with the named hidden effects (see the module docstring);
-    ``pose`` overrides the pose noise (m and rad)."""
+    ``pose`` overrides the pose noise (m and rad); ``hinge`` puts the stroke friction's
+    reference at the mean leg length (friction on one side of it only, the Coulomb sum being
+    clamped at zero) instead of at the end of the stroke it grows from."""
     rng = np.random.default_rng(seed)
     names = list(names)
     model = model_for(names)
     t = np.arange(samples) / RATE
     motion = excitation_motion(rng, t)
     params = {n: draw_parameters(n, rng) for n in names}
-    if "stroke_friction" in params:
+    if "stroke_friction" in params and hinge:
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore")
+            params["stroke_friction"]["reference"] = float(evaluate(model, motion).D.mean())
+    elif "stroke_friction" in params:
         with warnings.catch_warnings():
             warnings.simplefilter("ignore")
             D = evaluate(model, motion).D
@@ -363,6 +369,21 @@ def test_names_the_hidden_effect(name, seed):
     assert result.names == [name]
     size = case.sizes[name]
     assert parameter_error(case, name, result.effects[0].parameters) <= tolerance(size)
+    assert result.rms_after <= RMS_LIMIT * case.sigma
+
+
+@pytest.mark.parametrize("seed", [0, 1])
+def test_names_stroke_friction_with_a_reference_inside_the_stroke(seed):
+    # reference at the mean leg length: no friction over one half of the stroke, friction
+    # growing from the middle over the other; not a term growing from either end
+    case = make_case(["stroke_friction"], seed, size=10.0, hinge=True)
+    result = run_case(case)
+    assert result.names == ["stroke_friction"]
+    found = result.effects[0].parameters
+    true = case.parameters["stroke_friction"]
+    assert np.sign(found["slope"]) == np.sign(true["slope"])
+    D = evaluate(case.truth, case.true_motion).D
+    assert abs(found["reference"] - true["reference"]) <= 0.1 * np.ptp(D)
     assert result.rms_after <= RMS_LIMIT * case.sigma
 
 

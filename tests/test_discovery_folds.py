@@ -1,6 +1,7 @@
 """Block cross-validation on records whose folds are not all informative."""
 
 import numpy as np
+import pytest
 
 from gsfric.discovery import discover
 from gsfric.discovery import statistics as st
@@ -50,3 +51,58 @@ def test_drag_on_moves_between_long_rests_is_named():
     assert data.sizes["quadratic_drag"] > 3
     assert r.names == ["quadratic_drag"]
     assert r.verdict == "explained"
+
+
+
+def test_stroke_friction_column_is_zero_beyond_its_reference():
+    """With a reference inside the stroke the clamped Coulomb sum leaves the forces unchanged
+    on the clamped side: the secant column is exactly zero there (not the rounding noise of
+    two model evaluations, which a fold whose training blocks never pass the reference would
+    fit with a huge coefficient), and the friction growing from the reference elsewhere."""
+    from gsfric.discovery.residuals import Problem
+    from gsfric.discovery.settings import Settings
+
+    data = synthesize(samples=1500, noise=0.1, seed=3)
+    f = data.frame
+    motion = Motion.from_samples(f["t"].to_numpy(), f[["x", "y", "z"]].to_numpy(),
+                                 quaternion=f[["qw", "qx", "qy", "qz"]].to_numpy())
+    problem = Problem(motion, f[[f"F{i}" for i in range(1, 7)]].to_numpy(), data.model,
+                      Settings(n_threads=1))
+    stroke = [c for c in problem.candidates if c.name == "stroke_friction"]
+    design = problem.linearise(problem.model.theta0, [], stroke)
+    D = problem.result.D[problem.used]
+    inside = 0
+    for cols, grid in zip(design.variants["stroke_friction"], design.grid["stroke_friction"]):
+        ref, sign = grid["reference"], design.signs[cols[0]]
+        column = design.X[:, :, cols[0]]
+        clamped = (D - ref) * sign < 0
+        assert np.all(column[clamped] == 0.0)
+        beyond = (D - ref) * sign > 0
+        if clamped.sum() >= 50 and beyond.sum() >= 50:
+            inside += 1
+            assert np.mean(column[beyond] != 0.0) > 0.5
+    assert inside >= 2 * 7
+
+
+def test_a_column_without_data_gets_no_coefficient():
+    """A column with a zero norm on the data fitted (a fold's training blocks that never reach
+    an effect) carries no information: its coefficient is 0, whatever rounding residue its
+    cross-product with the target holds."""
+    A = np.diag([2.0, 0.0])
+    b = np.array([1.0, 3e-12])
+    t = st.solve(A, b, np.array([-np.inf, 0.0]), np.array([np.inf, np.inf]))
+    assert t[1] == 0.0
+    assert t[0] == pytest.approx(0.5)
+
+
+def test_fold_training_sums_are_the_blocks_left():
+    """A fold's training cross-products are the sums over the blocks it leaves (so a column
+    zero on all of them is exactly zero)."""
+    rng = np.random.default_rng(2)
+    X = rng.normal(size=(400, 6, 2))
+    X[:100, :, 1] *= 1e8
+    X[100:, :, 1] = 0.0
+    blocks = st.Blocks.build(X, rng.normal(size=(400, 6)), 8)
+    A, b, c = blocks.without(np.array([0, 1]))
+    assert A[1, 1] == 0.0 and b[1] == 0.0
+    assert A[0, 0] == pytest.approx(np.sum(X[100:, :, 0] ** 2))

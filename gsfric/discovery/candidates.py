@@ -134,13 +134,25 @@ class Candidate:
         return self.fitted[0]
 
 
+STROKE_REFERENCES = 9
+"""Number of references of stroke friction tried, evenly spaced from the shortest to the
+longest leg length of the data (ends included: steps of an eighth of the stroke)."""
+
+
 def _stroke_ends(context: dict) -> dict | None:
-    """The reference of stroke friction at either end of the legs' stroke in the data, so that
-    a friction ``k (D - D_ref) sgn(v)`` growing from one end is one effect (k >= 0 from the
-    short end, k <= 0 from the long end). None without data (marks a data-dependent grid)."""
+    """References of stroke friction along the legs' stroke in the data, the ends included.
+
+    At an end, a friction ``k (D - D_ref) sgn(v)`` growing from that end over the whole stroke
+    is one effect (k >= 0 from the short end, k <= 0 from the long end). Inside the stroke the
+    catalog's clamp of the Coulomb sum at zero makes the term a hinge: no friction on one side
+    of the reference, friction growing with the distance from it on the other (the catalog's
+    default reference, the mean leg length, is such a one). An end-only grid cannot describe a
+    hinge inside the stroke; the grid's step of an eighth of the stroke leaves a hinge between
+    two grid points a small misfit. None without data (marks a data-dependent grid)."""
     if "min_length" not in context:
         return None
-    return {"reference": (float(context["min_length"]), float(context["max_length"]))}
+    lo, hi = float(context["min_length"]), float(context["max_length"])
+    return {"reference": tuple(float(v) for v in np.linspace(lo, hi, STROKE_REFERENCES))}
 
 
 def _bushing_spacing(platform: Platform, context: dict) -> dict:

@@ -109,6 +109,23 @@ class Columns:
             yield slice(a, min(m, a + size))
 
 
+SECANT_ROUNDING = 1e-9
+"""Relative size (to the force) below which a secant column's force difference is taken as
+rounding: the stepped and the unstepped forces come from two evaluations of the compiled
+model, and where a step changes nothing (a clamped Coulomb sum, a stroke friction beyond its
+reference) they still differ by a few units of the last place."""
+
+
+def secant(stepped: np.ndarray, F: np.ndarray, size: float) -> np.ndarray:
+    """The secant column ``(stepped - F) / size`` (forces (M, 6), N; size in the amplitude's
+    unit), zero where the difference is rounding (``SECANT_ROUNDING``). A column made of
+    rounding noise on a stretch of the record would otherwise be fitted there (a fold's
+    training blocks) with an arbitrary, huge coefficient."""
+    d = stepped - F
+    d[np.abs(d) <= SECANT_ROUNDING * np.abs(F)] = 0.0
+    return d / size
+
+
 @dataclass
 class Design:
     """The model linearised at theta: residual and derivative columns over the used samples.
@@ -365,7 +382,8 @@ class Problem:
         F, _ = self.model.jacobian(theta, columns, rows=self.used,
                                    out=X[:, :, :len(columns)])
         for j, step in enumerate(steps):
-            X[:, :, len(columns) + j] = (self.model.forces(step) - F)[self.used] / sizes[j]
+            X[:, :, len(columns) + j] = secant(self.model.forces(step)[self.used],
+                                               F[self.used], sizes[j])
         X *= self.weight[:, :, None]
         if delays:
             # the forces at theta as the compiled model's force map gives them (what a

@@ -74,11 +74,10 @@ def profile_cv(blocks: st.Blocks, null: list[int], variants: list[list[int]],
     """Held-out SSE per fold, the variant chosen on each fold's training blocks."""
     n = len(blocks.ztz)
     groups = np.array_split(np.arange(n), n_folds)
-    A, b, c, _ = blocks.total()
     out = np.empty(len(groups))
     for f, g in enumerate(groups):
         Af, bf, cf = blocks.XtX[g].sum(0), blocks.Xtz[g].sum(0), float(blocks.ztz[g].sum())
-        At, bt, ct = A - Af, b - bf, c - cf
+        At, bt, ct = blocks.without(g)
         best = None
         for v in variants:
             cols = null + v

@@ -268,6 +268,15 @@ class Blocks:
         return (np.tensordot(w, self.XtX, 1), w @ self.Xtz, float(w @ self.ztz),
                 float(w @ self.rows))
 
+    def without(self, held: np.ndarray) -> tuple[np.ndarray, np.ndarray, float]:
+        """Summed (XtX, Xtz, ztz) of the blocks not in ``held`` (indices): a fold's training
+        blocks. Summed, not the total less the held-out blocks: a column that is zero on
+        every training block (an effect only the held-out stretch reaches) is then exactly
+        zero, not a rounding residue that a solve would scale into a huge coefficient."""
+        keep = np.ones(len(self.ztz), bool)
+        keep[held] = False
+        return (self.XtX[keep].sum(0), self.Xtz[keep].sum(0), float(self.ztz[keep].sum()))
+
 
 # -- bounded least squares on cross-products ---------------------------------------------------
 
@@ -285,7 +294,8 @@ def solve(A: np.ndarray, b: np.ndarray, lower: np.ndarray | None = None,
         return np.zeros(0)
     d = np.sqrt(np.maximum(np.diag(A), 1e-300))
     As = A / np.outer(d, d) + RIDGE * np.eye(k)
-    bs = b / d
+    # a column without data (zero diagonal) carries no information: its coefficient is 0
+    bs = np.where(np.diag(A) > 0, b, 0.0) / d
     lo = np.full(k, -np.inf) if lower is None else np.asarray(lower, float) * d
     hi = np.full(k, np.inf) if upper is None else np.asarray(upper, float) * d
     t = np.linalg.solve(As, bs)
@@ -386,13 +396,13 @@ def cross_validate(blocks: Blocks, columns: Sequence[int], lower: np.ndarray,
     """Held-out prewhitened SSE of each fold (contiguous groups of blocks), shape (n_folds,)."""
     n = len(blocks.ztz)
     groups = np.array_split(np.arange(n), n_folds)
-    A, b, c, _ = blocks.total()
     cols = list(columns)
     idx = np.ix_(cols, cols)
     out = np.empty(len(groups))
     for f, g in enumerate(groups):
         Af, bf, cf = blocks.XtX[g].sum(0), blocks.Xtz[g].sum(0), float(blocks.ztz[g].sum())
-        t = solve((A - Af)[idx], (b - bf)[cols], lower[cols], upper[cols])
+        At, bt, _ = blocks.without(g)
+        t = solve(At[idx], bt[cols], lower[cols], upper[cols])
         out[f] = sse(Af[idx], bf[cols], cf, t)
     return out
 
