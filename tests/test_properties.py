@@ -279,7 +279,7 @@ def friction_setup(draw):
         "seal_friction": dict(force=draw(st.floats(0.0, 5.0))),
         "quadratic_drag": dict(coefficient=draw(st.floats(0.0, 5.0))),
         "stroke_friction": dict(slope=draw(st.floats(0.0, 10.0)),
-                                reference=draw(st.floats(0.0, models.STROKE[0]))),
+                                reference=draw(st.floats(0.0, models.STROKE[1]))),
         "bushing_friction": dict(coefficient=draw(coefficient),
                                  spacing=draw(st.floats(0.05, 0.3))),
         "joint_friction_coupling": dict(scale=draw(unit)),
