@@ -444,12 +444,8 @@ def _largest_model_whitener(problem: Problem, residual: np.ndarray, J: np.ndarra
     AR(12) noise of lag-one correlation 0.92 on point-to-point moves), and the prewhitened
     refit then weighs the differences of the residual over its level: it stopped at 2.07
     times the noise where the refitted parameters reach 1.04 times."""
-    k = J.shape[2]
-    if k == 0:
-        return st.Whitener.fit(residual, valid=problem.sliding)
-    flat = J.reshape(-1, k)
-    coef = st.solve(flat.T @ flat, flat.T @ residual.reshape(-1))
-    return st.Whitener.fit(residual - J @ coef, valid=problem.sliding)
+    flat = J.reshape(-1, J.shape[2])
+    return _whitener_beyond(problem, residual, J, flat.T @ flat, flat.T @ residual.reshape(-1))
 
 
 def _noise_whitener(design, problem: Problem) -> st.Whitener:
@@ -457,11 +453,17 @@ def _noise_whitener(design, problem: Problem) -> st.Whitener:
     candidate's columns and the refit at once, least squares): what the candidates could
     explain does not inflate the noise model, so a step-like effect (Coulomb friction) is not
     whitened away before it is tested, and the noise is not under-modelled either."""
-    coef = st.solve(design.XtX, design.Xtr)
-    k = design.X.shape[2]
-    r = design.r.copy()
-    for j in range(k):
-        r -= design.X[:, :, j] * coef[j]
+    return _whitener_beyond(problem, design.r, design.X, design.XtX, design.Xtr)
+
+
+def _whitener_beyond(problem: Problem, r: np.ndarray, X: np.ndarray, XtX: np.ndarray,
+                     Xtr: np.ndarray) -> st.Whitener:
+    """The AR noise model of the residual r (M, 6) less its least-squares fit by the columns
+    X (M, 6, k), given their cross-products XtX (k, k) and Xtr (k,)."""
+    coef = st.solve(XtX, Xtr)
+    r = r.copy()
+    for j in range(X.shape[2]):
+        r -= X[:, :, j] * coef[j]
     return st.Whitener.fit(r, valid=problem.sliding)
 
 
