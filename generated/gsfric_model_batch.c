@@ -31,8 +31,11 @@ typedef long long vl __attribute__((vector_size(8 * GSFRIC_LANES)));
  * gathered from the group's transposed outputs y (entry o of lane l at y[8 o + l]) by an
  * index table (idx[f] = 8 (f % size) + f / size for flat entry f of the rows): one
  * 64-byte store per vector instead of eight scalar ones; non-temporal where the rows are
- * 64-byte aligned. */
-#if GSFRIC_LANES == 8 && defined(__AVX512F__)
+ * 64-byte aligned. Not on AMD Zen cores, whose gathers cost more than the eight scalar
+ * stores (docs/performance.md). */
+#if GSFRIC_LANES == 8 && defined(__AVX512F__) && !defined(__znver1__) \
+    && !defined(__znver2__) && !defined(__znver3__) && !defined(__znver4__) \
+    && !defined(__znver5__)
 #define VSTORE 1
 #include <stdint.h>
 static inline void v_store_rows(double *dst, const double *y, const long long *idx,
@@ -14016,13 +14019,19 @@ void gsfric_model_eval_batch(const double **in, const long long *in_stride,
         *(vd *)yt[310] = w305;
         *(vd *)yt[311] = w314;
         *(vd *)yt[312] = w52;
-        if (bad) {  /* 1 where some output is infinite or NaN (v - v is NaN) */
-            vl b = (vl)v_splat(0.0);
-            for (int k = 0; k < 313; ++k) {
-                vd v = *(const vd *)yt[k], z = v - v;
-                b |= (vl)(z != z);
+        if (bad) {  /* 1 where some output is infinite or NaN: v * 0 is NaN there, else
+                       0, and a sum of them NaN when one is (four sums: one add each) */
+            vd z0 = v_splat(0.0), z1 = z0, z2 = z0, z3 = z0;
+            int k = 0;
+            for (; k + 4 <= 313; k += 4) {
+                z0 += *(const vd *)yt[k] * 0.0;
+                z1 += *(const vd *)yt[k + 1] * 0.0;
+                z2 += *(const vd *)yt[k + 2] * 0.0;
+                z3 += *(const vd *)yt[k + 3] * 0.0;
             }
-            for (int l = 0; l < m; ++l) bad[s0 + l] = b[l] != 0;
+            for (; k < 313; ++k) z0 += *(const vd *)yt[k] * 0.0;
+            vd z = (z0 + z1) + (z2 + z3);
+            for (int l = 0; l < m; ++l) bad[s0 + l] = z[l] != z[l];
         }
         /* outputs: one loop, rows of each step written whole */
         for (int j = 0, b = 0; j < 30; b += size[j], ++j) {
@@ -26541,13 +26550,19 @@ void gsfric_model_eval_coupled_batch(const double **in, const long long *in_stri
         *(vd *)yt[310] = w245;
         *(vd *)yt[311] = w84;
         *(vd *)yt[312] = w52;
-        if (bad) {  /* 1 where some output is infinite or NaN (v - v is NaN) */
-            vl b = (vl)v_splat(0.0);
-            for (int k = 0; k < 313; ++k) {
-                vd v = *(const vd *)yt[k], z = v - v;
-                b |= (vl)(z != z);
+        if (bad) {  /* 1 where some output is infinite or NaN: v * 0 is NaN there, else
+                       0, and a sum of them NaN when one is (four sums: one add each) */
+            vd z0 = v_splat(0.0), z1 = z0, z2 = z0, z3 = z0;
+            int k = 0;
+            for (; k + 4 <= 313; k += 4) {
+                z0 += *(const vd *)yt[k] * 0.0;
+                z1 += *(const vd *)yt[k + 1] * 0.0;
+                z2 += *(const vd *)yt[k + 2] * 0.0;
+                z3 += *(const vd *)yt[k + 3] * 0.0;
             }
-            for (int l = 0; l < m; ++l) bad[s0 + l] = b[l] != 0;
+            for (; k < 313; ++k) z0 += *(const vd *)yt[k] * 0.0;
+            vd z = (z0 + z1) + (z2 + z3);
+            for (int l = 0; l < m; ++l) bad[s0 + l] = z[l] != z[l];
         }
         /* outputs: one loop, rows of each step written whole */
         for (int j = 0, b = 0; j < 30; b += size[j], ++j) {
@@ -37633,13 +37648,19 @@ void gsfric_model_actuator_coupled_batch(const double **in, const long long *in_
         w292 = w292 + w129;
         w177 = w177 + w292;
         *(vd *)yt[5] = w177;
-        if (bad) {  /* 1 where some output is infinite or NaN (v - v is NaN) */
-            vl b = (vl)v_splat(0.0);
-            for (int k = 0; k < 6; ++k) {
-                vd v = *(const vd *)yt[k], z = v - v;
-                b |= (vl)(z != z);
+        if (bad) {  /* 1 where some output is infinite or NaN: v * 0 is NaN there, else
+                       0, and a sum of them NaN when one is (four sums: one add each) */
+            vd z0 = v_splat(0.0), z1 = z0, z2 = z0, z3 = z0;
+            int k = 0;
+            for (; k + 4 <= 6; k += 4) {
+                z0 += *(const vd *)yt[k] * 0.0;
+                z1 += *(const vd *)yt[k + 1] * 0.0;
+                z2 += *(const vd *)yt[k + 2] * 0.0;
+                z3 += *(const vd *)yt[k + 3] * 0.0;
             }
-            for (int l = 0; l < m; ++l) bad[s0 + l] = b[l] != 0;
+            for (; k < 6; ++k) z0 += *(const vd *)yt[k] * 0.0;
+            vd z = (z0 + z1) + (z2 + z3);
+            for (int l = 0; l < m; ++l) bad[s0 + l] = z[l] != z[l];
         }
         /* outputs: one loop, rows of each step written whole */
         for (int j = 0, b = 0; j < 1; b += size[j], ++j) {
@@ -49354,13 +49375,19 @@ void gsfric_model_envelope_coupled_batch(const double **in, const long long *in_
         *(vd *)yt[100] = w113;
         *(vd *)yt[101] = w346;
         *(vd *)yt[102] = w1;
-        if (bad) {  /* 1 where some output is infinite or NaN (v - v is NaN) */
-            vl b = (vl)v_splat(0.0);
-            for (int k = 0; k < 103; ++k) {
-                vd v = *(const vd *)yt[k], z = v - v;
-                b |= (vl)(z != z);
+        if (bad) {  /* 1 where some output is infinite or NaN: v * 0 is NaN there, else
+                       0, and a sum of them NaN when one is (four sums: one add each) */
+            vd z0 = v_splat(0.0), z1 = z0, z2 = z0, z3 = z0;
+            int k = 0;
+            for (; k + 4 <= 103; k += 4) {
+                z0 += *(const vd *)yt[k] * 0.0;
+                z1 += *(const vd *)yt[k + 1] * 0.0;
+                z2 += *(const vd *)yt[k + 2] * 0.0;
+                z3 += *(const vd *)yt[k + 3] * 0.0;
             }
-            for (int l = 0; l < m; ++l) bad[s0 + l] = b[l] != 0;
+            for (; k < 103; ++k) z0 += *(const vd *)yt[k] * 0.0;
+            vd z = (z0 + z1) + (z2 + z3);
+            for (int l = 0; l < m; ++l) bad[s0 + l] = z[l] != z[l];
         }
         /* outputs: one loop, rows of each step written whole */
         for (int j = 0, b = 0; j < 6; b += size[j], ++j) {
@@ -56029,13 +56056,19 @@ void gsfric_model_eval_posthoc_batch(const double **in, const long long *in_stri
         w69 = w69 + w300;
         w69 = v_sqrt(w69);
         *(vd *)yt[312] = w69;
-        if (bad) {  /* 1 where some output is infinite or NaN (v - v is NaN) */
-            vl b = (vl)v_splat(0.0);
-            for (int k = 0; k < 313; ++k) {
-                vd v = *(const vd *)yt[k], z = v - v;
-                b |= (vl)(z != z);
+        if (bad) {  /* 1 where some output is infinite or NaN: v * 0 is NaN there, else
+                       0, and a sum of them NaN when one is (four sums: one add each) */
+            vd z0 = v_splat(0.0), z1 = z0, z2 = z0, z3 = z0;
+            int k = 0;
+            for (; k + 4 <= 313; k += 4) {
+                z0 += *(const vd *)yt[k] * 0.0;
+                z1 += *(const vd *)yt[k + 1] * 0.0;
+                z2 += *(const vd *)yt[k + 2] * 0.0;
+                z3 += *(const vd *)yt[k + 3] * 0.0;
             }
-            for (int l = 0; l < m; ++l) bad[s0 + l] = b[l] != 0;
+            for (; k < 313; ++k) z0 += *(const vd *)yt[k] * 0.0;
+            vd z = (z0 + z1) + (z2 + z3);
+            for (int l = 0; l < m; ++l) bad[s0 + l] = z[l] != z[l];
         }
         /* outputs: one loop, rows of each step written whole */
         for (int j = 0, b = 0; j < 30; b += size[j], ++j) {
@@ -61124,13 +61157,19 @@ void gsfric_model_actuator_posthoc_batch(const double **in, const long long *in_
         w258 = w258 + w48;
         w204 = w204 + w258;
         *(vd *)yt[5] = w204;
-        if (bad) {  /* 1 where some output is infinite or NaN (v - v is NaN) */
-            vl b = (vl)v_splat(0.0);
-            for (int k = 0; k < 6; ++k) {
-                vd v = *(const vd *)yt[k], z = v - v;
-                b |= (vl)(z != z);
+        if (bad) {  /* 1 where some output is infinite or NaN: v * 0 is NaN there, else
+                       0, and a sum of them NaN when one is (four sums: one add each) */
+            vd z0 = v_splat(0.0), z1 = z0, z2 = z0, z3 = z0;
+            int k = 0;
+            for (; k + 4 <= 6; k += 4) {
+                z0 += *(const vd *)yt[k] * 0.0;
+                z1 += *(const vd *)yt[k + 1] * 0.0;
+                z2 += *(const vd *)yt[k + 2] * 0.0;
+                z3 += *(const vd *)yt[k + 3] * 0.0;
             }
-            for (int l = 0; l < m; ++l) bad[s0 + l] = b[l] != 0;
+            for (; k < 6; ++k) z0 += *(const vd *)yt[k] * 0.0;
+            vd z = (z0 + z1) + (z2 + z3);
+            for (int l = 0; l < m; ++l) bad[s0 + l] = z[l] != z[l];
         }
         /* outputs: one loop, rows of each step written whole */
         for (int j = 0, b = 0; j < 1; b += size[j], ++j) {
@@ -66764,13 +66803,19 @@ void gsfric_model_envelope_posthoc_batch(const double **in, const long long *in_
         *(vd *)yt[100] = w314;
         *(vd *)yt[101] = w318;
         *(vd *)yt[102] = w322;
-        if (bad) {  /* 1 where some output is infinite or NaN (v - v is NaN) */
-            vl b = (vl)v_splat(0.0);
-            for (int k = 0; k < 103; ++k) {
-                vd v = *(const vd *)yt[k], z = v - v;
-                b |= (vl)(z != z);
+        if (bad) {  /* 1 where some output is infinite or NaN: v * 0 is NaN there, else
+                       0, and a sum of them NaN when one is (four sums: one add each) */
+            vd z0 = v_splat(0.0), z1 = z0, z2 = z0, z3 = z0;
+            int k = 0;
+            for (; k + 4 <= 103; k += 4) {
+                z0 += *(const vd *)yt[k] * 0.0;
+                z1 += *(const vd *)yt[k + 1] * 0.0;
+                z2 += *(const vd *)yt[k + 2] * 0.0;
+                z3 += *(const vd *)yt[k + 3] * 0.0;
             }
-            for (int l = 0; l < m; ++l) bad[s0 + l] = b[l] != 0;
+            for (; k < 103; ++k) z0 += *(const vd *)yt[k] * 0.0;
+            vd z = (z0 + z1) + (z2 + z3);
+            for (int l = 0; l < m; ++l) bad[s0 + l] = z[l] != z[l];
         }
         /* outputs: one loop, rows of each step written whole */
         for (int j = 0, b = 0; j < 6; b += size[j], ++j) {
