@@ -182,8 +182,8 @@ def generate(out_dir: Path = GENERATED) -> dict[str, bytes]:
         del ser
         files[f"{BASENAME}.casadi"] = (tmp / f"{BASENAME}.casadi").read_bytes()
         files[f"{BASENAME}_batch.c"] = simd.batch_file(
-            [f for f in funcs if f.name() in {f"{BASENAME}_{n}" for n in SIMD_FUNCTIONS}]
-        ).encode()
+            [f for f in funcs if f.name() in {f"{BASENAME}_{n}" for n in SIMD_FUNCTIONS}],
+            on_request=mdl.ON_REQUEST).encode()
     finally:
         for p in tmp.glob("*"):
             p.unlink()

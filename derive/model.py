@@ -132,6 +132,12 @@ OUTPUTS = (
     ("N_bushing", (6, 2), "N", "magnitudes of the two bushings' normal forces (first, second)"),
 )
 
+# Outputs that the SIMD-over-steps functions compute only in a call that asks for one of them
+# (derive/simd.py): copies of other outputs in another frame, and the parts of sums that are
+# outputs themselves. The runtime computes them on first access (gsfric.evaluation.DETAILS).
+ON_REQUEST = ("R_3_leg", "M_3_leg", "Ffr_viscous", "Ffr_coulomb", "Ffr_bushing", "Ffr_seal",
+              "Ffr_effects", "N_bushing")
+
 
 def _size(shape) -> int:
     n = 1

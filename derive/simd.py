@@ -20,6 +20,12 @@ instructions that depend only on them and on constants are hoisted out of the st
 evaluated once per call (each gets a name of its own, so CasADi's reuse of work slots inside
 the loop cannot overwrite it).
 
+Outputs computed on request (``on_request``, derive/model.py's ``ON_REQUEST``): the
+instructions whose values only these outputs need are printed after the others, in a block
+that runs only when the call asks for one of them (their own values named once each, the loop
+body's values they read copied where they are computed, since later instructions may reuse
+the work slot); their entries of the transposed outputs come last.
+
 Generated function, for CasADi function ``f`` with inputs k and outputs j:
 
     void <prefix>_batch(const double **in, const long long *in_stride,
@@ -365,25 +371,74 @@ def _divisor_uses(f, names) -> dict[int, tuple[int, int, int]]:
     return {k: tuple(c) for k, c in count.items()}
 
 
-def batch_source(f, prefix: str) -> str:
-    """C source of ``<prefix>_batch`` for the CasADi SX function ``f``."""
+def _on_request_only(f, names, lazy: set[int]) -> set[int]:
+    """The instructions whose values only the outputs ``lazy`` need (read from the
+    instruction list: a work slot's value is the one its last writer gave it)."""
+    writer: dict[int, int] = {}
+    consumers: dict[int, list[int]] = {}
+    core: set[int] = set()
+    values: set[int] = set()
+    for k in range(f.n_instructions()):
+        op = names[f.instruction_id(k)]
+        i = f.instruction_input(k)
+        if op == "OP_OUTPUT":
+            if f.instruction_output(k)[0] not in lazy:
+                core.add(writer[i[0]])
+            continue
+        values.add(k)
+        args = [] if op in ("OP_INPUT", "OP_CONST") else \
+            [writer[i[0]], writer[i[1]]] if op in _BINARY else [writer[i[0]]]
+        for a in args:
+            consumers.setdefault(a, []).append(k)
+        writer[f.instruction_output(k)[0]] = k
+    for k in range(f.n_instructions() - 1, -1, -1):
+        if k not in core and any(c in core for c in consumers.get(k, ())):
+            core.add(k)
+    return values - core
+
+
+def batch_source(f, prefix: str, on_request=()) -> str:
+    """C source of ``<prefix>_batch`` for the CasADi SX function ``f``; the outputs named in
+    ``on_request`` are computed only in a call that asks for one of them."""
     names = _opnames()
     n_x = f.numel_in(0)
     sizes = [f.numel_out(j) for j in range(f.n_out())]
-    base = [sum(sizes[:j]) for j in range(len(sizes))]
+    lazy_out = {j for j in range(f.n_out()) if f.name_out(j) in on_request}
+    lazy = _on_request_only(f, names, lazy_out)
+    order = [j for j in range(f.n_out()) if j not in lazy_out] + sorted(lazy_out)
+    base = {j: sum(sizes[q] for q in order[:order.index(j)]) for j in order}
+    n_core = sum(sizes[j] for j in range(f.n_out()) if j not in lazy_out)
     uses = _divisor_uses(f, names)
-    hoisted, body = [], []
+    hoisted, body, later = [], [], []
     current: dict[int, tuple[str, bool, int]] = {}  # work slot -> (C name, invariant, defined by)
     rsqrt: set[int] = set()        # square roots held as their reciprocals
     recip: dict[int, str] = {}     # divisors -> the name of their reciprocal
+    line_of: dict[int, int] = {}   # instruction -> its line in body
+    copied: dict[int, int] = {}    # instruction -> its work slot, for a copy read by `later`
+
+    def value(slot: int, deferred: bool) -> tuple[str, bool, int]:
+        """The value in ``slot``; in the deferred part a copy of a loop-body value, which
+        later instructions of the body may overwrite."""
+        name, invariant, d = current[slot]
+        if deferred and name.startswith("w"):
+            copied[d] = slot
+            return f"c{d}", invariant, d
+        return name, invariant, d
+
     for k in range(f.n_instructions()):
         op = names[f.instruction_id(k)]
         i = f.instruction_input(k)
         o = f.instruction_output(k)
         if op == "OP_OUTPUT":
-            src, _, _ = current[i[0]]
-            body.append(f"        *(vd *)yt[{base[o[0]] + o[1]}] = {src};")
+            deferred = o[0] in lazy_out
+            src, _, _ = value(i[0], deferred)
+            (later if deferred else body).append(
+                f"        *(vd *)yt[{base[o[0]] + o[1]}] = {src};")
             continue
+        deferred = k in lazy
+        current_k = {s: value(s, deferred) for s in
+                     ([] if op in ("OP_INPUT", "OP_CONST") else
+                      [i[0], i[1]] if op in _BINARY else [i[0]])}
         if op == "OP_INPUT":
             if i[0] == 0:
                 expr, invariant = f"*(const vd *)xt[{i[1]}]", False
@@ -391,18 +446,18 @@ def batch_source(f, prefix: str) -> str:
                 expr, invariant = f"v_splat(in[{i[0]}][{i[1]}])", True
         elif op == "OP_CONST":
             expr, invariant = f"v_splat({float(f.instruction_constant(k))!r})", True
-        elif op == "OP_DIV" and not (current[i[0]][1] and current[i[1]][1]):
-            (a, _, _), (b, _, d) = current[i[0]], current[i[1]]
+        elif op == "OP_DIV" and not (current_k[i[0]][1] and current_k[i[1]][1]):
+            (a, _, _), (b, _, d) = current_k[i[0]], current_k[i[1]]
             expr, invariant = (f"{a} * {b}" if d in rsqrt else f"{a} * {recip[d]}"
                                if d in recip else f"v_div({a}, {b})"), False
         elif op in _BINARY:
-            (a, ia, _), (b, ib, _) = current[i[0]], current[i[1]]
+            (a, ia, _), (b, ib, _) = current_k[i[0]], current_k[i[1]]
             expr, invariant = _BINARY[op].format(a=a, b=b), ia and ib
-        elif op == "OP_SQRT" and not current[i[0]][1] and uses[k][1] == uses[k][0] > 0:
-            expr, invariant = f"v_rsqrt({current[i[0]][0]})", False
+        elif op == "OP_SQRT" and not current_k[i[0]][1] and uses[k][1] == uses[k][0] > 0:
+            expr, invariant = f"v_rsqrt({current_k[i[0]][0]})", False
             rsqrt.add(k)
         elif op in _UNARY:
-            a, ia, _ = current[i[0]]
+            a, ia, _ = current_k[i[0]]
             expr, invariant = _UNARY[op].format(a=a), ia
         else:
             raise NotImplementedError(f"{f.name()}: no SIMD translation for {op}")
@@ -412,12 +467,21 @@ def batch_source(f, prefix: str) -> str:
             if uses[k][2]:      # a divisor of the loop body's divisions: its reciprocal, once
                 hoisted.append(f"    const vd r{k} = 1.0 / h{k};")
                 recip[k] = f"r{k}"
+        elif deferred:
+            later.append(f"        const vd l{k} = {expr};")
+            current[o[0]] = (f"l{k}", False, k)
+            if k not in rsqrt and uses[k][1] >= 2:
+                later.append(f"        const vd r{k} = v_rcp(l{k});")
+                recip[k] = f"r{k}"
         else:
+            line_of[k] = len(body)
             body.append(f"        w{o[0]} = {expr};")
             current[o[0]] = (f"w{o[0]}", False, k)
             if k not in rsqrt and uses[k][1] >= 2:
                 body.append(f"        const vd r{k} = v_rcp(w{o[0]});")
                 recip[k] = f"r{k}"
+    for d in sorted(copied, key=line_of.get, reverse=True):
+        body.insert(line_of[d] + 1, f"        const vd c{d} = w{copied[d]};")
     slots = sorted({int(line.split("=")[0].strip()[1:]) for line in body
                     if line.lstrip().startswith("w")})
     lines = [
@@ -428,6 +492,10 @@ def batch_source(f, prefix: str) -> str:
         *hoisted,
         "    " + " ".join(f"vd w{s};" for s in slots),
         f"    static const int size[{len(sizes)}] = {{{', '.join(map(str, sizes))}}};",
+        f"    static const int ybase[{len(sizes)}] = "
+        f"{{{', '.join(str(base[j]) for j in range(len(sizes)))}}};",
+        "    int lazy = " + (" || ".join(f"out[{j}] != 0" for j in sorted(lazy_out)) or "0")
+        + ";  /* an output computed on request is asked for */",
         f"    double xt[{n_x}][GSFRIC_LANES] __attribute__((aligned(8 * GSFRIC_LANES)));",
         f"    double yt[{sum(sizes)}][GSFRIC_LANES] __attribute__((aligned(8 * GSFRIC_LANES)));",
         "    int stream = n >= STREAM_STEPS;",
@@ -445,22 +513,26 @@ def batch_source(f, prefix: str) -> str:
         f"            for (int j = 0; j < {n_x}; ++j) xt[j][l] = row[j];",
         "        }",
         *body,
+        *(["        if (lazy) {  /* the outputs computed on request, after the others */",
+           *["    " + line for line in later], "        }"] if later else []),
         "        if (bad) {  /* 1 where some output is infinite or NaN: v * 0 is NaN there, else",
-        "                       0, and a sum of them NaN when one is (four sums: one add each) */",
+        "                       0, and a sum of them NaN when one is (four sums: one add each);",
+        "                       the outputs computed on request come last */",
         "            vd z0 = v_splat(0.0), z1 = z0, z2 = z0, z3 = z0;",
-        "            int k = 0;",
-        f"            for (; k + 4 <= {sum(sizes)}; k += 4) {{",
+        f"            int k = 0, end = lazy ? {sum(sizes)} : {n_core};",
+        "            for (; k + 4 <= end; k += 4) {",
         "                z0 += *(const vd *)yt[k] * 0.0;",
         "                z1 += *(const vd *)yt[k + 1] * 0.0;",
         "                z2 += *(const vd *)yt[k + 2] * 0.0;",
         "                z3 += *(const vd *)yt[k + 3] * 0.0;",
         "            }",
-        f"            for (; k < {sum(sizes)}; ++k) z0 += *(const vd *)yt[k] * 0.0;",
+        "            for (; k < end; ++k) z0 += *(const vd *)yt[k] * 0.0;",
         "            vd z = (z0 + z1) + (z2 + z3);",
         "            for (int l = 0; l < m; ++l) bad[s0 + l] = z[l] != z[l];",
         "        }",
         "        /* outputs: one loop, rows of each step written whole */",
-        f"        for (int j = 0, b = 0; j < {len(sizes)}; b += size[j], ++j) {{",
+        f"        for (int j = 0; j < {len(sizes)}; ++j) {{",
+        "            int b = ybase[j];",
         "            if (!out[j]) continue;",
         "#ifdef VSTORE",
         "            if (m == GSFRIC_LANES && vec[j]) {",
@@ -485,6 +557,8 @@ def batch_source(f, prefix: str) -> str:
     return "\n".join(lines)
 
 
-def batch_file(functions) -> str:
-    """One C file with a ``_batch`` function for each CasADi function."""
-    return _header() + "\n" + "\n".join(batch_source(f, f.name()) for f in functions)
+def batch_file(functions, on_request=()) -> str:
+    """One C file with a ``_batch`` function for each CasADi function (``on_request``: see
+    ``batch_source``)."""
+    return _header() + "\n" + "\n".join(batch_source(f, f.name(), on_request)
+                                        for f in functions)
