@@ -494,8 +494,8 @@ def batch_source(f, prefix: str, on_request=()) -> str:
         f"    static const int size[{len(sizes)}] = {{{', '.join(map(str, sizes))}}};",
         f"    static const int ybase[{len(sizes)}] = "
         f"{{{', '.join(str(base[j]) for j in range(len(sizes)))}}};",
-        "    int lazy = " + (" || ".join(f"out[{j}] != 0" for j in sorted(lazy_out)) or "0")
-        + ";  /* an output computed on request is asked for */",
+        *(["    int lazy = " + " || ".join(f"out[{j}] != 0" for j in sorted(lazy_out))
+           + ";  /* an output computed on request is asked for */"] if lazy_out else []),
         f"    double xt[{n_x}][GSFRIC_LANES] __attribute__((aligned(8 * GSFRIC_LANES)));",
         f"    double yt[{sum(sizes)}][GSFRIC_LANES] __attribute__((aligned(8 * GSFRIC_LANES)));",
         "    int stream = n >= STREAM_STEPS;",
@@ -514,12 +514,12 @@ def batch_source(f, prefix: str, on_request=()) -> str:
         "        }",
         *body,
         *(["        if (lazy) {  /* the outputs computed on request, after the others */",
-           *["    " + line for line in later], "        }"] if later else []),
+           *["    " + line for line in later], "        }"] if lazy_out else []),
         "        if (bad) {  /* 1 where some output is infinite or NaN: v * 0 is NaN there, else",
-        "                       0, and a sum of them NaN when one is (four sums: one add each);",
-        "                       the outputs computed on request come last */",
+        "                       0, and a sum of them NaN when one is (four sums: one add each;",
+        "                       the outputs computed on request come last) */",
         "            vd z0 = v_splat(0.0), z1 = z0, z2 = z0, z3 = z0;",
-        f"            int k = 0, end = lazy ? {sum(sizes)} : {n_core};",
+        f"            int k = 0, end = {f'lazy ? {sum(sizes)} : {n_core}' if lazy_out else n_core};",
         "            for (; k + 4 <= end; k += 4) {",
         "                z0 += *(const vd *)yt[k] * 0.0;",
         "                z1 += *(const vd *)yt[k + 1] * 0.0;",

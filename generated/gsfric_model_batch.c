@@ -14126,8 +14126,8 @@ void gsfric_model_eval_batch(const double **in, const long long *in_stride,
             *(vd *)yt[312] = c12438;
         }
         if (bad) {  /* 1 where some output is infinite or NaN: v * 0 is NaN there, else
-                       0, and a sum of them NaN when one is (four sums: one add each);
-                       the outputs computed on request come last */
+                       0, and a sum of them NaN when one is (four sums: one add each;
+                       the outputs computed on request come last) */
             vd z0 = v_splat(0.0), z1 = z0, z2 = z0, z3 = z0;
             int k = 0, end = lazy ? 313 : 235;
             for (; k + 4 <= end; k += 4) {
@@ -26759,8 +26759,8 @@ void gsfric_model_eval_coupled_batch(const double **in, const long long *in_stri
             *(vd *)yt[312] = c11015;
         }
         if (bad) {  /* 1 where some output is infinite or NaN: v * 0 is NaN there, else
-                       0, and a sum of them NaN when one is (four sums: one add each);
-                       the outputs computed on request come last */
+                       0, and a sum of them NaN when one is (four sums: one add each;
+                       the outputs computed on request come last) */
             vd z0 = v_splat(0.0), z1 = z0, z2 = z0, z3 = z0;
             int k = 0, end = lazy ? 313 : 235;
             for (; k + 4 <= end; k += 4) {
@@ -26993,7 +26993,6 @@ void gsfric_model_actuator_coupled_batch(const double **in, const long long *in_
     vd w0; vd w1; vd w2; vd w3; vd w4; vd w5; vd w6; vd w7; vd w8; vd w10; vd w11; vd w12; vd w13; vd w14; vd w15; vd w16; vd w17; vd w18; vd w19; vd w20; vd w21; vd w22; vd w23; vd w24; vd w25; vd w26; vd w27; vd w28; vd w29; vd w30; vd w31; vd w32; vd w33; vd w34; vd w35; vd w36; vd w37; vd w38; vd w39; vd w40; vd w41; vd w42; vd w43; vd w44; vd w45; vd w46; vd w47; vd w48; vd w49; vd w50; vd w51; vd w52; vd w53; vd w54; vd w55; vd w56; vd w57; vd w58; vd w59; vd w60; vd w61; vd w62; vd w63; vd w64; vd w65; vd w66; vd w67; vd w68; vd w69; vd w70; vd w71; vd w72; vd w73; vd w74; vd w75; vd w76; vd w77; vd w78; vd w79; vd w80; vd w81; vd w82; vd w83; vd w84; vd w85; vd w86; vd w87; vd w88; vd w89; vd w90; vd w91; vd w92; vd w93; vd w94; vd w95; vd w96; vd w97; vd w98; vd w99; vd w100; vd w101; vd w102; vd w103; vd w104; vd w105; vd w106; vd w107; vd w108; vd w109; vd w110; vd w111; vd w112; vd w113; vd w114; vd w115; vd w116; vd w117; vd w118; vd w119; vd w120; vd w121; vd w122; vd w123; vd w124; vd w125; vd w126; vd w127; vd w128; vd w129; vd w130; vd w131; vd w132; vd w133; vd w134; vd w135; vd w136; vd w137; vd w138; vd w139; vd w140; vd w141; vd w142; vd w143; vd w144; vd w145; vd w146; vd w147; vd w148; vd w149; vd w150; vd w151; vd w152; vd w153; vd w154; vd w155; vd w156; vd w157; vd w158; vd w159; vd w160; vd w161; vd w162; vd w163; vd w164; vd w165; vd w166; vd w167; vd w168; vd w169; vd w170; vd w171; vd w172; vd w173; vd w174; vd w175; vd w176; vd w177; vd w178; vd w179; vd w180; vd w181; vd w182; vd w183; vd w184; vd w185; vd w186; vd w187; vd w188; vd w189; vd w190; vd w191; vd w192; vd w193; vd w194; vd w195; vd w196; vd w197; vd w198; vd w199; vd w200; vd w201; vd w202; vd w203; vd w204; vd w205; vd w206; vd w207; vd w208; vd w209; vd w210; vd w211; vd w212; vd w213; vd w214; vd w215; vd w216; vd w217; vd w218; vd w219; vd w220; vd w221; vd w222; vd w223; vd w224; vd w225; vd w226; vd w227; vd w228; vd w229; vd w230; vd w231; vd w232; vd w233; vd w234; vd w235; vd w236; vd w237; vd w238; vd w239; vd w240; vd w241; vd w242; vd w243; vd w244; vd w245; vd w246; vd w247; vd w248; vd w249; vd w250; vd w251; vd w252; vd w253; vd w254; vd w255; vd w256; vd w257; vd w258; vd w259; vd w260; vd w261; vd w262; vd w263; vd w264; vd w265; vd w266; vd w267; vd w268; vd w269; vd w270; vd w271; vd w272; vd w273; vd w274; vd w275; vd w276; vd w277; vd w278; vd w279; vd w280; vd w281; vd w282; vd w283; vd w284; vd w285; vd w286; vd w287; vd w288; vd w289; vd w290; vd w291; vd w292; vd w293; vd w294; vd w295; vd w296; vd w297; vd w298; vd w299; vd w300; vd w301; vd w302; vd w303; vd w304; vd w305; vd w306; vd w307; vd w308; vd w309; vd w310; vd w311; vd w312; vd w313; vd w314; vd w315; vd w316; vd w317; vd w318; vd w319; vd w320; vd w321; vd w322; vd w323; vd w324; vd w325; vd w326; vd w327; vd w328; vd w329; vd w330; vd w331; vd w332; vd w333; vd w334; vd w335; vd w336; vd w337; vd w338; vd w339; vd w340; vd w341; vd w342; vd w343; vd w344; vd w345; vd w346; vd w347; vd w348; vd w349; vd w350; vd w351; vd w352; vd w353; vd w354; vd w355; vd w356; vd w357; vd w358; vd w359; vd w360; vd w361; vd w362; vd w363; vd w364; vd w365; vd w366; vd w367; vd w368; vd w369; vd w370; vd w371; vd w372; vd w373; vd w374; vd w375; vd w376; vd w377; vd w378; vd w379; vd w380; vd w381; vd w382; vd w383; vd w384; vd w385; vd w386; vd w387; vd w388; vd w389; vd w390; vd w391; vd w392; vd w393; vd w394; vd w395; vd w396; vd w397; vd w398; vd w399; vd w400; vd w401; vd w402; vd w403; vd w404; vd w405; vd w406; vd w407; vd w408; vd w409; vd w410; vd w411; vd w412; vd w413; vd w414; vd w415; vd w416; vd w417; vd w418; vd w419; vd w420; vd w421; vd w422; vd w423; vd w424; vd w425; vd w426; vd w427; vd w428; vd w429; vd w430; vd w431; vd w432; vd w433; vd w434; vd w435; vd w436; vd w437; vd w438; vd w439; vd w440; vd w441; vd w442; vd w443; vd w444; vd w445; vd w446; vd w447; vd w448; vd w449; vd w450; vd w451; vd w452; vd w453; vd w454; vd w455; vd w456; vd w457; vd w458; vd w459; vd w460; vd w461; vd w462; vd w463; vd w464; vd w465; vd w466; vd w467; vd w468; vd w469; vd w470; vd w471; vd w472; vd w473; vd w474; vd w475; vd w476; vd w477; vd w478; vd w479; vd w480; vd w481; vd w482; vd w483; vd w484; vd w485;
     static const int size[1] = {6};
     static const int ybase[1] = {0};
-    int lazy = 0;  /* an output computed on request is asked for */
     double xt[24][GSFRIC_LANES] __attribute__((aligned(8 * GSFRIC_LANES)));
     double yt[6][GSFRIC_LANES] __attribute__((aligned(8 * GSFRIC_LANES)));
     int stream = n >= STREAM_STEPS;
@@ -37861,10 +37860,10 @@ void gsfric_model_actuator_coupled_batch(const double **in, const long long *in_
         w177 = w177 + w292;
         *(vd *)yt[5] = w177;
         if (bad) {  /* 1 where some output is infinite or NaN: v * 0 is NaN there, else
-                       0, and a sum of them NaN when one is (four sums: one add each);
-                       the outputs computed on request come last */
+                       0, and a sum of them NaN when one is (four sums: one add each;
+                       the outputs computed on request come last) */
             vd z0 = v_splat(0.0), z1 = z0, z2 = z0, z3 = z0;
-            int k = 0, end = lazy ? 6 : 6;
+            int k = 0, end = 6;
             for (; k + 4 <= end; k += 4) {
                 z0 += *(const vd *)yt[k] * 0.0;
                 z1 += *(const vd *)yt[k + 1] * 0.0;
@@ -38152,7 +38151,6 @@ void gsfric_model_envelope_coupled_batch(const double **in, const long long *in_
     vd w0; vd w1; vd w2; vd w3; vd w5; vd w6; vd w8; vd w10; vd w11; vd w12; vd w13; vd w14; vd w15; vd w16; vd w17; vd w18; vd w19; vd w20; vd w21; vd w22; vd w23; vd w24; vd w25; vd w26; vd w27; vd w28; vd w29; vd w30; vd w31; vd w32; vd w33; vd w34; vd w35; vd w36; vd w37; vd w38; vd w39; vd w40; vd w41; vd w42; vd w43; vd w44; vd w45; vd w46; vd w47; vd w48; vd w49; vd w50; vd w51; vd w52; vd w53; vd w54; vd w55; vd w56; vd w57; vd w58; vd w59; vd w60; vd w61; vd w62; vd w63; vd w64; vd w65; vd w66; vd w67; vd w68; vd w69; vd w70; vd w71; vd w72; vd w73; vd w74; vd w75; vd w76; vd w77; vd w78; vd w79; vd w80; vd w81; vd w82; vd w83; vd w84; vd w85; vd w86; vd w87; vd w88; vd w89; vd w90; vd w91; vd w92; vd w93; vd w94; vd w95; vd w96; vd w97; vd w98; vd w99; vd w100; vd w101; vd w102; vd w103; vd w104; vd w105; vd w106; vd w107; vd w108; vd w109; vd w110; vd w111; vd w112; vd w113; vd w114; vd w115; vd w116; vd w118; vd w119; vd w120; vd w121; vd w122; vd w123; vd w124; vd w125; vd w126; vd w127; vd w128; vd w129; vd w130; vd w131; vd w132; vd w133; vd w134; vd w135; vd w136; vd w137; vd w138; vd w139; vd w140; vd w141; vd w142; vd w143; vd w144; vd w145; vd w146; vd w147; vd w148; vd w149; vd w150; vd w151; vd w152; vd w153; vd w154; vd w155; vd w156; vd w157; vd w158; vd w159; vd w160; vd w161; vd w162; vd w163; vd w164; vd w165; vd w166; vd w167; vd w168; vd w169; vd w170; vd w171; vd w172; vd w173; vd w174; vd w175; vd w176; vd w177; vd w178; vd w179; vd w180; vd w181; vd w182; vd w183; vd w184; vd w185; vd w186; vd w187; vd w188; vd w189; vd w190; vd w191; vd w192; vd w193; vd w194; vd w195; vd w196; vd w197; vd w198; vd w199; vd w200; vd w201; vd w202; vd w203; vd w204; vd w205; vd w206; vd w207; vd w208; vd w209; vd w210; vd w211; vd w212; vd w213; vd w214; vd w215; vd w216; vd w217; vd w218; vd w219; vd w220; vd w221; vd w222; vd w223; vd w224; vd w225; vd w226; vd w227; vd w228; vd w229; vd w230; vd w231; vd w232; vd w233; vd w234; vd w235; vd w236; vd w237; vd w238; vd w239; vd w240; vd w241; vd w242; vd w243; vd w244; vd w245; vd w246; vd w247; vd w248; vd w249; vd w250; vd w251; vd w252; vd w253; vd w254; vd w255; vd w256; vd w257; vd w258; vd w259; vd w260; vd w261; vd w262; vd w263; vd w264; vd w265; vd w266; vd w267; vd w268; vd w269; vd w270; vd w271; vd w272; vd w273; vd w274; vd w275; vd w276; vd w277; vd w278; vd w279; vd w280; vd w281; vd w282; vd w283; vd w284; vd w285; vd w286; vd w287; vd w288; vd w289; vd w290; vd w291; vd w292; vd w293; vd w294; vd w295; vd w296; vd w297; vd w298; vd w299; vd w300; vd w301; vd w302; vd w303; vd w304; vd w305; vd w306; vd w307; vd w308; vd w309; vd w310; vd w311; vd w312; vd w313; vd w314; vd w315; vd w316; vd w317; vd w318; vd w319; vd w320; vd w321; vd w322; vd w323; vd w324; vd w325; vd w326; vd w327; vd w328; vd w329; vd w330; vd w331; vd w332; vd w333; vd w334; vd w335; vd w336; vd w337; vd w338; vd w339; vd w340; vd w341; vd w342; vd w343; vd w344; vd w345; vd w346; vd w347; vd w348; vd w349; vd w350; vd w351; vd w352; vd w353; vd w354; vd w355; vd w356; vd w357; vd w358; vd w359; vd w360; vd w361; vd w362; vd w363; vd w364; vd w365; vd w366; vd w367; vd w368; vd w369; vd w370; vd w371; vd w372; vd w373; vd w374; vd w375; vd w376; vd w377; vd w378; vd w379; vd w380; vd w381; vd w382; vd w383; vd w384; vd w385; vd w386; vd w387; vd w388; vd w389; vd w390; vd w391; vd w392; vd w393; vd w394; vd w395; vd w396; vd w397; vd w398; vd w399; vd w400; vd w401; vd w402; vd w403; vd w404; vd w405; vd w406; vd w407; vd w408; vd w409; vd w410; vd w411; vd w412; vd w413; vd w414; vd w415; vd w416; vd w417; vd w418; vd w419; vd w420; vd w421; vd w422; vd w423; vd w424; vd w425; vd w426; vd w427; vd w428; vd w429; vd w430; vd w431; vd w432; vd w433; vd w434; vd w435; vd w436; vd w437; vd w438; vd w439; vd w440; vd w441; vd w442; vd w443; vd w444; vd w445; vd w446; vd w447; vd w448; vd w449; vd w450; vd w451; vd w452; vd w453; vd w454; vd w455; vd w456; vd w457; vd w458; vd w459; vd w460; vd w461; vd w462; vd w463; vd w464; vd w465; vd w466; vd w467; vd w468; vd w469; vd w470; vd w471; vd w472; vd w473; vd w474; vd w475; vd w476; vd w477; vd w478; vd w479; vd w480; vd w481; vd w482; vd w483; vd w484; vd w485; vd w486; vd w487; vd w488; vd w489; vd w490; vd w491; vd w492; vd w493; vd w494; vd w495; vd w496; vd w497; vd w498; vd w499; vd w500; vd w501; vd w502; vd w503; vd w504; vd w505; vd w506; vd w507; vd w508; vd w509; vd w510; vd w511; vd w512; vd w513; vd w514; vd w515; vd w516; vd w517; vd w518; vd w519; vd w520; vd w521; vd w522; vd w523; vd w524; vd w525; vd w526; vd w527; vd w528; vd w529; vd w530; vd w531; vd w532; vd w533; vd w534; vd w535; vd w536; vd w537; vd w538; vd w539; vd w540; vd w541; vd w542; vd w543; vd w544; vd w545; vd w546; vd w547; vd w548; vd w549; vd w550; vd w551; vd w552; vd w553; vd w554; vd w555; vd w556; vd w557; vd w558; vd w559; vd w560; vd w561; vd w562; vd w563; vd w564; vd w565;
     static const int size[6] = {78, 6, 6, 1, 6, 6};
     static const int ybase[6] = {0, 78, 84, 90, 91, 97};
-    int lazy = 0;  /* an output computed on request is asked for */
     double xt[24][GSFRIC_LANES] __attribute__((aligned(8 * GSFRIC_LANES)));
     double yt[103][GSFRIC_LANES] __attribute__((aligned(8 * GSFRIC_LANES)));
     int stream = n >= STREAM_STEPS;
@@ -49592,10 +49590,10 @@ void gsfric_model_envelope_coupled_batch(const double **in, const long long *in_
         *(vd *)yt[101] = w346;
         *(vd *)yt[102] = w1;
         if (bad) {  /* 1 where some output is infinite or NaN: v * 0 is NaN there, else
-                       0, and a sum of them NaN when one is (four sums: one add each);
-                       the outputs computed on request come last */
+                       0, and a sum of them NaN when one is (four sums: one add each;
+                       the outputs computed on request come last) */
             vd z0 = v_splat(0.0), z1 = z0, z2 = z0, z3 = z0;
-            int k = 0, end = lazy ? 103 : 103;
+            int k = 0, end = 103;
             for (; k + 4 <= end; k += 4) {
                 z0 += *(const vd *)yt[k] * 0.0;
                 z1 += *(const vd *)yt[k + 1] * 0.0;
@@ -56387,8 +56385,8 @@ void gsfric_model_eval_posthoc_batch(const double **in, const long long *in_stri
             *(vd *)yt[312] = l6585;
         }
         if (bad) {  /* 1 where some output is infinite or NaN: v * 0 is NaN there, else
-                       0, and a sum of them NaN when one is (four sums: one add each);
-                       the outputs computed on request come last */
+                       0, and a sum of them NaN when one is (four sums: one add each;
+                       the outputs computed on request come last) */
             vd z0 = v_splat(0.0), z1 = z0, z2 = z0, z3 = z0;
             int k = 0, end = lazy ? 313 : 235;
             for (; k + 4 <= end; k += 4) {
@@ -56606,7 +56604,6 @@ void gsfric_model_actuator_posthoc_batch(const double **in, const long long *in_
     vd w0; vd w1; vd w2; vd w3; vd w4; vd w5; vd w6; vd w7; vd w8; vd w9; vd w10; vd w11; vd w12; vd w13; vd w14; vd w15; vd w16; vd w17; vd w18; vd w19; vd w20; vd w21; vd w22; vd w23; vd w24; vd w25; vd w26; vd w27; vd w28; vd w29; vd w30; vd w31; vd w32; vd w33; vd w34; vd w35; vd w36; vd w37; vd w38; vd w39; vd w40; vd w41; vd w42; vd w43; vd w44; vd w45; vd w46; vd w47; vd w48; vd w49; vd w50; vd w51; vd w52; vd w53; vd w54; vd w55; vd w56; vd w57; vd w58; vd w59; vd w60; vd w61; vd w62; vd w63; vd w64; vd w65; vd w66; vd w67; vd w68; vd w69; vd w70; vd w71; vd w72; vd w73; vd w74; vd w75; vd w76; vd w77; vd w78; vd w79; vd w80; vd w81; vd w82; vd w83; vd w84; vd w85; vd w86; vd w87; vd w88; vd w89; vd w90; vd w91; vd w92; vd w93; vd w94; vd w95; vd w96; vd w97; vd w98; vd w99; vd w100; vd w101; vd w102; vd w103; vd w104; vd w105; vd w106; vd w107; vd w108; vd w109; vd w110; vd w111; vd w112; vd w113; vd w114; vd w115; vd w116; vd w117; vd w118; vd w119; vd w120; vd w121; vd w122; vd w123; vd w124; vd w125; vd w126; vd w127; vd w128; vd w129; vd w130; vd w131; vd w132; vd w133; vd w134; vd w135; vd w136; vd w137; vd w138; vd w139; vd w140; vd w141; vd w142; vd w143; vd w144; vd w145; vd w146; vd w147; vd w148; vd w149; vd w150; vd w151; vd w152; vd w153; vd w154; vd w155; vd w156; vd w157; vd w158; vd w159; vd w160; vd w161; vd w162; vd w163; vd w164; vd w165; vd w166; vd w167; vd w168; vd w169; vd w170; vd w171; vd w172; vd w173; vd w174; vd w175; vd w176; vd w177; vd w178; vd w179; vd w180; vd w181; vd w182; vd w183; vd w184; vd w185; vd w186; vd w187; vd w188; vd w189; vd w190; vd w191; vd w192; vd w193; vd w194; vd w195; vd w196; vd w197; vd w198; vd w199; vd w200; vd w201; vd w202; vd w203; vd w204; vd w205; vd w206; vd w207; vd w208; vd w209; vd w210; vd w211; vd w212; vd w213; vd w214; vd w215; vd w216; vd w217; vd w218; vd w219; vd w220; vd w221; vd w222; vd w223; vd w224; vd w225; vd w226; vd w227; vd w228; vd w229; vd w230; vd w231; vd w232; vd w233; vd w234; vd w235; vd w236; vd w237; vd w238; vd w239; vd w240; vd w241; vd w242; vd w243; vd w244; vd w245; vd w246; vd w247; vd w248; vd w249; vd w250; vd w251; vd w252; vd w253; vd w254; vd w255; vd w256; vd w257; vd w258; vd w259; vd w260; vd w261; vd w262; vd w263; vd w264; vd w265; vd w266; vd w267; vd w268; vd w269; vd w271; vd w272; vd w273;
     static const int size[1] = {6};
     static const int ybase[1] = {0};
-    int lazy = 0;  /* an output computed on request is asked for */
     double xt[24][GSFRIC_LANES] __attribute__((aligned(8 * GSFRIC_LANES)));
     double yt[6][GSFRIC_LANES] __attribute__((aligned(8 * GSFRIC_LANES)));
     int stream = n >= STREAM_STEPS;
@@ -61492,10 +61489,10 @@ void gsfric_model_actuator_posthoc_batch(const double **in, const long long *in_
         w204 = w204 + w258;
         *(vd *)yt[5] = w204;
         if (bad) {  /* 1 where some output is infinite or NaN: v * 0 is NaN there, else
-                       0, and a sum of them NaN when one is (four sums: one add each);
-                       the outputs computed on request come last */
+                       0, and a sum of them NaN when one is (four sums: one add each;
+                       the outputs computed on request come last) */
             vd z0 = v_splat(0.0), z1 = z0, z2 = z0, z3 = z0;
-            int k = 0, end = lazy ? 6 : 6;
+            int k = 0, end = 6;
             for (; k + 4 <= end; k += 4) {
                 z0 += *(const vd *)yt[k] * 0.0;
                 z1 += *(const vd *)yt[k + 1] * 0.0;
@@ -61768,7 +61765,6 @@ void gsfric_model_envelope_posthoc_batch(const double **in, const long long *in_
     vd w0; vd w1; vd w2; vd w3; vd w5; vd w6; vd w8; vd w10; vd w11; vd w12; vd w13; vd w14; vd w15; vd w16; vd w17; vd w18; vd w19; vd w20; vd w21; vd w22; vd w23; vd w24; vd w25; vd w26; vd w27; vd w28; vd w29; vd w30; vd w31; vd w32; vd w33; vd w34; vd w35; vd w36; vd w37; vd w38; vd w39; vd w40; vd w41; vd w42; vd w43; vd w44; vd w45; vd w46; vd w47; vd w48; vd w49; vd w50; vd w51; vd w52; vd w53; vd w54; vd w55; vd w56; vd w57; vd w58; vd w59; vd w60; vd w61; vd w62; vd w63; vd w64; vd w65; vd w66; vd w67; vd w68; vd w69; vd w70; vd w71; vd w72; vd w73; vd w74; vd w75; vd w76; vd w77; vd w78; vd w79; vd w80; vd w81; vd w82; vd w83; vd w84; vd w85; vd w86; vd w87; vd w88; vd w89; vd w90; vd w91; vd w92; vd w93; vd w94; vd w95; vd w96; vd w97; vd w98; vd w99; vd w100; vd w101; vd w102; vd w103; vd w104; vd w105; vd w106; vd w107; vd w109; vd w110; vd w111; vd w112; vd w113; vd w114; vd w115; vd w116; vd w117; vd w118; vd w119; vd w120; vd w121; vd w122; vd w123; vd w124; vd w125; vd w126; vd w127; vd w128; vd w129; vd w130; vd w131; vd w132; vd w133; vd w134; vd w135; vd w136; vd w137; vd w138; vd w139; vd w140; vd w141; vd w142; vd w143; vd w144; vd w145; vd w146; vd w147; vd w148; vd w149; vd w150; vd w151; vd w152; vd w153; vd w154; vd w155; vd w156; vd w157; vd w158; vd w159; vd w160; vd w161; vd w162; vd w163; vd w164; vd w165; vd w166; vd w167; vd w168; vd w169; vd w170; vd w171; vd w172; vd w173; vd w174; vd w175; vd w176; vd w177; vd w178; vd w179; vd w180; vd w181; vd w182; vd w183; vd w184; vd w185; vd w186; vd w187; vd w188; vd w189; vd w190; vd w191; vd w192; vd w193; vd w194; vd w195; vd w196; vd w197; vd w198; vd w199; vd w200; vd w201; vd w202; vd w203; vd w204; vd w205; vd w206; vd w207; vd w208; vd w209; vd w210; vd w211; vd w212; vd w213; vd w214; vd w215; vd w216; vd w217; vd w218; vd w219; vd w220; vd w221; vd w222; vd w223; vd w224; vd w225; vd w226; vd w227; vd w228; vd w229; vd w230; vd w231; vd w232; vd w233; vd w234; vd w235; vd w236; vd w237; vd w238; vd w239; vd w240; vd w241; vd w242; vd w243; vd w244; vd w245; vd w246; vd w247; vd w248; vd w249; vd w250; vd w251; vd w252; vd w253; vd w254; vd w255; vd w256; vd w257; vd w258; vd w259; vd w260; vd w261; vd w262; vd w263; vd w264; vd w265; vd w266; vd w267; vd w268; vd w269; vd w270; vd w271; vd w272; vd w273; vd w274; vd w275; vd w276; vd w277; vd w278; vd w279; vd w280; vd w281; vd w282; vd w283; vd w284; vd w285; vd w286; vd w287; vd w288; vd w289; vd w290; vd w291; vd w292; vd w293; vd w294; vd w295; vd w296; vd w297; vd w298; vd w299; vd w300; vd w301; vd w302; vd w303; vd w304; vd w305; vd w306; vd w307; vd w308; vd w309; vd w310; vd w311; vd w312; vd w313; vd w314; vd w315; vd w316; vd w317; vd w318; vd w319; vd w320; vd w321; vd w322; vd w323; vd w324; vd w325; vd w326; vd w327; vd w328; vd w329; vd w330;
     static const int size[6] = {78, 6, 6, 1, 6, 6};
     static const int ybase[6] = {0, 78, 84, 90, 91, 97};
-    int lazy = 0;  /* an output computed on request is asked for */
     double xt[24][GSFRIC_LANES] __attribute__((aligned(8 * GSFRIC_LANES)));
     double yt[103][GSFRIC_LANES] __attribute__((aligned(8 * GSFRIC_LANES)));
     int stream = n >= STREAM_STEPS;
@@ -67142,10 +67138,10 @@ void gsfric_model_envelope_posthoc_batch(const double **in, const long long *in_
         *(vd *)yt[101] = w318;
         *(vd *)yt[102] = w322;
         if (bad) {  /* 1 where some output is infinite or NaN: v * 0 is NaN there, else
-                       0, and a sum of them NaN when one is (four sums: one add each);
-                       the outputs computed on request come last */
+                       0, and a sum of them NaN when one is (four sums: one add each;
+                       the outputs computed on request come last) */
             vd z0 = v_splat(0.0), z1 = z0, z2 = z0, z3 = z0;
-            int k = 0, end = lazy ? 103 : 103;
+            int k = 0, end = 103;
             for (; k + 4 <= end; k += 4) {
                 z0 += *(const vd *)yt[k] * 0.0;
                 z1 += *(const vd *)yt[k + 1] * 0.0;
