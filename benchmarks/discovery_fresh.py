@@ -408,8 +408,7 @@ def one_case(case, model, keep=None):
         scale = 1.0 + e
     else:
         F, reached = outside_forces(rng, name, platform, motion, size * sigma, t)
-        # the added force as drawn on the true motion (its value on the recorded one differs
-        # by the motion's error only through the model part)
+        # the added force as drawn (a function of the true motion and time)
         F_true_extra = F - read_forces(platform, motion)
     e = force_noise(rng, noise_kind, n, rate, sigma)
     rec_pos = position * [scale, scale, 1.0] + rng.normal(0, pose_noise, position.shape)

@@ -178,9 +178,10 @@ class Design:
         A candidate is one effect with one value of its grid parameters: its variants side by
         side are no model of the catalog (the stroke references' hinges, both signs, add up to
         any friction law along the stroke; the delay's secants to a filter of the force), and
-        what only such a sum fits is structure the candidates do not explain. Fitted with all
-        variants, the largest model behind the rounds' noise model changed with the number of
-        grid points tried and took that structure out of what the noise model sees."""
+        what only such a sum fits is structure the candidates do not explain. With all
+        variants, the largest model behind the rounds' noise model would change with the
+        number of grid points tried and take that structure out of what the noise model
+        sees. Returns the design's column indices, the refit's first."""
         cols = list(self.refit)
         for sets in self.variants.values():
             best, chosen = np.inf, sets[0]
