@@ -18,6 +18,7 @@ from itertools import product
 
 import numpy as np
 
+from gsfric.discovery import statistics as st
 from gsfric.discovery.candidates import (CANDIDATE_NAMES, CANDIDATES, REFIT, STRIBECK_QUANTILE,
                                          Candidate, stribeck_velocity_bound)
 from gsfric.discovery.model import BASE_PARAMETERS, ParametricModel
@@ -168,6 +169,31 @@ class Design:
                 self.Xtr += np.einsum("ik,i->k", X, r)
         r = self.r.reshape(-1)
         self.rtr = float(r @ r)
+
+    def largest_model(self) -> list[int]:
+        """Columns of the largest model: the refitted parameters' and each candidate's once,
+        with the variant (grid value, sign, secant step) that fits the residual best together
+        with the refit (plain least squares, unbounded).
+
+        A candidate is one effect with one value of its grid parameters: its variants side by
+        side are no model of the catalog (the stroke references' hinges, both signs, add up to
+        any friction law along the stroke; the delay's secants to a filter of the force), and
+        what only such a sum fits is structure the candidates do not explain. With all
+        variants, the largest model behind the rounds' noise model would change with the
+        number of grid points tried and take that structure out of what the noise model
+        sees. Returns the design's column indices, the refit's first."""
+        cols = list(self.refit)
+        for sets in self.variants.values():
+            best, chosen = np.inf, sets[0]
+            for v in sets:
+                c = self.refit + v
+                A, b = self.XtX[np.ix_(c, c)], self.Xtr[c]
+                t = st.solve(A, b)
+                sse = self.rtr - 2 * t @ b + t @ A @ t
+                if sse < best:
+                    best, chosen = sse, v
+            cols += [c for c in chosen if c not in cols]
+        return cols
 
 
 class Problem:

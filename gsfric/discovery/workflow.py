@@ -449,11 +449,14 @@ def _largest_model_whitener(problem: Problem, residual: np.ndarray, J: np.ndarra
 
 
 def _noise_whitener(design, problem: Problem) -> st.Whitener:
-    """The AR noise model of a round, fitted to the residual of the largest model (every
-    candidate's columns and the refit at once, least squares): what the candidates could
-    explain does not inflate the noise model, so a step-like effect (Coulomb friction) is not
-    whitened away before it is tested, and the noise is not under-modelled either."""
-    return _whitener_beyond(problem, design.r, design.X, design.XtX, design.Xtr)
+    """The AR noise model of a round, fitted to the residual of the largest model (the refit
+    and every candidate at once, each with one variant: ``Design.largest_model``; least
+    squares): what the candidates could explain does not inflate the noise model, so a
+    step-like effect (Coulomb friction) is not whitened away before it is tested, and the
+    noise is not under-modelled either."""
+    cols = design.largest_model()
+    return _whitener_beyond(problem, design.r, design.X[:, :, cols],
+                            design.XtX[np.ix_(cols, cols)], design.Xtr[cols])
 
 
 def _whitener_beyond(problem: Problem, r: np.ndarray, X: np.ndarray, XtX: np.ndarray,
