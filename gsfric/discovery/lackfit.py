@@ -766,3 +766,70 @@ def reversal_structure(residual: np.ndarray, direction: np.ndarray, travel: np.n
 REVERSAL_MEANING = ("a friction-like force that depends on the travel since the last reversal, "
                     "not on the speed: play in a joint, a pre-sliding (Dahl-like) friction, or "
                     "a friction that builds up after each reversal")
+
+
+# -- parameter stability in time: what drifts over the record ----------------------------------
+
+
+DRIFT_SIGNALS = ("sgn(v) drift", "F drift")
+"""The columns of ``drift_basis``: the friction level and the load cells' gain changing
+linearly over the record."""
+
+DRIFT_MEANING = ("a friction or a gain that changes over the record (the friction-like or the "
+                 "force-proportional part of the residual grows or shrinks with time): a seal "
+                 "or lubricant warming up, a thermal drift of the load cells' gain")
+
+
+def drift_basis(t: np.ndarray, F: np.ndarray, speed: np.ndarray, sliding: np.ndarray
+                ) -> np.ndarray:
+    """The columns (M, 6, 2) of ``DRIFT_SIGNALS``: ``sgn(v) tau`` on the sliding pairs and
+    ``F tau``, with ``tau`` the time mapped linearly onto [-1, 1] over the record (t (M,) s,
+    F (M, 6) N, speed (M, 6) m/s); each scaled to unit RMS over all legs (one coefficient for
+    the six legs, as the basis's signals)."""
+    t = np.asarray(t, float)
+    tau = (2 * (t - t[0]) / max(t[-1] - t[0], 1e-300) - 1)[:, None]
+    X = np.stack([np.sign(speed) * sliding * tau, F * tau], axis=2)
+    for j in range(X.shape[2]):
+        scale = float(np.sqrt(np.mean(X[:, :, j] ** 2)))
+        X[:, :, j] /= scale if scale > 0 else 1.0
+    return X
+
+
+def parameter_drift(residual: np.ndarray, X: np.ndarray, valid: np.ndarray, *, alpha: float,
+                    min_gap: float, n_blocks: int, n_folds: int) -> dict:
+    """Are the friction level and the gain the same over the whole record? (a Chow-type test)
+
+    Every catalog effect and every refitted parameter is a constant of the record. An error
+    outside the catalog that a catalog term takes only on average (a Coulomb force that grows
+    as a seal warms up, whose mean the refitted Coulomb coefficient or a named friction takes)
+    leaves the difference between its value at each time and that mean: friction-shaped
+    (``sgn(v)``) or force-shaped (``F``), changing sign over the record. That residual is
+    tested against the parameters' first-order change in time (``drift_basis``: the friction
+    level and the gain, each varying linearly over the record, one coefficient for the six
+    legs; no catalog effect has such a column) by the rules of the generic basis (``test``):
+    prewhitened with the AR model of the residual left by these columns, F-test at ``alpha``,
+    a lower held-out error of the block cross-validation (contiguous folds: a drift fitted
+    on the other folds must predict the held-out stretch, which slow noise, wandering at
+    random, does not), and a gap of at least ``min_gap``.
+
+    Parameters
+    ----------
+    residual : ndarray, shape (M, 6)
+        Final residual per leg (weighted as the fit's), N.
+    X : ndarray, shape (M, 6, 2)
+        ``drift_basis``, weighted as the residual.
+    valid : ndarray of bool, shape (M, 6)
+        The pairs of the noise model (sliding pairs).
+
+    Returns
+    -------
+    dict
+        As ``test``: ``significant``, ``p_value``, ``gap``, ``cv_gain``, ``structure_rms`` (N),
+        ``per_leg_rms`` (N), ``signals`` (each column's share), ``fitted`` (M, 6).
+    """
+    k = X.shape[2]
+    flat = X.reshape(-1, k)
+    coef = st.solve(flat.T @ flat, flat.T @ residual.reshape(-1))
+    whitener = st.Whitener.fit(residual - X @ coef, valid=valid)
+    return test(residual, X, whitener, alpha=alpha, min_gap=min_gap, n_blocks=n_blocks,
+                n_folds=n_folds, min_fold_share=0.0, names=list(DRIFT_SIGNALS))
