@@ -53,6 +53,13 @@ of the travel since the last reversal, and their pulses sit right after each rev
 the speed is small. ``reversal_structure`` bins the residual, signed by the direction of
 travel, by that travel (``travel_since_reversal``) and asks, as ``state_structure`` does,
 whether the bin means of the other folds predict the held-out fold.
+
+Every catalog effect and every refitted parameter is one constant of the record. An error that
+a catalog term takes only on average (a Coulomb force growing as a seal warms up, whose mean a
+refitted Coulomb coefficient or a named friction takes) leaves its change over the record:
+friction-shaped and changing sign between the record's start and end. ``parameter_drift``
+tests the parameters' stability in time (a Chow-type test with a linear change): the friction
+level and the gain, each varying linearly over the record, by the rules of the basis.
 """
 
 from __future__ import annotations
