@@ -59,7 +59,7 @@ a catalog term takes only on average (a Coulomb force growing as a seal warms up
 refitted Coulomb coefficient or a named friction takes) leaves its change over the record:
 friction-shaped and changing sign between the record's start and end. ``parameter_drift``
 tests the parameters' stability in time (a Chow-type test with a linear change): the friction
-level and the gain, each varying linearly over the record, by the rules of the basis.
+level varying linearly over the record, by the rules of the basis.
 """
 
 from __future__ import annotations
@@ -778,24 +778,24 @@ REVERSAL_MEANING = ("a friction-like force that depends on the travel since the 
 # -- parameter stability in time: what drifts over the record ----------------------------------
 
 
-DRIFT_SIGNALS = ("sgn(v) drift", "F drift")
-"""The columns of ``drift_basis``: the friction level and the load cells' gain changing
-linearly over the record."""
+DRIFT_SIGNALS = ("sgn(v) drift",)
+"""The column of ``drift_basis``: the friction level changing linearly over the record."""
 
-DRIFT_MEANING = ("a friction or a gain that changes over the record (the friction-like or the "
-                 "force-proportional part of the residual grows or shrinks with time): a seal "
-                 "or lubricant warming up, a thermal drift of the load cells' gain")
+DRIFT_MEANING = ("a friction that changes over the record (the friction-like part of the "
+                 "residual grows or shrinks with time): a seal or lubricant warming up or "
+                 "wearing in")
 
 
-def drift_basis(t: np.ndarray, F: np.ndarray, speed: np.ndarray, sliding: np.ndarray
-                ) -> np.ndarray:
-    """The columns (M, 6, 2) of ``DRIFT_SIGNALS``: ``sgn(v) tau`` on the sliding pairs and
-    ``F tau``, with ``tau`` the time mapped linearly onto [-1, 1] over the record (t (M,) s,
-    F (M, 6) N, speed (M, 6) m/s); each scaled to unit RMS over all legs (one coefficient for
-    the six legs, as the basis's signals)."""
+def drift_basis(t: np.ndarray, speed: np.ndarray, sliding: np.ndarray) -> np.ndarray:
+    """The column (M, 6, 1) of ``DRIFT_SIGNALS``: ``sgn(v) tau`` on the sliding pairs, with
+    ``tau`` the time mapped linearly onto [-1, 1] over the record (t (M,) s, speed (M, 6)
+    m/s), scaled to unit RMS over all legs (one coefficient for the six legs, as the basis's
+    signals). A gain drifting with time (``F tau``) is not a column: on a creep under pink
+    noise it is a slow wave like the noise's own wander, and it made a correctly named
+    ``stroke_friction`` read unexplained."""
     t = np.asarray(t, float)
     tau = (2 * (t - t[0]) / max(t[-1] - t[0], 1e-300) - 1)[:, None]
-    X = np.stack([np.sign(speed) * sliding * tau, F * tau], axis=2)
+    X = (np.sign(speed) * sliding * tau)[:, :, None]
     for j in range(X.shape[2]):
         scale = float(np.sqrt(np.mean(X[:, :, j] ** 2)))
         X[:, :, j] /= scale if scale > 0 else 1.0
@@ -804,26 +804,25 @@ def drift_basis(t: np.ndarray, F: np.ndarray, speed: np.ndarray, sliding: np.nda
 
 def parameter_drift(residual: np.ndarray, X: np.ndarray, valid: np.ndarray, *, alpha: float,
                     min_gap: float, n_blocks: int, n_folds: int) -> dict:
-    """Are the friction level and the gain the same over the whole record? (a Chow-type test)
+    """Is the friction level the same over the whole record? (a Chow-type test)
 
     Every catalog effect and every refitted parameter is a constant of the record. An error
     outside the catalog that a catalog term takes only on average (a Coulomb force that grows
     as a seal warms up, whose mean the refitted Coulomb coefficient or a named friction takes)
     leaves the difference between its value at each time and that mean: friction-shaped
-    (``sgn(v)``) or force-shaped (``F``), changing sign over the record. That residual is
-    tested against the parameters' first-order change in time (``drift_basis``: the friction
-    level and the gain, each varying linearly over the record, one coefficient for the six
-    legs; no catalog effect has such a column) by the rules of the generic basis (``test``):
-    prewhitened with the AR model of the residual left by these columns, F-test at ``alpha``,
-    a lower held-out error of the block cross-validation (contiguous folds: a drift fitted
-    on the other folds must predict the held-out stretch, which slow noise, wandering at
-    random, does not), and a gap of at least ``min_gap``.
+    (``sgn(v)``), changing sign over the record. That residual is tested against the friction
+    level's first-order change in time (``drift_basis``: varying linearly over the record, one
+    coefficient for the six legs; no catalog effect has such a column) by the rules of the
+    generic basis (``test``): prewhitened with the AR model of the residual left by the
+    column, F-test at ``alpha``, a lower held-out error of the block cross-validation
+    (contiguous folds: a drift fitted on the other folds must predict the held-out stretch,
+    which slow noise, wandering at random, does not), and a gap of at least ``min_gap``.
 
     Parameters
     ----------
     residual : ndarray, shape (M, 6)
         Final residual per leg (weighted as the fit's), N.
-    X : ndarray, shape (M, 6, 2)
+    X : ndarray, shape (M, 6, 1)
         ``drift_basis``, weighted as the residual.
     valid : ndarray of bool, shape (M, 6)
         The pairs of the noise model (sliding pairs).
@@ -832,7 +831,7 @@ def parameter_drift(residual: np.ndarray, X: np.ndarray, valid: np.ndarray, *, a
     -------
     dict
         As ``test``: ``significant``, ``p_value``, ``gap``, ``cv_gain``, ``structure_rms`` (N),
-        ``per_leg_rms`` (N), ``signals`` (each column's share), ``fitted`` (M, 6).
+        ``per_leg_rms`` (N), ``signals``, ``fitted`` (M, 6).
     """
     k = X.shape[2]
     flat = X.reshape(-1, k)

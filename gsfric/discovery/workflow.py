@@ -491,7 +491,7 @@ def _lack_of_fit(problem: Problem, theta: np.ndarray, residual: np.ndarray,
                        min_fold_share=s.min_fold_share, names=names)
     X = flat = None
     drift = lackfit.parameter_drift(
-        residual, lackfit.drift_basis(t, F, speed, problem.sliding) * problem.weight[:, :, None],
+        residual, lackfit.drift_basis(t, speed, problem.sliding) * problem.weight[:, :, None],
         problem.sliding, alpha=s.alpha, min_gap=s.min_gap, n_blocks=s.n_blocks,
         n_folds=s.n_folds)
     D = problem.result.D[used]
