@@ -10,6 +10,7 @@ import pytest
 from scipy.signal import lfilter
 
 from gsfric.discovery import discover, lackfit
+from gsfric.discovery.report import report
 from gsfric.discovery.rest import poses_from_columns
 from gsfric.models import reference_platform
 from gsfric.synth import synthesize
@@ -97,3 +98,6 @@ def test_a_drifting_friction_is_not_explained(base, seed, phi):
     assert result.verdict == "unexplained_discrepancy"
     assert result.lack_of_fit["drift"]["significant"]
     assert result.lack_of_fit["main_signal"] in ("drifts over the record", "sgn(v)")
+    levels = [v for _, _, v in result.lack_of_fit["drift"]["levels"]]
+    assert levels[0] < 0 < levels[-1]       # less friction than the mean first, more last
+    assert "changes over the record" in report(result)

@@ -839,3 +839,20 @@ def parameter_drift(residual: np.ndarray, X: np.ndarray, valid: np.ndarray, *, a
     whitener = st.Whitener.fit(residual - X @ coef, valid=valid)
     return test(residual, X, whitener, alpha=alpha, min_gap=min_gap, n_blocks=n_blocks,
                 n_folds=n_folds, min_fold_share=0.0, names=list(DRIFT_SIGNALS))
+
+
+def friction_levels(t: np.ndarray, residual: np.ndarray, speed: np.ndarray,
+                    valid: np.ndarray, parts: int = 3) -> list[tuple[float, float, float]]:
+    """The friction-like level of the residual in each of ``parts`` equal stretches of the
+    record: the mean of ``r sgn(v)`` (N; negative: less friction than the model) over the valid
+    pairs, with each stretch's first and last time (s); ``(t0, t1, nan)`` for a stretch without
+    valid pairs. t (M,) s; residual, speed (M, 6) N and m/s; valid (M, 6) bool."""
+    out = []
+    for g in np.array_split(np.arange(len(t)), parts):
+        if len(g) == 0:
+            continue
+        ok = valid[g]
+        level = (float(np.mean((residual[g] * np.sign(speed[g]))[ok])) if ok.any()
+                 else float("nan"))
+        out.append((float(t[g[0]]), float(t[g[-1]]), level))
+    return out

@@ -506,6 +506,7 @@ def _lack_of_fit(problem: Problem, theta: np.ndarray, residual: np.ndarray,
     out["state"], out["dynamic"], out["reversal"] = state, dynamic, reversal
     out["rest"] = _rest_test(problem, theta)
     drift_fitted = drift.pop("fitted")
+    drift["levels"] = lackfit.friction_levels(t, residual, speed, problem.sliding)
     out["drift"] = drift
     # structure in a form of the basis says most about what it is; else a friction or gain
     # that drifts over the record; else structure that repeats with the state; else structure
