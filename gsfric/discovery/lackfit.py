@@ -53,6 +53,13 @@ of the travel since the last reversal, and their pulses sit right after each rev
 the speed is small. ``reversal_structure`` bins the residual, signed by the direction of
 travel, by that travel (``travel_since_reversal``) and asks, as ``state_structure`` does,
 whether the bin means of the other folds predict the held-out fold.
+
+Every catalog effect and every refitted parameter is one constant of the record. An error that
+a catalog term takes only on average (a Coulomb force growing as a seal warms up, whose mean a
+refitted Coulomb coefficient or a named friction takes) leaves its change over the record:
+friction-shaped and changing sign between the record's start and end. ``parameter_drift``
+tests the parameters' stability in time (a Chow-type test with a linear change): the friction
+level varying linearly over the record, by the rules of the basis.
 """
 
 from __future__ import annotations
@@ -766,3 +773,86 @@ def reversal_structure(residual: np.ndarray, direction: np.ndarray, travel: np.n
 REVERSAL_MEANING = ("a friction-like force that depends on the travel since the last reversal, "
                     "not on the speed: play in a joint, a pre-sliding (Dahl-like) friction, or "
                     "a friction that builds up after each reversal")
+
+
+# -- parameter stability in time: what drifts over the record ----------------------------------
+
+
+DRIFT_SIGNALS = ("sgn(v) drift",)
+"""The column of ``drift_basis``: the friction level changing linearly over the record."""
+
+DRIFT_MEANING = ("a friction that changes over the record (the friction-like part of the "
+                 "residual grows or shrinks with time): a seal or lubricant warming up or "
+                 "wearing in")
+
+
+def drift_basis(t: np.ndarray, speed: np.ndarray, sliding: np.ndarray) -> np.ndarray:
+    """The column (M, 6, 1) of ``DRIFT_SIGNALS``: ``sgn(v) tau`` on the sliding pairs, with
+    ``tau`` the time mapped linearly onto [-1, 1] over the record (t (M,) s, speed (M, 6)
+    m/s), scaled to unit RMS over all legs (one coefficient for the six legs, as the basis's
+    signals). A gain drifting with time (``F tau``) is not a column: on a creep under pink
+    noise it is a slow wave like the noise's own wander, and it made a correctly named
+    ``stroke_friction`` read unexplained."""
+    t = np.asarray(t, float)
+    tau = (2 * (t - t[0]) / max(t[-1] - t[0], 1e-300) - 1)[:, None]
+    X = (np.sign(speed) * sliding * tau)[:, :, None]
+    for j in range(X.shape[2]):
+        scale = float(np.sqrt(np.mean(X[:, :, j] ** 2)))
+        X[:, :, j] /= scale if scale > 0 else 1.0
+    return X
+
+
+def parameter_drift(residual: np.ndarray, X: np.ndarray, valid: np.ndarray, *, alpha: float,
+                    min_gap: float, n_blocks: int, n_folds: int) -> dict:
+    """Is the friction level the same over the whole record? (a Chow-type test)
+
+    Every catalog effect and every refitted parameter is a constant of the record. An error
+    outside the catalog that a catalog term takes only on average (a Coulomb force that grows
+    as a seal warms up, whose mean the refitted Coulomb coefficient or a named friction takes)
+    leaves the difference between its value at each time and that mean: friction-shaped
+    (``sgn(v)``), changing sign over the record. That residual is tested against the friction
+    level's first-order change in time (``drift_basis``: varying linearly over the record, one
+    coefficient for the six legs; no catalog effect has such a column) by the rules of the
+    generic basis (``test``): prewhitened with the AR model of the residual left by the
+    column, F-test at ``alpha``, a lower held-out error of the block cross-validation
+    (contiguous folds: a drift fitted on the other folds must predict the held-out stretch,
+    which slow noise, wandering at random, does not), and a gap of at least ``min_gap``.
+
+    Parameters
+    ----------
+    residual : ndarray, shape (M, 6)
+        Final residual per leg (weighted as the fit's), N.
+    X : ndarray, shape (M, 6, 1)
+        ``drift_basis``, weighted as the residual.
+    valid : ndarray of bool, shape (M, 6)
+        The pairs of the noise model (sliding pairs).
+
+    Returns
+    -------
+    dict
+        As ``test``: ``significant``, ``p_value``, ``gap``, ``cv_gain``, ``structure_rms`` (N),
+        ``per_leg_rms`` (N), ``signals``, ``fitted`` (M, 6).
+    """
+    k = X.shape[2]
+    flat = X.reshape(-1, k)
+    coef = st.solve(flat.T @ flat, flat.T @ residual.reshape(-1))
+    whitener = st.Whitener.fit(residual - X @ coef, valid=valid)
+    return test(residual, X, whitener, alpha=alpha, min_gap=min_gap, n_blocks=n_blocks,
+                n_folds=n_folds, min_fold_share=0.0, names=list(DRIFT_SIGNALS))
+
+
+def friction_levels(t: np.ndarray, residual: np.ndarray, speed: np.ndarray,
+                    valid: np.ndarray, parts: int = 3) -> list[tuple[float, float, float]]:
+    """The friction-like level of the residual in each of ``parts`` equal stretches of the
+    record: the mean of ``r sgn(v)`` (N; negative: less friction than the model) over the valid
+    pairs, with each stretch's first and last time (s); ``(t0, t1, nan)`` for a stretch without
+    valid pairs. t (M,) s; residual, speed (M, 6) N and m/s; valid (M, 6) bool."""
+    out = []
+    for g in np.array_split(np.arange(len(t)), parts):
+        if len(g) == 0:
+            continue
+        ok = valid[g]
+        level = (float(np.mean((residual[g] * np.sign(speed[g]))[ok])) if ok.any()
+                 else float("nan"))
+        out.append((float(t[g[0]]), float(t[g[-1]]), level))
+    return out

@@ -61,6 +61,16 @@ def report(d: Discovery, source: str = "", platform_source: str = "") -> str:
               f"remains, {lof.get('looks_like', '')}. Per leg (N): "
               f"{', '.join(_g(v, 3) for v in lof.get('per_leg_rms', []))}; dominant frequency "
               f"of the residual {_g(lof.get('frequency'), 3)} Hz.", ""]
+        drift = lof.get("drift", {})
+        if drift.get("significant"):
+            L += ["The friction-like part of the residual (signed by the direction of motion; "
+                  "negative: less friction than the model) changes over the record "
+                  f"(p = {_g(drift.get('p_value'), 2)}); its mean per third of the record "
+                  "(s: N): "
+                  + ", ".join(f"{a:.3g}-{b:.3g}: {_g(v, 2)}"
+                              for a, b, v in drift.get("levels", []))
+                  + ". A friction that drifts with time (a seal warming up) leaves this; every "
+                  "catalog effect is one constant of the record.", ""]
         rev = lof.get("reversal", {})
         if rev.get("significant"):
             L += ["After each reversal the residual, signed by the direction of travel (negative: "

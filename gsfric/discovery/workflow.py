@@ -493,6 +493,10 @@ def _lack_of_fit(problem: Problem, theta: np.ndarray, residual: np.ndarray,
                        n_blocks=s.n_blocks, n_folds=s.n_folds,
                        min_fold_share=s.min_fold_share, names=names)
     X = flat = None
+    drift = lackfit.parameter_drift(
+        residual, lackfit.drift_basis(t, speed, problem.sliding) * problem.weight[:, :, None],
+        problem.sliding, alpha=s.alpha, min_gap=s.min_gap, n_blocks=s.n_blocks,
+        n_folds=s.n_folds)
     D = problem.result.D[used]
     state = lackfit.state_structure(residual, lackfit.state_features(D, speed, F),
                                     problem.sliding, n_folds=s.n_folds, min_gap=s.min_gap)
@@ -504,22 +508,28 @@ def _lack_of_fit(problem: Problem, theta: np.ndarray, residual: np.ndarray,
                                           n_folds=s.n_folds, alpha=s.alpha, min_gap=s.min_gap)
     out["state"], out["dynamic"], out["reversal"] = state, dynamic, reversal
     out["rest"] = _rest_test(problem, theta)
-    # structure in a form of the basis says most about what it is; else structure that repeats
-    # with the state; else structure that follows the motion; else after each reversal; else
-    # what happens at the rests
-    tests = {"basis": out, "state": state, "dynamic": dynamic, "reversal": reversal,
-             "rest": out["rest"]}
+    drift_fitted = drift.pop("fitted")
+    drift["levels"] = lackfit.friction_levels(t, residual, speed, problem.sliding)
+    out["drift"] = drift
+    # structure in a form of the basis says most about what it is; else a friction or gain
+    # that drifts over the record; else structure that repeats with the state; else structure
+    # that follows the motion; else after each reversal; else what happens at the rests
+    tests = {"basis": out, "drift": drift, "state": state, "dynamic": dynamic,
+             "reversal": reversal, "rest": out["rest"]}
     by = next((k for k, v in tests.items() if v["significant"]), None)
-    if by in ("state", "dynamic", "reversal", "rest"):
+    if by in ("drift", "state", "dynamic", "reversal", "rest"):
         out.update(significant=True, gap=tests[by]["gap"],
                    structure_rms=tests[by]["structure_rms"], per_leg_rms=tests[by]["per_leg_rms"])
-    fitted = out["fitted"]
+    fitted = drift_fitted if by == "drift" else out["fitted"]
     thirds = np.array_split(np.arange(len(t)), 3)
     out["time_rms"] = {f"{t[g[0]]:.4g}-{t[g[-1]]:.4g} s": _rms(fitted[g]) for g in thirds}
     out["frequency"] = lackfit.dominant_frequency(t, residual)
     main = max(out["signals"], key=out["signals"].get) if out["signals"] else None
     out["looks_like"] = lackfit.MEANING.get(main, "") if main else ""
-    if by == "state":
+    if by == "drift":
+        main = "drifts over the record"
+        out["looks_like"] = lackfit.DRIFT_MEANING
+    elif by == "state":
         main = f"repeats with {state['variable']}"
         out["looks_like"] = lackfit.state_meaning(state["variable"])
     elif by == "dynamic":
