@@ -31,11 +31,8 @@ typedef long long vl __attribute__((vector_size(8 * GSFRIC_LANES)));
  * gathered from the group's transposed outputs y (entry o of lane l at y[8 o + l]) by an
  * index table (idx[f] = 8 (f % size) + f / size for flat entry f of the rows): one
  * 64-byte store per vector instead of eight scalar ones; non-temporal where the rows are
- * 64-byte aligned. Not on AMD Zen cores, whose gathers cost more than the eight scalar
- * stores (docs/performance.md). */
-#if GSFRIC_LANES == 8 && defined(__AVX512F__) && !defined(__znver1__) \
-    && !defined(__znver2__) && !defined(__znver3__) && !defined(__znver4__) \
-    && !defined(__znver5__)
+ * 64-byte aligned. */
+#if GSFRIC_LANES == 8 && defined(__AVX512F__)
 #define VSTORE 1
 #include <stdint.h>
 static inline void v_store_rows(double *dst, const double *y, const long long *idx,
