@@ -72,11 +72,10 @@ def noise_model(w: st.Whitener) -> dict:
 def profile_cv(blocks: st.Blocks, null: list[int], variants: list[list[int]],
                lower: np.ndarray, upper: np.ndarray, n_folds: int) -> np.ndarray:
     """Held-out SSE per fold, the variant chosen on each fold's training blocks."""
-    n = len(blocks.ztz)
-    groups = np.array_split(np.arange(n), n_folds)
+    groups = blocks.folds(n_folds)
     out = np.empty(len(groups))
     for f, g in enumerate(groups):
-        Af, bf, cf = blocks.XtX[g].sum(0), blocks.Xtz[g].sum(0), float(blocks.ztz[g].sum())
+        Af, bf, cf = blocks.held(g)
         At, bt, ct = blocks.without(g)
         best = None
         for v in variants:
@@ -601,8 +600,8 @@ def half_stability(problem: Problem, J: np.ndarray, r: np.ndarray, names: list[s
     k = J.shape[2]
     est = []
     for g in (slice(0, half), slice(half, None)):
-        A, b = blocks.XtX[g].sum(0), blocks.Xtz[g].sum(0)
-        c, rows = float(blocks.ztz[g].sum()), float(blocks.rows[g].sum())
+        A, b, c = blocks.held(g)
+        rows = float(blocks.rows[g].sum())
         inv = np.linalg.pinv(A)
         delta = inv @ b
         s2 = max(c - 2 * delta @ b + delta @ A @ delta, 0.0) / max(rows - k, 1.0)

@@ -277,6 +277,16 @@ class Blocks:
         keep[held] = False
         return (self.XtX[keep].sum(0), self.Xtz[keep].sum(0), float(self.ztz[keep].sum()))
 
+    def folds(self, n_folds: int) -> list[np.ndarray]:
+        """The block indices of each fold of a cross-validation: ``n_folds`` contiguous
+        groups of blocks, as equal as they divide."""
+        return np.array_split(np.arange(len(self.ztz)), n_folds)
+
+    def held(self, fold) -> tuple[np.ndarray, np.ndarray, float]:
+        """Summed (XtX, Xtz, ztz) of the blocks ``fold`` (indices or a slice): a fold's
+        held-out data."""
+        return (self.XtX[fold].sum(0), self.Xtz[fold].sum(0), float(self.ztz[fold].sum()))
+
 
 # -- bounded least squares on cross-products ---------------------------------------------------
 
@@ -394,13 +404,12 @@ def f_test(null: Fit, alternative: Fit, k: int | None = None) -> tuple[float, fl
 def cross_validate(blocks: Blocks, columns: Sequence[int], lower: np.ndarray,
                    upper: np.ndarray, n_folds: int) -> np.ndarray:
     """Held-out prewhitened SSE of each fold (contiguous groups of blocks), shape (n_folds,)."""
-    n = len(blocks.ztz)
-    groups = np.array_split(np.arange(n), n_folds)
+    groups = blocks.folds(n_folds)
     cols = list(columns)
     idx = np.ix_(cols, cols)
     out = np.empty(len(groups))
     for f, g in enumerate(groups):
-        Af, bf, cf = blocks.XtX[g].sum(0), blocks.Xtz[g].sum(0), float(blocks.ztz[g].sum())
+        Af, bf, cf = blocks.held(g)
         At, bt, _ = blocks.without(g)
         t = solve(At[idx], bt[cols], lower[cols], upper[cols])
         out[f] = sse(Af[idx], bf[cols], cf, t)
@@ -412,8 +421,7 @@ def fold_share(blocks: Blocks, cv: np.ndarray, cv_null: np.ndarray, n_folds: int
     (n_folds,), from ``cross_validate``), among the folds that hold observations: a fold
     without any (a stretch of the record where no pair is used, a long rest) can neither
     confirm nor refute a candidate."""
-    groups = np.array_split(np.arange(len(blocks.ztz)), n_folds)
-    held = np.array([blocks.rows[g].sum() > 0 for g in groups])
+    held = np.array([blocks.rows[g].sum() > 0 for g in blocks.folds(n_folds)])
     if not held.any():
         return 0.0
     return float(np.mean((np.asarray(cv) < np.asarray(cv_null))[held]))
