@@ -795,11 +795,9 @@ def drift_basis(t: np.ndarray, speed: np.ndarray, sliding: np.ndarray) -> np.nda
     ``stroke_friction`` read unexplained."""
     t = np.asarray(t, float)
     tau = (2 * (t - t[0]) / max(t[-1] - t[0], 1e-300) - 1)[:, None]
-    X = (np.sign(speed) * sliding * tau)[:, :, None]
-    for j in range(X.shape[2]):
-        scale = float(np.sqrt(np.mean(X[:, :, j] ** 2)))
-        X[:, :, j] /= scale if scale > 0 else 1.0
-    return X
+    x = np.sign(speed) * sliding * tau
+    scale = float(np.sqrt(np.mean(x ** 2)))
+    return (x / (scale if scale > 0 else 1.0))[:, :, None]
 
 
 def parameter_drift(residual: np.ndarray, X: np.ndarray, valid: np.ndarray, *, alpha: float,

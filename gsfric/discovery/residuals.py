@@ -188,8 +188,7 @@ class Design:
             for v in sets:
                 c = self.refit + v
                 A, b = self.XtX[np.ix_(c, c)], self.Xtr[c]
-                t = st.solve(A, b)
-                sse = self.rtr - 2 * t @ b + t @ A @ t
+                sse = st.sse(A, b, self.rtr, st.solve(A, b))
                 if sse < best:
                     best, chosen = sse, v
             cols += [c for c in chosen if c not in cols]

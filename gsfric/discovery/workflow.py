@@ -511,8 +511,8 @@ def _lack_of_fit(problem: Problem, theta: np.ndarray, residual: np.ndarray,
     drift_fitted = drift.pop("fitted")
     drift["levels"] = lackfit.friction_levels(t, residual, speed, problem.sliding)
     out["drift"] = drift
-    # structure in a form of the basis says most about what it is; else a friction or gain
-    # that drifts over the record; else structure that repeats with the state; else structure
+    # structure in a form of the basis says most about what it is; else a friction that
+    # drifts over the record; else structure that repeats with the state; else structure
     # that follows the motion; else after each reversal; else what happens at the rests
     tests = {"basis": out, "drift": drift, "state": state, "dynamic": dynamic,
              "reversal": reversal, "rest": out["rest"]}
