@@ -29,29 +29,43 @@ EXIT_PIPE = 128 + 13
 _STOP_SIGNALS = ("SIGTERM", "SIGHUP")
 
 
-def _raise_interrupted(signum, frame):
-    from gsfric.errors import Interrupted
+class _StopSignals:
+    """While entered, SIGTERM and SIGHUP raise ``Interrupted`` in the main thread, as SIGINT
+    raises KeyboardInterrupt, so that temporary outputs and compiler processes are cleaned up.
 
-    raise Interrupted(signum)
+    ``received`` keeps the first stop signal that arrived: one that lands inside an extension
+    module's import comes out as an ImportError that does not chain the exception raised here.
+    """
 
+    def __init__(self):
+        self.received: int | None = None
+        self._previous = {}
 
-@contextlib.contextmanager
-def _stop_signals_as_exceptions():
-    """SIGTERM and SIGHUP raise ``Interrupted`` in the main thread, as SIGINT raises
-    KeyboardInterrupt, so that temporary outputs and compiler processes are cleaned up."""
-    previous = {}
-    for name in _STOP_SIGNALS:
-        number = getattr(signal, name, None)
-        if number is None:
-            continue
-        with contextlib.suppress(ValueError, OSError):   # not the main thread
-            previous[number] = signal.signal(number, _raise_interrupted)
-    try:
-        yield
-    finally:
-        for number, handler in previous.items():
+    def _handle(self, signum, frame):
+        from gsfric.errors import Interrupted
+
+        if self.received is None:
+            self.received = signum
+        if signum == signal.SIGINT:
+            raise KeyboardInterrupt
+        raise Interrupted(signum)
+
+    def __enter__(self):
+        for name in (*_STOP_SIGNALS, "SIGINT"):
+            number = getattr(signal, name, None)
+            if number is None:
+                continue
+            if name == "SIGINT" and signal.getsignal(number) is not signal.default_int_handler:
+                continue                          # ignored (a background job): keep it so
+            with contextlib.suppress(ValueError, OSError):   # not the main thread
+                self._previous[number] = signal.signal(number, self._handle)
+        return self
+
+    def __exit__(self, *exc_info):
+        for number, handler in self._previous.items():
             with contextlib.suppress(ValueError, OSError):
                 signal.signal(number, handler)
+        return False
 
 
 @contextlib.contextmanager
@@ -109,8 +123,9 @@ class _Group(click.Group):
     def invoke(self, ctx):
         from gsfric.errors import GsfricError, InputError, Interrupted, StepFlagError
 
+        stops = _StopSignals()
         try:
-            with _stop_signals_as_exceptions(), _one_line_warnings():
+            with stops, _one_line_warnings():
                 return super().invoke(ctx)
         except Interrupted as exc:
             name = signal.Signals(exc.signum).name
@@ -130,14 +145,15 @@ class _Group(click.Group):
             _fail(f"{where}{exc.strerror or exc}", EXIT_INTERNAL)
         except Exception as exc:
             # a stop signal that arrived inside an import or a cleanup comes out as the error
-            # it caused there (an ImportError "from" the KeyboardInterrupt): still a stop
+            # it caused there (an ImportError, chained to the stop or not): still a stop
             stop = _stop_in_chain(exc)
-            if stop is None:
+            signum = getattr(stop, "signum", signal.SIGINT) if stop else stops.received
+            if signum is None:
                 raise
-            if isinstance(stop, Interrupted):
-                name = signal.Signals(stop.signum).name
-                _fail(f"stopped by {name}; no output was left half-written", 128 + stop.signum)
-            _fail("interrupted; no output was left half-written", 130)
+            if signum == signal.SIGINT:
+                _fail("interrupted; no output was left half-written", 130)
+            name = signal.Signals(signum).name
+            _fail(f"stopped by {name}; no output was left half-written", 128 + signum)
 
     def main(self, args=None, prog_name=None, **kwargs):
         """Usage errors (unknown option, missing argument) as one line too, exit 2."""

@@ -283,12 +283,12 @@ def test_stale_temporaries_of_dead_runs_are_removed(tmp_path):
 
 SLOW_SIMULATE = textwrap.dedent("""
     import sys, time
-    from gsfric.evaluation import Evaluator
-    original = Evaluator.evaluate_quiet
-    def slow(self, motion, **kwargs):
+    import gsfric.evaluation
+    original = gsfric.evaluation.evaluate_outputs
+    def slow(*args, **kwargs):
         time.sleep(0.3)
-        return original(self, motion, **kwargs)
-    Evaluator.evaluate_quiet = slow
+        return original(*args, **kwargs)
+    gsfric.evaluation.evaluate_outputs = slow
     from gsfric.cli import main
     main(sys.argv[1:])
 """)
@@ -542,3 +542,36 @@ def test_a_stop_inside_an_import_is_still_a_stop():
     stop = _stop_in_chain(raised(Interrupted(signal.SIGTERM)))
     assert isinstance(stop, Interrupted) and stop.signum == signal.SIGTERM
     assert _stop_in_chain(raised(ValueError("a real import problem"))) is None
+
+
+STOP_INSIDE_AN_EXTENSION_IMPORT = textwrap.dedent("""
+    import os, signal, sys
+    from gsfric.errors import Interrupted
+    from gsfric.evaluation import Evaluator
+    stop = getattr(signal, sys.argv.pop(1))
+    def stopped_inside_an_import(self, *args, **kwargs):
+        try:
+            os.kill(os.getpid(), stop)
+        except (Interrupted, KeyboardInterrupt):
+            pass
+        # what a Cython module's init makes of it: a new error, not chained to the stop
+        raise ImportError('PyCapsule_Import could not import module "pandas"')
+    Evaluator.__init__ = stopped_inside_an_import     # in the main thread, output open
+    from gsfric.cli import main
+    main(sys.argv[1:])
+""")
+
+
+@pytest.mark.parametrize("name, code", [("SIGTERM", 143), ("SIGINT", 130)])
+def test_a_stop_that_an_import_turned_into_an_unchained_error_is_still_a_stop(tmp_path, name,
+                                                                              code):
+    path = _trajectory_file(tmp_path, 300)
+    out = tmp_path / "o.csv"
+    out.write_text("earlier output\n")
+    proc = subprocess.run([sys.executable, "-c", STOP_INSIDE_AN_EXTENSION_IMPORT, name,
+                           "simulate", "--trajectory", str(path), "--out", str(out),
+                           "--no-progress"],
+                          capture_output=True, text=True, preexec_fn=_interruptible, timeout=120)
+    message = one_error(proc.stderr, code, proc.returncode)
+    assert message.startswith("stopped by SIGTERM" if name == "SIGTERM" else "interrupted")
+    assert out.read_text() == "earlier output\n" and leftovers(tmp_path) == []
