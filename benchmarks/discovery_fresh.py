@@ -381,11 +381,11 @@ def true_model_rms(log, fmt, true_platform, platform, extra=None):
 # ---------------------------------------------------------------- cases
 
 
-def one_case(case, model, keep=None):
+def one_case(case, model, keep=None, noises=NOISES):
     kind, name, size, c, seed = case
     rng = np.random.default_rng(seed)
     platform, home, rb = random_platform(rng, model)
-    family, noise_kind = FAMILIES[c % len(FAMILIES)], NOISES[(c // 2) % len(NOISES)]
+    family, noise_kind = FAMILIES[c % len(FAMILIES)], noises[(c // 2) % len(noises)]
     rate = float(rng.choice([500.0, 1000.0, 2000.0]) * rng.uniform(0.9, 1.1))
     n = int(min(rng.uniform(6, 12) * rate, 10_000))
     t = np.arange(n) / rate
@@ -480,6 +480,8 @@ def main():
                     help="only cases of these effects ('null' for the nulls)")
     ap.add_argument("--cases", nargs="+", type=int, default=None,
                     help="only these case numbers (as printed by --verbose)")
+    ap.add_argument("--noises", nargs="+", choices=NOISES, default=NOISES,
+                    help="the force noises to cycle through (default: all)")
     ap.add_argument("--verbose", action="store_true", help="one line per case")
     ap.add_argument("--keep", default=None, metavar="DIR",
                     help="keep each case's log, column map, platform and discover output in "
@@ -493,7 +495,7 @@ def main():
     start = time.time()
     results = []
     for case in todo:
-        r = one_case(case, a.model, a.keep)
+        r = one_case(case, a.model, a.keep, tuple(a.noises))
         results.append(r)
         if a.verbose:
             print(f"#{case[3]:<3d} {r['kind']:7s} {r['name']:24s} {r['size']:<4g} "
