@@ -9,6 +9,10 @@ out-of-model errors of a rig produce, none of them a catalog term in this form:
 * ``sgn(v)`` on sliding samples (friction of another law),
 * ``a`` the leg's acceleration (an inertia or timing error),
 * a cubic drift in time (a thermal drift of the load cells),
+* as a competitor of a round's winner only (``selection.generic_competitor``), ``dF/de`` for a
+  scale error e of each position axis of the recorded pose (x, y, z read ``1 + e`` times the
+  true ones, velocity and acceleration with them: a pose measurement's calibration), given by
+  the model (``ParametricModel.pose_scale``),
 * ``dF/dt`` with coefficients that sum to zero over the legs (five contrasts: leg k's against
   leg 6's; a delay that differs between the force channels beyond their common delay).
 
@@ -68,7 +72,8 @@ import numpy as np
 
 from gsfric.discovery import statistics as st
 
-SIGNALS = ("dF/dt", "F|F|", "F^3", "F", "sgn(v)", "acceleration", "drift", "dF/dt between legs")
+SIGNALS = ("dF/dt", "F|F|", "F^3", "F", "sgn(v)", "acceleration", "drift", "dF/dt between legs",
+           "pose scale")
 
 CATALOG_EQUIVALENT = {"dF/dt": "time_offset", "F": "force_scale", "sgn(v)": "seal_friction"}
 """Signals that a catalog effect reproduces (a common delay, a common gain, a common Coulomb
@@ -85,6 +90,8 @@ MEANING = {
     "drift": "a slow drift in time: a thermal drift or a zero shift of the load cells",
     "dF/dt between legs": "correlated with the rate of change of the force, differently on each "
                           "leg: a delay that differs between the force channels",
+    "pose scale": "what a scale error of the recorded position (x, y or z) makes of the "
+                  "rigid-body force: a calibration error of the pose measurement",
 }
 
 
@@ -123,13 +130,16 @@ def state_meaning(variable: str) -> str:
 
 
 def basis(t: np.ndarray, F: np.ndarray, speed: np.ndarray, sliding: np.ndarray,
-          derivatives: tuple[np.ndarray, np.ndarray] | None = None) -> np.ndarray:
+          derivatives: tuple[np.ndarray, np.ndarray] | None = None,
+          pose: np.ndarray | None = None) -> np.ndarray:
     """The generic columns (M, 6, k) of ``SIGNALS`` (drift: three columns; dF/dt between legs:
-    five); ``derivatives``, if given, are dF/dt and the legs' acceleration (from ``rates``),
+    five; pose scale: the three columns of ``pose`` (M, 6, 3), dF/de per position axis, if
+    given); ``derivatives``, if given, are dF/dt and the legs' acceleration (from ``rates``),
     not computed again."""
     t = np.asarray(t, float)
     legs = F.shape[1]
-    X = np.zeros(F.shape + (9 + legs - 1,))
+    extra = 0 if pose is None else pose.shape[2]
+    X = np.zeros(F.shape + (9 + legs - 1 + extra,))
     dF, acceleration = derivatives if derivatives is not None else rates(t, F, speed)
     X[:, :, 0] = dF
     X[:, :, 1] = F * np.abs(F)
@@ -143,6 +153,8 @@ def basis(t: np.ndarray, F: np.ndarray, speed: np.ndarray, sliding: np.ndarray,
     for k in range(legs - 1):     # leg k's delay against the last leg's: sum zero
         X[:, k, 9 + k] = dF[:, k]
         X[:, legs - 1, 9 + k] = -dF[:, legs - 1]
+    if extra:
+        X[:, :, 9 + legs - 1:] = pose
     for j in range(X.shape[2]):     # unit RMS per signal over all legs (one coefficient: one cause)
         scale = float(np.sqrt(np.mean(X[:, :, j] ** 2)))
         X[:, :, j] /= scale if scale > 0 else 1.0
@@ -155,23 +167,24 @@ def rates(t: np.ndarray, F: np.ndarray, speed: np.ndarray) -> tuple[np.ndarray, 
     return np.gradient(F, t, axis=0), np.gradient(speed, t, axis=0)
 
 
-def column_names() -> list[str]:
+def column_names(pose: int = 0) -> list[str]:
     """The signal of each column of ``basis`` (drift: three columns; dF/dt between legs:
-    five)."""
-    return list(SIGNALS[:-2]) + ["drift"] * 3 + ["dF/dt between legs"] * 5
+    five; pose scale: ``pose`` columns)."""
+    return list(SIGNALS[:-3]) + ["drift"] * 3 + ["dF/dt between legs"] * 5 + \
+        ["pose scale"] * pose
 
 
 def basis_outside(t: np.ndarray, F: np.ndarray, speed: np.ndarray, sliding: np.ndarray,
                   weight: np.ndarray, catalog,
-                  derivatives: tuple[np.ndarray, np.ndarray] | None = None
-                  ) -> tuple[np.ndarray, list[str]]:
+                  derivatives: tuple[np.ndarray, np.ndarray] | None = None,
+                  pose: np.ndarray | None = None) -> tuple[np.ndarray, list[str]]:
     """``basis`` without the signals that an effect of ``catalog`` reproduces
     (``CATALOG_EQUIVALENT``: that effect's parameter, not a structure outside the catalog),
     weighted per (sample, leg) by ``weight`` (M, 6); returns the columns (M, 6, k) and their
     signals."""
-    names = column_names()
+    names = column_names(0 if pose is None else pose.shape[2])
     keep = [j for j, name in enumerate(names) if CATALOG_EQUIVALENT.get(name) not in catalog]
-    X = basis(t, F, speed, sliding, derivatives)
+    X = basis(t, F, speed, sliding, derivatives, pose)
     if len(keep) < X.shape[2]:
         X = X[:, :, keep]
     X *= weight[:, :, None]

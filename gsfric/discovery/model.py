@@ -143,6 +143,35 @@ class ParametricModel:
         self.evaluations += 1
         return self._read(theta, self._evaluator.actuator_forces(self.x, P=P, Q=Q))
 
+    def pose_scale(self, theta: np.ndarray, rows: slice | None = None,
+                   h: float = 1e-4) -> np.ndarray:
+        """dF/de (M, 6, 3) over ``rows`` (default all N), N: the change of the rigid-body
+        force per unit scale error e of each position axis of the motion (x, y, z, their
+        velocity and acceleration read ``1 + e`` times the true ones, about the base frame's
+        origin), by central differences of step ``h``.
+
+        The rigid-body force is F(theta) with the friction coefficients at zero and no
+        effect: the inertia and the weights that a mis-scaled pose moves between the legs,
+        not the friction laws that its scaled speed would change (which friction candidates
+        and the refit already describe)."""
+        from gsfric.evaluation import effect_vector
+
+        rigid = self.platform_at(theta).without_effects().with_friction(
+            **dict.fromkeys(_FRICTION + ("prismatic_seal",), 0.0))
+        P, Q = parameter_vector(rigid), effect_vector(rigid)
+        x = self.x if rows is None else self.x[rows]
+        out = np.empty((x.shape[0], 6, 3))
+        for axis in range(3):
+            columns = [axis, 12 + axis, 18 + axis]     # p, v, a (``state_array``'s layout)
+            F = []
+            for e in (h, -h):
+                moved = x.copy()
+                moved[:, columns] *= 1.0 + e
+                F.append(self._evaluator.actuator_forces(moved, P=P, Q=Q))
+            out[:, :, axis] = (F[0] - F[1]) / (2 * h)
+        self.evaluations += 6
+        return out
+
     def forces_batch(self, thetas: np.ndarray) -> np.ndarray:
         """F at several parameter vectors, (G, N, 6) for thetas (G, n_theta)."""
         thetas = np.atleast_2d(np.asarray(thetas, float))

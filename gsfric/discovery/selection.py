@@ -342,8 +342,9 @@ def bootstrap_share(problem: Problem, design: Design, screen: Screen,
 def generic_competitor(problem: Problem, design: Design, whitener: st.Whitener,
                        screen: Screen, winner: str) -> dict:
     """The winner against the generic out-of-model structure of ``lackfit`` (a delay, a
-    nonlinear or mis-scaled load cell, another friction law, a drift), without the signals
-    that a tested candidate reproduces (``lackfit.CATALOG_EQUIVALENT``).
+    nonlinear or mis-scaled load cell, another friction law, a drift, a scale error of the
+    recorded position), without the signals that a tested candidate reproduces
+    (``lackfit.CATALOG_EQUIVALENT``).
 
     The winner is *blocked* (not named) when it adds nothing worth naming to the generic basis
     (p >= alpha, or a gap below ``min_gap`` times the noise, with the refitted model in both),
@@ -368,7 +369,8 @@ def generic_competitor(problem: Problem, design: Design, whitener: st.Whitener,
     available = set(screen.tests) | {n.split(".")[0] for n in design.names}
     B, names = lackfit.basis_outside(np.asarray(problem.model.t[used], float), F,
                                      problem.result.D_dot[used], problem.sliding,
-                                     problem.weight, available)
+                                     problem.weight, available,
+                                     pose=problem.model.pose_scale(design.theta, used))
     others = [n for n, t in screen.tests.items() if t.significant and n != winner]
     wcols = design.variants[winner][screen.variant[winner]]
     ocols = [c for n in others for c in design.variants[n][screen.variant[n]]]
@@ -407,19 +409,33 @@ def generic_competitor(problem: Problem, design: Design, whitener: st.Whitener,
     main = max(parts, key=parts.get) if parts else None
     gap_winner = _gap(XtX, Xtr, design.rtr, generic, both)
     gap_generic = _gap(XtX, Xtr, design.rtr, catalog, everything)
-    adds = p_winner < s.alpha and gap_winner >= s.min_gap
-    structure = p_generic < level and gap_generic >= s.min_gap
-    # the generic basis explains everything the winner does and significantly more, if less
-    # than min_gap; or the winner adds nothing significant to the generic basis, whatever the
-    # basis adds to it: the data cannot tell the winner from an error outside the catalog, as
-    # they cannot tell two indistinguishable candidates apart; named (the catalog term is the
-    # simpler explanation), never confidently
-    imitates = (not adds and p_generic < level) or p_winner >= s.alpha
+    blocked, imitates = competitor_rule(p_winner, gap_winner, p_generic, gap_generic,
+                                        alpha=s.alpha, level=level, min_gap=s.min_gap)
     return {"p_winner_beyond_generic": float(p_winner), "gap_winner_beyond_generic": gap_winner,
             "p_generic_beyond_catalog": float(p_generic),
-            "gap_generic_beyond_catalog": gap_generic,
-            "blocked": bool(structure and not adds), "imitates": bool(imitates and not structure),
-            "main_signal": main}
+            "gap_generic_beyond_catalog": gap_generic, "blocked": blocked,
+            "imitates": imitates, "main_signal": main}
+
+
+def competitor_rule(p_winner: float, gap_winner: float, p_generic: float, gap_generic: float,
+                    *, alpha: float, level: float, min_gap: float) -> tuple[bool, bool]:
+    """Whether a round's winner is blocked (not named) or imitates the generic basis (named,
+    never confidently), from the F-tests and gaps of the winner beyond the basis and of the
+    basis beyond the catalog (``generic_competitor``).
+
+    Blocked: the winner adds nothing significant to the basis (p >= ``alpha``) while the basis
+    adds a significant part of at least ``min_gap`` (p < ``level``) to the catalog. Imitates,
+    when not blocked: the winner adds nothing significant, or adds a significant part smaller
+    than ``min_gap`` while the basis adds a significant part of any size. The data cannot
+    tell such a winner from an error outside the catalog, as they cannot tell two
+    indistinguishable candidates apart; a significant winner is a real part of the gap,
+    however small beside what the basis takes (a motion differentiated from noisy poses can
+    leave several times the noise), so it is named, as the simpler explanation."""
+    adds = p_winner < alpha and gap_winner >= min_gap
+    structure = p_generic < level and gap_generic >= min_gap
+    blocked = structure and p_winner >= alpha
+    imitates = not blocked and ((not adds and p_generic < level) or p_winner >= alpha)
+    return bool(blocked), bool(imitates)
 
 
 # -- Gauss-Newton refinement on the compiled model ---------------------------------------------
