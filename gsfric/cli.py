@@ -61,6 +61,16 @@ class _StopSignals:
                 self._previous[number] = signal.signal(number, self._handle)
         return self
 
+    def check(self) -> None:
+        """Raise the stop if one arrived (``gsfric.io.commit_check``): its own exception may
+        have been swallowed, raised inside a callback that the interpreter only reports."""
+        from gsfric.errors import Interrupted
+
+        if self.received == signal.SIGINT:
+            raise KeyboardInterrupt
+        if self.received is not None:
+            raise Interrupted(self.received)
+
     def __exit__(self, *exc_info):
         for number, handler in self._previous.items():
             with contextlib.suppress(ValueError, OSError):
@@ -123,9 +133,11 @@ class _Group(click.Group):
     def invoke(self, ctx):
         from gsfric.errors import GsfricError, InputError, Interrupted, StepFlagError
 
+        from gsfric.io import commit_check
+
         stops = _StopSignals()
         try:
-            with stops, _one_line_warnings():
+            with stops, commit_check(stops.check), _one_line_warnings():
                 return super().invoke(ctx)
         except Interrupted as exc:
             name = signal.Signals(exc.signum).name

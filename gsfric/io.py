@@ -23,6 +23,7 @@ Writes are atomic (``atomic_write``): a reader never sees a partly written file.
 from __future__ import annotations
 
 import contextlib
+import contextvars
 import csv
 import difflib
 import errno
@@ -159,6 +160,30 @@ def _write_failure(path: Path, error: OSError, what: str = "file") -> OutputErro
                        f"{what} of that name is unchanged")
 
 
+_COMMIT_CHECK: contextvars.ContextVar = contextvars.ContextVar("gsfric_commit_check",
+                                                               default=None)
+
+
+@contextlib.contextmanager
+def commit_check(check) -> Iterator[None]:
+    """Within the block, ``atomic_write`` and ``output_folder`` call ``check()`` (in the calling
+    context) just before they move their outputs into place; an exception it raises leaves the
+    earlier outputs as they were. The command line checks for a stop signal there: one whose
+    exception the interpreter swallowed (raised inside a callback, reported as "Exception
+    ignored") must still keep a half-done run from replacing them."""
+    token = _COMMIT_CHECK.set(check)
+    try:
+        yield
+    finally:
+        _COMMIT_CHECK.reset(token)
+
+
+def _before_commit() -> None:
+    check = _COMMIT_CHECK.get()
+    if check is not None:
+        check()
+
+
 @contextlib.contextmanager
 def atomic_write(path: str | os.PathLike[str], mode: str = "w", *,
                  encoding: str = "utf-8", newline: str | None = None) -> Iterator[IO[Any]]:
@@ -217,6 +242,7 @@ def atomic_write(path: str | os.PathLike[str], mode: str = "w", *,
                 yield handle
                 handle.flush()
                 os.fsync(handle.fileno())
+            _before_commit()
             try:
                 permissions = path.stat().st_mode & 0o7777
             except FileNotFoundError:
@@ -298,6 +324,7 @@ def output_folder(path: str | os.PathLike[str], *,
     try:
         try:
             yield tmp
+            _before_commit()
             names = sorted(p.name for p in tmp.iterdir())
             protected = [Path(p) for p in inputs if p is not None]
             for name in names:

@@ -796,6 +796,18 @@ class _Writer:
         self.header = True
         self.flusher = _Flusher(handle)
 
+    @staticmethod
+    def load(kind: str) -> None:
+        """Import what writing ``kind`` needs, before the temporary output exists: a stop
+        signal that lands inside an import comes out as whatever error the import makes of it
+        (or is swallowed in an import's callback), not as the stop."""
+        if kind == "csv":
+            import pandas  # noqa: F401
+        else:
+            import pyarrow.parquet  # noqa: F401
+
+            import gsfric.columns  # noqa: F401
+
     def write(self, columns: dict[str, np.ndarray]) -> None:
         if self.kind == "csv":
             import pandas as pd
@@ -988,6 +1000,7 @@ def simulate_file(trajectory: str | os.PathLike[str], out: str | os.PathLike[str
     # three stages in three threads: reading and differentiating chunk k + 2 (this thread),
     # evaluating chunk k + 1, building the columns of chunk k and writing them (the compiled
     # code, NumPy's copies and the Parquet writer run without the GIL)
+    _Writer.load(kind)
     try:
         with gio.atomic_write(out, mode_text, **options) as handle, \
                 ThreadPoolExecutor(1, thread_name_prefix="gsfric-evaluate") as evaluation, \

@@ -575,3 +575,35 @@ def test_a_stop_that_an_import_turned_into_an_unchained_error_is_still_a_stop(tm
     message = one_error(proc.stderr, code, proc.returncode)
     assert message.startswith("stopped by SIGTERM" if name == "SIGTERM" else "interrupted")
     assert out.read_text() == "earlier output\n" and leftovers(tmp_path) == []
+
+
+STOP_SWALLOWED = textwrap.dedent("""
+    import os, signal, sys
+    from gsfric.errors import Interrupted
+    from gsfric.evaluation import Evaluator
+    stop = getattr(signal, sys.argv.pop(1))
+    original = Evaluator.__init__
+    def swallowed(self, *args, **kwargs):
+        try:
+            os.kill(os.getpid(), stop)
+        except (Interrupted, KeyboardInterrupt):
+            pass        # as when it is raised in a callback: "Exception ignored in ..."
+        original(self, *args, **kwargs)
+    Evaluator.__init__ = swallowed      # in the main thread, output open
+    from gsfric.cli import main
+    main(sys.argv[1:])
+""")
+
+
+@pytest.mark.parametrize("name, code", [("SIGTERM", 143), ("SIGINT", 130)])
+def test_a_stop_whose_exception_was_swallowed_still_keeps_the_old_output(tmp_path, name, code):
+    """The run goes on to its end, but what it wrote does not replace the earlier output."""
+    path = _trajectory_file(tmp_path, 300)
+    out = tmp_path / "o.csv"
+    out.write_text("earlier output\n")
+    proc = subprocess.run([sys.executable, "-c", STOP_SWALLOWED, name, "simulate",
+                           "--trajectory", str(path), "--out", str(out), "--no-progress"],
+                          capture_output=True, text=True, preexec_fn=_interruptible, timeout=120)
+    message = one_error(proc.stderr, code, proc.returncode)
+    assert message.startswith("stopped by SIGTERM" if name == "SIGTERM" else "interrupted")
+    assert out.read_text() == "earlier output\n" and leftovers(tmp_path) == []
