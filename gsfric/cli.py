@@ -30,11 +30,13 @@ _STOP_SIGNALS = ("SIGTERM", "SIGHUP")
 
 
 class _StopSignals:
-    """While entered, SIGTERM and SIGHUP raise ``Interrupted`` in the main thread, as SIGINT
-    raises KeyboardInterrupt, so that temporary outputs and compiler processes are cleaned up.
+    """While entered, SIGTERM and SIGHUP raise ``Interrupted`` in the main thread, and SIGINT
+    KeyboardInterrupt (unless it is ignored), so that temporary outputs and compiler processes
+    are cleaned up.
 
-    ``received`` keeps the first stop signal that arrived: one that lands inside an extension
-    module's import comes out as an ImportError that does not chain the exception raised here.
+    ``received`` keeps the first stop signal that arrived, and ``check`` raises it again: one
+    that lands inside an extension module's import comes out as an ImportError that does not
+    chain the exception raised here, and one raised inside a callback is only reported.
     """
 
     def __init__(self):
@@ -132,13 +134,14 @@ class _Group(click.Group):
 
     def invoke(self, ctx):
         from gsfric.errors import GsfricError, InputError, Interrupted, StepFlagError
-
         from gsfric.io import commit_check
 
         stops = _StopSignals()
         try:
             with stops, commit_check(stops.check), _one_line_warnings():
-                return super().invoke(ctx)
+                result = super().invoke(ctx)
+                stops.check()            # a stop the run went on through never succeeds
+                return result
         except Interrupted as exc:
             name = signal.Signals(exc.signum).name
             _fail(f"stopped by {name}; no output was left half-written", 128 + exc.signum)
