@@ -844,12 +844,18 @@ def parameter_drift(residual: np.ndarray, X: np.ndarray, valid: np.ndarray, *, a
         As ``test``: ``significant``, ``p_value``, ``gap``, ``cv_gain``, ``structure_rms`` (N),
         ``per_leg_rms`` (N), ``signals``, ``fitted`` (M, 6).
     """
-    k = X.shape[2]
-    flat = X.reshape(-1, k)
+    return test(residual, X, whitener_beyond(residual, X, valid), alpha=alpha, min_gap=min_gap,
+                n_blocks=n_blocks, n_folds=n_folds, min_fold_share=0.0,
+                names=list(DRIFT_SIGNALS))
+
+
+def whitener_beyond(residual: np.ndarray, X: np.ndarray, valid: np.ndarray) -> st.Whitener:
+    """The AR noise model of the residual (M, 6) left by its least-squares fit by the columns
+    X (M, 6, k), on the ``valid`` pairs (M, 6): the largest model's, so that the structure
+    the columns test is not whitened away before it is tested."""
+    flat = X.reshape(-1, X.shape[2])
     coef = st.solve(flat.T @ flat, flat.T @ residual.reshape(-1))
-    whitener = st.Whitener.fit(residual - X @ coef, valid=valid)
-    return test(residual, X, whitener, alpha=alpha, min_gap=min_gap, n_blocks=n_blocks,
-                n_folds=n_folds, min_fold_share=0.0, names=list(DRIFT_SIGNALS))
+    return st.Whitener.fit(residual - X @ coef, valid=valid)
 
 
 def friction_levels(t: np.ndarray, residual: np.ndarray, speed: np.ndarray,

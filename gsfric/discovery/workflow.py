@@ -485,14 +485,11 @@ def _lack_of_fit(problem: Problem, theta: np.ndarray, residual: np.ndarray,
     X, names = lackfit.basis_outside(t, F, speed, problem.sliding, problem.weight, in_model,
                                      derivatives=(dF, acceleration))
     # the noise model from the residual of the basis fit (largest model), as in each round
-    k = X.shape[2]
-    flat = X.reshape(-1, k)
-    coef = st.solve(flat.T @ flat, flat.T @ residual.reshape(-1))
-    whitener = st.Whitener.fit(residual - X @ coef, valid=problem.sliding)
+    whitener = lackfit.whitener_beyond(residual, X, problem.sliding)
     out = lackfit.test(residual, X, whitener, alpha=s.alpha, min_gap=s.min_gap,
                        n_blocks=s.n_blocks, n_folds=s.n_folds,
                        min_fold_share=s.min_fold_share, names=names)
-    X = flat = None
+    X = None
     drift = lackfit.parameter_drift(
         residual, lackfit.drift_basis(t, speed, problem.sliding) * problem.weight[:, :, None],
         problem.sliding, alpha=s.alpha, min_gap=s.min_gap, n_blocks=s.n_blocks,
