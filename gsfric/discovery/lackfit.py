@@ -205,7 +205,9 @@ def test(residual: np.ndarray, X: np.ndarray, whitener: st.Whitener, *, alpha: f
         on each leg), ``signals`` (each signal's share of the structure), ``fitted`` (M, 6).
     """
     k = X.shape[2]
-    blocks = st.Blocks.whitened(whitener, X, residual, n_blocks)
+    # stretches of time, not of pairs: the basis follows slow noise within one move
+    # (statistics.block_edges)
+    blocks = st.Blocks.whitened(whitener, X, residual, n_blocks, by="time")
     lo, hi = np.full(k, -np.inf), np.full(k, np.inf)
     empty = st.fit(blocks, [], lo, hi)
     full = st.fit(blocks, list(range(k)), lo, hi)
@@ -224,8 +226,11 @@ def test(residual: np.ndarray, X: np.ndarray, whitener: st.Whitener, *, alpha: f
         part = X[:, :, j] * full.coef[j]
         parts[name] = parts.get(name, 0.0) + float(np.sum(part * fitted)) / total
     # no share-of-folds rule: a discrepancy confined to part of the record (the fast end of a
-    # chirp) is still a discrepancy; that rule is for naming a stable effect
-    significant = bool(p < alpha and cv_gain > 0 and gap >= min_gap)
+    # chirp) is still a discrepancy; that rule is for naming a stable effect. The held-out gain
+    # must exceed k / n, what k columns fitted to white noise gain in-sample (and lose
+    # held-out): a smaller one is within the cross-validation's own scatter
+    significant = bool(p < alpha and cv_gain > k / max(float(blocks.rows.sum()), 1.0)
+                       and gap >= min_gap)
     return {"significant": significant, "p_value": float(p), "gap": gap, "cv_gain": cv_gain,
             "fold_share": share, "structure_rms": float(np.sqrt(np.mean(fitted ** 2))),
             "per_leg_rms": [float(v) for v in np.sqrt(np.mean(fitted ** 2, axis=0))],

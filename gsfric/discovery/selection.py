@@ -379,7 +379,7 @@ def generic_competitor(problem: Problem, design: Design, whitener: st.Whitener,
     # was the largest temporary of a round)
     nb = B.shape[2]
     Xc = design.X[:, :, cols]
-    blocks = st.Blocks.whitened(whitener, [Xc, B], design.r, s.n_blocks)
+    blocks = st.Blocks.whitened(whitener, [Xc, B], design.r, s.n_blocks, by="time")
     fc, fb, z = Xc.reshape(-1, len(cols)), B.reshape(-1, nb), design.r.reshape(-1)
     cross = fc.T @ fb
     XtX = np.block([[fc.T @ fc, cross], [cross.T, fb.T @ fb]])
