@@ -19,7 +19,9 @@ class Settings:
     max_effects : int
         Most effects added.
     n_blocks : int
-        Contiguous blocks of time: the unit of cross-validation folds and bootstrap draws.
+        Contiguous blocks, each holding an equal share of the used (sample, leg) pairs (the
+        generic basis of the lack-of-fit test: of equal length): the unit of cross-validation
+        folds and bootstrap draws.
     n_folds : int
         Cross-validation folds (contiguous groups of blocks).
     min_fold_share : float

@@ -18,7 +18,7 @@ uses three tools instead, each on a linearised model (the columns of dF/dtheta):
 * **Block bootstrap** (``bootstrap``): stretches are drawn with replacement to measure how
   stable the choice of effect is and how uncertain its parameters are.
 
-All three work on cross-products of the prewhitened design per block of time (``Blocks``), so
+All three work on cross-products of the prewhitened design per block (``Blocks``), so
 a fit is a small (k x k) solve whatever the number of samples.
 """
 
@@ -184,12 +184,12 @@ class Whitener:
         return np.array(out)
 
 
-# -- cross-products by blocks of time ---------------------------------------------------------
+# -- cross-products by blocks -----------------------------------------------------------------
 
 
 @dataclass
 class Blocks:
-    """Cross-products of a prewhitened design per contiguous block of time.
+    """Cross-products of a prewhitened design per contiguous block of samples.
 
     Attributes
     ----------
