@@ -175,3 +175,40 @@ def test_play_in_a_joint_is_not_explained(base):
     assert reversal["significant"], reversal
     # less friction than the model right after the reversals
     assert min(v for e, v in reversal["profile"] if e <= 1e-3) < -0.3
+
+
+def _moves_after_a_rest(rng, m=M):
+    """Leg lengths (m) and speeds (m/s), (m, 6): a rest over the first 7/8 of the record, then
+    three minimum-jerk moves per leg, out, back and out again (two reversals per leg, all in
+    the last eighth of the record), with rests of 0.2 s."""
+    t = np.arange(m) / RATE
+    D = np.full((m, 6), 0.9)
+    mv, rs = int(0.6 * RATE), int(0.2 * RATE)
+    s = np.linspace(0, 1, mv)
+    shape = 10 * s ** 3 - 15 * s ** 4 + 6 * s ** 5
+    for leg in range(6):
+        a = rng.choice([-1, 1]) * rng.uniform(0.01, 0.03)
+        k, cur = m - 3 * (mv + rs) - rs, 0.9
+        for tgt in (0.9 + a, 0.9 - a / 2, 0.9 + a / 3):
+            D[k:k + mv, leg] = cur + shape * (tgt - cur)
+            D[k + mv:, leg] = tgt
+            k, cur = k + mv + rs, tgt
+    return t, D, np.gradient(D, t, axis=0)
+
+
+@pytest.mark.parametrize("phi", [0.0, 0.95])
+def test_reversals_in_one_stretch_of_time_are_tested_across_legs(phi):
+    """Every reversal in the last eighth of the record: no other stretch of time holds one, so
+    the held-out stretch was predicted by nothing and a pre-sliding friction's gap was 0. The
+    other legs predict a held-out leg instead; on noise alone (a static level at each rest)
+    the test stays silent."""
+    for seed in range(4):
+        rng = np.random.default_rng(seed)
+        t, D, v = _moves_after_a_rest(rng)
+        sliding = np.abs(v) > BAND
+        noise = _with_static_levels(rng, _ar1(rng, phi), sliding)
+        quiet = _test(noise, D, v, sliding)
+        found = _test(noise + 0.5 * _dahl(D, v, sliding, 3e-4), D, v, sliding)
+        assert not quiet["significant"], (seed, quiet["p_value"], quiet["gap"])
+        assert found["significant"], (seed, found["p_value"], found["gap"])
+        assert found["reversals"] == 18    # three changes of direction per leg, one from none

@@ -701,7 +701,8 @@ def reversal_structure(residual: np.ndarray, direction: np.ndarray, travel: np.n
     the tests binned by speed see few samples. This test needs no model of either: the
     residual signed by the direction of travel, ``r d``, is averaged in bins of the travel
     since the reversal (``TRAVEL_EDGES``), and the bin means of the other contiguous folds
-    predict the held-out fold (as ``state_structure``), against a single level per fold. Noise,
+    predict the held-out fold (as ``state_structure``), against a single level per fold; where
+    every reversal lies in one fold, the other legs predict a held-out leg. Noise,
     white or slow, does not repeat after every reversal in another stretch of time; a pulse
     that every reversal leaves does. The size is measured on the pairs within the last edge of
     a reversal, where such a pulse lives (its share of all pairs does not dilute it), and a
@@ -749,9 +750,14 @@ def reversal_structure(residual: np.ndarray, direction: np.ndarray, travel: np.n
     b = np.searchsorted(edges, travel[rows, legs_of])
     nb = len(edges) + 1
     f = fold[rows]
+    groups = n_folds
+    if len(np.unique(f[b < nb - 1])) < 2:
+        # every reversal in one stretch of time (one move after a rest): no other stretch can
+        # predict it, but the other legs can; the legs' load cells have noises of their own
+        f, groups = legs_of, legs
     key = f * nb + b
-    count = np.bincount(key, minlength=n_folds * nb).reshape(n_folds, nb)
-    total = np.bincount(key, y, minlength=n_folds * nb).reshape(n_folds, nb)
+    count = np.bincount(key, minlength=groups * nb).reshape(groups, nb)
+    total = np.bincount(key, y, minlength=groups * nb).reshape(groups, nb)
     rest_count = count.sum(0) - count
     rest_total = total.sum(0) - total
     mean = np.where(rest_count >= 5, rest_total / np.maximum(rest_count, 1), 0.0)
