@@ -55,6 +55,15 @@ def _with_static_levels(rng, r, sliding, level=1.0):
     return out
 
 
+def _noisy(moves, seed, phi):
+    """Leg lengths D and speeds v drawn by ``moves`` from ``seed``, the sliding pairs, and
+    AR(1) noise ``phi`` (N) with a static level at each rest: (D, v, sliding, noise)."""
+    rng = np.random.default_rng(seed)
+    t, D, v = moves(rng)
+    sliding = np.abs(v) > BAND
+    return D, v, sliding, _with_static_levels(rng, _ar1(rng, phi), sliding)
+
+
 def _test(residual, D, v, sliding):
     d, s = lackfit.travel_since_reversal(D, v, sliding)
     return lackfit.reversal_structure(residual, d, s, sliding, n_folds=8, alpha=0.01,
@@ -97,10 +106,7 @@ def test_travel_is_measured_from_the_turning_point_and_a_rest_is_no_reversal():
 @pytest.mark.parametrize("phi", [0.0, 0.9, 0.995])
 def test_noise_with_static_levels_at_rest_leaves_no_structure(phi):
     for seed in range(4):
-        rng = np.random.default_rng(seed)
-        t, D, v = _moves(rng)
-        sliding = np.abs(v) > BAND
-        r = _with_static_levels(rng, _ar1(rng, phi), sliding)
+        D, v, sliding, r = _noisy(_moves, seed, phi)
         out = _test(r, D, v, sliding)
         assert out["reversals"] > 50
         assert not out["significant"], (seed, out["p_value"], out["gap"])
@@ -109,11 +115,8 @@ def test_noise_with_static_levels_at_rest_leaves_no_structure(phi):
 def _tested(seed, phi, effect):
     """The test on moves of ``seed`` whose residual is ``0.5 * effect(D, v, sliding)`` (N) plus
     AR(1) noise ``phi`` and a static level at each rest."""
-    rng = np.random.default_rng(seed)
-    t, D, v = _moves(rng)
-    sliding = np.abs(v) > BAND
-    r = _with_static_levels(rng, 0.5 * effect(D, v, sliding) + _ar1(rng, phi), sliding)
-    return _test(r, D, v, sliding)
+    D, v, sliding, noise = _noisy(_moves, seed, phi)
+    return _test(noise + 0.5 * effect(D, v, sliding), D, v, sliding)
 
 
 @pytest.mark.parametrize("phi", [0.0, 0.95])
@@ -137,10 +140,7 @@ def test_false_alarm_rate_on_noise(phi):
     fired = 0
     n = 100
     for seed in range(n):
-        rng = np.random.default_rng(100 + seed)
-        t, D, v = _moves(rng)
-        sliding = np.abs(v) > BAND
-        r = _with_static_levels(rng, _ar1(rng, phi), sliding)
+        D, v, sliding, r = _noisy(_moves, 100 + seed, phi)
         fired += _test(r, D, v, sliding)["significant"]
     assert fired <= 2, fired
 
@@ -203,10 +203,7 @@ def test_reversals_in_one_stretch_of_time_are_tested_across_legs(phi):
     other legs predict a held-out leg instead; on noise alone (a static level at each rest)
     the test stays silent."""
     for seed in range(4):
-        rng = np.random.default_rng(seed)
-        t, D, v = _moves_after_a_rest(rng)
-        sliding = np.abs(v) > BAND
-        noise = _with_static_levels(rng, _ar1(rng, phi), sliding)
+        D, v, sliding, noise = _noisy(_moves_after_a_rest, seed, phi)
         quiet = _test(noise, D, v, sliding)
         found = _test(noise + 0.5 * _dahl(D, v, sliding, 3e-4), D, v, sliding)
         assert not quiet["significant"], (seed, quiet["p_value"], quiet["gap"])
