@@ -304,9 +304,9 @@ def block_edges(valid: np.ndarray | None, rows: int, n_blocks: int) -> np.ndarra
     long rests leaves most folds without a sliding pair, so a structure of the moves is
     predicted from one other move or from none (14 s of rest, then two moves: a sensor bias of
     2.9 times the noise was not named, ``no_discrepancy`` with 4.1 times the noise left).
-    Cut by the pairs, the folds of such a
-    record fall within the moves, each still one contiguous stretch; on a record that slides
-    throughout, the cut is the same as by time. Every block keeps at least one sample.
+    Cut by the pairs, the folds of such a record fall within the moves, each still one
+    contiguous stretch; on a record that slides throughout, the cut is the same as by time.
+    Every block keeps at least one sample.
 
     The tests of the generic out-of-model basis (``lackfit.test`` and the competitor of each
     round's winner) cut by time instead: with free coefficients on F, F^3, sgn(v) and a drift,
