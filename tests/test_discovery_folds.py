@@ -185,3 +185,32 @@ def test_generic_structure_needs_a_held_out_gain_beyond_k_over_n(monkeypatch):
         assert out["p_value"] < 1e-10 and out["gap"] > 0.3
         assert out["cv_gain"] == pytest.approx(factor * kn)
         assert out["significant"] is expected
+
+
+def test_moves_shorter_than_the_differentiators_window_are_a_data_problem():
+    """Moves of 0.15 s at 200 Hz with 10 um of pose noise: the differentiator's window is
+    longer than a move, so no pair is known to slide. A one-line error says so (it was a
+    division by zero in the screening of the candidates)."""
+    from gsfric.errors import InputError
+
+    platform = reference_platform(friction_model="paper")
+    data = synthesize(platform, [], motion=moves_with_long_rests(seconds=13.0, move=0.15,
+                                                                 rest=0.94),
+                      noise=0.05, pose_noise=1e-5, seed=3)
+    with pytest.raises(InputError, match=r"pairs slide beyond the speed uncertainty.*"
+                                         r"the differentiator's window \(\d+ samples\)"):
+        discover_log(data, platform)
+
+
+def test_moves_with_a_fixed_orientation_slide():
+    """Moves of 0.3 s at 500 Hz, translations only: every rest is widened by the position's
+    reach alone (the fixed orientation's filter, the longest there is, widened the rests over
+    the whole moves and left 69 sliding pairs), and a drag is named."""
+    platform = reference_platform(friction_model="paper")
+    data = synthesize(platform, ["quadratic_drag:coefficient=40"],
+                      motion=moves_with_long_rests(rate=500.0, seconds=20.0, move=0.3,
+                                                   rest=1.66, seed=6),
+                      noise=0.05, seed=6)
+    r = discover_log(data, platform)
+    assert r.noise["not_sliding_share"] < 0.9
+    assert r.names == ["quadratic_drag"] and r.verdict == "explained"

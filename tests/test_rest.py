@@ -147,3 +147,29 @@ def test_differentiator_from_the_motions_own_filters():
     fixed = Motion.from_samples(fr.t.to_numpy(), position, window=31,
                                 quaternion=fr[["qw", "qx", "qy", "qz"]].to_numpy())
     assert fixed.sample_filters() is None
+
+
+def test_a_fixed_orientation_does_not_widen_the_rests():
+    """Translations only, the orientation held (noise-free, or with noise of its own): the
+    orientation's filter is the longest there is (nothing to resolve), and its reach does not
+    count; the position's does. A rotating platform keeps the longer of the two."""
+    from gsfric.discovery.rest import moves
+    from gsfric.trajectory import motion_filters
+
+    rng = np.random.default_rng(6)
+    rate, seconds = 500.0, 12.0
+    t = np.arange(int(rate * seconds)) / rate
+    targets = np.c_[rng.uniform(-0.03, 0.03, (12, 2)), 0.95 + rng.uniform(-0.02, 0.02, 12)]
+    position = minimum_jerk_moves(t, targets, 1.2, 0.3).position
+    for rotation_noise in (0.0, 1e-5):
+        angles = rng.normal(0, rotation_noise, (len(t), 3))
+        rotation = Rotation.from_rotvec(angles).as_matrix()
+        q = quaternion_from_rotation(rotation)
+        assert not moves(q)
+        _, reach = differentiator(position, rotation)
+        np.testing.assert_array_equal(reach, motion_filters(position)[0][1] // 2)
+    turning = Rotation.from_rotvec(np.c_[np.zeros((len(t), 2)), 0.2 * np.sin(t)]).as_matrix()
+    _, reach = differentiator(position, turning)
+    q_reach = motion_filters(quaternion_from_rotation(turning))[0][1] // 2
+    np.testing.assert_array_equal(reach, np.maximum(motion_filters(position)[0][1] // 2,
+                                                    q_reach))

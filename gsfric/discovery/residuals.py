@@ -279,6 +279,14 @@ class Problem:
         self.sigma_v = np.median(sigma_v[self.used], axis=0)
         self.sliding = rest.sliding_mask(self.result.D_dot, sigma_v, 3 * PRISMATIC_EPS,
                                          reach=self.reach)[self.used]
+        pairs = int(np.count_nonzero(self.sliding))
+        if pairs < needed:
+            window = 2 * int(np.median(self.reach[self.used])) + 1
+            raise InputError(
+                f"measured data: {pairs} (sample, leg) pairs slide beyond the speed "
+                f"uncertainty of the differentiated poses; the workflow needs at least "
+                f"{needed}: moves shorter than the differentiator's window ({window} samples) "
+                "or too slow for the pose noise cannot be told from rests")
         self.weight = self.sliding.astype(float)
         # the speeds the sliding samples cover: a Stribeck decay above nearly all of them is
         # a speed-independent friction on this data (see ``candidates.STRIBECK_QUANTILE``)

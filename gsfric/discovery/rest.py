@@ -79,26 +79,47 @@ def differentiator(position: np.ndarray, rotation: np.ndarray, polyorder: int | 
         filter, per sample step: a white noise sigma becomes a velocity noise
         ``sigma gain / step``.
     reach : ndarray of int, shape (N,)
-        Half the longer of the two windows, samples.
+        Half the longer of the two windows, samples; of the position's alone when the
+        orientation does not move (``moves``).
     """
     from gsfric.trajectory import (DEFAULT_POLYORDER, _continuous, motion_filters,
                                    quaternion_from_rotation)
 
     polyorder = DEFAULT_POLYORDER if polyorder is None else int(polyorder)
+    signals = (np.asarray(position, float),
+               _continuous(quaternion_from_rotation(np.asarray(rotation, float))))
     if filters is None:
-        q = _continuous(quaternion_from_rotation(np.asarray(rotation, float)))
-        filters = [motion_filters(signal, polyorder) for signal in
-                   (np.asarray(position, float), q)]
+        filters = [motion_filters(signal, polyorder) for signal in signals]
     gains, reaches = [], []
-    for chosen in filters:
+    for chosen, signal in zip(filters, signals):
         orders, windows = chosen[0]
         gain = np.empty(len(windows))
         for p, w in np.unique(np.stack([orders, windows], axis=1), axis=0):
             rows = (orders == p) & (windows == w)
             gain[rows] = np.linalg.norm(savgol_coeffs(int(w), int(p), deriv=1))
         gains.append(gain)
-        reaches.append(windows // 2)
+        reaches.append(windows // 2 if moves(signal) else np.zeros_like(windows))
     return np.maximum(*gains), np.maximum(*reaches)
+
+
+MOVE_TO_NOISE = 20.0
+"""A recorded channel moves when its range exceeds this many times its white noise."""
+
+
+def moves(signal: np.ndarray) -> bool:
+    """Whether a recorded signal (N, k) moves beyond its noise: the range of a component
+    exceeds ``MOVE_TO_NOISE`` times its white noise (``trajectory.white_noise_std``).
+
+    The reach of a differentiator matters where its window mixes a rest with a move; a channel
+    that does not move mixes nothing, whatever window it was given. An orientation held fixed
+    (translations only, a common test) gets the longest window there is, since nothing is to
+    be resolved, and counting its reach would widen every rest by it: 0.3 s moves at 500 Hz
+    with a fixed orientation were left without a sliding pair."""
+    from gsfric.trajectory import white_noise_std
+
+    signal = np.asarray(signal, float)
+    return bool(np.any(np.ptp(signal, axis=0) > MOVE_TO_NOISE * white_noise_std(signal)
+                       + 1e-12 * np.max(np.abs(signal), initial=1.0)))
 
 
 SPLINE_NOISE_DRAWS = 8
