@@ -24,7 +24,7 @@ import numpy as np
 from gsfric.discovery import discover
 from gsfric.discovery.candidates import CANDIDATES
 from gsfric.errors import InputError
-from gsfric.models import reference_platform
+from gsfric.models import minimum_jerk_moves, reference_platform
 from gsfric.synth import synthesize
 from gsfric.trajectory import Motion, rotation_from_quaternion
 
@@ -41,7 +41,7 @@ def effects_of(model: str) -> list[str]:
 
 def moves(rng, rate: float, move: float, rest: float) -> Motion:
     """Minimum-jerk translations between random targets, a rest after each, the orientation
-    fixed; positions, velocities and accelerations in closed form."""
+    fixed (``models.minimum_jerk_moves``), over at least 8 s."""
     seconds = min(max(8.0, 12 * (move + rest)), 10000 / rate)
     t = np.arange(int(rate * seconds)) / rate
     period = move + rest
@@ -49,17 +49,7 @@ def moves(rng, rate: float, move: float, rest: float) -> Motion:
     amplitude = rng.choice([0.01, 0.03])
     targets = np.c_[rng.uniform(-amplitude, amplitude, (count, 2)),
                     0.95 + rng.uniform(-0.02, 0.02, count)]
-    k = np.minimum((t // period).astype(int), count - 2)
-    s = np.clip((t - k * period) / move, 0.0, 1.0)
-    moving = (t - k * period) < move
-    d = targets[k + 1] - targets[k]
-    shape = [10 * s ** 3 - 15 * s ** 4 + 6 * s ** 5,
-             (30 * s ** 2 - 60 * s ** 3 + 30 * s ** 4) / move * moving,
-             (60 * s - 180 * s ** 2 + 120 * s ** 3) / move ** 2 * moving]
-    zero = np.zeros((len(t), 3))
-    return Motion.from_arrays(t, targets[k] + shape[0][:, None] * d,
-                              np.tile(np.eye(3), (len(t), 1, 1)), shape[1][:, None] * d, zero,
-                              shape[2][:, None] * d, zero)
+    return minimum_jerk_moves(t, targets, period, move)
 
 
 def unit_effect(rng, name: str) -> tuple[dict[str, float], list[str]]:

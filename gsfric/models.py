@@ -273,3 +273,21 @@ def point_to_point(rng: np.random.Generator, samples: int, rate: float = 200.0,
     position = pose[:, :3] + [0.0, 0.0, height]
     rotation = rotation_from_euler(pose[:, 3], pose[:, 4] + tilt, pose[:, 5])
     return Motion.from_samples(t, position, quaternion=quaternion_from_rotation(rotation))
+
+
+def minimum_jerk_moves(t: np.ndarray, targets: np.ndarray, period: float, move: float) -> Motion:
+    """Translations through ``targets`` (K, 3), m, the orientation fixed: from target k to
+    k + 1 a minimum-jerk move of ``move`` s starting at ``k period`` s, then a rest until the
+    next. Positions, velocities and accelerations in closed form at the times t (N,), s (not
+    differentiated from samples: the true motion of a synthetic record)."""
+    k = np.minimum((t // period).astype(int), len(targets) - 2)
+    s = np.clip((t - k * period) / move, 0.0, 1.0)
+    moving = (t - k * period) < move
+    d = targets[k + 1] - targets[k]
+    shape = [10 * s ** 3 - 15 * s ** 4 + 6 * s ** 5,
+             (30 * s ** 2 - 60 * s ** 3 + 30 * s ** 4) / move * moving,
+             (60 * s - 180 * s ** 2 + 120 * s ** 3) / move ** 2 * moving]
+    zero = np.zeros((len(t), 3))
+    return Motion.from_arrays(t, targets[k] + shape[0][:, None] * d,
+                              np.tile(np.eye(3), (len(t), 1, 1)), shape[1][:, None] * d, zero,
+                              shape[2][:, None] * d, zero)

@@ -8,6 +8,7 @@ import gsfric
 from gsfric import models
 from gsfric.evaluation import effect_vector, parameter_vector, state_array
 from gsfric.manifest import layout
+from gsfric.models import minimum_jerk_moves  # noqa: F401  (the tests import it from here)
 
 
 PAPER_MISPRINTS = {
@@ -80,22 +81,3 @@ def with_every_effect(rng: np.random.Generator, platform: gsfric.Platform) -> gs
         "leg_weight": {"lower_mass": 0.3, "upper_mass": 0.2},
         "bushing_friction": {"coefficient": 0.1, "spacing": 0.08},
     })
-
-
-def minimum_jerk_moves(t: np.ndarray, targets: np.ndarray, period: float, move: float):
-    """A motion through ``targets`` (K, 3), m: from target k to k + 1 a minimum-jerk move of
-    ``move`` s starting at ``k period``, then a rest until the next; the orientation fixed.
-    Positions, velocities and accelerations in closed form at the times t (N,), s."""
-    from gsfric.trajectory import Motion
-
-    k = np.minimum((t // period).astype(int), len(targets) - 2)
-    s = np.clip((t - k * period) / move, 0.0, 1.0)
-    moving = (t - k * period) < move
-    d = targets[k + 1] - targets[k]
-    shape = [10 * s ** 3 - 15 * s ** 4 + 6 * s ** 5,
-             (30 * s ** 2 - 60 * s ** 3 + 30 * s ** 4) / move * moving,
-             (60 * s - 180 * s ** 2 + 120 * s ** 3) / move ** 2 * moving]
-    zero = np.zeros((len(t), 3))
-    return Motion.from_arrays(t, targets[k] + shape[0][:, None] * d,
-                              np.tile(np.eye(3), (len(t), 1, 1)), shape[1][:, None] * d, zero,
-                              shape[2][:, None] * d, zero)
