@@ -205,7 +205,7 @@ def test_moves_shorter_than_the_differentiators_window_are_a_data_problem():
 def test_moves_with_a_fixed_orientation_slide():
     """Moves of 0.3 s at 500 Hz, translations only: every rest is widened by the position's
     reach alone (the fixed orientation's filter, the longest there is, widened the rests over
-    the whole moves and left 69 sliding pairs), and a drag is named."""
+    the whole moves and left 135 sliding pairs, a data error), and a drag is named."""
     platform = reference_platform(friction_model="paper")
     data = synthesize(platform, ["quadratic_drag:coefficient=40"],
                       motion=moves_with_long_rests(rate=500.0, seconds=20.0, move=0.3,
