@@ -826,7 +826,19 @@ class Motion:
         motion = cls(t, p0, rotation, p1, omega, p2, alpha)
         if uniform and window is None:
             object.__setattr__(motion, "_filters", (int(polyorder), filters))
+        object.__setattr__(motion, "_recorded", (position, q))
         return motion
+
+    def recorded_poses(self) -> tuple[np.ndarray, np.ndarray] | None:
+        """The samples ``from_samples`` differentiated: positions (N, 3), m, and rotations
+        (N, 3, 3), unsmoothed; None for a motion not made by ``from_samples``, or a slice.
+        The pose noise, and from it the uncertainty of the differentiated speed, is measured
+        on them (``gsfric.discovery``); the smoothed poses hide most of it."""
+        recorded = getattr(self, "_recorded", None)
+        if recorded is None:
+            return None
+        position, q = recorded
+        return position, rotation_from_quaternion(q)
 
     def sample_filters(self, polyorder: int = DEFAULT_POLYORDER):
         """The per-sample Savitzky-Golay filters ``from_samples`` chose for this motion

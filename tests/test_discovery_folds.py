@@ -188,13 +188,13 @@ def test_generic_structure_needs_a_held_out_gain_beyond_k_over_n(monkeypatch):
 
 
 def test_moves_shorter_than_the_differentiators_window_are_a_data_problem():
-    """Moves of 0.15 s at 200 Hz with 10 um of pose noise: the differentiator's window is
-    longer than a move, so no pair is known to slide. A one-line error says so (it was a
-    division by zero in the screening of the candidates)."""
+    """Moves of 0.05 s (10 samples at 200 Hz) with 10 um of pose noise: the differentiator's
+    window is longer than a move, so no pair is known to slide. A one-line error says so (it
+    was a division by zero in the screening of the candidates)."""
     from gsfric.errors import InputError
 
     platform = reference_platform(friction_model="paper")
-    data = synthesize(platform, [], motion=moves_with_long_rests(seconds=13.0, move=0.15,
+    data = synthesize(platform, [], motion=moves_with_long_rests(seconds=13.0, move=0.05,
                                                                  rest=0.94),
                       noise=0.05, pose_noise=1e-5, seed=3)
     with pytest.raises(InputError, match=r"pairs slide beyond the speed uncertainty.*"

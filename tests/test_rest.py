@@ -173,3 +173,32 @@ def test_a_fixed_orientation_does_not_widen_the_rests():
     q_reach = motion_filters(quaternion_from_rotation(turning))[0][1] // 2
     np.testing.assert_array_equal(reach, np.maximum(motion_filters(position)[0][1] // 2,
                                                     q_reach))
+
+
+def test_the_motion_keeps_its_recorded_poses_for_the_speed_band():
+    """A motion made from samples keeps them: ``discover`` without ``poses`` measures the pose
+    noise on the recorded samples, as the command line does with the log's columns (on the
+    smoothed poses the band was 0.015 times as wide)."""
+    from gsfric.discovery.residuals import Problem
+    from gsfric.discovery.settings import Settings
+
+    platform = reference_platform(friction_model="paper")
+    data = synthesize(platform, motion=point_to_point(np.random.default_rng(5), 3000),
+                      noise=0.1, pose_noise=1e-5, seed=5)
+    fr = data.frame
+    position = fr[["x", "y", "z"]].to_numpy()
+    estimate = Motion.from_samples(fr.t.to_numpy(), position,
+                                   quaternion=fr[["qw", "qx", "qy", "qz"]].to_numpy())
+    kept, rotation = estimate.recorded_poses()
+    np.testing.assert_array_equal(kept, position)
+    np.testing.assert_allclose(rotation, poses_from_columns(fr)[1], atol=1e-12)
+    assert estimate.slice(0, 100).recorded_poses() is None
+    forces = fr[[f"F{i}" for i in range(1, 7)]].to_numpy()
+    default = Problem(estimate, forces, platform, Settings(n_threads=1))
+    given = Problem(estimate, forces, platform, Settings(n_threads=1),
+                    poses=poses_from_columns(fr))
+    np.testing.assert_allclose(default.sigma_v, given.sigma_v, rtol=1e-9)
+    np.testing.assert_array_equal(default.sliding, given.sliding)
+    smoothed = Problem(estimate, forces, platform, Settings(n_threads=1),
+                       poses=(estimate.position, estimate.rotation))
+    assert np.all(smoothed.sigma_v < 0.1 * given.sigma_v)

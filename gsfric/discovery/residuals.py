@@ -255,6 +255,8 @@ class Problem:
         from gsfric.evaluation import PRISMATIC_EPS
 
         t = np.asarray(motion.t, float)
+        if poses is None:
+            poses = motion.recorded_poses()
         recorded = poses is not None
         if poses is None:
             poses = (np.asarray(motion.position, float), np.asarray(motion.rotation, float))

@@ -213,8 +213,8 @@ def discover(motion: Motion, forces: np.ndarray, platform: Platform | None = Non
     poses : (ndarray (N, 3), ndarray (N, 3, 3)), optional
         The recorded (unsmoothed) positions (m) and rotations, from which the pose noise and
         the uncertainty of the leg speeds are estimated (``rest.speed_uncertainty``; see
-        ``rest.poses_from_columns``). Default: the motion's smoothed poses, which
-        underestimate it.
+        ``rest.poses_from_columns``). Default: the samples the motion was made from
+        (``Motion.recorded_poses``), else its smoothed poses, which underestimate it.
     **options
         Fields of ``Settings`` overriding ``settings``.
 
