@@ -126,9 +126,9 @@ def test_seal_force_on_a_jittered_log_with_rests_is_named():
     assert result.rms_after < 1.15 * float(np.sqrt(np.mean(data.noise ** 2)))
 
 
-def test_differentiator_from_the_motions_own_filters():
-    """The gains and reaches from the filters ``Motion.from_samples`` chose for the recorded
-    samples are those chosen again from the recorded poses (the filters are chosen once)."""
+def _recorded_point_to_point():
+    """A point-to-point record with 10 um of pose noise (paper base): the platform, the log's
+    frame, its positions and the motion ``Motion.from_samples`` makes of them."""
     platform = reference_platform(friction_model="paper")
     data = synthesize(platform, motion=point_to_point(np.random.default_rng(5), 3000),
                       noise=0.1, pose_noise=1e-5, seed=5)
@@ -136,6 +136,13 @@ def test_differentiator_from_the_motions_own_filters():
     position = fr[["x", "y", "z"]].to_numpy()
     estimate = Motion.from_samples(fr.t.to_numpy(), position,
                                    quaternion=fr[["qw", "qx", "qy", "qz"]].to_numpy())
+    return platform, fr, position, estimate
+
+
+def test_differentiator_from_the_motions_own_filters():
+    """The gains and reaches from the filters ``Motion.from_samples`` chose for the recorded
+    samples are those chosen again from the recorded poses (the filters are chosen once)."""
+    _, fr, position, estimate = _recorded_point_to_point()
     _, rotation = poses_from_columns(fr)
     filters = estimate.sample_filters()
     assert filters is not None and estimate.slice(0, 100).sample_filters() is None
@@ -182,13 +189,7 @@ def test_the_motion_keeps_its_recorded_poses_for_the_speed_band():
     from gsfric.discovery.residuals import Problem
     from gsfric.discovery.settings import Settings
 
-    platform = reference_platform(friction_model="paper")
-    data = synthesize(platform, motion=point_to_point(np.random.default_rng(5), 3000),
-                      noise=0.1, pose_noise=1e-5, seed=5)
-    fr = data.frame
-    position = fr[["x", "y", "z"]].to_numpy()
-    estimate = Motion.from_samples(fr.t.to_numpy(), position,
-                                   quaternion=fr[["qw", "qx", "qy", "qz"]].to_numpy())
+    platform, fr, position, estimate = _recorded_point_to_point()
     kept, rotation = estimate.recorded_poses()
     np.testing.assert_array_equal(kept, position)
     np.testing.assert_allclose(rotation, poses_from_columns(fr)[1], atol=1e-12)
