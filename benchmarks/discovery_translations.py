@@ -77,19 +77,14 @@ def case(seed: int, model: str, name: str | None, size: float) -> dict:
     pose = float(rng.choice([0.0, 3e-6, 1e-5]))
     sigma, phi = float(rng.choice([0.05, 0.2])), float(rng.choice([0.0, 0.9, 0.95]))
     platform = reference_platform(friction_model=model)
-    effects = {}
-    if name is not None:
-        params, keys = unit_effect(rng, name)
-        for _ in range(3):     # the effects are close to linear in their scaled parameters
-            data = synthesize(platform, {name: params}, motion=motion, noise=sigma,
-                              noise_correlation=phi, pose_noise=pose, seed=seed)
-            k = size / max(data.sizes[name], 1e-12)
-            if abs(k - 1) < 0.03:
-                break
-            params = {p: v * k if not keys or p in keys else v for p, v in params.items()}
-        effects = {name: params}
-    data = synthesize(platform, effects, motion=motion, noise=sigma, noise_correlation=phi,
-                      pose_noise=pose, seed=seed)
+    params, keys = unit_effect(rng, name) if name is not None else ({}, [])
+    for _ in range(4):     # the effects are close to linear in their scaled parameters
+        data = synthesize(platform, {name: params} if name is not None else {}, motion=motion,
+                          noise=sigma, noise_correlation=phi, pose_noise=pose, seed=seed)
+        k = 1.0 if name is None else size / max(data.sizes[name], 1e-12)
+        if abs(k - 1) < 0.03:
+            break
+        params = {p: v * k if not keys or p in keys else v for p, v in params.items()}
     f = data.frame
     position = f[["x", "y", "z"]].to_numpy()
     quaternion = f[["qw", "qx", "qy", "qz"]].to_numpy()

@@ -258,7 +258,7 @@ class Problem:
         if poses is None:
             poses = motion.recorded_poses()
         recorded = poses is not None
-        if poses is None:
+        if not recorded:
             poses = (np.asarray(motion.position, float), np.asarray(motion.rotation, float))
         uniform = np.ptp(np.diff(t)) <= 1e-6 * np.mean(np.diff(t))
         sigma_v, self.reach = np.zeros((n, 6)), np.zeros(n, int)
