@@ -104,21 +104,25 @@ class Case:
 
 def make_case(names, seed: int, size: float | None = None, phi: float | None = None,
               sigma: float | None = None, samples: int = SAMPLES,
-              pose: float | None = None, hinge: bool = False) -> Case:
+              pose: float | None = None, hinge: bool = False,
+              hinge_at: float | None = None) -> Case:
     """A synthetic measured record with the named hidden effects (see the module docstring);
     ``pose`` overrides the pose noise (m and rad); ``hinge`` puts the stroke friction's
     reference at the mean leg length (friction on one side of it only, the Coulomb sum being
-    clamped at zero) instead of at the end of the stroke it grows from."""
+    clamped at zero) instead of at the end of the stroke it grows from; ``hinge_at`` at that
+    fraction of the stroke from the shortest leg length."""
     rng = np.random.default_rng(seed)
     names = list(names)
     model = model_for(names)
     t = np.arange(samples) / RATE
     motion = excitation_motion(rng, t)
     params = {n: draw_parameters(n, rng) for n in names}
-    if "stroke_friction" in params and hinge:
+    if "stroke_friction" in params and (hinge or hinge_at is not None):
         with warnings.catch_warnings():
             warnings.simplefilter("ignore")
-            params["stroke_friction"]["reference"] = float(evaluate(model, motion).D.mean())
+            D = evaluate(model, motion).D
+        params["stroke_friction"]["reference"] = float(
+            D.mean() if hinge_at is None else D.min() + hinge_at * np.ptp(D))
     elif "stroke_friction" in params:
         with warnings.catch_warnings():
             warnings.simplefilter("ignore")
@@ -384,6 +388,19 @@ def test_names_stroke_friction_with_a_reference_inside_the_stroke(seed):
     assert np.sign(found["slope"]) == np.sign(true["slope"])
     D = evaluate(case.truth, case.true_motion).D
     assert abs(found["reference"] - true["reference"]) <= 0.1 * np.ptp(D)
+    assert result.rms_after <= RMS_LIMIT * case.sigma
+
+
+def test_a_stroke_reference_between_the_grids_values_is_refined():
+    # the references tried are eighths of the stroke; one at 5/16 lies halfway between two.
+    # Held at the nearest, the misfit (a friction of slope x 1/16 of the stroke over most of
+    # it) was left to seal_friction, named beside it. Refined, it is one effect.
+    case = make_case(["stroke_friction"], 3, size=3.0, phi=0.0, hinge_at=5 / 16)
+    result = run_case(case)
+    assert result.names == ["stroke_friction"]
+    found = result.effects[0].parameters["reference"]
+    D = evaluate(case.truth, case.true_motion).D
+    assert abs(found - case.parameters["stroke_friction"]["reference"]) <= np.ptp(D) / 32
     assert result.rms_after <= RMS_LIMIT * case.sigma
 
 

@@ -331,6 +331,11 @@ class Problem:
             return self.plausible[name]
         effect, _, param = name.partition(".")
         for c in CANDIDATES:
+            if c.name == effect and param in c.refined:
+                lo, hi = c.refined_bounds(self.context)
+                value = float(self.model.theta0[self.model.index[name]])
+                own = c.name in self.platform.effects
+                return (min(lo, value), max(hi, value)) if own else (lo, hi)
             if c.name == effect and param in c.fitted:
                 k = c.fitted.index(param)
                 if name == "stribeck.velocity":
@@ -341,7 +346,7 @@ class Problem:
     def refit_names(self, active: Sequence[str]) -> list[str]:
         names = list(self.plausible)
         for c in self.own_effects + [c for c in CANDIDATES if c.name in active]:
-            names += [col for col in c.columns if col not in names]
+            names += [col for col in c.refined_columns if col not in names]
         return names
 
     def with_fixed(self, theta: np.ndarray, candidates: Sequence[Candidate]) -> np.ndarray:

@@ -375,7 +375,8 @@ def discover(motion: Motion, forces: np.ndarray, platform: Platform | None = Non
         ev["effect_size"] = _rms(contributions[name]) / noise if noise > 0 else float("inf")
         ev["contribution_rms"] = _rms(contributions[name])
         findings.append(Finding(name, params,
-                                {p: intervals[f"{name}.{p}"] for p in c.fitted}, ev))
+                                {p: intervals[f"{name}.{p}"] for p in c.fitted + c.refined},
+                                ev))
     for name in list(refit["parameters"]):
         refit["parameters"][name]["final"] = float(theta[model.index[name]])
         refit["parameters"][name]["interval"] = intervals.get(name)
