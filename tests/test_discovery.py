@@ -391,6 +391,30 @@ def test_names_stroke_friction_with_a_reference_inside_the_stroke(seed):
     assert result.rms_after <= RMS_LIMIT * case.sigma
 
 
+def test_a_winner_that_refined_does_not_lower_the_residual_leaves_the_others_in(monkeypatch):
+    # the round's winner is dropped when, refined on the compiled model, it does not lower
+    # the residual; that says nothing of the other candidates, and the search goes on
+    from gsfric.discovery import workflow
+
+    case = make_case(["sensor_bias", "payload_offset"], 1, size=8.0, phi=0.0)
+    refine = workflow.refine
+    failed = []
+
+    def first_effect_fails(problem, theta, names, whitener, start=None):
+        theta_new, r, J = refine(problem, theta, names, whitener, start=start)
+        effects = {n.split(".")[0] for n in names} & set(CANDIDATE_NAMES)
+        if effects and not failed:
+            failed.append(effects.pop())
+            return theta_new, r + problem.mask(np.full_like(r, 100.0)), J
+        return theta_new, r, J
+
+    monkeypatch.setattr(workflow, "refine", first_effect_fails)
+    result = run_case(case)
+    assert len(failed) == 1 and failed[0] not in result.names
+    assert set(result.names) == {"sensor_bias", "payload_offset"} - set(failed)
+    assert any(f"{failed[0]} refined on the compiled model" in n for n in result.notes)
+
+
 def test_a_stroke_reference_between_the_grids_values_is_refined():
     # the references tried are eighths of the stroke; one at 5/16 lies halfway between two.
     # Held at the nearest, the misfit (a friction of slope x 1/16 of the stroke over most of

@@ -257,10 +257,11 @@ def discover(motion: Motion, forces: np.ndarray, platform: Platform | None = Non
     notes += refit.pop("notes")
 
     active: list[str] = []
+    dropped: list[str] = []     # winners that, refined, did not lower the residual
     rounds: list[Round] = []
     findings_evidence: dict[str, dict] = {}
     while len(active) < settings.max_effects:
-        candidates = [c for c in problem.candidates if c.name not in active]
+        candidates = [c for c in problem.candidates if c.name not in active + dropped]
         if not candidates:
             break
         bar.step(f"round {len(rounds) + 1}: testing {len(candidates)} candidate effects")
@@ -335,11 +336,15 @@ def discover(motion: Motion, forces: np.ndarray, platform: Platform | None = Non
         rnd.rms_after = _rms(r_new[sliding])
         if rnd.rms_after >= rnd.rms_before:
             # refined on the compiled model, the effect no longer shrinks the gap
+            # (a change of the refitted parameters that the linearised screening did not
+            # foresee); it says nothing of the other candidates: the round is repeated
+            # without it
             notes.append(f"round {rnd.index}: {winner} refined on the compiled model does "
                          f"not lower the residual ({rnd.rms_before:.4g} N -> "
-                         f"{rnd.rms_after:.4g} N): not named")
+                         f"{rnd.rms_after:.4g} N): not named, the round repeated without it")
             rnd.blocked, rnd.winner, rnd.rms_after = winner, None, rnd.rms_before
-            break
+            dropped.append(winner)
+            continue
         theta, r, J, names = theta_new, r_new, J_new, new_names
         active.append(winner)
         findings_evidence[winner] = {
