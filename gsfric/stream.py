@@ -56,7 +56,7 @@ from gsfric.errors import GsfricWarning, InputError, StepFlagError
 from gsfric.evaluation import FLAG_NAMES, Evaluator
 from gsfric.trajectory import (DEFAULT_POLYORDER, GIMBAL_JUMP, GIMBAL_SIN_BETA, MIN_SAMPLES,
                                UNIFORM_RTOL, Motion, _check_window, _conjugate, _continuous,
-                               _gcv_window, _savgol, quaternion_from_euler,
+                               _gcv_window, _savgol, is_uniform, quaternion_from_euler,
                                quaternion_multiply)
 
 DEFAULT_CHUNK = 100_000
@@ -466,7 +466,7 @@ def iter_motions(path: str | os.PathLike[str], *, chunk: int = DEFAULT_CHUNK,
     info["rows"] = count
     if count <= chunk:
         motion = _whole(path, first, window, polyorder)
-        info["windows"] = "whole" if _uniform(motion.t) else None
+        info["windows"] = "whole" if is_uniform(motion.t) else None
         yield 0, motion
         return
 
@@ -544,12 +544,6 @@ def iter_motions(path: str | os.PathLike[str], *, chunk: int = DEFAULT_CHUNK,
     watch.finish()
     if done < total:
         yield emit(total, True)
-
-
-def _uniform(t: np.ndarray) -> bool:
-    steps = np.diff(t)
-    mean = (t[-1] - t[0]) / (len(t) - 1)
-    return bool(np.all(np.abs(steps - mean) <= UNIFORM_RTOL * mean))
 
 
 def _check_uniform(path: Path, t: np.ndarray, step: float, start: int, chunk: int) -> None:

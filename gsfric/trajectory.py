@@ -238,6 +238,16 @@ def check_units(t: np.ndarray, position: np.ndarray, source: str | None = None,
                       GsfricWarning, stacklevel=stacklevel)
 
 
+def is_uniform(t: np.ndarray) -> bool:
+    """Whether the times t (N,), s, are uniformly sampled as ``Motion.from_samples`` takes
+    them: every step within ``UNIFORM_RTOL`` of the mean step (a log's time stamps rounded to
+    the microsecond still are)."""
+    t = np.asarray(t, float)
+    steps = np.diff(t)
+    mean_step = (t[-1] - t[0]) / (len(t) - 1)
+    return bool(np.all(np.abs(steps - mean_step) <= UNIFORM_RTOL * mean_step))
+
+
 def _candidate_windows(n: int, polyorder: int) -> list[int]:
     smallest = polyorder + 2 if polyorder % 2 else polyorder + 3
     largest = min(n, MAX_AUTO_WINDOW)
@@ -794,7 +804,7 @@ class Motion:
         if lam is not None:
             lam = as_float(lam, "lam", minimum=0.0)
         mean_step = (t[-1] - t[0]) / (n - 1)
-        uniform = np.all(np.abs(steps - mean_step) <= UNIFORM_RTOL * mean_step)
+        uniform = is_uniform(t)
         if uniform:
             if window is None:
                 filters = (motion_filters(position, polyorder), motion_filters(q, polyorder))

@@ -203,3 +203,26 @@ def test_the_motion_keeps_its_recorded_poses_for_the_speed_band():
     smoothed = Problem(estimate, forces, platform, Settings(n_threads=1),
                        poses=(estimate.position, estimate.rotation))
     assert np.all(smoothed.sigma_v < 0.1 * given.sigma_v)
+
+
+def test_time_stamps_rounded_in_the_log_keep_the_motions_filters():
+    """A log's time stamps rounded to 0.1 us (ms with four decimals) are uniform for
+    ``Motion.from_samples``, which differentiates with its Savitzky-Golay filters; the speed
+    band and the rests' reach must come from those filters, not from the smoothing splines of
+    a jittered time base."""
+    from gsfric.discovery.residuals import Problem
+    from gsfric.discovery.settings import Settings
+
+    platform, fr, position, _ = _recorded_point_to_point()
+    exact = fr.t.to_numpy() * 0.997311 + 1.0
+    rounded = np.round(exact * 1e7) / 1e7
+    assert np.ptp(np.diff(rounded)) > 1e-6 * np.mean(np.diff(rounded))
+    forces = fr[[f"F{i}" for i in range(1, 7)]].to_numpy()
+    quaternion = fr[["qw", "qx", "qy", "qz"]].to_numpy()
+    problems = [Problem(Motion.from_samples(times, position, quaternion=quaternion), forces,
+                        platform, Settings(n_threads=1), poses=poses_from_columns(fr))
+                for times in (exact, rounded)]
+    assert problems[1].model.motion.sample_filters() is not None
+    np.testing.assert_array_equal(problems[0].reach, problems[1].reach)
+    np.testing.assert_allclose(problems[0].sigma_v, problems[1].sigma_v, rtol=1e-3)
+    np.testing.assert_array_equal(problems[0].sliding, problems[1].sliding)

@@ -25,7 +25,7 @@ from gsfric.discovery.model import BASE_PARAMETERS, ParametricModel
 from gsfric.discovery.settings import Settings
 from gsfric.errors import InputError
 from gsfric.platform import Platform
-from gsfric.trajectory import MAX_AUTO_WINDOW, Motion
+from gsfric.trajectory import MAX_AUTO_WINDOW, Motion, is_uniform
 
 DELAY = "time_offset.delay"
 
@@ -260,7 +260,9 @@ class Problem:
         recorded = poses is not None
         if not recorded:
             poses = (np.asarray(motion.position, float), np.asarray(motion.rotation, float))
-        uniform = np.ptp(np.diff(t)) <= 1e-6 * np.mean(np.diff(t))
+        # as the motion was differentiated: Savitzky-Golay filters on a uniform time base (a
+        # log's time stamps rounded to the microsecond included), else smoothing splines
+        uniform = is_uniform(t)
         sigma_v, self.reach = np.zeros((n, 6)), np.zeros(n, int)
         if uniform:
             # the filters the motion was differentiated with, when it was made from these
