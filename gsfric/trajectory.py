@@ -238,36 +238,14 @@ def check_units(t: np.ndarray, position: np.ndarray, source: str | None = None,
                       GsfricWarning, stacklevel=stacklevel)
 
 
-ROUNDED_CLOCK_RESOLUTION = 0.25
-"""Largest resolution of a rounded uniform clock's stamps, relative to the step (a larger one
-is not told from a dropout: steps of one and two samples)."""
-
-
 def is_uniform(t: np.ndarray) -> bool:
     """Whether the times t (N,), s, are uniformly sampled as ``Motion.from_samples`` takes
-    them: every step within ``UNIFORM_RTOL`` of the mean step, or the stamps of a uniform
-    clock rounded to their resolution.
-
-    Rounded to a resolution d, a uniform clock's stamps have two steps, d apart (the step
-    rounded down and up: a microsecond counter at 1946 Hz steps 513 and 514 us), and every
-    stamp lies within d of the evenly spaced grid. Their differences are the rounding, not the
-    sampling: differentiated on the rounded stamps, the motion would take the rounding for
-    jitter (and be fitted by a smoothing spline, one penalty for the whole record, where the
-    filters of a uniform time base adapt to each sample). A jittered clock's steps take many
-    values."""
+    them: every step within ``UNIFORM_RTOL`` of the mean step (a log's time stamps rounded to
+    the microsecond still are)."""
     t = np.asarray(t, float)
     steps = np.diff(t)
     mean_step = (t[-1] - t[0]) / (len(t) - 1)
-    if np.all(np.abs(steps - mean_step) <= UNIFORM_RTOL * mean_step):
-        return True
-    lo, hi = float(steps.min()), float(steps.max())
-    resolution, tol = hi - lo, UNIFORM_RTOL * mean_step
-    if resolution > ROUNDED_CLOCK_RESOLUTION * mean_step:
-        return False
-    two_steps = np.all(np.minimum(np.abs(steps - lo), np.abs(steps - hi)) <= tol)
-    i = np.arange(len(t), dtype=float)
-    offsets = t - np.polyval(np.polyfit(i, t, 1), i)      # from the clock's best line
-    return bool(two_steps and np.ptp(offsets) <= resolution + tol)
+    return bool(np.all(np.abs(steps - mean_step) <= UNIFORM_RTOL * mean_step))
 
 
 def _candidate_windows(n: int, polyorder: int) -> list[int]:
@@ -722,8 +700,7 @@ class Motion:
         made sign-continuous, and position and quaternion are smoothed and differentiated
         twice:
 
-        * Uniform sampling (every step within ``UNIFORM_RTOL`` of the mean step, or a uniform
-          clock's stamps rounded to their resolution: ``is_uniform``): a
+        * Uniform sampling (every step within ``UNIFORM_RTOL`` of the mean step): a
           Savitzky-Golay filter (``scipy.signal.savgol_filter``, ``mode="interp"``, orders 0,
           1 and 2) of ``window`` samples and polynomial order ``polyorder``. With
           ``window=None`` the filter (order ``polyorder`` or ``polyorder + 2``, odd window up
