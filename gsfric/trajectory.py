@@ -240,8 +240,8 @@ def check_units(t: np.ndarray, position: np.ndarray, source: str | None = None,
 
 def is_uniform(t: np.ndarray) -> bool:
     """Whether the times t (N,), s, are uniformly sampled as ``Motion.from_samples`` takes
-    them: every step within ``UNIFORM_RTOL`` of the mean step (a log's time stamps rounded to
-    the microsecond still are)."""
+    them: every step within ``UNIFORM_RTOL`` of the mean step (time stamps rounded to less
+    than that, a log's ms with four decimals, still are)."""
     t = np.asarray(t, float)
     steps = np.diff(t)
     mean_step = (t[-1] - t[0]) / (len(t) - 1)

@@ -417,8 +417,9 @@ def test_a_winner_that_refined_does_not_lower_the_residual_leaves_the_others_in(
 
 def test_a_stroke_reference_between_the_grids_values_is_refined():
     # the references tried are eighths of the stroke; one at 5/16 lies halfway between two.
-    # Held at the nearest, the misfit (a friction of slope x 1/16 of the stroke over most of
-    # it) was left to seal_friction, named beside it. Refined, it is one effect.
+    # Held at the nearest, the reference was 1/16 of the stroke off here, and the misfit (a
+    # friction of slope x 1/16 of the stroke over most of it) was on other records left to
+    # seal_friction, named beside it. Refined, the reference is found.
     case = make_case(["stroke_friction"], 3, size=3.0, phi=0.0, hinge_at=5 / 16)
     result = run_case(case)
     assert result.names == ["stroke_friction"]

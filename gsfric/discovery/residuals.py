@@ -261,7 +261,7 @@ class Problem:
         if not recorded:
             poses = (np.asarray(motion.position, float), np.asarray(motion.rotation, float))
         # as the motion was differentiated: Savitzky-Golay filters on a uniform time base (a
-        # log's time stamps rounded to the microsecond included), else smoothing splines
+        # log's time stamps rounded to 0.1 us included), else smoothing splines
         uniform = is_uniform(t)
         sigma_v, self.reach = np.zeros((n, 6)), np.zeros(n, int)
         if uniform:
