@@ -7,10 +7,11 @@ a lubricated joint), the refit is held at the range's edge and the remaining gap
 candidate effects.
 
 Each candidate (``CANDIDATES``, one per catalog effect, names fixed in SPEC) lists the
-parameters fitted (with physical bounds), the parameters held fixed (set from the data or the
-platform: the stroke reference is the data's mean leg length, the bushing spacing is the
-platform's or the catalog's), and, for the one parameter on which the model is strongly
-nonlinear (``stribeck.velocity``), a grid of starting values.
+parameters fitted (with physical bounds), the parameters held fixed (set from the platform:
+the bushing spacing is the platform's or the catalog's), and, for the parameters on which the
+model is strongly nonlinear, a grid of starting values: ``stribeck.velocity`` (then fitted),
+the stroke reference (9 leg lengths along the data's stroke; refined once the effect is named,
+``Candidate.refined``).
 """
 
 from __future__ import annotations
