@@ -214,3 +214,17 @@ def test_moves_with_a_fixed_orientation_slide():
     r = discover_log(data, platform)
     assert r.noise["not_sliding_share"] < 0.9
     assert r.names == ["quadratic_drag"] and r.verdict == "explained"
+
+
+def test_each_separating_motion_names_the_two_effects_it_separates():
+    """The report's sentence on what motion would separate two indistinguishable candidates
+    names both, each a candidate (a catalog name misspelt would send the reader nowhere)."""
+    from gsfric.discovery.candidates import CANDIDATE_NAMES, SEPARATING_MOTION, separating_motion
+
+    assert frozenset({"force_scale", "sensor_bias"}) in SEPARATING_MOTION
+    for pair in SEPARATING_MOTION:
+        a, b = sorted(pair)
+        assert {a, b} <= set(CANDIDATE_NAMES)
+        sentence = separating_motion(a, b)
+        assert sentence == separating_motion(b, a)
+        assert a in sentence and b in sentence

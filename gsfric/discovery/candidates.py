@@ -276,8 +276,13 @@ SEPARATING_MOTION = {
     frozenset({"force_scale", "payload_offset"}):
         "moves with large accelerations at one pose separate force_scale (scales inertial "
         "forces too) from payload_offset (weight only)",
+    frozenset({"force_scale", "sensor_bias"}):
+        "moves that change each leg's force over a wide range (fast vertical moves, tilts that "
+        "shift the weight between the legs) separate force_scale (proportional to the force) "
+        "from sensor_bias (constant)",
     frozenset({"time_offset", "quadratic_drag"}):
-        "faster and slower repetitions of the same path separate a delay from a speed law",
+        "faster and slower repetitions of the same path separate a delay (time_offset) from a "
+        "speed law (quadratic_drag)",
 }
 """What motion separates two candidates the data could not tell apart (for the report)."""
 
