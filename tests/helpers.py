@@ -8,7 +8,6 @@ import gsfric
 from gsfric import models
 from gsfric.evaluation import effect_vector, parameter_vector, state_array
 from gsfric.manifest import layout
-from gsfric.models import minimum_jerk_moves  # noqa: F401  (the tests import it from here)
 
 
 PAPER_MISPRINTS = {

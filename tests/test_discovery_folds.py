@@ -5,11 +5,9 @@ import pytest
 
 from gsfric.discovery import discover
 from gsfric.discovery import statistics as st
-from gsfric.models import reference_platform
+from gsfric.models import minimum_jerk_moves, reference_platform
 from gsfric.synth import synthesize
 from gsfric.trajectory import Motion
-
-from helpers import minimum_jerk_moves
 
 
 def moves_with_long_rests(rate=200.0, seconds=14.0, move=0.7, rest=3.0, seed=4):

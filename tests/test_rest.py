@@ -10,11 +10,9 @@ from scipy.spatial.transform import Rotation
 from gsfric.discovery.rest import (differentiator, poses_from_columns, sliding_mask,
                                    speed_uncertainty)
 from gsfric.evaluation import evaluate
-from gsfric.models import point_to_point, reference_platform
+from gsfric.models import minimum_jerk_moves, point_to_point, reference_platform
 from gsfric.synth import synthesize
 from gsfric.trajectory import Motion, quaternion_from_rotation
-
-from helpers import minimum_jerk_moves
 
 
 def test_each_sample_looks_as_far_as_its_own_window_reaches():

@@ -111,9 +111,8 @@ class Candidate:
     """Rank in parsimony among indistinguishable candidates (lower: simpler, preferred)."""
     refined: tuple[str, ...] = ()
     """Grid parameters refined by Gauss-Newton once the effect is in the model (from the best
-    grid value, within ``refined_bounds``): where the truth lies between two grid values, the
+    grid value, within the grid's range): where the truth lies between two grid values, the
     grid's misfit would otherwise be left to another candidate."""
-    refined_bounds: Callable[[dict], tuple[float, float]] = lambda context: (-INF, INF)
     secants: tuple[float, ...] = (1.0,)
     """Steps of the amplitude at which its one-sided (secant) columns are taken, for an
     amplitude on which F is nonlinear (``time_offset``: a delay of several samples shifts a
@@ -164,11 +163,6 @@ def _stroke_ends(context: dict) -> dict | None:
         return None
     lo, hi = float(context["min_length"]), float(context["max_length"])
     return {"reference": tuple(float(v) for v in np.linspace(lo, hi, STROKE_REFERENCES))}
-
-
-def _stroke_range(context: dict) -> tuple[float, float]:
-    """The stroke reference's range: the legs' stroke in the data (``_stroke_ends``)."""
-    return float(context["min_length"]), float(context["max_length"])
 
 
 def _bushing_spacing(platform: Platform, context: dict) -> dict:
@@ -241,8 +235,7 @@ CANDIDATES: tuple[Candidate, ...] = (
               "friction-like, growing with the square of the leg speed"),
     Candidate("stroke_friction", ("slope",), (-INF,), (INF,),
               "friction-like, growing along the stroke from one end", grid_from=_stroke_ends,
-              coulomb=True, signs=(1.0, -1.0), simpler=2, refined=("reference",),
-              refined_bounds=_stroke_range),
+              coulomb=True, signs=(1.0, -1.0), simpler=2, refined=("reference",)),
     Candidate("payload_offset", ("x", "y", "z"), (-0.5, -0.5, -0.5), (0.5, 0.5, 0.5),
               "load-like, varying with the pose (moment of the payload's weight)"),
     Candidate("sensor_bias", tuple(f"b{i}" for i in range(1, 7)), (-INF,) * 6, (INF,) * 6,

@@ -334,7 +334,8 @@ class Problem:
         effect, _, param = name.partition(".")
         for c in CANDIDATES:
             if c.name == effect and param in c.refined:
-                lo, hi = c.refined_bounds(self.context)
+                grid = c.grids(self.context)[param]
+                lo, hi = float(min(grid)), float(max(grid))
                 value = float(self.model.theta0[self.model.index[name]])
                 own = c.name in self.platform.effects
                 return (min(lo, value), max(hi, value)) if own else (lo, hi)
