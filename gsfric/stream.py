@@ -57,7 +57,7 @@ from gsfric.evaluation import FLAG_NAMES, Evaluator
 from gsfric.trajectory import (DEFAULT_POLYORDER, GIMBAL_JUMP, GIMBAL_SIN_BETA, MIN_SAMPLES,
                                UNIFORM_RTOL, Motion, _check_window, _conjugate, _continuous,
                                _gcv_window, _savgol, is_uniform, quaternion_from_euler,
-                               quaternion_multiply)
+                               quaternion_multiply, savgol_weights)
 
 DEFAULT_CHUNK = 100_000
 """Steps per chunk of ``simulate_file`` (about 0.5 GB of working memory)."""
@@ -291,11 +291,8 @@ def _whole(path: Path, blocks: list[_Block], window, polyorder) -> Motion:
 def _savgol_coefficients(window: int, polyorder: int) -> np.ndarray:
     """(3, window) Savitzky-Golay weights of the value and the first two derivatives (unit
     sample step), applied as ``sum_j c[k, j] y[i - window // 2 + j]``: those of
-    ``scipy.signal.savgol_filter`` away from the ends of the signal. Read-only."""
-    from scipy.signal import savgol_coeffs
-
-    # the weights savgol_filter convolves with, reversed (as scipy.ndimage.convolve1d does)
-    c = np.stack([savgol_coeffs(window, polyorder, deriv=k)[::-1] for k in (0, 1, 2)])
+    ``trajectory.savgol_filter`` away from the ends of the signal. Read-only."""
+    c = np.stack([savgol_weights(window, polyorder, k)[window // 2] for k in (0, 1, 2)])
     c.flags.writeable = False
     return c
 
@@ -304,7 +301,7 @@ def _savgol_core(y: np.ndarray, window: int, polyorder: int, step: float,
                  lo: int, hi: int) -> list[np.ndarray]:
     """The value and first two derivatives (``_savgol``) of y (N, k) at rows lo..hi-1, which
     have ``window // 2`` samples on each side: contiguous (hi - lo, k) arrays, equal to the
-    last bit to ``scipy.signal.savgol_filter``'s there (the same ``scipy.ndimage.correlate1d``
+    last bit to ``trajectory.savgol_filter``'s there (the same ``scipy.ndimage.correlate1d``
     with the same weights, run on the rows it needs only)."""
     from scipy.ndimage import correlate1d
 
@@ -378,7 +375,7 @@ def _differentiate(t, position, q, windows, polyorder, step, core: slice,
 
     Where the core has half a window of samples on each side (every chunk but those at the
     ends of the file), the filter is applied to the core only (``_savgol_core``); at the ends
-    of the file, ``scipy.signal.savgol_filter`` fits the edges."""
+    of the file, ``trajectory.savgol_filter`` fits the edges."""
     wp, wq = windows
     lo, hi = core.start, core.stop
     if lo >= max(windows) // 2 and len(t) - hi >= max(windows) // 2:

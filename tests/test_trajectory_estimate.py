@@ -17,6 +17,7 @@ from gsfric.trajectory import (
     adaptive_filters,
     motion_filters,
     quaternion_from_rotation,
+    savgol_filter,
     white_noise_std,
 )
 
@@ -139,6 +140,51 @@ def test_white_noise_std_recovers_the_pose_noise(sigma):
     assert np.all(white_noise_std(exact.position) < 1e-8)
 
 
+def test_white_noise_of_a_log_whose_rests_read_one_value():
+    """Moves and rests logged at 0.1 um (mm with four decimals), rests three quarters of the
+    record: every rest reads one value, and the noise is that of the rounding in the moves,
+    resolution / sqrt(12), not zero (the median of the differences, most of them zero)."""
+    from gsfric.models import minimum_jerk_moves
+
+    rng = np.random.default_rng(3)
+    t = np.arange(6000) / 500.0
+    targets = rng.uniform(-0.02, 0.02, (7, 3)) + [0.0, 0.0, 0.9]
+    moves = minimum_jerk_moves(t, targets, period=2.0, move=0.5)
+    resolution = 1e-7
+    logged = np.round(moves.position / resolution) * resolution
+    at_rest = np.all(np.diff(logged, axis=0) == 0.0, axis=1).mean()
+    assert at_rest > 0.6
+    np.testing.assert_allclose(white_noise_std(logged), resolution / np.sqrt(12), rtol=0.15)
+
+
+@pytest.mark.parametrize("cap", [801, 1601])
+def test_windows_spanning_a_triangle_waves_corners_are_not_chosen(monkeypatch, cap):
+    """Two windows that both span the corners of a triangle wave are wrong alike and differ
+    little; the choice must not take them for unbiased. Longer candidate windows leave the
+    acceleration error of the windows up to 201 samples (without the detected-bias rule, 801
+    samples gave nine times that error)."""
+    import gsfric.trajectory as trajectory
+
+    rng = np.random.default_rng(5)
+    rate = 476.0
+    t = np.arange(int(8 * rate)) / rate
+    f = rng.uniform(0.15, 0.6, 3)
+    phase = rng.uniform(0, 2 * np.pi, 3)
+    # arcsin of a slightly shrunk sine: a triangle wave with rounded corners
+    position = 0.02 * 2 / np.pi * np.arcsin(0.995 * np.sin(2 * np.pi * f * t[:, None] + phase))
+    acceleration = np.gradient(np.gradient(position, t, axis=0), t, axis=0)
+    recorded = position + rng.normal(0.0, 1e-5, position.shape)
+
+    def error(longest):
+        monkeypatch.setattr(trajectory, "MAX_AUTO_WINDOW", longest)
+        filters = motion_filters(recorded)
+        estimate = trajectory._savgol_adaptive(recorded, filters, 1 / rate)[2]
+        inner = slice(len(t) // 20, -len(t) // 20)
+        return float(np.sqrt(np.mean((estimate - acceleration)[inner] ** 2)))
+
+    assert error(cap) < 1.1 * error(201)
+
+
 def test_jittered_log_times_are_differentiated_on_their_own_time_base():
     """A log whose sample times jitter (+-20 % of the step) is differentiated on its actual
     times (smoothing spline): its velocity error is well below that of pretending the times
@@ -214,3 +260,31 @@ def test_repeated_time_stamp_names_the_row():
     quaternion = np.tile([1.0, 0.0, 0.0, 0.0], (50, 1))
     with pytest.raises(InputError, match=r"^log.csv: row 18: t does not increase$"):
         Motion.from_samples(t, position, quaternion=quaternion, source="log.csv")
+
+
+@pytest.mark.parametrize("window", [7, 31, 101])
+@pytest.mark.parametrize("deriv", [0, 1, 2])
+def test_savgol_filter_is_scipys_where_scipys_is_exact(window, deriv):
+    """Order 4, short windows: scipy.signal.savgol_filter (mode "interp") to rounding."""
+    from scipy import signal
+
+    y = np.cumsum(np.random.default_rng(window + deriv).normal(size=(300, 3)), axis=0)
+    expected = signal.savgol_filter(y, window, 4, deriv=deriv, axis=0, mode="interp")
+    np.testing.assert_allclose(savgol_filter(y, window, 4, deriv), expected,
+                               rtol=0, atol=1e-9 * np.abs(expected).max())
+
+
+@pytest.mark.parametrize("window", [201, 401, 1601])
+@pytest.mark.parametrize("deriv", [0, 1, 2])
+def test_long_savgol_windows_reproduce_the_polynomials_of_their_order(window, deriv):
+    """A polynomial of order 6 and its derivatives come back exactly from the order-6 filter,
+    at the ends as in the middle, however long the window (scipy's weights of the value are
+    zero at 401 samples)."""
+    n = 3 * window
+    x = (np.arange(n) - n / 2) / n
+    coefficients = np.array([0.3, -1.0, 2.0, 0.5, -4.0, 1.0, 7.0])
+    y = np.polynomial.polynomial.polyval(x, coefficients)
+    exact = np.polynomial.polynomial.polyval(
+        x, np.polynomial.polynomial.polyder(coefficients, deriv)) / n**deriv
+    got = savgol_filter(y[:, None], window, 6, deriv)[:, 0]
+    np.testing.assert_allclose(got, exact, rtol=0, atol=1e-9 * np.abs(exact).max())

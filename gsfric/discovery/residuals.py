@@ -22,10 +22,10 @@ from gsfric.discovery import statistics as st
 from gsfric.discovery.candidates import (CANDIDATE_NAMES, CANDIDATES, REFIT, STRIBECK_QUANTILE,
                                          Candidate, stribeck_velocity_bound)
 from gsfric.discovery.model import BASE_PARAMETERS, ParametricModel
-from gsfric.discovery.settings import Settings
+from gsfric.discovery.settings import DEFAULT_TRIM, Settings
 from gsfric.errors import InputError
 from gsfric.platform import Platform
-from gsfric.trajectory import MAX_AUTO_WINDOW, Motion, is_uniform
+from gsfric.trajectory import Motion, is_uniform
 
 DELAY = "time_offset.delay"
 
@@ -223,7 +223,7 @@ class Problem:
             raise InputError(f"forces: row {row + 1} is not finite")
         trim = settings.trim
         if trim is None:
-            trim = min(MAX_AUTO_WINDOW // 2, n // 20)
+            trim = min(DEFAULT_TRIM, n // 20)
         trim = int(trim)
         used = n - 2 * trim
         needed = 20 * settings.n_blocks
@@ -285,7 +285,7 @@ class Problem:
                                          reach=self.reach)[self.used]
         pairs = int(np.count_nonzero(self.sliding))
         if pairs < needed:
-            window = 2 * int(np.median(self.reach[self.used])) + 1
+            window = 2 * rest.move_reach(self.reach[self.used], self.sliding.any(axis=1)) + 1
             raise InputError(
                 f"measured data: {pairs} (sample, leg) pairs slide beyond the speed "
                 f"uncertainty of the differentiated poses; the workflow needs at least "

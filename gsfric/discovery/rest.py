@@ -24,9 +24,8 @@ noise; strongly correlated noise has more power at low frequencies than this see
 from __future__ import annotations
 
 import numpy as np
-from scipy.signal import savgol_coeffs, savgol_filter
 
-from gsfric.trajectory import robust_std
+from gsfric.trajectory import robust_std, savgol_filter, savgol_weights
 
 REST_BAND = 5.0
 """Half-width of the not-sliding band, in standard deviations of the speed estimate."""
@@ -51,8 +50,8 @@ def high_frequency_std(y: np.ndarray, window: int = NOISE_WINDOW) -> np.ndarray:
     window = int(min(window, len(y) - (1 - len(y) % 2)))
     if window < 5:
         return np.zeros(y.shape[1])
-    smooth = savgol_filter(y, window, 3, axis=0, mode="interp")
-    h0 = savgol_coeffs(window, 3)[window // 2]
+    smooth = savgol_filter(y, window, 3)
+    h0 = savgol_weights(window, 3)[window // 2, window // 2]
     core = slice(window, len(y) - window) if len(y) > 3 * window else slice(None)
     return robust_std((y - smooth)[core]) / np.sqrt(1.0 - h0)
 
@@ -96,7 +95,7 @@ def differentiator(position: np.ndarray, rotation: np.ndarray, polyorder: int | 
         gain = np.empty(len(windows))
         for p, w in np.unique(np.stack([orders, windows], axis=1), axis=0):
             rows = (orders == p) & (windows == w)
-            gain[rows] = np.linalg.norm(savgol_coeffs(int(w), int(p), deriv=1))
+            gain[rows] = np.linalg.norm(savgol_weights(int(w), int(p), 1)[w // 2])
         gains.append(gain)
         reaches.append(windows // 2 if moves(signal) else np.zeros_like(windows))
     return np.maximum(*gains), np.maximum(*reaches)
@@ -180,7 +179,7 @@ def spline_differentiator(t: np.ndarray, position: np.ndarray, rotation: np.ndar
                                                          mode="nearest")))
     step = (t[-1] - t[0]) / (n - 1)
     windows = np.array(_candidate_windows(n, DEFAULT_POLYORDER))
-    gains = np.array([np.linalg.norm(savgol_coeffs(int(w), DEFAULT_POLYORDER, deriv=1))
+    gains = np.array([np.linalg.norm(savgol_weights(int(w), DEFAULT_POLYORDER, 1)[w // 2])
                       for w in windows]) / step                           # decreasing
     index = np.clip(np.searchsorted(-gains, -gain), 0, len(windows) - 1)
     return gain, windows[index] // 2
@@ -222,11 +221,24 @@ def speed_uncertainty(platform, t: np.ndarray, position: np.ndarray, rotation: n
     sigma_D = white_noise_std(D)
     step = float(np.mean(np.diff(t)))
     if window is not None:
-        return sigma_D * float(np.linalg.norm(savgol_coeffs(int(window), polyorder,
-                                                            deriv=1))) / step
+        return sigma_D * float(np.linalg.norm(
+            savgol_weights(int(window), polyorder, 1)[int(window) // 2])) / step
     if gain is None:
         gain = differentiator(position, rotation, polyorder)[0]
     return np.asarray(gain, float)[:, None] * sigma_D[None, :] / step
+
+
+def move_reach(reach: np.ndarray, moving: np.ndarray) -> int:
+    """The differentiator's reach where the legs move: the median of ``reach`` (N,), samples,
+    over the samples where ``moving`` (N,) is True (over all when none is).
+
+    The reach that matters at a rest's ends is that of the windows of the moves next to it.
+    A rest's own windows are long (nothing to bias them: up to ``MAX_AUTO_WINDOW`` samples),
+    and the median over a record that mostly rests would be theirs: at 200 Hz a run of 455
+    samples, which closed the gaps between moves of 0.7 s and took them for rests."""
+    reach = np.asarray(reach, int)
+    chosen = reach[np.asarray(moving, bool)]
+    return int(np.median(chosen if len(chosen) else reach))
 
 
 def sliding_mask(speed: np.ndarray, sigma_v: np.ndarray, floor: float,
@@ -240,7 +252,8 @@ def sliding_mask(speed: np.ndarray, sigma_v: np.ndarray, floor: float,
     differentiated noise is correlated over the window: such an excursion is one noise event,
     or the pull of the next move on the window, not a move). With a reach per sample (the
     differentiator's window varies along the record), each sample looks as far as its own
-    window reaches, and a rest is a run at least as long as the median reach.
+    window reaches, and a rest is a run at least as long as the median reach of the samples
+    outside the band (``move_reach``).
 
     Why: the differentiator (a local polynomial fit over ``2 reach + 1`` samples) is unbiased
     where the motion is a polynomial over its window, as at a smooth reversal, whose passage
@@ -268,14 +281,14 @@ def sliding_mask(speed: np.ndarray, sigma_v: np.ndarray, floor: float,
         return ~inside
     from scipy.ndimage import binary_closing, binary_opening
 
-    run = max(int(np.median(reach)), 1)
+    n = len(speed)
+    reach = np.broadcast_to(reach, (n,))
+    run = max(move_reach(reach, ~inside.all(axis=1)), 1)
     structure = np.ones((run, 1), bool)
     # a rest: in the band for at least `run` samples, excursions shorter than `run`
     # (one correlated noise event of the differentiator) included
     rests = binary_opening(binary_closing(inside, structure=structure), structure=structure)
-    n = len(speed)
     i = np.arange(n)
-    reach = np.broadcast_to(reach, (n,))
     counts = np.concatenate([np.zeros((1, speed.shape[1]), int),
                              np.cumsum(rests, axis=0)])
     lo, hi = np.clip(i - reach, 0, n), np.clip(i + reach + 1, 0, n)

@@ -7,6 +7,11 @@ from dataclasses import dataclass
 
 from gsfric.discovery.candidates import CANDIDATE_NAMES, REFIT
 
+DEFAULT_TRIM = 100
+"""Samples left out at each end of the record by default (a twentieth of it when that is
+fewer): there the motion's filters fit one polynomial to the first or last window instead of
+centring one on each sample."""
+
 
 @dataclass(frozen=True)
 class Settings:
@@ -33,7 +38,7 @@ class Settings:
         Block-bootstrap draws of the parameter intervals (half as many for the share of draws
         each accepted candidate wins).
     trim : int or None
-        Samples left out at each end (None: ``min(MAX_AUTO_WINDOW // 2, N // 20)``).
+        Samples left out at each end (None: ``min(DEFAULT_TRIM, N // 20)``).
     candidates : tuple of str
         Candidate effects tested (default: the whole catalog).
     refit : tuple of str
