@@ -770,8 +770,8 @@ class Motion:
         twice:
 
         * Uniform sampling (every step within ``UNIFORM_RTOL`` of the mean step): a
-          Savitzky-Golay filter (``scipy.signal.savgol_filter``, ``mode="interp"``, orders 0,
-          1 and 2) of ``window`` samples and polynomial order ``polyorder``. With
+          Savitzky-Golay filter (``savgol_filter``: SciPy's with ``mode="interp"``, on
+          well-conditioned weights; orders 0, 1 and 2) of ``window`` samples and polynomial order ``polyorder``. With
           ``window=None`` the filter (order ``polyorder`` or ``polyorder + 2``, odd window up
           to ``MAX_AUTO_WINDOW`` samples) is chosen per sample, separately for position and
           quaternion and for the velocity (which position and velocity use) and the
