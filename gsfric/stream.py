@@ -292,7 +292,7 @@ def _savgol_coefficients(window: int, polyorder: int) -> np.ndarray:
     """(3, window) Savitzky-Golay weights of the value and the first two derivatives (unit
     sample step), applied as ``sum_j c[k, j] y[i - window // 2 + j]``: those of
     ``trajectory.savgol_filter`` away from the ends of the signal. Read-only."""
-    c = np.stack([savgol_weights(window, polyorder, k)[window // 2] for k in (0, 1, 2)])
+    c = np.stack([savgol_weights(window, polyorder, k) for k in (0, 1, 2)])
     c.flags.writeable = False
     return c
 

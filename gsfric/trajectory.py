@@ -273,40 +273,50 @@ def _gcv_window(y: np.ndarray, polyorder: int) -> int:
     scores = []
     for w in windows:
         smooth = savgol_filter(y, w, polyorder)
-        centre = savgol_weights(w, polyorder)[w // 2, w // 2]
+        centre = savgol_weights(w, polyorder)[w // 2]
         scores.append(np.sum((y - smooth) ** 2) / (1.0 - centre) ** 2)
     return windows[int(np.argmin(scores))]
 
 
-@functools.lru_cache(maxsize=128)
-def savgol_weights(window: int, polyorder: int, deriv: int = 0) -> np.ndarray:
-    """Savitzky-Golay weights, (window, window), read-only: row i times the window's samples
-    is the ``deriv``-th derivative (unit sample step) at the window's i-th sample of the
-    least-squares polynomial of order ``polyorder`` through them.
+@functools.lru_cache(maxsize=256)
+def _polynomial_fit(window: int, polyorder: int, deriv: int) -> tuple[np.ndarray, np.ndarray]:
+    """The least-squares polynomial of order ``polyorder`` through a window's samples:
+    ``fit`` (p + 1, window) maps the samples to its coefficients, ``derivative`` (window,
+    p + 1) maps those to its ``deriv``-th derivative (unit sample step) at each sample of the
+    window. Read-only.
 
-    Row ``window // 2`` is the centred filter (``scipy.signal.savgol_coeffs(..., use="dot")``);
-    the rows before and after it give the ends of a signal (``savgol_filter``'s
-    ``mode="interp"``). The polynomial is written in Legendre polynomials of the abscissa
-    scaled to [-1, 1], whose least-squares problem stays well conditioned for any window:
-    ``savgol_coeffs`` fits powers of the sample index, and at order 6 its weights are wrong
-    beyond about 300 samples (those of the value are all zero at 401).
+    The polynomial is written in Legendre polynomials of the abscissa scaled to [-1, 1], whose
+    least-squares problem stays well conditioned for any window: ``scipy.signal.savgol_coeffs``
+    fits powers of the sample index, and at order 6 its weights are wrong beyond about 300
+    samples (those of the value are all zero at 401).
     """
     from numpy.polynomial import legendre
 
-    half = window // 2
-    x = (np.arange(window) - half) / max(half, 1)
-    fit = np.linalg.pinv(legendre.legvander(x, polyorder))            # (p + 1, window)
-    basis = np.eye(polyorder + 1)
-    derivative = np.stack([legendre.legval(x, legendre.legder(b, deriv)) for b in basis],
-                          axis=1)                                     # (window, p + 1)
-    weights = derivative @ fit / max(half, 1) ** deriv
+    half = max(window // 2, 1)
+    x = (np.arange(window) - window // 2) / half
+    fit = np.linalg.pinv(legendre.legvander(x, polyorder))
+    derivative = np.stack([legendre.legval(x, legendre.legder(b, deriv))
+                           for b in np.eye(polyorder + 1)], axis=1) / half ** deriv
+    fit.flags.writeable = derivative.flags.writeable = False
+    return derivative, fit
+
+
+@functools.lru_cache(maxsize=256)
+def savgol_weights(window: int, polyorder: int, deriv: int = 0) -> np.ndarray:
+    """Savitzky-Golay weights (window,), read-only: times the window's samples, the
+    ``deriv``-th derivative (unit sample step) at its centre of the least-squares polynomial
+    of order ``polyorder`` through them (``scipy.signal.savgol_coeffs(..., use="dot")``,
+    computed as ``_polynomial_fit``)."""
+    derivative, fit = _polynomial_fit(window, polyorder, deriv)
+    weights = derivative[window // 2] @ fit
     weights.flags.writeable = False
     return weights
 
 
 def savgol_filter(y: np.ndarray, window: int, polyorder: int, deriv: int = 0) -> np.ndarray:
     """``scipy.signal.savgol_filter(y, window, polyorder, deriv, axis=0, mode="interp")``
-    (unit sample step) with the well-conditioned weights of ``savgol_weights``.
+    (unit sample step) with the well-conditioned fit of ``_polynomial_fit``: the centred
+    weights inside, the polynomial through the first and last ``window`` samples at the ends.
 
     Parameters
     ----------
@@ -320,11 +330,12 @@ def savgol_filter(y: np.ndarray, window: int, polyorder: int, deriv: int = 0) ->
     from scipy.ndimage import correlate1d
 
     y = np.asarray(y, float)
-    weights = savgol_weights(int(window), int(polyorder), int(deriv))
-    half = window // 2
-    out = correlate1d(y, weights[half], axis=0, mode="constant")
-    out[:half] = weights[:half] @ y[:window]
-    out[len(y) - half:] = weights[half + 1:] @ y[len(y) - window:]
+    window, polyorder, deriv = int(window), int(polyorder), int(deriv)
+    derivative, fit = _polynomial_fit(window, polyorder, deriv)
+    half, n = window // 2, len(y)
+    out = correlate1d(y, savgol_weights(window, polyorder, deriv), axis=0, mode="constant")
+    out[:half] = derivative[:half] @ (fit @ y[:window])
+    out[n - half:] = derivative[half + 1:] @ (fit @ y[n - window:])
     return out
 
 
@@ -469,7 +480,7 @@ def adaptive_filters(y: np.ndarray, polyorder: int = DEFAULT_POLYORDER,
 
         def coefficients(w: int) -> np.ndarray:
             h = np.zeros(width)
-            h[(width - w) // 2:(width + w) // 2] = savgol_weights(w, p, deriv)[w // 2]
+            h[(width - w) // 2:(width + w) // 2] = savgol_weights(w, p, deriv)
             return h
 
         j = (np.arange(width) - width // 2).astype(float)
@@ -771,7 +782,8 @@ class Motion:
 
         * Uniform sampling (every step within ``UNIFORM_RTOL`` of the mean step): a
           Savitzky-Golay filter (``savgol_filter``: SciPy's with ``mode="interp"``, on
-          well-conditioned weights; orders 0, 1 and 2) of ``window`` samples and polynomial order ``polyorder``. With
+          well-conditioned weights; orders 0, 1 and 2) of ``window`` samples and polynomial
+          order ``polyorder``. With
           ``window=None`` the filter (order ``polyorder`` or ``polyorder + 2``, odd window up
           to ``MAX_AUTO_WINDOW`` samples) is chosen per sample, separately for position and
           quaternion and for the velocity (which position and velocity use) and the

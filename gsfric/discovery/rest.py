@@ -51,7 +51,7 @@ def high_frequency_std(y: np.ndarray, window: int = NOISE_WINDOW) -> np.ndarray:
     if window < 5:
         return np.zeros(y.shape[1])
     smooth = savgol_filter(y, window, 3)
-    h0 = savgol_weights(window, 3)[window // 2, window // 2]
+    h0 = savgol_weights(window, 3)[window // 2]
     core = slice(window, len(y) - window) if len(y) > 3 * window else slice(None)
     return robust_std((y - smooth)[core]) / np.sqrt(1.0 - h0)
 
@@ -95,7 +95,7 @@ def differentiator(position: np.ndarray, rotation: np.ndarray, polyorder: int | 
         gain = np.empty(len(windows))
         for p, w in np.unique(np.stack([orders, windows], axis=1), axis=0):
             rows = (orders == p) & (windows == w)
-            gain[rows] = np.linalg.norm(savgol_weights(int(w), int(p), 1)[w // 2])
+            gain[rows] = np.linalg.norm(savgol_weights(int(w), int(p), 1))
         gains.append(gain)
         reaches.append(windows // 2 if moves(signal) else np.zeros_like(windows))
     return np.maximum(*gains), np.maximum(*reaches)
@@ -179,7 +179,7 @@ def spline_differentiator(t: np.ndarray, position: np.ndarray, rotation: np.ndar
                                                          mode="nearest")))
     step = (t[-1] - t[0]) / (n - 1)
     windows = np.array(_candidate_windows(n, DEFAULT_POLYORDER))
-    gains = np.array([np.linalg.norm(savgol_weights(int(w), DEFAULT_POLYORDER, 1)[w // 2])
+    gains = np.array([np.linalg.norm(savgol_weights(int(w), DEFAULT_POLYORDER, 1))
                       for w in windows]) / step                           # decreasing
     index = np.clip(np.searchsorted(-gains, -gain), 0, len(windows) - 1)
     return gain, windows[index] // 2
@@ -221,8 +221,7 @@ def speed_uncertainty(platform, t: np.ndarray, position: np.ndarray, rotation: n
     sigma_D = white_noise_std(D)
     step = float(np.mean(np.diff(t)))
     if window is not None:
-        return sigma_D * float(np.linalg.norm(
-            savgol_weights(int(window), polyorder, 1)[int(window) // 2])) / step
+        return sigma_D * float(np.linalg.norm(savgol_weights(int(window), polyorder, 1))) / step
     if gain is None:
         gain = differentiator(position, rotation, polyorder)[0]
     return np.asarray(gain, float)[:, None] * sigma_D[None, :] / step
