@@ -283,9 +283,11 @@ class Problem:
         self.sigma_v = np.median(sigma_v[self.used], axis=0)
         self.sliding = rest.sliding_mask(self.result.D_dot, sigma_v, 3 * PRISMATIC_EPS,
                                          reach=self.reach)[self.used]
+        # the reach of the moves' windows, where a rest begins and ends
+        self.move_reach = rest.move_reach(self.reach[self.used], self.sliding.any(axis=1))
         pairs = int(np.count_nonzero(self.sliding))
         if pairs < needed:
-            window = 2 * rest.move_reach(self.reach[self.used], self.sliding.any(axis=1)) + 1
+            window = 2 * self.move_reach + 1
             raise InputError(
                 f"measured data: {pairs} (sample, leg) pairs slide beyond the speed "
                 f"uncertainty of the differentiated poses; the workflow needs at least "

@@ -30,7 +30,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from gsfric.discovery import lackfit, rest
+from gsfric.discovery import lackfit
 from gsfric.discovery import statistics as st
 from gsfric.discovery.candidates import CANDIDATES
 from gsfric.discovery.regimes import bands as regime_bands
@@ -556,9 +556,7 @@ def _rest_test(problem: Problem, theta: np.ndarray) -> dict:
     delay fitted to imitate something else would put its own transients into the rests."""
     s = problem.settings
     used = problem.used
-    reach = rest.move_reach(problem.reach[used], problem.sliding.any(axis=1)) \
-        if len(problem.reach) else 0
-    runs = lackfit.rest_runs(problem.sliding, reach)
+    runs = lackfit.rest_runs(problem.sliding, problem.move_reach)
     if len(runs) < 4:
         return lackfit.rest_transients(np.zeros_like(problem.y), [], alpha=s.alpha,
                                        min_gap=s.min_gap)
