@@ -1,4 +1,5 @@
-"""Helpers shared by the tests: perturbed platforms, random states, the chain's inputs."""
+"""Helpers shared by the tests: perturbed platforms, random states, the chain's inputs, 1/f
+noise."""
 
 from __future__ import annotations
 
@@ -80,3 +81,14 @@ def with_every_effect(rng: np.random.Generator, platform: gsfric.Platform) -> gs
         "leg_weight": {"lower_mass": 0.3, "upper_mass": 0.2},
         "bushing_friction": {"coefficient": 0.1, "spacing": 0.08},
     })
+
+
+def pink_noise(rng: np.random.Generator, n: int, legs: int = 6, extra: int = 2000) -> np.ndarray:
+    """1/f noise (n, legs) of unit standard deviation per column: white noise shaped in
+    frequency, with periods up to ``n + extra`` samples (a record cut from a longer one)."""
+    spec = np.fft.rfft(rng.standard_normal((n + extra, legs)), axis=0)
+    f = np.fft.rfftfreq(n + extra)
+    spec[1:] /= np.sqrt(f[1:, None])
+    spec[0] = 0.0
+    e = np.fft.irfft(spec, n + extra, axis=0)[extra:]
+    return e / e.std(axis=0)

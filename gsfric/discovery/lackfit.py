@@ -193,9 +193,12 @@ def basis_outside(t: np.ndarray, F: np.ndarray, speed: np.ndarray, sliding: np.n
 
 def test(residual: np.ndarray, X: np.ndarray, whitener: st.Whitener, *, alpha: float,
          min_gap: float, n_blocks: int, n_folds: int, min_fold_share: float,
-         names: list[str] | None = None) -> dict:
+         names: list[str] | None = None, low: np.ndarray | None = None) -> dict:
     """The lack-of-fit test of the residual (M, 6) against the basis X (M, 6, k) whose
-    columns carry the signals ``names`` (default ``column_names()``).
+    columns carry the signals ``names`` (default ``column_names()``); with ``low``, the
+    record's slowest components (``statistics.low_band``), the F-test must also hold on them
+    alone or on the rest alone (``statistics.band_tests``: a drift that slow noise makes as
+    large is not a structure).
 
     Returns
     -------
@@ -207,11 +210,13 @@ def test(residual: np.ndarray, X: np.ndarray, whitener: st.Whitener, *, alpha: f
     k = X.shape[2]
     # stretches of time, not of pairs: the basis follows slow noise within one move
     # (statistics.block_edges)
-    blocks = st.Blocks.whitened(whitener, X, residual, n_blocks, by="time")
+    blocks = st.Blocks.whitened(whitener, X, residual, n_blocks, by="time", low=low)
     lo, hi = np.full(k, -np.inf), np.full(k, np.inf)
     empty = st.fit(blocks, [], lo, hi)
     full = st.fit(blocks, list(range(k)), lo, hi)
     _, p, _ = st.f_test(empty, full)
+    p_bands = 0.0 if low is None else min(
+        1.0, 2 * min(st.band_tests(blocks, [], list(range(k)), lo, hi, k)))
     cv_null = st.cross_validate(blocks, [], lo, hi, n_folds)
     cv = st.cross_validate(blocks, list(range(k)), lo, hi, n_folds)
     cv_gain = float((cv_null.sum() - cv.sum()) / max(cv_null.sum(), 1e-300))
@@ -229,9 +234,10 @@ def test(residual: np.ndarray, X: np.ndarray, whitener: st.Whitener, *, alpha: f
     # chirp) is still a discrepancy; that rule is for naming a stable effect. The held-out gain
     # must exceed k / n, what k columns fitted to white noise gain in-sample (and lose
     # held-out): a smaller one is within the cross-validation's own scatter
-    significant = bool(p < alpha and cv_gain > k / max(float(blocks.rows.sum()), 1.0)
-                       and gap >= min_gap)
-    return {"significant": significant, "p_value": float(p), "gap": gap, "cv_gain": cv_gain,
+    significant = bool(p < alpha and p_bands < alpha
+                       and cv_gain > k / max(float(blocks.rows.sum()), 1.0) and gap >= min_gap)
+    return {"significant": significant, "p_value": float(p), "p_bands": float(p_bands),
+            "gap": gap, "cv_gain": cv_gain,
             "fold_share": share, "structure_rms": float(np.sqrt(np.mean(fitted ** 2))),
             "per_leg_rms": [float(v) for v in np.sqrt(np.mean(fitted ** 2, axis=0))],
             "signals": {k_: max(v, 0.0) for k_, v in parts.items()}, "fitted": fitted}

@@ -43,7 +43,15 @@ class CandidateTest:
         RMS change of the fitted residual when the candidate is added (the gap it closes
         beyond the refitted model, or with the refitted changes it replaces held at the
         model's values: ``gap_replacing_refit``), divided by the RMS of the residual left.
+    p_bands : float
+        p-value of the same F-test on the record's slowest components alone or on the rest
+        alone, whichever is smaller, times two (``statistics.band_tests``).
     significant : bool
+    slow_only : bool
+        Accepted by every rule but the test on the record's slowest components alone or on
+        the rest alone: the data hold what the candidate fits, but as slow as noise the AR
+        model does not describe (``workflow``: such a candidate is held against the generic
+        out-of-catalog structure).
     reason : str
         Why the candidate was or was not accepted.
     """
@@ -57,7 +65,9 @@ class CandidateTest:
     fold_share: float
     sse_gain: float
     gap: float = 0.0
+    p_bands: float = 1.0
     significant: bool = False
+    slow_only: bool = False
     reason: str = ""
 
 
@@ -107,7 +117,10 @@ def screen_candidates(problem: Problem, design: Design, whitener: st.Whitener,
                       candidates: Sequence[Candidate]) -> Screen:
     """Fit and test every candidate against the refitted model (prewhitened by ``whitener``).
 
-    A candidate is accepted when (a) its F-test gives p < alpha / K, (b) it lowers the
+    A candidate is accepted when (a) its F-test gives p < alpha / K, and so does the same
+    test on the record's slowest components alone or on the rest alone, each band's noise
+    measured in that band (``statistics.band_tests``; the smaller p-value, times two: slow
+    noise that the AR model does not describe is not taken for an offset), (b) it lowers the
     held-out error of the block cross-validation in total and in at least ``min_fold_share``
     of the folds that hold used pairs (``statistics.fold_share``), (c) the gap it closes
     reaches ``min_gap`` (counting the refitted changes it replaces, ``gap_replacing_refit``),
@@ -116,7 +129,8 @@ def screen_candidates(problem: Problem, design: Design, whitener: st.Whitener,
     model; an explanation of the gap must also shrink the gap as measured).
     """
     s = problem.settings
-    blocks = st.Blocks.whitened(whitener, design.X, design.r, s.n_blocks)
+    blocks = st.Blocks.whitened(whitener, design.X, design.r, s.n_blocks,
+                                low=low_band_of(problem, whitener))
     null_cols = design.refit
     null = st.fit(blocks, null_cols, design.lower, design.upper)
     cv_null = st.cross_validate(blocks, null_cols, design.lower, design.upper, s.n_folds)
@@ -136,11 +150,21 @@ def screen_candidates(problem: Problem, design: Design, whitener: st.Whitener,
         gap = gap_closed(design, null, best)
         if p < level and cv_gain > 0 and share >= s.min_fold_share and gap < s.min_gap:
             gap = max(gap, gap_replacing_refit(problem, design, blocks, best, k))
+        p_bands = 1.0
+        if p < level:
+            p_bands = min(1.0, 2 * min(st.band_tests(blocks, null_cols, best.columns,
+                                                     design.lower, design.upper, k)))
         test = CandidateTest(c.name, params, float(F), p, k, cv_gain, share,
-                             float((null.sse - best.sse) / null.sse), gap)
+                             float((null.sse - best.sse) / null.sse), gap, p_bands)
         plain = plain_sse(design, best) < plain_sse(design, null)
+        test.slow_only = bool(p < level <= p_bands and cv_gain > 0 and gap >= s.min_gap
+                              and share >= s.min_fold_share and plain)
         if p >= level:
             test.reason = f"not significant (p = {p:.2g} >= {level:.2g})"
+        elif p_bands >= level:
+            test.reason = (f"not significant on the record's slowest components alone nor on "
+                           f"the rest alone (p = {p_bands:.2g} >= {level:.2g}): slow noise "
+                           "explains it as well")
         elif cv_gain <= 0:
             test.reason = "does not lower the held-out error (block cross-validation)"
         elif share < s.min_fold_share:
@@ -157,6 +181,13 @@ def screen_candidates(problem: Problem, design: Design, whitener: st.Whitener,
             test.reason = "significant"
         tests[c.name], fits[c.name], chosen[c.name] = test, best, j
     return Screen(tests, fits, chosen, null, blocks, cv_null)
+
+
+def low_band_of(problem: Problem, whitener: st.Whitener) -> np.ndarray:
+    """The record's slowest components (``statistics.low_band``) on the samples that
+    ``whitener`` filters and keeps, (M - order, 6, LOW_BAND)."""
+    t = problem.model.t[problem.used]
+    return st.low_band(t[whitener.order:], whitener.kept(problem.sliding))
 
 
 def plain_sse(design: Design, f: st.Fit) -> float:
@@ -356,7 +387,8 @@ def generic_competitor(problem: Problem, design: Design, whitener: st.Whitener,
     significant part smaller than ``min_gap``: the data cannot tell it from an error outside
     the catalog, as they cannot tell two indistinguishable candidates apart; it is named (the
     simpler explanation), but the verdict is not ``explained``. Returns the p-values and gaps
-    both ways,
+    both ways (and ``p_generic_bands``, the basis beyond the catalog on the record's slowest
+    components alone or on the rest alone: ``statistics.band_tests``),
     ``blocked``, ``imitates`` and the generic signal that carries most.
     """
     from gsfric.discovery import lackfit
@@ -379,7 +411,8 @@ def generic_competitor(problem: Problem, design: Design, whitener: st.Whitener,
     # was the largest temporary of a round)
     nb = B.shape[2]
     Xc = design.X[:, :, cols]
-    blocks = st.Blocks.whitened(whitener, [Xc, B], design.r, s.n_blocks, by="time")
+    blocks = st.Blocks.whitened(whitener, [Xc, B], design.r, s.n_blocks, by="time",
+                                low=low_band_of(problem, whitener))
     fc, fb, z = Xc.reshape(-1, len(cols)), B.reshape(-1, nb), design.r.reshape(-1)
     cross = fc.T @ fb
     XtX = np.block([[fc.T @ fc, cross], [cross.T, fb.T @ fb]])
@@ -401,6 +434,8 @@ def generic_competitor(problem: Problem, design: Design, whitener: st.Whitener,
     catalog = st.fit(blocks, R + W + O, lower, upper)
     everything = st.fit(blocks, R + W + O + G, lower, upper)
     _, p_generic, _ = st.f_test(catalog, everything)
+    p_generic_bands = min(1.0, 2 * min(st.band_tests(blocks, R + W + O, R + W + O + G,
+                                                     lower, upper, nb)))
     level = s.alpha / max(len(screen.tests), 1)
     parts = {}
     coef = everything.coef[len(R + W + O):]
@@ -413,6 +448,7 @@ def generic_competitor(problem: Problem, design: Design, whitener: st.Whitener,
                                         alpha=s.alpha, level=level, min_gap=s.min_gap)
     return {"p_winner_beyond_generic": float(p_winner), "gap_winner_beyond_generic": gap_winner,
             "p_generic_beyond_catalog": float(p_generic),
+            "p_generic_bands": p_generic_bands,
             "gap_generic_beyond_catalog": gap_generic, "blocked": blocked,
             "imitates": imitates, "main_signal": main}
 

@@ -3,7 +3,7 @@
 Measurement residuals are never white: force noise is coloured, and so are the errors of a
 motion differentiated from noisy poses. A least-squares fit and an F-test or BIC that assume
 white noise count every sample as new information and find "effects" everywhere. The workflow
-uses three tools instead, each on a linearised model (the columns of dF/dtheta):
+uses these tools instead, each on a linearised model (the columns of dF/dtheta):
 
 * **Prewhitening** (``Whitener``): an AR(p) model is fitted to each leg's residual
   (Yule-Walker via Levinson-Durbin, order by BIC up to ``MAX_ORDER``), and residuals and design
@@ -17,8 +17,13 @@ uses three tools instead, each on a linearised model (the columns of dF/dtheta):
   between folds much further than its correlation time, which is far shorter than a stretch.
 * **Block bootstrap** (``bootstrap``): stretches are drawn with replacement to measure how
   stable the choice of effect is and how uncertain its parameters are.
+* **The slowest components on their own noise** (``low_band``, ``band_tests``): an AR model of
+  a dozen lags does not see noise whose power keeps rising towards the lowest frequencies
+  (1/f noise, a thermal wander), and tests of what lives at the record's slowest components
+  (an offset of each channel) against it are too confident. The same F-test is made on those
+  components alone, with the noise measured on them, and on the rest alone.
 
-All three work on cross-products of the prewhitened design per block (``Blocks``), so
+All of them work on cross-products of the prewhitened design per block (``Blocks``), so
 a fit is a small (k x k) solve whatever the number of samples.
 """
 
@@ -31,6 +36,10 @@ import numpy as np
 
 MAX_ORDER = 12
 """Largest AR order considered for the residual of each leg."""
+
+LOW_BAND = 3
+"""Slowest components of the record per leg (cosines: the mean and the periods of twice the
+record's length and of its length) that ``band_tests`` measures the noise on by themselves."""
 
 RIDGE = 1e-10
 """Ridge added to the scaled normal equations (unit diagonal) of every fit."""
@@ -157,12 +166,23 @@ class Whitener:
             else:
                 out[:, i] = lfilter(np.concatenate([[1.0], -phi]), [1.0], a[:, i], axis=0)[p:]
         if valid is not None:
-            ok = np.asarray(valid, bool)
-            window = ok[p:].copy()
-            for lag in range(1, p + 1):
-                window &= ok[p - lag:len(ok) - lag]
+            window = self.kept(valid)
             out *= window.reshape(window.shape + (1,) * (out.ndim - 2))
         return out
+
+    def kept(self, valid: np.ndarray | None = None, n: int | None = None) -> np.ndarray:
+        """The filtered samples (N - order, 6) that ``apply`` keeps: those whose window holds
+        valid samples only (``valid`` (N, 6), default the fit's own; all of them without
+        one, N = ``n``)."""
+        valid = self.valid if valid is None else valid
+        p = self.order
+        if valid is None:
+            return np.ones((n - p, len(self.coefficients)), bool)
+        ok = np.asarray(valid, bool)
+        window = ok[p:].copy()
+        for lag in range(1, p + 1):
+            window &= ok[p - lag:len(ok) - lag]
+        return window
 
     def phi1(self) -> np.ndarray:
         """Lag-one autocorrelation implied by each leg's model, (6,)."""
@@ -204,6 +224,9 @@ class Blocks:
     Xtz: np.ndarray
     ztz: np.ndarray
     rows: np.ndarray
+    low_X: np.ndarray | None = None
+    low_z: np.ndarray | None = None
+    low_rows: float = 0.0
 
     @classmethod
     def build(cls, X: np.ndarray, z: np.ndarray, n_blocks: int) -> Blocks:
@@ -229,7 +252,7 @@ class Blocks:
 
     @classmethod
     def whitened(cls, whitener: "Whitener", X: np.ndarray | Sequence[np.ndarray], z: np.ndarray,
-                 n_blocks: int, by: str = "pairs") -> Blocks:
+                 n_blocks: int, by: str = "pairs", low: np.ndarray | None = None) -> Blocks:
         """The blocks of ``whitener.apply(X)`` and ``whitener.apply(z)``, computed block by
         block without holding a whitened copy of X (the filter is a short FIR filter, so each
         block needs only ``order`` samples before it). X may be a sequence of arrays
@@ -237,7 +260,11 @@ class Blocks:
 
         ``by="pairs"``: the blocks are contiguous stretches holding equal shares of the
         whitener's valid pairs (``block_edges``); ``by="time"`` or without a valid mask, of
-        equal lengths (``build``'s cut)."""
+        equal lengths (``build``'s cut).
+
+        ``low`` (M - order, 6, q), the record's slowest components (``low_band``): the
+        projections of the whitened X and z on them are kept too (``low_X`` (6, q, k),
+        ``low_z`` (6, q); ``low_rows``, the number of components), for ``band_tests``."""
         if by not in ("pairs", "time"):
             raise ValueError(f"by must be 'pairs' or 'time', not {by!r}")
         p = whitener.order
@@ -251,19 +278,26 @@ class Blocks:
         Xtz = np.empty((n_blocks, k))
         ztz = np.empty(n_blocks)
         rows = np.empty(n_blocks)
+        low_X = None if low is None else np.zeros((legs, low.shape[2], k))
+        low_z = None if low is None else np.zeros((legs, low.shape[2]))
         for b in range(n_blocks):
             start, stop = edges[b], edges[b + 1]
             v = None if whitener.valid is None else whitener.valid[start:stop + p]
-            Xb = np.concatenate([whitener.apply(a[start:stop + p], v) for a in parts],
-                                axis=2).reshape(-1, k) if len(parts) > 1 else \
-                whitener.apply(parts[0][start:stop + p], v).reshape(-1, k)
-            zb = whitener.apply(z[start:stop + p], v).reshape(-1)
+            Xw = np.concatenate([whitener.apply(a[start:stop + p], v) for a in parts],
+                                axis=2) if len(parts) > 1 else \
+                whitener.apply(parts[0][start:stop + p], v)
+            zw = whitener.apply(z[start:stop + p], v)
+            Xb, zb = Xw.reshape(-1, k), zw.reshape(-1)
             XtX[b] = Xb.T @ Xb
             Xtz[b] = Xb.T @ zb
             ztz[b] = zb @ zb
             # rows zeroed by a gap carry no observation
             rows[b] = zb.size if v is None else np.count_nonzero(zb)
-        return cls(XtX, Xtz, ztz, rows)
+            if low is not None:
+                low_X += np.einsum("ilq,ilk->lqk", low[start:stop], Xw)
+                low_z += np.einsum("ilq,il->lq", low[start:stop], zw)
+        low_rows = 0.0 if low is None else float(np.count_nonzero(np.any(low != 0, axis=0)))
+        return cls(XtX, Xtz, ztz, rows, low_X, low_z, low_rows)
 
     def total(self, weights: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray, float,
                                                                float]:
@@ -464,6 +498,81 @@ def fold_share(blocks: Blocks, cv: np.ndarray, cv_null: np.ndarray, n_folds: int
     if not held.any():
         return 0.0
     return float(np.mean((np.asarray(cv) < np.asarray(cv_null))[held]))
+
+
+def low_band(t: np.ndarray, kept: np.ndarray, q: int = LOW_BAND) -> np.ndarray:
+    """The record's slowest components, per leg: the cosines ``cos(pi j tau)``, j = 0..q-1,
+    of the time scaled to tau in [0, 1] (the mean and periods down to 2 T / (q - 1)),
+    orthonormal over each leg's kept samples and zero on the others; shape (M, 6, q).
+
+    t : ndarray (M,), s, the time of the filtered samples; kept : ndarray (M, 6) of bool,
+    the samples the filter keeps (``Whitener.kept``). A cosine that the kept samples cannot
+    tell from the slower ones (a record that moves only in short stretches) is left out
+    (zero)."""
+    t = np.asarray(t, float)
+    tau = (t - t[0]) / max(t[-1] - t[0], 1e-300)
+    C = np.cos(np.pi * np.arange(q)[None, :] * tau[:, None])
+    out = np.zeros(kept.shape + (q,))
+    for leg in range(kept.shape[1]):
+        rows = np.flatnonzero(kept[:, leg])
+        if len(rows) <= q:
+            continue
+        Q, R = np.linalg.qr(C[rows])
+        independent = np.abs(np.diag(R)) > 1e-6 * np.sqrt(len(rows))
+        out[rows, leg, :] = Q * independent
+    return out
+
+
+def band_tests(blocks: Blocks, null: Sequence[int], alternative: Sequence[int],
+               lower: np.ndarray, upper: np.ndarray, k: int) -> tuple[float, float]:
+    """p-values of the nested F-test of ``alternative`` against ``null`` (column lists, ``k``
+    parameters tested) on the record's slowest components alone and on the rest alone
+    (``Blocks.whitened`` with ``low``): each band's noise level measured in that band.
+
+    The AR noise model describes the noise where its few lags see it; noise whose spectrum
+    keeps rising towards the lowest frequencies (1/f noise, a slow thermal wander of the
+    load cells) has more power at the record's slowest components than the model gives it.
+    An effect whose evidence lives there (a constant offset of each channel, a force
+    proportional to a slowly changing load) is then tested against too little noise. On the
+    slowest components alone, the noise is measured where the evidence is: the test is the
+    low-frequency t-test of econometrics (the long-run variance from the lowest cosine
+    projections), and the rest is tested with the slowest components left out.
+
+    Both models are fitted once, on all the data; each band's sums of squares are then
+    those of the same coefficients, and its residual degrees of freedom its observations
+    less the alternative's parameters spent on it (the trace of the hat matrix over the
+    band). Fitted on the slowest components alone, the refitted parameters and the effects
+    already named (a dozen columns and more, mostly determined by the rest) would use up
+    their 6 x ``LOW_BAND`` observations."""
+    from scipy.special import fdtrc
+
+    A, b, c, rows = blocks.total()
+    PX, pz = blocks.low_X, blocks.low_z
+    AL = np.einsum("lqk,lqm->km", PX, PX)
+    bL = np.einsum("lqk,lq->k", PX, pz)
+    cL = float(np.sum(pz ** 2))
+    fits = []
+    for cols in (list(null), list(alternative)):
+        idx = np.ix_(cols, cols)
+        t = solve(A[idx], b[cols], lower[cols], upper[cols])
+        low = sse(AL[idx], bL[cols], cL, t)
+        fits.append((low, sse(A[idx], b[cols], c, t) - low))
+    cols = list(alternative)
+    idx = np.ix_(cols, cols)
+    d = np.sqrt(np.maximum(np.diag(A[idx]), 1e-300))
+    scaled = A[idx] / np.outer(d, d) + RIDGE * np.eye(len(cols))
+    spent = float(np.trace(np.linalg.solve(scaled, AL[idx] / np.outer(d, d)))) if cols else 0.0
+    out = []
+    for band, (n, used) in enumerate(((blocks.low_rows, spent),
+                                      (rows - blocks.low_rows, len(cols) - spent))):
+        dof = n - used
+        left = fits[1][band]
+        if dof <= 0 or left <= 0:
+            out.append(1.0)
+            continue
+        F = max(fits[0][band] - left, 0.0) / k / (left / dof)
+        out.append(float(fdtrc(k, dof, F)))
+    return out[0], out[1]
 
 
 def bootstrap_weights(rng: np.random.Generator, n_blocks: int, n_draws: int) -> np.ndarray:

@@ -71,10 +71,11 @@ def summary(d: Discovery) -> dict:
             "indistinguishable": rnd.indistinguishable,
             "bootstrap_share": rnd.bootstrap_share, "noise_model": rnd.noise_model,
             "rms_before": rnd.rms_before, "rms_after": rnd.rms_after,
-            "generic": rnd.generic, "blocked": rnd.blocked,
+            "generic": rnd.generic, "blocked": rnd.blocked, "slow": rnd.slow,
             "tests": [{"name": t.name, "F": t.F, "p_value": t.p_value, "dof": t.dof,
                        "cv_gain": t.cv_gain, "fold_share": t.fold_share,
-                       "sse_gain": t.sse_gain, "gap": t.gap, "significant": t.significant,
+                       "sse_gain": t.sse_gain, "gap": t.gap, "p_bands": t.p_bands,
+                       "significant": t.significant, "slow_only": t.slow_only,
                        "reason": t.reason, "parameters": t.parameters} for t in rnd.tests]})
     n = d.used.stop - d.used.start
     duration = float(d.t[-1] - d.t[0]) if len(d.t) > 1 else 0.0

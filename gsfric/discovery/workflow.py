@@ -37,7 +37,7 @@ from gsfric.discovery.regimes import bands as regime_bands
 from gsfric.discovery.residuals import Problem
 from gsfric.discovery.settings import Settings
 from gsfric.discovery.selection import (CandidateTest, bootstrap_share, generic_competitor,
-                                        half_stability, indistinguishable,
+                                        half_stability, indistinguishable, low_band_of,
                                         noise_model, refine, refit_alternatives,
                                         screen_candidates, winner_of)
 from gsfric.platform import Platform
@@ -82,6 +82,10 @@ class Round:
     """A winner not named: a generic out-of-catalog structure explains the data better and the
     winner adds nothing to it (``generic["blocked"]``), or refined on the compiled model it
     does not lower the residual."""
+    slow: str | None = None
+    """Without a winner: the candidate accepted by every rule but the test on the slowest
+    components (``CandidateTest.slow_only``) that a generic out-of-catalog structure explains
+    as well or better (``generic`` holds that comparison): not slow noise but a structure."""
 
 
 @dataclass
@@ -244,6 +248,7 @@ def discover(motion: Motion, forces: np.ndarray, platform: Platform | None = Non
     J0 *= problem.weight[:, :, None]
     whitener = _largest_model_whitener(problem, residual_before, J0)
     refit = _refit_report(problem, theta0, J0, whitener, residual_before)
+    refit["test"] = _refit_test(problem, J0, residual_before, whitener)
     theta, r, J = refine(problem, theta0, names, whitener, start=(residual_before, J0))
     del J0
     sliding = problem.sliding
@@ -296,6 +301,7 @@ def discover(motion: Motion, forces: np.ndarray, platform: Platform | None = Non
         rounds.append(rnd)
         if winner is None:
             rnd.rms_after = rnd.rms_before
+            _slow_structure(problem, design, whitener, screen, rnd, notes)
             break
         rnd.indistinguishable, p_alone = indistinguishable(problem, design, screen, winner)
         if rnd.indistinguishable:
@@ -417,13 +423,15 @@ def discover(motion: Motion, forces: np.ndarray, platform: Platform | None = Non
             "does not explain as well or better: the data cannot tell "
             f"{name} from an error outside the catalog; it is named as the simpler explanation, "
             "the verdict is not 'explained'")
-    if lof["significant"] or imitators or any(rnd.generic.get("blocked") for rnd in rounds):
+    if (lof["significant"] or imitators or any(rnd.slow for rnd in rounds)
+            or any(rnd.generic.get("blocked") for rnd in rounds)):
         verdict = "unexplained_discrepancy"
     elif active:
         verdict = "explained"
     else:
         closed = np.sqrt(max(_rms(residual_before[sliding]) ** 2 - rms_after ** 2, 0.0))
-        verdict = "explained" if closed >= settings.min_gap * rms_after else "no_discrepancy"
+        verdict = "explained" if (closed >= settings.min_gap * rms_after
+                                  and refit["test"]["significant"]) else "no_discrepancy"
     lof.pop("fitted")
     table = regime_bands(np.asarray(motion.t[used]), problem.result.D_dot[used],
                          problem.result.D[used], problem.result.F[used],
@@ -438,6 +446,34 @@ def discover(motion: Motion, forces: np.ndarray, platform: Platform | None = Non
         settings=settings, evaluations=model.evaluations, notes=notes, verdict=verdict,
         lack_of_fit=lof, noise=noise_info, rms_after_all=_rms(full_after),
         sliding=sliding)
+
+
+def _slow_structure(problem: Problem, design, whitener: st.Whitener, screen, rnd: Round,
+                    notes: list[str]) -> None:
+    """A round without a winner, whose best candidate failed only the test on the record's
+    slowest components: slow noise would explain it, and so would a structure outside the
+    catalog (a scale error of the recorded pose, a delay on a slow motion). The candidate is
+    held against the generic basis (``generic_competitor``) as a winner would be; when it only
+    imitates the basis or is blocked by it, and the basis adds a significant part beyond the
+    catalog also on the slowest components alone or on the rest alone (slow noise, which the
+    basis's drift and force columns fit as well as an offset, does not pass that), the slow
+    part is a structure, and the round says so (``Round.slow``)."""
+    slow = [t for t in screen.tests.values() if t.slow_only]
+    if not slow:
+        return
+    name = max(slow, key=lambda t: t.cv_gain).name
+    generic = generic_competitor(problem, design, whitener, screen, name)
+    level = problem.settings.alpha / max(len(screen.tests), 1)
+    if not ((generic["blocked"] or generic["imitates"])
+            and generic["p_generic_beyond_catalog"] < level
+            and generic["p_generic_bands"] < level):
+        return
+    rnd.generic, rnd.slow = generic, name
+    notes.append(
+        f"round {rnd.index}: {name} fits a part of the gap that slow noise could also make "
+        f"(not named), but a generic out-of-catalog structure (mainly {generic['main_signal']}: "
+        f"{lackfit.MEANING.get(generic['main_signal'], '')}) explains it as well or better, "
+        "and a significant part beyond the catalog: the catalog does not explain the data")
 
 
 def _largest_model_whitener(problem: Problem, residual: np.ndarray, J: np.ndarray
@@ -494,7 +530,8 @@ def _lack_of_fit(problem: Problem, theta: np.ndarray, residual: np.ndarray,
     whitener = lackfit.whitener_beyond(residual, X, problem.sliding)
     out = lackfit.test(residual, X, whitener, alpha=s.alpha, min_gap=s.min_gap,
                        n_blocks=s.n_blocks, n_folds=s.n_folds,
-                       min_fold_share=s.min_fold_share, names=names)
+                       min_fold_share=s.min_fold_share, names=names,
+                       low=low_band_of(problem, whitener))
     X = None
     drift = lackfit.parameter_drift(
         residual, lackfit.drift_basis(t, speed, problem.sliding) * problem.weight[:, :, None],
@@ -604,6 +641,26 @@ def _intervals(problem: Problem, J: np.ndarray, names: list[str], whitener: st.W
     draws = np.array(draws) + theta[cols]
     q = np.percentile(draws, [2.5, 97.5], axis=0)
     return {n: (float(q[0, k]), float(q[1, k])) for k, n in enumerate(names)}
+
+
+def _refit_test(problem: Problem, J: np.ndarray, residual: np.ndarray,
+                whitener: st.Whitener) -> dict:
+    """Is the refit of the model's own parameters (columns J (M, 6, k) at the model's values,
+    residual (M, 6)) significant? The F-test of all of them against none on the prewhitened
+    data, and the same test on the record's slowest components alone or on the rest alone
+    (``statistics.band_tests``, the smaller p-value times two), each at ``alpha``: a refit
+    that takes up slow noise (a Coulomb coefficient and a payload mass that follow the wander
+    of 1/f noise) is not a gap closed."""
+    k = J.shape[2]
+    if k == 0:
+        return {"p_value": 1.0, "p_bands": 1.0, "significant": False}
+    blocks = st.Blocks.whitened(whitener, J, residual, problem.settings.n_blocks,
+                                low=low_band_of(problem, whitener))
+    lo, hi = np.full(k, -np.inf), np.full(k, np.inf)
+    p = st.f_test(st.fit(blocks, [], lo, hi), st.fit(blocks, list(range(k)), lo, hi))[1]
+    p_bands = min(1.0, 2 * min(st.band_tests(blocks, [], list(range(k)), lo, hi, k)))
+    alpha = problem.settings.alpha
+    return {"p_value": p, "p_bands": p_bands, "significant": bool(p < alpha and p_bands < alpha)}
 
 
 def _refit_report(problem: Problem, theta0: np.ndarray, J: np.ndarray,
