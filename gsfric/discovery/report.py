@@ -146,9 +146,10 @@ def report(d: Discovery, source: str = "", platform_source: str = "") -> str:
                  f"residual AR orders {rnd.noise_model.get('ar_order')}, lag-1 "
                  f"autocorrelations {rnd.noise_model.get('lag1_autocorrelation')}.")
         L.append("")
-        L += _table(["candidate", "F", "p", "held-out gain", "folds improved", "gap closed",
-                     "decision"],
-                    [[t.name, t.F, t.p_value, t.cv_gain, t.fold_share, t.gap, t.reason]
+        L += _table(["candidate", "F", "p", "p slowest / rest", "held-out gain",
+                     "folds improved", "gap closed", "decision"],
+                    [[t.name, t.F, t.p_value, t.p_bands if t.p_value < rnd.level else "-",
+                      t.cv_gain, t.fold_share, t.gap, t.reason]
                      for t in sorted(rnd.tests, key=lambda t: -t.cv_gain)])
         if rnd.winner:
             if rnd.indistinguishable:
@@ -194,7 +195,9 @@ def report(d: Discovery, source: str = "", platform_source: str = "") -> str:
           "Each candidate is fitted together with the refitted model parameters on a "
           "linearisation of the compiled model. The residual is prewhitened with an AR model "
           "per leg; a candidate is accepted when (1) the nested F-test on the prewhitened data "
-          "gives p below alpha / K (Bonferroni over the K candidates), (2) block "
+          "gives p below alpha / K (Bonferroni over the K candidates), and so does the same "
+          "test on the record's three slowest components per leg alone (the noise measured on "
+          "them: slow noise is not an offset) or on the rest alone, (2) block "
           "cross-validation over contiguous stretches, each holding an equal share of the used "
           "pairs, shows a lower held-out error in "
           f"total and in at least {d.settings.min_fold_share:.0%} of the folds, and (3) it "
