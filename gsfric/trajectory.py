@@ -279,26 +279,41 @@ def _gcv_window(y: np.ndarray, polyorder: int) -> int:
 
 
 @functools.lru_cache(maxsize=256)
-def _polynomial_fit(window: int, polyorder: int, deriv: int) -> tuple[np.ndarray, np.ndarray]:
-    """The least-squares polynomial of order ``polyorder`` through a window's samples:
-    ``fit`` (p + 1, window) maps the samples to its coefficients, ``derivative`` (window,
-    p + 1) maps those to its ``deriv``-th derivative (unit sample step) at each sample of the
-    window. Read-only.
+def _polynomial_fit(window: int, polyorder: int) -> np.ndarray:
+    """The least-squares polynomial of order ``polyorder`` through a window's samples: the
+    matrix (p + 1, window) that maps the samples to its coefficients in Legendre polynomials
+    of the abscissa scaled to [-1, 1] (``_polynomial_derivative`` evaluates them). Read-only.
 
-    The polynomial is written in Legendre polynomials of the abscissa scaled to [-1, 1], whose
-    least-squares problem stays well conditioned for any window: ``scipy.signal.savgol_coeffs``
-    fits powers of the sample index, and at order 6 its weights are wrong beyond about 300
-    samples (those of the value are all zero at 401).
+    Legendre polynomials keep the least-squares problem well conditioned for any window:
+    ``scipy.signal.savgol_coeffs`` fits powers of the sample index, and at order 6 its weights
+    are wrong beyond about 300 samples (those of the value are all zero at 401).
     """
     from numpy.polynomial import legendre
 
-    half = max(window // 2, 1)
-    x = (np.arange(window) - window // 2) / half
-    fit = np.linalg.pinv(legendre.legvander(x, polyorder))
+    fit = np.linalg.pinv(legendre.legvander(_abscissa(window)[0], polyorder))
+    fit.flags.writeable = False
+    return fit
+
+
+@functools.lru_cache(maxsize=256)
+def _polynomial_derivative(window: int, polyorder: int, deriv: int) -> np.ndarray:
+    """The matrix (window, p + 1) that maps the coefficients of ``_polynomial_fit`` to the
+    polynomial's ``deriv``-th derivative (unit sample step) at each sample of the window.
+    Read-only."""
+    from numpy.polynomial import legendre
+
+    x, half = _abscissa(window)
     derivative = np.stack([legendre.legval(x, legendre.legder(b, deriv))
                            for b in np.eye(polyorder + 1)], axis=1) / half ** deriv
-    fit.flags.writeable = derivative.flags.writeable = False
-    return derivative, fit
+    derivative.flags.writeable = False
+    return derivative
+
+
+def _abscissa(window: int) -> tuple[np.ndarray, int]:
+    """The window's samples (window,) scaled to [-1, 1] about its centre, and the scale (half
+    the window, samples, at least 1)."""
+    half = max(window // 2, 1)
+    return (np.arange(window) - window // 2) / half, half
 
 
 @functools.lru_cache(maxsize=256)
@@ -307,8 +322,8 @@ def savgol_weights(window: int, polyorder: int, deriv: int = 0) -> np.ndarray:
     ``deriv``-th derivative (unit sample step) at its centre of the least-squares polynomial
     of order ``polyorder`` through them (``scipy.signal.savgol_coeffs(..., use="dot")``,
     computed as ``_polynomial_fit``)."""
-    derivative, fit = _polynomial_fit(window, polyorder, deriv)
-    weights = derivative[window // 2] @ fit
+    weights = _polynomial_derivative(window, polyorder, deriv)[window // 2] \
+        @ _polynomial_fit(window, polyorder)
     weights.flags.writeable = False
     return weights
 
@@ -331,7 +346,8 @@ def savgol_filter(y: np.ndarray, window: int, polyorder: int, deriv: int = 0) ->
 
     y = np.asarray(y, float)
     window, polyorder, deriv = int(window), int(polyorder), int(deriv)
-    derivative, fit = _polynomial_fit(window, polyorder, deriv)
+    derivative = _polynomial_derivative(window, polyorder, deriv)
+    fit = _polynomial_fit(window, polyorder)
     half, n = window // 2, len(y)
     out = correlate1d(y, savgol_weights(window, polyorder, deriv), axis=0, mode="constant")
     out[:half] = derivative[:half] @ (fit @ y[:window])

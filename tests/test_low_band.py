@@ -15,8 +15,8 @@ def offset_tests(residual, rate=1000.0, valid=None):
     low = st.low_band(np.arange(n)[w.order:] / rate, w.kept(valid, n))
     blocks = st.Blocks.whitened(w, X, residual, 40, low=low)
     lo, hi = np.full(6, -np.inf), np.full(6, np.inf)
-    p = st.f_test(st.fit(blocks, [], lo, hi), st.fit(blocks, list(range(6)), lo, hi))[1]
-    return p, st.band_tests(blocks, [], list(range(6)), lo, hi, 6)
+    none, offsets = st.fit(blocks, [], lo, hi), st.fit(blocks, list(range(6)), lo, hi)
+    return st.f_test(none, offsets)[1], st.band_tests(blocks, none, offsets, 6)
 
 
 def test_the_mean_of_1_over_f_noise_between_rests_is_not_an_offset():
@@ -94,7 +94,8 @@ def test_an_offset_beside_many_fitted_columns_keeps_its_slowest_components():
         coef_ = coef.copy()
         coef_[12:] *= size
         blocks = st.Blocks.whitened(w, X, noise + X @ coef_, 40, low=low)
-        p_low, p_high = st.band_tests(blocks, null, alternative, lo, hi, 6)
+        p_low, p_high = st.band_tests(blocks, st.fit(blocks, null, lo, hi),
+                                      st.fit(blocks, alternative, lo, hi), 6)
         assert (p_low < 1e-6) == found, (size, p_low)
         assert p_high > 1e-3, (size, p_high)
 

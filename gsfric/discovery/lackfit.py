@@ -215,8 +215,7 @@ def test(residual: np.ndarray, X: np.ndarray, whitener: st.Whitener, *, alpha: f
     empty = st.fit(blocks, [], lo, hi)
     full = st.fit(blocks, list(range(k)), lo, hi)
     _, p, _ = st.f_test(empty, full)
-    p_bands = 0.0 if low is None else min(
-        1.0, 2 * min(st.band_tests(blocks, [], list(range(k)), lo, hi, k)))
+    p_bands = 0.0 if low is None else st.band_p_value(blocks, empty, full, k)
     cv_null = st.cross_validate(blocks, [], lo, hi, n_folds)
     cv = st.cross_validate(blocks, list(range(k)), lo, hi, n_folds)
     cv_gain = float((cv_null.sum() - cv.sum()) / max(cv_null.sum(), 1e-300))

@@ -45,7 +45,7 @@ class CandidateTest:
         model's values: ``gap_replacing_refit``), divided by the RMS of the residual left.
     p_bands : float
         p-value of the same F-test on the record's slowest components alone or on the rest
-        alone, whichever is smaller, times two (``statistics.band_tests``).
+        alone, whichever is smaller, times two (``statistics.band_p_value``).
     significant : bool
     slow_only : bool
         Accepted by every rule but the test on the record's slowest components alone or on
@@ -119,7 +119,7 @@ def screen_candidates(problem: Problem, design: Design, whitener: st.Whitener,
 
     A candidate is accepted when (a) its F-test gives p < alpha / K, and so does the same
     test on the record's slowest components alone or on the rest alone, each band's noise
-    measured in that band (``statistics.band_tests``; the smaller p-value, times two: slow
+    measured in that band (``statistics.band_p_value``: the smaller p-value, times two; slow
     noise that the AR model does not describe is not taken for an offset), (b) it lowers the
     held-out error of the block cross-validation in total and in at least ``min_fold_share``
     of the folds that hold used pairs (``statistics.fold_share``), (c) the gap it closes
@@ -152,8 +152,7 @@ def screen_candidates(problem: Problem, design: Design, whitener: st.Whitener,
             gap = max(gap, gap_replacing_refit(problem, design, blocks, best, k))
         p_bands = 1.0
         if p < level:
-            p_bands = min(1.0, 2 * min(st.band_tests(blocks, null_cols, best.columns,
-                                                     design.lower, design.upper, k)))
+            p_bands = st.band_p_value(blocks, null, best, k)
         test = CandidateTest(c.name, params, float(F), p, k, cv_gain, share,
                              float((null.sse - best.sse) / null.sse), gap, p_bands)
         plain = plain_sse(design, best) < plain_sse(design, null)
@@ -434,8 +433,7 @@ def generic_competitor(problem: Problem, design: Design, whitener: st.Whitener,
     catalog = st.fit(blocks, R + W + O, lower, upper)
     everything = st.fit(blocks, R + W + O + G, lower, upper)
     _, p_generic, _ = st.f_test(catalog, everything)
-    p_generic_bands = min(1.0, 2 * min(st.band_tests(blocks, R + W + O, R + W + O + G,
-                                                     lower, upper, nb)))
+    p_generic_bands = st.band_p_value(blocks, catalog, everything, nb)
     level = s.alpha / max(len(screen.tests), 1)
     parts = {}
     coef = everything.coef[len(R + W + O):]

@@ -523,10 +523,9 @@ def low_band(t: np.ndarray, kept: np.ndarray, q: int = LOW_BAND) -> np.ndarray:
     return out
 
 
-def band_tests(blocks: Blocks, null: Sequence[int], alternative: Sequence[int],
-               lower: np.ndarray, upper: np.ndarray, k: int) -> tuple[float, float]:
-    """p-values of the nested F-test of ``alternative`` against ``null`` (column lists, ``k``
-    parameters tested) on the record's slowest components alone and on the rest alone
+def band_tests(blocks: Blocks, null: Fit, alternative: Fit, k: int) -> tuple[float, float]:
+    """p-values of the nested F-test of ``alternative`` against ``null`` (fits on ``blocks``,
+    ``k`` parameters tested) on the record's slowest components alone and on the rest alone
     (``Blocks.whitened`` with ``low``): each band's noise level measured in that band.
 
     The AR noise model describes the noise where its few lags see it; noise whose spectrum
@@ -538,8 +537,8 @@ def band_tests(blocks: Blocks, null: Sequence[int], alternative: Sequence[int],
     low-frequency t-test of econometrics (the long-run variance from the lowest cosine
     projections), and the rest is tested with the slowest components left out.
 
-    Both models are fitted once, on all the data; each band's sums of squares are then
-    those of the same coefficients, and its residual degrees of freedom its observations
+    Both models are fitted once, on all the data (the fits given); each band's sums of
+    squares are then those of the same coefficients, and its residual degrees of freedom its observations
     less the alternative's parameters spent on it (the trace of the hat matrix over the
     band). Fitted on the slowest components alone, the refitted parameters and the effects
     already named (a dozen columns and more, mostly determined by the rest) would use up
@@ -552,12 +551,11 @@ def band_tests(blocks: Blocks, null: Sequence[int], alternative: Sequence[int],
     bL = np.einsum("lqk,lq->k", PX, pz)
     cL = float(np.sum(pz ** 2))
     fits = []
-    for cols in (list(null), list(alternative)):
-        idx = np.ix_(cols, cols)
-        t = solve(A[idx], b[cols], lower[cols], upper[cols])
-        low = sse(AL[idx], bL[cols], cL, t)
-        fits.append((low, sse(A[idx], b[cols], c, t) - low))
-    cols = list(alternative)
+    for f in (null, alternative):
+        idx = np.ix_(f.columns, f.columns)
+        low = sse(AL[idx], bL[f.columns], cL, f.coef)
+        fits.append((low, sse(A[idx], b[f.columns], c, f.coef) - low))
+    cols = list(alternative.columns)
     idx = np.ix_(cols, cols)
     d = np.sqrt(np.maximum(np.diag(A[idx]), 1e-300))
     scaled = A[idx] / np.outer(d, d) + RIDGE * np.eye(len(cols))
@@ -573,6 +571,12 @@ def band_tests(blocks: Blocks, null: Sequence[int], alternative: Sequence[int],
         F = max(fits[0][band] - left, 0.0) / k / (left / dof)
         out.append(float(fdtrc(k, dof, F)))
     return out[0], out[1]
+
+
+def band_p_value(blocks: Blocks, null: Fit, alternative: Fit, k: int) -> float:
+    """The smaller p-value of ``band_tests``, times two (Bonferroni over the two parts): the
+    alternative passes on the slowest components alone or on the rest alone."""
+    return min(1.0, 2 * min(band_tests(blocks, null, alternative, k)))
 
 
 def bootstrap_weights(rng: np.random.Generator, n_blocks: int, n_draws: int) -> np.ndarray:

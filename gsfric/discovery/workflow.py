@@ -463,10 +463,9 @@ def _slow_structure(problem: Problem, design, whitener: st.Whitener, screen, rnd
         return
     name = max(slow, key=lambda t: t.cv_gain).name
     generic = generic_competitor(problem, design, whitener, screen, name)
-    level = problem.settings.alpha / max(len(screen.tests), 1)
     if not ((generic["blocked"] or generic["imitates"])
-            and generic["p_generic_beyond_catalog"] < level
-            and generic["p_generic_bands"] < level):
+            and generic["p_generic_beyond_catalog"] < rnd.level
+            and generic["p_generic_bands"] < rnd.level):
         return
     rnd.generic, rnd.slow = generic, name
     notes.append(
@@ -648,7 +647,7 @@ def _refit_test(problem: Problem, J: np.ndarray, residual: np.ndarray,
     """Is the refit of the model's own parameters (columns J (M, 6, k) at the model's values,
     residual (M, 6)) significant? The F-test of all of them against none on the prewhitened
     data, and the same test on the record's slowest components alone or on the rest alone
-    (``statistics.band_tests``, the smaller p-value times two), each at ``alpha``: a refit
+    (``statistics.band_p_value``, the smaller p-value times two), each at ``alpha``: a refit
     that takes up slow noise (a Coulomb coefficient and a payload mass that follow the wander
     of 1/f noise) is not a gap closed."""
     k = J.shape[2]
@@ -657,8 +656,9 @@ def _refit_test(problem: Problem, J: np.ndarray, residual: np.ndarray,
     blocks = st.Blocks.whitened(whitener, J, residual, problem.settings.n_blocks,
                                 low=low_band_of(problem, whitener))
     lo, hi = np.full(k, -np.inf), np.full(k, np.inf)
-    p = st.f_test(st.fit(blocks, [], lo, hi), st.fit(blocks, list(range(k)), lo, hi))[1]
-    p_bands = min(1.0, 2 * min(st.band_tests(blocks, [], list(range(k)), lo, hi, k)))
+    none, every = st.fit(blocks, [], lo, hi), st.fit(blocks, list(range(k)), lo, hi)
+    p = st.f_test(none, every)[1]
+    p_bands = st.band_p_value(blocks, none, every, k)
     alpha = problem.settings.alpha
     return {"p_value": p, "p_bands": p_bands, "significant": bool(p < alpha and p_bands < alpha)}
 
