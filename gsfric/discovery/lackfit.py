@@ -193,12 +193,18 @@ def basis_outside(t: np.ndarray, F: np.ndarray, speed: np.ndarray, sliding: np.n
 
 def test(residual: np.ndarray, X: np.ndarray, whitener: st.Whitener, *, alpha: float,
          min_gap: float, n_blocks: int, n_folds: int, min_fold_share: float,
-         names: list[str] | None = None, low: np.ndarray | None = None) -> dict:
+         names: list[str] | None = None, low: np.ndarray | None = None,
+         nuisance: int = 0, by: str = "time") -> dict:
     """The lack-of-fit test of the residual (M, 6) against the basis X (M, 6, k) whose
     columns carry the signals ``names`` (default ``column_names()``); with ``low``, the
     record's slowest components (``statistics.low_band``), the F-test must also hold on them
     alone or on the rest alone (``statistics.band_tests``: a drift that slow noise makes as
     large is not a structure).
+
+    The first ``nuisance`` columns are fitted under the null as well (tested: the others
+    beyond them; ``names`` then names the tested columns only). ``by``: the blocks of the
+    cross-validation (``statistics.Blocks.whitened``), stretches of equal time (default: the
+    basis follows slow noise within one move) or of equal shares of the valid pairs.
 
     Returns
     -------
@@ -207,27 +213,27 @@ def test(residual: np.ndarray, X: np.ndarray, whitener: st.Whitener, *, alpha: f
         ``cv_gain``, ``fold_share``, ``structure_rms`` (N), ``per_leg_rms`` (N, the structure
         on each leg), ``signals`` (each signal's share of the structure), ``fitted`` (M, 6).
     """
-    k = X.shape[2]
-    # stretches of time, not of pairs: the basis follows slow noise within one move
-    # (statistics.block_edges)
-    blocks = st.Blocks.whitened(whitener, X, residual, n_blocks, by="time", low=low)
-    lo, hi = np.full(k, -np.inf), np.full(k, np.inf)
-    empty = st.fit(blocks, [], lo, hi)
-    full = st.fit(blocks, list(range(k)), lo, hi)
+    columns = X.shape[2]
+    k = columns - nuisance
+    blocks = st.Blocks.whitened(whitener, X, residual, n_blocks, by=by, low=low)
+    lo, hi = np.full(columns, -np.inf), np.full(columns, np.inf)
+    null = list(range(nuisance))
+    empty = st.fit(blocks, null, lo, hi)
+    full = st.fit(blocks, list(range(columns)), lo, hi)
     _, p, _ = st.f_test(empty, full)
     p_bands = 0.0 if low is None else st.band_p_value(blocks, empty, full, k)
-    cv_null = st.cross_validate(blocks, [], lo, hi, n_folds)
-    cv = st.cross_validate(blocks, list(range(k)), lo, hi, n_folds)
+    cv_null = st.cross_validate(blocks, null, lo, hi, n_folds)
+    cv = st.cross_validate(blocks, list(range(columns)), lo, hi, n_folds)
     cv_gain = float((cv_null.sum() - cv.sum()) / max(cv_null.sum(), 1e-300))
     share = float(np.mean(cv < cv_null))
-    fitted = X @ full.coef
-    left = residual - fitted
+    fitted = X[:, :, nuisance:] @ full.coef[nuisance:]
+    left = residual - X @ full.coef
     gap = float(np.sqrt(np.mean(fitted ** 2) / max(np.mean(left ** 2), 1e-300)))
     parts = {}
     total = max(float(np.sum(fitted ** 2)), 1e-300)
     names = column_names() if names is None else names
     for j, name in enumerate(names):
-        part = X[:, :, j] * full.coef[j]
+        part = X[:, :, nuisance + j] * full.coef[nuisance + j]
         parts[name] = parts.get(name, 0.0) + float(np.sum(part * fitted)) / total
     # no share-of-folds rule: a discrepancy confined to part of the record (the fast end of a
     # chirp) is still a discrepancy; that rule is for naming a stable effect. The held-out gain
@@ -808,7 +814,8 @@ REVERSAL_MEANING = ("a friction-like force that depends on the travel since the 
 
 
 DRIFT_SIGNALS = ("sgn(v) drift",)
-"""The column of ``drift_basis``: the friction level changing linearly over the record."""
+"""The tested column of ``drift_basis``: the friction level changing linearly over the record
+(the level itself, ``sgn(v)``, is fitted beside it under the null as well)."""
 
 DRIFT_MEANING = ("a friction that changes over the record (the friction-like part of the "
                  "residual grows or shrinks with time): a seal or lubricant warming up or "
@@ -816,21 +823,25 @@ DRIFT_MEANING = ("a friction that changes over the record (the friction-like par
 
 
 def drift_basis(t: np.ndarray, speed: np.ndarray, sliding: np.ndarray) -> np.ndarray:
-    """The column (M, 6, 1) of ``DRIFT_SIGNALS``: ``sgn(v) tau`` on the sliding pairs, with
-    ``tau`` the time mapped linearly onto [-1, 1] over the record (t (M,) s, speed (M, 6)
-    m/s), scaled to unit RMS over all legs (one coefficient for the six legs, as the basis's
-    signals). A gain drifting with time (``F tau``) is not a column: on a creep under pink
-    noise it is a slow wave like the noise's own wander, and it made a correctly named
-    ``stroke_friction`` read unexplained."""
+    """The columns (M, 6, 2) of the drift test: the friction level ``sgn(v)`` and its change
+    ``sgn(v) tau`` (``DRIFT_SIGNALS``) on the sliding pairs, with ``tau`` the time mapped
+    linearly onto [-1, 1] over the record (t (M,) s, speed (M, 6) m/s), each scaled to unit
+    RMS over all legs (one coefficient for the six legs, as the basis's signals). A gain
+    drifting with time (``F tau``) is not a column: on a creep under pink noise it is a slow
+    wave like the noise's own wander, and it made a correctly named ``stroke_friction`` read
+    unexplained."""
     t = np.asarray(t, float)
     tau = (2 * (t - t[0]) / max(t[-1] - t[0], 1e-300) - 1)[:, None]
-    x = np.sign(speed) * sliding * tau
-    scale = float(np.sqrt(np.mean(x ** 2)))
-    return (x / (scale if scale > 0 else 1.0))[:, :, None]
+    level = np.sign(speed) * sliding
+    X = np.stack([level, level * tau], axis=2)
+    for j in range(X.shape[2]):
+        scale = float(np.sqrt(np.mean(X[:, :, j] ** 2)))
+        X[:, :, j] /= scale if scale > 0 else 1.0
+    return X
 
 
-def parameter_drift(residual: np.ndarray, X: np.ndarray, valid: np.ndarray, *, alpha: float,
-                    min_gap: float, n_blocks: int, n_folds: int) -> dict:
+def parameter_drift(residual: np.ndarray, X: np.ndarray, valid: np.ndarray, t: np.ndarray, *,
+                    alpha: float, min_gap: float, n_blocks: int, n_folds: int) -> dict:
     """Is the friction level the same over the whole record? (a Chow-type test)
 
     Every catalog effect and every refitted parameter is a constant of the record. An error
@@ -839,30 +850,41 @@ def parameter_drift(residual: np.ndarray, X: np.ndarray, valid: np.ndarray, *, a
     leaves the difference between its value at each time and that mean: friction-shaped
     (``sgn(v)``), changing sign over the record. That residual is tested against the friction
     level's first-order change in time (``drift_basis``: varying linearly over the record, one
-    coefficient for the six legs; no catalog effect has such a column) by the rules of the
-    generic basis (``test``): prewhitened with the AR model of the residual left by the
-    column, F-test at ``alpha``, a lower held-out error of the block cross-validation
-    (contiguous folds: a drift fitted on the other folds must predict the held-out stretch,
-    which slow noise, wandering at random, does not), and a gap of at least ``min_gap``.
+    coefficient for the six legs; no catalog effect has such a column), with the level itself
+    fitted under the null as well: what the catalog took of the mean is not exactly the mean
+    (a Stribeck curve or a viscous refit takes part of a friction that differs between moves
+    of different speeds), and a level left over is a friction law's error, not a change. By
+    the rules of the generic basis (``test``): prewhitened with the AR model of the residual
+    left by the columns, F-test at ``alpha`` also on the record's slowest components alone or
+    on the rest alone (``statistics.band_tests``: a wander of slow noise between the moves is
+    measured there), a lower held-out error of the block cross-validation, and a gap of at
+    least ``min_gap``. The blocks hold equal shares of the sliding pairs: on moves between
+    long rests, blocks of equal time put whole moves in one fold, and a change of level is
+    not predicted from the other one or two moves.
 
     Parameters
     ----------
     residual : ndarray, shape (M, 6)
         Final residual per leg (weighted as the fit's), N.
-    X : ndarray, shape (M, 6, 1)
+    X : ndarray, shape (M, 6, 2)
         ``drift_basis``, weighted as the residual.
     valid : ndarray of bool, shape (M, 6)
         The pairs of the noise model (sliding pairs).
+    t : ndarray, shape (M,)
+        Sample times, s.
 
     Returns
     -------
     dict
-        As ``test``: ``significant``, ``p_value``, ``gap``, ``cv_gain``, ``structure_rms`` (N),
-        ``per_leg_rms`` (N), ``signals``, ``fitted`` (M, 6).
+        As ``test``: ``significant``, ``p_value``, ``p_bands``, ``gap``, ``cv_gain``,
+        ``structure_rms`` (N), ``per_leg_rms`` (N), ``signals``, ``fitted`` (M, 6): of the
+        change alone, the level left out.
     """
-    return test(residual, X, whitener_beyond(residual, X, valid), alpha=alpha, min_gap=min_gap,
-                n_blocks=n_blocks, n_folds=n_folds, min_fold_share=0.0,
-                names=list(DRIFT_SIGNALS))
+    whitener = whitener_beyond(residual, X, valid)
+    low = st.low_band(np.asarray(t, float)[whitener.order:], whitener.kept(valid))
+    return test(residual, X, whitener, alpha=alpha, min_gap=min_gap, n_blocks=n_blocks,
+                n_folds=n_folds, min_fold_share=0.0, names=list(DRIFT_SIGNALS), low=low,
+                nuisance=1, by="pairs")
 
 
 def whitener_beyond(residual: np.ndarray, X: np.ndarray, valid: np.ndarray) -> st.Whitener:

@@ -56,11 +56,21 @@ def report(d: Discovery, source: str = "", platform_source: str = "") -> str:
     L += ["## Result", "", f"Verdict: **{d.verdict}**.", ""]
     if d.verdict == "unexplained_discrepancy":
         lof = d.lack_of_fit
-        L += [f"The catalog does not explain the data: a structured residual of "
-              f"{_g(lof.get('structure_rms'))} N RMS ({_g(lof.get('gap'), 3)} x the noise left) "
-              f"remains, {lof.get('looks_like', '')}. Per leg (N): "
-              f"{', '.join(_g(v, 3) for v in lof.get('per_leg_rms', []))}; dominant frequency "
-              f"of the residual {_g(lof.get('frequency'), 3)} Hz.", ""]
+        source = lof.get("source") or "final residual"
+        if source == "final residual":
+            L += [f"The catalog does not explain the data: a structured residual of "
+                  f"{_g(lof.get('structure_rms'))} N RMS ({_g(lof.get('gap'), 3)} x the noise "
+                  f"left) remains, {lof.get('looks_like', '')}. Per leg (N): "
+                  f"{', '.join(_g(v, 3) for v in lof.get('per_leg_rms', []))}; dominant "
+                  f"frequency of the residual {_g(lof.get('frequency'), 3)} Hz.", ""]
+        else:
+            L += [f"The catalog does not explain the data: in {source}, a generic structure "
+                  f"outside the catalog (mainly {lof.get('main_signal')}) explains the gap as "
+                  "well as the catalog's best candidate or better (see the round's table "
+                  f"below), {lof.get('looks_like', '')}. The final residual's own tests find "
+                  "no structure beyond the effects named: what is left is taken by them, not "
+                  f"explained. Dominant frequency of the residual "
+                  f"{_g(lof.get('frequency'), 3)} Hz.", ""]
         drift = lof.get("drift", {})
         if drift.get("significant"):
             L += ["The friction-like part of the residual (signed by the direction of motion; "

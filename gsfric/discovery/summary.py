@@ -90,9 +90,8 @@ def summary(d: Discovery) -> dict:
             "looks_like": lof.get("looks_like"),
             "partial_effects": [f.name for f in d.effects],
             "speed_bands": {b.name: b.rms_after for b in d.regimes if b.regime == "speed"},
-            "message": "the catalog does not explain the data: a structured residual of "
-                       f"{lof.get('structure_rms', 0.0):.4g} N RMS remains, "
-                       f"{lof.get('looks_like', '')}"}
+            "source": lof.get("source"),
+            "message": _unexplained_message(lof)}
     out = {
         "verdict": d.verdict,
         "unexplained": unexplained,
@@ -122,3 +121,15 @@ def summary(d: Discovery) -> dict:
         "evaluations": d.evaluations,
     }
     return _clean(out)
+
+
+def _unexplained_message(lof: dict) -> str:
+    """One sentence on an ``unexplained_discrepancy``: the structure left in the final
+    residual, or the round whose generic competitor found it (``lof["source"]``)."""
+    source = lof.get("source") or "final residual"
+    if source == "final residual":
+        return ("the catalog does not explain the data: a structured residual of "
+                f"{lof.get('structure_rms', 0.0):.4g} N RMS remains, {lof.get('looks_like', '')}")
+    return (f"the catalog does not explain the data: in {source}, a generic structure outside "
+            f"the catalog ({lof.get('main_signal')}) explains the gap as well as the catalog's "
+            f"best candidate or better, {lof.get('looks_like', '')}")

@@ -423,9 +423,13 @@ def discover(motion: Motion, forces: np.ndarray, platform: Platform | None = Non
             "does not explain as well or better: the data cannot tell "
             f"{name} from an error outside the catalog; it is named as the simpler explanation, "
             "the verdict is not 'explained'")
-    if (lof["significant"] or imitators or any(rnd.slow for rnd in rounds)
-            or any(rnd.generic.get("blocked") for rnd in rounds)):
+    lof["source"] = "final residual" if lof["significant"] else None
+    by_round = next((rnd for rnd in rounds if rnd.slow or rnd.generic.get("blocked")
+                     or (rnd.winner and rnd.generic.get("imitates"))), None)
+    if lof["significant"] or by_round is not None:
         verdict = "unexplained_discrepancy"
+        if not lof["significant"]:
+            _round_structure(lof, by_round)
     elif active:
         verdict = "explained"
     else:
@@ -446,6 +450,17 @@ def discover(motion: Motion, forces: np.ndarray, platform: Platform | None = Non
         settings=settings, evaluations=model.evaluations, notes=notes, verdict=verdict,
         lack_of_fit=lof, noise=noise_info, rms_after_all=_rms(full_after),
         sliding=sliding)
+
+
+def _round_structure(lof: dict, rnd: Round) -> None:
+    """What the lack-of-fit summary ``lof`` says about an ``unexplained_discrepancy`` that a
+    round found (a generic structure that blocks its winner, that its winner only imitates, or
+    that a slow part fits) while the final residual's tests found none: the round's generic
+    signal, and the round as the source, instead of the final basis's weaker signals."""
+    main = rnd.generic.get("main_signal")
+    lof["source"] = f"round {rnd.index}"
+    lof["main_signal"] = main
+    lof["looks_like"] = lackfit.MEANING.get(main, "") if main else ""
 
 
 def _slow_structure(problem: Problem, design, whitener: st.Whitener, screen, rnd: Round,
@@ -534,7 +549,7 @@ def _lack_of_fit(problem: Problem, theta: np.ndarray, residual: np.ndarray,
     X = None
     drift = lackfit.parameter_drift(
         residual, lackfit.drift_basis(t, speed, problem.sliding) * problem.weight[:, :, None],
-        problem.sliding, alpha=s.alpha, min_gap=s.min_gap, n_blocks=s.n_blocks,
+        problem.sliding, t, alpha=s.alpha, min_gap=s.min_gap, n_blocks=s.n_blocks,
         n_folds=s.n_folds)
     D = problem.result.D[used]
     state = lackfit.state_structure(residual, lackfit.state_features(D, speed, F),
