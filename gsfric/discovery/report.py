@@ -68,9 +68,9 @@ def report(d: Discovery, source: str = "", platform_source: str = "") -> str:
                   f"outside the catalog (mainly {lof.get('main_signal')}) explains the gap as "
                   "well as the catalog's best candidate or better (see the round's table "
                   f"below), {lof.get('looks_like', '')}. The final residual's own tests find "
-                  "no structure beyond the effects named: what is left is taken by them, not "
-                  f"explained. Dominant frequency of the residual "
-                  f"{_g(lof.get('frequency'), 3)} Hz.", ""]
+                  "no structure by themselves: what the round found went into the effects "
+                  "named, or is too slow to stand out of the noise alone. Dominant frequency "
+                  f"of the residual {_g(lof.get('frequency'), 3)} Hz.", ""]
         drift = lof.get("drift", {})
         if drift.get("significant"):
             L += ["The friction-like part of the residual (signed by the direction of motion; "
