@@ -209,9 +209,10 @@ def test(residual: np.ndarray, X: np.ndarray, whitener: st.Whitener, *, alpha: f
     Returns
     -------
     dict
-        ``significant``, ``p_value``, ``gap`` (RMS of the fitted structure over the RMS left),
-        ``cv_gain``, ``fold_share``, ``structure_rms`` (N), ``per_leg_rms`` (N, the structure
-        on each leg), ``signals`` (each signal's share of the structure), ``fitted`` (M, 6).
+        ``significant``, ``p_value``, ``p_bands`` (0 without ``low``), ``gap`` (RMS of the
+        fitted structure over the RMS left), ``cv_gain``, ``fold_share``, ``structure_rms``
+        (N), ``per_leg_rms`` (N, the structure on each leg), ``signals`` (each signal's share
+        of the structure), ``fitted`` (M, 6); the structure is the tested columns' part.
     """
     columns = X.shape[2]
     k = columns - nuisance
