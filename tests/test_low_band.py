@@ -12,7 +12,7 @@ def offset_tests(residual, rate=1000.0, valid=None):
     X = np.zeros((n, 6, 6))
     X[:, np.arange(6), np.arange(6)] = 1.0
     w = st.Whitener.fit(residual, valid=valid)
-    low = st.low_band(np.arange(n)[w.order:] / rate, w.kept(valid, n))
+    low = w.low_band(np.arange(n) / rate, valid)
     blocks = st.Blocks.whitened(w, X, residual, 40, low=low)
     lo, hi = np.full(6, -np.inf), np.full(6, np.inf)
     none, offsets = st.fit(blocks, [], lo, hi), st.fit(blocks, list(range(6)), lo, hi)
@@ -87,7 +87,7 @@ def test_an_offset_beside_many_fitted_columns_keeps_its_slowest_components():
     coef = np.r_[rng.uniform(0.5, 1, 12), 0.3 * rng.choice([-1.0, 1.0], 6)]
     noise = rng.standard_normal((n, 6))
     w = st.Whitener.fit(noise)
-    low = st.low_band(t[w.order:], w.kept(None, n))
+    low = w.low_band(t)
     lo, hi = np.full(18, -np.inf), np.full(18, np.inf)
     null, alternative = list(range(12)), list(range(18))
     for size, found in ((1.0, True), (0.0, False)):

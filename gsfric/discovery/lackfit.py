@@ -882,10 +882,9 @@ def parameter_drift(residual: np.ndarray, X: np.ndarray, valid: np.ndarray, t: n
         change alone, the level left out.
     """
     whitener = whitener_beyond(residual, X, valid)
-    low = st.low_band(np.asarray(t, float)[whitener.order:], whitener.kept(valid))
     return test(residual, X, whitener, alpha=alpha, min_gap=min_gap, n_blocks=n_blocks,
-                n_folds=n_folds, min_fold_share=0.0, names=list(DRIFT_SIGNALS), low=low,
-                nuisance=1, by="pairs")
+                n_folds=n_folds, min_fold_share=0.0, names=list(DRIFT_SIGNALS),
+                low=whitener.low_band(t, valid), nuisance=1, by="pairs")
 
 
 def whitener_beyond(residual: np.ndarray, X: np.ndarray, valid: np.ndarray) -> st.Whitener:

@@ -185,8 +185,7 @@ def screen_candidates(problem: Problem, design: Design, whitener: st.Whitener,
 def low_band_of(problem: Problem, whitener: st.Whitener) -> np.ndarray:
     """The record's slowest components (``statistics.low_band``) on the samples that
     ``whitener`` filters and keeps, (M - order, 6, LOW_BAND)."""
-    t = problem.model.t[problem.used]
-    return st.low_band(t[whitener.order:], whitener.kept(problem.sliding))
+    return whitener.low_band(problem.model.t[problem.used], problem.sliding)
 
 
 def plain_sse(design: Design, f: st.Fit) -> float:

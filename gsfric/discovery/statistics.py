@@ -184,6 +184,13 @@ class Whitener:
             window &= ok[p - lag:len(ok) - lag]
         return window
 
+    def low_band(self, t: np.ndarray, valid: np.ndarray | None = None) -> np.ndarray:
+        """The record's slowest components (``low_band``) on the filtered samples that
+        ``apply`` keeps (``kept``): t (N,) s, the times of the unfiltered samples; valid as
+        ``kept``. Shape (N - order, 6, LOW_BAND)."""
+        t = np.asarray(t, float)
+        return low_band(t[self.order:], self.kept(valid, len(t)))
+
     def phi1(self) -> np.ndarray:
         """Lag-one autocorrelation implied by each leg's model, (6,)."""
         out = []

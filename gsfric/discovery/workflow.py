@@ -247,8 +247,12 @@ def discover(motion: Motion, forces: np.ndarray, platform: Platform | None = Non
     residual_before = problem.mask(problem.y - F0[problem.used])
     J0 *= problem.weight[:, :, None]
     whitener = _largest_model_whitener(problem, residual_before, J0)
-    refit = _refit_report(problem, theta0, J0, whitener, residual_before)
-    refit["test"] = _refit_test(problem, J0, residual_before, whitener)
+    # the refit's columns prewhitened once, for its unbounded values and for its test
+    refit_blocks = st.Blocks.whitened(whitener, J0, residual_before, problem.settings.n_blocks,
+                                      low=low_band_of(problem, whitener))
+    refit = _refit_report(problem, theta0, refit_blocks)
+    refit["test"] = _refit_test(problem, refit_blocks)
+    del refit_blocks
     theta, r, J = refine(problem, theta0, names, whitener, start=(residual_before, J0))
     del J0
     sliding = problem.sliding
@@ -657,19 +661,16 @@ def _intervals(problem: Problem, J: np.ndarray, names: list[str], whitener: st.W
     return {n: (float(q[0, k]), float(q[1, k])) for k, n in enumerate(names)}
 
 
-def _refit_test(problem: Problem, J: np.ndarray, residual: np.ndarray,
-                whitener: st.Whitener) -> dict:
-    """Is the refit of the model's own parameters (columns J (M, 6, k) at the model's values,
-    residual (M, 6)) significant? The F-test of all of them against none on the prewhitened
-    data, and the same test on the record's slowest components alone or on the rest alone
-    (``statistics.band_p_value``, the smaller p-value times two), each at ``alpha``: a refit
-    that takes up slow noise (a Coulomb coefficient and a payload mass that follow the wander
-    of 1/f noise) is not a gap closed."""
-    k = J.shape[2]
+def _refit_test(problem: Problem, blocks: st.Blocks) -> dict:
+    """Is the refit of the model's own parameters significant? ``blocks``: its columns (at
+    the model's values) and the residual, prewhitened, with the record's slowest components.
+    The F-test of all of them against none, and the same test on the record's slowest
+    components alone or on the rest alone (``statistics.band_p_value``, the smaller p-value
+    times two), each at ``alpha``: a refit that takes up slow noise (a Coulomb coefficient and
+    a payload mass that follow the wander of 1/f noise) is not a gap closed."""
+    k = blocks.XtX.shape[1]
     if k == 0:
         return {"p_value": 1.0, "p_bands": 1.0, "significant": False}
-    blocks = st.Blocks.whitened(whitener, J, residual, problem.settings.n_blocks,
-                                low=low_band_of(problem, whitener))
     lo, hi = np.full(k, -np.inf), np.full(k, np.inf)
     none, every = st.fit(blocks, [], lo, hi), st.fit(blocks, list(range(k)), lo, hi)
     p = st.f_test(none, every)[1]
@@ -678,21 +679,20 @@ def _refit_test(problem: Problem, J: np.ndarray, residual: np.ndarray,
     return {"p_value": p, "p_bands": p_bands, "significant": bool(p < alpha and p_bands < alpha)}
 
 
-def _refit_report(problem: Problem, theta0: np.ndarray, J: np.ndarray,
-                  whitener: st.Whitener, residual0: np.ndarray) -> dict:
+def _refit_report(problem: Problem, theta0: np.ndarray, blocks: st.Blocks) -> dict:
     """The unbounded values a refit would need, and their plausibility.
 
-    J (M, 6, k) holds the derivatives of F at theta0 for the refitted parameters (the
-    plausible ones first).
+    ``blocks`` holds the prewhitened derivatives of F at theta0 for the refitted parameters
+    (the plausible ones first) and the residual there.
     """
     model = problem.model
     names = list(problem.plausible)
     out = {"parameters": {}, "implausible": [], "notes": []}
     if not names:
         return out
-    A, b, _, _ = st.Blocks.whitened(whitener, np.ascontiguousarray(J[:, :, :len(names)]),
-                                    residual0, problem.settings.n_blocks).total()
-    free = st.solve(A, b)
+    A, b, _, _ = blocks.total()
+    n = len(names)
+    free = st.solve(A[:n, :n], b[:n])
     free += theta0[[model.index[n] for n in names]]
     for k, name in enumerate(names):
         lo, hi = problem.plausible[name]
