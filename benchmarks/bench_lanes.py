@@ -29,9 +29,9 @@ VARIANTS = {
 CHILD = """
 import json, sys, time
 import numpy as np
-from gsfric import native
-from gsfric.bench import states
-from gsfric.evaluation import Evaluator
+from gsfric.compiled import native
+from gsfric.bench.throughput import states
+from gsfric.evaluation.evaluator import Evaluator
 import gsfric
 n = int(sys.argv[1])
 x = states(n)

@@ -12,7 +12,7 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
-from gsfric.bench import run_bench
+from gsfric.bench.throughput import run_bench
 
 
 def main(argv=None) -> None:

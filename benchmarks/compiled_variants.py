@@ -43,9 +43,11 @@ from pathlib import Path
 
 import numpy as np
 
-from gsfric import bench, models, native
-from gsfric.evaluation import Evaluator, effect_vector, parameter_vector
-from gsfric.manifest import BASENAME, generated_dir
+from gsfric import models
+from gsfric.bench import throughput as bench
+from gsfric.compiled import native
+from gsfric.compiled.manifest import BASENAME, generated_dir
+from gsfric.evaluation.evaluator import Evaluator, effect_vector, parameter_vector
 
 EXTRA_FLAGS = ("-fno-semantic-interposition", "-fno-math-errno")
 BLOCK = 64

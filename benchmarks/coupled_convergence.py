@@ -27,10 +27,12 @@ import numpy as np
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "tests"))
 
-import gsfric  # noqa: E402
-from gsfric import bench, models  # noqa: E402
-from gsfric.evaluation import FLAG_COUPLING, Evaluator  # noqa: E402
 from helpers_validation import random_platform  # noqa: E402
+
+import gsfric  # noqa: E402
+from gsfric import models
+from gsfric.bench import throughput as bench  # noqa: E402
+from gsfric.evaluation.evaluator import FLAG_COUPLING, Evaluator  # noqa: E402
 
 MU_R = (0.002, 0.003, 0.004, 0.005, 0.0075, 0.01, 0.015, 0.02, 0.03)
 PLATFORMS = 12

@@ -40,8 +40,9 @@ from derive import build as dbuild  # noqa: E402
 from derive import coupled as dcoupled  # noqa: E402
 from derive import effects as fx  # noqa: E402
 from derive import model as mdl  # noqa: E402
-from gsfric import bench, models  # noqa: E402
-from gsfric.evaluation import Evaluator, state_array  # noqa: E402
+from gsfric import models
+from gsfric.bench import throughput as bench  # noqa: E402
+from gsfric.evaluation.evaluator import Evaluator, state_array  # noqa: E402
 
 TOLERANCES = (1e-8, 1e-9, 1e-10, 1e-11)
 LANES = 8

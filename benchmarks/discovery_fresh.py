@@ -53,8 +53,8 @@ from scipy.spatial.transform import Rotation
 
 from gsfric import models
 from gsfric.discovery import CANDIDATE_NAMES
-from gsfric.evaluation import evaluate
-from gsfric.platform import Body, Friction, Geometry, Legs, Platform
+from gsfric.evaluation.evaluator import evaluate
+from gsfric.platform.description import Body, Friction, Geometry, Legs, Platform
 from gsfric.synth import read_forces
 from gsfric.trajectory import Motion
 

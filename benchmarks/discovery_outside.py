@@ -19,12 +19,14 @@ import time
 
 import numpy as np
 from scipy.signal import lfilter
-from gsfric.models import reference_platform
-from gsfric.synth import synthesize, effect_contributions
-from gsfric.trajectory import Motion, quaternion_from_rotation, rotation_from_euler
+
 from gsfric.discovery import discover
 from gsfric.discovery.rest import poses_from_columns
-from gsfric.evaluation import evaluate
+from gsfric.evaluation.evaluator import evaluate
+from gsfric.models import reference_platform
+from gsfric.signal.rotations import quaternion_from_rotation, rotation_from_euler
+from gsfric.synth import effect_contributions, synthesize
+from gsfric.trajectory import Motion
 
 RATE = 250.0
 AMP = np.array([0.025, 0.025, 0.02, 0.04, 0.04, 0.06])

@@ -23,12 +23,13 @@ from collections import defaultdict
 
 import numpy as np
 
+from gsfric import models
 from gsfric.discovery import CANDIDATE_NAMES, discover
 from gsfric.discovery.rest import poses_from_columns
-from gsfric import models
 from gsfric.models import reference_platform
+from gsfric.signal.rotations import quaternion_from_rotation, rotation_from_euler
 from gsfric.synth import synthesize
-from gsfric.trajectory import Motion, quaternion_from_rotation, rotation_from_euler
+from gsfric.trajectory import Motion
 
 RATE = 200.0
 AMPLITUDE = np.array([0.03, 0.03, 0.02, 0.05, 0.05, 0.05])
@@ -98,7 +99,7 @@ def scaled(name, platform, motion, size, sigma):
 
     params = dict(UNIT[name])
     if name == "stroke_friction":
-        from gsfric.evaluation import evaluate
+        from gsfric.evaluation.evaluator import evaluate
 
         params["reference"] = float(evaluate(platform, motion).D.min())
     c = effect_contributions(platform.with_effect(name, **params), motion, [name])[name]

@@ -25,8 +25,9 @@ from gsfric.discovery import discover
 from gsfric.discovery.candidates import CANDIDATES
 from gsfric.errors import InputError
 from gsfric.models import minimum_jerk_moves, reference_platform
+from gsfric.signal.rotations import rotation_from_quaternion
 from gsfric.synth import synthesize
-from gsfric.trajectory import Motion, rotation_from_quaternion
+from gsfric.trajectory import Motion
 
 EFFECTS = ("stribeck", "seal_friction", "quadratic_drag", "stroke_friction", "payload_offset",
            "sensor_bias", "force_scale", "time_offset", "joint_friction_coupling")

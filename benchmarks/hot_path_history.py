@@ -54,7 +54,7 @@ sys.path.insert(0, sys.argv[1])
 import numpy as np
 import gsfric
 from gsfric import models
-from gsfric.evaluation import Evaluator
+from gsfric.evaluation.evaluator import Evaluator
 assert gsfric.__file__.startswith(sys.argv[1]), gsfric.__file__
 model, states, calls, forces = sys.argv[2], sys.argv[3], int(sys.argv[4]), sys.argv[5]
 x = np.load(states)
@@ -71,7 +71,7 @@ if forces != "-":
     np.save(forces, out)
 res = {"cpu_s": best}
 if len(sys.argv) > 6:  # the paths around the hot path (a source with Evaluator.forces)
-    from gsfric.bench import _motion
+    from gsfric.bench.throughput import _motion
     motion = _motion(len(x))
     def fastest(f, calls):
         f()
@@ -144,7 +144,7 @@ def main(argv=None) -> None:
     old_cache = workdir / "cache"
     new_cache = Path(os.environ.get("GSFRIC_CACHE") or workdir / "cache-current")
 
-    from gsfric import bench
+    from gsfric.bench import throughput as bench
 
     states = workdir / f"states-{args.steps}.npy"
     np.save(states, bench.states(args.steps))

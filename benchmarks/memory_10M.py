@@ -32,7 +32,7 @@ def write_trajectory(path: Path, steps: int, rows_per_group: int = ROWS_PER_GROU
     """A ``models.sinusoidal`` motion of ``steps`` samples at 1 kHz as a Parquet trajectory
     file (``t, x, y, z, qw, qx, qy, qz``), in row groups of ``rows_per_group``: the file of
     ``gsfric bench``'s simulate case."""
-    from gsfric.bench import write_trajectory as write
+    from gsfric.bench.throughput import write_trajectory as write
 
     write(path, steps, group=rows_per_group)
 
@@ -41,7 +41,7 @@ def run_simulate(trajectory: Path, out: Path, chunk: int, threads: int = 1,
                  extra: tuple[str, ...] = ()) -> dict:
     """``gsfric simulate`` in a subprocess (``gsfric.bench.run_simulate``, the runner of
     ``gsfric bench``'s simulate case): exit code, output, wall and CPU time, peak RSS."""
-    from gsfric.bench import run_simulate as run
+    from gsfric.bench.throughput import run_simulate as run
 
     return run(trajectory, out, chunk=chunk, threads=threads, extra=extra)
 

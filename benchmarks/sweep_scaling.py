@@ -57,7 +57,7 @@ PATHS = ("evaluate", "eval-only", "envelope-only", "direct", "serial", "dask-1",
 
 
 def workspace(steps: int, states: int = 8):
-    from gsfric.sweep import Workspace
+    from gsfric.sweep.sweep import Workspace
 
     return Workspace.from_dict({
         "sampling": "lhs", "samples": max(1, steps // states), "states": states, "seed": 0,
@@ -69,7 +69,7 @@ def workspace(steps: int, states: int = 8):
 def _blocks(ws, poses):
     """(first step, states, times) of the workspace, ``BLOCK_STEPS`` states at a time, built as
     the sweep builds them (rotations once, states per block)."""
-    from gsfric import sweep as sw
+    from gsfric.sweep import sweep as sw
 
     per = max(1, sw.BLOCK_STEPS // ws.states)
     rotation = sw._rotation(poses)
@@ -87,7 +87,7 @@ def cpu_seconds() -> float:
 def evaluate(ws) -> tuple[int, float]:
     """``Evaluator.evaluate_quiet`` (all outputs) block by block; (steps, seconds)."""
     from gsfric import models
-    from gsfric.evaluation import Evaluator
+    from gsfric.evaluation.evaluator import Evaluator
     from gsfric.trajectory import Motion
 
     poses = ws.poses()
@@ -115,9 +115,10 @@ def eval_only(ws) -> tuple[int, float]:
     """The model's compiled ``eval`` (derived with the platform's friction model fixed, as
     ``evaluate`` runs it) on the outputs an envelope needs (``NEEDED``), with the step flags,
     block by block into reused buffers; no reduction."""
-    from gsfric import models, native
-    from gsfric import sweep as sw
-    from gsfric.evaluation import Evaluator, model_function
+    from gsfric import models
+    from gsfric.compiled import native
+    from gsfric.evaluation.evaluator import Evaluator, model_function
+    from gsfric.sweep import sweep as sw
 
     poses = ws.poses()
     platform = models.reference_platform()
@@ -141,7 +142,7 @@ def direct(ws, reduce: bool) -> tuple[int, float]:
     """The sweep's block evaluation (generated ``envelope``) and, with ``reduce``, its fold
     into the running envelope, in one loop."""
     from gsfric import models
-    from gsfric import sweep as sw
+    from gsfric.sweep import sweep as sw
 
     poses = ws.poses()
     block = sw._Block(sw.BLOCK_STEPS)
@@ -161,7 +162,7 @@ def warm() -> None:
     """A worker's one-time cost: a task of one pose (imports: gsfric, pandas, SciPy's
     rotations; the compiled library loaded, or compiled, from the cache)."""
     from gsfric import models
-    from gsfric import sweep as sw
+    from gsfric.sweep import sweep as sw
 
     sw.run_task(sw.Task(0, "workspace", [0], [models.reference_platform()], 8,
                         poses=np.array([[0.0, 0.0, 0.7, 0.0, 0.0, 0.0]]),
@@ -219,7 +220,7 @@ def run_path(name: str, ws, chunk: int) -> dict:
     else:
         from distributed import Client
 
-        from gsfric import sweep as sw
+        from gsfric.sweep import sweep as sw
 
         n = int(name[-1])
         t0 = time.perf_counter()
@@ -244,7 +245,7 @@ def run_path(name: str, ws, chunk: int) -> dict:
 
 
 def main() -> None:
-    from gsfric import sweep as sw
+    from gsfric.sweep import sweep as sw
 
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--steps", type=float, default=1e6)
@@ -255,7 +256,7 @@ def main() -> None:
                         "round); the fastest run of each is compared, the spread printed")
     parser.add_argument("--json", type=Path, help="also write the figures as JSON")
     args = parser.parse_args()
-    from gsfric import native
+    from gsfric.compiled import native
 
     native.is_compiled()
     ws = workspace(int(args.steps))

@@ -16,46 +16,47 @@ Main names: ``evaluate`` (a platform over a motion -> ``Result``), ``Platform``
 units and meaning of every output column. ``help(gsfric.evaluate)`` and the README tell more.
 """
 
-from __future__ import annotations
+import importlib
 
 __version__ = "0.1.0"
 
 _LAZY = {
-    "Platform": ("gsfric.platform", "Platform"),
+    "Platform": ("gsfric.platform.description", "Platform"),
     "Motion": ("gsfric.trajectory", "Motion"),
-    "Evaluator": ("gsfric.evaluation", "Evaluator"),
-    "Result": ("gsfric.evaluation", "Result"),
-    "evaluate": ("gsfric.evaluation", "evaluate"),
+    "Evaluator": ("gsfric.evaluation.evaluator", "Evaluator"),
+    "Result": ("gsfric.evaluation.evaluator", "Result"),
+    "evaluate": ("gsfric.evaluation.evaluator", "evaluate"),
     "reference_platform": ("gsfric.models", "reference_platform"),
     "paper_platform": ("gsfric.models", "paper_platform"),
-    "LogFormat": ("gsfric.io", "LogFormat"),
-    "read_trajectory": ("gsfric.io", "read_trajectory"),
-    "read_measured": ("gsfric.io", "read_measured"),
+    "LogFormat": ("gsfric.io.logs", "LogFormat"),
+    "read_trajectory": ("gsfric.io.readers", "read_trajectory"),
+    "read_measured": ("gsfric.io.readers", "read_measured"),
     "GsfricError": ("gsfric.errors", "GsfricError"),
     "InputError": ("gsfric.errors", "InputError"),
 }
 """Public names, imported on first use (``import gsfric`` stays fast: no NumPy, no compiler)."""
 
-_MODULES = ("models", "io", "columns", "catalog", "trajectory", "platform", "evaluation",
-            "native", "stream", "synth", "discovery", "sweep")
-"""Submodules reachable as attributes, e.g. ``gsfric.models.sinusoidal``."""
+_MODULES = {"models": "gsfric.models", "io": "gsfric.io", "columns": "gsfric.evaluation.columns",
+            "catalog": "gsfric.platform.catalog", "trajectory": "gsfric.trajectory",
+            "platform": "gsfric.platform", "evaluation": "gsfric.evaluation",
+            "signal": "gsfric.signal", "simulate": "gsfric.simulate", "synth": "gsfric.synth",
+            "discovery": "gsfric.discovery", "sweep": "gsfric.sweep", "paper": "gsfric.paper"}
+"""Modules reachable as attributes, e.g. ``gsfric.models.sinusoidal``."""
 
 __all__ = sorted(_LAZY) + ["columns", "io", "models", "sweep"]
 
 
 def __getattr__(name):
-    import importlib
-
     if name in _LAZY:
         module, attr = _LAZY[name]
         value = getattr(importlib.import_module(module), attr)
         globals()[name] = value          # later look-ups skip this function
         return value
     if name in _MODULES:
-        return importlib.import_module(f"gsfric.{name}")
+        return importlib.import_module(_MODULES[name])
     raise AttributeError(f"module 'gsfric' has no attribute {name!r}")
 
 
 def __dir__():
     """Every public name, loaded or not (for ``dir(gsfric)`` and tab completion)."""
-    return sorted(set(globals()) | set(_LAZY) | set(_MODULES))
+    return sorted({"__version__", *_LAZY, *_MODULES})

@@ -117,38 +117,3 @@ def fields_equal(a: object, b: object) -> bool:
     return True
 
 
-def _kind(value: object) -> str:
-    if isinstance(value, np.ndarray):
-        return f"a NumPy array of shape {value.shape}"
-    return "None" if value is None else f"a {type(value).__module__}.{type(value).__name__}"
-
-
-def evaluation_arguments(platform: object, motion: object, chunk: object = 1) -> None:
-    """The checks of ``gsfric.evaluate(platform, motion, chunk=...)``, each one line.
-
-    Raises
-    ------
-    TypeError
-        ``platform`` not a ``Platform`` or ``motion`` not a ``Motion`` (naming what was given,
-        and saying so when the two are swapped).
-    InputError
-        ``chunk`` not an integer >= 1.
-    """
-    from gsfric.platform import Platform
-    from gsfric.trajectory import Motion
-
-    if isinstance(platform, Motion) and isinstance(motion, Platform):
-        raise TypeError("evaluate(platform, motion): the arguments are swapped; give the "
-                        "Platform first, then the Motion")
-    if not isinstance(platform, Platform):
-        raise TypeError(f"evaluate: platform must be a gsfric.Platform, got {_kind(platform)} "
-                        "(gsfric.reference_platform() or Platform.from_toml(path))")
-    if not isinstance(motion, Motion):
-        hint = ("; for states (N, 24) use Evaluator.actuator_forces, for samples "
-                "Motion.from_samples") if isinstance(motion, np.ndarray) else \
-            " (Motion.from_samples, Motion.from_arrays or gsfric.io.read_trajectory)"
-        raise TypeError(f"evaluate: motion must be a gsfric.Motion or a pandas DataFrame of "
-                        f"trajectory columns, got {_kind(motion)}{hint}")
-    if isinstance(chunk, (bool, np.bool_)) or not isinstance(chunk, (int, np.integer)) \
-            or chunk < 1:
-        raise InputError(f"chunk: must be an integer >= 1 (steps per call), got {short(chunk)}")

@@ -18,8 +18,8 @@ from pathlib import Path
 
 import click
 
-from gsfric.columns import DEFAULT_GROUPS as DEFAULT_COLUMN_GROUPS
-from gsfric.columns import GROUPS as COLUMN_GROUPS
+from gsfric.evaluation.columns import DEFAULT_GROUPS as DEFAULT_COLUMN_GROUPS
+from gsfric.evaluation.columns import GROUPS as COLUMN_GROUPS
 
 EXIT_CHECK = 1
 EXIT_INPUT = 2
@@ -134,7 +134,7 @@ class _Group(click.Group):
 
     def invoke(self, ctx):
         from gsfric.errors import GsfricError, InputError, Interrupted, StepFlagError
-        from gsfric.io import commit_check
+        from gsfric.io.files import commit_check
 
         stops = _StopSignals()
         try:
@@ -233,14 +233,14 @@ def _log_options(command=None, *, keep=True):
 
 
 def _log_format(column_map, units_map, angles, keep_columns):
-    from gsfric.io import LogFormat
+    from gsfric.io.logs import LogFormat
 
     return LogFormat.from_options(column_map, units_map, angles, keep_columns)
 
 
 def _platform(path):
     from gsfric.models import reference_platform
-    from gsfric.platform import Platform
+    from gsfric.platform.description import Platform
 
     return reference_platform() if path is None else Platform.from_toml(path)
 
@@ -293,7 +293,7 @@ def derive(check):
 @click.option("--no-plots", is_flag=True, help="Skip the plots.")
 def paper(out_dir, mode, platform_file, no_plots):
     """Run the paper's 40-step motion and write Tables 1-3, a report and plots."""
-    from gsfric.paper_report import run_paper
+    from gsfric.paper.report import run_paper
 
     written = run_paper(out_dir, mode=mode, platform_file=platform_file, plots=not no_plots)
     for path in written:
@@ -357,7 +357,7 @@ def simulate(trajectory, platform_file, out, mode, strict, threads, chunk, windo
     """
     import warnings
 
-    from gsfric.stream import parse_columns, simulate_file
+    from gsfric.simulate.stream import parse_columns, simulate_file
 
     if breakdown_file is not None and mode != "kinematic":
         from gsfric.errors import InputError
@@ -374,11 +374,12 @@ def simulate(trajectory, platform_file, out, mode, strict, threads, chunk, windo
                                 log_format=log_format, columns=parse_columns(columns),
                                 float32=float32)
         if breakdown_file is not None:
-            from gsfric import breakdown, io
+            from gsfric import io
+            from gsfric.evaluation.breakdown import to_frame
+            from gsfric.evaluation.evaluator import breakdown
 
             motion = io.read_trajectory(trajectory, log_format=log_format)
-            parts = breakdown.breakdown(platform, motion)
-            io.write_table(breakdown.to_frame(motion.t, parts), breakdown_file)
+            io.write_table(to_frame(motion.t, breakdown(platform, motion)), breakdown_file)
             if not quiet:
                 click.echo(f"wrote {breakdown_file}")
     if not quiet:
@@ -451,7 +452,7 @@ def synth(out, platform_file, effects, samples, rate, noise, noise_correlation, 
               help="Also write the table as JSON.")
 def bench(quick, out):
     """Print the throughput table: compiled vs NumPy-vectorised vs per-step loop."""
-    from gsfric.bench import run_bench
+    from gsfric.bench.throughput import run_bench
 
     run_bench(quick=quick, out=out)
 
@@ -514,7 +515,7 @@ def sweep(out_dir, trajectories, workspace, platform_file, vary, tolerance, vari
     summary.csv, variants.csv, limits.csv (cases beyond the platform's [limits]), sweep.json
     and plots. See docs/sizing.md.
     """
-    from gsfric import sweep as sw
+    from gsfric.sweep import sweep as sw
 
     result = sw.sweep(out_dir, trajectories=list(trajectories) or None, workspace=workspace,
                       platform=platform_file, vary=_pairs(vary, "--vary", True),
@@ -540,7 +541,7 @@ def sweep(out_dir, trajectories, workspace, platform_file, vary, tolerance, vari
               help="Leave out the columns added for a measured-data input.")
 def columns(markdown, no_measured):
     """List every output column of `simulate` with its unit and sign convention."""
-    from gsfric import columns as cols
+    from gsfric.evaluation import columns as cols
 
     text = cols.markdown_table(not no_measured) if markdown else cols.listing(not no_measured)
     click.echo(text)
@@ -553,7 +554,7 @@ def effects():
     Switch one on in a platform's [effects] table, e.g. stribeck = { static = 2.0 }, or hide it
     in synthetic data with `gsfric synth --effect stribeck:static=2`.
     """
-    from gsfric.catalog import describe
+    from gsfric.platform.catalog import describe
 
     for effect in describe():
         click.echo(f"{effect['name']}: {effect['description']}")
@@ -574,7 +575,7 @@ def platform(template, out):
     if out is None:
         click.echo(text, nl=False)
         return
-    from gsfric.io import atomic_write
+    from gsfric.io.files import atomic_write
 
     with atomic_write(out, "w") as handle:
         handle.write(text)

@@ -8,10 +8,11 @@ names the file, the key or column and, for tables, the 1-based data row, e.g.
 
 from __future__ import annotations
 
+import signal
+
 
 class GsfricError(Exception):
     """Base class of every exception raised by gsfric."""
-
 
 class InputError(GsfricError, ValueError):
     """Bad input: a file, a key, a column, a row or an array that cannot be used.
@@ -27,10 +28,8 @@ class InputError(GsfricError, ValueError):
 class StepFlagError(GsfricError):
     """A trajectory step could not be evaluated soundly (see the ``flag`` column of results)."""
 
-
 class GsfricWarning(UserWarning):
     """Input that can be used but looks suspicious (angles in degrees, a gimbal-lock jump, ...)."""
-
 
 class OutputError(GsfricError):
     """An output could not be written completely (a full disk, an I/O error).
@@ -52,7 +51,6 @@ class Interrupted(BaseException):
     """
 
     def __init__(self, signum: int) -> None:
-        import signal
 
         self.signum = int(signum)
         super().__init__(signal.Signals(self.signum).name)

@@ -13,10 +13,18 @@ with dt = 0.05 s.
 
 from __future__ import annotations
 
-import numpy as np
+import os
 
-from gsfric.platform import Body, Friction, Geometry, Legs, Platform
-from gsfric.trajectory import Motion, quaternion_from_rotation, rotation_from_euler
+import numpy as np
+from scipy.spatial.transform import Rotation
+
+from gsfric.evaluation.paper_constants import (
+    PAPER_ACCELERATION,
+    PAPER_ANGULAR_ACCELERATION,
+)
+from gsfric.platform.description import Body, Friction, Geometry, Legs, Platform
+from gsfric.signal.rotations import quaternion_from_rotation, rotation_from_euler
+from gsfric.trajectory import Motion
 
 BASE_RADIUS = 0.5
 PLATFORM_RADIUS = 0.3
@@ -24,11 +32,6 @@ HALF_SPACING = np.radians(15.0)
 HOME_HEIGHT = 0.7
 STROKE = (0.5, 1.1)
 
-PAPER_ACCELERATION = (0.07, 0.05, 0.04)
-PAPER_ANGULAR_ACCELERATION = (0.005, 0.003, 0.0025)
-PAPER_LEG_ACCELERATION = (0.055, 0.042, 0.027)
-PAPER_LEG_ANGULAR_ACCELERATION = (0.0032, 0.0021, 0.0017)
-PAPER_JOINT_SPEED = 0.02
 PAPER_STEPS = 40
 PAPER_DT = 0.05
 
@@ -82,7 +85,6 @@ REFERENCE_FRICTION = dict(model="coupled", bushing_offset=0.25, bushing_spacing=
 (the default of ``reference_platform``), polymer bushings (mu 0.1) at 0.25 m and 0.35 m from
 C_i, a 2 N rod seal."""
 
-
 def reference_platform(friction_model: str = "coupled") -> Platform:
     """The built-in platform: the reference geometry, the paper's platform and payload, the
     reference leg (``reference_leg``) and, by default, the coupled friction model.
@@ -109,6 +111,17 @@ def reference_platform(friction_model: str = "coupled") -> Platform:
     )
 
 
+def platform_from(source: Platform | str | os.PathLike[str] | None) -> Platform:
+    """The platform a command or function works on: ``source`` itself when it is a
+    ``Platform``, read from the TOML file it names, or, when None, the default: the reference
+    platform (``reference_platform()``, coupled friction)."""
+    if source is None:
+        return reference_platform()
+    if isinstance(source, Platform):
+        return source
+    return Platform.from_toml(source)
+
+
 def paper_platform() -> Platform:
     """The paper's platform: the paper's masses and coefficients on the reference geometry.
 
@@ -126,16 +139,8 @@ def paper_platform() -> Platform:
     )
 
 
-def paper_constants() -> np.ndarray:
-    """The paper's RESULTS constants in the order of the paper-mode input K, shape (13,)."""
-    return np.concatenate([PAPER_ACCELERATION, PAPER_ANGULAR_ACCELERATION,
-                           PAPER_LEG_ACCELERATION, PAPER_LEG_ANGULAR_ACCELERATION,
-                           [PAPER_JOINT_SPEED]]).astype(float)
-
-
 def _axis_angle(axis_angle: np.ndarray) -> np.ndarray:
     """Rotation matrices (N, 3, 3) of rotation vectors (N, 3) (Rodrigues)."""
-    from scipy.spatial.transform import Rotation
 
     return Rotation.from_rotvec(axis_angle).as_matrix()
 

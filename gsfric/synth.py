@@ -31,18 +31,24 @@ from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
+import pandas as pd
+from scipy.signal import lfilter
 
 from gsfric._checks import short, suggest
 from gsfric.errors import InputError
-from gsfric.platform import Platform
-from gsfric.trajectory import Motion, quaternion_multiply
+from gsfric.evaluation.evaluator import Evaluator, state_array
+from gsfric.io.tables import table_kind, write_table
+from gsfric.models import reference_platform, sinusoidal
+from gsfric.platform.catalog import EFFECTS, apply_sensor, sensor_parameters
+from gsfric.platform.description import Platform
+from gsfric.signal.rotations import quaternion_multiply
+from gsfric.trajectory import Motion
 
 __all__ = ["SyntheticData", "parse_effect", "synthesize", "run_synth", "effect_contributions",
            "ar1_noise", "excitation_motion"]
 
 EXCITATION_FREQUENCY = (0.3, 2.0)
 """Range of the excitation motion's frequencies, Hz."""
-
 
 def excitation_motion(rng: np.random.Generator, t: np.ndarray, scale: float = 1.0,
                       frequency: tuple[float, float] = EXCITATION_FREQUENCY) -> Motion:
@@ -69,7 +75,6 @@ def excitation_motion(rng: np.random.Generator, t: np.ndarray, scale: float = 1.
     -------
     Motion
     """
-    from gsfric.models import sinusoidal
 
     amplitude = rng.uniform(0.3, 1.0, 6) * np.array([0.06, 0.06, 0.05, 0.1, 0.1, 0.12]) * scale
     freq = rng.uniform(frequency[0], frequency[1], 6)
@@ -125,7 +130,6 @@ def parse_effect(text: str) -> tuple[str, dict[str, float]]:
     InputError
         Unknown effect or parameter, or a value that is not a number.
     """
-    from gsfric.catalog import EFFECTS
 
     name, _, rest = str(text).strip().partition(":")
     name = name.strip()
@@ -189,7 +193,6 @@ def ar1_noise(rng: np.random.Generator, shape: tuple[int, int], sigma: float,
     -------
     ndarray, shape (N, k)
     """
-    from scipy.signal import lfilter
 
     if not 0.0 <= phi < 1.0:
         raise InputError(f"noise_correlation: must be in [0, 1), got {phi:g}")
@@ -228,8 +231,6 @@ def effect_contributions(platform: Platform, motion: Motion,
 def read_forces(platform: Platform, motion: Motion) -> np.ndarray:
     """What the load cells read, (N, 6) N: the actuator forces of ``platform`` along
     ``motion`` with its sensor effects (force_scale, time_offset; gsfric.catalog) applied."""
-    from gsfric.catalog import apply_sensor, sensor_parameters
-    from gsfric.evaluation import Evaluator, state_array
 
     F = Evaluator(platform).actuator_forces(state_array(motion))
     gains, delay = sensor_parameters(platform.effects)
@@ -269,10 +270,6 @@ def synthesize(platform: Platform | None = None, effects=(), *, motion: Motion |
     -------
     SyntheticData
     """
-    import pandas as pd
-
-    from gsfric.evaluation import Evaluator
-    from gsfric.models import reference_platform
 
     if int(samples) < 20:
         raise InputError(f"samples: at least 20 are needed, got {samples}")
@@ -332,10 +329,9 @@ def run_synth(out: str | os.PathLike[str], platform_file: str | os.PathLike[str]
     Parameters are those of ``synthesize``; ``platform_file`` is a platform TOML (default the
     reference platform). Returns the path written (atomically).
     """
-    from gsfric.io import _table_kind, write_table
 
     out = Path(out)
-    _table_kind(out)
+    table_kind(out)
     platform = None if platform_file is None else Platform.from_toml(platform_file)
     data = synthesize(platform, effects, samples=samples, rate=rate, noise=noise,
                       noise_correlation=noise_correlation, pose_noise=pose_noise, seed=seed)

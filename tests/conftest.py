@@ -22,6 +22,6 @@ def platform():
 def compiled_library():
     """Compile the generated C once before any test, so that no test's output carries the
     one-time compilation notice (each xdist worker waits on the cache's lock)."""
-    from gsfric import native
+    from gsfric.compiled import native
 
     native.is_compiled()

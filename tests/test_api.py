@@ -15,9 +15,10 @@ import pytest
 from click.testing import CliRunner
 
 import gsfric
-from gsfric import columns, models
+from gsfric import models
 from gsfric.cli import main
 from gsfric.errors import InputError
+from gsfric.evaluation import columns
 
 ROOT = Path(__file__).resolve().parent.parent
 
@@ -114,7 +115,7 @@ def test_columns_listing_and_readme_table_come_from_one_source():
 
 
 def test_effects_listing_names_every_parameter_with_its_unit():
-    from gsfric.catalog import describe
+    from gsfric.platform.catalog import describe
 
     out = CliRunner().invoke(main, ["effects"]).output
     for effect in describe():
@@ -152,7 +153,12 @@ def test_a_dropped_result_memory_is_reused_for_the_next_with_the_same_values(pla
     flags of an evaluation into NumPy's own buffers, and a block in use is never handed out."""
     import gc
 
-    from gsfric.evaluation import _POOL, POOL_MIN_BYTES, Evaluator, release_memory
+    from gsfric.evaluation.evaluator import (
+        _POOL,
+        POOL_MIN_BYTES,
+        Evaluator,
+        release_memory,
+    )
 
     n = POOL_MIN_BYTES // (18 * 8) + 500
     rng = np.random.default_rng(5)
@@ -187,7 +193,12 @@ def test_a_dropped_result_memory_is_reused_for_the_next_with_the_same_values(pla
 def test_the_memory_kept_for_reuse_is_bounded(platform):
     import gc
 
-    from gsfric.evaluation import _POOL, POOL_MIN_BYTES, Evaluator, release_memory
+    from gsfric.evaluation.evaluator import (
+        _POOL,
+        POOL_MIN_BYTES,
+        Evaluator,
+        release_memory,
+    )
 
     evaluator = Evaluator(platform)
     rng = np.random.default_rng(6)

@@ -9,8 +9,8 @@ from click.testing import CliRunner
 
 import gsfric
 from gsfric import io, models
-from gsfric.breakdown import PARTS
 from gsfric.cli import main
+from gsfric.evaluation.breakdown import PARTS
 
 
 @pytest.fixture(scope="module")

@@ -19,10 +19,11 @@ import pytest
 import tomli_w
 from click.testing import CliRunner
 
-from gsfric import evaluation, models
+from gsfric import models
 from gsfric.cli import main
-from gsfric.io import read_table, write_table
-from gsfric.trajectory import euler_from_rotation, quaternion_from_rotation
+from gsfric.evaluation import evaluator as evaluation
+from gsfric.io.tables import read_table, write_table
+from gsfric.signal.rotations import euler_from_rotation, quaternion_from_rotation
 
 ROOT = Path(__file__).resolve().parent.parent
 STALE = "gsfric: warning: generated/ is stale"     # may appear while derive/ is being edited

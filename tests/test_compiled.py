@@ -10,12 +10,13 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from helpers import chain_values, perturbed_platform, random_states, with_every_effect
 
 from derive import build as dbuild
 from derive import model as mdl
-from gsfric import models, native
-from gsfric.evaluation import Evaluator, effect_vector, jacobian_parameters
-from helpers import chain_values, perturbed_platform, random_states, with_every_effect
+from gsfric import models
+from gsfric.compiled import native
+from gsfric.evaluation.evaluator import Evaluator, effect_vector, jacobian_parameters
 
 ROOT = Path(__file__).resolve().parents[1]
 
@@ -102,7 +103,7 @@ def test_fixed_model_functions_equal_the_generic_ones(rng, model):
 
 
 def _model_slot() -> int:
-    from gsfric.evaluation import _slots
+    from gsfric.evaluation.evaluator import _slots
 
     return next(start for name, start, _ in _slots("eval", "P")[1] if name == "friction_model")
 
@@ -235,7 +236,7 @@ def test_without_a_compiler_casadi_evaluates_the_same_numbers(tmp_path):
 
 
 def test_effect_vector_follows_the_catalog_order(platform):
-    from gsfric.catalog import parameter_names
+    from gsfric.platform.catalog import parameter_names
 
     p = platform.with_effect("seal_friction", force=2.5).with_effect("sensor_bias", b3=0.7)
     q = effect_vector(p)
@@ -281,7 +282,7 @@ def test_motion_input_in_blocks_equals_the_state_array(rng, threads, model):
     non-detail outputs, whose SIMD pass skips the instructions only the details need: every
     output and flag equals the state-array call's (every output asked for) over several
     blocks and threads, the details (computed on first access) too, NaN where non-finite."""
-    from gsfric.evaluation import DETAILS, FLAG_NONFINITE, state_array
+    from gsfric.evaluation.evaluator import DETAILS, FLAG_NONFINITE, state_array
 
     n = 2 * 4096 + 37
     motion = _motion_with_bad_steps(rng, n)
@@ -307,7 +308,7 @@ def test_control_loop_calls_read_views_and_slices_as_the_general_call(rng):
     """The bound calls get arrays as objects (their data pointer read in C): views with an
     offset, slices and converted arrays give the general call's numbers."""
     from gsfric.errors import GsfricError
-    from gsfric.evaluation import state_array
+    from gsfric.evaluation.evaluator import state_array
 
     motion = models.random_motion(rng, np.sort(rng.uniform(0, 5, 50)))
     ev = Evaluator(perturbed_platform(rng))
@@ -342,7 +343,7 @@ def test_vector_row_stores_equal_the_scalar_ones(rng, n, threads):
     same bit for bit, the partial last group and the second thread's range included."""
     motion = _motion_with_bad_steps(rng, n)
     ev = Evaluator(perturbed_platform(rng), n_threads=threads)
-    from gsfric.evaluation import state_array
+    from gsfric.evaluation.evaluator import state_array
 
     x = state_array(motion)
     f = ev._full

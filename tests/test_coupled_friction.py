@@ -17,16 +17,23 @@ import warnings
 import numpy as np
 import pytest
 import sympy as sp
+from helpers_validation import random_platform
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
 import gsfric
 from derive import bushing, coupled, prismatic
-from gsfric import models, native
+from gsfric import models
+from gsfric.compiled import native
 from gsfric.errors import InputError
-from gsfric.evaluation import (COUPLING_TOLERANCE, FLAG_COUPLING, Evaluator, effect_vector,
-                               parameter_vector, state_array)
-from helpers_validation import random_platform
+from gsfric.evaluation.evaluator import (
+    COUPLING_TOLERANCE,
+    FLAG_COUPLING,
+    Evaluator,
+    effect_vector,
+    parameter_vector,
+    state_array,
+)
 
 MU_R_CONVERGED = 0.006
 """m: joint friction mu r up to which the fixed point converges to COUPLING_TOLERANCE (with its

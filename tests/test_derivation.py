@@ -11,6 +11,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 import sympy as sp
+from helpers import chain_values, perturbed_platform, random_states
 
 from derive import kinematics as kin
 from derive import legs as lg
@@ -18,8 +19,7 @@ from derive import model as mdl
 from derive import platform as pf
 from derive.vectors import cross
 from gsfric import models
-
-from helpers import chain_values, perturbed_platform, random_states
+from gsfric.evaluation.paper_constants import paper_constants
 
 
 @pytest.fixture(scope="module")
@@ -86,7 +86,7 @@ def test_paper_mode_balances_hold_with_the_paper_constants(rng):
     platform = models.paper_platform()
     x = random_states(rng, 10)
     res, scale = balances(model)
-    values = chain_values(platform, x, K=models.paper_constants())
+    values = chain_values(platform, x, K=paper_constants())
     r = model.chain.evaluate(values, res)
     s = model.chain.evaluate(values, scale)
     for name in r:
@@ -148,7 +148,7 @@ def test_leg_angular_velocity_and_acceleration_match_finite_differences(kinemati
     h = 1e-5
     t0 = np.sort(rng.uniform(0.5, 4.0, 6))
     motion = models.random_motion(np.random.default_rng(7), np.concatenate([t0 - h, t0, t0 + h]))
-    from gsfric.evaluation import state_array
+    from gsfric.evaluation.evaluator import state_array
 
     legs = kinematic_model.symbols["legs"]
     outputs = {}

@@ -34,7 +34,7 @@ from gsfric.cli import main
 from gsfric.discovery import CANDIDATE_NAMES, discover, run_discover
 from gsfric.discovery import statistics as st
 from gsfric.errors import InputError
-from gsfric.evaluation import Evaluator, evaluate, state_array
+from gsfric.evaluation.evaluator import Evaluator, evaluate, state_array
 from gsfric.models import random_motion, reference_platform
 from gsfric.synth import effect_contributions, excitation_motion, synthesize
 from gsfric.trajectory import Motion

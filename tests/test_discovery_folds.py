@@ -217,7 +217,11 @@ def test_moves_with_a_fixed_orientation_slide():
 def test_each_separating_motion_names_the_two_effects_it_separates():
     """The report's sentence on what motion would separate two indistinguishable candidates
     names both, each a candidate (a catalog name misspelt would send the reader nowhere)."""
-    from gsfric.discovery.candidates import CANDIDATE_NAMES, SEPARATING_MOTION, separating_motion
+    from gsfric.discovery.candidates import (
+        CANDIDATE_NAMES,
+        SEPARATING_MOTION,
+        separating_motion,
+    )
 
     assert frozenset({"force_scale", "sensor_bias"}) in SEPARATING_MOTION
     for pair in SEPARATING_MOTION:

@@ -10,13 +10,13 @@ import numpy as np
 import pytest
 from click.testing import CliRunner
 
-from gsfric.catalog import apply_sensor, sensor_jacobian
 from gsfric.cli import main
 from gsfric.discovery import discover
 from gsfric.discovery.report import report
 from gsfric.discovery.rest import data_problems, poses_from_columns, speed_uncertainty
 from gsfric.errors import InputError
 from gsfric.models import reference_platform
+from gsfric.platform.catalog import apply_sensor, sensor_jacobian
 from gsfric.synth import synthesize
 from gsfric.trajectory import Motion
 
@@ -61,7 +61,7 @@ def test_speed_uncertainty_follows_the_pose_noise():
     """sigma_v from the recorded poses scales with the pose noise and is of the size of the
     spread of the differentiated leg speed where the legs are truly at rest (within a factor:
     docs/discovery.md gives the measured ratio)."""
-    from gsfric.evaluation import evaluate
+    from gsfric.evaluation.evaluator import evaluate
 
     out = []
     for pose in (1e-5, 4e-5):
@@ -413,7 +413,7 @@ def test_autocovariance_with_gaps_counts_only_valid_pairs():
 
 def _smooth_motion(family: str, seed: int, samples: int = 3000, rate: float = 200.0) -> Motion:
     """Sines of random frequencies (0.2-1.2 Hz) or chirps (0.1 -> 1.5 Hz) on every pose axis."""
-    from gsfric.trajectory import quaternion_from_rotation, rotation_from_euler
+    from gsfric.signal.rotations import quaternion_from_rotation, rotation_from_euler
 
     rng = np.random.default_rng(seed)
     t = np.arange(samples) / rate
@@ -533,7 +533,7 @@ def test_a_mode_ringing_after_the_stops_is_not_explained():
     each stop."""
     from scipy.signal import lfilter
 
-    from gsfric.evaluation import evaluate
+    from gsfric.evaluation.evaluator import evaluate
 
     rng = np.random.default_rng(1070)
     g = COUPLED.geometry
@@ -593,7 +593,7 @@ def test_pose_scale_columns_are_the_forces_of_a_scaled_motion():
     motions whose position, velocity and acceleration along one axis are scaled (the state's
     layout, the sign and the size)."""
     from gsfric.discovery.model import ParametricModel
-    from gsfric.evaluation import evaluate
+    from gsfric.evaluation.evaluator import evaluate
 
     motion = _smooth_motion("sines", 4, samples=200)
     platform = COUPLED.with_effect("seal_friction", force=3.0)

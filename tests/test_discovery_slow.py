@@ -24,11 +24,23 @@ import numpy as np
 import pytest
 
 try:
-    from test_discovery import (NULL_POSE, RMS_LIMIT, make_case, parameter_error, run_case,
-                                tolerance)
+    from test_discovery import (
+        NULL_POSE,
+        RMS_LIMIT,
+        make_case,
+        parameter_error,
+        run_case,
+        tolerance,
+    )
 except ImportError:  # run as a package
-    from tests.test_discovery import (NULL_POSE, RMS_LIMIT, make_case, parameter_error,
-                                      run_case, tolerance)
+    from tests.test_discovery import (
+        NULL_POSE,
+        RMS_LIMIT,
+        make_case,
+        parameter_error,
+        run_case,
+        tolerance,
+    )
 
 from gsfric.discovery import CANDIDATE_NAMES
 
@@ -171,7 +183,7 @@ def _rest_trial(base: str, name: str | None, seed: int, size: float = 3.0) -> di
     from gsfric import models
     from gsfric.discovery import discover
     from gsfric.discovery.rest import poses_from_columns
-    from gsfric.evaluation import evaluate
+    from gsfric.evaluation.evaluator import evaluate
     from gsfric.synth import effect_contributions, synthesize
     from gsfric.trajectory import Motion
 

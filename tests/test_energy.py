@@ -20,11 +20,11 @@ import functools
 
 import numpy as np
 import pytest
+from helpers_validation import Bodies, motion_pose, random_platform, relative_difference
 from scipy.integrate import cumulative_simpson
 
 import gsfric
 from gsfric import models
-from helpers_validation import Bodies, motion_pose, random_platform, relative_difference
 
 DURATION = 4.0
 STEPS = 4001

@@ -27,15 +27,16 @@ import casadi as ca
 import numpy as np
 import pytest
 import sympy as sp
+from helpers import PAPER_MISPRINTS
 
 from derive import effects as fx
 from derive import kinematics as kin
 from derive import model as dm
 from derive import printed as pr
-from gsfric import models, paper
-from gsfric.evaluation import parameter_values, state_array
+from gsfric import models
+from gsfric.evaluation.evaluator import parameter_values, state_array
+from gsfric.paper import tables as paper
 from gsfric.trajectory import Motion
-from helpers import PAPER_MISPRINTS
 
 PAPER = Path(__file__).resolve().parents[2] / "shared" / "paper"
 DOC = Path(__file__).resolve().parents[1] / "docs" / "errata.md"

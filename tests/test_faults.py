@@ -25,11 +25,13 @@ import pandas as pd
 import pytest
 from click.testing import CliRunner
 
-from gsfric import models, native
+from gsfric import models
 from gsfric.cli import main
+from gsfric.compiled import native
 from gsfric.errors import InputError, OutputError
-from gsfric.io import (output_folder, read_table, read_trajectory,
-                       remove_stale_temporaries, write_table)
+from gsfric.io.files import output_folder, remove_stale_temporaries
+from gsfric.io.readers import read_trajectory
+from gsfric.io.tables import read_table, write_table
 
 ROOT = Path(__file__).resolve().parent.parent
 
@@ -283,7 +285,7 @@ def test_stale_temporaries_of_dead_runs_are_removed(tmp_path):
 
 SLOW_SIMULATE = textwrap.dedent("""
     import sys, time
-    import gsfric.evaluation
+    import gsfric.evaluation.evaluator
     original = gsfric.evaluation.evaluate_outputs
     def slow(*args, **kwargs):
         time.sleep(0.3)
@@ -547,7 +549,7 @@ def test_a_stop_inside_an_import_is_still_a_stop():
 STOP_INSIDE_AN_EXTENSION_IMPORT = textwrap.dedent("""
     import os, signal, sys
     from gsfric.errors import Interrupted
-    from gsfric.evaluation import Evaluator
+    from gsfric.evaluation.evaluator import Evaluator
     stop = getattr(signal, sys.argv.pop(1))
     def stopped_inside_an_import(self, *args, **kwargs):
         try:
@@ -580,7 +582,7 @@ def test_a_stop_that_an_import_turned_into_an_unchained_error_is_still_a_stop(tm
 STOP_SWALLOWED = textwrap.dedent("""
     import os, signal, sys
     from gsfric.errors import Interrupted
-    from gsfric.evaluation import Evaluator
+    from gsfric.evaluation.evaluator import Evaluator
     stop = getattr(signal, sys.argv.pop(1))
     original = Evaluator.__init__
     def swallowed(self, *args, **kwargs):

@@ -13,14 +13,16 @@ from click.testing import CliRunner
 from hypothesis import HealthCheck, assume, given, settings
 from hypothesis import strategies as st
 
-from gsfric import models, stream
-from gsfric.catalog import EFFECTS
+from gsfric import models
 from gsfric.cli import main
 from gsfric.errors import GsfricWarning, InputError
-from gsfric.evaluation import FLAG_NONFINITE, Evaluator
-from gsfric.io import read_trajectory
-from gsfric.platform import Platform
-from gsfric.trajectory import Motion, rotation_from_quaternion
+from gsfric.evaluation.evaluator import FLAG_NONFINITE, Evaluator
+from gsfric.io.readers import read_trajectory
+from gsfric.platform.catalog import EFFECTS
+from gsfric.platform.description import Platform
+from gsfric.signal.rotations import rotation_from_quaternion
+from gsfric.simulate import stream
+from gsfric.trajectory import Motion
 
 fuzz = settings(deadline=None, max_examples=60,
                 suppress_health_check=[HealthCheck.function_scoped_fixture,

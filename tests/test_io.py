@@ -12,8 +12,11 @@ from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
 from gsfric.errors import GsfricWarning, InputError
-from gsfric.io import atomic_write, read_measured, read_table, read_trajectory, write_table
-from gsfric.trajectory import Motion, quaternion_from_euler
+from gsfric.io.files import atomic_write
+from gsfric.io.readers import read_measured, read_trajectory
+from gsfric.io.tables import read_table, write_table
+from gsfric.signal.rotations import quaternion_from_euler
+from gsfric.trajectory import Motion
 
 fuzz_settings = settings(suppress_health_check=[HealthCheck.function_scoped_fixture],
                          deadline=None, max_examples=150)

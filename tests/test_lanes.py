@@ -15,15 +15,15 @@ import sys
 
 import numpy as np
 import pytest
-
-from gsfric import native
-from gsfric.evaluation import Evaluator
 from helpers import perturbed_platform, random_states, with_every_effect
+
+from gsfric.compiled import native
+from gsfric.evaluation.evaluator import Evaluator
 
 SCRIPT = """
 import sys, numpy as np
-from gsfric import native
-from gsfric.evaluation import Evaluator, parameter_vector
+from gsfric.compiled import native
+from gsfric.evaluation.evaluator import Evaluator, parameter_vector
 x, P, Q = (np.load(sys.argv[1])[k] for k in ("x", "P", "Q"))
 lib = native._library()
 assert native.is_compiled()
@@ -89,12 +89,12 @@ def test_vector_exp_is_within_two_ulp_of_the_c_library():
 
 @pytest.mark.skipif(not native.is_compiled(), reason="no C compiler")
 def test_flags_in_c_equal_the_fallbacks_numpy_flags():
-    """The step flags computed in C (_native/batch.c) and those of the no-compiler fallback
+    """The step flags computed in C (compiled/batch.c) and those of the no-compiler fallback
     (Evaluator._flags, NumPy) on steps with every cause: stroke, singular pose, non-finite."""
     from scipy.spatial.transform import Rotation
 
     from gsfric import models
-    from gsfric.evaluation import state_array
+    from gsfric.evaluation.evaluator import state_array
     from gsfric.trajectory import Motion
 
     n = 40

@@ -1,9 +1,9 @@
 """The record's slowest components tested on their own noise (``statistics.band_tests``)."""
 
 import numpy as np
+from helpers import pink_noise as pink
 
 from gsfric.discovery import statistics as st
-from helpers import pink_noise as pink
 
 
 def offset_tests(residual, rate=1000.0, valid=None):

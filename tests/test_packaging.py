@@ -63,7 +63,7 @@ def _check_wheel(wheel):
     for name in json.loads(manifest.read_text())["files"]:
         assert f"gsfric/_generated/{name}" in names
     assert "gsfric/_generated/manifest.json" in names
-    assert "gsfric/_native/batch.c" in names
+    assert "gsfric/compiled/batch.c" in names
     assert {f"gsfric/data/paper_table{k}.csv" for k in (1, 2, 3)} <= names
     tops = {n.split("/")[0] for n in names}
     assert not [t for t in tops if t not in ("gsfric",) and not t.endswith(".dist-info")]

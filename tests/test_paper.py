@@ -8,12 +8,13 @@ import numpy as np
 import pandas as pd
 import pytest
 from click.testing import CliRunner
+from helpers import PAPER_MISPRINTS
 
-from gsfric import models, paper
+from gsfric import models
 from gsfric.cli import main
 from gsfric.errors import InputError
-from gsfric.platform import Platform
-from helpers import PAPER_MISPRINTS
+from gsfric.paper import tables as paper
+from gsfric.platform.description import Platform
 
 SHARED_PAPER = Path(__file__).resolve().parents[1].parent / "shared" / "paper"
 SHARED_CSV = {1: "table1_friction_moments_moving_platform_joints.csv",

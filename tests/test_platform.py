@@ -11,9 +11,16 @@ import tomli_w
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
-import gsfric.platform as platform_module
+import gsfric.platform.description as platform_module
 from gsfric.errors import InputError
-from gsfric.platform import Body, Friction, Geometry, Legs, Platform, default_universal_axes
+from gsfric.platform.description import (
+    Body,
+    Friction,
+    Geometry,
+    Legs,
+    Platform,
+    default_universal_axes,
+)
 
 EFFECTS = {
     "stribeck": {"static": 0.0, "velocity": 0.01},

@@ -13,13 +13,13 @@
 from __future__ import annotations
 
 import numpy as np
+from helpers_validation import Bodies, combined_body, random_inertia, random_platform
 from hypothesis import given, settings
 from hypothesis import strategies as st
 from scipy.spatial.transform import Rotation
 
 import gsfric
 from gsfric import models
-from helpers_validation import Bodies, combined_body, random_inertia, random_platform
 
 EXAMPLES = settings(max_examples=50, deadline=None)
 STATIC_KEYS = ("F0", "R_E", "R_C", "M_C")

@@ -10,11 +10,12 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
+from helpers import perturbed_platform, random_states, with_every_effect
 
 import gsfric
-from gsfric import models, numpy_model
-from gsfric.evaluation import Evaluator, state_array
-from helpers import perturbed_platform, random_states, with_every_effect
+from gsfric import models
+from gsfric.bench import numpy_engine as numpy_model
+from gsfric.evaluation.evaluator import Evaluator, state_array
 
 RTOL = 1e-9
 

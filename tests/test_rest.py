@@ -7,12 +7,17 @@ from __future__ import annotations
 import numpy as np
 from scipy.spatial.transform import Rotation
 
-from gsfric.discovery.rest import (differentiator, poses_from_columns, sliding_mask,
-                                   speed_uncertainty)
-from gsfric.evaluation import evaluate
+from gsfric.discovery.rest import (
+    differentiator,
+    poses_from_columns,
+    sliding_mask,
+    speed_uncertainty,
+)
+from gsfric.evaluation.evaluator import evaluate
 from gsfric.models import minimum_jerk_moves, point_to_point, reference_platform
+from gsfric.signal.rotations import quaternion_from_rotation
 from gsfric.synth import synthesize
-from gsfric.trajectory import Motion, quaternion_from_rotation
+from gsfric.trajectory import Motion
 
 
 def test_each_sample_looks_as_far_as_its_own_window_reaches():
@@ -72,7 +77,11 @@ def test_jittered_time_base_gets_a_speed_band_of_its_own():
     """On a log whose sample times jitter (+-20 % of the step) the smoothing spline's own noise
     gain gives the band: it matches the spread of the differentiated leg speed deep inside the
     rests, where a band from differences that ignore the jitter would count the motion."""
-    from gsfric.discovery.rest import divided_noise_std, leg_lengths, spline_differentiator
+    from gsfric.discovery.rest import (
+        divided_noise_std,
+        leg_lengths,
+        spline_differentiator,
+    )
 
     rng = np.random.default_rng(8)
     platform = reference_platform(friction_model="paper")
@@ -159,7 +168,7 @@ def test_a_fixed_orientation_does_not_widen_the_rests():
     orientation's filter is the longest there is (nothing to resolve), and its reach does not
     count; the position's does. A rotating platform keeps the longer of the two."""
     from gsfric.discovery.rest import moves
-    from gsfric.trajectory import motion_filters
+    from gsfric.signal.savgol import motion_filters
 
     rng = np.random.default_rng(6)
     rate, seconds = 500.0, 12.0

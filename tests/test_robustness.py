@@ -15,15 +15,30 @@ import pytest
 from scipy.spatial.transform import Rotation
 
 import gsfric
-from gsfric import models, stream
+from gsfric import models
 from gsfric.errors import GsfricWarning, InputError, StepFlagError
-from gsfric.evaluation import (COND_LIMIT, FLAG_NONFINITE, FLAG_SINGULAR, FLAG_STROKE,
-                               SINGULAR_LIMIT,
-                               FLAG_UNIVERSAL, JOINT_EPS, PRISMATIC_EPS, UNIVERSAL_LIMIT,
-                               Evaluator, evaluate)
-from gsfric.io import read_trajectory, write_table
-from gsfric.trajectory import (Motion, euler_from_rotation, quaternion_from_rotation,
-                               rotation_from_euler)
+from gsfric.evaluation.evaluator import (
+    COND_LIMIT,
+    FLAG_NONFINITE,
+    FLAG_SINGULAR,
+    FLAG_STROKE,
+    FLAG_UNIVERSAL,
+    JOINT_EPS,
+    PRISMATIC_EPS,
+    SINGULAR_LIMIT,
+    UNIVERSAL_LIMIT,
+    Evaluator,
+    evaluate,
+)
+from gsfric.io.readers import read_trajectory
+from gsfric.io.tables import write_table
+from gsfric.signal.rotations import (
+    euler_from_rotation,
+    quaternion_from_rotation,
+    rotation_from_euler,
+)
+from gsfric.simulate import stream
+from gsfric.trajectory import Motion
 
 ROOT = Path(__file__).resolve().parent.parent
 BENCHMARK = ROOT / "benchmarks" / "memory_10M.py"
@@ -508,9 +523,9 @@ def test_chunked_differentiation_with_the_window_of_the_first_chunk(tmp_path):
     wp, wq = info["windows"]
     assert wp > 7                                    # the noise needs a longer window
     position = np.concatenate([m.position for _, m in parts])
-    from gsfric.trajectory import _savgol
+    from gsfric.signal.savgol import savgol_derivatives
     frame = pd.read_csv(path)
-    expected = _savgol(frame[["x", "y", "z"]].to_numpy(), wp, 4, 0.01)
+    expected = savgol_derivatives(frame[["x", "y", "z"]].to_numpy(), wp, 4, 0.01)
     np.testing.assert_allclose(position, expected[0], rtol=0, atol=1e-12)
     np.testing.assert_allclose(np.concatenate([m.velocity for _, m in parts]), expected[1],
                                rtol=1e-10, atol=1e-10)
@@ -832,7 +847,7 @@ def test_measured_forces_of_1e300_are_refused_with_the_row(tmp_path):
     frame.loc[7, "F3"] = 1e300
     path = tmp_path / "m.csv"
     write_table(frame, path)
-    from gsfric.io import read_measured
+    from gsfric.io.readers import read_measured
 
     with pytest.raises(InputError, match=r"m\.csv: row 8: column 'F3' = 1e\+300 N is not a "
                                          r"plausible actuator force \(\|F\| > 1e\+08 N\)"):
@@ -889,13 +904,13 @@ def test_long_non_uniform_spline_equals_scipy_with_its_penalties():
     is the one of least estimated acceleration error: on a noise-free record the smallest."""
     from scipy.interpolate import make_smoothing_spline
 
-    from gsfric import trajectory as tr
+    from gsfric.signal import spline as tr
 
     rng = np.random.default_rng(3)
     n = tr.SPLINE_GCV_ROWS + 700
     t = np.cumsum(rng.uniform(0.5, 1.5, n)) * 0.01
     y = np.stack([np.sin(t * (j + 1)) + 1e-3 * rng.standard_normal(n) for j in range(3)], 1)
-    got = tr._spline(t, y, None)
+    got = tr.spline_derivatives(t, y, None)
     penalties = tr.spline_penalties(t, y)
     for j in range(3):
         reference = make_smoothing_spline(t, y[:, j], lam=penalties[j])
@@ -909,7 +924,7 @@ def test_long_non_uniform_spline_equals_scipy_with_its_penalties():
 
 
 def test_bench_ratio_of_a_zero_time_is_nan():
-    from gsfric.bench import Case, _ratio
+    from gsfric.bench.throughput import Case, _ratio
 
     assert np.isnan(_ratio(1.0, 0.0)) and np.isnan(_ratio(None, 1.0)) and _ratio(6.0, 2.0) == 3
     case = Case("compiled", 1, 40, best=0.0, cpu_best=0.0)

@@ -9,10 +9,11 @@ import pytest
 from click.testing import CliRunner
 
 import gsfric
-from gsfric import models, stream
+from gsfric import models
 from gsfric.cli import main
-from gsfric.io import write_table
-from gsfric.trajectory import quaternion_from_rotation
+from gsfric.io.tables import write_table
+from gsfric.signal.rotations import quaternion_from_rotation
+from gsfric.simulate import stream
 
 
 def _trajectory(path, n=700, rate=200.0):
@@ -135,8 +136,8 @@ def test_streamed_sensor_delay_equals_the_whole_record(tmp_path, delay):
     """time_offset reaches across chunk starts (and, at 0.26 s, over a whole chunk of 200
     steps): the streamed F is the whole record's shifted F, bit for bit, and the evaluation
     of the whole file to rounding."""
-    from gsfric.catalog import apply_sensor
-    from gsfric.io import read_trajectory
+    from gsfric.io.readers import read_trajectory
+    from gsfric.platform.catalog import apply_sensor
 
     path = _trajectory(tmp_path / "t.parquet")              # 700 steps at 200 Hz
     base = models.reference_platform()
@@ -188,7 +189,7 @@ def test_streamed_motions_are_the_validated_motions(full):
 def test_filter_on_the_core_is_the_whole_signals_to_the_bit(window, polyorder):
     """Windows and orders whose weights are even, odd and neither (scipy.ndimage sums each
     kind its own way): the streamed filter gives savgol_filter's values exactly."""
-    from gsfric.trajectory import savgol_filter
+    from gsfric.signal.savgol import savgol_filter
 
     rng = np.random.default_rng(window * 10 + polyorder)
     y = np.cumsum(rng.normal(size=(400, 4)), axis=0) * 0.01 + 0.5
@@ -202,7 +203,7 @@ def test_filter_on_the_core_is_the_whole_signals_to_the_bit(window, polyorder):
 
 
 def test_selected_outputs_and_flags_equal_the_full_evaluation():
-    from gsfric.evaluation import Evaluator, evaluate_outputs
+    from gsfric.evaluation.evaluator import Evaluator, evaluate_outputs
 
     platform = models.reference_platform()
     motion = models.sinusoidal(np.linspace(0.0, 2.0, 401))

@@ -14,9 +14,9 @@ import pandas as pd
 import pytest
 
 from gsfric import io, models
-from gsfric import sweep as sw
 from gsfric.errors import InputError
-from gsfric.evaluation import evaluate
+from gsfric.evaluation.evaluator import evaluate
+from gsfric.sweep import sweep as sw
 
 WORKSPACE = {
     "sampling": "lhs", "samples": 60, "states": 4, "seed": 3,
@@ -257,7 +257,7 @@ def test_gsfric_sweep_is_callable():
 
 
 def test_platform_limits_round_trip_and_one_line_errors(tmp_path):
-    from gsfric.platform import Platform
+    from gsfric.platform.description import Platform
 
     platform = models.reference_platform().replace(
         limits={"actuator_force": 200.0, "universal_load": 300.0})
@@ -323,7 +323,7 @@ def test_block_evaluation_is_evaluate_quiet(name):
     """Each step's enveloped values (the generated function ``envelope``), evaluated block by
     block, equal the norms and products of Evaluator.evaluate_quiet's outputs to 1e-12, with
     exactly its step flags (stroke and coupled-friction flags included)."""
-    from gsfric.evaluation import FLAG_COUPLING, FLAG_STROKE, Evaluator
+    from gsfric.evaluation.evaluator import FLAG_COUPLING, FLAG_STROKE, Evaluator
     from gsfric.trajectory import Motion
 
     platform = _platforms()[name]
@@ -379,7 +379,7 @@ def test_sweep_with_the_paper_friction_model_and_effects(inputs, tmp_path):
 def test_workspace_envelope_leaves_the_flagged_steps_out(monkeypatch):
     """A task's envelope is the extreme over the unflagged steps of evaluate_quiet, block
     boundaries and all; flagged steps are counted."""
-    from gsfric.evaluation import Evaluator
+    from gsfric.evaluation.evaluator import Evaluator
     from gsfric.trajectory import Motion
 
     monkeypatch.setattr(sw, "BLOCK_STEPS", 24)

@@ -9,10 +9,16 @@ from click.testing import CliRunner
 
 from gsfric.cli import main
 from gsfric.errors import InputError
-from gsfric.evaluation import Evaluator, state_array
-from gsfric.io import read_measured
+from gsfric.evaluation.evaluator import Evaluator, state_array
+from gsfric.io.readers import read_measured
 from gsfric.models import reference_platform
-from gsfric.synth import ar1_noise, excitation_motion, parse_effect, run_synth, synthesize
+from gsfric.synth import (
+    ar1_noise,
+    excitation_motion,
+    parse_effect,
+    run_synth,
+    synthesize,
+)
 
 COLUMNS = ["t", "x", "y", "z", "qw", "qx", "qy", "qz"] + [f"F{i}" for i in range(1, 7)] \
     + [f"D{i}" for i in range(1, 7)]

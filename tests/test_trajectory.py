@@ -9,9 +9,7 @@ import pytest
 from scipy.spatial.transform import Rotation
 
 from gsfric.errors import GsfricWarning, InputError
-from gsfric.trajectory import (
-    MIN_SAMPLES,
-    Motion,
+from gsfric.signal.rotations import (
     euler_from_rotation,
     quaternion_from_euler,
     quaternion_from_rotation,
@@ -19,6 +17,7 @@ from gsfric.trajectory import (
     rotation_from_euler,
     rotation_from_quaternion,
 )
+from gsfric.trajectory import MIN_SAMPLES, Motion
 
 AXIS = np.array([1.0, 2.0, 2.0]) / 3
 R0 = Rotation.from_euler("zxz", [0.4, 0.5, -0.3]).as_matrix()

@@ -10,16 +10,17 @@ from scipy.spatial.transform import Rotation
 
 from gsfric.errors import InputError
 from gsfric.models import reference_platform
-from gsfric.synth import read_forces
-from gsfric.trajectory import (
-    Motion,
-    _gcv_window,
+from gsfric.signal.noise import white_noise_std
+from gsfric.signal.rotations import quaternion_from_rotation
+from gsfric.signal.savgol import (
     adaptive_filters,
+    gcv_window,
     motion_filters,
-    quaternion_from_rotation,
+    savgol_adaptive,
     savgol_filter,
-    white_noise_std,
 )
+from gsfric.synth import read_forces
+from gsfric.trajectory import Motion
 
 AXIS = np.array([2.0, -1.0, 2.0]) / 3
 R0 = Rotation.from_euler("zxz", [0.3, 0.2, -0.4]).as_matrix()
@@ -106,7 +107,7 @@ def test_local_choice_beats_every_single_window():
     fixed = {w: force_error(platform, exact, Motion.from_samples(
         exact.t, position, quaternion=quaternion, window=w)) for w in range(21, 122, 10)}
     assert adaptive < 0.8 * min(fixed.values()), (adaptive, fixed)
-    gcv = _gcv_window(position, 4)
+    gcv = gcv_window(position, 4)
     assert adaptive < 0.8 * force_error(platform, exact, Motion.from_samples(
         exact.t, position, quaternion=quaternion, window=gcv))
 
@@ -163,7 +164,7 @@ def test_windows_spanning_a_triangle_waves_corners_are_not_chosen(monkeypatch, c
     little; the choice must not take them for unbiased. Longer candidate windows leave the
     acceleration error of the windows up to 201 samples (without the detected-bias rule, 801
     samples gave nine times that error)."""
-    import gsfric.trajectory as trajectory
+    import gsfric.signal.savgol as savgol
 
     rng = np.random.default_rng(5)
     rate = 476.0
@@ -176,9 +177,9 @@ def test_windows_spanning_a_triangle_waves_corners_are_not_chosen(monkeypatch, c
     recorded = position + rng.normal(0.0, 1e-5, position.shape)
 
     def error(longest):
-        monkeypatch.setattr(trajectory, "MAX_AUTO_WINDOW", longest)
+        monkeypatch.setattr(savgol, "MAX_AUTO_WINDOW", longest)
         filters = motion_filters(recorded)
-        estimate = trajectory._savgol_adaptive(recorded, filters, 1 / rate)[2]
+        estimate = savgol_adaptive(recorded, filters, 1 / rate)[2]
         inner = slice(len(t) // 20, -len(t) // 20)
         return float(np.sqrt(np.mean((estimate - acceleration)[inner] ** 2)))
 

@@ -19,10 +19,16 @@ import pytest
 
 pytest.importorskip("pinocchio")
 
+from helpers_validation import (  # noqa: E402
+    engine,
+    engine_geometry,
+    engine_results,
+    random_platform,
+    relative_difference,
+)
+
 import gsfric  # noqa: E402
 from gsfric import models  # noqa: E402
-from helpers_validation import (engine, engine_geometry, engine_results,  # noqa: E402
-                                random_platform, relative_difference)
 
 TOLERANCE = 1e-8
 STEPS = 40

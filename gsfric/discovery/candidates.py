@@ -21,7 +21,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from gsfric.platform import Platform
+from gsfric.platform.description import Platform
 
 INF = np.inf
 
@@ -166,7 +166,7 @@ def _stroke_ends(context: dict) -> dict | None:
 
 
 def _bushing_spacing(platform: Platform, context: dict) -> dict:
-    from gsfric.catalog import EFFECTS
+    from gsfric.platform.catalog import EFFECTS
 
     own = platform.effects.get("bushing_friction", {})
     return {"spacing": float(own.get("spacing", EFFECTS["bushing_friction"]["spacing"]))}

@@ -17,10 +17,15 @@ from collections.abc import Sequence
 
 import numpy as np
 
-from gsfric.evaluation import Evaluator, Result, jacobian_parameters, parameter_vector, \
-    state_array
-from gsfric.manifest import jacobian_platform_parameters, layout
-from gsfric.platform import Platform
+from gsfric.compiled.manifest import jacobian_platform_parameters, layout
+from gsfric.evaluation.evaluator import (
+    Evaluator,
+    Result,
+    jacobian_parameters,
+    parameter_vector,
+    state_array,
+)
+from gsfric.platform.description import Platform
 from gsfric.trajectory import Motion
 
 BASE_PARAMETERS = jacobian_platform_parameters()
@@ -31,7 +36,7 @@ _BODY = ("payload_mass", "platform_mass")
 
 
 def _compiled_jacobian_is_dense() -> bool:
-    from gsfric.manifest import function
+    from gsfric.compiled.manifest import function
 
     n_theta = len(jacobian_parameters())
     try:
@@ -62,13 +67,13 @@ class ParametricModel:
     """
 
     def __init__(self, platform: Platform, motion: Motion, n_threads: int = 1) -> None:
-        from gsfric.evaluation import effect_vector
+        from gsfric.evaluation.evaluator import effect_vector
 
         self.platform = platform
         self.motion = motion
         self.n_threads = int(n_threads)
         self.x = state_array(motion)
-        from gsfric.catalog import SENSOR_EFFECTS, sensor_parameters
+        from gsfric.platform.catalog import SENSOR_EFFECTS, sensor_parameters
 
         compiled = jacobian_parameters()
         self.n_compiled = len(compiled)
@@ -119,7 +124,7 @@ class ParametricModel:
         return np.asarray(theta[k:k + 6], float), float(theta[k + 6])
 
     def _read(self, theta: np.ndarray, F: np.ndarray) -> np.ndarray:
-        from gsfric.catalog import apply_sensor
+        from gsfric.platform.catalog import apply_sensor
 
         gains, delay = self.sensor(theta)
         if delay == 0.0 and not np.any(gains):
@@ -128,7 +133,7 @@ class ParametricModel:
 
     def effect_names(self, theta: np.ndarray) -> list[str]:
         """Effects whose parameters in theta differ from the catalog defaults."""
-        from gsfric.catalog import EFFECTS
+        from gsfric.platform.catalog import EFFECTS
 
         out = []
         for name, params in EFFECTS.items():
@@ -154,7 +159,7 @@ class ParametricModel:
         effect: the inertia and the weights that a mis-scaled pose moves between the legs,
         not the friction laws that its scaled speed would change (which friction candidates
         and the refit already describe)."""
-        from gsfric.evaluation import effect_vector
+        from gsfric.evaluation.evaluator import effect_vector
 
         rigid = self.platform_at(theta).without_effects().with_friction(
             **dict.fromkeys(_FRICTION + ("prismatic_seal",), 0.0))
@@ -190,7 +195,7 @@ class ParametricModel:
         ``rows`` (default all N), written into ``out`` if given. The compiled Jacobian (every
         parameter) is evaluated ``chunk`` steps at a time, so memory grows with the columns
         asked for only."""
-        from gsfric.catalog import apply_sensor, sensor_jacobian
+        from gsfric.platform.catalog import apply_sensor, sensor_jacobian
 
         theta = np.asarray(theta, float)
         cols = [self.index[c] for c in columns]

@@ -21,7 +21,7 @@ import numpy as np
 from gsfric.discovery.regimes import hotspots
 from gsfric.discovery.summary import _per_leg, summary
 from gsfric.discovery.workflow import Discovery, discover
-from gsfric.io import atomic_write
+from gsfric.io.files import atomic_write
 
 PLOTS = ("residuals_time.png", "residuals_speed.png", "regimes.png")
 
@@ -298,7 +298,7 @@ def plots(d: Discovery, out_dir: Path) -> list[Path]:
 def write(d: Discovery, out_dir: str | os.PathLike[str], *, source: str = "",
           platform_source: str = "", figures: bool = True) -> list[Path]:
     """Write summary.json, report.md and (with ``figures``) the plots."""
-    from gsfric.io import output_folder
+    from gsfric.io.files import output_folder
 
     written = []
     with output_folder(out_dir, inputs=[source or None, platform_source or None]) as out:
@@ -350,15 +350,16 @@ def run_discover(measured: str | os.PathLike[str],
     list of Path
         The files written.
     """
-    from gsfric import io as gio
     from gsfric.discovery.rest import poses_from_columns
+    from gsfric.io.readers import read_measured_columns
     from gsfric.models import reference_platform
-    from gsfric.platform import Platform
+    from gsfric.platform.description import Platform
+    from gsfric.signal.savgol import DEFAULT_POLYORDER
 
     platform = reference_platform() if platform_file is None else Platform.from_toml(
         platform_file)
     log_format = options.pop("log_format", None)   # column map and units of a log
-    motion, forces, lengths, columns = gio._read_measured(measured, None, gio.DEFAULT_POLYORDER,
+    motion, forces, lengths, columns = read_measured_columns(measured, None, DEFAULT_POLYORDER,
                                                           log_format)
     result = discover(motion, forces, platform, seed=seed, progress=progress,
                       poses=poses_from_columns(columns), **options)

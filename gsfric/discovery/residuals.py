@@ -19,12 +19,18 @@ from itertools import product
 import numpy as np
 
 from gsfric.discovery import statistics as st
-from gsfric.discovery.candidates import (CANDIDATE_NAMES, CANDIDATES, REFIT, STRIBECK_QUANTILE,
-                                         Candidate, stribeck_velocity_bound)
+from gsfric.discovery.candidates import (
+    CANDIDATE_NAMES,
+    CANDIDATES,
+    REFIT,
+    STRIBECK_QUANTILE,
+    Candidate,
+    stribeck_velocity_bound,
+)
 from gsfric.discovery.model import BASE_PARAMETERS, ParametricModel
 from gsfric.discovery.settings import DEFAULT_TRIM, Settings
 from gsfric.errors import InputError
-from gsfric.platform import Platform
+from gsfric.platform.description import Platform
 from gsfric.trajectory import Motion, is_uniform
 
 DELAY = "time_offset.delay"
@@ -252,7 +258,7 @@ class Problem:
         self.context = {"mean_length": float(D.mean()), "min_length": float(D.min()),
                         "max_length": float(D.max())}
         # rests and reversals: pairs (sample, leg) not known to slide are left out
-        from gsfric.evaluation import PRISMATIC_EPS
+        from gsfric.evaluation.evaluator import PRISMATIC_EPS
 
         t = np.asarray(motion.t, float)
         if poses is None:

@@ -25,7 +25,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from gsfric.trajectory import robust_std, savgol_filter, savgol_weights
+from gsfric.signal.noise import robust_std
+from gsfric.signal.savgol import savgol_filter, savgol_weights
 
 REST_BAND = 5.0
 """Half-width of the not-sliding band, in standard deviations of the speed estimate."""
@@ -81,12 +82,12 @@ def differentiator(position: np.ndarray, rotation: np.ndarray, polyorder: int | 
         Half the longer of the two windows, samples; of the position's alone when the
         orientation does not move (``moves``).
     """
-    from gsfric.trajectory import (DEFAULT_POLYORDER, _continuous, motion_filters,
-                                   quaternion_from_rotation)
+    from gsfric.signal.rotations import continuous_quaternions, quaternion_from_rotation
+    from gsfric.signal.savgol import DEFAULT_POLYORDER, motion_filters
 
     polyorder = DEFAULT_POLYORDER if polyorder is None else int(polyorder)
     signals = (np.asarray(position, float),
-               _continuous(quaternion_from_rotation(np.asarray(rotation, float))))
+               continuous_quaternions(quaternion_from_rotation(np.asarray(rotation, float))))
     if filters is None:
         filters = [motion_filters(signal, polyorder) for signal in signals]
     gains, reaches = [], []
@@ -114,7 +115,7 @@ def moves(signal: np.ndarray) -> bool:
     (translations only, a common test) gets the longest window there is, since nothing is to
     be resolved, and counting its reach would widen every rest by it: 0.3 s moves at 500 Hz
     with a fixed orientation were left without a sliding pair."""
-    from gsfric.trajectory import white_noise_std
+    from gsfric.signal.noise import white_noise_std
 
     signal = np.asarray(signal, float)
     return bool(np.any(np.ptp(signal, axis=0) > MOVE_TO_NOISE * white_noise_std(signal)
@@ -134,14 +135,17 @@ def divided_noise_std(t: np.ndarray, y: np.ndarray) -> np.ndarray:
     motion times the jitter as noise). Robust scale (median of the normalised squares)."""
     from numpy.lib.stride_tricks import sliding_window_view
 
-    from gsfric.trajectory import NOISE_DIFFERENCE_ORDER, _divided_difference_coefficients
+    from gsfric.signal.noise import (
+        NOISE_DIFFERENCE_ORDER,
+        divided_difference_coefficients,
+    )
 
     t, y = np.asarray(t, float), np.asarray(y, float)
     m = NOISE_DIFFERENCE_ORDER
     if len(t) <= m:
         return np.zeros(y.shape[1])
     scale = (t[-1] - t[0]) / (len(t) - 1)
-    w = _divided_difference_coefficients((t - t[0]) / scale, m + 1)      # (N - m, m + 1)
+    w = divided_difference_coefficients((t - t[0]) / scale, m + 1)      # (N - m, m + 1)
     d = np.einsum("nkj,nj->nk", sliding_window_view(y, m + 1, axis=0), w)
     z2 = d ** 2 / np.sum(w ** 2, axis=1)[:, None]
     return np.sqrt(np.median(z2, axis=0) / 0.454936)     # median of chi-square(1)
@@ -157,13 +161,13 @@ def spline_differentiator(t: np.ndarray, position: np.ndarray, rotation: np.ndar
     the spline's penalties are not available (short records)."""
     from scipy.ndimage import uniform_filter1d
 
-    from gsfric.trajectory import (DEFAULT_POLYORDER, _candidate_windows, _continuous,
-                                   _smoothing_splines, quaternion_from_rotation,
-                                   spline_penalties)
+    from gsfric.signal.rotations import continuous_quaternions, quaternion_from_rotation
+    from gsfric.signal.savgol import DEFAULT_POLYORDER, candidate_windows
+    from gsfric.signal.spline import smoothing_splines, spline_penalties
 
     t = np.asarray(t, float)
     n = len(t)
-    q = _continuous(quaternion_from_rotation(np.asarray(rotation, float)))
+    q = continuous_quaternions(quaternion_from_rotation(np.asarray(rotation, float)))
     rng = np.random.default_rng(0)
     gain = np.zeros(n)
     for signal in (np.asarray(position, float), q):
@@ -173,12 +177,12 @@ def spline_differentiator(t: np.ndarray, position: np.ndarray, rotation: np.ndar
         power = np.zeros(n)
         for _ in range(SPLINE_NOISE_DRAWS):
             noise = rng.standard_normal(signal.shape)
-            power += np.mean(_smoothing_splines(t, noise, penalties).derivative(1)(t) ** 2,
+            power += np.mean(smoothing_splines(t, noise, penalties).derivative(1)(t) ** 2,
                              axis=1)
         gain = np.maximum(gain, np.sqrt(uniform_filter1d(power / SPLINE_NOISE_DRAWS, 51,
                                                          mode="nearest")))
     step = (t[-1] - t[0]) / (n - 1)
-    windows = np.array(_candidate_windows(n, DEFAULT_POLYORDER))
+    windows = np.array(candidate_windows(n, DEFAULT_POLYORDER))
     gains = np.array([np.linalg.norm(savgol_weights(int(w), DEFAULT_POLYORDER, 1))
                       for w in windows]) / step                           # decreasing
     index = np.clip(np.searchsorted(-gains, -gain), 0, len(windows) - 1)
@@ -214,7 +218,8 @@ def speed_uncertainty(platform, t: np.ndarray, position: np.ndarray, rotation: n
     ndarray, shape (N, 6)
         Per sample and leg; (6,) with a fixed ``window``.
     """
-    from gsfric.trajectory import DEFAULT_POLYORDER, white_noise_std
+    from gsfric.signal.noise import white_noise_std
+    from gsfric.signal.savgol import DEFAULT_POLYORDER
 
     polyorder = DEFAULT_POLYORDER if polyorder is None else int(polyorder)
     D = leg_lengths(platform, np.asarray(position, float), np.asarray(rotation, float))
@@ -303,7 +308,7 @@ def force_noise(forces: np.ndarray) -> np.ndarray:
 def poses_from_columns(columns) -> tuple[np.ndarray, np.ndarray]:
     """Recorded positions (N, 3) and rotations (N, 3, 3) from trajectory columns (a mapping or
     DataFrame with ``x, y, z`` and ``qw, qx, qy, qz`` or ``alpha, beta, gamma``)."""
-    from gsfric.trajectory import rotation_from_euler, rotation_from_quaternion
+    from gsfric.signal.rotations import rotation_from_euler, rotation_from_quaternion
 
     position = np.stack([np.asarray(columns[k], float) for k in ("x", "y", "z")], axis=1)
     if "qw" in columns:

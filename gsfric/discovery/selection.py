@@ -561,7 +561,7 @@ def delay_profile(problem: Problem, theta: np.ndarray, names: list[str],
     """
     from scipy.optimize import minimize_scalar
 
-    from gsfric.catalog import shift
+    from gsfric.platform.catalog import shift
 
     model = problem.model
     j = model.index[DELAY]

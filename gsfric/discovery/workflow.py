@@ -35,12 +35,21 @@ from gsfric.discovery import statistics as st
 from gsfric.discovery.candidates import CANDIDATES
 from gsfric.discovery.regimes import bands as regime_bands
 from gsfric.discovery.residuals import Problem
+from gsfric.discovery.selection import (
+    CandidateTest,
+    bootstrap_share,
+    generic_competitor,
+    half_stability,
+    indistinguishable,
+    low_band_of,
+    noise_model,
+    refine,
+    refit_alternatives,
+    screen_candidates,
+    winner_of,
+)
 from gsfric.discovery.settings import Settings
-from gsfric.discovery.selection import (CandidateTest, bootstrap_share, generic_competitor,
-                                        half_stability, indistinguishable, low_band_of,
-                                        noise_model, refine, refit_alternatives,
-                                        screen_candidates, winner_of)
-from gsfric.platform import Platform
+from gsfric.platform.description import Platform
 from gsfric.trajectory import Motion
 
 
@@ -625,7 +634,7 @@ def _contributions(problem: Problem, theta: np.ndarray, active: Sequence[str]
     """Each named effect's contribution to F at theta (F minus F with it switched off)."""
     if not active:
         return {}
-    from gsfric.catalog import EFFECTS
+    from gsfric.platform.catalog import EFFECTS
 
     model = problem.model
     thetas = [theta]

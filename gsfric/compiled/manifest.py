@@ -9,6 +9,9 @@ found with ``importlib.resources``. ``GSFRIC_GENERATED`` points to another gener
 from __future__ import annotations
 
 import functools
+import hashlib
+import importlib.resources
+import importlib.util
 import json
 import os
 from pathlib import Path
@@ -38,7 +41,6 @@ def generated_dir() -> Path:
 
 @functools.lru_cache(maxsize=None)
 def _packaged_dir() -> Path:
-    import importlib.resources
 
     try:
         folder = importlib.resources.files(PACKAGE)
@@ -48,7 +50,7 @@ def _packaged_dir() -> Path:
         candidate = folder / "manifest.json"
         if candidate.is_file():
             return Path(str(candidate)).parent
-    return Path(__file__).resolve().parent.parent / "generated"
+    return Path(__file__).resolve().parents[2] / "generated"
 
 
 @functools.lru_cache(maxsize=None)
@@ -85,8 +87,6 @@ def staleness() -> str | None:
     Checks the generated files against the hashes in the manifest and, when the derive/
     sources are beside generated/ (a source checkout), their hash against the manifest's.
     """
-    import hashlib
-    import importlib.util
 
     folder = generated_dir()
     for name, digest in manifest().get("files", {}).items():

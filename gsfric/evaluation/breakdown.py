@@ -20,15 +20,17 @@ joint_friction + prismatic_* + effects``. Units N, shape (N, 6) each, step leadi
 
 from __future__ import annotations
 
-import numpy as np
+from collections.abc import Callable
 
-from gsfric.platform import Platform
+import numpy as np
+import pandas as pd
+
+from gsfric.platform.description import Platform
 from gsfric.trajectory import Motion
 
 PARTS = ("inertia", "gravity", "payload", "joint_friction", "prismatic_viscous",
          "prismatic_coulomb", "prismatic_bushing", "prismatic_seal", "effects")
 """Names of the parts, in the order of the columns of ``to_frame``."""
-
 
 def _at_rest(motion: Motion) -> Motion:
     zero = np.zeros_like(motion.velocity)
@@ -36,35 +38,29 @@ def _at_rest(motion: Motion) -> Motion:
                               zero.copy())
 
 
-def breakdown(platform: Platform, motion: Motion, result=None) -> dict[str, np.ndarray]:
+def parts(full, run: Callable[[Platform, Motion], object], platform: Platform,
+          motion: Motion) -> dict[str, np.ndarray]:
     """The actuator forces of ``platform`` along ``motion`` split into their parts.
 
     Parameters
     ----------
+    full : Result
+        The kinematic-mode evaluation of ``platform`` along ``motion``.
+    run : callable
+        ``run(platform, motion) -> Result``: evaluates the platform variants (without payload,
+        at rest) that the parts are differences of.
     platform : Platform
     motion : Motion
-    result : Result, optional
-        ``gsfric.evaluate(platform, motion)`` if already computed.
 
     Returns
     -------
     dict
         ``PARTS`` name -> ndarray (N, 6), N; and ``F`` (N, 6), N, their sum.
     """
-    import warnings
-
-    from gsfric.evaluation import Evaluator
-
-    def run(p, m):
-        with warnings.catch_warnings():
-            warnings.simplefilter("ignore")   # flags are the full evaluation's to report
-            return Evaluator(p).evaluate(m)
-
-    full = run(platform, motion) if result is None else result
     bare = platform.with_body(payload_mass=0.0, payload_inertia=np.zeros((3, 3)))
     without_payload = run(bare, motion).F0
     gravity = run(bare, _at_rest(motion)).F0
-    parts = dict(
+    split = dict(
         inertia=without_payload - gravity,
         gravity=gravity,
         payload=full.F0 - without_payload,
@@ -74,14 +70,13 @@ def breakdown(platform: Platform, motion: Motion, result=None) -> dict[str, np.n
         prismatic_bushing=-full.Ffr_bushing,
         prismatic_seal=-full.Ffr_seal,
     )
-    parts["effects"] = full.F - sum(parts.values())
-    parts["F"] = full.F.copy()
-    return parts
+    split["effects"] = full.F - sum(split.values())
+    split["F"] = full.F.copy()
+    return split
 
 
 def to_frame(t: np.ndarray, parts: dict[str, np.ndarray]):
     """The parts as a DataFrame: ``t``, then ``{part}{i}`` for each part and leg i = 1..6, N."""
-    import pandas as pd
 
     cols = {"t": np.asarray(t, float)}
     for name in (*PARTS, "F"):

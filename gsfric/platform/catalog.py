@@ -25,7 +25,7 @@ from collections.abc import Mapping
 
 import numpy as np
 
-from gsfric.manifest import manifest
+from gsfric.compiled.manifest import manifest
 
 SENSOR_EFFECTS: dict[str, dict[str, float]] = {
     "force_scale": {f"g{i}": 0.0 for i in range(1, 7)},

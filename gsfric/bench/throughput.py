@@ -31,10 +31,23 @@ import subprocess
 import sys
 import tempfile
 import time
+import tracemalloc
 from dataclasses import asdict, dataclass, field
 from pathlib import Path
 
 import numpy as np
+
+import gsfric
+from gsfric import models
+from gsfric.bench import numpy_engine as numpy_model
+from gsfric.compiled import native
+from gsfric.compiled.manifest import function, manifest
+from gsfric.evaluation.evaluator import (
+    Evaluator,
+    model_function,
+    release_memory,
+    state_array,
+)
 
 SIZES = (40, 1_000, 100_000, 1_000_000)
 QUICK_SIZES = (40, 1_000)
@@ -147,15 +160,12 @@ class Report:
 # --------------------------------------------------------------------------------- inputs
 def states(n: int) -> np.ndarray:
     """States (n, 24) of a smooth random motion sampled every ``DT`` seconds."""
-    from gsfric.evaluation import state_array
 
     return state_array(_motion(n))
 
 
 def _callable(implementation: str, threads: int, x: np.ndarray):
     """A function of no arguments that evaluates x with one implementation."""
-    from gsfric import models, numpy_model
-    from gsfric.evaluation import Evaluator
 
     platform = models.reference_platform("paper")   # the model the NumPy references implement
     if implementation in ("compiled", "compiled_paper"):
@@ -246,7 +256,6 @@ def memory_child(implementation: str, threads: int, path: str) -> dict:
     one first, so the figure is the call's own peak above what was resident before it;
     elsewhere it is the rise of ``getrusage``'s maximum resident set size (a lower bound).
     """
-    import tracemalloc
 
     x = np.load(path)
     fn = _callable(implementation, threads, x)
@@ -313,7 +322,6 @@ def import_time(runs: int = 7) -> dict:
 
 # ------------------------------------------------------------------- the other paths
 def _motion(n: int):
-    from gsfric import models
 
     return models.random_motion(np.random.default_rng(SEED), DT * np.arange(n))
 
@@ -335,7 +343,6 @@ def _busy_core():
 
 def evaluate_memory_child(n: int) -> dict:
     """In a fresh process: the peak memory ``gsfric.evaluate`` adds at n steps, in GiB."""
-    import gsfric
 
     motion = _motion(n)
     platform = gsfric.reference_platform()
@@ -360,7 +367,6 @@ def write_trajectory(path: Path, steps: int, group: int = 250_000) -> None:
     import pyarrow as pa
     import pyarrow.parquet as pq
 
-    from gsfric import models
 
     writer = None
     try:
@@ -456,9 +462,6 @@ def simulate_case(steps: int, folder: Path) -> dict | None:
 def measure_paths(budget: float, memory: bool, progress=print, simulate: bool = False) -> dict:
     """The paths around the hot path: ``evaluate`` with flags, the README's control loop,
     Evaluator construction, two threads against a busy core, evaluate's memory."""
-    import gsfric
-    from gsfric import native, numpy_model
-    from gsfric.evaluation import Evaluator, state_array
 
     platform = gsfric.reference_platform()
     out: dict = {"friction_model": platform.friction.model}
@@ -469,7 +472,6 @@ def measure_paths(budget: float, memory: bool, progress=print, simulate: bool = 
     best, median, cpu = _best_times(lambda: gsfric.evaluate(platform, motion), budget)
     ev, buffers = Evaluator(platform), {}
     rbest, _, rcpu = _best_times(lambda: ev.evaluate_quiet(motion, buffers=buffers), budget)
-    from gsfric.evaluation import release_memory
 
     # no dropped result's memory to reuse: every page mapped anew (the release untimed)
     fbest, _, fcpu = _best_times(lambda: gsfric.evaluate(platform, motion), budget,
@@ -547,7 +549,6 @@ def parallel_capacity(iterations: int = 3_000_000) -> float:
 
 # ------------------------------------------------------------------------------------ run
 def _machine() -> dict:
-    from gsfric import native
 
     model = _platform.processor() or _platform.machine()
     try:
@@ -557,10 +558,8 @@ def _machine() -> dict:
                 break
     except OSError:
         pass
-    from gsfric.manifest import function, manifest
 
     compiled = native.is_compiled()
-    from gsfric.evaluation import model_function
 
     # the actuator map the reference platform runs (its friction model's, derive/build.py)
     simd = bool(function(model_function("actuator", "coupled")).get("simd", False))
@@ -579,7 +578,6 @@ def _machine() -> dict:
 
 
 def _lanes():
-    from gsfric import native
 
     lib = native._library()
     return lib.gsfric_simd_lanes() if lib is not None else None

@@ -1,6 +1,6 @@
 """Compiled evaluation of the generated functions over batches of steps.
 
-The C code in generated/ and the batch driver ``_native/batch.c`` are compiled once into a
+The C code in generated/ and the batch driver ``batch.c`` are compiled once into a
 shared library, cached under ``$GSFRIC_CACHE`` (default: the user cache directory) in a folder
 named after the hash of the sources, the compiler command and the CPU's instruction-set
 features (``-march=native`` code is only valid on the CPU it was built for), and loaded with
@@ -45,11 +45,18 @@ import warnings
 from pathlib import Path
 
 import numpy as np
+from platformdirs import user_cache_dir
 
+from gsfric.compiled.manifest import (
+    BASENAME,
+    function,
+    generated_dir,
+    manifest,
+    staleness,
+)
 from gsfric.errors import GsfricError
-from gsfric.manifest import BASENAME, function, generated_dir, manifest
 
-DRIVER = Path(__file__).resolve().parent / "_native" / "batch.c"
+DRIVER = Path(__file__).resolve().parent / "batch.c"
 
 
 def _target_flags() -> tuple[str, ...]:
@@ -83,17 +90,14 @@ _SHARED_MAGIC = (b"\x7fELF", b"\xcf\xfa\xed\xfe", b"\xce\xfa\xed\xfe", b"MZ")
 class BuildError(GsfricError):
     """The generated C code could not be compiled (gsfric falls back to CasADi)."""
 
-
 class LibraryError(GsfricError):
     """The compiled-library cache or the compiler's output cannot be used (no fallback)."""
-
 
 def cache_dir() -> Path:
     """The root of the compiled-library cache: ``$GSFRIC_CACHE`` or the user cache directory."""
     env = os.environ.get("GSFRIC_CACHE")
     if env:
         return Path(env)
-    from platformdirs import user_cache_dir
 
     return Path(user_cache_dir("gsfric"))
 
@@ -403,7 +407,7 @@ class _Fn(ctypes.Structure):
 
 
 class _Bound(ctypes.Structure):
-    """The fixed arguments of a control-loop call (``gsfric_bound`` in ``_native/batch.c``)."""
+    """The fixed arguments of a control-loop call (``gsfric_bound`` in ``batch.c``)."""
 
     _fields_ = [("fn", ctypes.POINTER(_Fn)), ("fixed", ctypes.c_void_p),
                 ("in_stride", ctypes.c_void_p), ("out_stride", ctypes.c_void_p),
@@ -411,7 +415,7 @@ class _Bound(ctypes.Structure):
 
 
 class FlagSpec(ctypes.Structure):
-    """Settings of the step flags computed in C (``gsfric_flags`` in ``_native/batch.c``)."""
+    """Settings of the step flags computed in C (``gsfric_flags`` in ``batch.c``)."""
 
     _fields_ = [("d", ctypes.c_int), ("s2", ctypes.c_int), ("h", ctypes.c_int),
                 ("has_stroke", ctypes.c_int), ("stroke_lo", ctypes.c_double),
@@ -653,7 +657,7 @@ class CompiledFunction:
 @functools.lru_cache(maxsize=None)
 def _tuples_readable(lib) -> bool:
     """True when the library reads a tuple's items as Python does (``gsfric_tuple_item``,
-    _native/batch.c): the control loop's calls then pass their arrays as one tuple."""
+    batch.c): the control loop's calls then pass their arrays as one tuple."""
     samples = [(np.zeros(1), np.zeros((2, 3))), tuple(np.zeros(3) for _ in range(7))]
     try:
         return all(lib.gsfric_tuple_item(t, k) == id(t[k]) for t in samples
@@ -665,7 +669,7 @@ def _tuples_readable(lib) -> bool:
 @functools.lru_cache(maxsize=None)
 def _objects_readable(lib) -> bool:
     """True when the library reads a NumPy array's data pointer from the array object as
-    NumPy itself gives it (``gsfric_array_data``, _native/batch.c) for arrays, views and
+    NumPy itself gives it (``gsfric_array_data``, batch.c) for arrays, views and
     slices: the control loop's calls then pass arrays as objects."""
     base = np.arange(60.0).reshape(5, 12)
     samples = [base, base[2:], base[1:3, 4:], np.empty((1, 6)), np.zeros(0)]
@@ -695,7 +699,7 @@ def _motion_arrays(name: str, motion) -> list[np.ndarray]:
 def state_of(motion) -> np.ndarray:
     """The (N, 24) state array of a motion's six arrays (p, T row-major, v, omega, a,
     alpha): the one layout in Python (``evaluation.state_array``, the CasADi fallback), the
-    same as ``layout_states`` in ``_native/batch.c``."""
+    same as ``layout_states`` in ``batch.c``."""
     parts = _motion_arrays("motion", motion)
     n = parts[0].shape[0]
     return np.concatenate([p.reshape(n, -1) for p in parts], axis=1)
@@ -757,7 +761,6 @@ class CasadiFunction:
 
 def check_generated() -> None:
     """Warn when generated/ is stale against derive/; fail when its files were altered."""
-    from gsfric.manifest import staleness
 
     reason = staleness()
     if reason is None:

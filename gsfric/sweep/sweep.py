@@ -40,12 +40,12 @@ import glob as globmod
 import hashlib
 import itertools
 import json
+import logging
 import math
 import os
 import shutil
 import sys
 import time
-import tomllib
 import warnings
 from collections.abc import Callable, Mapping
 from dataclasses import dataclass, field
@@ -53,10 +53,24 @@ from pathlib import Path
 from typing import Any
 
 import numpy as np
+import pandas as pd
+import tomllib
+from scipy.spatial.transform import Rotation
+from scipy.stats import qmc
+from tqdm import tqdm
 
+from gsfric import __version__
 from gsfric._checks import as_float, short, suggest
+from gsfric.compiled import native
 from gsfric.errors import InputError
-from gsfric.platform import Platform
+from gsfric.evaluation.evaluator import Evaluator, model_function, state_array
+from gsfric.io.files import atomic_write
+from gsfric.io.tables import count_rows
+from gsfric.models import reference_platform
+from gsfric.platform.catalog import sensor_parameters
+from gsfric.platform.description import Platform
+from gsfric.simulate.stream import iter_motions
+from gsfric.trajectory import Motion
 
 # -- what an envelope holds -----------------------------------------------------------------
 
@@ -115,7 +129,6 @@ costs about what a second core saves on a million steps (docs/sizing.md)."""
 
 STREAM_CHUNK = 50_000
 """Steps of a trajectory file read and evaluated at a time inside a task (bounds memory)."""
-
 
 # -- workspace ------------------------------------------------------------------------------
 
@@ -230,7 +243,6 @@ class Workspace:
                     for i in range(6)]
             mesh = np.meshgrid(*axes, indexing="ij")
             return np.stack([m.ravel() for m in mesh], axis=1)
-        from scipy.stats import qmc
 
         out = np.tile(lo, (self.samples, 1))
         if varying.size:
@@ -305,7 +317,6 @@ def _rotation(poses: np.ndarray) -> np.ndarray:
 
 def _angles(rotation: np.ndarray) -> np.ndarray:
     """(roll, pitch, yaw) of rotations (N, 3, 3), ``R = Rz(yaw) Ry(pitch) Rx(roll)``."""
-    from scipy.spatial.transform import Rotation
 
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", UserWarning)   # gimbal lock at pitch = +-90 deg
@@ -314,7 +325,6 @@ def _angles(rotation: np.ndarray) -> np.ndarray:
 
 _LENGTH_BLOCK = 8192
 """Poses whose leg lengths are computed at a time (their work arrays stay in the cache)."""
-
 
 def _leg_lengths(platform: Platform, poses: np.ndarray) -> np.ndarray:
     """Leg lengths |p + R e_i - c_i| (n, 6), m, of poses (n, 6) (``POSE`` columns).
@@ -458,7 +468,6 @@ def make_variants(platform: Platform, vary: Mapping | None = None,
         return platforms, table
     if isinstance(samples, bool) or not isinstance(samples, (int, np.integer)) or samples < 1:
         raise InputError(f"variants: expected an integer >= 1, got {short(samples)}")
-    from scipy.stats import qmc
 
     rng = np.random.default_rng(seed)
     unit = (qmc.LatinHypercube(d=len(ranges), seed=seed).random(samples) if ranges
@@ -552,7 +561,6 @@ class _Block:
     (``MALLOC_TRIM_THRESHOLD_``), so every such allocation would cost fresh pages."""
 
     def __init__(self, size: int) -> None:
-        from gsfric import native
 
         self.compiled = native.is_compiled()
         self.size = size
@@ -585,9 +593,6 @@ class _Evaluation:
     """
 
     def __init__(self, platform: Platform) -> None:
-        from gsfric import native
-        from gsfric.catalog import sensor_parameters
-        from gsfric.evaluation import Evaluator, model_function
 
         self.evaluator = Evaluator(platform, n_threads=1)
         gains, delay = sensor_parameters(platform.effects)
@@ -620,7 +625,6 @@ class _Evaluation:
                          flag=block.flag)
                 yield s, e
             return
-        from gsfric.trajectory import Motion
 
         motion = Motion(t, x[:, 0:3], x[:, 3:12].reshape(n, 3, 3), x[:, 12:15], x[:, 15:18],
                         x[:, 18:21], x[:, 21:24])
@@ -724,8 +728,6 @@ def _pieces(task: Task, block: _Block):
     as it is streamed, a block of workspace poses ``BLOCK_STEPS`` states at a time (in the
     block's buffers: valid until the next piece)."""
     if task.path is not None:
-        from gsfric.evaluation import state_array
-        from gsfric.stream import iter_motions
 
         for start, m in iter_motions(task.path, chunk=STREAM_CHUNK):
             yield start, state_array(m), np.asarray(m.t, float)
@@ -746,7 +748,6 @@ def run_task(task: Task):
     evaluated for every variant of the task into the same reused buffers and folded into the
     variant's envelope at once, so memory follows ``BLOCK_STEPS``, not the task's size.
     """
-    import pandas as pd
 
     states = task.workspace.states if task.workspace is not None else 1
     block = _Block(max(BLOCK_STEPS, states))
@@ -769,7 +770,6 @@ def run_task(task: Task):
 
 
 def _file_rows(path: Path) -> int:
-    from gsfric.io import count_rows
 
     rows = count_rows(path)
     if rows is not None:
@@ -802,7 +802,6 @@ _POSE_BYTES = 48
 _VARIANT_BYTES = 17_000
 """What a pose and a variant weigh in a task's traffic: a pose in (6 floats), a variant's
 platform in (2 kB) and its envelope out (15 kB), pickled (measured)."""
-
 
 def _pose_block(n_poses: int, states: int, variants: int, chunk_steps: int) -> int:
     """Poses per workspace task, the task covering ``chunk_steps // (block * states)``
@@ -838,8 +837,6 @@ def plan(trajectories=None, workspace: Workspace | str | os.PathLike | None = No
          platform: Platform | str | os.PathLike | None = None, vary=None, tolerances=None,
          variants: int = 16, seed: int = 0, chunk_steps: int = CHUNK_STEPS) -> Plan:
     """Cut a sweep into tasks (see ``sweep`` for the parameters); checks every input."""
-    from gsfric import __version__
-    from gsfric.models import reference_platform
 
     if platform is None:
         platform = reference_platform()
@@ -900,7 +897,6 @@ def plan(trajectories=None, workspace: Workspace | str | os.PathLike | None = No
 MERGE_EVERY = 64
 """Task envelopes held before they are folded into the running merge (bounds client memory)."""
 
-
 def _reduce(frames) -> Any:
     """Fold task envelopes (and earlier folds) into one row per case, quantity and leg.
 
@@ -909,7 +905,6 @@ def _reduce(frames) -> Any:
     has at most one term per case (a motion's variant is one task: files are never split;
     the workspace has no energy). Rows keep the winning ``task``.
     """
-    import pandas as pd
 
     frame = pd.concat(frames, ignore_index=True)
     key = ["motion", "variant", "quantity", "leg"]
@@ -935,7 +930,6 @@ def _reduce(frames) -> Any:
 
 def merge(chunks) -> Any:
     """Per-case envelopes (``ENVELOPE_COLUMNS``) from task envelopes, in any order."""
-    import pandas as pd
 
     out = _reduce(list(chunks))
     out["quantity"] = pd.Categorical(out["quantity"], categories=list(QUANTITIES))
@@ -947,7 +941,6 @@ def merge(chunks) -> Any:
 
 def summarize(envelopes) -> Any:
     """The extreme of each quantity and leg over all cases, with its case and location."""
-    import pandas as pd
 
     parts = []
     for q, (kind, unit, _) in QUANTITIES.items():
@@ -963,7 +956,6 @@ def summarize(envelopes) -> Any:
 
 def check_limits(envelopes, limits: Mapping) -> Any:
     """Rows of ``envelopes`` beyond the platform's ``[limits]``, with the limit and the ratio."""
-    import pandas as pd
 
     parts = []
     for key, q in LIMIT_QUANTITY.items():
@@ -1031,11 +1023,9 @@ monitors (the nannies', which run in this process, and the workers') once a seco
 worker, Dask's defaults cost the worker 2.0 % of a core and this process (the scheduler and the
 nannies) 3.2 %; these settings, 0.3 % and 0.7 % (docs/sizing.md)."""
 
-
 def local_cluster(workers: int):
     """The ``LocalCluster`` of ``scheduler="local"``: ``workers`` processes with one thread
     each, one per core (nothing shared between cores), with ``LOCAL_CLUSTER_CONFIG``."""
-    import logging
 
     import dask
     from distributed import LocalCluster
@@ -1059,7 +1049,6 @@ def _resolve_scheduler(scheduler, steps: int):
 
 
 def _store(partial: Path, task_id: int, frame) -> None:
-    from gsfric.io import atomic_write
 
     with atomic_write(partial / "chunks" / f"{task_id:07d}.parquet", "wb") as handle:
         frame.to_parquet(handle, index=False)
@@ -1127,7 +1116,6 @@ def sweep(out: str | os.PathLike, trajectories=None,
     -------
     SweepResult
     """
-    import pandas as pd
 
     out = Path(out)
     p = plan(trajectories, workspace, platform, vary, tolerances, variants, seed, chunk_steps)
@@ -1159,12 +1147,10 @@ def sweep(out: str | os.PathLike, trajectories=None,
     chosen = _resolve_scheduler(scheduler, steps_todo) if todo else "serial"
     if progress is None:
         progress = sys.stderr.isatty()
-    from tqdm import tqdm
 
     bar = tqdm(total=p.steps, initial=p.steps - steps_todo, unit="step", unit_scale=True,
                desc="sweep", disable=not progress, file=sys.stderr)
     started = time.perf_counter()
-    from gsfric import native
 
     native.is_compiled()       # compile (or load) once here, before workers need the cache
 
@@ -1241,7 +1227,6 @@ def sweep(out: str | os.PathLike, trajectories=None,
 
 def load(out: str | os.PathLike) -> SweepResult:
     """Read a finished sweep's output folder back."""
-    import pandas as pd
 
     out = Path(out)
     info = json.loads((out / "sweep.json").read_text())
@@ -1257,7 +1242,7 @@ def load(out: str | os.PathLike) -> SweepResult:
 
 def plot(envelopes, summary, folder: Path, limits: Mapping, workspace: dict | None) -> None:
     """``envelope.png`` (each quantity per leg, all cases, limits) and ``locations.png``."""
-    from matplotlib.figure import Figure        # no pyplot: leaves the caller's backend alone
+    from matplotlib.figure import Figure  # no pyplot: leaves the caller's backend alone
     from matplotlib.patches import Rectangle
 
     shown = ["R_E", "R_C", "M_C", "R_3", "M_3", "F_max", "Ffr", "P_C", "W_C"]
@@ -1307,13 +1292,3 @@ def plot(envelopes, summary, folder: Path, limits: Mapping, workspace: dict | No
     axes[0].legend(fontsize=7)
     fig.suptitle("Where each joint's largest load occurs (numbers: legs)")
     fig.savefig(folder / "locations.png", dpi=90)
-
-
-class _CallableModule(type(sys)):
-    """Lets ``gsfric.sweep(...)`` call ``gsfric.sweep.sweep(...)``: the module is callable."""
-
-    def __call__(self, *args, **kwargs):
-        return sweep(*args, **kwargs)
-
-
-sys.modules[__name__].__class__ = _CallableModule

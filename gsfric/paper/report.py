@@ -15,12 +15,24 @@ import numpy as np
 import pandas as pd
 
 from gsfric import models
-from gsfric.io import atomic_write
-from gsfric.paper import (LARGE_FACTOR, PAPER_FRICTION, SMALL_FRACTION, TABLES, PaperRun,
-                          evaluate_paper, format_significant, geometry_sensitivity,
-                          implied_joint_reaction)
-from gsfric.platform import Platform
-
+from gsfric.evaluation.paper_constants import (
+    PAPER_ACCELERATION,
+    PAPER_ANGULAR_ACCELERATION,
+)
+from gsfric.io.files import atomic_write, output_folder
+from gsfric.paper import friction as paper_friction
+from gsfric.paper.tables import (
+    LARGE_FACTOR,
+    PAPER_FRICTION,
+    SMALL_FRACTION,
+    TABLES,
+    PaperRun,
+    evaluate_paper,
+    format_significant,
+    geometry_sensitivity,
+    implied_joint_reaction,
+)
+from gsfric.platform.description import Platform
 
 # -- plots ----------------------------------------------------------------------------------------
 
@@ -145,7 +157,7 @@ def report_text(run: PaperRun, sensitivity: pd.DataFrame | None = None,
         ", written to `platform.toml`. The paper's dimensions (its figures 6-7) are missing, so "
         "the geometry is the project's reference geometry (docs/reference.md).",
         f"- Motion: {n} steps from rest at the home pose with constant accelerations "
-        f"a = {models.PAPER_ACCELERATION} m/s^2, alpha = {models.PAPER_ANGULAR_ACCELERATION} "
+        f"a = {PAPER_ACCELERATION} m/s^2, alpha = {PAPER_ANGULAR_ACCELERATION} "
         f"rad/s^2, t_j = {models.PAPER_DT} j s.",
         f"- Mode: {mode_text}.",
         f"- Flagged steps: {len(res.flagged())} of {n}.",
@@ -399,8 +411,6 @@ def run_paper(out_dir: str | os.PathLike[str], mode: str = "paper",
     list of Path
         The files written: table1-3.csv, platform.toml, the plots, report.md.
     """
-    from gsfric import paper_friction
-    from gsfric.io import output_folder
 
     out = Path(out_dir)
     platform = models.paper_platform() if platform_file is None \

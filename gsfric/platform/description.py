@@ -24,7 +24,6 @@ from __future__ import annotations
 
 import dataclasses
 import os
-import tomllib
 import warnings
 from collections.abc import Mapping
 from dataclasses import dataclass, field
@@ -32,9 +31,13 @@ from pathlib import Path
 from typing import Any
 
 import numpy as np
+import tomli_w
+import tomllib
 
 from gsfric._checks import as_array, as_float, fields_equal, short, suggest
-from gsfric.errors import GsfricError, GsfricWarning, InputError
+from gsfric.errors import GsfricWarning, InputError
+from gsfric.io.files import atomic_write
+from gsfric.platform.catalog import EFFECTS
 
 LEG_MODELS = ("rigid", "paper")
 """Leg models: ``rigid`` (centres of mass at fixed distances from C_i and E_i) and ``paper``
@@ -67,7 +70,6 @@ _TRIANGLE_TOL = 1e-9
 MAX_JOINT_DISTANCE = 20.0
 """A joint farther than this from its frame's origin, m, draws a ``GsfricWarning``: lengths
 given in millimetres rather than metres (the largest hexapods measure a few metres)."""
-
 
 def _diag(value: float) -> tuple[tuple[float, ...], ...]:
     return ((value, 0.0, 0.0), (0.0, value, 0.0), (0.0, 0.0, value))
@@ -375,22 +377,13 @@ def _check_plausible(p: Platform) -> None:
                           "outside the body (or lengths in mm)?", GsfricWarning, stacklevel=4)
 
 
-def _effects_catalog() -> Mapping[str, Mapping[str, float]]:
-    """``gsfric.catalog.EFFECTS``: effect name -> {parameter name: default}."""
-    try:
-        from gsfric.catalog import EFFECTS
-    except ImportError as error:
-        raise GsfricError(f"the effect catalog gsfric.catalog is not available ({error})") from None
-    return EFFECTS
-
-
 def _effects(value: object) -> dict[str, dict[str, float]]:
     """Validated effects, every parameter filled in (catalog default when not given)."""
     if not isinstance(value, Mapping):
         raise InputError(f"effects: expected a table, got {short(value)}")
     if not value:
         return {}
-    catalog = _effects_catalog()
+    catalog = EFFECTS
     result: dict[str, dict[str, float]] = {}
     for name, params in value.items():
         if name not in catalog:
@@ -571,9 +564,6 @@ class Platform:
 
     def to_toml(self, path: str | os.PathLike[str]) -> None:
         """Write the platform as TOML, atomically; ``from_toml`` reads back an equal platform."""
-        import tomli_w
-
-        from gsfric.io import atomic_write
 
         text = tomli_w.dumps(self.to_dict())
         with atomic_write(path, "w") as handle:
@@ -621,6 +611,15 @@ class Platform:
                 raise InputError(f"effects.{name}: not switched on{suggest(name, self.effects)}")
         keep = {k: v for k, v in self.effects.items() if names and k not in names}
         return self.replace(effects=keep)
+
+    def leg_lengths(self, position: np.ndarray, rotation: np.ndarray) -> np.ndarray:
+        """Leg lengths ``|p + R e_i - c_i|`` (N, 6), m, of platform positions (N, 3), m, and
+        orientations (N, 3, 3) in the base frame (e_i, c_i the platform's and the base's
+        joints)."""
+        g = self.geometry
+        E = np.einsum("nij,kj->nki", rotation, np.asarray(g.platform_joints, float))
+        return np.linalg.norm(position[:, None, :] + E - np.asarray(g.base_joints, float)[None],
+                              axis=2)
 
 
 _SECTIONS: dict[str, type] = {

@@ -42,22 +42,67 @@ import os
 import sys
 import warnings
 from collections.abc import Iterator
+from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
 import numpy as np
+import pandas as pd
+from scipy.ndimage import correlate1d
+from tqdm import tqdm
 
-from gsfric import io as gio
-from gsfric.columns import DEFAULT_GROUPS as DEFAULT_COLUMN_GROUPS   # written by default
-from gsfric.columns import GROUPS as COLUMN_GROUPS   # output groups of --columns
-from gsfric.columns import plan as _column_plan      # the columns from gsfric.columns
 from gsfric.errors import GsfricWarning, InputError, StepFlagError
-from gsfric.evaluation import FLAG_NAMES, Evaluator
-from gsfric.trajectory import (DEFAULT_POLYORDER, GIMBAL_JUMP, GIMBAL_SIN_BETA, MIN_SAMPLES,
-                               UNIFORM_RTOL, Motion, _check_window, _conjugate, _continuous,
-                               _gcv_window, _savgol, is_uniform, quaternion_from_euler,
-                               quaternion_multiply, savgol_weights)
+from gsfric.evaluation.columns import (
+    DEFAULT_GROUPS as DEFAULT_COLUMN_GROUPS,  # written by default
+)
+from gsfric.evaluation.columns import (
+    GROUPS as COLUMN_GROUPS,  # output groups of --columns
+)
+from gsfric.evaluation.columns import arrow_table
+from gsfric.evaluation.columns import (
+    plan as _column_plan,  # the columns from gsfric.columns
+)
+from gsfric.evaluation.evaluator import (
+    FLAG_NAMES,
+    FLAG_NONFINITE,
+    Evaluator,
+    evaluate_outputs,
+)
+from gsfric.io.files import atomic_write
+from gsfric.io.logs import EULER, FORCES, QUATERNION, ColumnReader
+from gsfric.io.readers import motion_from_columns
+from gsfric.io.tables import (
+    check_file,
+    check_unique_columns,
+    count_rows,
+    csv_options,
+    field_count_problem,
+    table_kind,
+)
+from gsfric.models import reference_platform
+from gsfric.platform.catalog import sensor_parameters
+from gsfric.signal.rotations import (
+    continuous_quaternions,
+    quaternion_conjugate,
+    quaternion_from_euler,
+    quaternion_multiply,
+)
+from gsfric.signal.savgol import (
+    DEFAULT_POLYORDER,
+    gcv_window,
+    savgol_derivatives,
+    savgol_weights,
+)
+from gsfric.trajectory import (
+    GIMBAL_JUMP,
+    GIMBAL_SIN_BETA,
+    MIN_SAMPLES,
+    UNIFORM_RTOL,
+    Motion,
+    _check_window,
+    is_uniform,
+)
 
 DEFAULT_CHUNK = 100_000
 """Steps per chunk of ``simulate_file`` (about 0.5 GB of working memory)."""
@@ -65,22 +110,20 @@ DEFAULT_CHUNK = 100_000
 MAX_REPORTED = 10_000
 """Flagged step indices kept for the summary (the count is always exact)."""
 
-
 # -- reading in blocks --------------------------------------------------------------------------
 
 
 def _csv_blocks(path: Path, rows: int):
     """DataFrames of at most ``rows`` rows; errors as ``read_table`` gives them."""
-    import pandas as pd
 
     def parse_error(error: Exception) -> InputError:
-        reason = gio._field_count_problem(path) or str(error)
+        reason = field_count_problem(path) or str(error)
         return InputError(f"{path}: cannot parse as CSV: {reason}")
 
     try:
         with warnings.catch_warnings():
             warnings.simplefilter("error", pd.errors.ParserWarning)
-            reader = pd.read_csv(path, chunksize=rows, **gio.csv_options())
+            reader = pd.read_csv(path, chunksize=rows, **csv_options())
     except pd.errors.EmptyDataError:
         raise InputError(f"{path}: file is empty (no header line)") from None
     except UnicodeDecodeError as error:
@@ -105,7 +148,7 @@ def _csv_blocks(path: Path, rows: int):
             except OSError as error:
                 raise InputError(f"{path}: cannot read ({error.strerror})") from None
             names = [str(c) for c in frame.columns]
-            gio.check_unique_columns(path, names)
+            check_unique_columns(path, names)
             frame.columns = names
             yield frame
 
@@ -125,11 +168,9 @@ def _parquet_blocks(path: Path, rows: int):
     if len(set(names)) != len(names):
         raise InputError(f"{path}: a column name appears more than once")
     if source.metadata.num_rows == 0:
-        import pandas as pd
 
         yield pd.DataFrame({n: [] for n in names})
         return
-    import pandas as pd
 
     batches = source.iter_batches(batch_size=rows)
     while True:
@@ -173,8 +214,8 @@ def _blocks(path: Path, rows: int, log_format=None, carry=None) -> Iterator[_Blo
     ``carry``: a list to which each block's carried columns (F1..F6 of a measured-data file
     and ``keep:NAME`` columns) are appended as a dict, in order.
     """
-    kind = gio.check_file(path)
-    reader = gio.ColumnReader(path, log_format)
+    kind = check_file(path)
+    reader = ColumnReader(path, log_format)
     frames = _csv_blocks(path, rows) if kind == "csv" else _parquet_blocks(path, rows)
     start = 0
     last_t = None
@@ -192,7 +233,7 @@ def _blocks(path: Path, rows: int, log_format=None, carry=None) -> Iterator[_Blo
         columns = reader.read(frame, first_row=start)
         if carry is not None and (reader.forces or reader.keep):
             carry.append({k: v for k, v in columns.items()
-                          if k in gio.FORCES or k.startswith("keep:")})
+                          if k in FORCES or k.startswith("keep:")})
         t = columns["t"]
         with np.errstate(over="ignore", invalid="ignore"):
             steps = np.diff(t if last_t is None else np.concatenate([[last_t], t]))
@@ -208,7 +249,7 @@ def _blocks(path: Path, rows: int, log_format=None, carry=None) -> Iterator[_Blo
                              f"t = {float(previous)!r} in row {row - 1}; t must increase")
         position = np.stack([columns[n] for n in ("x", "y", "z")], axis=1)
         angles = np.stack([columns[n] for n in orientation], axis=1)
-        if orientation == gio.QUATERNION:
+        if orientation == QUATERNION:
             norms = np.linalg.norm(angles, axis=1)
             zero = np.flatnonzero(norms < 1e-12)
             if len(zero):
@@ -283,8 +324,8 @@ def _whole(path: Path, blocks: list[_Block], window, polyorder) -> Motion:
                          "to differentiate the motion")
     names = blocks[0].columns.keys()
     columns = {name: np.concatenate([b.columns[name] for b in blocks]) for name in names}
-    orientation = gio.QUATERNION if "qw" in columns else gio.EULER
-    return gio._motion(path, columns, orientation, window, polyorder)
+    orientation = QUATERNION if "qw" in columns else EULER
+    return motion_from_columns(path, columns, orientation, window, polyorder)
 
 
 @functools.lru_cache(maxsize=16)
@@ -299,11 +340,10 @@ def _savgol_coefficients(window: int, polyorder: int) -> np.ndarray:
 
 def _savgol_core(y: np.ndarray, window: int, polyorder: int, step: float,
                  lo: int, hi: int) -> list[np.ndarray]:
-    """The value and first two derivatives (``_savgol``) of y (N, k) at rows lo..hi-1, which
+    """The value and first two derivatives (``savgol_derivatives``) of y (N, k) at rows lo..hi-1, which
     have ``window // 2`` samples on each side: contiguous (hi - lo, k) arrays, equal to the
     last bit to ``trajectory.savgol_filter``'s there (the same ``scipy.ndimage.correlate1d``
     with the same weights, run on the rows it needs only)."""
-    from scipy.ndimage import correlate1d
 
     c = _savgol_coefficients(window, polyorder)
     h = window // 2
@@ -383,11 +423,11 @@ def _differentiate(t, position, q, windows, polyorder, step, core: slice,
         q0, q1, q2 = _savgol_core(q, wq, polyorder, step, lo, hi)
         omega, alpha = _rates(q0, q1, q2)
     else:
-        p0, p1, p2 = (a[core] for a in _savgol(position, wp, polyorder, step))
-        q0, q1, q2 = (a[core] for a in _savgol(q, wq, polyorder, step))
+        p0, p1, p2 = (a[core] for a in savgol_derivatives(position, wp, polyorder, step))
+        q0, q1, q2 = (a[core] for a in savgol_derivatives(q, wq, polyorder, step))
         squared = np.sum(q0 * q0, axis=1, keepdims=True)
-        omega = 2 * quaternion_multiply(q1, _conjugate(q0))[:, 1:] / squared
-        alpha = (2 * quaternion_multiply(q2, _conjugate(q0))[:, 1:] / squared
+        omega = 2 * quaternion_multiply(q1, quaternion_conjugate(q0))[:, 1:] / squared
+        alpha = (2 * quaternion_multiply(q2, quaternion_conjugate(q0))[:, 1:] / squared
                  - omega * 2 * np.sum(q0 * q1, axis=1, keepdims=True) / squared)
     parts = (p0, p1, p2, q0, omega, alpha)
     if not all(np.isfinite(a).all() for a in parts):
@@ -473,7 +513,7 @@ def iter_motions(path: str | os.PathLike[str], *, chunk: int = DEFAULT_CHUNK,
         watch.add(block)
     t = np.concatenate([b.t for b in first])
     position = np.concatenate([b.position for b in first])
-    q = _continuous(np.concatenate([b.quaternion for b in first]))
+    q = continuous_quaternions(np.concatenate([b.quaternion for b in first]))
     step = (t[chunk - 1] - t[0]) / (chunk - 1)
     if not np.isfinite(step) or step <= 0:
         raise InputError(f"{path}: t spans too large a range")
@@ -486,8 +526,8 @@ def iter_motions(path: str | os.PathLike[str], *, chunk: int = DEFAULT_CHUNK,
                          f"{polyorder + 1} steps")
     if window is None:
         with np.errstate(all="ignore"):
-            windows = (_gcv_window(position[:chunk], polyorder),
-                       _gcv_window(q[:chunk], polyorder))
+            windows = (gcv_window(position[:chunk], polyorder),
+                       gcv_window(q[:chunk], polyorder))
     else:
         try:
             _check_window(window, polyorder, chunk)
@@ -532,7 +572,7 @@ def iter_motions(path: str | os.PathLike[str], *, chunk: int = DEFAULT_CHUNK,
         watch.add(block)
         _check_uniform(path, np.concatenate([buf_t[-1:], block.t]), step, block.start - 1,
                        chunk)
-        q_new = _continuous(np.vstack([buf_q[-1:], block.quaternion]))[1:]
+        q_new = continuous_quaternions(np.vstack([buf_q[-1:], block.quaternion]))[1:]
         buf_t = np.concatenate([buf_t, block.t])
         buf_p = np.concatenate([buf_p, block.position])
         buf_q = np.concatenate([buf_q, q_new])
@@ -607,7 +647,6 @@ def _steps_text(indices: np.ndarray, total: int, limit: int = 10) -> str:
 FLOAT32_RTOL = 2.0 ** -24
 """Relative rounding error of an output written as float32 (``--float32``): half an ulp."""
 
-
 def parse_columns(text: str | None) -> tuple[str, ...]:
     """Output groups from ``--columns`` ("forces,friction"; None: ``DEFAULT_COLUMN_GROUPS``,
     "all": every group)."""
@@ -627,7 +666,6 @@ TRANSPOSE_BLOCK = 2048
 """Steps per block of the row-major to column-major copies of ``result_columns``: a block of a
 Result array stays in the cache while its columns are written (twice as fast as one strided
 copy of the whole array)."""
-
 
 def _transpose_into(out: np.ndarray, rows: np.ndarray) -> None:
     """``out[:] = rows.T`` for rows (N, k) and out (k, N), block by block of steps."""
@@ -734,7 +772,6 @@ compression)."""
 FLUSH_BYTES = 256 * 2**20
 """Bytes written between two requests to the disk (``_Flusher``)."""
 
-
 class _Flusher:
     """Hands the written part of a file to the disk while more is being written.
 
@@ -744,7 +781,6 @@ class _Flusher:
     left. Without it, the kernel holds back up to a tenth of the memory before writing."""
 
     def __init__(self, handle) -> None:
-        from concurrent.futures import ThreadPoolExecutor
 
         self.handle = handle
         self.fileno = handle.fileno()
@@ -797,11 +833,10 @@ class _Writer:
         else:
             import pyarrow.parquet  # noqa: F401
 
-            import gsfric.columns  # noqa: F401
+            import gsfric.evaluation.columns  # noqa: F401
 
     def write(self, columns: dict[str, np.ndarray]) -> None:
         if self.kind == "csv":
-            import pandas as pd
 
             pd.DataFrame(columns, copy=False).to_csv(self.handle, index=False,
                                                      header=self.header)
@@ -816,7 +851,6 @@ class _Writer:
 
         arrays = [pa.array(values) for values in columns.values()]
         if self.parquet is None:
-            from gsfric.columns import arrow_table   # field metadata: unit, description
 
             self.schema = arrow_table(dict(zip(columns, arrays))).schema
             floats = [f.name for f in self.schema if pa.types.is_floating(f.type)]
@@ -895,11 +929,10 @@ def simulate_file(trajectory: str | os.PathLike[str], out: str | os.PathLike[str
     StepFlagError
         ``strict`` and a flagged step.
     """
-    from tqdm import tqdm
 
     trajectory, out = Path(trajectory), Path(out)
-    kind = gio._table_kind(out)
-    gio.check_file(trajectory)
+    kind = table_kind(out)
+    check_file(trajectory)
     if out.exists() and out.is_dir():
         raise InputError(f"{out}: is a directory; give a file name")
     if not out.parent.is_dir():
@@ -908,7 +941,6 @@ def simulate_file(trajectory: str | os.PathLike[str], out: str | os.PathLike[str
         if out.exists() and os.path.samefile(out, trajectory):
             raise InputError(f"{out}: is the trajectory file itself; choose another output")
     if platform is None:
-        from gsfric.models import reference_platform
 
         platform = reference_platform()
 
@@ -923,17 +955,14 @@ def simulate_file(trajectory: str | os.PathLike[str], out: str | os.PathLike[str
     counts = dict.fromkeys(FLAG_NAMES, 0)
     evaluator = None
     show = sys.stderr.isatty() if progress is None else bool(progress)
-    bar = tqdm(total=gio.count_rows(trajectory) if show else None, unit="step",
+    bar = tqdm(total=count_rows(trajectory) if show else None, unit="step",
                unit_scale=True, desc="simulate", file=sys.stderr, disable=not show,
                dynamic_ncols=True, leave=False)
     mode_text = "wb" if kind == "parquet" else "w"
     options = {"newline": ""} if kind == "csv" else {}
-    from concurrent.futures import ThreadPoolExecutor
 
     sets: tuple[dict, dict] = ({}, {})   # the evaluation's outputs of even and odd chunks
     column_arrays: dict = {}             # the columns' arrays (filled by the writing thread)
-    from gsfric.catalog import sensor_parameters
-    from gsfric.evaluation import FLAG_NONFINITE, evaluate_outputs
 
     gains, delay = sensor_parameters(platform.effects)
     # a delay reaches across chunks: applied here, over the record, not per chunk
@@ -993,7 +1022,7 @@ def simulate_file(trajectory: str | os.PathLike[str], out: str | os.PathLike[str
     # code, NumPy's copies and the Parquet writer run without the GIL)
     _Writer.load(kind)
     try:
-        with gio.atomic_write(out, mode_text, **options) as handle, \
+        with atomic_write(out, mode_text, **options) as handle, \
                 ThreadPoolExecutor(1, thread_name_prefix="gsfric-evaluate") as evaluation, \
                 ThreadPoolExecutor(1, thread_name_prefix="gsfric-write") as output:
             writer = _Writer(handle, kind)

@@ -31,8 +31,9 @@ import numpy as np
 import pandas as pd
 
 from gsfric import models
-from gsfric.evaluation import Evaluator, Result
-from gsfric.platform import Friction, Platform
+from gsfric.evaluation.evaluator import Evaluator, Result
+from gsfric.evaluation.paper_constants import PAPER_JOINT_SPEED
+from gsfric.platform.description import Friction, Platform
 from gsfric.trajectory import Motion
 
 DATA = Path(__file__).resolve().parent / "data"
@@ -51,7 +52,6 @@ misprint: an order of magnitude off the rest of the table."""
 
 LARGE_FACTOR = 1.2
 """A printed value more than this factor above every other value of its table is a misprint."""
-
 
 @dataclass(frozen=True)
 class TableSpec:
@@ -246,7 +246,7 @@ def find_misprints(number: int, printed: pd.DataFrame | None = None) -> list[Mis
 # -- what the paper's values imply ---------------------------------------------------------------
 
 
-def implied_joint_reaction(moment, speed=models.PAPER_JOINT_SPEED,
+def implied_joint_reaction(moment, speed=PAPER_JOINT_SPEED,
                            viscous=PAPER_FRICTION.joint_viscous,
                            coulomb=PAPER_FRICTION.joint_coulomb,
                            radius=PAPER_FRICTION.joint_radius) -> np.ndarray:
@@ -449,15 +449,3 @@ def geometry_sensitivity(platform: Platform, mode: str = "paper") -> pd.DataFram
                       "|Ffr|": np.median(np.abs(result.Ffr_s)),
                       "|R_3|": np.median(np.linalg.norm(result.R_3, axis=2))}
     return pd.DataFrame.from_dict(rows, orient="index")
-
-
-_REPORT_NAMES = ("plot_table", "figure_png", "report_text", "run_paper")
-
-
-def __getattr__(name):
-    """The report writers, moved to ``gsfric.paper_report``, under their former names."""
-    if name in _REPORT_NAMES:
-        from gsfric import paper_report
-
-        return getattr(paper_report, name)
-    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")

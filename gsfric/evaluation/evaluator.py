@@ -21,7 +21,7 @@ Step flags (bits of ``Result.flag``; 0 = sound step):
   forces changed by more than ``COUPLING_TOLERANCE * (1 N + |F0|)`` over the last of its
   iterations (joint friction so large that it nearly locks the mechanism; docs/friction.md).
 
-Every flag is computed in C in the same pass as the outputs (``_native/batch.c``).
+Every flag is computed in C in the same pass as the outputs (``compiled/batch.c``).
 
 Detail outputs (``DETAILS``: R_3 and M_3 in the leg frames, the parts of the prismatic
 friction, the bushings' normal forces, the coupled solve's last change) are not kept by the
@@ -55,11 +55,19 @@ from collections.abc import MutableMapping
 from dataclasses import dataclass, field
 
 import numpy as np
+import pandas as pd
+from tqdm import tqdm
 
-from gsfric import native
+from gsfric._checks import short
+from gsfric.compiled import native
+from gsfric.compiled.manifest import function, layout, manifest
 from gsfric.errors import GsfricError, InputError, StepFlagError
-from gsfric.manifest import function, layout
-from gsfric.platform import Platform
+from gsfric.evaluation.breakdown import parts as breakdown_parts
+from gsfric.evaluation.columns import annotate, plan
+from gsfric.evaluation.paper_constants import paper_constants as pc
+from gsfric.io.readers import motion_from_frame
+from gsfric.platform.catalog import GENERATED_EFFECTS, apply_sensor, sensor_parameters
+from gsfric.platform.description import Platform
 from gsfric.trajectory import Motion
 
 FLAG_NONFINITE = 1
@@ -88,12 +96,11 @@ DETAILS = ("R_3_leg", "M_3_leg", "coupling_change", "Ffr_viscous", "Ffr_coulomb"
 """Outputs computed on first access (see the module's docstring): copies of other outputs in
 another frame, and the parts of sums that are kept (``Ffr``)."""
 
-
 def state_array(motion: Motion) -> np.ndarray:
     """The generated functions' state input, (N, 24): p, T (row-major), v, omega, a, alpha.
 
     Laid out by ``native.state_of``, the one Python layout of the states (the compiled code
-    lays them out itself, block by block, in ``_native/batch.c``).
+    lays them out itself, block by block, in ``compiled/batch.c``).
     """
     return native.state_of((motion.position, motion.rotation, motion.velocity, motion.omega,
                             motion.acceleration, motion.alpha))
@@ -102,7 +109,6 @@ def state_array(motion: Motion) -> np.ndarray:
 MODEL_FUNCTIONS = {"coupled": "coupled", "paper": "posthoc"}
 """Suffix of the generated functions derived with the platform's friction model fixed
 (derive/build.py, ``FIXED_MODELS``): the paper's model then has no fixed-point iterations."""
-
 
 @functools.lru_cache(maxsize=None)
 def model_function(name: str, model: str | None) -> str:
@@ -178,7 +184,6 @@ def effect_vector(platform: Platform) -> np.ndarray:
     Sensor effects (``gsfric.catalog.SENSOR_EFFECTS``) are not inputs of the compiled code:
     ``Evaluator.evaluate`` applies them to F.
     """
-    from gsfric.catalog import GENERATED_EFFECTS
 
     values = []
     for name, params in GENERATED_EFFECTS.items():
@@ -281,13 +286,11 @@ class Result:
 
     def breakdown(self) -> dict[str, np.ndarray]:
         """F per leg split into inertia, gravity, payload, joint friction carried, prismatic
-        friction by kind and effects, (N, 6) N each (``gsfric.breakdown``; kinematic mode)."""
-        from gsfric.breakdown import breakdown
-
+        friction by kind and effects, (N, 6) N each (``gsfric.evaluation.breakdown``; kinematic mode)."""
         if self.source is None or self.mode != "kinematic":
             raise GsfricError("breakdown: needs a kinematic-mode result of Evaluator.evaluate")
         platform, motion = self.source
-        return breakdown(platform, motion, self)
+        return breakdown_parts(self, _evaluate_quietly, platform, motion)
 
     def __getattr__(self, name):
         arrays = self.__dict__.get("arrays", {})
@@ -325,9 +328,6 @@ class Result:
         pandas.DataFrame
             6 N rows, MultiIndex levels ``step`` (0..N-1) and ``leg`` (1..6).
         """
-        import pandas as pd
-
-        from gsfric.manifest import function
 
         n = len(self.t)
         index = pd.MultiIndex.from_product([np.arange(n), np.arange(1, 7)],
@@ -371,9 +371,6 @@ class Result:
         ``attrs["units"]`` maps every column to its unit and ``attrs["descriptions"]`` to its
         meaning and sign convention (``gsfric.columns``; ``gsfric columns`` lists them).
         """
-        import pandas as pd
-
-        from gsfric.columns import annotate, plan
 
         n = len(self.t)
         cols = {"t": self.t}
@@ -397,7 +394,7 @@ class Evaluator:
     n_threads : int
         Threads for long evaluations (POSIX threads created per call, at least 2048 steps each).
     paper_constants : ndarray (13,), optional
-        Paper mode's constants (default ``gsfric.models.paper_constants()``).
+        Paper mode's constants (default ``gsfric.evaluation.paper_constants.paper_constants()``).
     """
 
     def __init__(self, platform: Platform, mode: str = "kinematic", n_threads: int = 1,
@@ -410,7 +407,6 @@ class Evaluator:
         self.P, self.Q, self._calls = _packed(platform)
         self.K = None
         if mode == "paper":
-            from gsfric.models import paper_constants as pc
 
             self.K = np.array(pc() if paper_constants is None else paper_constants, float)
             self.K.flags.writeable = False
@@ -532,7 +528,6 @@ class Evaluator:
         flag = np.empty(n, dtype=np.int64)
         starts = range(0, n, chunk)
         if progress and n > chunk:
-            from tqdm import tqdm
 
             starts = tqdm(starts, total=(n + chunk - 1) // chunk, unit="chunk",
                           desc="evaluating")
@@ -602,7 +597,6 @@ class Evaluator:
         """Sensor effects (force_scale, time_offset: gsfric.catalog) on F, what a load cell
         reads; the reactions stay those of the mechanism. A delay interpolates between the
         steps with finite values only, so a non-finite step stays NaN and spreads nowhere."""
-        from gsfric.catalog import apply_sensor, sensor_parameters
 
         gains, delay = sensor_parameters(self.platform.effects)
         if delay == 0.0 and not np.any(gains != 0.0):
@@ -617,7 +611,7 @@ class Evaluator:
         arrays["F"] = out
 
     def _flags(self, x, arrays) -> np.ndarray:
-        """The flags of ``_native/batch.c`` in NumPy, for the CasADi fallback (no compiler)."""
+        """The flags of ``compiled/batch.c`` in NumPy, for the CasADi fallback (no compiler)."""
         n = x.shape[0]
         flag = np.zeros(n, dtype=np.int64)
         finite = np.isfinite(x).all(axis=1)
@@ -645,7 +639,6 @@ POOL_MIN_BYTES = 1 << 20
 """Result arrays from this size up are taken from ``_POOL`` (smaller ones from NumPy)."""
 POOL_KEEP_BYTES = 512 << 20
 """At most this much memory of dropped results is kept for the next evaluations."""
-
 
 class _BlockPool:
     """Memory for large result arrays: anonymous mappings, rounded up to whole huge pages
@@ -751,7 +744,6 @@ def _index_list(idx: np.ndarray, limit: int = 10) -> str:
 
 def jacobian_parameters() -> list[str]:
     """Names of the Jacobian's parameters: friction coefficients, masses, then every effect's."""
-    from gsfric.manifest import manifest
 
     return list(manifest()["jacobian_parameters"])
 
@@ -798,20 +790,64 @@ def evaluate(platform: Platform, motion, mode: str = "kinematic", **kwargs) -> R
     >>> result.F.shape, result.R_E.shape
     ((101, 6), (101, 6, 3))
     """
-    try:
-        import pandas as pd
-    except ModuleNotFoundError:  # pragma: no cover - a dependency
-        pd = None
-    if pd is not None and isinstance(motion, pd.DataFrame):
-        from gsfric.io import motion_from_frame
+    if isinstance(motion, pd.DataFrame):
 
         reading = {k: kwargs.pop(k) for k in ("window", "polyorder", "log_format")
                    if k in kwargs}
         motion = motion_from_frame(motion, **reading)
-    from gsfric._checks import evaluation_arguments
 
     evaluation_arguments(platform, motion, kwargs.get("chunk", 1))
     return Evaluator(platform, mode=mode).evaluate(motion, **kwargs)
+
+
+def _kind(value: object) -> str:
+    if isinstance(value, np.ndarray):
+        return f"a NumPy array of shape {value.shape}"
+    return "None" if value is None else f"a {type(value).__module__}.{type(value).__name__}"
+
+
+def evaluation_arguments(platform: object, motion: object, chunk: object = 1) -> None:
+    """The checks of ``gsfric.evaluate(platform, motion, chunk=...)``, each one line.
+
+    Raises
+    ------
+    TypeError
+        ``platform`` not a ``Platform`` or ``motion`` not a ``Motion`` (naming what was given,
+        and saying so when the two are swapped).
+    InputError
+        ``chunk`` not an integer >= 1.
+    """
+
+    if isinstance(platform, Motion) and isinstance(motion, Platform):
+        raise TypeError("evaluate(platform, motion): the arguments are swapped; give the "
+                        "Platform first, then the Motion")
+    if not isinstance(platform, Platform):
+        raise TypeError(f"evaluate: platform must be a gsfric.Platform, got {_kind(platform)} "
+                        "(gsfric.reference_platform() or Platform.from_toml(path))")
+    if not isinstance(motion, Motion):
+        hint = ("; for states (N, 24) use Evaluator.actuator_forces, for samples "
+                "Motion.from_samples") if isinstance(motion, np.ndarray) else \
+            " (Motion.from_samples, Motion.from_arrays or gsfric.io.read_trajectory)"
+        raise TypeError(f"evaluate: motion must be a gsfric.Motion or a pandas DataFrame of "
+                        f"trajectory columns, got {_kind(motion)}{hint}")
+    if isinstance(chunk, (bool, np.bool_)) or not isinstance(chunk, (int, np.integer)) \
+            or chunk < 1:
+        raise InputError(f"chunk: must be an integer >= 1 (steps per call), got {short(chunk)}")
+
+
+def _evaluate_quietly(platform: Platform, motion: Motion) -> Result:
+    """The evaluation of a breakdown's platform variant: its flags are the full evaluation's
+    to report."""
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        return Evaluator(platform).evaluate(motion)
+
+
+def breakdown(platform: Platform, motion: Motion) -> dict[str, np.ndarray]:
+    """The actuator forces of ``platform`` along ``motion`` split into their parts
+    (``Result.breakdown``), without reporting the step flags: ``PARTS`` name -> (N, 6) N, and
+    ``F`` (N, 6) N, their sum (``gsfric.evaluation.breakdown``)."""
+    return _evaluate_quietly(platform, motion).breakdown()
 
 
 def evaluate_outputs(evaluator: Evaluator, motion: Motion, names, buffers: dict | None = None,

@@ -17,8 +17,9 @@ from __future__ import annotations
 import numpy as np
 import pandas as pd
 
-from gsfric import native
-from gsfric.evaluation import effect_vector, parameter_vector
+from gsfric.compiled import native
+from gsfric.evaluation.breakdown import plot
+from gsfric.evaluation.evaluator import breakdown, effect_vector, parameter_vector
 
 WAYS = ("(35) with R_3", "(35) with R_E", "bushings")
 
@@ -74,7 +75,6 @@ def breakdown_figure(platform, motion):
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
-    from gsfric.breakdown import breakdown, plot
 
     parts = breakdown(platform, motion)
     fig, axes = plt.subplots(1, 2, figsize=(11, 4), sharex=True)

@@ -24,14 +24,14 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from gsfric.evaluation import JOINT_EPS, PRISMATIC_EPS, PRISMATIC_POINT
-from gsfric.platform import Platform
+from gsfric.evaluation.evaluator import JOINT_EPS, PRISMATIC_EPS, PRISMATIC_POINT
+from gsfric.platform.catalog import EFFECTS
+from gsfric.platform.description import Platform
 
 N_LEGS = 6
 N_UNKNOWNS = 42
 """Unknowns of (2)-(16): R_E (18: leg i's force on the platform at E_i, base frame), R_C (18:
 the base's force on leg i at C_i), M_C (6: the universal joints' moments along n_i)."""
-
 
 @dataclass(frozen=True)
 class Parameters:
@@ -80,7 +80,6 @@ class Parameters:
 
 def parameters(platform: Platform) -> Parameters:
     """The numbers of ``platform`` that both implementations use."""
-    from gsfric.catalog import EFFECTS
 
     q = {f"{name}.{p}": float(platform.effects.get(name, {}).get(p, default))
          for name, params in EFFECTS.items() for p, default in params.items()}

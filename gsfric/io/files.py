@@ -1,0 +1,294 @@
+"""Output files written atomically: a reader never sees a partly written file, and an interrupted
+run leaves nothing behind (temporary names beside the output, renamed when complete)."""
+
+from __future__ import annotations
+
+import contextlib
+import contextvars
+import errno
+import glob
+import os
+import shutil
+import tempfile
+from collections.abc import Iterable, Iterator
+from pathlib import Path
+from typing import IO, TYPE_CHECKING, Any
+
+from gsfric.errors import GsfricError, InputError, OutputError
+
+if TYPE_CHECKING:
+    pass
+
+_COMMIT_CHECK: contextvars.ContextVar = contextvars.ContextVar("gsfric_commit_check",
+                                                               default=None)
+
+
+_TEMP_TAG = ".gsfric-"
+"""Temporary outputs are named ``.{name}.gsfric-{pid}-{random}.tmp`` beside the output, so that a
+later run can recognise (and remove) those of its own that a killed process (SIGKILL, a power
+cut) left behind."""
+
+_WRITE_ERRNOS = {errno.ENOSPC, errno.EDQUOT, errno.EFBIG, errno.EIO}
+
+
+def _current_umask() -> int:
+    mask = os.umask(0)
+    os.umask(mask)
+    return mask
+
+
+def _pid_alive(pid: int) -> bool:
+    try:
+        os.kill(pid, 0)
+    except ProcessLookupError:
+        return False
+    except (PermissionError, OverflowError, ValueError):
+        return True
+    return True
+
+
+def remove_stale_temporaries(path: str | os.PathLike[str]) -> list[Path]:
+    """Remove the temporary files or folders of ``path`` that dead gsfric processes left.
+
+    Only names ``.{name}.gsfric-{pid}-*.tmp`` in ``path``'s directory whose process no longer
+    runs are removed (a run still writing is never disturbed). Returns what was removed.
+    """
+
+    path = Path(path)
+    removed = []
+    pattern = f".{glob.escape(path.name)}{_TEMP_TAG}*.tmp"
+    for stale in path.parent.glob(pattern):
+        pid_text = stale.name[len(path.name) + 1 + len(_TEMP_TAG):].split("-", 1)[0]
+        if not pid_text.isdigit() or _pid_alive(int(pid_text)):
+            continue
+        with contextlib.suppress(OSError):
+            if stale.is_dir() and not stale.is_symlink():
+                shutil.rmtree(stale)
+            else:
+                stale.unlink()
+            removed.append(stale)
+    return removed
+
+
+def _temp_prefix(path: Path) -> str:
+    return f".{path.name}{_TEMP_TAG}{os.getpid()}-"
+
+
+def resolve_output(path: str | os.PathLike[str]) -> Path:
+    """The file an output path stands for: a symbolic link's target (the link is kept).
+
+    Raises
+    ------
+    InputError
+        A symbolic link loop.
+    """
+    path = Path(path)
+    try:
+        os.stat(path)
+    except FileNotFoundError:
+        pass
+    except OSError as error:
+        if error.errno == errno.ELOOP:
+            raise InputError(f"{path}: symbolic link loop (too many levels of symbolic "
+                             "links)") from None
+    if path.is_symlink():
+        return Path(os.path.realpath(path))
+    return path
+
+
+def _write_failure(path: Path, error: OSError, what: str = "file") -> OutputError:
+    reason = error.strerror or str(error) or type(error).__name__
+    return OutputError(f"{path}: cannot write ({reason}); nothing was written, an earlier "
+                       f"{what} of that name is unchanged")
+
+
+@contextlib.contextmanager
+def commit_check(check) -> Iterator[None]:
+    """Within the block, ``atomic_write`` and ``output_folder`` call ``check()`` (in the calling
+    context) just before they move their outputs into place; an exception it raises leaves the
+    earlier outputs as they were. The command line checks for a stop signal there: one whose
+    exception the interpreter swallowed (raised inside a callback, reported as "Exception
+    ignored") must still keep a half-done run from replacing them."""
+    token = _COMMIT_CHECK.set(check)
+    try:
+        yield
+    finally:
+        _COMMIT_CHECK.reset(token)
+
+
+def _before_commit() -> None:
+    check = _COMMIT_CHECK.get()
+    if check is not None:
+        check()
+
+
+@contextlib.contextmanager
+def atomic_write(path: str | os.PathLike[str], mode: str = "w", *,
+                 encoding: str = "utf-8", newline: str | None = None) -> Iterator[IO[Any]]:
+    """Open a temporary file next to ``path`` and move it onto ``path`` when the block ends.
+
+    The temporary file lives in the same directory (so ``os.replace`` is atomic), is named
+    ``.{name}.gsfric-{pid}-{random}.tmp`` (those of dead processes are removed on the next
+    write of the same output, see ``remove_stale_temporaries``), is flushed and fsync'ed before
+    the move, and is removed if the block raises or a signal interrupts it; ``path`` is then
+    left as it was. A symbolic link ``path`` is followed: its target is written, the link kept.
+    A new file gets the usual permissions (0666 less the umask), a replaced file keeps its own.
+
+    Parameters
+    ----------
+    path : path-like
+        The file to write.
+    mode : {"w", "wt", "wb"}
+        Text or binary.
+    encoding, newline :
+        As for ``open``, text mode only.
+
+    Yields
+    ------
+    file object
+
+    Raises
+    ------
+    InputError
+        The directory is missing or not writable, ``path`` is a directory or a link loop.
+    OutputError
+        Writing failed part way (a full disk, an I/O error); nothing was left.
+    """
+    if mode not in ("w", "wt", "wb"):
+        raise ValueError(f"atomic_write: mode must be 'w', 'wt' or 'wb', got {mode!r}")
+    given = Path(path)
+    path = resolve_output(given)
+    directory = path.parent
+    if path.is_dir():
+        raise InputError(f"{given}: is a directory; give a file name")
+    with contextlib.suppress(OSError):
+        remove_stale_temporaries(path)
+    try:
+        fd, tmp_name = tempfile.mkstemp(prefix=_temp_prefix(path), suffix=".tmp", dir=directory)
+    except FileNotFoundError as error:
+        if directory.is_dir():
+            raise InputError(f"{given}: cannot write ({error.strerror})") from None
+        raise InputError(f"{given}: directory {str(directory)!r} does not exist") from None
+    except NotADirectoryError:
+        raise InputError(f"{given}: {str(directory)!r} is not a directory") from None
+    except OSError as error:
+        raise InputError(f"{given}: cannot write ({error.strerror})") from None
+    try:
+        text_options = {} if "b" in mode else {"encoding": encoding, "newline": newline}
+        try:
+            with os.fdopen(fd, mode, **text_options) as handle:
+                yield handle
+                handle.flush()
+                os.fsync(handle.fileno())
+            _before_commit()
+            try:
+                permissions = path.stat().st_mode & 0o7777
+            except FileNotFoundError:
+                permissions = 0o666 & ~_current_umask()
+            os.chmod(tmp_name, permissions)
+            os.replace(tmp_name, path)
+        except OSError as error:
+            if isinstance(error, (GsfricError, BrokenPipeError)):
+                raise
+            raise _write_failure(given, error) from None
+    except BaseException:
+        with contextlib.suppress(FileNotFoundError):
+            os.unlink(tmp_name)
+        raise
+    _sync_directory(directory)
+
+
+def _sync_directory(directory: Path) -> None:
+    with contextlib.suppress(OSError):
+        dir_fd = os.open(directory, os.O_RDONLY)
+        try:
+            os.fsync(dir_fd)
+        finally:
+            os.close(dir_fd)
+
+
+@contextlib.contextmanager
+def output_folder(path: str | os.PathLike[str], *,
+                  inputs: Iterable[str | os.PathLike[str] | None] = ()) -> Iterator[Path]:
+    """Write a set of outputs into a temporary folder and move them into ``path`` as a whole.
+
+    Yields a new empty folder beside ``path`` (``.{name}.gsfric-{pid}-{random}.tmp``). When the
+    block ends without an error, the folder itself is renamed to ``path`` if ``path`` does not
+    exist or is empty; otherwise each file is renamed into ``path`` (other files there are
+    left alone). Only renames happen then, which need no disk space: either every output of
+    the run is in place or, if the block raises or a signal interrupts it, none is and the
+    temporary folder is removed (earlier outputs stay as they were). Files of ``inputs`` are
+    never replaced: an output of the same name raises ``InputError`` before anything moves.
+
+    Parameters
+    ----------
+    path : path-like
+        The output directory (created with its parents if missing).
+    inputs : iterable of path-like
+        Files the run reads (``None`` entries are ignored).
+
+    Yields
+    ------
+    Path
+        The temporary folder to write into (plain files only).
+
+    Raises
+    ------
+    InputError
+        ``path`` exists and is not a directory, cannot be created or written, or an output
+        would replace one of ``inputs``.
+    OutputError
+        A write failed (a full disk); nothing was left.
+    """
+
+    given = Path(path)
+    path = resolve_output(given)
+    if path.exists() and not path.is_dir():
+        raise InputError(f"{given}: exists and is not a directory")
+    try:
+        path.parent.mkdir(parents=True, exist_ok=True)
+    except FileExistsError:
+        raise InputError(f"{given}: {str(path.parent)!r} is not a directory") from None
+    except OSError as error:
+        raise InputError(f"{given}: cannot create the directory ({error.strerror})") from None
+    with contextlib.suppress(OSError):
+        remove_stale_temporaries(path)
+    try:
+        tmp = Path(tempfile.mkdtemp(prefix=_temp_prefix(path), suffix=".tmp", dir=path.parent))
+    except OSError as error:
+        raise InputError(f"{given}: cannot write in {str(path.parent)!r} "
+                         f"({error.strerror})") from None
+    try:
+        try:
+            yield tmp
+            _before_commit()
+            names = sorted(p.name for p in tmp.iterdir())
+            protected = [Path(p) for p in inputs if p is not None]
+            for name in names:
+                target = path / name
+                for source in protected:
+                    with contextlib.suppress(OSError):
+                        if target.exists() and os.path.samefile(target, source):
+                            raise InputError(f"{given}: writing {name} would replace the input "
+                                             f"file {source}; choose another output directory")
+            if not path.exists() or (path.is_dir() and not any(path.iterdir())):
+                os.chmod(tmp, 0o777 & ~_current_umask())
+                if path.exists():
+                    path.rmdir()
+                os.replace(tmp, path)
+            else:
+                if not os.access(path, os.W_OK | os.X_OK):
+                    raise InputError(f"{given}: directory is not writable")
+                for name in names:
+                    os.replace(tmp / name, path / name)
+                tmp.rmdir()
+            _sync_directory(path.parent)
+        except OSError as error:
+            if isinstance(error, (GsfricError, BrokenPipeError)):
+                raise
+            raise _write_failure(given, error, "output") from None
+        except OutputError as error:   # name the final path, not the temporary folder
+            raise OutputError(str(error).replace(str(tmp), str(given))) from None
+    except BaseException:
+        shutil.rmtree(tmp, ignore_errors=True)
+        raise

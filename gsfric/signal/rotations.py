@@ -1,0 +1,171 @@
+"""Rotations: ZXZ angles, unit quaternions and rotation matrices, and the conversions between them.
+
+Conventions: the orientation ``R`` maps platform-frame vectors to the base frame. In ZXZ angles,
+``R = Rz(gamma) Rx(beta) Rz(alpha)``, whose entries are the paper's b_ij; this is
+``scipy.spatial.transform.Rotation.from_euler("zxz", [alpha, beta, gamma])`` (extrinsic).
+Quaternions are unit and scalar-first, ``(qw, qx, qy, qz)``, Hamilton product, mapping the
+platform frame to the base frame. Angular velocity ``omega`` and acceleration ``alpha`` are
+expressed in the base frame: ``dR/dt = [omega]x R``.
+"""
+
+from __future__ import annotations
+
+import warnings
+
+import numpy as np
+from scipy.spatial.transform import Rotation
+
+
+def rotation_from_euler(alpha: np.ndarray | float, beta: np.ndarray | float,
+                        gamma: np.ndarray | float) -> np.ndarray:
+    """Rotation matrices ``Rz(gamma) Rx(beta) Rz(alpha)`` from ZXZ angles.
+
+    Parameters
+    ----------
+    alpha, beta, gamma : array_like, shape (N,) (or broadcastable, or scalars)
+        rad.
+
+    Returns
+    -------
+    ndarray, shape (N, 3, 3)
+        Entries are the paper's b_ij, e.g. ``b11 = cos(a)cos(g) - cos(b)sin(a)sin(g)``,
+        ``b13 = sin(b)sin(g)``, ``b31 = sin(b)sin(a)``, ``b33 = cos(b)``.
+    """
+    a, b, g = np.broadcast_arrays(*(np.asarray(v, dtype=float) for v in (alpha, beta, gamma)))
+    ca, sa, cb, sb, cg, sg = np.cos(a), np.sin(a), np.cos(b), np.sin(b), np.cos(g), np.sin(g)
+    rows = [
+        [ca * cg - cb * sa * sg, -sa * cg - cb * ca * sg, sb * sg],
+        [ca * sg + cb * sa * cg, -sa * sg + cb * ca * cg, -sb * cg],
+        [sb * sa, sb * ca, cb],
+    ]
+    return np.stack([np.stack(row, axis=-1) for row in rows], axis=-2)
+
+
+def euler_from_rotation(rotation: np.ndarray) -> np.ndarray:
+    """ZXZ angles ``(alpha, beta, gamma)`` of rotation matrices.
+
+    Parameters
+    ----------
+    rotation : array_like, shape (N, 3, 3)
+
+    Returns
+    -------
+    ndarray, shape (N, 3)
+        alpha, gamma in (-pi, pi], beta in [0, pi], rad. Where sin(beta) vanishes (the level
+        pose) only alpha + gamma (or alpha - gamma) is defined; there gamma = 0.
+    """
+    r = np.asarray(rotation, dtype=float)
+    sin_beta = np.hypot(r[..., 0, 2], r[..., 1, 2])
+    beta = np.arctan2(sin_beta, r[..., 2, 2])
+    regular = sin_beta > 1e-12
+    alpha = np.where(regular, np.arctan2(r[..., 2, 0], r[..., 2, 1]),
+                     np.arctan2(np.sign(r[..., 2, 2]) * r[..., 1, 0], r[..., 0, 0]))
+    gamma = np.where(regular, np.arctan2(r[..., 0, 2], -r[..., 1, 2]), 0.0)
+    return np.stack([alpha, beta, gamma], axis=-1)
+
+
+def quaternion_from_euler(alpha: np.ndarray | float, beta: np.ndarray | float,
+                          gamma: np.ndarray | float) -> np.ndarray:
+    """Unit quaternions ``(qw, qx, qy, qz)`` of ``Rz(gamma) Rx(beta) Rz(alpha)``, shape (N, 4)."""
+    a, b, g = np.broadcast_arrays(*(np.asarray(v, dtype=float) / 2 for v in (alpha, beta, gamma)))
+    zero = np.zeros_like(a)
+    qa = np.stack([np.cos(a), zero, zero, np.sin(a)], axis=-1)
+    qb = np.stack([np.cos(b), np.sin(b), zero, zero], axis=-1)
+    qg = np.stack([np.cos(g), zero, zero, np.sin(g)], axis=-1)
+    return quaternion_multiply(qg, quaternion_multiply(qb, qa))
+
+
+def quaternion_from_rotation(rotation: np.ndarray) -> np.ndarray:
+    """Unit quaternions ``(qw, qx, qy, qz)`` with qw >= 0 of rotation matrices.
+
+    Parameters
+    ----------
+    rotation : array_like, shape (N, 3, 3)
+
+    Returns
+    -------
+    ndarray, shape (N, 4)
+    """
+
+    r = np.asarray(rotation, dtype=float)
+    xyzw = Rotation.from_matrix(r.reshape(-1, 3, 3)).as_quat()
+    q = np.concatenate([xyzw[:, 3:], xyzw[:, :3]], axis=1)
+    q *= np.where(q[:, :1] < 0, -1.0, 1.0)
+    return q.reshape(r.shape[:-2] + (4,))
+
+
+def rotation_from_quaternion(quaternion: np.ndarray) -> np.ndarray:
+    """Rotation matrices of quaternions ``(qw, qx, qy, qz)`` (normalized first).
+
+    Parameters
+    ----------
+    quaternion : array_like, shape (N, 4)
+
+    Returns
+    -------
+    ndarray, shape (N, 3, 3)
+    """
+    q = np.asarray(quaternion, dtype=float)
+    w, x, y, z = np.moveaxis(q / np.linalg.norm(q, axis=-1, keepdims=True), -1, 0)
+    rows = [
+        [1 - 2 * (y * y + z * z), 2 * (x * y - w * z), 2 * (x * z + w * y)],
+        [2 * (x * y + w * z), 1 - 2 * (x * x + z * z), 2 * (y * z - w * x)],
+        [2 * (x * z - w * y), 2 * (y * z + w * x), 1 - 2 * (x * x + y * y)],
+    ]
+    return np.stack([np.stack(row, axis=-1) for row in rows], axis=-2)
+
+
+def quaternion_multiply(p: np.ndarray, q: np.ndarray) -> np.ndarray:
+    """Hamilton product ``p q`` of scalar-first quaternions, shape (N, 4)."""
+    pw, pv = p[..., :1], p[..., 1:]
+    qw, qv = q[..., :1], q[..., 1:]
+    w = pw * qw - np.sum(pv * qv, axis=-1, keepdims=True)
+    v = pw * qv + qw * pv + np.cross(pv, qv)
+    return np.concatenate([w, v], axis=-1)
+
+
+def quaternion_conjugate(q: np.ndarray) -> np.ndarray:
+    return q * np.array([1.0, -1.0, -1.0, -1.0])
+
+
+def continuous_quaternions(q: np.ndarray) -> np.ndarray:
+    """Flip signs so that consecutive quaternions have a non-negative dot product."""
+    dots = np.sum(q[1:] * q[:-1], axis=1)
+    signs = np.concatenate([[1.0], np.cumprod(np.where(dots < 0, -1.0, 1.0))])
+    return q * signs[:, None]
+
+
+def rotation_from_rpy(angles: np.ndarray) -> np.ndarray:
+    """Rotation matrices (N, 3, 3) ``R = Rz(yaw) Ry(pitch) Rx(roll)`` of angles (N, 3) rad,
+    columns (roll, pitch, yaw): SciPy's ``Rotation.from_euler("ZYX", [yaw, pitch, roll])``
+    (the convention "xyz" of ``LogFormat``), written out (six times faster at a million
+    poses)."""
+    c, s = np.cos(angles), np.sin(angles)
+    (cr, cp, cy), (sr, sp, sy) = c.T, s.T
+    out = np.empty((len(angles), 3, 3))
+    out[:, 0, 0] = cy * cp
+    out[:, 0, 1] = cy * sp * sr - sy * cr
+    out[:, 0, 2] = cy * sp * cr + sy * sr
+    out[:, 1, 0] = sy * cp
+    out[:, 1, 1] = sy * sp * sr + cy * cr
+    out[:, 1, 2] = sy * sp * cr - cy * sr
+    out[:, 2, 0] = -sp
+    out[:, 2, 1] = cp * sr
+    out[:, 2, 2] = cp * cr
+    return out
+
+
+def rpy_from_rotation(rotation: np.ndarray) -> np.ndarray:
+    """(roll, pitch, yaw) (N, 3) rad of rotations (N, 3, 3), ``R = Rz(yaw) Ry(pitch) Rx(roll)``;
+    at gimbal lock (pitch = +-90 deg) roll is set to zero and yaw takes the whole angle."""
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", UserWarning)   # SciPy's gimbal-lock warning
+        return Rotation.from_matrix(rotation).as_euler("ZYX")[:, ::-1]
+
+
+def quaternion_from_rpy(angles: np.ndarray, convention: str = "xyz") -> np.ndarray:
+    """Unit quaternions (w, x, y, z), (N, 4), of roll, pitch, yaw (N, 3) rad in SciPy's
+    ``convention``: "xyz" extrinsic, ``R = Rz(yaw) Ry(pitch) Rx(roll)``; "XYZ" intrinsic,
+    ``R = Rx(roll) Ry(pitch) Rz(yaw)``."""
+    xyzw = Rotation.from_euler(convention, angles).as_quat()
+    return np.concatenate([xyzw[:, 3:], xyzw[:, :3]], axis=1)
