@@ -30,7 +30,7 @@ CHILD = """
 import json, sys, time
 import numpy as np
 from gsfric.compiled import native
-from gsfric.bench.throughput import states
+from gsfric.bench.cases import states
 from gsfric.evaluation.evaluator import Evaluator
 import gsfric
 n = int(sys.argv[1])

@@ -6,7 +6,7 @@ Usage::
 
 Builds, in a temporary folder, from the current generated/gsfric_model.c:
 
-* ``current``: the library as ``gsfric.native`` builds it (its cached copy), called the way
+* ``current``: the library as ``gsfric.compiled.build`` builds it (its cached copy), called the way
   ``CompiledFunction`` calls it (through the SIMD-over-steps function of derive/simd.py where
   the library has one, else the per-step driver);
 * ``per-step``: the same library through the per-step driver ``gsfric_batch`` (CasADi's scalar
@@ -44,10 +44,12 @@ from pathlib import Path
 import numpy as np
 
 from gsfric import models
-from gsfric.bench import throughput as bench
-from gsfric.compiled import native
+from gsfric.bench import cases as bench
+from gsfric.compiled import build as compiled_build
+from gsfric.compiled import functions
 from gsfric.compiled.manifest import BASENAME, generated_dir
-from gsfric.evaluation.evaluator import Evaluator, effect_vector, parameter_vector
+from gsfric.evaluation.evaluator import Evaluator
+from gsfric.evaluation.parameters import effect_vector, parameter_vector
 
 EXTRA_FLAGS = ("-fno-semantic-interposition", "-fno-math-errno")
 BLOCK = 64
@@ -128,20 +130,20 @@ def _compile(cmd: list[str]) -> bool:
 
 def build(folder: Path) -> dict[str, Path]:
     """Compile the variants into ``folder``; returns name -> shared library."""
-    cc = native._compiler()
+    cc = compiled_build._compiler()
     src = generated_dir() / f"{BASENAME}.c"
-    sources = [str(native.DRIVER)] + [str(p) for p in sorted(generated_dir().glob("*.c"))]
-    current = native.build_library()
+    sources = [str(compiled_build.DRIVER)] + [str(p) for p in sorted(generated_dir().glob("*.c"))]
+    current = compiled_build.build_library()
     libs = {"current": current, "per-step": current}
     flags = folder / "libflags.so"
-    extra = [f for f in EXTRA_FLAGS if f not in native.CFLAGS]
-    if _compile(cc + list(native.CFLAGS) + extra + ["-shared"] + sources
+    extra = [f for f in EXTRA_FLAGS if f not in compiled_build.CFLAGS]
+    if _compile(cc + list(compiled_build.CFLAGS) + extra + ["-shared"] + sources
                 + ["-o", str(flags), "-lm"]):
         libs["flags"] = flags
     block_c = folder / "block.c"
     block_c.write_text(block_source(src.read_text()))
     block = folder / "libblock.so"
-    common = cc + list(native.CFLAGS) + extra + ["-shared", "-mprefer-vector-width=256",
+    common = cc + list(compiled_build.CFLAGS) + extra + ["-shared", "-mprefer-vector-width=256",
                                                  str(block_c), "-o", str(block)]
     if _compile(common[:1] + ["-DVECTOR_EXP"] + common[1:] + ["-lmvec", "-lm"]) or \
             _compile(common + ["-lm"]):
@@ -171,7 +173,7 @@ class _Batch:
         else:
             self.fn = lib.gsfric_run
             self.fn.restype = ctypes.c_longlong
-            self.desc = native._Fn(
+            self.desc = functions._Fn(
                 ctypes.cast(simd, ctypes.c_void_p) if self.kind == "simd" else None,
                 ctypes.cast(getattr(lib, f"{BASENAME}_actuator"), ctypes.c_void_p),
                 ctypes.cast(getattr(lib, f"{BASENAME}_actuator_work"), ctypes.c_void_p), 3, 1)
@@ -194,7 +196,7 @@ class _Batch:
 def _best(fn, budget: float, min_calls: int = 3) -> tuple[float, float]:
     """Fastest call: wall-clock seconds and process CPU seconds."""
     cpu: list[float] = []
-    times = bench._time_calls(fn, budget, min_calls, 200_000, cpu)
+    times = bench.time_calls(fn, budget, min_calls, 200_000, cpu)
     return min(times), min(cpu)
 
 
@@ -223,7 +225,7 @@ def measure(budget: float = 2.0) -> dict:
                 if threads == 1:
                     row[f"steps_per_cpu_s_{n}_{threads}t"] = n / cpu
             x40, o40 = np.ascontiguousarray(x[:40]), np.zeros((40, 6))
-            times = bench._time_calls(lambda: call(x40, o40, 1), budget, 100, 200_000)
+            times = bench.time_calls(lambda: call(x40, o40, 1), budget, 100, 200_000)
             row["latency_40_us_best"] = min(times) * 1e6
             row["latency_40_us_median"] = float(np.median(times)) * 1e6
             row["two_vs_one_core_1e6"] = (row["steps_per_s_1000000_2t"]
@@ -250,7 +252,7 @@ def call_overhead(evaluator: Evaluator, lean: _Batch, x1: np.ndarray,
     samples: dict[str, list[float]] = {name: [] for name in paths}
     for _ in range(calls):
         for name, fn in paths.items():
-            samples[name] += bench._time_calls(fn, 0.0, 1, 1)
+            samples[name] += bench.time_calls(fn, 0.0, 1, 1)
     times = {name: float(np.median(v)) * 1e6 for name, v in samples.items()}
     times["python_overhead_us"] = times["evaluator_us"] - times["lean_ctypes_us"]
     return times

@@ -31,8 +31,9 @@ from helpers_validation import random_platform  # noqa: E402
 
 import gsfric  # noqa: E402
 from gsfric import models
-from gsfric.bench import throughput as bench  # noqa: E402
-from gsfric.evaluation.evaluator import FLAG_COUPLING, Evaluator  # noqa: E402
+from gsfric.bench import cases as bench  # noqa: E402
+from gsfric.evaluation.evaluator import Evaluator  # noqa: E402
+from gsfric.evaluation.flags import FLAG_COUPLING  # noqa: E402
 
 MU_R = (0.002, 0.003, 0.004, 0.005, 0.0075, 0.01, 0.015, 0.02, 0.03)
 PLATFORMS = 12

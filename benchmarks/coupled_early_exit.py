@@ -6,7 +6,7 @@ that solve's own last change is below an acceptance tolerance ``tol_a (1 N + |F0
 the full solve only for the others. With SIMD over steps (8 lanes on AVX-512) a group of 8
 steps needs the full solve as soon as one of its steps does.
 
-For the reference platform on the benchmark's states (``gsfric.bench.states``: a smooth random
+For the reference platform on the benchmark's states (``gsfric.bench.cases.states``: a smooth random
 motion at 1 kHz) and, with ``--random``, on the random platforms of
 ``benchmarks/coupled_convergence.py``, at each mu r, this script derives the coupled actuator
 map with k = 1 .. N_ITERATIONS iterations (CasADi, no C compiler needed) and reports, for each k
@@ -36,12 +36,15 @@ ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 sys.path.insert(0, str(ROOT / "tests"))
 
+from helpers_validation import random_platform  # noqa: E402
+
 from derive import build as dbuild  # noqa: E402
 from derive import coupled as dcoupled  # noqa: E402
 from derive import effects as fx  # noqa: E402
 from derive import model as mdl  # noqa: E402
-from gsfric import models
-from gsfric.bench import throughput as bench  # noqa: E402
+from gsfric import models  # noqa: E402
+from gsfric._optional import optional  # noqa: E402
+from gsfric.bench import cases as bench  # noqa: E402
 from gsfric.evaluation.evaluator import Evaluator, state_array  # noqa: E402
 
 TOLERANCES = (1e-8, 1e-9, 1e-10, 1e-11)
@@ -51,8 +54,7 @@ LANES = 8
 def short_solves(n_max: int) -> dict:
     """k -> CasADi function (x, P, Q) -> (F, F0, coupling_change) of the coupled model with k
     iterations (``model.build(..., n_iter=k)``)."""
-    import casadi as ca
-
+    ca = optional("casadi")
     x = ca.SX.sym("x", mdl.input_size(mdl.STATE))
     P = ca.SX.sym("P", mdl.input_size(mdl.PARAMETERS))
     Q = ca.SX.sym("Q", len(fx.parameter_names()))
@@ -123,8 +125,6 @@ def main(argv=None) -> None:
         report(f"reference platform, mu r = {mu_r:g}, bench.states", evaluate(
             functions, platform, x), functions)
         if args.random:
-            from helpers_validation import random_platform
-
             parts = []
             for seed in range(1, 12):
                 rng = np.random.default_rng(seed)

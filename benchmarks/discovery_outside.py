@@ -232,10 +232,10 @@ def main():
         # a name given with the verdict "explained" to an effect outside the catalog
         row[2] += int(kind == "ooc" and bool(r.names) and r.verdict == "explained")
         if a.detail:
-            lof = r.lack_of_fit
+            lof = r.lack_of_fit.to_json()
             print("   basis", {k: lof.get(k) for k in ("p_value", "gap", "cv_gain")},
-                  "\n   state", {k: v for k, v in lof.get("state", {}).items() if k != "per_leg_rms"},
-                  "\n   dynamic", {k: v for k, v in lof.get("dynamic", {}).items() if k != "per_leg_rms"})
+                  "\n   state", {k: v for k, v in lof["state"].items() if k != "per_leg_rms"},
+                  "\n   dynamic", {k: v for k, v in lof["dynamic"].items() if k != "per_leg_rms"})
 
     print(f"{sum(v[1] for v in tally.values())} cases, {time.time() - start:.0f} s")
     for kind, (k, n, confident) in tally.items():

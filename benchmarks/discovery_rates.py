@@ -183,8 +183,8 @@ def ambiguities(r) -> list[tuple[str, ...]]:
     replace its change."""
     out = [tuple([rnd.winner] + list(rnd.indistinguishable)) for rnd in r.rounds
            if rnd.winner and rnd.indistinguishable]
-    for name, entry in r.refit.get("parameters", {}).items():
-        for alt in entry.get("alternatives", []):
+    for name, entry in r.refit.parameters.items():
+        for alt in entry.alternatives or []:
             out.append((f"refit:{name}", alt))
     return out
 

@@ -46,6 +46,8 @@ from pathlib import Path
 
 import numpy as np
 
+from gsfric.bench import cases as bench
+
 ROOT = Path(__file__).resolve().parents[1]
 
 CHILD = """
@@ -71,8 +73,8 @@ if forces != "-":
     np.save(forces, out)
 res = {"cpu_s": best}
 if len(sys.argv) > 6:  # the paths around the hot path (a source with Evaluator.forces)
-    from gsfric.bench.throughput import _motion
-    motion = _motion(len(x))
+    from gsfric.bench.cases import bench_motion
+    motion = bench_motion(len(x))
     def fastest(f, calls):
         f()
         times = []
@@ -84,7 +86,7 @@ if len(sys.argv) > 6:  # the paths around the hot path (a source with Evaluator.
     res["evaluate_cpu_s"] = min(fastest(lambda: gsfric.evaluate(platform, motion), 5))
     buffers = {}
     res["reused_cpu_s"] = min(fastest(lambda: ev.evaluate_quiet(motion, buffers=buffers), 5))
-    m40 = _motion(40)
+    m40 = bench_motion(40)
     args = (m40.position, m40.rotation, m40.velocity, m40.omega, m40.acceleration, m40.alpha)
     loop = fastest(lambda: [Evaluator(platform).forces(*args) for _ in range(1000)], 15)
     res["control_40_cpu_s"] = sorted(loop)[len(loop) // 2] / 1000
@@ -143,8 +145,6 @@ def main(argv=None) -> None:
     old_src = _unpack(commit, workdir)
     old_cache = workdir / "cache"
     new_cache = Path(os.environ.get("GSFRIC_CACHE") or workdir / "cache-current")
-
-    from gsfric.bench import throughput as bench
 
     states = workdir / f"states-{args.steps}.npy"
     np.save(states, bench.states(args.steps))

@@ -25,6 +25,9 @@ import tempfile
 import time
 from pathlib import Path
 
+from gsfric._optional import optional
+from gsfric.bench import simulate
+
 ROWS_PER_GROUP = 250_000
 
 
@@ -32,18 +35,14 @@ def write_trajectory(path: Path, steps: int, rows_per_group: int = ROWS_PER_GROU
     """A ``models.sinusoidal`` motion of ``steps`` samples at 1 kHz as a Parquet trajectory
     file (``t, x, y, z, qw, qx, qy, qz``), in row groups of ``rows_per_group``: the file of
     ``gsfric bench``'s simulate case."""
-    from gsfric.bench.throughput import write_trajectory as write
-
-    write(path, steps, group=rows_per_group)
+    simulate.write_trajectory(path, steps, group=rows_per_group)
 
 
 def run_simulate(trajectory: Path, out: Path, chunk: int, threads: int = 1,
                  extra: tuple[str, ...] = ()) -> dict:
-    """``gsfric simulate`` in a subprocess (``gsfric.bench.run_simulate``, the runner of
+    """``gsfric simulate`` in a subprocess (``gsfric.bench.simulate.run_simulate``, the runner of
     ``gsfric bench``'s simulate case): exit code, output, wall and CPU time, peak RSS."""
-    from gsfric.bench.throughput import run_simulate as run
-
-    return run(trajectory, out, chunk=chunk, threads=threads, extra=extra)
+    return simulate.run_simulate(trajectory, out, chunk=chunk, threads=threads, extra=extra)
 
 
 def main(argv: list[str] | None = None) -> int:
@@ -80,9 +79,7 @@ def main(argv: list[str] | None = None) -> int:
         if figures["returncode"] != 0:
             print(figures["stderr"], file=sys.stderr)
             return 1
-        import pyarrow.parquet as pq
-
-        rows = pq.ParquetFile(out).metadata.num_rows
+        rows = optional("pyarrow.parquet").ParquetFile(out).metadata.num_rows
         figures.update(steps=args.steps, chunk=args.chunk, threads=args.threads,
                        rows_written=rows, trajectory_mb=trajectory.stat().st_size / 2**20,
                        output_mb=out.stat().st_size / 2**20, generate_s=written,

@@ -13,12 +13,13 @@ sweep builds them:
   per step an envelope maximises, with the step flags), block by block; no reduction;
 * ``direct``: ``envelope-only`` and the fold of each block into the running envelope, in one
   loop in this process: the sweep's arithmetic without tasks, files or Dask;
-* ``serial``: ``gsfric.sweep(scheduler="serial")``: the plan (poses, reachability), the tasks
+* ``serial``: ``gsfric.sweep.sweep(scheduler="serial")``: the plan (poses, reachability), the tasks
   in this process, the task envelopes, the chunk files and the merge;
-* ``dask-1`` and ``dask-2``: ``gsfric.sweep`` on the ``LocalCluster`` of ``scheduler="local"``
-  (``gsfric.sweep.local_cluster``) with 1 and 2 single-threaded worker processes, started
-  for the run and warmed by a one-pose task (start-up timed apart: paid once per sweep); one
-  cluster at a time; the workers' peak memory (resident set) is printed.
+* ``dask-1`` and ``dask-2``: ``gsfric.sweep.sweep`` on the ``LocalCluster`` of
+  ``scheduler="local"`` (``gsfric.sweep.run.local_cluster``) with 1 and 2 single-threaded
+  worker processes, started for the run and warmed by a one-pose task (start-up timed apart:
+  paid once per sweep); one cluster at a time; the workers' peak memory (resident set) is
+  printed.
 
 With ``--repeat N`` every path runs N times, interleaved (each path once, then again), and the
 fastest run of each is compared, with the spread (slowest over fastest) printed: on a shared
@@ -42,6 +43,7 @@ import json
 import os
 import resource
 import tempfile
+import threading
 import time
 import warnings
 from pathlib import Path
@@ -53,12 +55,26 @@ for _name in ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS"):
 
 import numpy as np  # noqa: E402
 
+from gsfric import models  # noqa: E402
+from gsfric._optional import optional  # noqa: E402
+from gsfric.compiled import native  # noqa: E402
+from gsfric.compiled.state import state_layout  # noqa: E402
+from gsfric.evaluation.evaluator import Evaluator  # noqa: E402
+from gsfric.evaluation.parameters import model_function  # noqa: E402
+from gsfric.signal.rotations import rotation_from_rpy  # noqa: E402
+from gsfric.sweep import Workspace, sweep  # noqa: E402
+from gsfric.sweep.blocks import Block, Evaluation  # noqa: E402
+from gsfric.sweep.envelope import Envelope  # noqa: E402
+from gsfric.sweep.plan import CHUNK_STEPS  # noqa: E402
+from gsfric.sweep.run import local_cluster  # noqa: E402
+from gsfric.sweep.tasks import BLOCK_STEPS, Task, run_task  # noqa: E402
+from gsfric.trajectory import Motion  # noqa: E402
+
 PATHS = ("evaluate", "eval-only", "envelope-only", "direct", "serial", "dask-1", "dask-2")
 
 
-def workspace(steps: int, states: int = 8):
-    from gsfric.sweep.sweep import Workspace
-
+def workspace(steps: int, states: int = 8) -> Workspace:
+    """The benchmark's workspace: ``steps // states`` Latin-hypercube poses."""
     return Workspace.from_dict({
         "sampling": "lhs", "samples": max(1, steps // states), "states": states, "seed": 0,
         "pose": {"x": [-0.05, 0.05], "y": [-0.05, 0.05], "z": [0.65, 0.75],
@@ -69,10 +85,8 @@ def workspace(steps: int, states: int = 8):
 def _blocks(ws, poses):
     """(first step, states, times) of the workspace, ``BLOCK_STEPS`` states at a time, built as
     the sweep builds them (rotations once, states per block)."""
-    from gsfric.sweep import sweep as sw
-
-    per = max(1, sw.BLOCK_STEPS // ws.states)
-    rotation = sw._rotation(poses)
+    per = max(1, BLOCK_STEPS // ws.states)
+    rotation = rotation_from_rpy(poses[:, 3:6])
     zeros = np.zeros(per * ws.states)
     for p0 in range(0, len(poses), per):
         x = ws.states_of(poses[p0:p0 + per], p0, rotation[p0:p0 + per])
@@ -86,10 +100,6 @@ def cpu_seconds() -> float:
 
 def evaluate(ws) -> tuple[int, float]:
     """``Evaluator.evaluate_quiet`` (all outputs) block by block; (steps, seconds)."""
-    from gsfric import models
-    from gsfric.evaluation.evaluator import Evaluator
-    from gsfric.trajectory import Motion
-
     poses = ws.poses()
     ev = Evaluator(models.reference_platform())
     buffers: dict = {}
@@ -97,8 +107,7 @@ def evaluate(ws) -> tuple[int, float]:
     start = time.perf_counter()
     for _, x, t in _blocks(ws, poses):
         n = len(x)
-        motion = Motion(t, x[:, 0:3], x[:, 3:12].reshape(n, 3, 3), x[:, 12:15], x[:, 15:18],
-                        x[:, 18:21], x[:, 21:24])
+        motion = Motion(t, *state_layout().split(x))
         with warnings.catch_warnings():
             warnings.simplefilter("ignore")
             ev.evaluate_quiet(motion, buffers=buffers)
@@ -115,19 +124,14 @@ def eval_only(ws) -> tuple[int, float]:
     """The model's compiled ``eval`` (derived with the platform's friction model fixed, as
     ``evaluate`` runs it) on the outputs an envelope needs (``NEEDED``), with the step flags,
     block by block into reused buffers; no reduction."""
-    from gsfric import models
-    from gsfric.compiled import native
-    from gsfric.evaluation.evaluator import Evaluator, model_function
-    from gsfric.sweep import sweep as sw
-
     poses = ws.poses()
     platform = models.reference_platform()
     ev = Evaluator(platform, n_threads=1)
     fn = native.get(model_function("eval", platform.friction.model))
     spec = ev.flag_spec()
     sizes = {name: size for name, size, _ in fn.outputs}
-    flat = {k: np.empty(sw.BLOCK_STEPS * sizes[k]) for k in NEEDED}
-    flag = np.empty(sw.BLOCK_STEPS, dtype=np.int64)
+    flat = {k: np.empty(BLOCK_STEPS * sizes[k]) for k in NEEDED}
+    flag = np.empty(BLOCK_STEPS, dtype=np.int64)
     steps = 0
     start = time.perf_counter()
     for _, x, _ in _blocks(ws, poses):
@@ -141,19 +145,17 @@ def eval_only(ws) -> tuple[int, float]:
 def direct(ws, reduce: bool) -> tuple[int, float]:
     """The sweep's block evaluation (generated ``envelope``) and, with ``reduce``, its fold
     into the running envelope, in one loop."""
-    from gsfric import models
-    from gsfric.sweep import sweep as sw
-
     poses = ws.poses()
-    block = sw._Block(sw.BLOCK_STEPS)
-    evaluation = sw._Evaluation(models.reference_platform())
-    envelope = sw._Envelope()
+    block = Block(BLOCK_STEPS)
+    evaluation = Evaluation(models.reference_platform())
+    envelope = Envelope()
     steps = 0
     start = time.perf_counter()
     for first, x, t in _blocks(ws, poses):
         for s, e in evaluation.blocks(block, x, t):
             if reduce:
-                envelope.add(block, x[s:e], t[s:e], first + s, False)
+                envelope.add(block.values, block.flag, x[s:e], t[s:e], first + s, False,
+                             block.pairs)
         steps += len(x)
     return steps, time.perf_counter() - start
 
@@ -161,12 +163,8 @@ def direct(ws, reduce: bool) -> tuple[int, float]:
 def warm() -> None:
     """A worker's one-time cost: a task of one pose (imports: gsfric, pandas, SciPy's
     rotations; the compiled library loaded, or compiled, from the cache)."""
-    from gsfric import models
-    from gsfric.sweep import sweep as sw
-
-    sw.run_task(sw.Task(0, "workspace", [0], [models.reference_platform()], 8,
-                        poses=np.array([[0.0, 0.0, 0.7, 0.0, 0.0, 0.0]]),
-                        workspace=workspace(8)))
+    run_task(Task(0, "workspace", [0], [models.reference_platform()], 8,
+                  poses=np.array([[0.0, 0.0, 0.7, 0.0, 0.0, 0.0]]), workspace=workspace(8)))
 
 
 def peak_rss_mb() -> float:
@@ -185,8 +183,6 @@ def peak_rss_mb() -> float:
 
 def worker_threads() -> dict:
     """What a worker runs with: its BLAS thread variables and its threads."""
-    import threading
-
     return {"OMP_NUM_THREADS": os.environ.get("OMP_NUM_THREADS"),
             "OPENBLAS_NUM_THREADS": os.environ.get("OPENBLAS_NUM_THREADS"),
             "MKL_NUM_THREADS": os.environ.get("MKL_NUM_THREADS"),
@@ -194,12 +190,11 @@ def worker_threads() -> dict:
 
 
 def swept(ws, chunk: int, scheduler) -> tuple[int, float, dict]:
-    import gsfric
-
+    """``gsfric.sweep.sweep`` of the workspace on ``scheduler``; (steps, seconds, info)."""
     with tempfile.TemporaryDirectory() as tmp:
         start = time.perf_counter()
-        result = gsfric.sweep(Path(tmp) / "out", workspace=ws, scheduler=scheduler,
-                              chunk_steps=chunk, plots=False, progress=False)
+        result = sweep(Path(tmp) / "out", workspace=ws, scheduler=scheduler,
+                       chunk_steps=chunk, plots=False, progress=False)
         return result.info["steps"], time.perf_counter() - start, result.info
 
 
@@ -218,14 +213,11 @@ def run_path(name: str, ws, chunk: int) -> dict:
         steps, sec, info = swept(ws, chunk, "serial")
         out["tasks"] = info["tasks"]
     else:
-        from distributed import Client
-
-        from gsfric.sweep import sweep as sw
-
+        Client = optional("distributed").Client
         n = int(name[-1])
         t0 = time.perf_counter()
         # one cluster at a time: an idle one's scheduler and nannies would run in this process
-        with sw.local_cluster(n) as cluster, Client(cluster, set_as_default=False) as client:
+        with local_cluster(n) as cluster, Client(cluster, set_as_default=False) as client:
             client.wait_for_workers(n)
             client.run(warm)       # import gsfric and load the cached compiled library
             out["startup"] = time.perf_counter() - t0
@@ -244,36 +236,20 @@ def run_path(name: str, ws, chunk: int) -> dict:
     return out
 
 
-def main() -> None:
-    from gsfric.sweep import sweep as sw
-
+def _arguments() -> argparse.Namespace:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--steps", type=float, default=1e6)
-    parser.add_argument("--chunk", type=int, default=sw.CHUNK_STEPS, help="steps per task")
+    parser.add_argument("--chunk", type=int, default=CHUNK_STEPS, help="steps per task")
     parser.add_argument("--paths", nargs="+", choices=PATHS, default=list(PATHS))
     parser.add_argument("--repeat", type=int, default=1,
                         help="runs of every path, interleaved (path after path, round after "
                         "round); the fastest run of each is compared, the spread printed")
     parser.add_argument("--json", type=Path, help="also write the figures as JSON")
-    args = parser.parse_args()
-    from gsfric.compiled import native
+    return parser.parse_args()
 
-    native.is_compiled()
-    ws = workspace(int(args.steps))
-    runs: dict[str, list[dict]] = {name: [] for name in args.paths}
-    for _ in range(args.repeat):
-        for name in args.paths:
-            runs[name].append(run_path(name, ws, args.chunk))
-    startup = {int(k[-1]): min(r["startup"] for r in v) for k, v in runs.items()
-               if k.startswith("dask")}
-    memory = {k: max(r["memory"] for r in v) for k, v in runs.items() if k.startswith("dask")}
-    threads = {k: v[0]["threads"] for k, v in runs.items() if k.startswith("dask")}
-    first = next(iter(runs.values()))[0]
-    steps = first["steps"]
-    tasks = next((r[0]["tasks"] for r in runs.values() if r[0]["tasks"]), None)
-    print(f"sweep of {steps} steps ({ws.samples} poses x {ws.states} states), "
-          f"{args.chunk} steps per task ({tasks} tasks), {sw.BLOCK_STEPS} steps per block, "
-          f"{args.repeat} interleaved run(s) of each path")
+
+def _table(runs: dict[str, list[dict]], steps: int) -> tuple[dict, dict]:
+    """Print each path's fastest run; (best (steps, seconds, workers), cpu (work, client))."""
     print(f"{'path':<14} {'workers':>7} {'seconds':>9} {'spread':>7} {'steps/s':>10} "
           f"{'steps/s/core':>13} {'cpu s':>8} {'steps/cpu-s':>12} {'client cpu s':>13}")
     best, cpu = {}, {}
@@ -289,13 +265,13 @@ def main() -> None:
     print("(seconds: the fastest run; spread: slowest over fastest - 1; cpu s: the least CPU "
           "time of the process(es) doing the work, this one or the Dask workers together; "
           "client cpu s: this process while the workers ran)")
-    per_core = {k: v[0] / v[1] / v[2] for k, v in best.items()}
-    per_cpu = {k: best[k][0] / cpu[k][0] for k in best}
-    figures = {"steps": steps, "chunk": args.chunk, "tasks": tasks, "repeat": args.repeat,
-               "block": sw.BLOCK_STEPS, "rates_per_core": per_core, "rates_per_cpu_s": per_cpu,
-               "cpu_s": cpu, "runs": runs,
-               "cluster_startup_s": startup, "worker_peak_rss_mb": memory,
-               "client_peak_rss_mb": peak_rss_mb(), "worker_threads": threads}
+    return best, cpu
+
+
+def _comparisons(figures: dict, runs: dict[str, list[dict]], startup: dict, memory: dict,
+                 threads: dict) -> list[str]:
+    """The lines comparing the paths (and the ratios added to ``figures``)."""
+    per_core, per_cpu = figures["rates_per_core"], figures["rates_per_cpu_s"]
 
     def ratio(slow, fast):
         if slow in per_core and fast in per_core:
@@ -332,7 +308,36 @@ def main() -> None:
                      f"; this process {figures['client_peak_rss_mb']:.0f} MB")
     if threads:
         lines.append(f"a worker's threads: {next(iter(threads.values()))}")
-    print("\n".join(lines))
+    return lines
+
+
+def main() -> None:
+    args = _arguments()
+    native.is_compiled()
+    ws = workspace(int(args.steps))
+    runs: dict[str, list[dict]] = {name: [] for name in args.paths}
+    for _ in range(args.repeat):
+        for name in args.paths:
+            runs[name].append(run_path(name, ws, args.chunk))
+    startup = {int(k[-1]): min(r["startup"] for r in v) for k, v in runs.items()
+               if k.startswith("dask")}
+    memory = {k: max(r["memory"] for r in v) for k, v in runs.items() if k.startswith("dask")}
+    threads = {k: v[0]["threads"] for k, v in runs.items() if k.startswith("dask")}
+    first = next(iter(runs.values()))[0]
+    steps = first["steps"]
+    tasks = next((r[0]["tasks"] for r in runs.values() if r[0]["tasks"]), None)
+    print(f"sweep of {steps} steps ({ws.samples} poses x {ws.states} states), "
+          f"{args.chunk} steps per task ({tasks} tasks), {BLOCK_STEPS} steps per block, "
+          f"{args.repeat} interleaved run(s) of each path")
+    best, cpu = _table(runs, steps)
+    per_core = {k: v[0] / v[1] / v[2] for k, v in best.items()}
+    per_cpu = {k: best[k][0] / cpu[k][0] for k in best}
+    figures = {"steps": steps, "chunk": args.chunk, "tasks": tasks, "repeat": args.repeat,
+               "block": BLOCK_STEPS, "rates_per_core": per_core, "rates_per_cpu_s": per_cpu,
+               "cpu_s": cpu, "runs": runs,
+               "cluster_startup_s": startup, "worker_peak_rss_mb": memory,
+               "client_peak_rss_mb": peak_rss_mb(), "worker_threads": threads}
+    print("\n".join(_comparisons(figures, runs, startup, memory, threads)))
     if args.json:
         args.json.write_text(json.dumps(figures, indent=1))
 

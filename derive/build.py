@@ -19,10 +19,12 @@ import json
 import sys
 from pathlib import Path
 
+import casadi as ca
+import sympy
+
 from . import effects as fx
-from . import envelope
+from . import envelope, simd
 from . import model as mdl
-from . import simd
 from .sources import source_hash
 
 ROOT = Path(__file__).resolve().parent.parent
@@ -70,8 +72,7 @@ def _split(sx, specs, env):
 
 
 def _functions():
-    import casadi as ca
-
+    """Every generated CasADi function, in file order, and their metadata (``_metadata``)."""
     nx = mdl.input_size(mdl.STATE)
     nP = mdl.input_size(mdl.PARAMETERS)
     q_names = fx.parameter_names()
@@ -130,6 +131,19 @@ def _functions():
                         ["x", "P", "Q"], ["F"]),
             envelope.function(f"{BASENAME}_envelope_{suffix}", fixed, x, P, Q),
         ]
+    return funcs, _metadata(specs, theta_names)
+
+
+def _metadata(specs: dict, theta_names: list[str]) -> dict:
+    """What the manifest records of the functions' inputs and outputs.
+
+    Returns
+    -------
+    dict
+        ``specs`` (input name -> its blocks), ``shapes``, ``units``, ``descriptions`` (output or
+        friction input name -> shape list, unit, text), ``theta`` (the Jacobian's parameters)
+        and ``rows`` (output name -> the names of its rows, where they have names).
+    """
     shapes = {n: list(s) for n, s, *_ in mdl.OUTPUTS}
     units = {n: u for n, _, u, _ in mdl.OUTPUTS}
     descs = {n: d for n, _, _, d in mdl.OUTPUTS}
@@ -143,9 +157,8 @@ def _functions():
     shapes["dF"] = [6, len(theta_names)]
     units["dF"] = "N per unit of each parameter"
     descs["dF"] = "Jacobian of F with respect to theta (see jacobian_parameters)"
-    meta = dict(specs=specs, shapes=shapes, units=units, descriptions=descs,
-                theta=theta_names)
-    return funcs, meta
+    return dict(specs=specs, shapes=shapes, units=units, descriptions=descs, theta=theta_names,
+                rows=envelope.ROW_NAMES)
 
 
 def generate(out_dir: Path = GENERATED) -> dict[str, bytes]:
@@ -162,10 +175,18 @@ def generate(out_dir: Path = GENERATED) -> dict[str, bytes]:
         File name in generated/ -> its content (C, header, serialized functions, batch C,
         manifest.json); identical on every run.
     """
-    import casadi as ca
-    import sympy
-
     funcs, meta = _functions()
+    files = _code_files(funcs, out_dir)
+    files["manifest.json"] = (json.dumps(_manifest(funcs, meta, files), indent=2) + "\n").encode()
+    return files
+
+
+def _code_files(funcs: list, out_dir: Path) -> dict[str, bytes]:
+    """The C source and header, the serialized functions and the batch C of ``funcs``.
+
+    CasADi's code generator and serializer write into a temporary directory in ``out_dir``,
+    removed afterwards.
+    """
     tmp = out_dir / f".{BASENAME}.tmp"
     tmp.mkdir(parents=True, exist_ok=True)
     try:
@@ -188,29 +209,38 @@ def generate(out_dir: Path = GENERATED) -> dict[str, bytes]:
         for p in tmp.glob("*"):
             p.unlink()
         tmp.rmdir()
+    return files
 
-    def io(f, kind):
-        names = f.name_in() if kind == "in" else f.name_out()
-        sizes = [f.numel_in(i) if kind == "in" else f.numel_out(i) for i in range(len(names))]
-        items = []
-        for name, size in zip(names, sizes):
-            item = dict(name=name, size=size)
-            if kind == "in" and name in meta["specs"]:
-                item["layout"] = _layout(meta["specs"][name])
-            else:
-                item.update(shape=meta["shapes"].get(name, [size]),
-                            unit=meta["units"].get(name, ""),
-                            description=meta["descriptions"].get(name, ""))
-            items.append(item)
-        return items
 
-    manifest = dict(
+def _io(f, kind: str, meta: dict) -> list[dict]:
+    """The manifest's entries for the inputs (``kind`` "in") or outputs ("out") of function f."""
+    names = f.name_in() if kind == "in" else f.name_out()
+    sizes = [f.numel_in(i) if kind == "in" else f.numel_out(i) for i in range(len(names))]
+    items = []
+    for name, size in zip(names, sizes):
+        item = dict(name=name, size=size)
+        if kind == "in" and name in meta["specs"]:
+            item["layout"] = _layout(meta["specs"][name])
+        else:
+            item.update(shape=meta["shapes"].get(name, [size]),
+                        unit=meta["units"].get(name, ""),
+                        description=meta["descriptions"].get(name, ""))
+            if name in meta["rows"]:
+                item["rows"] = list(meta["rows"][name])
+        items.append(item)
+    return items
+
+
+def _manifest(funcs: list, meta: dict, files: dict[str, bytes]) -> dict:
+    """manifest.json's content: the derivation's source hash, the tools, the files' hashes, the
+    functions' inputs and outputs (``_metadata``), the Jacobian's parameters and the effects."""
+    return dict(
         generator="derive/build.py",
         source_hash=source_hash(),
         tools=dict(casadi=ca.__version__, sympy=sympy.__version__,
                    python=".".join(map(str, sys.version_info[:2]))),
         files={n: hashlib.sha256(b).hexdigest() for n, b in sorted(files.items())},
-        functions=[dict(name=f.name(), inputs=io(f, "in"), outputs=io(f, "out"),
+        functions=[dict(name=f.name(), inputs=_io(f, "in", meta), outputs=_io(f, "out", meta),
                         n_instructions=f.n_instructions(),
                         simd=f.name() in {f"{BASENAME}_{n}" for n in SIMD_FUNCTIONS})
                    for f in funcs],
@@ -222,8 +252,6 @@ def generate(out_dir: Path = GENERATED) -> dict[str, bytes]:
                                        description=p.description) for p in e.parameters])
                  for e in fx.CATALOG],
     )
-    files["manifest.json"] = (json.dumps(manifest, indent=2) + "\n").encode()
-    return files
 
 
 def write(files: dict[str, bytes], out_dir: Path = GENERATED) -> None:

@@ -15,9 +15,13 @@ solved by an orthogonal (Gram-Schmidt) factorisation written out as such steps (
 
 from __future__ import annotations
 
+import builtins
 from dataclasses import dataclass, field
 
+import casadi as ca
+import numpy as np
 import sympy as sp
+from sympy.printing.numpy import NumPyPrinter
 
 
 @dataclass
@@ -291,8 +295,6 @@ class Chain:
 
     def _print_numpy_body(self):
         """Python source lines computing every step, shared by all ``numpy_function`` calls."""
-        from sympy.printing.numpy import NumPyPrinter
-
         names: dict[sp.Symbol, str] = {}
 
         class Printer(NumPyPrinter):
@@ -337,8 +339,6 @@ class Chain:
         -------
         dict of output name -> casadi.SX column (row-major entries of the Matrix).
         """
-        import casadi as ca
-
         env: dict[sp.Symbol, object] = {}
         for name, mat in self.inputs.items():
             col = inputs[name]
@@ -380,10 +380,6 @@ class Chain:
             ``f(values) -> dict`` with ``values`` and the result as in ``evaluate``
             (arrays (N, size), entries row-major).
         """
-        import builtins
-
-        import numpy as np
-
         if self._numpy_body is None or self._numpy_body[0] != len(self.steps):
             self._numpy_body = (len(self.steps),) + self._print_numpy_body()
         _, names, lines, printer = self._numpy_body
@@ -422,8 +418,6 @@ class _CasadiConverter:
     """SymPy expression -> CasADi SX, sharing the nodes of repeated subexpressions."""
 
     def __init__(self, env: dict) -> None:
-        import casadi as ca
-
         self.ca = ca
         self.env = env
         self.memo: dict = {}

@@ -52,6 +52,8 @@ the effect changes the actuator forces only (one solve with the post-hoc moments
 
 from __future__ import annotations
 
+from dataclasses import dataclass
+
 import sympy as sp
 
 from . import legs as lg
@@ -202,66 +204,140 @@ def solve(ch, legs, A_qr, weight, friction, m, n_iter=N_ITERATIONS, accelerate=A
     -------
     (df, change) : sympy.Matrix (6, 1) each, N
         The change of the axial forces by the joint friction, and its change over the last
-        iteration (zero in the paper model, where every iterate is the same). Sets in ``leg.out``: ``R_E``, ``R_C``, ``M_C`` (coupled), ``MfrE``,
-        ``MfrC`` (in equilibrium with them), ``R_E_fr``, ``R_C_fr`` (the reactions the moments
-        were computed from) and ``dR_E`` (the change of R_E by friction).
+        iteration (zero in the paper model, where every iterate is the same). Sets in
+        ``leg.out``: ``R_E``, ``R_C``, ``M_C`` (coupled), ``MfrE``, ``MfrC`` (in equilibrium
+        with them), ``R_E_fr``, ``R_C_fr`` (the reactions the moments were computed from) and
+        ``dR_E`` (the change of R_E by friction).
     """
     if m == 0:
         n_iter = 1
     R0 = [(leg.out["R_E"], leg.out["R_C"], leg.out["M_C"]) for leg in legs]
     R_E = [r[0] for r in R0]
     R_C = [r[1] for r in R0]
-    loads = [friction.loads(leg, R_E[i], R_C[i], 0) for i, leg in enumerate(legs)]
-    mfr = [friction.moments(leg, loads[i], 0) for i, leg in enumerate(legs)]
-    weights = None
+    loads = _friction_loads(friction, legs, R_E, R_C, 0)
+    mfr = _friction_moments(friction, legs, loads, 0)
     df_prev = sp.zeros(len(legs), 1)
-    images = residuals = None
+    memory = _AndersonMemory()
     for it in range(1, n_iter + 1):
-        rhs_F, rhs_M = sp.zeros(3, 1), sp.zeros(3, 1)
-        dts, dMCs = [], []
-        for leg, (ME, MC) in zip(legs, mfr):
-            let = ch.scope("coupled", leg.k)
-            dK = let(f"dK_leg{it}", leg.joint.frame.T * (weight * (ME - MC)),
-                     rf"\Delta K^{{({it})}}_{{leg}}")
-            dM_C = let(f"dM_C{it}", lg.torsion_moment(dK, leg.joint),
-                       rf"\Delta M^{{({it})}}_{{C}}")
-            dt = let(f"dt_E{it}", lg.transverse_end_force(dK, dM_C, leg.joint, leg.D),
-                     rf"\Delta R^{{({it})}}_{{E\perp}}")
-            rhs_F -= dt
-            rhs_M -= cross(leg.r_E, dt) + weight * ME
-            dts.append(dt)
-            dMCs.append(dM_C)
-        df = ch.solve(f"df_it{it}_", A_qr, sp.Matrix.vstack(rhs_F, rhs_M),
-                      rf"\Delta f^{{({it})}}", "coupled")
-        R_E_new, R_C_new = [], []
-        for i, leg in enumerate(legs):
-            dR = m * (df[i] * leg.u + dts[i])
-            R_E_new.append(R0[i][0] + dR)
-            R_C_new.append(R0[i][1] + dR)
+        df, dts, dMCs = _friction_solve(ch, legs, A_qr, weight, mfr, it)
+        R_E_new, R_C_new = _reactions(legs, R0, df, dts, m)
         if it == n_iter:
             break
         R_E, R_C = R_E_new, R_C_new
         df_prev = df
-        image = [friction.loads(leg, R_E[i], R_C[i], it) for i, leg in enumerate(legs)]
-        residual = [[G - x for G, x in zip(Gs, xs)] for Gs, xs in zip(image, loads)]
-        if accelerate and residuals is not None and it < n_iter - 1:
-            if weights is None:
-                weights = [friction.weights(leg) for leg in legs]
-            loads = _anderson_step(ch, it, image, residual, images, residuals, weights)
-        else:
-            loads = image
-        images, residuals = image, residual
-        mfr = [friction.moments(leg, loads[i], it) for i, leg in enumerate(legs)]
+        image = _friction_loads(friction, legs, R_E, R_C, it)
+        loads = _next_loads(ch, it, legs, friction, image, loads, memory,
+                            accelerate and it < n_iter - 1)
+        mfr = _friction_moments(friction, legs, loads, it)
+    _set_outputs(ch, legs, R0, (R_E, R_C), (R_E_new, R_C_new), mfr, (df, dts, dMCs), m)
+    return df, m * (df - df_prev)
+
+
+def _set_outputs(ch, legs, R0, R_fr, R_new, mfr, change, m) -> None:
+    """Set every leg's coupled outputs in ``leg.out`` (see ``solve``).
+
+    ``R_fr``: the reactions (R_E, R_C lists) the moments ``mfr`` were computed from; ``R_new``:
+    those in equilibrium with them; ``change``: the last iteration's ``_friction_solve``.
+    """
+    df, dts, dMCs = change
     for i, leg in enumerate(legs):
         let = ch.scope("coupled", leg.k)
         o = leg.out
-        o["R_E_fr"], o["R_C_fr"] = R_E[i], R_C[i]
+        o["R_E_fr"], o["R_C_fr"] = R_fr[0][i], R_fr[1][i]
         o["MfrE"], o["MfrC"] = mfr[i]
         o["dR_E"] = m * (df[i] * leg.u + dts[i])
         o["M_C"] = let("M_C_fr", R0[i][2] + m * dMCs[i], r"M^{fr}_{C}")
-        o["R_E"] = let("R_E_fr", R_E_new[i], r"R^{fr}_{E}")
-        o["R_C"] = let("R_C_fr", R_C_new[i], r"R^{fr}_{C}")
-    return df, m * (df - df_prev)
+        o["R_E"] = let("R_E_fr", R_new[0][i], r"R^{fr}_{E}")
+        o["R_C"] = let("R_C_fr", R_new[1][i], r"R^{fr}_{C}")
+
+
+def _friction_loads(friction, legs, R_E, R_C, it) -> list:
+    """Every leg's friction loads (``friction.loads``) from its reactions ``R_E[i]``, ``R_C[i]``."""
+    return [friction.loads(leg, R_E[i], R_C[i], it) for i, leg in enumerate(legs)]
+
+
+def _friction_moments(friction, legs, loads, it) -> list:
+    """Every leg's friction moments (M_frE, M_frC) (``friction.moments``) from its loads."""
+    return [friction.moments(leg, loads[i], it) for i, leg in enumerate(legs)]
+
+
+def _friction_solve(ch, legs, A_qr, weight, mfr, it):
+    """Iteration ``it``'s change of the axial forces by the friction moments ``mfr``.
+
+    Each leg's moment balance gives the change of its torsion moment and of the transverse part
+    of R_E; the platform's balance, with the QR factor ``A_qr``, the change of the axial forces.
+
+    Returns
+    -------
+    (df, dts, dMCs)
+        ``df`` sympy.Matrix (6, 1), N; per leg the transverse change of R_E (3, 1), N, and the
+        change of the torsion moment M_C, N m.
+    """
+    rhs_F, rhs_M = sp.zeros(3, 1), sp.zeros(3, 1)
+    dts, dMCs = [], []
+    for leg, (ME, MC) in zip(legs, mfr):
+        let = ch.scope("coupled", leg.k)
+        dK = let(f"dK_leg{it}", leg.joint.frame.T * (weight * (ME - MC)),
+                 rf"\Delta K^{{({it})}}_{{leg}}")
+        dM_C = let(f"dM_C{it}", lg.torsion_moment(dK, leg.joint),
+                   rf"\Delta M^{{({it})}}_{{C}}")
+        dt = let(f"dt_E{it}", lg.transverse_end_force(dK, dM_C, leg.joint, leg.D),
+                 rf"\Delta R^{{({it})}}_{{E\perp}}")
+        rhs_F -= dt
+        rhs_M -= cross(leg.r_E, dt) + weight * ME
+        dts.append(dt)
+        dMCs.append(dM_C)
+    df = ch.solve(f"df_it{it}_", A_qr, sp.Matrix.vstack(rhs_F, rhs_M),
+                  rf"\Delta f^{{({it})}}", "coupled")
+    return df, dts, dMCs
+
+
+def _reactions(legs, R0, df, dts, m) -> tuple[list, list]:
+    """The legs' reactions R_E, R_C: the frictionless ``R0`` plus ``m`` times friction's change."""
+    R_E_new, R_C_new = [], []
+    for i, leg in enumerate(legs):
+        dR = m * (df[i] * leg.u + dts[i])
+        R_E_new.append(R0[i][0] + dR)
+        R_C_new.append(R0[i][1] + dR)
+    return R_E_new, R_C_new
+
+
+@dataclass
+class _AndersonMemory:
+    """The previous update of the fixed point, for the Anderson step.
+
+    Attributes
+    ----------
+    images : list or None
+        The loads ``G`` of the previous update's reactions (a list per leg); None before it.
+    residuals : list or None
+        Their residuals ``G - x`` (a list per leg); None before the first update.
+    weights : list or None
+        The loads' weights in the inner product (``friction.weights``), once a step needs them.
+    """
+
+    images: list | None = None
+    residuals: list | None = None
+    weights: list | None = None
+
+
+def _next_loads(ch, it, legs, friction, image, loads, memory, accelerate) -> list:
+    """The loads of the next iteration: ``image`` (the plain step) or the Anderson step.
+
+    ``loads`` are the loads the iteration was solved with, ``image`` those of its reactions;
+    ``accelerate`` allows the Anderson step, taken when ``memory`` holds a previous update.
+    Updates ``memory`` to this update.
+    """
+    residual = [[G - x for G, x in zip(Gs, xs)] for Gs, xs in zip(image, loads)]
+    if accelerate and memory.residuals is not None:
+        if memory.weights is None:
+            memory.weights = [friction.weights(leg) for leg in legs]
+        loads = _anderson_step(ch, it, image, residual, memory.images, memory.residuals,
+                               memory.weights)
+    else:
+        loads = image
+    memory.images, memory.residuals = image, residual
+    return loads
 
 
 def _anderson_step(ch, it, image, residual, images, residuals, weights):

@@ -34,6 +34,8 @@ from dataclasses import dataclass
 
 import sympy as sp
 
+from .vectors import cross, norm
+
 
 @dataclass(frozen=True)
 class Parameter:
@@ -122,8 +124,6 @@ def prismatic_effects_force(q: dict, v, sgn_v, D, u, M_3):
     sympy.Expr
         Force along u on the upper part, N (opposing v).
     """
-    from .vectors import cross, norm
-
     coulomb = sp.Max(0, q["stribeck.static"] * sp.exp(-(v / q["stribeck.velocity"]) ** 2)
                + q["seal_friction.force"]
                + q["stroke_friction.slope"] * (D - q["stroke_friction.reference"])

@@ -1,6 +1,6 @@
 """The per-step values a load envelope maximises, computed with the model (``envelope``).
 
-A sizing sweep (gsfric/sweep.py) keeps, per leg, the largest magnitude of each joint load and
+A sizing sweep (gsfric/sweep/) keeps, per leg, the largest magnitude of each joint load and
 friction over all steps. Rather than writing every output of ``eval`` and taking the norms in
 NumPy, ``envelope`` computes, from the same expressions as ``eval``, one row ``G`` (13, 6) per
 step, every entry to be maximised over the steps:
@@ -20,6 +20,8 @@ row    value (leg i)                                           unit
 ``s2``, ``h``, ``coupling_change``, ``F0``) under their ``eval`` names.
 """
 
+import casadi as ca
+
 ROWS = ("R_E", "R_C", "R_3", "M_3", "MfrE", "MfrC", "M_C", "F_max", "F_min", "Ffr", "P_E",
         "P_C", "P_3")
 """Rows of ``G``: the squared magnitudes of the first six vectors, then the scalars."""
@@ -35,8 +37,6 @@ def _dot(a, b, leg: int):
 
 def rows(kin: dict) -> list:
     """The 78 entries of ``G`` (row-major (13, 6)) from the kinematic model's outputs."""
-    import casadi as ca
-
     G = []
     for name in ROWS[:6]:
         G += [_dot(kin[name], kin[name], i) for i in range(6)]
@@ -52,13 +52,12 @@ def rows(kin: dict) -> list:
 
 def function(name: str, kin: dict, x, P, Q):
     """The CasADi function ``name``: (x, P, Q) -> G (78,), then ``FLAG_OUTPUTS``."""
-    import casadi as ca
-
     return ca.Function(name, [x, P, Q], [ca.vertcat(*rows(kin))] +
                        [kin[n] for n in FLAG_OUTPUTS], ["x", "P", "Q"], ["G", *FLAG_OUTPUTS])
 
 
 SHAPES = {"G": [len(ROWS), 6]}
+ROW_NAMES = {"G": ROWS}
 UNITS = {"G": "N^2, (N m)^2, N m, N, W (per row)"}
 DESCRIPTIONS = {"G": "per-step values a load envelope maximises, rows " + ", ".join(ROWS) +
                 " (derive/envelope.py)"}

@@ -30,8 +30,8 @@ from types import SimpleNamespace
 
 import sympy as sp
 
-from . import conditioning
 from . import bushing as bu
+from . import conditioning
 from . import coupled as cp
 from . import effects as fx
 from . import friction as fr

@@ -45,6 +45,8 @@ the batch is long and the output starts on a 64-byte boundary. Unless ``bad`` is
 
 from __future__ import annotations
 
+import casadi as ca
+
 # recorded in the manifest: the printed code is the same for every lane width
 LANES = "chosen when compiled: 8 (AVX-512F), 4 (AVX), 1"
 
@@ -321,8 +323,6 @@ def _header() -> str:
 
 
 def _opnames():
-    import casadi as ca
-
     return {getattr(ca, n): n for n in dir(ca) if n.startswith("OP_")
             and isinstance(getattr(ca, n), int)}
 

@@ -1,8 +1,8 @@
 """The hash of the derivation's sources (no SymPy needed, so the runtime can check staleness).
 
-Only the modules that generate code are hashed: editing the errata module (printed.py), which
-generates nothing, leaves generated/ current. tests/test_derivation.py checks that
-``GENERATING`` is exactly the set of derive/ modules that ``derive.build`` imports.
+Only the modules that generate code are hashed: editing the errata modules (printed.py,
+printed_legs.py), which generate nothing, leaves generated/ current. tests/test_derivation.py
+checks that ``GENERATING`` is exactly the set of derive/ modules that ``derive.build`` imports.
 """
 
 import hashlib

@@ -24,7 +24,7 @@ _LAZY = {
     "Platform": ("gsfric.platform.description", "Platform"),
     "Motion": ("gsfric.trajectory", "Motion"),
     "Evaluator": ("gsfric.evaluation.evaluator", "Evaluator"),
-    "Result": ("gsfric.evaluation.evaluator", "Result"),
+    "Result": ("gsfric.evaluation.result", "Result"),
     "evaluate": ("gsfric.evaluation.evaluator", "evaluate"),
     "reference_platform": ("gsfric.models", "reference_platform"),
     "paper_platform": ("gsfric.models", "paper_platform"),

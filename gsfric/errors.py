@@ -14,6 +14,7 @@ import signal
 class GsfricError(Exception):
     """Base class of every exception raised by gsfric."""
 
+
 class InputError(GsfricError, ValueError):
     """Bad input: a file, a key, a column, a row or an array that cannot be used.
 
@@ -28,8 +29,10 @@ class InputError(GsfricError, ValueError):
 class StepFlagError(GsfricError):
     """A trajectory step could not be evaluated soundly (see the ``flag`` column of results)."""
 
+
 class GsfricWarning(UserWarning):
     """Input that can be used but looks suspicious (angles in degrees, a gimbal-lock jump, ...)."""
+
 
 class OutputError(GsfricError):
     """An output could not be written completely (a full disk, an I/O error).
@@ -51,6 +54,5 @@ class Interrupted(BaseException):
     """
 
     def __init__(self, signum: int) -> None:
-
         self.signum = int(signum)
         super().__init__(signal.Signals(self.signum).name)

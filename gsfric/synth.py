@@ -38,7 +38,7 @@ from gsfric._checks import short, suggest
 from gsfric.errors import InputError
 from gsfric.evaluation.evaluator import Evaluator, state_array
 from gsfric.io.tables import table_kind, write_table
-from gsfric.models import reference_platform, sinusoidal
+from gsfric.models import platform_from, sinusoidal
 from gsfric.platform.catalog import EFFECTS, apply_sensor, sensor_parameters
 from gsfric.platform.description import Platform
 from gsfric.signal.rotations import quaternion_multiply
@@ -230,7 +230,7 @@ def effect_contributions(platform: Platform, motion: Motion,
 
 def read_forces(platform: Platform, motion: Motion) -> np.ndarray:
     """What the load cells read, (N, 6) N: the actuator forces of ``platform`` along
-    ``motion`` with its sensor effects (force_scale, time_offset; gsfric.catalog) applied."""
+    ``motion`` with its sensor effects (force_scale, time_offset; gsfric.platform.catalog) applied."""
 
     F = Evaluator(platform).actuator_forces(state_array(motion))
     gains, delay = sensor_parameters(platform.effects)
@@ -270,7 +270,29 @@ def synthesize(platform: Platform | None = None, effects=(), *, motion: Motion |
     -------
     SyntheticData
     """
+    _check_arguments(samples, rate, noise, noise_correlation, pose_noise)
+    model = platform_from(platform)
+    rng = np.random.default_rng(seed)
+    if motion is None:
+        t = np.arange(int(samples)) / float(rate)
+        motion = excitation_motion(rng, t)
+    hidden = _effects(effects)
+    true = _true_platform(model, hidden, motion)
+    forces = read_forces(true, motion)
+    lengths = Evaluator(true).evaluate(motion).D
+    e = ar1_noise(rng, (len(motion), 6), float(noise), float(noise_correlation))
+    frame = _measured_frame(rng, motion, forces + e, lengths, pose_noise)
+    resolved = {name: dict(true.effects[name]) for name in hidden}
+    contributions = effect_contributions(true, motion, hidden)
+    sizes = {name: (float(np.sqrt(np.mean(c**2))) / noise if noise > 0 else float("inf"))
+             for name, c in contributions.items()}
+    return SyntheticData(frame=frame, platform=true, model=model, motion=motion,
+                         forces=forces, noise=e, effects=resolved,
+                         contributions=contributions, sizes=sizes)
 
+
+def _check_arguments(samples, rate, noise, noise_correlation, pose_noise) -> None:
+    """``InputError`` for a number of samples, a rate or a noise level ``synthesize`` refuses."""
     if int(samples) < 20:
         raise InputError(f"samples: at least 20 are needed, got {samples}")
     if not (np.isfinite(rate) and rate > 0):
@@ -281,44 +303,39 @@ def synthesize(platform: Platform | None = None, effects=(), *, motion: Motion |
         raise InputError(f"pose_noise: must be >= 0, got {pose_noise!r}")
     if not 0.0 <= noise_correlation < 1.0:
         raise InputError(f"noise_correlation: must be in [0, 1), got {noise_correlation!r}")
-    model = reference_platform() if platform is None else platform
-    rng = np.random.default_rng(seed)
-    if motion is None:
-        t = np.arange(int(samples)) / float(rate)
-        motion = excitation_motion(rng, t)
-    hidden = _effects(effects)
+
+
+def _true_platform(model: Platform, hidden: dict[str, dict[str, float]],
+                   motion: Motion) -> Platform:
+    """``model`` with the ``hidden`` effects switched on; ``stroke_friction.reference``, when
+    not given, is the mean leg length of ``model`` along ``motion`` (m)."""
     if "stroke_friction" in hidden and "reference" not in hidden["stroke_friction"]:
         lengths = Evaluator(model).evaluate(motion).D
         hidden["stroke_friction"]["reference"] = float(lengths.mean())
     true = model
     for name, params in hidden.items():
         true = true.with_effect(name, **params)
-    forces = read_forces(true, motion)
-    lengths = Evaluator(true).evaluate(motion).D
-    n = len(motion)
-    e = ar1_noise(rng, (n, 6), float(noise), float(noise_correlation))
+    return true
 
+
+def _measured_frame(rng: np.random.Generator, motion: Motion, forces: np.ndarray,
+                    lengths: np.ndarray, pose_noise: float) -> pd.DataFrame:
+    """The measured-data table ``t, x, y, z, qw, qx, qy, qz, F1..F6, D1..D6`` of the measured
+    ``forces`` (N, 6) N and ``lengths`` (N, 6) m, the pose with noise of standard deviation
+    ``pose_noise`` (m, rad) drawn from ``rng``."""
     position = motion.position.copy()
     quaternion = motion.quaternion()
     if pose_noise > 0:
         position = position + rng.normal(0.0, pose_noise, position.shape)
-        quaternion = quaternion_multiply(_rotation_noise(rng, n, pose_noise), quaternion)
+        quaternion = quaternion_multiply(_rotation_noise(rng, len(motion), pose_noise),
+                                         quaternion)
         quaternion *= np.where(quaternion[:, :1] < 0, -1.0, 1.0)
-
     columns = {"t": motion.t}
     columns.update(zip(("x", "y", "z"), position.T))
     columns.update(zip(("qw", "qx", "qy", "qz"), quaternion.T))
-    columns.update((f"F{i + 1}", forces[:, i] + e[:, i]) for i in range(6))
+    columns.update((f"F{i + 1}", forces[:, i]) for i in range(6))
     columns.update((f"D{i + 1}", lengths[:, i]) for i in range(6))
-    frame = pd.DataFrame(columns)
-
-    resolved = {name: dict(true.effects[name]) for name in hidden}
-    contributions = effect_contributions(true, motion, hidden)
-    sizes = {name: (float(np.sqrt(np.mean(c**2))) / noise if noise > 0 else float("inf"))
-             for name, c in contributions.items()}
-    return SyntheticData(frame=frame, platform=true, model=model, motion=motion,
-                         forces=forces, noise=e, effects=resolved,
-                         contributions=contributions, sizes=sizes)
+    return pd.DataFrame(columns)
 
 
 def run_synth(out: str | os.PathLike[str], platform_file: str | os.PathLike[str] | None = None,
@@ -332,7 +349,7 @@ def run_synth(out: str | os.PathLike[str], platform_file: str | os.PathLike[str]
 
     out = Path(out)
     table_kind(out)
-    platform = None if platform_file is None else Platform.from_toml(platform_file)
+    platform = platform_from(platform_file)
     data = synthesize(platform, effects, samples=samples, rate=rate, noise=noise,
                       noise_correlation=noise_correlation, pose_noise=pose_noise, seed=seed)
     write_table(data.frame, out)

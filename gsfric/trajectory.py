@@ -13,7 +13,6 @@ from __future__ import annotations
 
 import warnings
 from dataclasses import dataclass
-from typing import TYPE_CHECKING
 
 import numpy as np
 import pandas as pd
@@ -21,24 +20,16 @@ import pandas as pd
 from gsfric._checks import as_array, as_float, fields_equal
 from gsfric.errors import GsfricWarning, InputError
 from gsfric.signal.rotations import (
+    angular_rates,
     continuous_quaternions,
     euler_from_rotation,
-    quaternion_conjugate,
     quaternion_from_euler,
     quaternion_from_rotation,
-    quaternion_multiply,
     rotation_from_quaternion,
 )
-from gsfric.signal.savgol import (
-    DEFAULT_POLYORDER,
-    motion_filters,
-    savgol_adaptive,
-    savgol_derivatives,
-)
+from gsfric.signal.savgol import DEFAULT_POLYORDER, check_window, savgol_derivatives
 from gsfric.signal.spline import spline_derivatives
-
-if TYPE_CHECKING:
-    import pandas as pd
+from gsfric.signal.windows import motion_filters, savgol_adaptive
 
 MIN_SAMPLES = 7
 """Fewest samples ``Motion.from_samples`` (and the trajectory readers) accept."""
@@ -80,7 +71,7 @@ def _check_euler(euler: np.ndarray, source: str | None) -> None:
            for name, value in zip(("alpha", "beta", "gamma"), largest) if value > 2 * np.pi]
     if big:
         warnings.warn(f"{prefix}angles look like degrees ({', '.join(big)} > 2*pi); "
-                      "angles must be in radians", GsfricWarning, stacklevel=4)
+                      "angles must be in radians", GsfricWarning, stacklevel=5)
     near_lock = np.abs(np.sin(euler[:, 1])) < GIMBAL_SIN_BETA
     near_lock = near_lock[1:] | near_lock[:-1]
     steps = np.abs((np.diff(euler[:, [0, 2]], axis=0) + np.pi) % (2 * np.pi) - np.pi)
@@ -89,7 +80,7 @@ def _check_euler(euler: np.ndarray, source: str | None) -> None:
         warnings.warn(f"{prefix}ZXZ angles near beta = 0 (where alpha and gamma are ill-defined) "
                       f"jump by more than {GIMBAL_JUMP} rad in alpha or gamma at "
                       f"{_where(source, jumps)}; give the orientation as a quaternion "
-                      "(qw, qx, qy, qz) instead", GsfricWarning, stacklevel=4)
+                      "(qw, qx, qy, qz) instead", GsfricWarning, stacklevel=5)
 
 
 def check_units(t: np.ndarray, position: np.ndarray, source: str | None = None,
@@ -295,74 +286,20 @@ class Motion:
     @classmethod
     def _from_samples(cls, t, position, euler, quaternion, window, polyorder, lam,
                       source) -> Motion:
-        t = as_array(t, (None,), "t")
-        n = len(t)
-        if n < MIN_SAMPLES:
-            raise InputError(f"{n} samples; at least {MIN_SAMPLES} are needed to differentiate")
-        position = as_array(position, (n, 3), "position")
-        if (euler is None) == (quaternion is None):
-            raise InputError("give the orientation as exactly one of euler= or quaternion=")
-        steps = np.diff(t)
-        bad = np.flatnonzero(steps <= 0)
-        if len(bad):
-            raise InputError(f"{_where(source, bad[:1] + 1)}: t does not increase")
-        if not np.isfinite(t[-1] - t[0]):
-            raise InputError("t spans too large a range")
-        check_units(t, position, source, stacklevel=5)
-
-        if euler is not None:
-            euler = as_array(euler, (n, 3), "euler")
-            _check_euler(euler, source)
-            q = quaternion_from_euler(euler[:, 0], euler[:, 1], euler[:, 2])
-        else:
-            q = as_array(quaternion, (n, 4), "quaternion")
-            norms = np.linalg.norm(q, axis=1)
-            zero = np.flatnonzero(norms < 1e-12)
-            if len(zero):
-                raise InputError(f"{_where(source, zero[:1])}: quaternion of zero length")
-            q = q / norms[:, None]
-        q = continuous_quaternions(q)
-
-        if isinstance(polyorder, bool) or not isinstance(polyorder, (int, np.integer)) \
-                or polyorder < 2:
-            raise InputError(f"polyorder must be an integer >= 2, got {polyorder!r}")
-        if polyorder + 1 >= n:
-            raise InputError(f"polyorder = {polyorder} needs more than {polyorder + 1} samples, "
-                             f"got {n}")
+        t, position, q = _sampled_poses(t, position, euler, quaternion, source)
+        _check_polyorder(polyorder, len(t))
         if lam is not None:
             lam = as_float(lam, "lam", minimum=0.0)
-        mean_step = (t[-1] - t[0]) / (n - 1)
-        uniform = is_uniform(t)
-        if uniform:
-            if window is None:
-                filters = (motion_filters(position, polyorder), motion_filters(q, polyorder))
-                p0, p1, p2 = savgol_adaptive(position, filters[0], mean_step)
-                q0, q1, q2 = savgol_adaptive(q, filters[1], mean_step)
-            else:
-                _check_window(window, polyorder, n)
-                p0, p1, p2 = savgol_derivatives(position, window, polyorder, mean_step)
-                q0, q1, q2 = savgol_derivatives(q, window, polyorder, mean_step)
-        else:
-            if window is not None:
-                warnings.warn(f"{source + ': ' if source else ''}t is not uniformly "
-                              "sampled: window is ignored, a smoothing spline is used",
-                              GsfricWarning, stacklevel=3)
-            try:
-                p0, p1, p2 = spline_derivatives(t, position, lam)
-                q0, q1, q2 = spline_derivatives(t, q, lam)
-            except ValueError as error:
-                raise InputError(f"smoothing spline failed: {error}") from None
-        squared = np.sum(q0 * q0, axis=1, keepdims=True)
-        omega = 2 * quaternion_multiply(q1, quaternion_conjugate(q0))[:, 1:] / squared
-        alpha = (2 * quaternion_multiply(q2, quaternion_conjugate(q0))[:, 1:] / squared
-                 - omega * 2 * np.sum(q0 * q1, axis=1, keepdims=True) / squared)
+        (p0, p1, p2), (q0, q1, q2), filters = _smoothed(t, position, q, window, polyorder,
+                                                        lam, source)
+        omega, alpha = angular_rates(q0, q1, q2)
         rotation = rotation_from_quaternion(q0)
         results = (p0, p1, p2, rotation, omega, alpha)
         if not all(np.isfinite(r).all() for r in results):
             raise InputError("differentiation gave non-finite values (values or time steps "
                              "out of range)")
         motion = cls(t, p0, rotation, p1, omega, p2, alpha)
-        if uniform and window is None:
+        if filters is not None:
             object.__setattr__(motion, "_filters", (int(polyorder), filters))
         object.__setattr__(motion, "_recorded", (position, q))
         return motion
@@ -425,12 +362,66 @@ class Motion:
         return pd.DataFrame(columns)
 
 
-def _check_window(window: object, polyorder: int, n: int) -> None:
-    if isinstance(window, bool) or not isinstance(window, (int, np.integer)):
-        raise InputError(f"window must be an odd integer, got {window!r}")
-    if window % 2 == 0:
-        raise InputError(f"window must be odd, got {window}")
-    if window <= polyorder:
-        raise InputError(f"window = {window} must exceed polyorder = {polyorder}")
-    if window > n:
-        raise InputError(f"window = {window} is longer than the {n} samples")
+def _sampled_poses(t, position, euler, quaternion, source: str | None
+                   ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """The checked samples of ``Motion.from_samples``: times (N,), positions (N, 3) and
+    sign-continuous unit quaternions (N, 4)."""
+    t = as_array(t, (None,), "t")
+    n = len(t)
+    if n < MIN_SAMPLES:
+        raise InputError(f"{n} samples; at least {MIN_SAMPLES} are needed to differentiate")
+    position = as_array(position, (n, 3), "position")
+    if (euler is None) == (quaternion is None):
+        raise InputError("give the orientation as exactly one of euler= or quaternion=")
+    steps = np.diff(t)
+    bad = np.flatnonzero(steps <= 0)
+    if len(bad):
+        raise InputError(f"{_where(source, bad[:1] + 1)}: t does not increase")
+    if not np.isfinite(t[-1] - t[0]):
+        raise InputError("t spans too large a range")
+    check_units(t, position, source, stacklevel=6)
+    if euler is not None:
+        euler = as_array(euler, (n, 3), "euler")
+        _check_euler(euler, source)
+        q = quaternion_from_euler(euler[:, 0], euler[:, 1], euler[:, 2])
+    else:
+        q = as_array(quaternion, (n, 4), "quaternion")
+        norms = np.linalg.norm(q, axis=1)
+        zero = np.flatnonzero(norms < 1e-12)
+        if len(zero):
+            raise InputError(f"{_where(source, zero[:1])}: quaternion of zero length")
+        q = q / norms[:, None]
+    return t, position, continuous_quaternions(q)
+
+
+def _check_polyorder(polyorder: object, n: int) -> None:
+    if isinstance(polyorder, bool) or not isinstance(polyorder, (int, np.integer)) \
+            or polyorder < 2:
+        raise InputError(f"polyorder must be an integer >= 2, got {polyorder!r}")
+    if polyorder + 1 >= n:
+        raise InputError(f"polyorder = {polyorder} needs more than {polyorder + 1} samples, "
+                         f"got {n}")
+
+
+def _smoothed(t, position, q, window, polyorder, lam, source):
+    """The smoothed position and quaternion with their first two derivatives (three arrays
+    each), and the per-sample filters chosen (None unless uniform sampling without a
+    ``window``): see ``Motion.from_samples``."""
+    n = len(t)
+    if is_uniform(t):
+        mean_step = (t[-1] - t[0]) / (n - 1)
+        if window is None:
+            filters = (motion_filters(position, polyorder), motion_filters(q, polyorder))
+            return (savgol_adaptive(position, filters[0], mean_step),
+                    savgol_adaptive(q, filters[1], mean_step), filters)
+        check_window(window, polyorder, n)
+        return (savgol_derivatives(position, window, polyorder, mean_step),
+                savgol_derivatives(q, window, polyorder, mean_step), None)
+    if window is not None:
+        warnings.warn(f"{source + ': ' if source else ''}t is not uniformly "
+                      "sampled: window is ignored, a smoothing spline is used",
+                      GsfricWarning, stacklevel=4)
+    try:
+        return (spline_derivatives(t, position, lam), spline_derivatives(t, q, lam), None)
+    except ValueError as error:
+        raise InputError(f"smoothing spline failed: {error}") from None

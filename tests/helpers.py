@@ -8,7 +8,8 @@ import numpy as np
 import gsfric
 from gsfric import models
 from gsfric.compiled.manifest import layout
-from gsfric.evaluation.evaluator import effect_vector, parameter_vector, state_array
+from gsfric.evaluation.evaluator import state_array
+from gsfric.evaluation.parameters import effect_vector, parameter_vector
 
 PAPER_MISPRINTS = {
     (1, 10, "MfrE5", "-0.0133", ("digits", "small")),   # an order of magnitude low

@@ -4,11 +4,13 @@ and the units that travel with the outputs (DataFrame.attrs, Parquet field metad
 
 from __future__ import annotations
 
+import gc
 import re
 import subprocess
 import sys
 from pathlib import Path
 
+import click
 import numpy as np
 import pyarrow.parquet as pq
 import pytest
@@ -19,6 +21,9 @@ from gsfric import models
 from gsfric.cli import main
 from gsfric.errors import InputError
 from gsfric.evaluation import columns
+from gsfric.evaluation.evaluator import Evaluator
+from gsfric.evaluation.memory import _POOL, POOL_MIN_BYTES, release_memory
+from gsfric.platform.catalog import describe
 
 ROOT = Path(__file__).resolve().parent.parent
 
@@ -115,7 +120,6 @@ def test_columns_listing_and_readme_table_come_from_one_source():
 
 
 def test_effects_listing_names_every_parameter_with_its_unit():
-    from gsfric.platform.catalog import describe
 
     out = CliRunner().invoke(main, ["effects"]).output
     for effect in describe():
@@ -135,30 +139,27 @@ def test_platform_template_reads_back_as_the_reference_platform(tmp_path):
 
 
 def test_every_option_has_help():
-    import click
+    ctx = click.Context(main)
+    names = main.list_commands(ctx)
+    assert len(names) >= 10
 
-    def walk(command, path):
+    def check(command, path):
         for param in command.params:
             if isinstance(param, click.Option) and not param.hidden:
                 assert param.help, f"{path} {param.opts[0]} has no help"
-        for name, sub in getattr(command, "commands", {}).items():
-            walk(sub, f"{path} {name}")
 
-    walk(main, "gsfric")
+    check(main, "gsfric")
+    for name in names:
+        command = main.get_command(ctx, name)
+        assert command is not None and command.name == name
+        check(command, f"gsfric {name}")
 
 
 def test_a_dropped_result_memory_is_reused_for_the_next_with_the_same_values(platform):
     """Large result arrays live on blocks that come back when the caller drops them: the next
     evaluation of that size writes into the same memory (no new pages), with the values and
     flags of an evaluation into NumPy's own buffers, and a block in use is never handed out."""
-    import gc
 
-    from gsfric.evaluation.evaluator import (
-        _POOL,
-        POOL_MIN_BYTES,
-        Evaluator,
-        release_memory,
-    )
 
     n = POOL_MIN_BYTES // (18 * 8) + 500
     rng = np.random.default_rng(5)
@@ -191,14 +192,7 @@ def test_a_dropped_result_memory_is_reused_for_the_next_with_the_same_values(pla
 
 
 def test_the_memory_kept_for_reuse_is_bounded(platform):
-    import gc
 
-    from gsfric.evaluation.evaluator import (
-        _POOL,
-        POOL_MIN_BYTES,
-        Evaluator,
-        release_memory,
-    )
 
     evaluator = Evaluator(platform)
     rng = np.random.default_rng(6)

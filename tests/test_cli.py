@@ -7,23 +7,26 @@ build failure (a stale or altered generated/).
 
 from __future__ import annotations
 
+import json
 import os
 import shutil
 import subprocess
 import sys
 from pathlib import Path
 
+import click
 import numpy as np
 import pandas as pd
 import pytest
 import tomli_w
 from click.testing import CliRunner
+from scipy.spatial.transform import Rotation
 
 from gsfric import models
-from gsfric.cli import main
-from gsfric.evaluation import evaluator as evaluation
+from gsfric.cli import COMMANDS, main
 from gsfric.io.tables import read_table, write_table
 from gsfric.signal.rotations import euler_from_rotation, quaternion_from_rotation
+from gsfric.simulate import run as simulate_run
 
 ROOT = Path(__file__).resolve().parent.parent
 STALE = "gsfric: warning: generated/ is stale"     # may appear while derive/ is being edited
@@ -301,7 +304,6 @@ def test_degrees_give_a_warning_and_a_result(tmp_path):
 def test_euler_jumps_at_the_level_pose_warn_and_match_the_quaternion(tmp_path):
     t = np.linspace(0.0, 2.0, 201)
     tilt = 0.05 * (t - 1.0)
-    from scipy.spatial.transform import Rotation
 
     rotation = Rotation.from_rotvec(np.stack([tilt, 0 * t, 0.4 * t], axis=1)).as_matrix()
     base = pd.DataFrame({"t": t, "x": 0.01 * t, "y": 0.0, "z": models.HOME_HEIGHT})
@@ -361,7 +363,7 @@ def test_keyboard_interrupt_exit_130_and_no_output(tmp_path, monkeypatch):
     path = tmp_path / "t.csv"
     write_table(trajectory(400), path)
     out = tmp_path / "o.parquet"
-    original = evaluation.evaluate_outputs     # what simulate evaluates each chunk with
+    original = simulate_run.evaluate_outputs     # what simulate evaluates each chunk with
     calls = []
 
     def interrupted(evaluator, motion, *args, **kwargs):
@@ -370,7 +372,7 @@ def test_keyboard_interrupt_exit_130_and_no_output(tmp_path, monkeypatch):
             raise KeyboardInterrupt
         return original(evaluator, motion, *args, **kwargs)
 
-    monkeypatch.setattr(evaluation, "evaluate_outputs", interrupted)
+    monkeypatch.setattr(simulate_run, "evaluate_outputs", interrupted)
     message = error_of(run("simulate", "--trajectory", path, "--out", out, "--chunk", "100"),
                        code=130)
     assert message == "interrupted; no output was left half-written"
@@ -436,7 +438,6 @@ def test_altered_generated_c_file_says_how_to_fix(tmp_path, good, generated_copy
 def test_altered_manifest_says_how_to_fix(tmp_path, good, generated_copy):
     manifest = generated_copy / "manifest.json"
     text = manifest.read_text()
-    import json
 
     data = json.loads(text)
     name = next(iter(data["files"]))
@@ -478,3 +479,30 @@ def test_failed_compilation_falls_back_to_casadi(tmp_path, good, generated_copy,
     assert run("simulate", "--trajectory", good, "--out", compiled).exit_code == 0
     np.testing.assert_allclose(read_table(out).to_numpy(), read_table(compiled).to_numpy(),
                                rtol=1e-10, atol=1e-10)
+
+
+# -- 7. the commands, loaded when they run ---------------------------------------------------
+
+
+def test_the_command_list_is_the_commands_own_help():
+    """``gsfric --help`` lists each command from ``gsfric.cli.COMMANDS`` without loading it: the
+    text there is the first paragraph of the command's own help."""
+    with click.Context(main, info_name="gsfric") as ctx:
+        assert main.list_commands(ctx) == sorted(COMMANDS)
+        for name in COMMANDS:
+            command = main.get_command(ctx, name)
+            assert command.name == name
+            assert command.help.split("\n\n")[0] == COMMANDS[name]
+        assert main.get_command(ctx, "no-such-command") is None
+
+
+def test_help_loads_no_command():
+    code = ("import sys; from gsfric.cli import main; sys.argv = ['gsfric', '--help']\n"
+            "try:\n    main()\nexcept SystemExit:\n    pass\n"
+            "print(sorted(m for m in sys.modules if m.startswith('gsfric.commands.')), "
+            "'numpy' in sys.modules, file=sys.stderr)")
+    result = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
+                            timeout=120)
+    assert result.stderr.split()[-2:] == ["['gsfric.commands.common']", "False"]
+    assert "simulate  Evaluate a motion: actuator forces, reactions and friction at" in \
+        result.stdout

@@ -10,13 +10,26 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from click.testing import CliRunner
 from helpers import chain_values, perturbed_platform, random_states, with_every_effect
+from scipy.spatial.transform import Rotation
 
+import gsfric
 from derive import build as dbuild
 from derive import model as mdl
 from gsfric import models
+from gsfric.cli import main
 from gsfric.compiled import native
-from gsfric.evaluation.evaluator import Evaluator, effect_vector, jacobian_parameters
+from gsfric.compiled.functions import _tuples_readable
+from gsfric.compiled.state import state_of
+from gsfric.errors import GsfricError
+from gsfric.evaluation.evaluator import Evaluator, state_array
+from gsfric.evaluation.flags import FLAG_NONFINITE, numpy_flags
+from gsfric.evaluation.paper_constants import paper_constants
+from gsfric.evaluation.parameters import _slots, effect_vector, jacobian_parameters
+from gsfric.evaluation.result import DETAILS
+from gsfric.platform.catalog import parameter_names
+from gsfric.trajectory import Motion
 
 ROOT = Path(__file__).resolve().parents[1]
 
@@ -37,7 +50,7 @@ def test_compiled_equals_lambdified_sympy_at_random_states(rng, mode, model):
     platform = platform.with_friction(model=model)
     x = random_states(rng, 40)
     model = mdl.build(mode)
-    K = models.paper_constants() if mode == "paper" else None
+    K = paper_constants() if mode == "paper" else None
     expected = model.chain.evaluate(chain_values(platform, x, K=K), model.outputs)
     ev = Evaluator(platform, mode=mode)
     got = ev._full([x, ev.P, ev.Q] + ([ev.K] if K is not None else []))
@@ -103,7 +116,6 @@ def test_fixed_model_functions_equal_the_generic_ones(rng, model):
 
 
 def _model_slot() -> int:
-    from gsfric.evaluation.evaluator import _slots
 
     return next(start for name, start, _ in _slots("eval", "P")[1] if name == "friction_model")
 
@@ -206,9 +218,7 @@ def test_regeneration_is_byte_identical():
 
 
 def test_cli_derive_check_exits_zero_when_fresh():
-    from click.testing import CliRunner
 
-    from gsfric.cli import main
 
     result = CliRunner().invoke(main, ["derive", "--check"])
     assert result.exit_code == 0, result.output
@@ -216,7 +226,7 @@ def test_cli_derive_check_exits_zero_when_fresh():
 
 def test_without_a_compiler_casadi_evaluates_the_same_numbers(tmp_path):
     code = ("import warnings, numpy as np, gsfric\n"
-            "from gsfric import native\n"
+            "from gsfric.compiled import native\n"
             "with warnings.catch_warnings(record=True) as w:\n"
             "    warnings.simplefilter('always')\n"
             "    r = gsfric.evaluate(gsfric.reference_platform(), gsfric.models.paper_motion())\n"
@@ -226,7 +236,6 @@ def test_without_a_compiler_casadi_evaluates_the_same_numbers(tmp_path):
     env = dict(os.environ, CC="no-such-compiler-gsfric", GSFRIC_CACHE=str(tmp_path / "cache"))
     run = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, env=env)
     assert run.returncode == 0, run.stderr
-    import gsfric
 
     expected = gsfric.evaluate(gsfric.reference_platform(), models.paper_motion()).F
     # the vectorised C and CasADi's virtual machine order some sums differently: agreement to
@@ -236,7 +245,6 @@ def test_without_a_compiler_casadi_evaluates_the_same_numbers(tmp_path):
 
 
 def test_effect_vector_follows_the_catalog_order(platform):
-    from gsfric.platform.catalog import parameter_names
 
     p = platform.with_effect("seal_friction", force=2.5).with_effect("sensor_bias", b3=0.7)
     q = effect_vector(p)
@@ -247,7 +255,6 @@ def test_effect_vector_follows_the_catalog_order(platform):
 
 
 def test_bound_hot_path_equals_the_general_call_and_checks_its_buffers(rng):
-    from gsfric.errors import GsfricError
 
     platform = perturbed_platform(rng)
     x = random_states(rng, 13)
@@ -263,9 +270,7 @@ def test_bound_hot_path_equals_the_general_call_and_checks_its_buffers(rng):
 
 def _motion_with_bad_steps(rng, n):
     """A random motion over n steps with a singular, an out-of-stroke and an overflowing step."""
-    from scipy.spatial.transform import Rotation
 
-    from gsfric.trajectory import Motion
 
     m = models.random_motion(rng, np.sort(rng.uniform(0, 20, n)))
     position, rotation = m.position.copy(), m.rotation.copy()
@@ -282,7 +287,6 @@ def test_motion_input_in_blocks_equals_the_state_array(rng, threads, model):
     non-detail outputs, whose SIMD pass skips the instructions only the details need: every
     output and flag equals the state-array call's (every output asked for) over several
     blocks and threads, the details (computed on first access) too, NaN where non-finite."""
-    from gsfric.evaluation.evaluator import DETAILS, FLAG_NONFINITE, state_array
 
     n = 2 * 4096 + 37
     motion = _motion_with_bad_steps(rng, n)
@@ -292,7 +296,8 @@ def test_motion_input_in_blocks_equals_the_state_array(rng, threads, model):
     assert {1, 2, 4} <= {b for b in (1, 2, 4) if (result.flag & b).any()}
     x = state_array(motion)
     raw = ev._full([x, ev.P, ev.Q], n_threads=threads)
-    np.testing.assert_array_equal(ev._flags(x, raw), result.flag)   # NaN where non-finite
+    stroke = ev.platform.geometry.stroke
+    np.testing.assert_array_equal(numpy_flags(x, raw, stroke), result.flag)   # NaN if non-finite
     for name, value in raw.items():
         np.testing.assert_array_equal(value.reshape(result.arrays[name].shape),
                                       result.arrays[name], err_msg=name)
@@ -307,8 +312,6 @@ def test_motion_input_in_blocks_equals_the_state_array(rng, threads, model):
 def test_control_loop_calls_read_views_and_slices_as_the_general_call(rng):
     """The bound calls get arrays as objects (their data pointer read in C): views with an
     offset, slices and converted arrays give the general call's numbers."""
-    from gsfric.errors import GsfricError
-    from gsfric.evaluation.evaluator import state_array
 
     motion = models.random_motion(rng, np.sort(rng.uniform(0, 5, 50)))
     ev = Evaluator(perturbed_platform(rng))
@@ -320,7 +323,7 @@ def test_control_loop_calls_read_views_and_slices_as_the_general_call(rng):
     parts = [motion.position[7:47], motion.rotation[7:47], motion.velocity[7:47].tolist(),
              np.asfortranarray(motion.omega[7:47]), motion.acceleration[7:47].astype(np.float32)
              .astype(np.float64), motion.alpha[7:47]]
-    rounded = native.get(ev._actuator)([native.state_of(parts), ev.P, ev.Q])["F"]
+    rounded = native.get(ev._actuator)([state_of(parts), ev.P, ev.Q])["F"]
     np.testing.assert_array_equal(ev.forces(*parts), rounded)
     with pytest.raises(GsfricError, match=r"rotation \(N, 3, 3\)"):
         ev.forces(*parts[:1], parts[1][:-1], *parts[2:])
@@ -343,7 +346,6 @@ def test_vector_row_stores_equal_the_scalar_ones(rng, n, threads):
     same bit for bit, the partial last group and the second thread's range included."""
     motion = _motion_with_bad_steps(rng, n)
     ev = Evaluator(perturbed_platform(rng), n_threads=threads)
-    from gsfric.evaluation.evaluator import state_array
 
     x = state_array(motion)
     f = ev._full
@@ -382,6 +384,6 @@ def test_control_loop_calls_pass_their_arrays_as_one_tuple():
     lib = native._library()
     if lib is None:
         pytest.skip("no compiled library")
-    assert native._tuples_readable(lib)
+    assert _tuples_readable(lib)
     t = (np.zeros(2), np.ones((3, 4)), None)
     assert [lib.gsfric_tuple_item(t, k) for k in range(3)] == [id(v) for v in t]

@@ -16,6 +16,7 @@ from helpers import perturbed_platform, with_every_effect
 
 from gsfric import models
 from gsfric.evaluation.evaluator import Evaluator, state_array
+from gsfric.evaluation.memory import POOL_MIN_BYTES
 
 CALLS = 10_000
 THREADS = 8
@@ -77,7 +78,6 @@ def test_large_results_from_threads_own_their_memory_and_equal_serial():
     """Results large enough for reused memory blocks (``evaluation._POOL``), from 6 threads with
     some dropped as others are computed: every one equals the serial result bit for bit, and
     no two results alive at once share memory."""
-    from gsfric.evaluation.evaluator import POOL_MIN_BYTES
 
     rng = np.random.default_rng(23)
     evaluator = Evaluator(with_every_effect(rng, perturbed_platform(rng)))

@@ -13,6 +13,7 @@
 from __future__ import annotations
 
 import warnings
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -24,16 +25,12 @@ from hypothesis import strategies as st
 import gsfric
 from derive import bushing, coupled, prismatic
 from gsfric import models
+from gsfric.commands.platform import platform_template
 from gsfric.compiled import native
 from gsfric.errors import InputError
-from gsfric.evaluation.evaluator import (
-    COUPLING_TOLERANCE,
-    FLAG_COUPLING,
-    Evaluator,
-    effect_vector,
-    parameter_vector,
-    state_array,
-)
+from gsfric.evaluation.evaluator import Evaluator, state_array
+from gsfric.evaluation.flags import COUPLING_TOLERANCE, FLAG_COUPLING
+from gsfric.evaluation.parameters import effect_vector, parameter_vector
 
 MU_R_CONVERGED = 0.006
 """m: joint friction mu r up to which the fixed point converges to COUPLING_TOLERANCE (with its
@@ -50,7 +47,6 @@ def test_bushings_are_a_beam_on_two_supports():
     """A weightless rod at rest, a transverse load P at its end E (distance D from C), bushings
     at s_a and s_b = s_a + b: N_b = -P (D - s_a) / b, N_a = P (D - s_b) / b (on the rod)."""
     u = sp.Matrix([0, 0, 1])
-    C = sp.zeros(3, 1)
     D, s_a, b, k3 = 0.8, 0.25, 0.1, 0.5
     load = sp.Matrix([3.0, -2.0, 0])          # external transverse load on the rod at E, N
     R_E = -load                               # the leg's force on the platform
@@ -195,7 +191,6 @@ def test_platform_file_without_friction_model_keeps_the_paper_meaning(tmp_path):
 def test_defaults_and_written_files_name_their_model(tmp_path):
     """The physical default is the coupled model, the paper's platform keeps the paper's, and
     every platform file gsfric writes states its model (a file without it means "paper")."""
-    from gsfric.cli import _platform_template
 
     assert models.reference_platform().friction.model == "coupled"
     assert models.reference_platform() == models.reference_platform("coupled")
@@ -207,7 +202,7 @@ def test_defaults_and_written_files_name_their_model(tmp_path):
         friction = path.read_text().split("[friction]", 1)[1]
         assert f'model = "{model}"' in friction.split("\n[", 1)[0]
     template = tmp_path / "template.toml"
-    template.write_text(_platform_template())
+    template.write_text(platform_template())
     assert 'model = "coupled"' in template.read_text().split("[friction]", 1)[1]
     assert gsfric.Platform.from_toml(template).friction.model == "coupled"
 
@@ -220,7 +215,6 @@ def test_actuator_hot_path_equals_the_full_evaluation():
 
 
 def test_iterations_stated_in_the_docs():
-    from pathlib import Path
 
     text = (Path(__file__).resolve().parents[1] / "docs" / "friction.md").read_text()
     assert f"{coupled.N_ITERATIONS} iterations" in text

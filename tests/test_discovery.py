@@ -457,9 +457,9 @@ def test_wrong_model_parameters_are_refitted_not_named():
                                    quaternion=f[["qw", "qx", "qy", "qz"]].to_numpy())
     result = discover(recorded, f[[f"F{i}" for i in range(1, 7)]].to_numpy(), model)
     assert result.names == []
-    fitted = result.refit["parameters"]
-    assert fitted["prismatic_viscous"]["final"] == pytest.approx(5.0, rel=0.02)
-    assert fitted["payload_mass"]["final"] == pytest.approx(3.6, rel=0.01)
+    fitted = result.refit.parameters
+    assert fitted["prismatic_viscous"].final == pytest.approx(5.0, rel=0.02)
+    assert fitted["payload_mass"].final == pytest.approx(3.6, rel=0.01)
 
 
 def test_an_implausible_refit_is_reported_as_a_missing_effect():
@@ -472,9 +472,8 @@ def test_an_implausible_refit_is_reported_as_a_missing_effect():
     recorded = Motion.from_samples(f["t"].to_numpy(), f[["x", "y", "z"]].to_numpy(),
                                    quaternion=f[["qw", "qx", "qy", "qz"]].to_numpy())
     result = discover(recorded, f[[f"F{i}" for i in range(1, 7)]].to_numpy(), model)
-    assert "prismatic_coulomb" in result.refit["implausible"]
-    assert result.refit["parameters"]["prismatic_coulomb"]["unbounded"] == pytest.approx(1.5,
-                                                                                         rel=0.1)
+    assert "prismatic_coulomb" in result.refit.implausible
+    assert result.refit.parameters["prismatic_coulomb"].unbounded == pytest.approx(1.5, rel=0.1)
     assert result.names  # a missing effect, not a coefficient of 1.5
 
 

@@ -73,7 +73,7 @@ def test_noise_alone_does_not_drift(slow, kind):
     for seed in range(4):
         rng = np.random.default_rng(seed)
         t, D, v = _motion(rng, slow)
-        assert not _drift_test(_noise(rng, kind), t, D, v)["significant"], seed
+        assert not _drift_test(_noise(rng, kind), t, D, v).significant, seed
 
 
 @pytest.mark.parametrize("moves", [3, 6])
@@ -84,7 +84,7 @@ def test_noise_between_rests_does_not_drift(moves, kind):
     for seed in range(4):
         rng = np.random.default_rng(seed)
         t, D, v = _moves(rng, moves)
-        assert not _drift_test(_noise(rng, kind), t, D, v)["significant"], seed
+        assert not _drift_test(_noise(rng, kind), t, D, v).significant, seed
 
 
 @pytest.mark.parametrize("kind", [0.0, 0.9])
@@ -96,7 +96,7 @@ def test_a_friction_level_left_over_is_not_a_drift(kind):
         rng = np.random.default_rng(seed)
         t, D, v = _moves(rng, 4, first=0.55)
         out = _drift_test(_noise(rng, kind) + 0.2 * np.tanh(v / 2e-3), t, D, v)
-        assert not out["significant"], seed
+        assert not out.significant, seed
 
 
 @pytest.mark.parametrize("moves", [2, 3])
@@ -110,7 +110,7 @@ def test_a_friction_changing_between_few_moves_drifts(moves, kind):
     t, D, v = _moves(rng, moves)
     ramp = 0.2 * (1 + (2 * t / t[-1] - 1)) - 0.1
     out = _drift_test(_noise(rng, kind) + np.tanh(v / 2e-3) * ramp[:, None], t, D, v)
-    assert out["significant"]
+    assert out.significant
 
 
 @pytest.mark.parametrize("slow", [False, True])
@@ -122,8 +122,8 @@ def test_a_friction_changing_over_the_record_drifts(slow, kind):
     t, D, v = _motion(rng, slow)
     tau = 2 * t / t[-1] - 1
     out = _drift_test(_noise(rng, kind) + 0.2 * np.tanh(v / 2e-3) * tau[:, None], t, D, v)
-    assert out["significant"]
-    assert out["signals"]["sgn(v) drift"] > 0.8
+    assert out.significant
+    assert out.details["signals"]["sgn(v) drift"] > 0.8
 
 
 def _drifting_seal(base: str, seed: int, phi: float):
@@ -150,8 +150,8 @@ def test_a_drifting_friction_is_not_explained(base, seed, phi):
     catalog."""
     result = _drifting_seal(base, seed, phi)
     assert result.verdict == "unexplained_discrepancy"
-    assert result.lack_of_fit["drift"]["significant"]
-    assert result.lack_of_fit["main_signal"] in ("drifts over the record", "sgn(v)")
-    levels = [v for _, _, v in result.lack_of_fit["drift"]["levels"]]
+    assert result.lack_of_fit.tests["drift"].significant
+    assert result.lack_of_fit.main_signal in ("drifts over the record", "sgn(v)")
+    levels = [v for _, _, v in result.lack_of_fit.tests["drift"].details["levels"]]
     assert levels[0] < 0 < levels[-1]       # less friction than the mean first, more last
     assert "changes over the record" in report(result)

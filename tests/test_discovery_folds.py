@@ -180,9 +180,9 @@ def test_generic_structure_needs_a_held_out_gain_beyond_k_over_n(monkeypatch):
             return null if not columns else null * (1 - factor * kn)
         monkeypatch.setattr(st, "cross_validate", held_out)
         out = lackfit.test(residual, X, w, **kw)
-        assert out["p_value"] < 1e-10 and out["gap"] > 0.3
-        assert out["cv_gain"] == pytest.approx(factor * kn)
-        assert out["significant"] is expected
+        assert out.p_value < 1e-10 and out.gap > 0.3
+        assert out.details["cv_gain"] == pytest.approx(factor * kn)
+        assert out.significant is expected
 
 
 def test_moves_shorter_than_the_differentiators_window_are_a_data_problem():
@@ -210,7 +210,7 @@ def test_moves_with_a_fixed_orientation_slide():
                                                    rest=1.66, seed=6),
                       noise=0.05, seed=6)
     r = discover_log(data, platform)
-    assert r.noise["not_sliding_share"] < 0.9
+    assert r.noise.not_sliding_share < 0.9
     assert r.names == ["quadratic_drag"] and r.verdict == "explained"
 
 

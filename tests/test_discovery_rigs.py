@@ -168,7 +168,7 @@ def test_coulomb_effects_hold_through_rests(base, effect):
     result = run(data)
     assert result.names == [effect.split(":")[0]]
     assert result.verdict == "explained"
-    assert result.noise["not_sliding_share"] > 0.1
+    assert result.noise.not_sliding_share > 0.1
     assert result.rms_after <= 1.15 * np.sqrt(np.mean(data.noise ** 2))
     if base == "coupled":
         tested = {t.name for t in result.rounds[0].tests}
@@ -242,7 +242,7 @@ def test_a_seal_force_taken_by_the_refit_is_named(seal_on_rests_coupled):
     data, force, result = seal_on_rests_coupled
     assert result.names == ["seal_friction"]
     assert result.effects[0].parameters["force"] == pytest.approx(force, rel=0.1)
-    assert result.refit["parameters"]["prismatic_coulomb"]["final"] == pytest.approx(
+    assert result.refit.parameters["prismatic_coulomb"].final == pytest.approx(
         COUPLED.friction.prismatic_coulomb, rel=0.05)
     assert result.rms_after <= 1.05 * float(np.sqrt(np.mean(data.noise ** 2)))
 
@@ -292,7 +292,7 @@ def test_out_of_catalog_is_unexplained():
     assert result.verdict == "unexplained_discrepancy"
     # at most its linear part about the legs' forces (a gain per cell), never the whole of it
     assert set(result.names) <= {"force_scale"}
-    assert result.lack_of_fit["main_signal"] in ("F|F|", "F^3", "F", "repeats with model force")
+    assert result.lack_of_fit.main_signal in ("F|F|", "F^3", "F", "repeats with model force")
 
 
 def _quadratic_load_cell_on_rests(platform, seed: int, phi: float):
@@ -320,7 +320,7 @@ def test_offsets_imitating_a_quadratic_load_cell_are_not_explained():
     assert result.verdict == "unexplained_discrepancy"
     for rnd in result.rounds:
         if rnd.winner:
-            assert rnd.generic["imitates"] or rnd.generic["p_generic_beyond_catalog"] < 0.01
+            assert rnd.generic.imitates or rnd.generic.p_generic_beyond_catalog < 0.01
 
 
 def test_delay_outside_the_fit_set_is_unexplained():
@@ -331,7 +331,7 @@ def test_delay_outside_the_fit_set_is_unexplained():
     result = run(data, candidates=names)
     assert result.verdict == "unexplained_discrepancy"
     assert result.names == []
-    assert result.lack_of_fit["main_signal"] == "dF/dt"
+    assert result.lack_of_fit.main_signal == "dF/dt"
 
 
 def test_no_effect_is_no_discrepancy():
@@ -552,8 +552,8 @@ def test_a_mode_ringing_after_the_stops_is_not_explained():
     forces = forces + ring * 1.25 / np.sqrt(np.mean(ring ** 2))
     result = discover(motion_rec, forces, wide, poses=poses, n_bootstrap=20, n_threads=1)
     assert result.verdict == "unexplained_discrepancy"
-    rest = result.lack_of_fit["rest"]
-    assert rest["significant"] and rest["p_value"] < 1e-4 and rest["rests"] >= 5
+    rest = result.lack_of_fit.tests["rest"]
+    assert rest.significant and rest.p_value < 1e-4 and rest.details["rests"] >= 5
 
 
 def test_offsets_as_good_as_a_quadratic_load_cell_under_slow_noise_are_not_explained():
@@ -565,14 +565,14 @@ def test_offsets_as_good_as_a_quadratic_load_cell_under_slow_noise_are_not_expla
         prismatic_viscous=2 * PAPER.friction.prismatic_viscous)
     result = _quadratic_load_cell_on_rests(heavy, seed=265, phi=0.9)
     assert result.verdict == "unexplained_discrepancy"
-    assert all(rnd.generic["imitates"] for rnd in result.rounds if rnd.winner)
+    assert all(rnd.generic.imitates for rnd in result.rounds if rnd.winner)
     summary = result.summary()
     assert [e["name"] for e in summary["effects"] if e["partial"]] == result.names
     assert summary["unexplained"]["partial_effects"] == result.names
     # the verdict comes from the round, not from the final residual (whose basis, fitted
     # after the offsets took the gap, read "F^3" from a structure of 0.2 x the noise): the
     # summary says which, and the round's generic signal
-    assert not result.lack_of_fit["significant"]
+    assert not result.lack_of_fit.significant
     first = next(rnd for rnd in result.rounds if rnd.winner)
     assert summary["unexplained"]["source"] == f"round {first.index}"
     assert summary["unexplained"]["main_signal"] == "F|F|"

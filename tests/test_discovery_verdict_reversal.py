@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 from scipy.signal import lfilter
 
-from gsfric.discovery import lackfit
+from gsfric.discovery import structure
 
 RATE = 250.0
 M = 6000
@@ -65,15 +65,15 @@ def _noisy(moves, seed, phi):
 
 
 def _test(residual, D, v, sliding):
-    d, s = lackfit.travel_since_reversal(D, v, sliding)
-    return lackfit.reversal_structure(residual, d, s, sliding, n_folds=8, alpha=0.01,
+    d, s = structure.travel_since_reversal(D, v, sliding)
+    return structure.reversal_structure(residual, d, s, sliding, n_folds=8, alpha=0.01,
                                       min_gap=0.3)
 
 
 def _play(D, v, sliding, play):
     """-d (1 N of friction missing) while the leg travels through ``play`` (m) after each
     reversal: the residual a model with Coulomb friction leaves."""
-    d, s = lackfit.travel_since_reversal(D, v, sliding)
+    d, s = structure.travel_since_reversal(D, v, sliding)
     return np.where(np.isfinite(s) & (s < play), -d, 0.0)
 
 
@@ -96,7 +96,7 @@ def test_travel_is_measured_from_the_turning_point_and_a_rest_is_no_reversal():
     D = np.repeat(x[:, None], 6, axis=1)
     v = np.gradient(D, t, axis=0)
     sliding = np.abs(v) > 1e-4
-    d, s = lackfit.travel_since_reversal(D, v, sliding)
+    d, s = structure.travel_since_reversal(D, v, sliding)
     assert np.all(d[:600] == 1) and np.all(d[601:] == -1)
     assert np.all(np.isnan(s[:600]))        # no reversal seen yet, the rest included
     np.testing.assert_allclose(s[-1], 0.015, atol=1e-4)
@@ -108,8 +108,8 @@ def test_noise_with_static_levels_at_rest_leaves_no_structure(phi):
     for seed in range(4):
         D, v, sliding, r = _noisy(_moves, seed, phi)
         out = _test(r, D, v, sliding)
-        assert out["reversals"] > 50
-        assert not out["significant"], (seed, out["p_value"], out["gap"])
+        assert out.details["reversals"] > 50
+        assert not out.significant, (seed, out.p_value, out.gap)
 
 
 def _tested(seed, phi, effect):
@@ -122,16 +122,16 @@ def _tested(seed, phi, effect):
 @pytest.mark.parametrize("phi", [0.0, 0.95])
 def test_play_after_each_reversal_is_found(phi):
     out = _tested(7, phi, lambda D, v, sliding: _play(D, v, sliding, 1e-3))
-    assert out["significant"], (out["p_value"], out["gap"])
+    assert out.significant, (out.p_value, out.gap)
     # the profile: friction missing (r d < 0) within the play, none far beyond it
-    profile = dict(out["profile"])
+    profile = dict(out.details["profile"])
     assert min(v_ for e, v_ in profile.items() if e <= 1e-3) < -0.2
     assert abs(profile[max(profile)]) < 0.1
 
 
 @pytest.mark.parametrize("phi", [0.0, 0.95])
 def test_presliding_friction_is_found(phi):
-    assert _tested(8, phi, lambda D, v, sliding: _dahl(D, v, sliding, 3e-4))["significant"]
+    assert _tested(8, phi, lambda D, v, sliding: _dahl(D, v, sliding, 3e-4)).significant
 
 
 @pytest.mark.slow
@@ -141,7 +141,7 @@ def test_false_alarm_rate_on_noise(phi):
     n = 100
     for seed in range(n):
         D, v, sliding, r = _noisy(_moves, 100 + seed, phi)
-        fired += _test(r, D, v, sliding)["significant"]
+        fired += _test(r, D, v, sliding).significant
     assert fired <= 2, fired
 
 
@@ -171,10 +171,10 @@ def test_play_in_a_joint_is_not_explained(base):
     result = discover(rec, forces, platform, poses=poses_from_columns(fr), n_bootstrap=20,
                       n_threads=1)
     assert result.verdict == "unexplained_discrepancy"
-    reversal = result.lack_of_fit["reversal"]
-    assert reversal["significant"], reversal
+    reversal = result.lack_of_fit.tests["reversal"]
+    assert reversal.significant, reversal
     # less friction than the model right after the reversals
-    assert min(v for e, v in reversal["profile"] if e <= 1e-3) < -0.3
+    assert min(v for e, v in reversal.details["profile"] if e <= 1e-3) < -0.3
 
 
 def _moves_after_a_rest(rng, m=M):
@@ -206,6 +206,6 @@ def test_reversals_in_one_stretch_of_time_are_tested_across_legs(phi):
         D, v, sliding, noise = _noisy(_moves_after_a_rest, seed, phi)
         quiet = _test(noise, D, v, sliding)
         found = _test(noise + 0.5 * _dahl(D, v, sliding, 3e-4), D, v, sliding)
-        assert not quiet["significant"], (seed, quiet["p_value"], quiet["gap"])
-        assert found["significant"], (seed, found["p_value"], found["gap"])
-        assert found["reversals"] == 18    # three changes of direction per leg, one from none
+        assert not quiet.significant, (seed, quiet.p_value, quiet.gap)
+        assert found.significant, (seed, found.p_value, found.gap)
+        assert found.details["reversals"] == 18    # three changes of direction per leg, one from none

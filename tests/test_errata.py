@@ -1,9 +1,9 @@
 """The errata of the paper (docs/errata.md): each printed form against the derived one.
 
-Every equation of derive/printed.py is evaluated at states of seeded random motions, with the
-reactions and body accelerations of the derivation (the chain of derive/model.py, evaluated
-through CasADi), converted to the paper's reading (derive/printed.py, "Reading"). For an
-equation with errata E, E', ...:
+Every equation of derive/printed.py and derive/printed_legs.py is evaluated at states of seeded
+random motions, with the reactions and body accelerations of the derivation (the chain of
+derive/model.py, evaluated through CasADi), converted to the paper's reading (derive/printed.py,
+"Reading"). For an equation with errata E, E', ...:
 
 * with every correction (``fix=EQUATION_ERRATA[eq]``) the equation holds: relative residual
   below ``HOLDS`` at every state;
@@ -33,8 +33,11 @@ from derive import effects as fx
 from derive import kinematics as kin
 from derive import model as dm
 from derive import printed as pr
+from derive import printed_legs as pl
 from gsfric import models
-from gsfric.evaluation.evaluator import parameter_values, state_array
+from gsfric.evaluation.evaluator import state_array
+from gsfric.evaluation.paper_constants import PAPER_LEG_ACCELERATION
+from gsfric.evaluation.parameters import parameter_values
 from gsfric.paper import tables as paper
 from gsfric.trajectory import Motion
 
@@ -250,7 +253,7 @@ def leg_forces(w, fix=()) -> list[dict]:
     """(11)-(13) for every leg."""
     out = []
     for leg in w.legs:
-        out += pr.eq11_13_terms(leg.RC_o, leg.RE_o, leg.F2, leg.F4, fix, W2=leg.W2, W4=leg.W4)
+        out += pl.eq11_13_terms(leg.RC_o, leg.RE_o, leg.F2, leg.F4, fix, W2=leg.W2, W4=leg.W4)
     return out
 
 
@@ -262,7 +265,7 @@ def leg_moments(w, eq: str, fix=(), inertia=None) -> list[dict]:
     out = []
     for leg in w.legs:
         M2, M4 = (leg.M2, leg.M4) if inertia is None else inertia(leg)
-        terms = pr.eq14_16_terms(leg.RE_o, leg.E, leg.C, leg.D, leg.F2, leg.F4, M2, M4,
+        terms = pl.eq14_16_terms(leg.RE_o, leg.E, leg.C, leg.D, leg.F2, leg.F4, M2, M4,
                                  leg.MC_o, *fixes, W2=leg.W2, W4=leg.W4, r2=leg.r2, r4=leg.r4)
         out.append(terms[index])
     return out
@@ -276,14 +279,14 @@ def upper_parts(w, fix=(), transform=("E22",), which=slice(None), inertial=None)
     """
     out = []
     for leg in w.legs:
-        U = pr.leg_frame(leg.E, leg.C, leg.E_next, ("E21",))
+        U = pl.leg_frame(leg.E, leg.C, leg.E_next, ("E21",))
 
         def to_leg(v):
-            return np.array(pr.eq25_27(v, U, transform))
+            return np.array(pl.eq25_27(v, U, transform))
 
         R3 = to_leg(-(leg.R_3 + leg.F0 * leg.u))
         F2 = to_leg(leg.F2 if inertial is None else inertial(leg))
-        terms = pr.eq28_32_terms(R3, to_leg(leg.RE_o), F2, to_leg(leg.M2), to_leg(-leg.M_3),
+        terms = pl.eq28_32_terms(R3, to_leg(leg.RE_o), F2, to_leg(leg.M2), to_leg(-leg.M_3),
                                  leg.D, fix, W2=to_leg(leg.W2), s2=leg.s2, s3=leg.s3)
         out += terms[which]
     return out
@@ -453,7 +456,7 @@ def test_E20_eq17_inertial_moment():
             out = []
             for m, a, J, I in ((leg.m2, leg.a2, leg.J2, np.diag(body.upper_inertia)),
                                (leg.m4, leg.a4, leg.J4, np.diag(body.lower_inertia))):
-                _, M = pr.eq17(m, a, I, leg.alpha, fix, J=J, omega=leg.omega_in)
+                _, M = pl.eq17(m, a, I, leg.alpha, fix, J=J, omega=leg.omega_in)
                 out.append(np.array(M))
             return out
         return moments
@@ -470,8 +473,8 @@ def test_E20_eq17_inertial_moment():
 def test_E21_leg_frame_V():
     w = world("rigid")
     for leg in w.legs:
-        derived = np.array(pr.leg_frame(leg.E, leg.C, leg.E_next, ("E21",)))
-        printed = np.array(pr.leg_frame(leg.E, leg.C, leg.E_next))
+        derived = np.array(pl.leg_frame(leg.E, leg.C, leg.E_next, ("E21",)))
+        printed = np.array(pl.leg_frame(leg.E, leg.C, leg.E_next))
         np.testing.assert_allclose(np.einsum("kjn,jn->kn", derived, leg.R_3), leg.R_3_leg,
                                    atol=1e-12)
         np.testing.assert_allclose(printed[:2], -derived[:2], atol=1e-12)
@@ -487,9 +490,9 @@ def test_E22_leg_components():
     assert_fails(upper_parts(w, every, (), slice(2, 5)), "(30)-(32), components as printed")
     assert_holds(upper_parts(w, every, (), slice(0, 2)), "(28)-(29), components as printed")
     for leg in w.legs:
-        U = pr.leg_frame(leg.E, leg.C, leg.E_next, ("E21",))
+        U = pl.leg_frame(leg.E, leg.C, leg.E_next, ("E21",))
         for transform, keeps in ((("E22",), True), ((), False)):
-            size = np.linalg.norm(np.array(pr.eq25_27(leg.R_E, U, transform)), axis=0)
+            size = np.linalg.norm(np.array(pl.eq25_27(leg.R_E, U, transform)), axis=0)
             kept = np.allclose(size, np.linalg.norm(leg.R_E, axis=0), rtol=1e-12)
             assert kept == keeps
 
@@ -528,8 +531,8 @@ def test_E25_sign_function():
         for omega, R, chain in ((leg.omega_rel, leg.R_E, leg.MfrE), (leg.omega_L, leg.R_C,
                                                                       leg.MfrC)):
             args = (fr.joint_viscous, omega, fr.joint_coulomb, fr.joint_radius, R)
-            derived = np.array(pr.eq33_34(*args, ("E25",)))
-            printed = np.array(pr.eq33_34(*args))
+            derived = np.array(pl.eq33_34(*args, ("E25",)))
+            printed = np.array(pl.eq33_34(*args))
             np.testing.assert_allclose(derived, chain, rtol=1e-4, atol=1e-12)
             derived_power.append(np.einsum("jn,jn->n", derived, omega))
             printed_power.append(np.einsum("jn,jn->n", printed, omega))
@@ -656,11 +659,11 @@ def test_E33_tables_1_2_disagree():
     m1 = np.abs(np.array([[float(c) for c in row[1:]] for row in t1]))
     m2 = np.abs(np.array([[float(c) for c in row[1:]] for row in t2]))
     fr, mass = models.reference_platform().friction, 0.5
-    a = np.array(models.PAPER_LEG_ACCELERATION)
-    F2, _ = pr.eq17(mass, a, np.zeros(3), np.zeros(3))
-    F4, _ = pr.eq17(mass, a, np.zeros(3), np.zeros(3))
+    a = np.array(PAPER_LEG_ACCELERATION)
+    F2, _ = pl.eq17(mass, a, np.zeros(3), np.zeros(3))
+    F4, _ = pl.eq17(mass, a, np.zeros(3), np.zeros(3))
     R_E = np.random.default_rng(SEED).normal(0.0, 30.0, (3, 1000))
-    R_C = -np.array([pr.residual(t) for t in pr.eq11_13_terms(np.zeros(3), R_E, F2, F4)])
+    R_C = -np.array([pr.residual(t) for t in pl.eq11_13_terms(np.zeros(3), R_E, F2, F4)])
     gap = np.linalg.norm(np.add(F2, F4))
     assert np.abs(np.linalg.norm(R_C, axis=0) - np.linalg.norm(R_E, axis=0)).max() <= gap
     rounding = 2 * 0.0005
@@ -685,15 +688,15 @@ def test_E34_table3_size():
             if "small" in m.kinds]
     sound = np.ones(table.shape, bool)
     sound[tuple(np.array(lost).T)] = False
-    ours = np.stack([np.abs(pr.eq35(fr.prismatic_viscous, leg.D_dot, fr.prismatic_coulomb,
+    ours = np.stack([np.abs(pl.eq35(fr.prismatic_viscous, leg.D_dot, fr.prismatic_coulomb,
                                     leg.R_3)) for leg in w.legs])
     assert ours.max() < 0.01
     implied = (table[sound] - fr.prismatic_viscous * 1.0) / fr.prismatic_coulomb
     assert implied.min() > 9.5
     with_printed = []
     for leg in w.legs:
-        U = pr.leg_frame(leg.E, leg.C, leg.E_next, ("E21",))
-        comp = np.array(pr.eq25_27(leg.RE_o, U))
+        U = pl.leg_frame(leg.E, leg.C, leg.E_next, ("E21",))
+        comp = np.array(pl.eq25_27(leg.RE_o, U))
         with_printed.append(fr.prismatic_coulomb * np.hypot(comp[0], comp[1]))
     ratio = np.median(with_printed) / np.median(table[sound])
     assert 1 / 3 < ratio < 3

@@ -26,9 +26,9 @@ import pytest
 from click.testing import CliRunner
 
 from gsfric import models
-from gsfric.cli import main
-from gsfric.compiled import native
-from gsfric.errors import InputError, OutputError
+from gsfric.cli import _stop_in_chain, main
+from gsfric.compiled import build, native
+from gsfric.errors import InputError, Interrupted, OutputError
 from gsfric.io.files import output_folder, remove_stale_temporaries
 from gsfric.io.readers import read_trajectory
 from gsfric.io.tables import read_table, write_table
@@ -285,12 +285,12 @@ def test_stale_temporaries_of_dead_runs_are_removed(tmp_path):
 
 SLOW_SIMULATE = textwrap.dedent("""
     import sys, time
-    import gsfric.evaluation.evaluator
-    original = gsfric.evaluation.evaluate_outputs
+    import gsfric.simulate.run
+    original = gsfric.simulate.run.evaluate_outputs
     def slow(*args, **kwargs):
         time.sleep(0.3)
         return original(*args, **kwargs)
-    gsfric.evaluation.evaluate_outputs = slow
+    gsfric.simulate.run.evaluate_outputs = slow
     from gsfric.cli import main
     main(sys.argv[1:])
 """)
@@ -377,7 +377,7 @@ def _fake_compiler(tmp_path: Path, library: Path | None, body: str = "") -> Path
 def _cache_folder(monkeypatch, cache: Path, cc: Path) -> Path:
     monkeypatch.setenv("GSFRIC_CACHE", str(cache))
     monkeypatch.setenv("CC", str(cc))
-    key = native._build_key(native._sources(), native._compiler() + list(native.CFLAGS))
+    key = build._build_key(build._sources(), build._compiler() + list(build.CFLAGS))
     return cache / f"build-{key}"
 
 
@@ -385,10 +385,10 @@ def _cache_folder(monkeypatch, cache: Path, cc: Path) -> Path:
 def real_library() -> Path:
     if not native.is_compiled():
         pytest.skip("no compiled library (no C compiler)")
-    return native.build_library()
+    return build.build_library()
 
 
-CHECK = ("import numpy as np, gsfric; from gsfric import native, models; "
+CHECK = ("import numpy as np, gsfric; from gsfric import models; from gsfric.compiled import native; "
          "r = gsfric.evaluate(gsfric.reference_platform(), "
          "models.sinusoidal(np.linspace(0, 1, 11))); "
          "print(native.is_compiled(), repr(float(r.F.sum())))")
@@ -422,15 +422,15 @@ def test_verification_detects_same_size_changes(tmp_path, monkeypatch):
     folder.mkdir()
     lib, record = folder / "libgsfric.so", folder / "libgsfric.json"
     lib.write_bytes(b"\x7fELF" + bytes(100))
-    size, digest = native._digest(lib)
+    size, digest = build._digest(lib)
     record.write_text(json.dumps({"size": size, "sha256": digest}))
-    assert native._damage(lib, record) is None
+    assert build._damage(lib, record) is None
     lib.write_bytes(b"\x7fELF" + bytes(99) + b"\x01")
-    assert native._damage(lib, record) == "its SHA-256 differs from the one recorded at build time"
+    assert build._damage(lib, record) == "its SHA-256 differs from the one recorded at build time"
     record.unlink()
-    assert native._damage(lib, record) == "libgsfric.json is missing"
+    assert build._damage(lib, record) == "libgsfric.json is missing"
     lib.unlink()
-    assert native._damage(lib, record) == "missing"
+    assert build._damage(lib, record) == "missing"
 
 
 def test_compiler_output_not_a_library_exit_3(tmp_path):
@@ -470,20 +470,20 @@ def test_read_only_cache_is_named(tmp_path, monkeypatch):
     monkeypatch.setenv("GSFRIC_CACHE", str(tmp_path / "cache"))
     monkeypatch.setenv("CC", "cc")
     real_access = os.access
-    monkeypatch.setattr(native.os, "access",
+    monkeypatch.setattr(build.os, "access",
                         lambda p, mode: False if "cache" in str(p) else real_access(p, mode))
-    with pytest.raises(native.LibraryError, match=r"cache/build-[0-9a-f]+: the compiled-library "
+    with pytest.raises(build.LibraryError, match=r"cache/build-[0-9a-f]+: the compiled-library "
                                                   r"cache \(GSFRIC_CACHE\) is not writable"):
-        native.build_library()
+        build.build_library()
 
 
 def test_cpu_features_are_part_of_the_key(monkeypatch):
-    sources = native._sources()
-    key = native._build_key(sources, ["cc"])
-    monkeypatch.setattr(native, "cpu_features", lambda: "x86_64 | sse2")
-    other = native._build_key(sources, ["cc"])
-    monkeypatch.setattr(native, "cpu_features", lambda: "x86_64 | sse2 avx2")
-    assert len({key, other, native._build_key(sources, ["cc"])}) == 3
+    sources = build._sources()
+    key = build._build_key(sources, ["cc"])
+    monkeypatch.setattr(build, "cpu_features", lambda: "x86_64 | sse2")
+    other = build._build_key(sources, ["cc"])
+    monkeypatch.setattr(build, "cpu_features", lambda: "x86_64 | sse2 avx2")
+    assert len({key, other, build._build_key(sources, ["cc"])}) == 3
 
 
 HANGING = 'echo $$ >> "{pids}"; sleep 300 & echo $! >> "{pids}"; wait'
@@ -495,9 +495,9 @@ def test_hanging_compiler_times_out_and_leaves_no_process(tmp_path, monkeypatch)
     monkeypatch.setenv("GSFRIC_CACHE", str(tmp_path / "cache"))
     monkeypatch.setenv("CC", str(cc))
     monkeypatch.setenv("GSFRIC_CC_TIMEOUT", "1")
-    with pytest.raises(native.BuildError, match=r"did not finish within 1 s "
+    with pytest.raises(build.BuildError, match=r"did not finish within 1 s "
                                                 r"\(GSFRIC_CC_TIMEOUT\); it was stopped"):
-        native.build_library()
+        build.build_library()
     started = [int(p) for p in pids.read_text().split()]
     assert len(started) == 6                       # three compilers, each with a child
     assert all_gone(started)
@@ -528,9 +528,6 @@ def test_sigterm_while_compiling_kills_the_compilers(tmp_path):
 def test_a_stop_inside_an_import_is_still_a_stop():
     """A signal that lands inside an import surfaces as the ImportError it caused there; the
     CLI finds the stop in the exception's chain (exit 130 or 128 + signal, not a traceback)."""
-    from gsfric.cli import _stop_in_chain
-    from gsfric.errors import Interrupted
-
     def raised(inner: BaseException) -> BaseException:
         try:
             try:

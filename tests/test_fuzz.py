@@ -16,12 +16,13 @@ from hypothesis import strategies as st
 from gsfric import models
 from gsfric.cli import main
 from gsfric.errors import GsfricWarning, InputError
-from gsfric.evaluation.evaluator import FLAG_NONFINITE, Evaluator
+from gsfric.evaluation.evaluator import Evaluator
+from gsfric.evaluation.flags import FLAG_NONFINITE
 from gsfric.io.readers import read_trajectory
 from gsfric.platform.catalog import EFFECTS
 from gsfric.platform.description import Platform
 from gsfric.signal.rotations import rotation_from_quaternion
-from gsfric.simulate import stream
+from gsfric.simulate.differentiate import iter_motions
 from gsfric.trajectory import Motion
 
 fuzz = settings(deadline=None, max_examples=60,
@@ -223,8 +224,8 @@ def test_malformed_csv_never_crashes_the_readers(tmp_path_factory, text):
     path = tmp_path_factory.mktemp("csv") / "trajectory.csv"
     path.write_text(text, encoding="utf-8", errors="surrogatepass")
     whole, whole_error = _outcome(lambda: read_trajectory(path))
-    parts, parts_error = _outcome(lambda: list(stream.iter_motions(path, chunk=8)))
-    one, one_error = _outcome(lambda: list(stream.iter_motions(path, chunk=10_000)))
+    parts, parts_error = _outcome(lambda: list(iter_motions(path, chunk=8)))
+    one, one_error = _outcome(lambda: list(iter_motions(path, chunk=10_000)))
     for message in (whole_error, parts_error, one_error):
         assert message is None or message.startswith(str(path)) \
             or message.startswith("chunk")
@@ -239,8 +240,8 @@ def test_malformed_csv_never_crashes_the_readers(tmp_path_factory, text):
         assert "uniformly sampled" in parts_error or "window" in parts_error \
             or "polyorder" in parts_error, parts_error
     else:
-        assert sum(len(m) for _, m in parts) == len(whole)
-        assert np.isfinite(np.concatenate([m.alpha for _, m in parts])).all()
+        assert sum(len(p.motion) for p in parts) == len(whole)
+        assert np.isfinite(np.concatenate([p.motion.alpha for p in parts])).all()
 
 
 @fuzz
@@ -248,7 +249,7 @@ def test_malformed_csv_never_crashes_the_readers(tmp_path_factory, text):
 def test_random_bytes_never_crash_the_streaming_reader(tmp_path_factory, raw, suffix):
     path = tmp_path_factory.mktemp("bytes") / f"trajectory{suffix}"
     path.write_bytes(raw)
-    _outcome(lambda: list(stream.iter_motions(path, chunk=8)))
+    _outcome(lambda: list(iter_motions(path, chunk=8)))
 
 
 # -- malformed TOML files ------------------------------------------------------------------------

@@ -7,7 +7,7 @@ import numpy as np
 import pytest
 from scipy.signal import lfilter
 
-from gsfric.discovery import lackfit
+from gsfric.discovery import structure, transients
 
 M = 6000
 RATE = 250.0
@@ -28,13 +28,13 @@ def _ar1(rng, phi, sigma=0.2):
 
 
 def _state(residual, D, v, F):
-    return lackfit.state_structure(residual, lackfit.state_features(D, v, F),
+    return structure.state_structure(residual, structure.state_features(D, v, F),
                                    np.ones(residual.shape, bool), n_folds=8, min_gap=0.3)
 
 
 def _dynamic(residual, t, v, F):
     inputs = {"dF/dt": np.gradient(F, t, axis=0), "acceleration": np.gradient(v, t, axis=0)}
-    return lackfit.dynamic_structure(residual, inputs, np.ones(residual.shape, bool),
+    return structure.dynamic_structure(residual, inputs, np.ones(residual.shape, bool),
                                      alpha=0.01, min_gap=0.3)
 
 
@@ -47,8 +47,8 @@ def test_noise_alone_has_no_structure(phi):
         t, D, v = _motion(rng)
         F = 50 + 300 * np.gradient(v, t, axis=0)
         r = _ar1(rng, phi)
-        assert not _state(r, D, v, F)["significant"], seed
-        assert not _dynamic(r, t, v, F)["significant"], seed
+        assert not _state(r, D, v, F).significant, seed
+        assert not _dynamic(r, t, v, F).significant, seed
 
 
 @pytest.mark.parametrize("phi", [0.0, 0.95])
@@ -58,8 +58,8 @@ def test_a_ripple_in_the_stroke_repeats_with_the_leg_length(phi):
     F = 50 + 300 * np.gradient(v, t, axis=0)
     ripple = 0.4 * np.sin(2 * np.pi * D / 0.012 + rng.uniform(0, 6, 6))
     out = _state(ripple + _ar1(rng, phi), D, v, F)
-    assert out["significant"] and out["variable"] == "leg length"
-    assert out["structure_rms"] == pytest.approx(0.4 / np.sqrt(2), rel=0.25)
+    assert out.significant and out.details["variable"] == "leg length"
+    assert out.structure_rms == pytest.approx(0.4 / np.sqrt(2), rel=0.25)
 
 
 def test_crosstalk_repeats_with_the_other_legs_force():
@@ -68,7 +68,7 @@ def test_crosstalk_repeats_with_the_other_legs_force():
     F = 100 * rng.uniform(0.5, 1.5, 6) * np.sin(2 * np.pi * rng.uniform(0.3, 1.0, 6)
                                                  * t[:, None])
     out = _state(0.05 * np.roll(F, -2, axis=1) + _ar1(rng, 0.5), D, v, F)
-    assert out["significant"] and out["variable"] == "force of leg i+2"
+    assert out.significant and out.details["variable"] == "force of leg i+2"
 
 
 @pytest.mark.parametrize("phi", [0.0, 0.95])
@@ -85,8 +85,8 @@ def test_a_ringing_mode_is_driven_by_the_motion(phi):
                    axis=0)
     ring *= 0.5 / np.sqrt(np.mean(ring ** 2))
     out = _dynamic(ring + _ar1(rng, phi), t, v, F)
-    assert out["significant"] and out["p_value"] < 1e-6
-    assert out["structure_rms"] == pytest.approx(0.5, rel=0.3)
+    assert out.significant and out.p_value < 1e-6
+    assert out.structure_rms == pytest.approx(0.5, rel=0.3)
 
 
 @pytest.mark.parametrize("noise", ["resonant", "band"])
@@ -113,8 +113,8 @@ def test_a_small_driven_part_under_resonant_noise_is_not_magnified(noise):
             x = lfilter(b, a, rng.normal(0, 1, (M + 500, 6)), axis=0)[500:]
         r = 0.2 * x / x.std() + 0.02 * acceleration / acceleration.std()
         out = _dynamic(r, t, v, F)
-        assert not out["significant"], (seed, out["gap"])
-        assert out["gap"] < 0.2, seed
+        assert not out.significant, (seed, out.gap)
+        assert out.gap < 0.2, seed
 
 
 def test_pink_noise_over_a_few_moves_between_rests_has_no_state_structure():
@@ -144,9 +144,9 @@ def test_pink_noise_over_a_few_moves_between_rests_has_no_state_structure():
         r = 0.2 * x / x.std()
         r -= (r * valid).sum(0) / valid.sum(0)
         F = 50 + 300 * np.gradient(v, t, axis=0)
-        out = lackfit.state_structure(r, lackfit.state_features(D, v, F), valid, n_folds=8,
+        out = structure.state_structure(r, structure.state_features(D, v, F), valid, n_folds=8,
                                       min_gap=0.3)
-        assert not out["significant"], (seed, out["variable"], out["gap"])
+        assert not out.significant, (seed, out.details["variable"], out.gap)
 
 
 def test_samples_left_out_are_not_used():
@@ -157,10 +157,10 @@ def test_samples_left_out_are_not_used():
     valid = np.abs(v) > np.quantile(np.abs(v), 0.5)
     ripple = np.where(valid, 0.0, 0.5 * np.sin(2 * np.pi * D / 0.012))
     r = ripple + _ar1(rng, 0.0)
-    assert _state(r, D, v, F)["significant"]
-    out = lackfit.state_structure(r, lackfit.state_features(D, v, F), valid, n_folds=8,
+    assert _state(r, D, v, F).significant
+    out = structure.state_structure(r, structure.state_features(D, v, F), valid, n_folds=8,
                                   min_gap=0.3)
-    assert not out["significant"]
+    assert not out.significant
 
 
 # -- rests ----------------------------------------------------------------------------------
@@ -179,11 +179,11 @@ def _rests(rng, rests=16, rest=220, move=160):
         a = move + k * period
         sliding[a:a + rest] = False
         stops.append(a)
-    return sliding, lackfit.rest_runs(sliding, REACH), np.array(stops)
+    return sliding, transients.rest_runs(sliding, REACH), np.array(stops)
 
 
 def _transients(r, runs):
-    return lackfit.rest_transients(r, runs, alpha=0.01, min_gap=0.3)
+    return transients.rest_transients(r, runs, alpha=0.01, min_gap=0.3)
 
 
 def test_rest_cores_leave_out_the_ends_of_the_moves():
@@ -193,8 +193,8 @@ def test_rest_cores_leave_out_the_ends_of_the_moves():
     assert len(runs) == 3 * 6
     assert {(a, b) for _, a, b in runs} == {(s + 2 * REACH, s + 220 - 2 * REACH) for s in stops}
     sliding[:50, 2] = False                      # standing at the start of the record
-    assert len(lackfit.rest_runs(sliding, REACH)) == 3 * 6
-    assert lackfit.rest_runs(sliding, 45) == []      # cores shorter than REST_MIN_RUN
+    assert len(transients.rest_runs(sliding, REACH)) == 3 * 6
+    assert transients.rest_runs(sliding, 45) == []      # cores shorter than REST_MIN_RUN
 
 
 @pytest.mark.parametrize("phi", [0.0, 0.9, 0.995])
@@ -212,8 +212,8 @@ def test_noise_at_rests_has_no_transient(phi):
         e = rng.normal(0, 0.2 * np.sqrt(1 - phi ** 2), r.shape)
         r += lfilter([1.0], [1.0, -phi], e, axis=0)
         out = _transients(r, runs)
-        assert out["rests"] == 16 and out["cores"] == 96
-        fired += out["significant"]
+        assert out.details["rests"] == 16 and out.details["cores"] == 96
+        fired += out.significant
     assert fired == 0
 
 
@@ -231,5 +231,5 @@ def test_a_mode_ringing_after_each_stop_is_a_transient(phi):
         r[s:s + 220] += ring[:, None] * rng.normal(0, 0.5, 6)
     e = rng.normal(0, 0.2 * np.sqrt(1 - phi ** 2), r.shape)
     out = _transients(r + lfilter([1.0], [1.0, -phi], e, axis=0), runs)
-    assert out["significant"] and out["p_value"] < 1e-4
-    assert out["gap"] > 0.5
+    assert out.significant and out.p_value < 1e-4
+    assert out.gap > 0.5

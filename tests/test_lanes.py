@@ -16,14 +16,19 @@ import sys
 import numpy as np
 import pytest
 from helpers import perturbed_platform, random_states, with_every_effect
+from scipy.spatial.transform import Rotation
 
+from gsfric import models
 from gsfric.compiled import native
-from gsfric.evaluation.evaluator import Evaluator
+from gsfric.evaluation.evaluator import Evaluator, state_array
+from gsfric.evaluation.flags import numpy_flags
+from gsfric.trajectory import Motion
 
 SCRIPT = """
 import sys, numpy as np
 from gsfric.compiled import native
-from gsfric.evaluation.evaluator import Evaluator, parameter_vector
+from gsfric.evaluation.evaluator import Evaluator
+from gsfric.evaluation.parameters import parameter_vector
 x, P, Q = (np.load(sys.argv[1])[k] for k in ("x", "P", "Q"))
 lib = native._library()
 assert native.is_compiled()
@@ -90,12 +95,8 @@ def test_vector_exp_is_within_two_ulp_of_the_c_library():
 @pytest.mark.skipif(not native.is_compiled(), reason="no C compiler")
 def test_flags_in_c_equal_the_fallbacks_numpy_flags():
     """The step flags computed in C (compiled/batch.c) and those of the no-compiler fallback
-    (Evaluator._flags, NumPy) on steps with every cause: stroke, singular pose, non-finite."""
-    from scipy.spatial.transform import Rotation
+    (``numpy_flags``, NumPy) on steps with every cause: stroke, singular pose, non-finite."""
 
-    from gsfric import models
-    from gsfric.evaluation.evaluator import state_array
-    from gsfric.trajectory import Motion
 
     n = 40
     angles = np.linspace(1.2, 1.9, n)
@@ -110,7 +111,8 @@ def test_flags_in_c_equal_the_fallbacks_numpy_flags():
     result = ev.evaluate_quiet(motion)
     assert all((result.flag & bit).any() for bit in (1, 2, 4)) and (result.flag == 0).any()
     raw = native.get("eval")([state_array(motion), ev.P, ev.Q])
-    np.testing.assert_array_equal(ev._flags(state_array(motion), raw), result.flag)
+    stroke = ev.platform.geometry.stroke
+    np.testing.assert_array_equal(numpy_flags(state_array(motion), raw, stroke), result.flag)
     for name, value in raw.items():                      # NaN where flagged non-finite
         np.testing.assert_array_equal(value.reshape(result.arrays[name].shape),
                                       result.arrays[name])

@@ -18,9 +18,12 @@ from click.testing import CliRunner
 from gsfric import models
 from gsfric.cli import main
 from gsfric.errors import GsfricWarning, InputError
-from gsfric.io.logs import LogFormat
+from gsfric.io.logs import ColumnReader, LogFormat
 from gsfric.io.readers import read_measured, read_trajectory
 from gsfric.io.tables import read_table, write_table
+from gsfric.signal.rotations import rotation_from_quaternion
+from gsfric.simulate.differentiate import iter_motions
+from gsfric.simulate.run import simulate_file
 
 ROOT = Path(__file__).resolve().parent.parent
 DOC = ROOT / "docs" / "logs.md"
@@ -92,9 +95,6 @@ def test_roll_pitch_yaw_conventions_against_hand_written_matrices(tmp_path):
 
 def _raw_rotation(path, fmt):
     """The rotation of every row as read (before differentiation)."""
-    from gsfric.io.logs import ColumnReader
-    from gsfric.signal.rotations import rotation_from_quaternion
-
     frame = read_table(path)
     reader = ColumnReader(path, fmt)
     with warnings.catch_warnings():
@@ -107,8 +107,6 @@ def _raw_rotation(path, fmt):
 
 def test_a_wrapping_counter_streamed_in_chunks_gives_the_whole_file(tmp_path):
     """A wrap inside the second chunk and a chunk boundary: the same times as read whole."""
-    from gsfric.simulate.stream import iter_motions
-
     n = 500
     counts = (2**16 - 3000 + 10 * np.arange(n)) % 2**16     # a 16-bit counter, 10 us steps
     motion = models.sinusoidal(np.arange(n) * 1e-5 * 2000)
@@ -123,7 +121,7 @@ def test_a_wrapping_counter_streamed_in_chunks_gives_the_whole_file(tmp_path):
         warnings.simplefilter("ignore", GsfricWarning)
         parts = list(iter_motions(tmp_path / "log.parquet", chunk=120, window=15,
                                   log_format=fmt))
-    t = np.concatenate([m.t for _, m in parts])
+    t = np.concatenate([p.motion.t for p in parts])
     np.testing.assert_array_equal(t, whole.t)
     np.testing.assert_allclose(np.diff(t), 1e-5, rtol=0, atol=1e-12)
 
@@ -220,8 +218,6 @@ def test_read_measured_with_units(tmp_path):
 @pytest.mark.parametrize("suffix", [".csv", ".parquet"])
 def test_progress_bar_has_a_total_on_request_and_is_absent_off_a_terminal(tmp_path, capsys,
                                                                           suffix):
-    from gsfric.simulate.stream import simulate_file
-
     path = tmp_path / f"m{suffix}"
     write_table(models.sinusoidal(np.arange(250) / 100.0).to_frame(), path)
     simulate_file(path, tmp_path / "o.csv", chunk=100, window=11, progress=True)

@@ -111,7 +111,7 @@ def test_sdist_and_wheel_build_without_warnings_install_and_run_outside_the_chec
         assert done.returncode == 0, done.stderr[-3000:]
         return done.stdout
 
-    where = run("-c", "import gsfric, gsfric.manifest as m; "
+    where = run("-c", "import gsfric, gsfric.compiled.manifest as m; "
                       "print(gsfric.__file__); print(m.generated_dir())").split()
     assert not Path(where[0]).is_relative_to(ROOT)
     assert Path(where[1]).parts[-2:] == ("gsfric", "_generated")

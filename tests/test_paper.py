@@ -13,7 +13,9 @@ from helpers import PAPER_MISPRINTS
 from gsfric import models
 from gsfric.cli import main
 from gsfric.errors import InputError
+from gsfric.evaluation.paper_constants import PAPER_JOINT_SPEED
 from gsfric.paper import tables as paper
+from gsfric.paper.report import run_paper
 from gsfric.platform.description import Platform
 
 SHARED_PAPER = Path(__file__).resolve().parents[1].parent / "shared" / "paper"
@@ -27,7 +29,7 @@ SHARED_CSV = {1: "table1_friction_moments_moving_platform_joints.csv",
 def written(tmp_path_factory):
     """One ``run_paper`` with plots, shared by the tests that read its files."""
     out = tmp_path_factory.mktemp("paper") / "out"
-    return out, paper.run_paper(out, mode="paper", plots=True)
+    return out, run_paper(out, mode="paper", plots=True)
 
 
 @pytest.fixture(scope="module")
@@ -96,7 +98,7 @@ def test_run_paper_uses_a_given_platform_file(tmp_path):
     platform = models.paper_platform().with_body(payload_mass=5.0)
     source = tmp_path / "heavy.toml"
     platform.to_toml(source)
-    paths = paper.run_paper(tmp_path / "out", platform_file=source, plots=False)
+    paths = run_paper(tmp_path / "out", platform_file=source, plots=False)
     assert [p.name for p in paths] == ["table1.csv", "table2.csv", "table3.csv",
                                        "platform.toml", "report.md"]
     assert Platform.from_toml(tmp_path / "out" / "platform.toml") == platform
@@ -106,7 +108,7 @@ def test_run_paper_uses_a_given_platform_file(tmp_path):
 def test_implied_joint_reaction_inverts_the_friction_law_closed_form():
     reaction = np.array([0.0, 1.0, 21.3, 64.0])
     fr = paper.PAPER_FRICTION
-    omega = models.PAPER_JOINT_SPEED
+    omega = PAPER_JOINT_SPEED
     moment = -(fr.joint_viscous * omega + fr.joint_coulomb * fr.joint_radius * reaction)
     np.testing.assert_allclose(paper.implied_joint_reaction(moment), reaction, atol=1e-12)
     # the paper's own constants: |R| = (|M| - 0.0004 N m) / 0.002 m
@@ -198,6 +200,6 @@ def test_a_file_is_refused_as_the_output_directory(tmp_path):
     target = tmp_path / "a_file"
     target.write_text("")
     with pytest.raises(InputError, match="not a directory"):
-        paper.run_paper(target, plots=False)
+        run_paper(target, plots=False)
     result = CliRunner().invoke(main, ["paper", "--out", str(target), "--no-plots"])
     assert result.exit_code == 2

@@ -228,7 +228,7 @@ def test_base_joint_on_axis_has_no_default_axis():
 
 
 def test_catalog_contract():
-    catalog = pytest.importorskip("gsfric.catalog")
+    catalog = pytest.importorskip("gsfric.platform.catalog")
     for name, params in EFFECTS.items():
         assert name in catalog.EFFECTS
         assert set(params) <= set(catalog.EFFECTS[name])

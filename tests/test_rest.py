@@ -12,9 +12,11 @@ from gsfric.discovery.rest import (
     poses_from_columns,
     sliding_mask,
     speed_uncertainty,
+    spline_differentiator,
 )
 from gsfric.evaluation.evaluator import evaluate
 from gsfric.models import minimum_jerk_moves, point_to_point, reference_platform
+from gsfric.signal.noise import divided_noise_std_every_window
 from gsfric.signal.rotations import quaternion_from_rotation
 from gsfric.synth import synthesize
 from gsfric.trajectory import Motion
@@ -77,12 +79,6 @@ def test_jittered_time_base_gets_a_speed_band_of_its_own():
     """On a log whose sample times jitter (+-20 % of the step) the smoothing spline's own noise
     gain gives the band: it matches the spread of the differentiated leg speed deep inside the
     rests, where a band from differences that ignore the jitter would count the motion."""
-    from gsfric.discovery.rest import (
-        divided_noise_std,
-        leg_lengths,
-        spline_differentiator,
-    )
-
     rng = np.random.default_rng(8)
     platform = reference_platform(friction_model="paper")
     step = 1 / 200.0
@@ -94,8 +90,8 @@ def test_jittered_time_base_gets_a_speed_band_of_its_own():
     quaternion = quaternion_from_rotation(rotation)
     estimate = Motion.from_samples(t, position, quaternion=quaternion)
     gain, reach = spline_differentiator(t, position, rotation)
-    D = leg_lengths(platform, position, rotation)
-    sigma_D = divided_noise_std(t, D)
+    D = platform.leg_lengths(position, rotation)
+    sigma_D = divided_noise_std_every_window(t, D)
     np.testing.assert_allclose(sigma_D, 2e-5, rtol=0.5)      # the leg lengths mix x, y, z
     sigma = gain[:, None] * sigma_D[None, :]
     v_est = evaluate(platform, estimate).D_dot
@@ -129,7 +125,7 @@ def test_seal_force_on_a_jittered_log_with_rests_is_named():
     result = discover(recorded, fr[[f"F{i}" for i in range(1, 7)]].to_numpy(), platform,
                       poses=poses_from_columns(fr), n_bootstrap=20, n_threads=1)
     assert result.names == ["seal_friction"]
-    assert result.noise["not_sliding_share"] > 0.25
+    assert result.noise.not_sliding_share > 0.25
     assert result.rms_after < 1.15 * float(np.sqrt(np.mean(data.noise ** 2)))
 
 
@@ -168,7 +164,7 @@ def test_a_fixed_orientation_does_not_widen_the_rests():
     orientation's filter is the longest there is (nothing to resolve), and its reach does not
     count; the position's does. A rotating platform keeps the longer of the two."""
     from gsfric.discovery.rest import moves
-    from gsfric.signal.savgol import motion_filters
+    from gsfric.signal.windows import motion_filters
 
     rng = np.random.default_rng(6)
     rate, seconds = 500.0, 12.0

@@ -11,33 +11,40 @@ from pathlib import Path
 
 import numpy as np
 import pandas as pd
+import pyarrow.parquet as pq
 import pytest
+from click.testing import CliRunner
+from scipy.interpolate import make_smoothing_spline
 from scipy.spatial.transform import Rotation
 
 import gsfric
 from gsfric import models
+from gsfric.bench.cases import Case
+from gsfric.bench.cases import ratio as _ratio
+from gsfric.cli import main
 from gsfric.errors import GsfricWarning, InputError, StepFlagError
-from gsfric.evaluation.evaluator import (
+from gsfric.evaluation.evaluator import Evaluator, evaluate
+from gsfric.evaluation.flags import (
     COND_LIMIT,
     FLAG_NONFINITE,
     FLAG_SINGULAR,
     FLAG_STROKE,
     FLAG_UNIVERSAL,
-    JOINT_EPS,
-    PRISMATIC_EPS,
     SINGULAR_LIMIT,
     UNIVERSAL_LIMIT,
-    Evaluator,
-    evaluate,
 )
-from gsfric.io.readers import read_trajectory
+from gsfric.evaluation.parameters import JOINT_EPS, PRISMATIC_EPS
+from gsfric.io.readers import read_measured, read_trajectory
 from gsfric.io.tables import write_table
+from gsfric.signal import spline as tr
 from gsfric.signal.rotations import (
     euler_from_rotation,
     quaternion_from_rotation,
     rotation_from_euler,
 )
-from gsfric.simulate import stream
+from gsfric.signal.savgol import savgol_derivatives
+from gsfric.simulate.differentiate import iter_motions
+from gsfric.simulate.run import simulate_file
 from gsfric.trajectory import Motion
 
 ROOT = Path(__file__).resolve().parent.parent
@@ -497,7 +504,7 @@ def _trajectory_frame(n: int, orientation: str = "quaternion", noise: float = 1e
 
 def _concatenated(parts):
     names = ("t", "position", "rotation", "velocity", "omega", "acceleration", "alpha")
-    return {k: np.concatenate([getattr(m, k) for _, m in parts]) for k in names}
+    return {k: np.concatenate([getattr(p.motion, k) for p in parts]) for k in names}
 
 
 @pytest.mark.parametrize("suffix", [".csv", ".parquet"])
@@ -506,10 +513,11 @@ def test_chunked_differentiation_equals_the_whole_file(tmp_path, suffix, chunk, 
     path = tmp_path / f"trajectory{suffix}"
     write_table(_trajectory_frame(613), path)
     whole = read_trajectory(path, window=window)
-    parts = list(stream.iter_motions(path, chunk=chunk, window=window))
-    starts = [start for start, _ in parts]
+    parts = list(iter_motions(path, chunk=chunk, window=window))
+    starts = [p.start for p in parts]
     assert starts == list(range(0, 613, chunk))[:len(parts)]
-    assert all(len(m) >= chunk for _, m in parts[:-1]) and sum(len(m) for _, m in parts) == 613
+    assert all(len(p.motion) >= chunk for p in parts[:-1]) \
+        and sum(len(p.motion) for p in parts) == 613
     for name, values in _concatenated(parts).items():
         np.testing.assert_allclose(values, getattr(whole, name), rtol=1e-12, atol=1e-12,
                                    err_msg=name)
@@ -518,16 +526,14 @@ def test_chunked_differentiation_equals_the_whole_file(tmp_path, suffix, chunk, 
 def test_chunked_differentiation_with_the_window_of_the_first_chunk(tmp_path):
     path = tmp_path / "trajectory.csv"
     write_table(_trajectory_frame(2000, noise=1e-4), path)
-    info = {}
-    parts = list(stream.iter_motions(path, chunk=300, info=info))
-    wp, wq = info["windows"]
+    parts = list(iter_motions(path, chunk=300))
+    wp, wq = parts[0].windows
     assert wp > 7                                    # the noise needs a longer window
-    position = np.concatenate([m.position for _, m in parts])
-    from gsfric.signal.savgol import savgol_derivatives
+    position = np.concatenate([p.motion.position for p in parts])
     frame = pd.read_csv(path)
     expected = savgol_derivatives(frame[["x", "y", "z"]].to_numpy(), wp, 4, 0.01)
     np.testing.assert_allclose(position, expected[0], rtol=0, atol=1e-12)
-    np.testing.assert_allclose(np.concatenate([m.velocity for _, m in parts]), expected[1],
+    np.testing.assert_allclose(np.concatenate([p.motion.velocity for p in parts]), expected[1],
                                rtol=1e-10, atol=1e-10)
 
 
@@ -539,8 +545,8 @@ def test_quaternion_signs_are_continuous_across_chunks(tmp_path):
         * signs[:, None]
     write_table(frame, tmp_path / "a.csv")
     write_table(flipped, tmp_path / "b.csv")
-    a = _concatenated(list(stream.iter_motions(tmp_path / "a.csv", chunk=37, window=9)))
-    b = _concatenated(list(stream.iter_motions(tmp_path / "b.csv", chunk=37, window=9)))
+    a = _concatenated(list(iter_motions(tmp_path / "a.csv", chunk=37, window=9)))
+    b = _concatenated(list(iter_motions(tmp_path / "b.csv", chunk=37, window=9)))
     for name in ("omega", "alpha", "rotation"):
         np.testing.assert_allclose(b[name], a[name], atol=1e-12, err_msg=name)
 
@@ -551,7 +557,8 @@ def test_a_file_within_one_chunk_is_read_as_read_trajectory(tmp_path):
     frame["t"] = np.cumsum(rng.uniform(0.005, 0.015, 80))   # non-uniform: smoothing spline
     path = tmp_path / "t.csv"
     write_table(frame, path)
-    (start, motion), = stream.iter_motions(path, chunk=80)
+    (part,) = iter_motions(path, chunk=80)
+    start, motion = part.start, part.motion
     expected = read_trajectory(path)
     assert start == 0
     for name in ("position", "velocity", "omega", "acceleration", "alpha"):
@@ -565,7 +572,7 @@ def test_non_uniform_sampling_in_a_long_file_names_the_row(tmp_path):
     write_table(frame, path)
     with pytest.raises(InputError, match=rf"^{path}: row 251: time step 0.013 s differs from "
                                          r"the first 100 rows' mean step 0.01 s"):
-        list(stream.iter_motions(path, chunk=100))
+        list(iter_motions(path, chunk=100))
 
 
 @pytest.mark.parametrize(("row", "column", "value", "message"), [
@@ -580,7 +587,7 @@ def test_bad_rows_in_later_chunks_name_the_row(tmp_path, row, column, value, mes
     path = tmp_path / "t.csv"
     frame.to_csv(path, index=False)
     with pytest.raises(InputError) as info:
-        list(stream.iter_motions(path, chunk=50, window=11))
+        list(iter_motions(path, chunk=50, window=11))
     assert str(info.value) == f"{path}: {message}"
 
 
@@ -599,7 +606,7 @@ def test_euler_jumps_are_reported_with_global_rows(tmp_path):
     assert len(expected) == 1 and "at row" in expected[0]
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always")
-        parts = list(stream.iter_motions(path, chunk=40))
+        parts = list(iter_motions(path, chunk=40))
     got = [str(w.message) for w in caught if w.category is GsfricWarning]
     assert got == expected
     assert np.isfinite(_concatenated(parts)["omega"]).all()
@@ -613,7 +620,7 @@ def test_degrees_in_a_long_file_warn_once(tmp_path):
     path = tmp_path / "deg.csv"
     write_table(frame, path)
     with pytest.warns(GsfricWarning) as caught:
-        list(stream.iter_motions(path, chunk=50, window=11))
+        list(iter_motions(path, chunk=50, window=11))
     messages = [str(w.message) for w in caught if "degrees" in str(w.message)]
     assert len(messages) == 1 and messages[0].startswith(f"{path}: angles look like degrees")
 
@@ -629,7 +636,7 @@ def test_streamed_simulation_equals_the_whole_evaluation(tmp_path):
     flagged = expected.flagged()
     assert {130, 131, 599, 600} <= set(flagged.tolist())
     with pytest.warns(GsfricWarning) as caught:
-        summary = stream.simulate_file(path, tmp_path / "out.parquet", platform, chunk=100,
+        summary = simulate_file(path, tmp_path / "out.parquet", platform, chunk=100,
                                        window=15, columns=("all",))
     message, = [str(w.message) for w in caught]
     shown = ", ".join(str(i) for i in flagged[:10])
@@ -649,8 +656,8 @@ def test_streamed_simulation_equals_the_whole_evaluation(tmp_path):
 def test_streamed_csv_output_reads_back_exactly(tmp_path):
     path = tmp_path / "t.csv"
     write_table(_trajectory_frame(250), path)
-    stream.simulate_file(path, tmp_path / "a.csv", chunk=60, window=9)
-    stream.simulate_file(path, tmp_path / "a.parquet", chunk=60, window=9)
+    simulate_file(path, tmp_path / "a.csv", chunk=60, window=9)
+    simulate_file(path, tmp_path / "a.parquet", chunk=60, window=9)
     a = gsfric.io.read_table(tmp_path / "a.csv")
     b = pd.read_parquet(tmp_path / "a.parquet")
     pd.testing.assert_frame_equal(a, b)
@@ -666,7 +673,7 @@ def test_interrupted_run_leaves_no_partial_file(tmp_path, monkeypatch):
     out = tmp_path / "out.parquet"
     out.write_bytes(b"the previous result")
     calls = []
-    original = gsfric.evaluation.evaluate_outputs     # what simulate evaluates each chunk with
+    original = gsfric.simulate.run.evaluate_outputs   # what simulate evaluates each chunk with
 
     def interrupted(evaluator, motion, *args, **kwargs):
         calls.append(len(motion))
@@ -674,9 +681,9 @@ def test_interrupted_run_leaves_no_partial_file(tmp_path, monkeypatch):
             raise KeyboardInterrupt
         return original(evaluator, motion, *args, **kwargs)
 
-    monkeypatch.setattr(gsfric.evaluation, "evaluate_outputs", interrupted)
+    monkeypatch.setattr(gsfric.simulate.run, "evaluate_outputs", interrupted)
     with pytest.raises(KeyboardInterrupt):
-        stream.simulate_file(path, out, chunk=100, window=9)
+        simulate_file(path, out, chunk=100, window=9)
     assert len(calls) == 3
     assert out.read_bytes() == b"the previous result"
     assert _leftovers(tmp_path) == []
@@ -689,7 +696,7 @@ def test_bad_row_after_written_chunks_leaves_no_output(tmp_path):
     frame.to_csv(path, index=False)
     out = tmp_path / "out.csv"
     with pytest.raises(InputError, match=r"row 450: column 'x' is not a number: 'oops'"):
-        stream.simulate_file(path, out, chunk=100, window=9)
+        simulate_file(path, out, chunk=100, window=9)
     assert not out.exists() and _leftovers(tmp_path) == []
 
 
@@ -700,13 +707,13 @@ def test_strict_stops_at_the_first_flagged_chunk(tmp_path, monkeypatch):
     write_table(frame, path)
     out = tmp_path / "out.csv"
     seen = []
-    original = gsfric.evaluation.evaluate_outputs     # what simulate evaluates each chunk with
-    monkeypatch.setattr(gsfric.evaluation, "evaluate_outputs",
+    original = gsfric.simulate.run.evaluate_outputs   # what simulate evaluates each chunk with
+    monkeypatch.setattr(gsfric.simulate.run, "evaluate_outputs",
                         lambda evaluator, motion, *a, **kw: seen.append(motion.t[0])
                         or original(evaluator, motion, *a, **kw))
     with pytest.raises(StepFlagError, match=r"^.*t.csv: 1 of 300 steps flagged .*steps 250 "
                                             r"\(data rows 251\) \(--strict"):
-        stream.simulate_file(path, out, chunk=100, window=9, strict=True)
+        simulate_file(path, out, chunk=100, window=9, strict=True)
     assert len(seen) == 3                             # stopped at the third chunk
     assert not out.exists() and _leftovers(tmp_path) == []
 
@@ -719,18 +726,18 @@ def test_bad_output_paths(tmp_path):
                          (path, "is the trajectory file itself"),
                          (tmp_path, "unknown extension")]:
         with pytest.raises(InputError, match=message):
-            stream.simulate_file(path, out)
+            simulate_file(path, out)
 
 
 def test_chunk_and_window_are_checked(tmp_path):
     path = tmp_path / "t.csv"
     write_table(_trajectory_frame(500), path)
     with pytest.raises(InputError, match=r"^chunk: must be an integer >= 7, got 3$"):
-        list(stream.iter_motions(path, chunk=3))
+        list(iter_motions(path, chunk=3))
     with pytest.raises(InputError, match=r"^window = 21 is longer than the chunk of 11 steps"):
-        list(stream.iter_motions(path, chunk=11, window=21))
+        list(iter_motions(path, chunk=11, window=21))
     with pytest.raises(InputError, match=r"t.csv: window must be odd, got 10$"):
-        list(stream.iter_motions(path, chunk=50, window=10))
+        list(iter_motions(path, chunk=50, window=10))
 
 
 def test_200k_steps_in_small_chunks_bounded_memory(tmp_path):
@@ -754,7 +761,6 @@ def test_200k_steps_in_small_chunks_bounded_memory(tmp_path):
     figures = json.loads(run.stdout)
     assert figures["returncode"] == 0, figures["stderr"]
     assert figures["stdout"] == f"wrote {out} (200000 steps, 0 flagged)"
-    import pyarrow.parquet as pq
 
     source = pq.ParquetFile(out)
     assert source.metadata.num_rows == 200_000
@@ -847,7 +853,6 @@ def test_measured_forces_of_1e300_are_refused_with_the_row(tmp_path):
     frame.loc[7, "F3"] = 1e300
     path = tmp_path / "m.csv"
     write_table(frame, path)
-    from gsfric.io.readers import read_measured
 
     with pytest.raises(InputError, match=r"m\.csv: row 8: column 'F3' = 1e\+300 N is not a "
                                          r"plausible actuator force \(\|F\| > 1e\+08 N\)"):
@@ -855,10 +860,6 @@ def test_measured_forces_of_1e300_are_refused_with_the_row(tmp_path):
 
 
 def test_synth_rate_outside_the_range_exit_2(tmp_path):
-    from click.testing import CliRunner
-
-    from gsfric.cli import main
-
     result = CliRunner().invoke(main, ["synth", "--out", str(tmp_path / "m.csv"), "--rate",
                                        "1e-300"])
     assert result.exit_code == 2
@@ -902,10 +903,6 @@ def test_long_non_uniform_spline_equals_scipy_with_its_penalties():
     """Above SPLINE_GCV_ROWS, the fit of every sample is make_smoothing_spline's with the
     penalties ``spline_penalties`` chose (same numbers, one banded set-up), and each penalty
     is the one of least estimated acceleration error: on a noise-free record the smallest."""
-    from scipy.interpolate import make_smoothing_spline
-
-    from gsfric.signal import spline as tr
-
     rng = np.random.default_rng(3)
     n = tr.SPLINE_GCV_ROWS + 700
     t = np.cumsum(rng.uniform(0.5, 1.5, n)) * 0.01
@@ -924,8 +921,6 @@ def test_long_non_uniform_spline_equals_scipy_with_its_penalties():
 
 
 def test_bench_ratio_of_a_zero_time_is_nan():
-    from gsfric.bench.throughput import Case, _ratio
-
     assert np.isnan(_ratio(1.0, 0.0)) and np.isnan(_ratio(None, 1.0)) and _ratio(6.0, 2.0) == 3
     case = Case("compiled", 1, 40, best=0.0, cpu_best=0.0)
     assert np.isnan(case.steps_per_second) and np.isnan(case.steps_per_cpu_second)

@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import os
+
 import numpy as np
 import pandas as pd
 import pyarrow.parquet as pq
@@ -11,9 +13,18 @@ from click.testing import CliRunner
 import gsfric
 from gsfric import models
 from gsfric.cli import main
+from gsfric.evaluation.columns import DEFAULT_GROUPS, GROUPS
+from gsfric.evaluation.evaluator import Evaluator, evaluate_outputs
+from gsfric.io.readers import read_trajectory
 from gsfric.io.tables import write_table
+from gsfric.platform.catalog import apply_sensor
 from gsfric.signal.rotations import quaternion_from_rotation
-from gsfric.simulate import stream
+from gsfric.signal.savgol import savgol_core, savgol_filter
+from gsfric.simulate import writer
+from gsfric.simulate.differentiate import iter_motions
+from gsfric.simulate.outputs import FLOAT32_RTOL
+from gsfric.simulate.run import simulate_file
+from gsfric.trajectory import Motion
 
 
 def _trajectory(path, n=700, rate=200.0):
@@ -36,7 +47,7 @@ def full(tmp_path_factory):
     folder = tmp_path_factory.mktemp("full")
     path = _trajectory(folder / "t.csv")
     out = folder / "all.parquet"
-    stream.simulate_file(path, out, chunk=200, window=9, columns=("all",))
+    simulate_file(path, out, chunk=200, window=9, columns=("all",))
     return path, pd.read_parquet(out), out
 
 
@@ -82,21 +93,21 @@ def test_default_columns_hold_the_documented_set_with_the_same_values(full, tmp_
 def test_every_group_but_the_defaults_is_named_in_the_help():
     result = _run("simulate", "--help")
     text = " ".join(result.output.split())
-    for group in stream.COLUMN_GROUPS:
+    for group in GROUPS:
         assert group in text, group
-    assert "[default: " + ",".join(stream.DEFAULT_COLUMN_GROUPS) + "]" in text
+    assert "[default: " + ",".join(DEFAULT_GROUPS) + "]" in text
 
 
 def test_float32_within_its_documented_error(full, tmp_path):
     path, every, _ = full
     out = tmp_path / "f32.parquet"
-    stream.simulate_file(path, out, chunk=200, window=9, float32=True)
+    simulate_file(path, out, chunk=200, window=9, float32=True)
     small = pd.read_parquet(out)
     assert small["t"].dtype == np.float64 and small["flag"].dtype == np.int64
     values = [c for c in small.columns if c not in ("t", "flag")]
     assert all(small[c].dtype == np.float32 for c in values)
     a, b = small[values].to_numpy(np.float64), every[values].to_numpy()
-    assert np.all(np.abs(a - b) <= stream.FLOAT32_RTOL * np.abs(b))
+    assert np.all(np.abs(a - b) <= FLOAT32_RTOL * np.abs(b))
     np.testing.assert_array_equal(small["t"], every["t"])
 
 
@@ -136,17 +147,14 @@ def test_streamed_sensor_delay_equals_the_whole_record(tmp_path, delay):
     """time_offset reaches across chunk starts (and, at 0.26 s, over a whole chunk of 200
     steps): the streamed F is the whole record's shifted F, bit for bit, and the evaluation
     of the whole file to rounding."""
-    from gsfric.io.readers import read_trajectory
-    from gsfric.platform.catalog import apply_sensor
-
     path = _trajectory(tmp_path / "t.parquet")              # 700 steps at 200 Hz
     base = models.reference_platform()
     gains = np.array([0.01, -0.02, 0.0, 0.03, 0.0, -0.01])
     sensor = base.with_effect("time_offset", delay=delay).with_effect(
         "force_scale", **{f"g{i + 1}": g for i, g in enumerate(gains)})
     plain, shifted = tmp_path / "plain.parquet", tmp_path / "shifted.parquet"
-    stream.simulate_file(path, plain, base, chunk=200, window=9, columns=["forces"])
-    summary = stream.simulate_file(path, shifted, sensor, chunk=200, window=9,
+    simulate_file(path, plain, base, chunk=200, window=9, columns=["forces"])
+    summary = simulate_file(path, shifted, sensor, chunk=200, window=9,
                                    columns=["forces", "lengths"])
     assert summary.chunks == 4
     plain, shifted = pd.read_parquet(plain), pd.read_parquet(shifted)
@@ -167,12 +175,10 @@ def test_streamed_motions_are_the_validated_motions(full):
     """The reader builds its Motions without a second validation pass (``Motion._trusted``):
     each equals the Motion validated from the same arrays, read-only and C-contiguous, and
     its rotations are rotations."""
-    from gsfric.trajectory import Motion
-
     path, _, _ = full
-    chunks = list(stream.iter_motions(path, chunk=200, window=9))
-    assert sum(len(m) for _, m in chunks) == 700
-    for _, motion in chunks:
+    chunks = list(iter_motions(path, chunk=200, window=9))
+    assert sum(len(c.motion) for c in chunks) == 700
+    for motion in (c.motion for c in chunks):
         fields = ("t", "position", "rotation", "velocity", "omega", "acceleration", "alpha")
         checked = Motion(*(np.array(getattr(motion, f)) for f in fields))
         assert checked == motion
@@ -189,13 +195,11 @@ def test_streamed_motions_are_the_validated_motions(full):
 def test_filter_on_the_core_is_the_whole_signals_to_the_bit(window, polyorder):
     """Windows and orders whose weights are even, odd and neither (scipy.ndimage sums each
     kind its own way): the streamed filter gives savgol_filter's values exactly."""
-    from gsfric.signal.savgol import savgol_filter
-
     rng = np.random.default_rng(window * 10 + polyorder)
     y = np.cumsum(rng.normal(size=(400, 4)), axis=0) * 0.01 + 0.5
     step = 0.004
     h = window // 2
-    got = stream._savgol_core(y, window, polyorder, step, h + 3, 400 - h - 5)
+    got = savgol_core(y, window, polyorder, step, h + 3, 400 - h - 5)
     for k in (0, 1, 2):
         expected = savgol_filter(y, window, polyorder, k) / step**k
         np.testing.assert_array_equal(got[k], expected[h + 3:400 - h - 5], err_msg=str(k))
@@ -203,8 +207,6 @@ def test_filter_on_the_core_is_the_whole_signals_to_the_bit(window, polyorder):
 
 
 def test_selected_outputs_and_flags_equal_the_full_evaluation():
-    from gsfric.evaluation.evaluator import Evaluator, evaluate_outputs
-
     platform = models.reference_platform()
     motion = models.sinusoidal(np.linspace(0.0, 2.0, 401))
     evaluator = Evaluator(platform)
@@ -234,9 +236,9 @@ def test_default_and_all_columns_flag_the_same_steps(tmp_path):
     path = tmp_path / "t.parquet"
     write_table(frame, path)
     with pytest.warns(gsfric.errors.GsfricWarning):
-        a = stream.simulate_file(path, tmp_path / "default.parquet", chunk=150, window=9)
+        a = simulate_file(path, tmp_path / "default.parquet", chunk=150, window=9)
     with pytest.warns(gsfric.errors.GsfricWarning):
-        b = stream.simulate_file(path, tmp_path / "all.parquet", chunk=150, window=9,
+        b = simulate_file(path, tmp_path / "all.parquet", chunk=150, window=9,
                                  columns=("all",))
     assert a.flagged == b.flagged > 0
     np.testing.assert_array_equal(a.flagged_steps, b.flagged_steps)
@@ -247,15 +249,31 @@ def test_default_and_all_columns_flag_the_same_steps(tmp_path):
 
 
 def test_flushing_while_writing_changes_nothing_in_the_file(full, tmp_path, monkeypatch):
-    import os
-
     path, _, out = full
-    monkeypatch.setattr(stream, "FLUSH_BYTES", 1)       # a request to the disk every chunk
+    monkeypatch.setattr(writer, "FLUSH_BYTES", 1)       # a request to the disk every chunk
     synced = []
     sync = getattr(os, "fdatasync", os.fsync)
     monkeypatch.setattr(os, "fdatasync" if hasattr(os, "fdatasync") else "fsync",
                         lambda fd: synced.append(fd) or sync(fd))
     again = tmp_path / "again.parquet"
-    stream.simulate_file(path, again, chunk=200, window=9, columns=("all",))
+    simulate_file(path, again, chunk=200, window=9, columns=("all",))
     assert 1 <= len(synced) <= 5                        # one at a time, in its own thread
     assert again.read_bytes() == out.read_bytes()
+
+
+def test_streamed_chunks_carry_their_rows_of_the_measured_forces(tmp_path):
+    """Each chunk's carried columns are the file's F1..F6 of its own steps, and every chunk
+    names the windows of the streamed file."""
+    path = _trajectory(tmp_path / "t.csv", n=650)
+    frame = pd.read_csv(path)
+    for i in range(1, 7):
+        frame[f"F{i}"] = np.arange(650) * 10.0 + i
+    frame.to_csv(path, index=False)
+    chunks = list(iter_motions(path, chunk=200, window=9))
+    assert [c.start for c in chunks] == [0, 200, 400, 600]
+    assert all(c.windows == (9, 9) for c in chunks)
+    for c in chunks:
+        rows = np.arange(c.start, c.start + len(c.motion))
+        np.testing.assert_array_equal(c.carried["F3"], frame["F3"].to_numpy()[rows])
+    whole, = iter_motions(path, chunk=1000, window=9)
+    assert whole.windows == "whole" and len(whole.carried["F1"]) == 650

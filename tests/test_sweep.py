@@ -4,19 +4,34 @@ resumed sweep), limits, and one-line errors on bad input."""
 
 from __future__ import annotations
 
+import glob
+import logging
 import os
+import pickle
 import signal
 import subprocess
 import sys
+import tracemalloc
 
 import numpy as np
 import pandas as pd
 import pytest
+from scipy.spatial.transform import Rotation
 
+import gsfric
 from gsfric import io, models
+from gsfric.compiled.state import state_layout
 from gsfric.errors import InputError
-from gsfric.evaluation.evaluator import evaluate
-from gsfric.sweep import sweep as sw
+from gsfric.evaluation.evaluator import Evaluator, evaluate
+from gsfric.evaluation.flags import FLAG_COUPLING, FLAG_STROKE
+from gsfric.platform.description import Platform
+from gsfric.signal.rotations import rotation_from_rpy
+from gsfric.sweep import SweepResult, Workspace, blocks, load, run, sweep, tasks
+from gsfric.sweep.plan import plan
+from gsfric.sweep.result import fold, merge
+from gsfric.sweep.variants import make_variants
+from gsfric.sweep.workspace import check_reachable
+from gsfric.trajectory import Motion
 
 WORKSPACE = {
     "sampling": "lhs", "samples": 60, "states": 4, "seed": 3,
@@ -34,7 +49,7 @@ def inputs(tmp_path_factory):
         motion = models.random_motion(np.random.default_rng(k), np.linspace(0, 4, 801))
         io.write_table(motion.to_frame(), folder / f"motion{k}.csv")
     return dict(trajectories=str(folder / "motion*.csv"),
-                workspace=sw.Workspace.from_dict(WORKSPACE),
+                workspace=Workspace.from_dict(WORKSPACE),
                 vary={"platform.payload_mass": (0.0, 8.0), "friction.joint_coulomb": (0.02, 0.1)},
                 tolerances={"geometry.base_joints": 0.001}, variants=3, seed=1,
                 chunk_steps=1000)
@@ -43,7 +58,7 @@ def inputs(tmp_path_factory):
 @pytest.fixture(scope="module")
 def serial(inputs, tmp_path_factory):
     out = tmp_path_factory.mktemp("serial") / "out"
-    return sw.sweep(out, scheduler="serial", plots=False, **inputs)
+    return sweep(out, scheduler="serial", plots=False, **inputs)
 
 
 def _same(a, b):
@@ -52,8 +67,6 @@ def _same(a, b):
 
 def test_envelope_is_the_extreme_of_a_direct_evaluation(serial, inputs):
     """Every extreme, its step and the dissipated energy, from evaluate() and numpy alone."""
-    import glob
-
     path = sorted(glob.glob(inputs["trajectories"]))[0]
     motion = io.read_trajectory(path)
     result = evaluate(models.reference_platform(), motion)
@@ -81,20 +94,17 @@ def test_envelope_is_the_extreme_of_a_direct_evaluation(serial, inputs):
 
 def test_workspace_location_reproduces_the_extreme(serial):
     """Re-evaluating the reported workspace state gives the reported value."""
-    ws = sw.Workspace.from_dict(WORKSPACE)
+    ws = Workspace.from_dict(WORKSPACE)
     poses = ws.poses()
     row = serial.summary[(serial.summary.quantity == "R_C") &
                          (serial.summary.motion == "workspace")].iloc[0]
     pose_index, _ = divmod(int(row.step), ws.states)
     x = ws.states_of(poses[pose_index:pose_index + 1], pose_index)[int(row.step) % ws.states]
-    from gsfric.trajectory import Motion
-
-    motion = Motion(np.zeros(1), x[None, 0:3], x[None, 3:12].reshape(1, 3, 3), x[None, 12:15],
-                    x[None, 15:18], x[None, 18:21], x[None, 21:24])
-    platforms, _ = sw.make_variants(models.reference_platform(),
-                                    {"platform.payload_mass": (0.0, 8.0),
-                                     "friction.joint_coulomb": (0.02, 0.1)},
-                                    {"geometry.base_joints": 0.001}, 3, 1)
+    motion = Motion(np.zeros(1), *state_layout().split(x[None]))
+    platforms, _ = make_variants(models.reference_platform(),
+                                 {"platform.payload_mass": (0.0, 8.0),
+                                  "friction.joint_coulomb": (0.02, 0.1)},
+                                 {"geometry.base_joints": 0.001}, 3, 1)
     result = evaluate(platforms[int(row.variant)], motion)
     assert np.linalg.norm(result.R_C[0, int(row.leg) - 1]) == pytest.approx(row.value,
                                                                              rel=1e-12)
@@ -102,8 +112,8 @@ def test_workspace_location_reproduces_the_extreme(serial):
 
 
 def test_chunking_does_not_change_the_envelopes(serial, inputs, tmp_path):
-    whole = sw.sweep(tmp_path / "out", scheduler="serial", plots=False,
-                     **{**inputs, "chunk_steps": 10**7})
+    whole = sweep(tmp_path / "out", scheduler="serial", plots=False,
+                  **{**inputs, "chunk_steps": 10**7})
     assert whole.info["tasks"] < serial.info["tasks"]
     _same(whole, serial)
 
@@ -122,8 +132,6 @@ def test_variants_heavier_payload_loads_the_actuators_more(serial):
 @pytest.fixture(scope="module")
 def cluster():
     distributed = pytest.importorskip("distributed")
-    import logging
-
     with distributed.LocalCluster(n_workers=2, threads_per_worker=1, processes=True,
                                   dashboard_address=None, silence_logs=logging.ERROR) as c, \
             distributed.Client(c) as client:
@@ -132,8 +140,8 @@ def cluster():
 
 def test_local_cluster_of_two_workers_equals_serial(serial, inputs, cluster, tmp_path,
                                                     monkeypatch):
-    monkeypatch.setattr(sw, "MERGE_EVERY", 2)   # fold envelopes as they arrive, in any order
-    result = sw.sweep(tmp_path / "out", scheduler=cluster, plots=False, **inputs)
+    monkeypatch.setattr(run, "MERGE_EVERY", 2)   # fold envelopes as they arrive, in any order
+    result = sweep(tmp_path / "out", scheduler=cluster, plots=False, **inputs)
     assert len(cluster.scheduler_info()["workers"]) == 2
     _same(result, serial)
     pd.testing.assert_frame_equal(result.summary, serial.summary, check_exact=True)
@@ -148,14 +156,14 @@ def test_killing_a_worker_mid_sweep_gives_the_same_envelopes(serial, inputs, clu
             os.kill(pids[0], signal.SIGKILL)
             killed.append(done)
 
-    result = sw.sweep(tmp_path / "out", scheduler=cluster, plots=False, on_chunk=kill_one,
-                      **inputs)
+    result = sweep(tmp_path / "out", scheduler=cluster, plots=False, on_chunk=kill_one,
+                   **inputs)
     assert killed and killed[0] < result.info["tasks"]
     _same(result, serial)
 
 
 def test_resumed_sweep_equals_an_uninterrupted_one(serial, inputs, tmp_path, monkeypatch):
-    monkeypatch.setattr(sw, "MERGE_EVERY", 2)
+    monkeypatch.setattr(run, "MERGE_EVERY", 2)
     out = tmp_path / "out"
 
     class Stop(Exception):
@@ -166,19 +174,19 @@ def test_resumed_sweep_equals_an_uninterrupted_one(serial, inputs, tmp_path, mon
             raise Stop
 
     with pytest.raises(Stop):
-        sw.sweep(out, scheduler="serial", plots=False, on_chunk=stop_after_three, **inputs)
+        sweep(out, scheduler="serial", plots=False, on_chunk=stop_after_three, **inputs)
     assert not out.exists()
     assert len(list((tmp_path / "out.partial" / "chunks").glob("*.parquet"))) == 3
     seen = []
-    resumed = sw.sweep(out, scheduler="serial", plots=False,
-                       on_chunk=lambda d, t: seen.append(d), **inputs)
+    resumed = sweep(out, scheduler="serial", plots=False,
+                    on_chunk=lambda d, t: seen.append(d), **inputs)
     assert resumed.info["computed_tasks"] == serial.info["tasks"] - 3
     assert seen == list(range(4, serial.info["tasks"] + 1))
     assert not (tmp_path / "out.partial").exists()
     _same(resumed, serial)
     assert resumed.info["steps"] == serial.info["steps"]
     # the same sweep again: read back, nothing computed
-    again = sw.sweep(out, scheduler="serial", plots=False, **inputs)
+    again = sweep(out, scheduler="serial", plots=False, **inputs)
     _same(again, serial)
 
 
@@ -194,7 +202,7 @@ def test_limits_list_exactly_the_exceeding_cases(serial, inputs, tmp_path):
     toml = tmp_path / "platform.toml"
     platform.to_toml(toml)
     args = {**inputs, "vary": None, "tolerances": None}
-    result = sw.sweep(tmp_path / "out", platform=toml, scheduler="serial", **args)
+    result = sweep(tmp_path / "out", platform=toml, scheduler="serial", **args)
     env, bad = result.envelopes, result.exceeded
     for q, over in (("R_E", env.value > rating), ("F_max", env.value > hi),
                     ("F_min", env.value < lo)):
@@ -232,7 +240,7 @@ def test_variant_range_min_above_max(inputs, tmp_path):
                          inputs["trajectories"], "--vary", "platform.payload_mass=5:2"),
                     "platform.payload_mass", "min 5 > max 2")
     with pytest.raises(InputError, match="unknown parameter"):
-        sw.make_variants(models.reference_platform(), {"platform.payload": (0, 1)})
+        make_variants(models.reference_platform(), {"platform.payload": (0, 1)})
 
 
 def test_unreachable_workspace(tmp_path):
@@ -247,18 +255,16 @@ def test_unreachable_workspace(tmp_path):
 
 def test_output_folder_of_another_sweep_is_not_overwritten(serial, inputs):
     with pytest.raises(InputError, match="exists"):
-        sw.sweep(serial.out, scheduler="serial", plots=False, **{**inputs, "seed": 2})
+        sweep(serial.out, scheduler="serial", plots=False, **{**inputs, "seed": 2})
 
 
-def test_gsfric_sweep_is_callable():
-    import gsfric
-
-    assert gsfric.sweep.Workspace is sw.Workspace and callable(gsfric.sweep)
+def test_gsfric_sweep_names_are_reachable():
+    """``import gsfric`` reaches the package's entry points as attributes."""
+    assert gsfric.sweep.sweep is sweep and gsfric.sweep.load is load
+    assert gsfric.sweep.Workspace is Workspace and gsfric.sweep.SweepResult is SweepResult
 
 
 def test_platform_limits_round_trip_and_one_line_errors(tmp_path):
-    from gsfric.platform.description import Platform
-
     platform = models.reference_platform().replace(
         limits={"actuator_force": 200.0, "universal_load": 300.0})
     assert platform.limits["actuator_force"] == (-200.0, 200.0)
@@ -275,12 +281,12 @@ def test_platform_limits_round_trip_and_one_line_errors(tmp_path):
 
 def test_merge_is_independent_of_arrival_order_and_folding(serial, inputs):
     """Task envelopes folded in a shuffled order, in steps, give the serial envelopes."""
-    p = sw.plan(**inputs)
-    frames = [sw.run_task(t) for t in p.tasks]
+    p = plan(**inputs)
+    frames = [tasks.run_task(t) for t in p.tasks]
     order = np.random.default_rng(5).permutation(len(frames))
     shuffled = [frames[i].sample(frac=1.0, random_state=1) for i in order]
-    folded = sw._reduce(shuffled[:3])
-    pd.testing.assert_frame_equal(sw.merge([folded, *shuffled[3:]]), serial.envelopes,
+    folded = fold(shuffled[:3])
+    pd.testing.assert_frame_equal(merge([folded, *shuffled[3:]]), serial.envelopes,
                                   check_exact=True)
 
 
@@ -289,7 +295,7 @@ def test_merge_is_independent_of_arrival_order_and_folding(serial, inputs):
 
 def _flagging_workspace():
     """Poses of which some put a leg beyond the stroke (flagged steps), in dynamic states."""
-    ws = sw.Workspace.from_dict({**WORKSPACE, "samples": 40, "pose": {
+    ws = Workspace.from_dict({**WORKSPACE, "samples": 40, "pose": {
         **WORKSPACE["pose"], "z": [0.66, 1.12]}})
     return ws, ws.poses()
 
@@ -323,16 +329,12 @@ def test_block_evaluation_is_evaluate_quiet(name):
     """Each step's enveloped values (the generated function ``envelope``), evaluated block by
     block, equal the norms and products of Evaluator.evaluate_quiet's outputs to 1e-12, with
     exactly its step flags (stroke and coupled-friction flags included)."""
-    from gsfric.evaluation.evaluator import FLAG_COUPLING, FLAG_STROKE, Evaluator
-    from gsfric.trajectory import Motion
-
     platform = _platforms()[name]
     ws, poses = _flagging_workspace()
     x = ws.states_of(poses, 0)
     n = len(x)
     t = np.linspace(0.0, 1.0, n)
-    motion = Motion(t, x[:, 0:3], x[:, 3:12].reshape(n, 3, 3), x[:, 12:15], x[:, 15:18],
-                    x[:, 18:21], x[:, 21:24])
+    motion = Motion(t, *state_layout().split(x))
     with np.errstate(all="ignore"):
         expected = Evaluator(platform).evaluate_quiet(motion)
     assert np.any(expected.flag & FLAG_STROKE) and not np.all(expected.flag)
@@ -340,9 +342,9 @@ def test_block_evaluation_is_evaluate_quiet(name):
         assert np.any(expected.flag & FLAG_COUPLING)
     G = _expected_values(expected)
     scale = np.abs(G).max(axis=0, initial=0.0, where=np.isfinite(G)) + 1e-300  # (13, 6)
-    block = sw._Block(37)                    # blocks that do not divide the steps
+    block = blocks.Block(37)                    # blocks that do not divide the steps
     seen = 0
-    for s, e in sw._Evaluation(platform).blocks(block, x, t):
+    for s, e in blocks.Evaluation(platform).blocks(block, x, t):
         assert s == seen and e - s <= 37
         np.testing.assert_array_equal(block.flag, expected.flag[s:e])
         ok = np.isfinite(G[s:e]).all(axis=(1, 2))      # flagged steps included
@@ -355,13 +357,11 @@ def test_block_evaluation_is_evaluate_quiet(name):
 def test_sweep_with_the_paper_friction_model_and_effects(inputs, tmp_path):
     """A platform file of the paper's friction model with effects: every motion envelope is
     the extreme of evaluate() on that platform, and its friction differs from the nominal's."""
-    import glob
-
     platform = models.reference_platform("paper").with_effect("stribeck", static=3.0) \
         .with_effect("sensor_bias", b1=1.5)
     platform.to_toml(tmp_path / "paper.toml")
-    result = sw.sweep(tmp_path / "out", trajectories=inputs["trajectories"],
-                      platform=tmp_path / "paper.toml", scheduler="serial", plots=False)
+    result = sweep(tmp_path / "out", trajectories=inputs["trajectories"],
+                   platform=tmp_path / "paper.toml", scheduler="serial", plots=False)
     env = result.envelopes.set_index(["motion", "quantity", "leg"])
     for path in sorted(glob.glob(inputs["trajectories"])):
         motion = io.read_trajectory(path)
@@ -379,20 +379,15 @@ def test_sweep_with_the_paper_friction_model_and_effects(inputs, tmp_path):
 def test_workspace_envelope_leaves_the_flagged_steps_out(monkeypatch):
     """A task's envelope is the extreme over the unflagged steps of evaluate_quiet, block
     boundaries and all; flagged steps are counted."""
-    from gsfric.evaluation.evaluator import Evaluator
-    from gsfric.trajectory import Motion
-
-    monkeypatch.setattr(sw, "BLOCK_STEPS", 24)
+    monkeypatch.setattr(tasks, "BLOCK_STEPS", 24)
     ws, poses = _flagging_workspace()
     platform = models.reference_platform()
-    task = sw.Task(0, "workspace", [0], [platform], len(poses) * ws.states, poses=poses,
-                   first_pose=0, workspace=ws)
-    frame = sw.run_task(task).set_index(["quantity", "leg"])
+    task = tasks.Task(0, "workspace", [0], [platform], len(poses) * ws.states, poses=poses,
+                      first_pose=0, workspace=ws)
+    frame = tasks.run_task(task).set_index(["quantity", "leg"])
     x = ws.states_of(poses, 0)
     n = len(x)
-    r = Evaluator(platform).evaluate_quiet(Motion(
-        np.zeros(n), x[:, 0:3], x[:, 3:12].reshape(n, 3, 3), x[:, 12:15], x[:, 15:18],
-        x[:, 18:21], x[:, 21:24]))
+    r = Evaluator(platform).evaluate_quiet(Motion(np.zeros(n), *state_layout().split(x)))
     ok = r.flag == 0
     assert 0 < ok.sum() < n
     assert (frame.flagged == n - ok.sum()).all() and (frame.steps == n).all()
@@ -417,19 +412,17 @@ def test_workspace_envelope_leaves_the_flagged_steps_out(monkeypatch):
 def test_task_memory_follows_the_block_not_the_task():
     """Peak memory (numpy's traced allocations) of a task 8 times larger grows only by its
     poses, not by its evaluated outputs (313 values per step)."""
-    import tracemalloc
-
-    ws = sw.Workspace.from_dict({**WORKSPACE, "samples": 16_000, "states": 8})
+    ws = Workspace.from_dict({**WORKSPACE, "samples": 16_000, "states": 8})
     poses = ws.poses()
     platform = models.reference_platform()
-    sw.run_task(sw.Task(0, "workspace", [0], [platform], 8, poses=poses[:1], workspace=ws))
+    tasks.run_task(tasks.Task(0, "workspace", [0], [platform], 8, poses=poses[:1], workspace=ws))
 
     def peak(n_poses):
-        task = sw.Task(0, "workspace", [0], [platform], n_poses * 8, poses=poses[:n_poses],
-                       first_pose=0, workspace=ws)
+        task = tasks.Task(0, "workspace", [0], [platform], n_poses * 8, poses=poses[:n_poses],
+                          first_pose=0, workspace=ws)
         tracemalloc.start()
         try:
-            sw.run_task(task)
+            tasks.run_task(task)
             return tracemalloc.get_traced_memory()[1]
         finally:
             tracemalloc.stop()
@@ -443,7 +436,7 @@ def test_task_memory_follows_the_block_not_the_task():
 def test_workspace_states_follow_their_definition():
     """Each component at -bound where the pose's Philox stream draws a double below 0.5, else
     +bound; state 0 static; the same whatever block a pose is drawn in."""
-    ws = sw.Workspace.from_dict({**WORKSPACE, "states": 5, "bounds": {
+    ws = Workspace.from_dict({**WORKSPACE, "states": 5, "bounds": {
         "velocity": [0.2, 0.0, 0.1], "omega": 0.4, "acceleration": 2.0, "alpha": 4.0}})
     poses = ws.poses()
     x = ws.states_of(poses, 0)
@@ -456,33 +449,41 @@ def test_workspace_states_follow_their_definition():
     buffer = np.empty(7 * 5 * 36)
     part = ws.states_of(poses[13:20], 13, out=buffer)
     np.testing.assert_array_equal(part, x[13 * 5:20 * 5])
-    from scipy.spatial.transform import Rotation
-
     rotation = Rotation.from_euler("ZYX", poses[:, [5, 4, 3]]).as_matrix()
     np.testing.assert_allclose(x[::5, 3:12].reshape(-1, 3, 3), rotation, rtol=0, atol=1e-15)
 
 
-def test_reachability_uses_the_leg_lengths_of_the_discovery_workflow():
-    """The sweep's leg lengths (one matrix product per pose) are rest.leg_lengths'."""
-    from gsfric.discovery.rest import leg_lengths
-
-    ws, poses = _flagging_workspace()
+def test_reachability_reports_the_first_unreachable_pose_of_any_block(monkeypatch):
+    """Platform.leg_lengths checked block by block: the count of unreachable poses and the
+    first one (its leg and length) whatever the blocks; reachable poses pass."""
+    _, poses = _flagging_workspace()
     platform = models.reference_platform()
-    expected = leg_lengths(platform, poses[:, :3], sw._rotation(poses))
-    np.testing.assert_allclose(sw._leg_lengths(platform, poses), expected, rtol=1e-15,
-                               atol=1e-15)
+    lengths = platform.leg_lengths(poses[:, :3], rotation_from_rpy(poses[:, 3:6]))
     lo, hi = platform.geometry.stroke
-    assert ((expected < lo) | (expected > hi)).any()
+    outside = (lengths < lo) | (lengths > hi)
+    bad = outside.any(axis=1)
+    k = int(np.flatnonzero(bad)[0])
+    leg = int(np.flatnonzero(outside[k])[0])
+    assert 0 < k and bad.sum() > 1
+    messages = []
+    for size in (3, 8192):
+        monkeypatch.setattr("gsfric.sweep.workspace._LENGTH_BLOCK", size)
+        with pytest.raises(InputError) as info:
+            check_reachable(platform, poses, "ws.toml")
+        messages.append(str(info.value))
+    assert messages[0] == messages[1]
+    assert messages[0].startswith(f"ws.toml: unreachable: {int(bad.sum())} of {len(poses)} ")
+    assert f"first: pose {k} (" in messages[0]
+    assert f"leg {leg + 1} length {lengths[k, leg]:.4g} m" in messages[0]
+    check_reachable(platform, poses[~bad])
 
 
 def test_workspace_tasks_with_many_variants_carry_few_poses():
     """Every (pose, variant) pair is in exactly one task; with many variants a task carries a
     block of the poses and a group of the variants, near the chunk size, not all the poses."""
-    import pickle
-
-    ws = sw.Workspace.from_dict({**WORKSPACE, "samples": 125_000, "states": 8})
-    p = sw.plan(workspace=ws, vary={"platform.payload_mass": (0.0, 8.0)}, variants=200,
-                chunk_steps=10**6)
+    ws = Workspace.from_dict({**WORKSPACE, "samples": 125_000, "states": 8})
+    p = plan(workspace=ws, vary={"platform.payload_mass": (0.0, 8.0)}, variants=200,
+             chunk_steps=10**6)
     counts = np.zeros((125_000, 201), dtype=int)
     for task in p.tasks:
         counts[task.first_pose:task.first_pose + len(task.poses), task.variants] += 1

@@ -10,6 +10,7 @@ from scipy.spatial.transform import Rotation
 
 from gsfric.errors import GsfricWarning, InputError
 from gsfric.signal.rotations import (
+    angular_rates,
     euler_from_rotation,
     quaternion_from_euler,
     quaternion_from_rotation,
@@ -312,3 +313,18 @@ def test_motion_validation_and_helpers():
         Motion(t, position, rotation, velocity, omega, acceleration,
                np.where(np.arange(12)[:, None] == 2, np.inf, alpha))
     assert MIN_SAMPLES == 7
+
+
+def test_angular_rates_of_a_uniformly_accelerated_turn():
+    """q(t) = (cos(phi/2), sin(phi/2) n) with phi = w0 t + a t^2 / 2 about the unit axis n:
+    omega = phi' n and alpha = phi'' n, also for a quaternion scaled by 3 (not unit)."""
+    t = np.linspace(0.0, 2.0, 9)[:, None]
+    w0, a = 0.7, -0.3
+    phi, rate = w0 * t + a * t**2 / 2, w0 + a * t
+    half = np.hstack([np.cos(phi / 2), np.sin(phi / 2) * AXIS])
+    turned = np.hstack([-np.sin(phi / 2), np.cos(phi / 2) * AXIS])
+    q0, q1 = 3 * half, 3 * turned * rate / 2
+    q2 = 3 * (-half * (rate / 2) ** 2 + turned * a / 2)
+    omega, alpha = angular_rates(q0, q1, q2)
+    np.testing.assert_allclose(omega, rate * AXIS, atol=1e-14)
+    np.testing.assert_allclose(alpha, np.broadcast_to(a * AXIS, alpha.shape), atol=1e-14)

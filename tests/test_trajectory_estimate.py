@@ -6,19 +6,16 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
+from scipy import signal
 from scipy.spatial.transform import Rotation
 
+import gsfric.signal.windows as windows
 from gsfric.errors import InputError
-from gsfric.models import reference_platform
+from gsfric.models import minimum_jerk_moves, reference_platform
 from gsfric.signal.noise import white_noise_std
 from gsfric.signal.rotations import quaternion_from_rotation
-from gsfric.signal.savgol import (
-    adaptive_filters,
-    gcv_window,
-    motion_filters,
-    savgol_adaptive,
-    savgol_filter,
-)
+from gsfric.signal.savgol import savgol_filter
+from gsfric.signal.windows import adaptive_filters, gcv_window, motion_filters, savgol_adaptive
 from gsfric.synth import read_forces
 from gsfric.trajectory import Motion
 
@@ -145,8 +142,6 @@ def test_white_noise_of_a_log_whose_rests_read_one_value():
     """Moves and rests logged at 0.1 um (mm with four decimals), rests three quarters of the
     record: every rest reads one value, and the noise is that of the rounding in the moves,
     resolution / sqrt(12), not zero (the median of the differences, most of them zero)."""
-    from gsfric.models import minimum_jerk_moves
-
     rng = np.random.default_rng(3)
     t = np.arange(6000) / 500.0
     targets = rng.uniform(-0.02, 0.02, (7, 3)) + [0.0, 0.0, 0.9]
@@ -164,8 +159,6 @@ def test_windows_spanning_a_triangle_waves_corners_are_not_chosen(monkeypatch, c
     little; the choice must not take them for unbiased. Longer candidate windows leave the
     acceleration error of the windows up to 201 samples (without the detected-bias rule, 801
     samples gave nine times that error)."""
-    import gsfric.signal.savgol as savgol
-
     rng = np.random.default_rng(5)
     rate = 476.0
     t = np.arange(int(8 * rate)) / rate
@@ -177,7 +170,7 @@ def test_windows_spanning_a_triangle_waves_corners_are_not_chosen(monkeypatch, c
     recorded = position + rng.normal(0.0, 1e-5, position.shape)
 
     def error(longest):
-        monkeypatch.setattr(savgol, "MAX_AUTO_WINDOW", longest)
+        monkeypatch.setattr(windows, "MAX_AUTO_WINDOW", longest)
         filters = motion_filters(recorded)
         estimate = savgol_adaptive(recorded, filters, 1 / rate)[2]
         inner = slice(len(t) // 20, -len(t) // 20)
@@ -267,8 +260,6 @@ def test_repeated_time_stamp_names_the_row():
 @pytest.mark.parametrize("deriv", [0, 1, 2])
 def test_savgol_filter_is_scipys_where_scipys_is_exact(window, deriv):
     """Order 4, short windows: scipy.signal.savgol_filter (mode "interp") to rounding."""
-    from scipy import signal
-
     y = np.cumsum(np.random.default_rng(window + deriv).normal(size=(300, 3)), axis=0)
     expected = signal.savgol_filter(y, window, 4, deriv=deriv, axis=0, mode="interp")
     np.testing.assert_allclose(savgol_filter(y, window, 4, deriv), expected,

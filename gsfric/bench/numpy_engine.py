@@ -24,7 +24,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from gsfric.evaluation.evaluator import JOINT_EPS, PRISMATIC_EPS, PRISMATIC_POINT
+from gsfric.compiled.state import state_layout
+from gsfric.evaluation.parameters import JOINT_EPS, PRISMATIC_EPS, PRISMATIC_POINT
 from gsfric.platform.catalog import EFFECTS
 from gsfric.platform.description import Platform
 
@@ -108,12 +109,6 @@ def parameters(platform: Platform) -> Parameters:
         prismatic_eps=PRISMATIC_EPS, effects=q)
 
 
-def _split_state(x: np.ndarray):
-    """p, T, v, omega, a, alpha of states x (..., 24)."""
-    return (x[..., 0:3], x[..., 3:12].reshape(x.shape[:-1] + (3, 3)), x[..., 12:15],
-            x[..., 15:18], x[..., 18:21], x[..., 21:24])
-
-
 def _prismatic_effects(q: dict, v, sgn_v, D, bending):
     """The catalog's friction force on the upper part along u (derive/effects.py).
 
@@ -190,26 +185,47 @@ def actuator_forces_numpy(platform: Platform, x: np.ndarray, chunk: int = 2048) 
     return out
 
 
-def _forces_block(prm: Parameters, x: np.ndarray) -> np.ndarray:
-    """``actuator_forces_numpy`` for one block of steps x (n, 24)."""
-    xt = np.ascontiguousarray(x.T)
-    p, v, w, a, al = xt[0:3], xt[12:15], xt[15:18], xt[18:21], xt[21:24]
-    T = xt[3:12].reshape(3, 3, -1)
-    g = prm.gravity
-    q = prm.effects
+@dataclass
+class _LegMotion:
+    """The six legs' kinematics over a block of n steps: vectors (3, n, 6), scalars (n, 6).
 
-    # platform and payload: the resultant force and moment about p they need, (2)-(7)
-    F_req = np.zeros_like(p)
-    M_req = np.zeros_like(p)
+    (1), (8)-(10), with the spin the universal joint allows: ``r_E = E_i - p``, ``E`` the
+    platform joints, ``D``, ``u`` (unit, C_i to E_i), ``n`` the universal joint's torsion
+    direction, ``a2`` its second axis, ``D_dot``, ``u_dot``, ``D_ddot``, ``u_ddot``, ``aE`` the
+    acceleration of E_i, ``w_L`` and ``al_L`` the leg's angular velocity and acceleration.
+    """
+
+    r_E: np.ndarray
+    E: np.ndarray
+    D: np.ndarray
+    u: np.ndarray
+    n: np.ndarray
+    a2: np.ndarray
+    D_dot: np.ndarray
+    u_dot: np.ndarray
+    D_ddot: np.ndarray
+    u_ddot: np.ndarray
+    aE: np.ndarray
+    w_L: np.ndarray
+    al_L: np.ndarray
+
+
+def _platform_loads(prm: Parameters, T, w, a, al, like: np.ndarray):
+    """Resultant force and moment about p that platform and payload need, (2)-(7), (3, n)."""
+    g = prm.gravity
+    F_req = np.zeros_like(like)
+    M_req = np.zeros_like(like)
     for mass, inertia, com in prm.bodies:
         r = np.tensordot(com, T, axes=([0], [1]))
         a_c = a + _cross(al, r) + _cross(w, _cross(w, r))
         force = mass * (a_c - g[:, None])
         F_req += force
         M_req += _cross(r, force) + _inertial_moment(T, inertia, al, w)
+    return F_req, M_req
 
-    # legs, (3, n, 6): kinematics (1), (8)-(10), with the spin the universal joint allows
-    wl, al_l = w[..., None], al[..., None]
+
+def _leg_motion(prm: Parameters, p, T, v, wl, a, al_l) -> _LegMotion:
+    """The legs' kinematics for platform states over a block (``wl``, ``al_l``: (3, n, 1))."""
     C, a1 = prm.base_joints.T[:, None], prm.universal_axes.T[:, None]
     r_E = np.einsum("ijn,kj->ink", T, prm.platform_joints)
     E = p[..., None] + r_E
@@ -233,21 +249,45 @@ def _forces_block(prm: Parameters, x: np.ndarray) -> np.ndarray:
     c_dot = _dot(u_dot, a1)
     lam_dot = (c_dot * qq + c * _dot(u_x_udd, a1)) / s2 + 2 * c**2 * c_dot * qq / s2**2
     al_L = u_x_udd + lam_dot * u + lam * u_dot
+    return _LegMotion(r_E=r_E, E=E, D=D, u=u, n=n, a2=a2, D_dot=D_dot, u_dot=u_dot,
+                      D_ddot=D_ddot, u_ddot=u_ddot, aE=aE, w_L=w_L, al_L=al_L)
 
-    # leg parts: centres, accelerations, the loads they need (11)-(17); B = leg body frame
-    B = np.stack([a2, _cross(u, a2), u], axis=1)
+
+def _leg_part_loads(prm: Parameters, m: _LegMotion):
+    """The loads the leg parts need (11)-(17): the upper part's force ``f2``, its centre's
+    distance from E_i ``s2E`` and inertial moment, the legs' force ``F_leg`` and moment about
+    C_i ``K`` (B = the leg's body frame)."""
+    u, D, D_dot, D_ddot, u_dot, u_ddot = m.u, m.D, m.D_dot, m.D_ddot, m.u_dot, m.u_ddot
+    C = prm.base_joints.T[:, None]
+    B = np.stack([m.a2, _cross(u, m.a2), u], axis=1)
     low, up = prm.lower, prm.upper
     s4 = low["com"] + low["frac"] * D
     s2E = up["com"] + up["frac"] * D
     a4 = low["frac"] * D_ddot * u + 2 * low["frac"] * D_dot * u_dot + s4 * u_ddot
-    a2c = aE - (up["frac"] * D_ddot * u + 2 * up["frac"] * D_dot * u_dot + s2E * u_ddot)
-    g_l = g[:, None, None]
+    a2c = m.aE - (up["frac"] * D_ddot * u + 2 * up["frac"] * D_dot * u_dot + s2E * u_ddot)
+    g_l = prm.gravity[:, None, None]
     f4 = low["mass"] * a4 - low["weight_mass"] * g_l
     f2 = up["mass"] * a2c - up["weight_mass"] * g_l
-    inertial2 = _inertial_moment(B, up["inertia"], al_L, w_L)
+    inertial2 = _inertial_moment(B, up["inertia"], m.al_L, m.w_L)
     F_leg = f4 + f2
-    K = (_cross(s4 * u, f4) + _cross(E - s2E * u - C, f2)
-         + _inertial_moment(B, low["inertia"], al_L, w_L) + inertial2)
+    K = (_cross(s4 * u, f4) + _cross(m.E - s2E * u - C, f2)
+         + _inertial_moment(B, low["inertia"], m.al_L, m.w_L) + inertial2)
+    return f2, s2E, inertial2, F_leg, K
+
+
+def _forces_block(prm: Parameters, x: np.ndarray) -> np.ndarray:
+    """``actuator_forces_numpy`` for one block of steps x (n, 24)."""
+    xt = np.ascontiguousarray(x.T)
+    states = state_layout()
+    p, v, w = xt[states.position], xt[states.velocity], xt[states.omega]
+    a, al = xt[states.acceleration], xt[states.alpha]
+    T = xt[states.rotation].reshape(3, 3, -1)
+    q = prm.effects
+    F_req, M_req = _platform_loads(prm, T, w, a, al, like=p)
+    wl = w[..., None]
+    m = _leg_motion(prm, p, T, v, wl, a, al[..., None])
+    u, n, D, r_E = m.u, m.n, m.D, m.r_E
+    f2, s2E, inertial2, F_leg, K = _leg_part_loads(prm, m)
 
     # the reduction: M_C and the transverse part of R_E per leg; a 6x6 system in the axial forces
     n_u = _dot(n, u)
@@ -267,17 +307,11 @@ def _forces_block(prm: Parameters, x: np.ndarray) -> np.ndarray:
     M_3 = _cross(to_P3, R_E) + _cross(to_P3 - s2E * u, f2) + inertial2
 
     # friction (33)-(35) and the catalog's prismatic effects
-    c_s, mu_r = prm.joint_viscous, prm.joint_coulomb * prm.joint_radius
-
-    def joint_friction(omega, R):
-        speed = np.sqrt(_dot(omega, omega) + prm.joint_eps**2)
-        return -(c_s * omega + (mu_r * _norm(R) / speed) * omega)
-
-    MfrE = joint_friction(wl - w_L, R_E)
-    MfrC = joint_friction(w_L, R_C)
-    sgn_v = D_dot / np.sqrt(D_dot**2 + prm.prismatic_eps**2)
-    Ffr = (-(prm.prismatic_viscous * D_dot + prm.prismatic_coulomb * _norm(R_3) * sgn_v)
-           + _prismatic_effects(q, D_dot, sgn_v, D, _norm(_cross(u, M_3))))
+    MfrE = _joint_friction_block(prm, wl - m.w_L, R_E)
+    MfrC = _joint_friction_block(prm, m.w_L, R_C)
+    sgn_v = m.D_dot / np.sqrt(m.D_dot**2 + prm.prismatic_eps**2)
+    Ffr = (-(prm.prismatic_viscous * m.D_dot + prm.prismatic_coulomb * _norm(R_3) * sgn_v)
+           + _prismatic_effects(q, m.D_dot, sgn_v, D, _norm(_cross(u, M_3))))
 
     # joint friction moments carried by the actuators (joint_friction_coupling)
     dK = MfrE - MfrC
@@ -287,6 +321,13 @@ def _forces_block(prm: Parameters, x: np.ndarray) -> np.ndarray:
 
     bias = np.array([q[f"sensor_bias.b{i}"] for i in range(1, N_LEGS + 1)])
     return F0 + q["joint_friction_coupling.scale"] * df - Ffr + bias
+
+
+def _joint_friction_block(prm: Parameters, omega, R):
+    """(33)-(34): a joint's friction moment for relative angular velocities (3, n, 6)."""
+    c_s, mu_r = prm.joint_viscous, prm.joint_coulomb * prm.joint_radius
+    speed = np.sqrt(_dot(omega, omega) + prm.joint_eps**2)
+    return -(c_s * omega + (mu_r * _norm(R) / speed) * omega)
 
 
 # ------------------------------------------------------------------------ one step at a time
@@ -422,7 +463,7 @@ def system_42(platform: Platform, state: np.ndarray) -> tuple[np.ndarray, np.nda
         ``A z = b`` for ``z = (R_E (6x3 row-major), R_C (6x3), M_C (6))``, N and N m.
     """
     prm = parameters(platform)
-    p, T, v, w, a, al = _split_state(np.asarray(state, dtype=float))
+    p, T, v, w, a, al = state_layout().split(np.asarray(state, dtype=float))
     legs = [_leg_step(prm, i, p, T, v, w, a, al) for i in range(N_LEGS)]
     F_req, M_req = _platform_step(prm, T, w, a, al)
     return _matrix_42(legs), _rhs_42(F_req, M_req, legs)
@@ -460,7 +501,7 @@ def actuator_forces_loop(platform: Platform, x: np.ndarray) -> np.ndarray:
     x = np.asarray(x, dtype=float)
     out = np.empty((x.shape[0], N_LEGS))
     for k in range(x.shape[0]):
-        p, T, v, w, a, al = _split_state(x[k])
+        p, T, v, w, a, al = state_layout().split(x[k])
         legs = [_leg_step(prm, i, p, T, v, w, a, al) for i in range(N_LEGS)]
         F_req, M_req = _platform_step(prm, T, w, a, al)
         M = _matrix_42(legs)

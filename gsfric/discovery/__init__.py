@@ -12,18 +12,10 @@ may change), ``statistics`` (prewhitening, block cross-validation, block bootstr
 """
 
 from gsfric.discovery.candidates import CANDIDATE_NAMES, CANDIDATES, REFIT
-from gsfric.discovery.workflow import Discovery, Finding, Settings, discover
+from gsfric.discovery.report import run_discover
+from gsfric.discovery.results import Discovery, Finding
+from gsfric.discovery.settings import Settings
+from gsfric.discovery.workflow import discover
 
 __all__ = ["CANDIDATES", "CANDIDATE_NAMES", "REFIT", "Discovery", "Finding", "Settings",
            "discover", "run_discover"]
-
-
-def run_discover(measured, platform_file=None, out_dir=".", *, seed: int = 0,
-                 progress: bool = True, **options):
-    """``gsfric discover``: read measured data, run the workflow, write the report.
-
-    See ``gsfric.discovery.report.run_discover``.
-    """
-    from gsfric.discovery.report import run_discover as run
-
-    return run(measured, platform_file, out_dir, seed=seed, progress=progress, **options)

@@ -21,6 +21,9 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from gsfric._checks import suggest
+from gsfric.errors import InputError
+from gsfric.platform.catalog import EFFECTS
 from gsfric.platform.description import Platform
 
 INF = np.inf
@@ -166,8 +169,6 @@ def _stroke_ends(context: dict) -> dict | None:
 
 
 def _bushing_spacing(platform: Platform, context: dict) -> dict:
-    from gsfric.platform.catalog import EFFECTS
-
     own = platform.effects.get("bushing_friction", {})
     return {"spacing": float(own.get("spacing", EFFECTS["bushing_friction"]["spacing"]))}
 
@@ -191,27 +192,18 @@ def _leg_weight_applies(platform: Platform) -> str | None:
 STRIBECK_VELOCITIES = tuple(float(v) for v in np.geomspace(0.002, 0.1, 6))
 """Starting values of the Stribeck velocity, m/s (those the data resolves, see below)."""
 
-STRIBECK_QUANTILE = 0.9
-"""Quantile of the sliding leg speeds (over the sliding (sample, leg) pairs) above which the
-Stribeck velocity is not fitted. ``exp(-(v / velocity)^2)`` with a velocity above nearly every
-sliding speed stays near 1 on the data: a Stribeck term with such a decay is a friction the
-same at every speed, ``seal_friction`` by another name, and fitting it there would let noise
-choose the two-parameter name over the one-parameter one. Bounded at this quantile, the
-Stribeck peak must decay (below 1/e) on at least a tenth of the sliding samples to be
-named; a speed-independent friction then fits better as ``seal_friction``."""
-
-
 def stribeck_velocity_bound(upper: float, context: dict) -> float:
     """Largest Stribeck velocity (m/s) fitted on data with this context: ``upper``, lowered to
-    the ``STRIBECK_QUANTILE`` quantile of the sliding leg speeds (``context["sliding_speed"]``),
-    never below the smallest starting value."""
+    the ``Settings.stribeck_quantile`` quantile of the sliding leg speeds
+    (``context["sliding_speed"]``), never below the smallest starting value."""
     resolved = float(context.get("sliding_speed", np.inf))
     return float(max(min(upper, resolved), STRIBECK_VELOCITIES[0]))
 
 
 def _stribeck_velocities(context: dict) -> dict | None:
-    """The starting Stribeck velocities the data resolves (see ``STRIBECK_QUANTILE``), the
-    bound itself included when it cuts the list. None without data (a data-dependent grid)."""
+    """The starting Stribeck velocities the data resolves (see ``Settings.stribeck_quantile``),
+    the bound itself included when it cuts the list. None without data (a data-dependent
+    grid)."""
     if "sliding_speed" not in context:
         return None
     bound = stribeck_velocity_bound(np.inf, context)
@@ -294,7 +286,4 @@ def candidate(name: str) -> Candidate:
     for c in CANDIDATES:
         if c.name == name:
             return c
-    from gsfric._checks import suggest
-    from gsfric.errors import InputError
-
     raise InputError(f"effect {name!r}: not a candidate{suggest(name, CANDIDATE_NAMES)}")

@@ -13,17 +13,25 @@ map (two evaluations per parameter), which gives the same numbers to about 1e-8 
 
 from __future__ import annotations
 
+import warnings
 from collections.abc import Sequence
 
 import numpy as np
 
-from gsfric.compiled.manifest import jacobian_platform_parameters, layout
-from gsfric.evaluation.evaluator import (
-    Evaluator,
-    Result,
+from gsfric.compiled.manifest import function, jacobian_platform_parameters, layout
+from gsfric.evaluation.evaluator import Evaluator, state_array
+from gsfric.evaluation.parameters import (
+    effect_vector,
     jacobian_parameters,
     parameter_vector,
-    state_array,
+)
+from gsfric.evaluation.result import Result
+from gsfric.platform.catalog import (
+    EFFECTS,
+    SENSOR_EFFECTS,
+    apply_sensor,
+    sensor_jacobian,
+    sensor_parameters,
 )
 from gsfric.platform.description import Platform
 from gsfric.trajectory import Motion
@@ -31,13 +39,18 @@ from gsfric.trajectory import Motion
 BASE_PARAMETERS = jacobian_platform_parameters()
 """Parameters of the platform description among the Jacobian's parameters (from the manifest)."""
 
-_FRICTION = ("joint_viscous", "joint_coulomb", "prismatic_viscous", "prismatic_coulomb")
-_BODY = ("payload_mass", "platform_mass")
+_BODY_FIELDS = {"payload_mass": "payload_mass", "platform_mass": "mass"}
+"""The body parameters among ``BASE_PARAMETERS``, by their field of ``Platform.platform``; the
+others are fields of ``Platform.friction``."""
+
+_FRICTION = tuple(n for n in BASE_PARAMETERS if n not in _BODY_FIELDS)
+"""The friction coefficients among ``BASE_PARAMETERS``."""
+
+_STATE = {block["name"]: block["offset"] for block in layout("eval", "x")}
+"""Offset of each block (position, velocity, acceleration, ...) in a state row (``x``)."""
 
 
 def _compiled_jacobian_is_dense() -> bool:
-    from gsfric.compiled.manifest import function
-
     n_theta = len(jacobian_parameters())
     try:
         outputs = {o["name"]: o["size"] for o in function("jacobian")["outputs"]}
@@ -67,14 +80,10 @@ class ParametricModel:
     """
 
     def __init__(self, platform: Platform, motion: Motion, n_threads: int = 1) -> None:
-        from gsfric.evaluation.evaluator import effect_vector
-
         self.platform = platform
         self.motion = motion
         self.n_threads = int(n_threads)
         self.x = state_array(motion)
-        from gsfric.platform.catalog import SENSOR_EFFECTS, sensor_parameters
-
         compiled = jacobian_parameters()
         self.n_compiled = len(compiled)
         self.names = compiled + [f"{e}.{p}" for e, ps in SENSOR_EFFECTS.items() for p in ps]
@@ -82,7 +91,8 @@ class ParametricModel:
         self.n_base = len(BASE_PARAMETERS)
         self.t = np.asarray(motion.t, float)
         f, b = platform.friction, platform.platform
-        base = [getattr(f, n) for n in _FRICTION] + [b.payload_mass, b.mass]
+        base = [getattr(b, _BODY_FIELDS[n]) if n in _BODY_FIELDS else getattr(f, n)
+                for n in BASE_PARAMETERS]
         gains, delay = sensor_parameters(platform.effects)
         self.theta0 = np.concatenate([base, effect_vector(platform), gains, [delay]]
                                      ).astype(float)
@@ -103,8 +113,7 @@ class ParametricModel:
         theta = np.asarray(theta, float)
         i = self.index
         p = self.platform.with_friction(**{n: float(theta[i[n]]) for n in _FRICTION})
-        p = p.with_body(payload_mass=float(theta[i["payload_mass"]]),
-                        mass=float(theta[i["platform_mass"]]))
+        p = p.with_body(**{field: float(theta[i[n]]) for n, field in _BODY_FIELDS.items()})
         for name in effects:
             params = {k.split(".", 1)[1]: float(theta[j]) for k, j in i.items()
                       if k.startswith(name + ".")}
@@ -124,8 +133,6 @@ class ParametricModel:
         return np.asarray(theta[k:k + 6], float), float(theta[k + 6])
 
     def _read(self, theta: np.ndarray, F: np.ndarray) -> np.ndarray:
-        from gsfric.platform.catalog import apply_sensor
-
         gains, delay = self.sensor(theta)
         if delay == 0.0 and not np.any(gains):
             return F
@@ -133,8 +140,6 @@ class ParametricModel:
 
     def effect_names(self, theta: np.ndarray) -> list[str]:
         """Effects whose parameters in theta differ from the catalog defaults."""
-        from gsfric.platform.catalog import EFFECTS
-
         out = []
         for name, params in EFFECTS.items():
             if any(theta[self.index[f"{name}.{p}"]] != d for p, d in params.items()):
@@ -159,15 +164,13 @@ class ParametricModel:
         effect: the inertia and the weights that a mis-scaled pose moves between the legs,
         not the friction laws that its scaled speed would change (which friction candidates
         and the refit already describe)."""
-        from gsfric.evaluation.evaluator import effect_vector
-
         rigid = self.platform_at(theta).without_effects().with_friction(
             **dict.fromkeys(_FRICTION + ("prismatic_seal",), 0.0))
         P, Q = parameter_vector(rigid), effect_vector(rigid)
         x = self.x if rows is None else self.x[rows]
         out = np.empty((x.shape[0], 6, 3))
         for axis in range(3):
-            columns = [axis, 12 + axis, 18 + axis]     # p, v, a (``state_array``'s layout)
+            columns = [_STATE[block] + axis for block in ("position", "velocity", "acceleration")]
             F = []
             for e in (h, -h):
                 moved = x.copy()
@@ -195,8 +198,6 @@ class ParametricModel:
         ``rows`` (default all N), written into ``out`` if given. The compiled Jacobian (every
         parameter) is evaluated ``chunk`` steps at a time, so memory grows with the columns
         asked for only."""
-        from gsfric.platform.catalog import apply_sensor, sensor_jacobian
-
         theta = np.asarray(theta, float)
         cols = [self.index[c] for c in columns]
         gains, delay = self.sensor(theta)
@@ -254,8 +255,6 @@ class ParametricModel:
         """The outputs ``keep`` of the full evaluation at theta, with F (what the load cells
         read, sensor effects applied) and the step flags; evaluated ``chunk`` steps at a time
         so that memory stays bounded (the full evaluation has about 200 numbers a step)."""
-        import warnings
-
         evaluator = Evaluator(self.platform_at(theta, self.effect_names(theta)),
                               n_threads=self.n_threads)
         self.evaluations += 1

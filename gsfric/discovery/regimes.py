@@ -23,9 +23,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-REVERSAL_QUANTILE = 0.05
-REVERSAL_MIN_SPEED = 1e-3  # m/s
-TIME_STRETCHES = 5
+from gsfric.discovery.settings import Settings
 
 
 @dataclass
@@ -97,7 +95,8 @@ def bands(t: np.ndarray, speed: np.ndarray, length: np.ndarray, force: np.ndarra
     v = np.abs(speed)
     regimes: dict[str, tuple[np.ndarray, list[str], list]] = {}
 
-    threshold = max(float(np.quantile(v, REVERSAL_QUANTILE)), REVERSAL_MIN_SPEED)
+    threshold = max(float(np.quantile(v, Settings.reversal_quantile)),
+                    Settings.reversal_min_speed)
     labels = np.zeros(v.shape, int)
     moving = v >= threshold
     if moving.sum() >= 3:
@@ -114,9 +113,10 @@ def bands(t: np.ndarray, speed: np.ndarray, length: np.ndarray, force: np.ndarra
     lab, lim = _terciles(_tilt(rotation), ("level", "tilted", "most tilted"))
     regimes["pose"] = (np.repeat(lab[:, None], 6, axis=1), ["level", "tilted", "most tilted"],
                        lim)
-    stretch = np.minimum((np.arange(m) * TIME_STRETCHES) // m, TIME_STRETCHES - 1)
+    stretches = Settings.time_stretches
+    stretch = np.minimum((np.arange(m) * stretches) // m, stretches - 1)
     edges = [(float(t[stretch == k][0]), float(t[stretch == k][-1]))
-             for k in range(TIME_STRETCHES)]
+             for k in range(stretches)]
     regimes["time"] = (np.repeat(stretch[:, None], 6, axis=1),
                        [f"{a:.4g}-{b:.4g} s" for a, b in edges], edges)
 

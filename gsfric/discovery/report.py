@@ -18,10 +18,15 @@ from pathlib import Path
 
 import numpy as np
 
+from gsfric._optional import optional
 from gsfric.discovery.regimes import hotspots
-from gsfric.discovery.summary import _per_leg, summary
-from gsfric.discovery.workflow import Discovery, discover
-from gsfric.io.files import atomic_write
+from gsfric.discovery.rest import poses_from_columns
+from gsfric.discovery.results import Discovery, per_leg_rms, summary
+from gsfric.discovery.workflow import discover
+from gsfric.io.files import atomic_write, output_folder
+from gsfric.io.readers import read_measured_columns
+from gsfric.models import platform_from
+from gsfric.signal.savgol import DEFAULT_POLYORDER
 
 PLOTS = ("residuals_time.png", "residuals_speed.png", "regimes.png")
 
@@ -47,6 +52,15 @@ def _table(header: list[str], rows: list[list]) -> list[str]:
 
 def report(d: Discovery, source: str = "", platform_source: str = "") -> str:
     """The readable report (Markdown)."""
+    L = _header(d, source, platform_source)
+    for section in (_unexplained, _effects_named, _disagreement, _own_parameters, _rounds,
+                    _effects_found, _gaps, _method):
+        L += section(d)
+    return "\n".join(L)
+
+
+def _header(d: Discovery, source: str, platform_source: str) -> list[str]:
+    """Title, data and model."""
     L = ["# Discrepancy discovery", ""]
     n = d.used.stop - d.used.start
     model = platform_source or "reference platform"
@@ -54,42 +68,54 @@ def report(d: Discovery, source: str = "", platform_source: str = "") -> str:
           f"Samples used: {n} ({d.used.start} left out at each end, where the pose's "
           f"differentiation is least accurate), {d.t[-1] - d.t[0]:.4g} s.", ""]
     L += ["## Result", "", f"Verdict: **{d.verdict}**.", ""]
+    return L
+
+
+def _unexplained(d: Discovery) -> list[str]:
+    """An ``unexplained_discrepancy``: where the structure was found and what it looks like."""
+    L: list[str] = []
     if d.verdict == "unexplained_discrepancy":
         lof = d.lack_of_fit
-        source = lof.get("source") or "final residual"
+        source = lof.source or "final residual"
         if source == "final residual":
             L += [f"The catalog does not explain the data: a structured residual of "
-                  f"{_g(lof.get('structure_rms'))} N RMS ({_g(lof.get('gap'), 3)} x the noise "
-                  f"left) remains, {lof.get('looks_like', '')}. Per leg (N): "
-                  f"{', '.join(_g(v, 3) for v in lof.get('per_leg_rms', []))}; dominant "
-                  f"frequency of the residual {_g(lof.get('frequency'), 3)} Hz.", ""]
+                  f"{_g(lof.structure_rms)} N RMS ({_g(lof.gap, 3)} x the noise "
+                  f"left) remains, {lof.looks_like}. Per leg (N): "
+                  f"{', '.join(_g(v, 3) for v in lof.per_leg_rms)}; dominant "
+                  f"frequency of the residual {_g(lof.frequency, 3)} Hz.", ""]
         else:
             L += [f"The catalog does not explain the data: in {source}, a generic structure "
-                  f"outside the catalog (mainly {lof.get('main_signal')}) explains the gap as "
+                  f"outside the catalog (mainly {lof.main_signal}) explains the gap as "
                   "well as the catalog's best candidate or better (see the round's table "
-                  f"below), {lof.get('looks_like', '')}. The final residual's own tests find "
+                  f"below), {lof.looks_like}. The final residual's own tests find "
                   "no structure by themselves: what the round found went into the effects "
                   "named, or is too slow to stand out of the noise alone. Dominant frequency "
-                  f"of the residual {_g(lof.get('frequency'), 3)} Hz.", ""]
-        drift = lof.get("drift", {})
-        if drift.get("significant"):
+                  f"of the residual {_g(lof.frequency, 3)} Hz.", ""]
+        drift = lof.tests["drift"]
+        if drift.significant:
             L += ["The friction-like part of the residual (signed by the direction of motion; "
                   "negative: less friction than the model) changes over the record "
-                  f"(p = {_g(drift.get('p_value'), 2)}); its mean per third of the record "
+                  f"(p = {_g(drift.p_value, 2)}); its mean per third of the record "
                   "(s: N): "
                   + ", ".join(f"{a:.3g}-{b:.3g}: {_g(v, 2)}"
-                              for a, b, v in drift.get("levels", []))
+                              for a, b, v in drift.details["levels"])
                   + ". A friction that drifts with time (a seal warming up) leaves this; every "
                   "catalog effect is one constant of the record.", ""]
-        rev = lof.get("reversal", {})
-        if rev.get("significant"):
+        rev = lof.tests["reversal"]
+        if rev.significant:
             L += ["After each reversal the residual, signed by the direction of travel (negative: "
                   "less friction than the model), depends on the travel since the reversal "
-                  f"(p = {_g(rev.get('p_value'), 2)}, {rev.get('reversals', 0)} reversals); mean "
+                  f"(p = {_g(rev.p_value, 2)}, {rev.details['reversals']} reversals); mean "
                   "per bin of travel (upper edge, mm: N): "
-                  + ", ".join(f"{1e3 * e:.3g}: {_g(v, 2)}" for e, v in rev.get("profile", []))
+                  + ", ".join(f"{1e3 * e:.3g}: {_g(v, 2)}" for e, v in rev.details["profile"])
                   + ". Play in a joint or a pre-sliding friction leaves this; a friction given "
                   "by the speed does not.", ""]
+    return L
+
+
+def _effects_named(d: Discovery) -> list[str]:
+    """The effects named (or that none is missing), the gap and the notes."""
+    L: list[str] = []
     if d.effects and d.verdict == "unexplained_discrepancy":
         L += ["The effects below are the best candidates for a part of the gap, not a "
               "confident explanation of it (`partial` in summary.json): structure is left that "
@@ -98,9 +124,9 @@ def report(d: Discovery, source: str = "", platform_source: str = "") -> str:
     if d.effects:
         for f in d.effects:
             params = ", ".join(f"{k} = {_g(v)}" for k, v in f.parameters.items())
-            twins = f.evidence["indistinguishable_from"]
-            L.append(f"- **{f.name}** ({params}): effect size {_g(f.evidence['effect_size'], 3)}"
-                     f" x noise, found in round {f.evidence['round']}"
+            twins = f.evidence.indistinguishable_from
+            L.append(f"- **{f.name}** ({params}): effect size {_g(f.evidence.effect_size, 3)}"
+                     f" x noise, found in round {f.evidence.round}"
                      + (f"; cannot be told apart from {', '.join(twins)}" if twins else ""))
     else:
         L.append("- No missing effect: after refitting the model's own parameters, no candidate "
@@ -110,14 +136,19 @@ def report(d: Discovery, source: str = "", platform_source: str = "") -> str:
           f" with the effects found (RMS over the samples where the legs slide). Noise level "
           f"estimated from the force channels alone (high-frequency part): "
           f"{_g(d.noise_rms_estimate)} N; from the final residual: "
-          f"{_g(d.noise.get('residual_corrected'))} N. Samples not sliding (speed within "
+          f"{_g(d.noise.residual_corrected)} N. Samples not sliding (speed within "
           f"the uncertainty of the differentiated poses): "
-          f"{_g(d.noise.get('not_sliding_share', 0.0), 3)} of the pairs.", ""]
+          f"{_g(d.noise.not_sliding_share, 3)} of the pairs.", ""]
     for note in d.notes:
         L.append(f"- Note: {note}")
     if d.notes:
         L.append("")
+    return L
 
+
+def _disagreement(d: Discovery) -> list[str]:
+    """The bands where the model as given was furthest off."""
+    L: list[str] = []
     L += ["## Where model and measurement disagreed", ""]
     spots = hotspots(d.regimes)
     if spots:
@@ -130,13 +161,18 @@ def report(d: Discovery, source: str = "", platform_source: str = "") -> str:
                       b.friction_before] for b in spots])
     else:
         L += ["The residual is spread evenly over every regime.", ""]
+    return L
 
+
+def _own_parameters(d: Discovery) -> list[str]:
+    """The refit of the model's own parameters."""
+    L: list[str] = []
     L += ["## The model's own parameters", ""]
     rows = []
-    for name, e in d.refit.get("parameters", {}).items():
-        lo, hi = e["plausible"]
-        rows.append([name, e["model"], e["refit"], e.get("final"), e["unbounded"],
-                     f"[{_g(lo)}, {_g(hi)}]", "yes" if e["plausible_refit"] else "**no**"])
+    for name, e in d.refit.parameters.items():
+        lo, hi = e.plausible
+        rows.append([name, e.model, e.refit, e.final, e.unbounded,
+                     f"[{_g(lo)}, {_g(hi)}]", "yes" if e.plausible_refit else "**no**"])
     if rows:
         L.append("Refitted first, within plausible ranges (a wrong coefficient is not a missing "
                  "effect), with the parameters of the effects the model already has (within "
@@ -146,15 +182,20 @@ def report(d: Discovery, source: str = "", platform_source: str = "") -> str:
         L.append("")
         L += _table(["parameter", "model", "refit", "final", "unbounded", "plausible range",
                      "plausible"], rows)
+    return L
 
+
+def _rounds(d: Discovery) -> list[str]:
+    """Each round's tests and decision."""
+    L: list[str] = []
     L += ["## Rounds", ""]
     for rnd in d.rounds:
         L.append(f"### Round {rnd.index}: "
                  + (f"**{rnd.winner}** added" if rnd.winner else "nothing significant; stop"))
         L.append("")
         L.append(f"Test level per candidate {_g(rnd.level, 3)} (alpha / number of candidates); "
-                 f"residual AR orders {rnd.noise_model.get('ar_order')}, lag-1 "
-                 f"autocorrelations {rnd.noise_model.get('lag1_autocorrelation')}.")
+                 f"residual AR orders {rnd.noise_model.ar_order}, lag-1 "
+                 f"autocorrelations {rnd.noise_model.lag1_autocorrelation}.")
         L.append("")
         L += _table(["candidate", "F", "p", "p slowest / rest", "held-out gain",
                      "folds improved", "gap closed", "decision"],
@@ -169,26 +210,36 @@ def report(d: Discovery, source: str = "", platform_source: str = "") -> str:
                 shares = ", ".join(f"{k} {v:.0%}" for k, v in rnd.bootstrap_share.items())
                 L += [f"Block bootstrap, share of draws won: {shares}.", ""]
             L += [f"RMS residual {_g(rnd.rms_before)} N -> {_g(rnd.rms_after)} N.", ""]
+    return L
 
+
+def _effects_found(d: Discovery) -> list[str]:
+    """Each named effect: parameters, intervals and evidence."""
+    L: list[str] = []
     if d.effects:
         L += ["## Effects found", ""]
         for f in d.effects:
             L.append(f"### {f.name}")
             L.append("")
-            L.append(f.evidence.get("signature", ""))
+            L.append(f.evidence.signature)
             L.append("")
             L += _table(["parameter", "value", "95% interval (block bootstrap)"],
                         [[k, v, ("[" + ", ".join(_g(x) for x in f.interval[k]) + "]")
                           if k in f.interval else "fixed"] for k, v in f.parameters.items()])
             ev = f.evidence
-            L.append(f"F = {_g(ev['F'])}, p = {_g(ev['p_value'], 3)} (level {_g(ev['level'], 3)}),"
-                     f" held-out gain {_g(ev['cv_gain'], 3)}, folds improved "
-                     f"{ev['fold_share']:.0%}, bootstrap share {ev['bootstrap_share']:.0%}, "
-                     f"contribution {_g(ev['contribution_rms'])} N RMS.")
+            L.append(f"F = {_g(ev.F)}, p = {_g(ev.p_value, 3)} (level {_g(ev.level, 3)}),"
+                     f" held-out gain {_g(ev.cv_gain, 3)}, folds improved "
+                     f"{ev.fold_share:.0%}, bootstrap share {ev.bootstrap_share:.0%}, "
+                     f"contribution {_g(ev.contribution_rms)} N RMS.")
             L.append("")
+    return L
 
+
+def _gaps(d: Discovery) -> list[str]:
+    """The gap per leg and per regime."""
+    L: list[str] = []
     L += ["## Gap per leg", ""]
-    before, after = _per_leg(d.residual_before), _per_leg(d.residual_after)
+    before, after = per_leg_rms(d.residual_before), per_leg_rms(d.residual_after)
     L += _table(["leg", "RMS before (N)", "RMS after (N)"],
                 [[i + 1, b, a] for i, (b, a) in enumerate(zip(before, after))])
     L += ["## Gap per regime", ""]
@@ -196,6 +247,12 @@ def report(d: Discovery, source: str = "", platform_source: str = "") -> str:
                  "friction-like before (N)", "friction-like after (N)"],
                 [[b.regime, b.name, b.share, b.rms_before, b.rms_after, b.friction_before,
                   b.friction_after] for b in d.regimes])
+    return L
+
+
+def _method(d: Discovery) -> list[str]:
+    """The plots and how the decisions are made."""
+    L: list[str] = []
     L += ["## Plots", "",
           "- `residuals_time.png`: residual of each leg over time, before and after.",
           "- `residuals_speed.png`: residual against the leg's sliding speed (friction shows "
@@ -215,7 +272,8 @@ def report(d: Discovery, source: str = "", platform_source: str = "") -> str:
           "candidate with the largest held-out gain is added, refined by Gauss-Newton on the "
           "compiled model, and the next round starts; the workflow stops when no candidate is "
           "accepted. See docs/discovery.md.", ""]
-    return "\n".join(L)
+    return L
+
 
 
 # -- plots ------------------------------------------------------------------------------------
@@ -227,10 +285,8 @@ def _thin(n: int, most: int = 2000) -> slice:
 
 def plots(d: Discovery, out_dir: Path) -> list[Path]:
     """Write the three figures; returns their paths."""
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
+    optional("matplotlib").use("Agg")
+    plt = optional("matplotlib.pyplot")
 
     out_dir = Path(out_dir)
     written = []
@@ -298,8 +354,6 @@ def plots(d: Discovery, out_dir: Path) -> list[Path]:
 def write(d: Discovery, out_dir: str | os.PathLike[str], *, source: str = "",
           platform_source: str = "", figures: bool = True) -> list[Path]:
     """Write summary.json, report.md and (with ``figures``) the plots."""
-    from gsfric.io.files import output_folder
-
     written = []
     with output_folder(out_dir, inputs=[source or None, platform_source or None]) as out:
         path = out / "summary.json"
@@ -350,14 +404,7 @@ def run_discover(measured: str | os.PathLike[str],
     list of Path
         The files written.
     """
-    from gsfric.discovery.rest import poses_from_columns
-    from gsfric.io.readers import read_measured_columns
-    from gsfric.models import reference_platform
-    from gsfric.platform.description import Platform
-    from gsfric.signal.savgol import DEFAULT_POLYORDER
-
-    platform = reference_platform() if platform_file is None else Platform.from_toml(
-        platform_file)
+    platform = platform_from(platform_file)
     log_format = options.pop("log_format", None)   # column map and units of a log
     motion, forces, lengths, columns = read_measured_columns(measured, None, DEFAULT_POLYORDER,
                                                           log_format)

@@ -18,19 +18,22 @@ from itertools import product
 
 import numpy as np
 
+from gsfric._checks import suggest
+from gsfric.discovery import rest
 from gsfric.discovery import statistics as st
 from gsfric.discovery.candidates import (
     CANDIDATE_NAMES,
     CANDIDATES,
     REFIT,
-    STRIBECK_QUANTILE,
     Candidate,
     stribeck_velocity_bound,
 )
 from gsfric.discovery.model import BASE_PARAMETERS, ParametricModel
-from gsfric.discovery.settings import DEFAULT_TRIM, Settings
+from gsfric.discovery.settings import Settings
 from gsfric.errors import InputError
+from gsfric.evaluation.parameters import PRISMATIC_EPS
 from gsfric.platform.description import Platform
+from gsfric.signal.noise import divided_noise_std_every_window, high_frequency_std
 from gsfric.trajectory import Motion, is_uniform
 
 DELAY = "time_offset.delay"
@@ -116,20 +119,16 @@ class Columns:
             yield slice(a, min(m, a + size))
 
 
-SECANT_ROUNDING = 1e-9
-"""Relative size (to the force) below which a secant column's force difference is taken as
-rounding: the stepped and the unstepped forces come from two evaluations of the compiled
-model, and where a step changes nothing (a clamped Coulomb sum, a stroke friction beyond its
-reference) they still differ by a few units of the last place."""
-
-
-def secant(stepped: np.ndarray, F: np.ndarray, size: float) -> np.ndarray:
+def secant(stepped: np.ndarray, F: np.ndarray, size: float,
+           rounding: float = Settings.secant_rounding) -> np.ndarray:
     """The secant column ``(stepped - F) / size`` (forces (M, 6), N; size in the amplitude's
-    unit), zero where the difference is rounding (``SECANT_ROUNDING``). A column made of
-    rounding noise on a stretch of the record would otherwise be fitted there (a fold's
-    training blocks) with an arbitrary, huge coefficient."""
+    unit), zero where the difference is rounding: at most ``rounding`` times the force (the
+    stepped and the unstepped forces come from two evaluations of the compiled model, and
+    where a step changes nothing, a clamped Coulomb sum, they still differ by a few units of
+    the last place). A column made of rounding noise on a stretch of the record would
+    otherwise be fitted there (a fold's training blocks) with an arbitrary, huge coefficient."""
     d = stepped - F
-    d[np.abs(d) <= SECANT_ROUNDING * np.abs(F)] = 0.0
+    d[np.abs(d) <= rounding * np.abs(F)] = 0.0
     return d / size
 
 
@@ -201,6 +200,45 @@ class Design:
         return cols
 
 
+def _checked_forces(motion: Motion, forces: np.ndarray) -> np.ndarray:
+    """The measured forces (N, 6), N, as floats; an ``InputError`` for a wrong shape, a
+    problem of the data that no model effect explains (``rest.data_problems``) or a row that
+    is not finite."""
+    n = len(motion)
+    forces = np.asarray(forces, float)
+    if forces.shape != (n, 6):
+        raise InputError(f"forces: expected shape ({n}, 6), got {forces.shape}")
+    problems = rest.data_problems(np.asarray(motion.t, float), forces)
+    if problems:
+        more = f" (and {len(problems) - 1} more)" if len(problems) > 1 else ""
+        raise InputError(f"measured data: {problems[0]}{more}; not a model effect, "
+                         "fix or cut the data")
+    if not np.isfinite(forces).all():
+        row = int(np.flatnonzero(~np.isfinite(forces).all(axis=1))[0])
+        raise InputError(f"forces: row {row + 1} is not finite")
+    return forces
+
+
+def _trim(n: int, settings: Settings) -> tuple[int, int]:
+    """The samples left out at each end of a record of n, and the fewest (sample, leg) pairs
+    the workflow needs (20 per block); an ``InputError`` when the record is too short or a
+    candidate is not in the catalog."""
+    trim = settings.trim
+    if trim is None:
+        trim = min(settings.default_trim, n // 20)
+    trim = int(trim)
+    used = n - 2 * trim
+    needed = 20 * settings.n_blocks
+    if used < needed:
+        raise InputError(f"measured data: {n} samples ({used} after leaving out {trim} at "
+                         f"each end); the workflow needs at least {needed + 2 * trim}")
+    for name in settings.candidates:
+        if name not in CANDIDATE_NAMES:
+            raise InputError(f"candidates: unknown effect {name!r}"
+                             f"{suggest(name, CANDIDATE_NAMES)}")
+    return trim, needed
+
+
 class Problem:
     """The data, the model, what may change and within which bounds.
 
@@ -213,35 +251,9 @@ class Problem:
     def __init__(self, motion: Motion, forces: np.ndarray, platform: Platform,
                  settings: Settings, poses: tuple[np.ndarray, np.ndarray] | None = None
                  ) -> None:
-        from gsfric.discovery import rest
-
         n = len(motion)
-        forces = np.asarray(forces, float)
-        if forces.shape != (n, 6):
-            raise InputError(f"forces: expected shape ({n}, 6), got {forces.shape}")
-        problems = rest.data_problems(np.asarray(motion.t, float), forces)
-        if problems:
-            more = f" (and {len(problems) - 1} more)" if len(problems) > 1 else ""
-            raise InputError(f"measured data: {problems[0]}{more}; not a model effect, "
-                             "fix or cut the data")
-        if not np.isfinite(forces).all():
-            row = int(np.flatnonzero(~np.isfinite(forces).all(axis=1))[0])
-            raise InputError(f"forces: row {row + 1} is not finite")
-        trim = settings.trim
-        if trim is None:
-            trim = min(DEFAULT_TRIM, n // 20)
-        trim = int(trim)
-        used = n - 2 * trim
-        needed = 20 * settings.n_blocks
-        if used < needed:
-            raise InputError(f"measured data: {n} samples ({used} after leaving out {trim} at "
-                             f"each end); the workflow needs at least {needed + 2 * trim}")
-        for name in settings.candidates:
-            if name not in CANDIDATE_NAMES:
-                from gsfric._checks import suggest
-
-                raise InputError(f"candidates: unknown effect {name!r}"
-                                 f"{suggest(name, CANDIDATE_NAMES)}")
+        forces = _checked_forces(motion, forces)
+        trim, needed = _trim(n, settings)
         self.settings = settings
         self.lazy = True
         """Whether ``linearise`` computes the time_offset secant columns when asked for
@@ -258,19 +270,38 @@ class Problem:
         self.context = {"mean_length": float(D.mean()), "min_length": float(D.min()),
                         "max_length": float(D.max())}
         # rests and reversals: pairs (sample, leg) not known to slide are left out
-        from gsfric.evaluation.evaluator import PRISMATIC_EPS
+        self._sliding_pairs(self._speed_band(motion, platform, poses), needed)
+        # the speeds the sliding samples cover: a Stribeck decay above nearly all of them is
+        # a speed-independent friction on this data (see ``Settings.stribeck_quantile``)
+        speeds = np.abs(self.result.D_dot[self.used])[self.sliding]
+        quantile = self.settings.stribeck_quantile
+        self.context["sliding_speed"] = (float(np.quantile(speeds, quantile))
+                                         if speeds.size else np.inf)
+        self.force_noise = high_frequency_std(forces[self.used], settings.noise_window)
+        self.candidates = [c for c in CANDIDATES if c.name in settings.candidates
+                           and c.name not in platform.effects]
+        self.skipped = {c.name: c.applies(platform) for c in self.candidates
+                        if c.applies(platform)}
+        self.candidates = [c for c in self.candidates if c.name not in self.skipped]
+        self.own_effects = [c for c in CANDIDATES if c.name in platform.effects]
+        self.plausible = self._plausible(settings)
 
+    def _speed_band(self, motion: Motion, platform: Platform,
+                    poses: tuple[np.ndarray, np.ndarray] | None) -> np.ndarray:
+        """The standard deviation (N, 6), m/s, of each leg's differentiated speed due to pose
+        noise, from the recorded ``poses`` (default: the motion's), as the motion was
+        differentiated: Savitzky-Golay filters on a uniform time base (a log's time stamps
+        rounded to 0.1 us included), else smoothing splines; sets ``reach`` (N,), the
+        differentiator's half window, samples."""
+        n = len(motion)
         t = np.asarray(motion.t, float)
         if poses is None:
             poses = motion.recorded_poses()
         recorded = poses is not None
         if not recorded:
             poses = (np.asarray(motion.position, float), np.asarray(motion.rotation, float))
-        # as the motion was differentiated: Savitzky-Golay filters on a uniform time base (a
-        # log's time stamps rounded to 0.1 us included), else smoothing splines
-        uniform = is_uniform(t)
         sigma_v, self.reach = np.zeros((n, 6)), np.zeros(n, int)
-        if uniform:
+        if is_uniform(t):
             # the filters the motion was differentiated with, when it was made from these
             # samples (not chosen a second time)
             filters = motion.sample_filters() if recorded else None
@@ -283,12 +314,19 @@ class Problem:
             spline = rest.spline_differentiator(t, *poses)
             if spline is not None:
                 gain, self.reach = spline
-                D = rest.leg_lengths(platform, *poses)
-                sigma_v = gain[:, None] * rest.divided_noise_std(t, D)[None, :]
+                D = platform.leg_lengths(*poses)
+                sigma_v = gain[:, None] * divided_noise_std_every_window(t, D)[None, :]
+        return sigma_v
+
+    def _sliding_pairs(self, sigma_v: np.ndarray, needed: int) -> None:
+        """The sliding (sample, leg) pairs of the used samples beyond the speed band sigma_v
+        (N, 6) (``sliding``, ``weight``), its per-leg median (``sigma_v``) and the reach of the
+        moves' windows (``move_reach``); at least ``needed`` pairs must slide."""
         # per leg, the median over the used samples (the band itself is per sample)
         self.sigma_v = np.median(sigma_v[self.used], axis=0)
         self.sliding = rest.sliding_mask(self.result.D_dot, sigma_v, 3 * PRISMATIC_EPS,
-                                         reach=self.reach)[self.used]
+                                         reach=self.reach,
+                                         rest_band=self.settings.rest_band)[self.used]
         # the reach of the moves' windows, where a rest begins and ends
         self.move_reach = rest.move_reach(self.reach[self.used], self.sliding.any(axis=1))
         pairs = int(np.count_nonzero(self.sliding))
@@ -300,19 +338,6 @@ class Problem:
                 f"{needed}: moves shorter than the differentiator's window ({window} samples) "
                 "or too slow for the pose noise cannot be told from rests")
         self.weight = self.sliding.astype(float)
-        # the speeds the sliding samples cover: a Stribeck decay above nearly all of them is
-        # a speed-independent friction on this data (see ``candidates.STRIBECK_QUANTILE``)
-        speeds = np.abs(self.result.D_dot[self.used])[self.sliding]
-        self.context["sliding_speed"] = (float(np.quantile(speeds, STRIBECK_QUANTILE))
-                                         if speeds.size else np.inf)
-        self.force_noise = rest.force_noise(forces[self.used])
-        self.candidates = [c for c in CANDIDATES if c.name in settings.candidates
-                           and c.name not in platform.effects]
-        self.skipped = {c.name: c.applies(platform) for c in self.candidates
-                        if c.applies(platform)}
-        self.candidates = [c for c in self.candidates if c.name not in self.skipped]
-        self.own_effects = [c for c in CANDIDATES if c.name in platform.effects]
-        self.plausible = self._plausible(settings)
 
     def _plausible(self, settings: Settings) -> dict[str, tuple[float, float]]:
         out = {}
@@ -434,7 +459,8 @@ class Problem:
                                    out=X[:, :, :len(columns)])
         for j, step in enumerate(steps):
             X[:, :, len(columns) + j] = secant(self.model.forces(step)[self.used],
-                                               F[self.used], sizes[j])
+                                               F[self.used], sizes[j],
+                                               self.settings.secant_rounding)
         X *= self.weight[:, :, None]
         if delays:
             # the forces at theta as the compiled model's force map gives them (what a

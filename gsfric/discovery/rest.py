@@ -7,62 +7,36 @@ sigma_D the noise of the leg length and h the Savitzky-Golay derivative filter u
 ``Motion.from_samples``. A Coulomb-type friction evaluated as ``sgn(v)`` there flips with the
 noise; physically, friction at rest (static friction) holds whatever force is needed, up to its
 static level, and is not a function of the speed at all. So a (sample, leg) pair whose speed
-lies within ``REST_BAND`` sigma_v of zero is treated as *not sliding*: its friction is only
-bounded, and it carries no information about any friction law. So is every pair whose
-differentiator window reaches into a rest (``sliding_mask``): there the differentiated speed
-is biased by the stop. The workflow leaves those pairs out of every fit and statistic (they
-are masked: residual and derivative columns set to zero, which is the least-squares solution
-of the bound when the bound is not active).
-The model's own evaluation keeps its documented regularisation of the sign (PRISMATIC_EPS).
+lies within ``Settings.rest_band`` sigma_v of zero is treated as *not sliding*: its friction is
+only bounded, and it carries no information about any friction law. So is every pair whose
+differentiator window reaches into a rest (``sliding_mask``): there the differentiated speed is
+biased by the stop. The workflow leaves those pairs out of every fit and statistic (they are
+masked: residual and derivative columns set to zero, which is the least-squares solution of the
+bound when the bound is not active). The model's own evaluation keeps its documented
+regularisation of the sign (PRISMATIC_EPS).
 
-``force_noise`` estimates the force noise from the force channels alone, without the model:
-the high-frequency part of each channel after removing its smooth part with a local cubic fit
-(robust scale), corrected for the smoother. It measures the white (innovation) part of the
-noise; strongly correlated noise has more power at low frequencies than this sees.
+The force noise comes from the force channels alone, without the model
+(``gsfric.signal.noise.high_frequency_std``): the high-frequency part of each channel after
+removing its smooth part with a local cubic fit (robust scale), corrected for the smoother.
+It measures the white (innovation) part of the noise; strongly correlated noise has more power at low frequencies than this sees.
 """
 
 from __future__ import annotations
 
 import numpy as np
+from scipy.ndimage import binary_closing, binary_opening, uniform_filter1d
 
-from gsfric.signal.noise import robust_std
-from gsfric.signal.savgol import savgol_filter, savgol_weights
-
-REST_BAND = 5.0
-"""Half-width of the not-sliding band, in standard deviations of the speed estimate."""
-
-NOISE_WINDOW = 15
-"""Window (samples) of the local cubic fit whose residual measures the noise."""
-
-
-def high_frequency_std(y: np.ndarray, window: int = NOISE_WINDOW) -> np.ndarray:
-    """Standard deviation of white noise in each column of y (N, k), from the residual of a
-    local cubic fit (corrected by ``1 - h0``, h0 the fit's centre weight).
-
-    Parameters
-    ----------
-    y : ndarray, shape (N, k)
-
-    Returns
-    -------
-    ndarray, shape (k,)
-    """
-    y = np.asarray(y, float)
-    window = int(min(window, len(y) - (1 - len(y) % 2)))
-    if window < 5:
-        return np.zeros(y.shape[1])
-    smooth = savgol_filter(y, window, 3)
-    h0 = savgol_weights(window, 3)[window // 2]
-    core = slice(window, len(y) - window) if len(y) > 3 * window else slice(None)
-    return robust_std((y - smooth)[core]) / np.sqrt(1.0 - h0)
-
-
-def leg_lengths(platform, position: np.ndarray, rotation: np.ndarray) -> np.ndarray:
-    """Leg lengths |p + R e_i - c_i| (N, 6), m, of poses (N, 3) and rotations (N, 3, 3)."""
-    g = platform.geometry
-    E = np.einsum("nij,kj->nki", rotation, np.asarray(g.platform_joints, float))
-    return np.linalg.norm(position[:, None, :] + E - np.asarray(g.base_joints, float)[None],
-                          axis=2)
+from gsfric.discovery.settings import Settings
+from gsfric.signal.noise import white_noise_std
+from gsfric.signal.rotations import (
+    continuous_quaternions,
+    quaternion_from_rotation,
+    rotation_from_euler,
+    rotation_from_quaternion,
+)
+from gsfric.signal.savgol import DEFAULT_POLYORDER, savgol_weights
+from gsfric.signal.spline import smoothing_splines, spline_penalties
+from gsfric.signal.windows import candidate_windows, motion_filters
 
 
 def differentiator(position: np.ndarray, rotation: np.ndarray, polyorder: int | None = None,
@@ -82,9 +56,6 @@ def differentiator(position: np.ndarray, rotation: np.ndarray, polyorder: int | 
         Half the longer of the two windows, samples; of the position's alone when the
         orientation does not move (``moves``).
     """
-    from gsfric.signal.rotations import continuous_quaternions, quaternion_from_rotation
-    from gsfric.signal.savgol import DEFAULT_POLYORDER, motion_filters
-
     polyorder = DEFAULT_POLYORDER if polyorder is None else int(polyorder)
     signals = (np.asarray(position, float),
                continuous_quaternions(quaternion_from_rotation(np.asarray(rotation, float))))
@@ -102,69 +73,31 @@ def differentiator(position: np.ndarray, rotation: np.ndarray, polyorder: int | 
     return np.maximum(*gains), np.maximum(*reaches)
 
 
-MOVE_TO_NOISE = 20.0
-"""A recorded channel moves when its range exceeds this many times its white noise."""
-
-
 def moves(signal: np.ndarray) -> bool:
     """Whether a recorded signal (N, k) moves beyond its noise: the range of a component
-    exceeds ``MOVE_TO_NOISE`` times its white noise (``trajectory.white_noise_std``).
+    exceeds ``Settings.move_to_noise`` times its white noise
+    (``gsfric.signal.noise.white_noise_std``).
 
     The reach of a differentiator matters where its window mixes a rest with a move; a channel
     that does not move mixes nothing, whatever window it was given. An orientation held fixed
     (translations only, a common test) gets the longest window there is, since nothing is to
     be resolved, and counting its reach would widen every rest by it: 0.3 s moves at 500 Hz
     with a fixed orientation were left without a sliding pair."""
-    from gsfric.signal.noise import white_noise_std
-
     signal = np.asarray(signal, float)
-    return bool(np.any(np.ptp(signal, axis=0) > MOVE_TO_NOISE * white_noise_std(signal)
+    ratio = Settings.move_to_noise
+    return bool(np.any(np.ptp(signal, axis=0) > ratio * white_noise_std(signal)
                        + 1e-12 * np.max(np.abs(signal), initial=1.0)))
 
 
-SPLINE_NOISE_DRAWS = 8
-"""Unit white-noise records through which the smoothing spline's velocity noise gain is
-measured on a non-uniform time base (``spline_differentiator``)."""
-
-
-def divided_noise_std(t: np.ndarray, y: np.ndarray) -> np.ndarray:
-    """White-noise standard deviation of each column of y (N, k) sampled at the non-uniform
-    times t (N,): from the 6th divided differences, whose noise variance is
-    ``sigma^2 sum_k w_k^2`` (w their weights) and whose signal part, ``y^(6) / 6!``, does not
-    grow with a jitter of the times (differences on a jittered time base would count the
-    motion times the jitter as noise). Robust scale (median of the normalised squares)."""
-    from numpy.lib.stride_tricks import sliding_window_view
-
-    from gsfric.signal.noise import (
-        NOISE_DIFFERENCE_ORDER,
-        divided_difference_coefficients,
-    )
-
-    t, y = np.asarray(t, float), np.asarray(y, float)
-    m = NOISE_DIFFERENCE_ORDER
-    if len(t) <= m:
-        return np.zeros(y.shape[1])
-    scale = (t[-1] - t[0]) / (len(t) - 1)
-    w = divided_difference_coefficients((t - t[0]) / scale, m + 1)      # (N - m, m + 1)
-    d = np.einsum("nkj,nj->nk", sliding_window_view(y, m + 1, axis=0), w)
-    z2 = d ** 2 / np.sum(w ** 2, axis=1)[:, None]
-    return np.sqrt(np.median(z2, axis=0) / 0.454936)     # median of chi-square(1)
-
-
-def spline_differentiator(t: np.ndarray, position: np.ndarray, rotation: np.ndarray
+def spline_differentiator(t: np.ndarray, position: np.ndarray, rotation: np.ndarray,
+                          draws: int = Settings.spline_noise_draws
                           ) -> tuple[np.ndarray, np.ndarray] | None:
     """``differentiator`` for a non-uniform time base, where ``Motion.from_samples`` fits
     smoothing splines: the velocity noise gain (N,), 1/s, of unit white noise through the same
     splines (same penalties; the larger of position and orientation; measured on
-    ``SPLINE_NOISE_DRAWS`` draws, averaged over 51 samples), and the reach (N,), the half
-    window of the order-4 Savitzky-Golay filter of the same gain at the mean step. None when
-    the spline's penalties are not available (short records)."""
-    from scipy.ndimage import uniform_filter1d
-
-    from gsfric.signal.rotations import continuous_quaternions, quaternion_from_rotation
-    from gsfric.signal.savgol import DEFAULT_POLYORDER, candidate_windows
-    from gsfric.signal.spline import smoothing_splines, spline_penalties
-
+    ``draws`` draws (``Settings.spline_noise_draws``), averaged over 51 samples), and the reach
+    (N,), the half window of the order-4 Savitzky-Golay filter of the same gain at the mean
+    step. None when the spline's penalties are not available (short records)."""
     t = np.asarray(t, float)
     n = len(t)
     q = continuous_quaternions(quaternion_from_rotation(np.asarray(rotation, float)))
@@ -175,11 +108,11 @@ def spline_differentiator(t: np.ndarray, position: np.ndarray, rotation: np.ndar
         if penalties is None:
             return None
         power = np.zeros(n)
-        for _ in range(SPLINE_NOISE_DRAWS):
+        for _ in range(draws):
             noise = rng.standard_normal(signal.shape)
             power += np.mean(smoothing_splines(t, noise, penalties).derivative(1)(t) ** 2,
                              axis=1)
-        gain = np.maximum(gain, np.sqrt(uniform_filter1d(power / SPLINE_NOISE_DRAWS, 51,
+        gain = np.maximum(gain, np.sqrt(uniform_filter1d(power / draws, 51,
                                                          mode="nearest")))
     step = (t[-1] - t[0]) / (n - 1)
     windows = np.array(candidate_windows(n, DEFAULT_POLYORDER))
@@ -195,7 +128,7 @@ def speed_uncertainty(platform, t: np.ndarray, position: np.ndarray, rotation: n
     """Standard deviation of each leg's differentiated speed due to pose noise, m/s.
 
     ``sigma_D ||h|| / step``: sigma_D the white noise of the leg length computed from the
-    recorded poses (``trajectory.white_noise_std``, the estimator the filter choice uses),
+    recorded poses (``gsfric.signal.noise.white_noise_std``, the estimator the filter choice uses),
     h the Savitzky-Golay first-derivative filter of the sample.
 
     Parameters
@@ -218,11 +151,8 @@ def speed_uncertainty(platform, t: np.ndarray, position: np.ndarray, rotation: n
     ndarray, shape (N, 6)
         Per sample and leg; (6,) with a fixed ``window``.
     """
-    from gsfric.signal.noise import white_noise_std
-    from gsfric.signal.savgol import DEFAULT_POLYORDER
-
     polyorder = DEFAULT_POLYORDER if polyorder is None else int(polyorder)
-    D = leg_lengths(platform, np.asarray(position, float), np.asarray(rotation, float))
+    D = platform.leg_lengths(np.asarray(position, float), np.asarray(rotation, float))
     sigma_D = white_noise_std(D)
     step = float(np.mean(np.diff(t)))
     if window is not None:
@@ -246,10 +176,11 @@ def move_reach(reach: np.ndarray, moving: np.ndarray) -> int:
 
 
 def sliding_mask(speed: np.ndarray, sigma_v: np.ndarray, floor: float,
-                 reach: int | np.ndarray = 0) -> np.ndarray:
+                 reach: int | np.ndarray = 0, rest_band: float = Settings.rest_band
+                 ) -> np.ndarray:
     """(N, 6) True where a leg is known to slide.
 
-    A pair (sample, leg) slides where ``|speed|`` exceeds ``REST_BAND`` sigma_v (and
+    A pair (sample, leg) slides where ``|speed|`` exceeds ``rest_band`` sigma_v (and
     ``floor``) and, with ``reach`` > 0, no rest lies within ``reach`` samples: no sample whose
     differentiator window reaches into a rest. A rest is a run of at least ``reach`` samples
     inside the band, with excursions out of the band shorter than ``reach`` samples (the
@@ -276,15 +207,15 @@ def sliding_mask(speed: np.ndarray, sigma_v: np.ndarray, floor: float,
         Smallest half-width of the band, m/s.
     reach : int or ndarray of int, shape (N,)
         Half-width of the differentiator's window, samples (0: no rest widening).
+    rest_band : float
+        Half-width of the band, in standard deviations of the speed estimate.
     """
     speed = np.asarray(speed, float)
-    band = np.maximum(REST_BAND * np.asarray(sigma_v, float), floor)
+    band = np.maximum(rest_band * np.asarray(sigma_v, float), floor)
     inside = np.abs(speed) <= np.broadcast_to(band, speed.shape)
     reach = np.asarray(reach, int)
     if not reach.any():
         return ~inside
-    from scipy.ndimage import binary_closing, binary_opening
-
     n = len(speed)
     reach = np.broadcast_to(reach, (n,))
     run = max(move_reach(reach, ~inside.all(axis=1)), 1)
@@ -300,16 +231,9 @@ def sliding_mask(speed: np.ndarray, sigma_v: np.ndarray, floor: float,
     return ~(inside | near)
 
 
-def force_noise(forces: np.ndarray) -> np.ndarray:
-    """Independent estimate of each force channel's white noise (6,), N (see module doc)."""
-    return high_frequency_std(forces)
-
-
 def poses_from_columns(columns) -> tuple[np.ndarray, np.ndarray]:
     """Recorded positions (N, 3) and rotations (N, 3, 3) from trajectory columns (a mapping or
     DataFrame with ``x, y, z`` and ``qw, qx, qy, qz`` or ``alpha, beta, gamma``)."""
-    from gsfric.signal.rotations import rotation_from_euler, rotation_from_quaternion
-
     position = np.stack([np.asarray(columns[k], float) for k in ("x", "y", "z")], axis=1)
     if "qw" in columns:
         q = np.stack([np.asarray(columns[k], float) for k in ("qw", "qx", "qy", "qz")], axis=1)
@@ -320,21 +244,18 @@ def poses_from_columns(columns) -> tuple[np.ndarray, np.ndarray]:
     return position, rotation
 
 
-HELD_RUN = 5
-"""Consecutive equal values of a force channel that make a dropout (``data_problems``)."""
-
-
 def _held_run(f: np.ndarray) -> tuple[int, int] | None:
-    """The longest run (first index, length) of at least ``HELD_RUN`` equal consecutive values
-    of a channel whose neighbouring samples otherwise differ (a noisy load cell: fewer than 1%
-    equal neighbours; a coarsely quantised channel repeats values and is not judged)."""
+    """The longest run (first index, length) of at least ``Settings.held_run`` equal
+    consecutive values of a channel whose neighbouring samples otherwise differ (a noisy load
+    cell: fewer than 1% equal neighbours; a coarsely quantised channel repeats values and is
+    not judged)."""
     same = np.diff(f) == 0
     edges = np.diff(np.r_[0, same.astype(np.int8), 0])
     starts, stops = np.flatnonzero(edges == 1), np.flatnonzero(edges == -1)
     if starts.size == 0:
         return None
     runs = stops - starts + 1                     # samples in each run of equal values
-    short = runs < HELD_RUN
+    short = runs < Settings.held_run
     if np.sum(runs[short] - 1) > 0.01 * same.size or short.all():
         return None                               # quantised, or nothing held
     k = int(np.argmax(runs))

@@ -15,8 +15,10 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from gsfric.discovery import lackfit
 from gsfric.discovery import statistics as st
 from gsfric.discovery.candidates import Candidate
+from gsfric.discovery.evidence import Evidence, Rule, accept, failures
 from gsfric.discovery.residuals import Design, Problem
 
 
@@ -70,13 +72,38 @@ class CandidateTest:
     slow_only: bool = False
     reason: str = ""
 
+    @property
+    def evidence(self) -> Evidence:
+        """The numbers the acceptance rule reads (``evidence.Evidence``)."""
+        return Evidence(self.p_value, self.p_bands, self.cv_gain, self.fold_share, self.gap)
 
-def noise_model(w: st.Whitener) -> dict:
-    """The AR model of each leg's residual, for the report."""
-    return {"ar_order": [len(c) for c in w.coefficients],
-            "lag1_autocorrelation": [round(float(v), 4) for v in w.phi1()],
-            "innovation_std": [float(v) for v in w.innovation_std],
-            "residual_std": [float(v) for v in w.marginal_std]}
+
+@dataclass
+class NoiseModel:
+    """The AR noise model of each leg's residual, for the report.
+
+    Attributes
+    ----------
+    ar_order : list of int
+        AR order per leg.
+    lag1_autocorrelation : list of float
+        Lag-one autocorrelation per leg (rounded to 4 decimals).
+    innovation_std, residual_std : list of float
+        Standard deviation of the innovations and of the residual itself per leg, N.
+    """
+
+    ar_order: list[int]
+    lag1_autocorrelation: list[float]
+    innovation_std: list[float]
+    residual_std: list[float]
+
+
+def noise_model(w: st.Whitener) -> NoiseModel:
+    """The AR model of each leg's residual of a whitener, for the report."""
+    return NoiseModel([len(c) for c in w.coefficients],
+                      [round(float(v), 4) for v in w.phi1()],
+                      [float(v) for v in w.innovation_std],
+                      [float(v) for v in w.marginal_std])
 
 
 def profile_cv(blocks: st.Blocks, null: list[int], variants: list[list[int]],
@@ -135,6 +162,7 @@ def screen_candidates(problem: Problem, design: Design, whitener: st.Whitener,
     null = st.fit(blocks, null_cols, design.lower, design.upper)
     cv_null = st.cross_validate(blocks, null_cols, design.lower, design.upper, s.n_folds)
     level = s.alpha / max(len(candidates), 1)
+    rule = Rule(level, min_gap=s.min_gap, min_cv_gain=0.0, min_fold_share=s.min_fold_share)
     tests, fits, chosen = {}, {}, {}
     for c in candidates:
         options = [st.fit(blocks, null_cols + v, design.lower, design.upper)
@@ -148,43 +176,48 @@ def screen_candidates(problem: Problem, design: Design, whitener: st.Whitener,
         share = st.fold_share(blocks, cv, cv_null, s.n_folds)
         params = candidate_values(problem, design, c, best, j)
         gap = gap_closed(design, null, best)
-        if p < level and cv_gain > 0 and share >= s.min_fold_share and gap < s.min_gap:
+        before_bands = Evidence(p, cv_gain=cv_gain, fold_share=share, gap=gap)
+        if failures(before_bands, rule) == ["gap"]:
             gap = max(gap, gap_replacing_refit(problem, design, blocks, best, k))
-        p_bands = 1.0
-        if p < level:
-            p_bands = st.band_p_value(blocks, null, best, k)
+        p_bands = st.band_p_value(blocks, null, best, k) if p < level else 1.0
         test = CandidateTest(c.name, params, float(F), p, k, cv_gain, share,
                              float((null.sse - best.sse) / null.sse), gap, p_bands)
         plain = plain_sse(design, best) < plain_sse(design, null)
-        test.slow_only = bool(p < level <= p_bands and cv_gain > 0 and gap >= s.min_gap
-                              and share >= s.min_fold_share and plain)
-        if p >= level:
-            test.reason = f"not significant (p = {p:.2g} >= {level:.2g})"
-        elif p_bands >= level:
-            test.reason = (f"not significant on the record's slowest components alone nor on "
-                           f"the rest alone (p = {p_bands:.2g} >= {level:.2g}): slow noise "
-                           "explains it as well")
-        elif cv_gain <= 0:
-            test.reason = "does not lower the held-out error (block cross-validation)"
-        elif share < s.min_fold_share:
-            test.reason = (f"lowers the held-out error in only {share:.0%} of the folds "
-                           f"(needs {s.min_fold_share:.0%})")
-        elif gap < s.min_gap:
-            test.reason = (f"closes a gap of only {gap:.2f} x the noise level "
-                           f"(needs {s.min_gap:g})")
-        elif not plain:
-            test.reason = ("lowers the prewhitened error but not the residual itself: it "
-                           "fits what the noise model weighs most, not the gap")
-        else:
-            test.significant = True
-            test.reason = "significant"
+        failed = failures(test.evidence, rule)
+        test.slow_only = bool(failed == ["p_bands"] and plain)
+        test.significant = not failed and plain
+        test.reason = _reason(test, failed, plain, rule)
         tests[c.name], fits[c.name], chosen[c.name] = test, best, j
     return Screen(tests, fits, chosen, null, blocks, cv_null)
 
 
+def _reason(test: CandidateTest, failed: list[str], plain: bool, rule: Rule) -> str:
+    """Why a candidate was or was not accepted: the first criterion of the rule it fails
+    (``failures``), else whether it lowers the plain residual as well."""
+    first = failed[0] if failed else None
+    if first == "p_value":
+        return f"not significant (p = {test.p_value:.2g} >= {rule.level:.2g})"
+    if first == "p_bands":
+        return (f"not significant on the record's slowest components alone nor on "
+                f"the rest alone (p = {test.p_bands:.2g} >= {rule.level:.2g}): slow noise "
+                "explains it as well")
+    if first == "cv_gain":
+        return "does not lower the held-out error (block cross-validation)"
+    if first == "fold_share":
+        return (f"lowers the held-out error in only {test.fold_share:.0%} of the folds "
+                f"(needs {rule.min_fold_share:.0%})")
+    if first == "gap":
+        return (f"closes a gap of only {test.gap:.2f} x the noise level "
+                f"(needs {rule.min_gap:g})")
+    if not plain:
+        return ("lowers the prewhitened error but not the residual itself: it "
+                "fits what the noise model weighs most, not the gap")
+    return "significant"
+
+
 def low_band_of(problem: Problem, whitener: st.Whitener) -> np.ndarray:
     """The record's slowest components (``statistics.low_band``) on the samples that
-    ``whitener`` filters and keeps, (M - order, 6, LOW_BAND)."""
+    ``whitener`` filters and keeps, (M - order, 6, ``Settings.low_band``)."""
     return whitener.low_band(problem.model.t[problem.used], problem.sliding)
 
 
@@ -368,8 +401,42 @@ def bootstrap_share(problem: Problem, design: Design, screen: Screen,
     return {n: float(v / len(weights)) for n, v in zip(names, wins)}
 
 
+@dataclass
+class GenericCompetitor:
+    """A round's winner against the generic out-of-catalog basis (``generic_competitor``).
+
+    Attributes
+    ----------
+    p_winner_beyond_generic : float
+        p-value of the winner added to the refitted model and the basis.
+    gap_winner_beyond_generic : float
+        The gap it closes there, over the RMS left.
+    p_generic_beyond_catalog : float
+        p-value of the basis added to the refitted model, the winner and every other accepted
+        candidate.
+    p_generic_bands : float
+        The same test on the record's slowest components alone or on the rest alone
+        (``statistics.band_p_value``).
+    gap_generic_beyond_catalog : float
+        The gap the basis closes beyond the catalog, over the RMS left.
+    blocked, imitates : bool
+        ``competitor_rule``'s decisions.
+    main_signal : str or None
+        The generic signal that carries most of the basis's part (``lackfit.SIGNALS``).
+    """
+
+    p_winner_beyond_generic: float
+    gap_winner_beyond_generic: float
+    p_generic_beyond_catalog: float
+    p_generic_bands: float
+    gap_generic_beyond_catalog: float
+    blocked: bool
+    imitates: bool
+    main_signal: str | None
+
+
 def generic_competitor(problem: Problem, design: Design, whitener: st.Whitener,
-                       screen: Screen, winner: str) -> dict:
+                       screen: Screen, winner: str) -> GenericCompetitor:
     """The winner against the generic out-of-model structure of ``lackfit`` (a delay, a
     nonlinear or mis-scaled load cell, another friction law, a drift, a scale error of the
     recorded position), without the signals that a tested candidate reproduces
@@ -389,42 +456,10 @@ def generic_competitor(problem: Problem, design: Design, whitener: st.Whitener,
     components alone or on the rest alone: ``statistics.band_tests``),
     ``blocked``, ``imitates`` and the generic signal that carries most.
     """
-    from gsfric.discovery import lackfit
-
     s = problem.settings
-    used = problem.used
-    F = problem.model.forces(design.theta)[used]
-    # only what lies outside the catalog as tested: a signal that a candidate (or an effect of
-    # the model) reproduces is that effect, not a generic structure
-    available = set(screen.tests) | {n.split(".")[0] for n in design.names}
-    B, names = lackfit.basis_outside(np.asarray(problem.model.t[used], float), F,
-                                     problem.result.D_dot[used], problem.sliding,
-                                     problem.weight, available,
-                                     pose=problem.model.pose_scale(design.theta, used))
-    others = [n for n, t in screen.tests.items() if t.significant and n != winner]
-    wcols = design.variants[winner][screen.variant[winner]]
-    ocols = [c for n in others for c in design.variants[n][screen.variant[n]]]
-    cols = design.refit + wcols + ocols
-    # the model's columns and the basis side by side, never joined into one array (that copy
-    # was the largest temporary of a round)
-    nb = B.shape[2]
-    Xc = design.X[:, :, cols]
-    blocks = st.Blocks.whitened(whitener, [Xc, B], design.r, s.n_blocks, by="time",
-                                low=low_band_of(problem, whitener))
-    fc, fb, z = Xc.reshape(-1, len(cols)), B.reshape(-1, nb), design.r.reshape(-1)
-    cross = fc.T @ fb
-    XtX = np.block([[fc.T @ fc, cross], [cross.T, fb.T @ fb]])
-    Xtr = np.concatenate([fc.T @ z, fb.T @ z])
-    basis_sq = np.diag(XtX)[len(cols):]
-    del Xc, B, fc, fb
-
-    nr, nw, no = len(design.refit), len(wcols), len(ocols)
-    lower = np.r_[design.lower[cols], np.full(nb, -np.inf)]
-    upper = np.r_[design.upper[cols], np.full(nb, np.inf)]
-    R = list(range(nr))
-    W = list(range(nr, nr + nw))
-    O = list(range(nr + nw, nr + nw + no))
-    G = list(range(nr + nw + no, nr + nw + no + nb))
+    side = _BesideBasis.of(problem, design, whitener, screen, winner)
+    blocks, lower, upper = side.blocks, side.lower, side.upper
+    R, W, O, G = side.groups
     k_w = len(next(c for c in problem.candidates if c.name == winner).fitted)
     generic = st.fit(blocks, R + G, lower, upper)
     both = st.fit(blocks, R + G + W, lower, upper)
@@ -432,22 +467,72 @@ def generic_competitor(problem: Problem, design: Design, whitener: st.Whitener,
     catalog = st.fit(blocks, R + W + O, lower, upper)
     everything = st.fit(blocks, R + W + O + G, lower, upper)
     _, p_generic, _ = st.f_test(catalog, everything)
-    p_generic_bands = st.band_p_value(blocks, catalog, everything, nb)
+    p_generic_bands = st.band_p_value(blocks, catalog, everything, len(G))
     level = s.alpha / max(len(screen.tests), 1)
     parts = {}
     coef = everything.coef[len(R + W + O):]
-    for j, name in enumerate(names):
-        parts[name] = parts.get(name, 0.0) + float(coef[j] ** 2 * basis_sq[j])
+    for j, name in enumerate(side.names):
+        parts[name] = parts.get(name, 0.0) + float(coef[j] ** 2 * side.basis_sq[j])
     main = max(parts, key=parts.get) if parts else None
-    gap_winner = _gap(XtX, Xtr, design.rtr, generic, both)
-    gap_generic = _gap(XtX, Xtr, design.rtr, catalog, everything)
+    gap_winner = _gap(side.XtX, side.Xtr, design.rtr, generic, both)
+    gap_generic = _gap(side.XtX, side.Xtr, design.rtr, catalog, everything)
     blocked, imitates = competitor_rule(p_winner, gap_winner, p_generic, gap_generic,
                                         alpha=s.alpha, level=level, min_gap=s.min_gap)
-    return {"p_winner_beyond_generic": float(p_winner), "gap_winner_beyond_generic": gap_winner,
-            "p_generic_beyond_catalog": float(p_generic),
-            "p_generic_bands": p_generic_bands,
-            "gap_generic_beyond_catalog": gap_generic, "blocked": blocked,
-            "imitates": imitates, "main_signal": main}
+    return GenericCompetitor(float(p_winner), gap_winner, float(p_generic), p_generic_bands,
+                             gap_generic, blocked, imitates, main)
+
+
+@dataclass
+class _BesideBasis:
+    """The model's columns of a round (the refit's, the winner's, the other accepted
+    candidates') beside the generic basis: prewhitened blocks, the unwhitened cross-products
+    X'X and X'r, each basis column's sum of squares and signal, the bounds, and the column
+    groups (refit, winner, others, basis)."""
+
+    blocks: st.Blocks
+    XtX: np.ndarray
+    Xtr: np.ndarray
+    basis_sq: np.ndarray
+    names: list[str]
+    lower: np.ndarray
+    upper: np.ndarray
+    groups: tuple[list[int], list[int], list[int], list[int]]
+
+    @classmethod
+    def of(cls, problem: Problem, design: Design, whitener: st.Whitener, screen: Screen,
+           winner: str) -> _BesideBasis:
+        used = problem.used
+        F = problem.model.forces(design.theta)[used]
+        # only what lies outside the catalog as tested: a signal that a candidate (or an
+        # effect of the model) reproduces is that effect, not a generic structure
+        available = set(screen.tests) | {n.split(".")[0] for n in design.names}
+        B, names = lackfit.basis_outside(np.asarray(problem.model.t[used], float), F,
+                                         problem.result.D_dot[used], problem.sliding,
+                                         problem.weight, available,
+                                         pose=problem.model.pose_scale(design.theta, used))
+        others = [n for n, t in screen.tests.items() if t.significant and n != winner]
+        wcols = design.variants[winner][screen.variant[winner]]
+        ocols = [c for n in others for c in design.variants[n][screen.variant[n]]]
+        cols = design.refit + wcols + ocols
+        # the model's columns and the basis side by side, never joined into one array (that
+        # copy was the largest temporary of a round)
+        nb = B.shape[2]
+        Xc = design.X[:, :, cols]
+        blocks = st.Blocks.whitened(whitener, [Xc, B], design.r, problem.settings.n_blocks,
+                                    by="time", low=low_band_of(problem, whitener))
+        fc, fb, z = Xc.reshape(-1, len(cols)), B.reshape(-1, nb), design.r.reshape(-1)
+        cross = fc.T @ fb
+        XtX = np.block([[fc.T @ fc, cross], [cross.T, fb.T @ fb]])
+        Xtr = np.concatenate([fc.T @ z, fb.T @ z])
+        basis_sq = np.diag(XtX)[len(cols):]
+        del Xc, B, fc, fb
+        nr, nw, no = len(design.refit), len(wcols), len(ocols)
+        groups = (list(range(nr)), list(range(nr, nr + nw)),
+                  list(range(nr + nw, nr + nw + no)),
+                  list(range(nr + nw + no, nr + nw + no + nb)))
+        return cls(blocks, XtX, Xtr, basis_sq, names,
+                   np.r_[design.lower[cols], np.full(nb, -np.inf)],
+                   np.r_[design.upper[cols], np.full(nb, np.inf)], groups)
 
 
 def competitor_rule(p_winner: float, gap_winner: float, p_generic: float, gap_generic: float,
@@ -464,210 +549,10 @@ def competitor_rule(p_winner: float, gap_winner: float, p_generic: float, gap_ge
     indistinguishable candidates apart; a significant winner is a real part of the gap,
     however small beside what the basis takes (a motion differentiated from noisy poses can
     leave several times the noise), so it is named, as the simpler explanation."""
-    adds = p_winner < alpha and gap_winner >= min_gap
-    structure = p_generic < level and gap_generic >= min_gap
-    blocked = structure and p_winner >= alpha
-    imitates = not blocked and ((not adds and p_generic < level) or p_winner >= alpha)
+    winner_adds = accept(Evidence(p_winner), Rule(alpha))
+    adds = accept(Evidence(p_winner, gap=gap_winner), Rule(alpha, min_gap=min_gap))
+    generic_adds = accept(Evidence(p_generic), Rule(level))
+    structure = accept(Evidence(p_generic, gap=gap_generic), Rule(level, min_gap=min_gap))
+    blocked = structure and not winner_adds
+    imitates = not blocked and ((not adds and generic_adds) or not winner_adds)
     return bool(blocked), bool(imitates)
-
-
-# -- Gauss-Newton refinement on the compiled model ---------------------------------------------
-
-
-def refine(problem: Problem, theta: np.ndarray, names: list[str], whitener: st.Whitener,
-           start: tuple[np.ndarray, np.ndarray] | None = None
-           ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """Gauss-Newton on the named parameters within their bounds (prewhitened objective).
-
-    ``start``, if given, is the residual (M, 6) and Jacobian (M, 6, k) at theta (which must
-    lie within the bounds). Returns theta, the residual and the Jacobian at the result.
-    """
-    model = problem.model
-    cols = [model.index[n] for n in names]
-    lo = np.array([problem.bounds(n)[0] for n in names])
-    hi = np.array([problem.bounds(n)[1] for n in names])
-    theta = theta.copy()
-    inside = bool(np.all((theta[cols] >= lo) & (theta[cols] <= hi)))
-    theta[cols] = np.clip(theta[cols], lo, hi)
-    if DELAY in names:
-        profiled = delay_profile(problem, theta, names, whitener)
-        if profiled["theta"] is not None:
-            theta, inside = profiled["theta"], False
-
-    def at(th):
-        F, J = model.jacobian(th, names, rows=problem.used)
-        r = problem.mask(problem.y - F[problem.used])
-        J *= problem.weight[:, :, None]
-        return r, J, float(np.sum(whitener.apply(r) ** 2))
-
-    if start is not None and inside:
-        r, J = start
-        current = float(np.sum(whitener.apply(r) ** 2))
-    else:
-        r, J, current = at(theta)
-    for _ in range(problem.settings.gauss_newton):
-        A, b, _, _ = st.Blocks.whitened(whitener, J, r, problem.settings.n_blocks).total()
-        step = st.solve(A, b, lo - theta[cols], hi - theta[cols])
-        for scale in (1.0, 0.5, 0.25):
-            trial = theta.copy()
-            trial[cols] = np.clip(theta[cols] + scale * step, lo, hi)
-            r_t, J_t, value = at(trial)
-            if value <= current:
-                break
-        else:
-            break
-        gain = (current - value) / max(current, 1e-300)
-        theta, r, J, current = trial, r_t, J_t, value
-        if gain < 1e-5:
-            break
-    return theta, r, J
-
-
-DELAY = "time_offset.delay"
-
-DELAY_RANGE = 0.5
-"""Half-width (s) of the delays the profile of ``delay_profile`` searches (capped by the
-candidate's bounds and a quarter of the record): the largest plausible delay between the pose
-and force channels of a rig (buffering, filters, clock offsets)."""
-
-DELAY_GRID = 200
-"""Number of steps of the profile's coarse grid over +-``DELAY_RANGE`` (never finer than one
-sample)."""
-
-
-def delay_profile(problem: Problem, theta: np.ndarray, names: list[str],
-                  whitener: st.Whitener) -> dict:
-    """The global estimate of ``time_offset.delay``: the profile of the prewhitened residual
-    sum of squares over the delay, the other parameters of ``names`` refitted linearly at each.
-
-    F depends on the delay only through a shift of the model's forces in time (``catalog``:
-    linear interpolation), which moves friction steps and load peaks by whole samples: the
-    sum of squares is a rough, many-valleyed function of the delay, and a Gauss-Newton step
-    from a secant's estimate stops in the nearest valley while the refitted viscous friction
-    and masses take over part of the shifted force. Here the forces and the derivatives of the
-    other parameters are computed once at zero delay and shifted, so each point of the
-    profile costs a shift and a small bounded least-squares fit: a coarse grid of
-    ``DELAY_GRID`` steps (at least one sample) over +-``DELAY_RANGE``, then a bounded scalar
-    search within one grid step either side of the best point; the current value is kept
-    unless the profile's minimum is lower.
-
-    Returns
-    -------
-    dict
-        ``theta`` (the parameters at the profile's minimum, the others stepped by their linear
-        refit; None when the current value is already best), ``delay`` (s), ``sse`` and
-        ``sse_current`` (prewhitened sums of squares at the minimum and at the current delay),
-        ``delays`` and ``profile`` (the coarse grid and its sums of squares).
-    """
-    from scipy.optimize import minimize_scalar
-
-    from gsfric.platform.catalog import shift
-
-    model = problem.model
-    j = model.index[DELAY]
-    others = [n for n in names if n != DELAY]
-    cols = [model.index[n] for n in others]
-    lo = np.array([problem.bounds(n)[0] for n in others]) - theta[cols]
-    hi = np.array([problem.bounds(n)[1] for n in others]) - theta[cols]
-    d_lo, d_hi = problem.bounds(DELAY)
-    t = model.t
-    span = min(DELAY_RANGE, 0.25 * float(t[-1] - t[0]))
-    d_lo, d_hi = max(d_lo, -span), min(d_hi, span)
-    at_zero = theta.copy()
-    at_zero[j] = 0.0
-    F, J = model.jacobian(at_zero, others)
-    n, k = len(t), len(others)
-    FJ = np.concatenate([F[:, :, None], J], axis=2).reshape(n, -1)
-    del F, J
-    used, weight = problem.used, problem.weight
-
-    def value(d: float) -> tuple[float, np.ndarray]:
-        moved = shift(t, FJ, d)[used].reshape(-1, 6, k + 1)
-        r = problem.mask(problem.y - moved[:, :, 0])
-        X = moved[:, :, 1:] * weight[:, :, None]
-        A, b, c, _ = st.Blocks.whitened(whitener, X, r, 1).total()
-        step = st.solve(A, b, lo, hi)
-        return st.sse(A, b, c, step), step
-
-    dt = float(np.median(np.diff(t)))
-    h = max(dt, (d_hi - d_lo) / DELAY_GRID)
-    delays = np.arange(d_lo, d_hi + 0.5 * h, h)
-    current = float(theta[j])
-    profile = np.array([value(float(d))[0] for d in delays])
-    best = float(delays[int(np.argmin(profile))])
-    found = minimize_scalar(lambda d: value(d)[0], bounds=(max(d_lo, best - h),
-                                                           min(d_hi, best + h)),
-                            method="bounded", options={"xatol": 1e-3 * dt})
-    candidates = [(float(profile.min()), best), (float(found.fun), float(found.x))]
-    sse_current = value(current)[0]
-    sse_best, delay = min(candidates)
-    out = {"theta": None, "delay": current, "sse": sse_current, "sse_current": sse_current,
-           "delays": delays, "profile": profile}
-    if sse_best < sse_current:
-        _, step = value(delay)
-        new = theta.copy()
-        new[j] = delay
-        # within the bounds exactly (the step's bounds were relative to theta: rounding)
-        bounds = np.array([problem.bounds(n) for n in others]).reshape(-1, 2)
-        new[cols] = np.clip(theta[cols] + step, bounds[:, 0], bounds[:, 1])
-        out.update(theta=new, delay=delay, sse=sse_best)
-    return out
-
-
-# -- stability of a named effect across the halves of the record --------------------------------
-
-
-def half_stability(problem: Problem, J: np.ndarray, r: np.ndarray, names: list[str],
-                   effect: str, whitener: st.Whitener) -> dict:
-    """Is the effect the same in both halves of the record?
-
-    A physical effect has one value of its parameters over the record; a catalog term that
-    imitates an error outside the catalog (per-leg offsets standing in for a nonlinear load
-    cell, a delay standing in for a ringing mode) fits whatever that error looks like on each
-    stretch of motion, and the stretches differ. The model, linearised at the final
-    parameters (J (M, 6, k) with respect to ``names``, residual r (M, 6)), is fitted on the
-    first and on the second half of the blocks separately, every parameter free; the
-    difference of the effect's parameters is tested by a Wald test (chi-square, the two halves'
-    prewhitened covariances summed), and its size is the RMS change of F it makes (N, plain,
-    sliding pairs) over the RMS of the final residual.
-
-    Returns
-    -------
-    dict
-        ``p_value``, ``change`` (RMS change of F between the halves over the RMS residual),
-        ``half_steps`` (the effect's parameters fitted on each half, as steps from the final
-        values), ``stable``.
-    """
-    from scipy.stats import chi2
-
-    s = problem.settings
-    cols = [k for k, n in enumerate(names) if n.startswith(effect + ".")]
-    if not cols or J.shape[2] == 0:
-        return {"p_value": 1.0, "change": 0.0, "half_steps": [], "stable": True}
-    blocks = st.Blocks.whitened(whitener, J, r, s.n_blocks)
-    half = len(blocks.ztz) // 2
-    k = J.shape[2]
-    est = []
-    for g in (slice(0, half), slice(half, None)):
-        A, b, c = blocks.held(g)
-        rows = float(blocks.rows[g].sum())
-        inv = np.linalg.pinv(A)
-        delta = inv @ b
-        s2 = max(c - 2 * delta @ b + delta @ A @ delta, 0.0) / max(rows - k, 1.0)
-        est.append((delta, s2 * inv))
-    d = est[0][0][cols] - est[1][0][cols]
-    V = est[0][1][np.ix_(cols, cols)] + est[1][1][np.ix_(cols, cols)]
-    W = float(d @ np.linalg.pinv(V) @ d)
-    p = float(chi2.sf(W, len(cols)))
-    sliding = problem.sliding
-    change_f = J[:, :, cols] @ d
-    left = float(np.sqrt(np.mean(r[sliding] ** 2)))
-    change = float(np.sqrt(np.mean(change_f[sliding] ** 2))) / max(left, 1e-300)
-    steps = [{names[j].split(".", 1)[1]: float(e[0][j]) for j in cols} for e in est]
-    stable = not (p < s.alpha and change >= STABILITY_MIN_CHANGE)
-    return {"p_value": p, "change": change, "half_steps": steps, "stable": bool(stable)}
-
-
-STABILITY_MIN_CHANGE = 0.3
-"""Smallest change of an effect's contribution between the halves of the record, relative to
-the residual left, that makes it unstable (with a Wald test p < alpha)."""

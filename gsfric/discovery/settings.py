@@ -1,17 +1,14 @@
-"""Settings of the discrepancy workflow (its own module: every other module may import it)."""
+"""Settings of the discrepancy workflow: every setting and numeric threshold in one place (its
+own module: every other module may import it)."""
 
 from __future__ import annotations
 
 from collections.abc import Mapping
 from dataclasses import dataclass
 
-from gsfric.discovery.candidates import CANDIDATE_NAMES, REFIT
+import numpy as np
 
-DEFAULT_TRIM = 100
-"""Samples left out at each end of the record by default (a twentieth of it when that is
-fewer): there the motion's filters fit one polynomial to the first or last window instead of
-centring one on each sample. Half the longest filter window was the default while that was
-201 samples; at 1601 it would leave out a tenth of a record of 8000 samples."""
+from gsfric.discovery.candidates import CANDIDATE_NAMES, REFIT
 
 
 @dataclass(frozen=True)
@@ -39,7 +36,7 @@ class Settings:
         Block-bootstrap draws of the parameter intervals (half as many for the share of draws
         each accepted candidate wins).
     trim : int or None
-        Samples left out at each end (None: ``min(DEFAULT_TRIM, N // 20)``).
+        Samples left out at each end (None: ``min(default_trim, N // 20)``).
     candidates : tuple of str
         Candidate effects tested (default: the whole catalog).
     refit : tuple of str
@@ -50,6 +47,9 @@ class Settings:
         Most Gauss-Newton iterations of a refinement.
     n_threads : int
         Threads of the compiled evaluation (0: every core).
+
+    The thresholds below (one line each on why) are fixed by the documented calibrations
+    (docs/discovery.md); change them only with the calibration.
     """
 
     alpha: float = 0.01
@@ -65,3 +65,102 @@ class Settings:
     plausible: Mapping[str, tuple[float, float]] | None = None
     gauss_newton: int = 4
     n_threads: int = 0
+
+    # -- the data ------------------------------------------------------------------------
+    default_trim: int = 100
+    """Samples left out at each end by default (a twentieth of the record when fewer): there
+    the motion's filters fit one polynomial to the first or last window instead of centring
+    one on each sample (at the longest window, 1601, half of it would leave out a tenth of a
+    record of 8000 samples)."""
+    held_run: int = 5
+    """Consecutive equal values of a force channel that make a dropout (``rest.data_problems``)."""
+    noise_window: int = 15
+    """Window (samples) of the local cubic fit whose residual measures the force noise
+    (``gsfric.signal.noise.high_frequency_std``): long enough for a robust scale, short beside
+    the moves."""
+
+    # -- rests and the speed band ------------------------------------------------------------
+    rest_band: float = 5.0
+    """Half-width of the not-sliding band, in standard deviations of the speed estimate: a
+    speed within it may be noise around a rest (``rest.sliding_mask``)."""
+    move_to_noise: float = 20.0
+    """A recorded channel moves when its range exceeds this many times its white noise
+    (``rest.moves``): a channel held fixed mixes no rest with a move, whatever its window."""
+    spline_noise_draws: int = 8
+    """Unit white-noise records through which the smoothing spline's velocity noise gain is
+    measured on a non-uniform time base (``rest.spline_differentiator``): enough for a gain
+    averaged over 51 samples."""
+
+    # -- the candidates and their fit ---------------------------------------------------------
+    stribeck_quantile: float = 0.9
+    """Quantile of the sliding leg speeds above which the Stribeck velocity is not fitted: a
+    Stribeck decay above nearly every sliding speed is a speed-independent friction
+    (``seal_friction`` by another name), and noise would choose the two-parameter name
+    (``candidates.stribeck_velocity_bound``)."""
+    secant_rounding: float = 1e-9
+    """Relative size (to the force) below which a secant column's force difference is
+    rounding of two evaluations of the compiled model (``residuals.secant``): such a column
+    would be fitted with an arbitrary, huge coefficient."""
+    delay_range: float = 0.5
+    """Half-width (s) of the delays the profile of ``refine.delay_profile`` searches: the
+    largest plausible delay between the pose and force channels of a rig."""
+    delay_grid: int = 200
+    """Steps of the delay profile's coarse grid over +-``delay_range`` (never finer than one
+    sample): fine enough that the bounded search from its best point finds the valley."""
+    stability_min_change: float = 0.3
+    """Smallest change of an effect's contribution between the halves of the record, relative
+    to the residual left, that makes it unstable with a Wald test p < alpha
+    (``refine.half_stability``): the size of ``min_gap``."""
+
+    # -- the statistics ----------------------------------------------------------------------
+    max_order: int = 12
+    """Largest AR order of the noise model (``statistics.Whitener``): enough for the coloured
+    noise of the calibration records, few enough to leave the structure to the tests."""
+    low_band: int = 3
+    """The record's slowest components per leg (cosines: the mean and the periods of twice the
+    record's length and of its length, ``statistics.low_band``) on which every F-test must
+    also hold, the noise measured there alone: the wander of slow noise lives there."""
+    ridge: float = 1e-10
+    """Ridge added to the scaled normal equations (``statistics.solve``): keeps a column that
+    the others nearly span from taking an arbitrary coefficient, far below any real signal."""
+
+    # -- the lack-of-fit tests of the final residual -----------------------------------------
+    state_bins: int = 24
+    """Bins per state variable and leg in ``structure.state_structure`` (quantiles of the used
+    samples): fine enough for a screw's ripple, with enough pairs per bin and fold."""
+    dynamic_order: int = 6
+    """Lagged residuals per leg in ``structure.dynamic_structure``: the noise's own past."""
+    dynamic_lags: int = 4
+    """Current and lagged samples of each input in ``structure.dynamic_structure`` (lags
+    0..dynamic_lags): a delay or a filter of a few samples."""
+    dynamic_min_gap: float = 0.5
+    """Smallest input-driven part, relative to the RMS left, that counts (at least
+    ``min_gap``): a motion differentiated from noisy poses leaves up to 0.31 times the noise
+    that follows the accelerations (``benchmarks/discovery_rates.py``); a resonance or a
+    delay of the size of the noise is above 0.6."""
+    travel_edges: tuple[float, ...] = tuple(float(v) for v in np.geomspace(2e-5, 1e-2, 10))
+    """Edges (m) of the bins of travel since a reversal in ``structure.reversal_structure``:
+    geometric, from 20 um (the smallest play or pre-sliding length resolved at the pose noise
+    of a rig) to 10 mm; longer travels form the reference bin, where the sliding law holds."""
+    rest_min_run: int = 48
+    """Shortest rest core (samples) that ``transients.rest_runs`` keeps: three windows of 16
+    samples (the mean square of fewer lagged differences is too uncertain to compare)."""
+    rest_min_rests: int = 6
+    """Fewest rests that ``transients.rest_transients`` tests: a t-test on fewer group means
+    rests on too few numbers to trust its tail."""
+    rest_window: float = 1 / 3
+    """Share of each rest core compared at its start and at its end
+    (``transients.rest_transients``)."""
+    rest_lags: tuple[int, ...] = (1, 4, 16)
+    """Lags (samples) of the differences whose energy ``transients.rest_transients`` compares:
+    fast and slow transients."""
+
+    # -- the regimes of the report ------------------------------------------------------------
+    reversal_quantile: float = 0.05
+    """Speeds below this quantile of all legs' speeds form the ``reversal`` band of the
+    regimes (``regimes.bands``): the neighbourhood of each velocity reversal."""
+    reversal_min_speed: float = 1e-3
+    """Smallest upper edge of the ``reversal`` band, m/s (``regimes.bands``)."""
+    time_stretches: int = 5
+    """Equal stretches of the record in the ``time`` regime (``regimes.bands``)."""
+

@@ -6,21 +6,20 @@ white noise count every sample as new information and find "effects" everywhere.
 uses these tools instead, each on a linearised model (the columns of dF/dtheta):
 
 * **Prewhitening** (``Whitener``): an AR(p) model is fitted to each leg's residual
-  (Yule-Walker via Levinson-Durbin, order by BIC up to ``MAX_ORDER``), and residuals and design
-  columns are filtered by ``1 - sum phi_j L^j``. Generalised least squares then becomes ordinary
-  least squares on filtered data, and nested F-tests on the filtered data are approximately
-  valid.
-* **Block cross-validation** (``cross_validate``): the samples are cut into contiguous stretches
-  of time, each holding an equal share of the used (sample, leg) pairs (``block_edges``); each
-  fold leaves out a stretch, fits on the rest and scores the one-step prediction
-  error (the prewhitened residual) of the stretch left out. Autocorrelated noise cannot leak
-  between folds much further than its correlation time, which is far shorter than a stretch.
-* **Block bootstrap** (``bootstrap``): stretches are drawn with replacement to measure how
-  stable the choice of effect is and how uncertain its parameters are.
-* **The slowest components on their own noise** (``low_band``, ``band_tests``): an AR model of
-  a dozen lags does not see noise whose power keeps rising towards the lowest frequencies
-  (1/f noise, a thermal wander), and tests of what lives at the record's slowest components
-  (an offset of each channel) against it are too confident. The same F-test is made on those
+  (Yule-Walker via Levinson-Durbin, order by BIC up to ``Settings.max_order``), and residuals
+  and design columns are filtered by ``1 - sum phi_j L^j``. Generalised least squares then
+  becomes ordinary least squares on filtered data, and nested F-tests on the filtered data are
+  approximately valid. * **Block cross-validation** (``cross_validate``): the samples are cut
+  into contiguous stretches of time, each holding an equal share of the used (sample, leg)
+  pairs (``block_edges``); each fold leaves out a stretch, fits on the rest and scores the
+  one-step prediction error (the prewhitened residual) of the stretch left out. Autocorrelated
+  noise cannot leak between folds much further than its correlation time, which is far shorter
+  than a stretch. * **Block bootstrap** (``bootstrap``): stretches are drawn with replacement
+  to measure how stable the choice of effect is and how uncertain its parameters are. * **The
+  slowest components on their own noise** (``low_band``, ``band_tests``): an AR model of a
+  dozen lags does not see noise whose power keeps rising towards the lowest frequencies (1/f
+  noise, a thermal wander), and tests of what lives at the record's slowest components (an
+  offset of each channel) against it are too confident. The same F-test is made on those
   components alone, with the noise measured on them, and on the rest alone.
 
 All of them work on cross-products of the prewhitened design per block (``Blocks``), so
@@ -33,17 +32,10 @@ from collections.abc import Sequence
 from dataclasses import dataclass
 
 import numpy as np
+from scipy.signal import lfilter
+from scipy.special import fdtrc
 
-MAX_ORDER = 12
-"""Largest AR order considered for the residual of each leg."""
-
-LOW_BAND = 3
-"""Slowest components of the record per leg (cosines: the mean and the periods of twice the
-record's length and of its length) that ``band_tests`` measures the noise on by themselves."""
-
-RIDGE = 1e-10
-"""Ridge added to the scaled normal equations (unit diagonal) of every fit."""
-
+from gsfric.discovery.settings import Settings
 
 # -- AR noise model ---------------------------------------------------------------------------
 
@@ -117,7 +109,7 @@ class Whitener:
         return max(len(c) for c in self.coefficients)
 
     @classmethod
-    def fit(cls, residual: np.ndarray, max_order: int = MAX_ORDER,
+    def fit(cls, residual: np.ndarray, max_order: int = Settings.max_order,
             valid: np.ndarray | None = None) -> Whitener:
         """AR models of each leg's residual (N, 6), orders by BIC.
 
@@ -154,8 +146,6 @@ class Whitener:
         Filtered samples whose window (the sample and the ``order`` before it) touches an
         invalid one are zero: ``valid`` (N, 6) if given, else the fit's own ``valid`` when
         ``a`` has its length."""
-        from scipy.signal import lfilter
-
         p = self.order
         if valid is None and self.valid is not None and len(self.valid) == a.shape[0]:
             valid = self.valid
@@ -187,7 +177,7 @@ class Whitener:
     def low_band(self, t: np.ndarray, valid: np.ndarray | None = None) -> np.ndarray:
         """The record's slowest components (``low_band``) on the filtered samples that
         ``apply`` keeps (``kept``): t (N,) s, the times of the unfiltered samples; valid as
-        ``kept``. Shape (N - order, 6, LOW_BAND)."""
+        ``kept``. Shape (N - order, 6, ``Settings.low_band``)."""
         t = np.asarray(t, float)
         return low_band(t[self.order:], self.kept(valid, len(t)))
 
@@ -383,7 +373,7 @@ def solve(A: np.ndarray, b: np.ndarray, lower: np.ndarray | None = None,
     if k == 0:
         return np.zeros(0)
     d = np.sqrt(np.maximum(np.diag(A), 1e-300))
-    As = A / np.outer(d, d) + RIDGE * np.eye(k)
+    As = A / np.outer(d, d) + Settings.ridge * np.eye(k)
     # a column without data (zero diagonal) carries no information: its coefficient is 0
     bs = np.where(np.diag(A) > 0, b, 0.0) / d
     lo = np.full(k, -np.inf) if lower is None else np.asarray(lower, float) * d
@@ -470,8 +460,6 @@ def f_test(null: Fit, alternative: Fit, k: int | None = None) -> tuple[float, fl
 
     ``k``, the number of parameters tested, defaults to the difference in columns.
     """
-    from scipy.special import fdtrc
-
     if k is None:
         k = len(alternative.columns) - len(null.columns)
     dof = alternative.rows - len(null.columns) - k
@@ -507,7 +495,7 @@ def fold_share(blocks: Blocks, cv: np.ndarray, cv_null: np.ndarray, n_folds: int
     return float(np.mean((np.asarray(cv) < np.asarray(cv_null))[held]))
 
 
-def low_band(t: np.ndarray, kept: np.ndarray, q: int = LOW_BAND) -> np.ndarray:
+def low_band(t: np.ndarray, kept: np.ndarray, q: int = Settings.low_band) -> np.ndarray:
     """The record's slowest components, per leg: the cosines ``cos(pi j tau)``, j = 0..q-1,
     of the time scaled to tau in [0, 1] (the mean and periods down to 2 T / (q - 1)),
     orthonormal over each leg's kept samples and zero on the others; shape (M, 6, q).
@@ -549,9 +537,7 @@ def band_tests(blocks: Blocks, null: Fit, alternative: Fit, k: int) -> tuple[flo
     less the alternative's parameters spent on it (the trace of the hat matrix over the
     band). Fitted on the slowest components alone, the refitted parameters and the effects
     already named (a dozen columns and more, mostly determined by the rest) would use up
-    their 6 x ``LOW_BAND`` observations."""
-    from scipy.special import fdtrc
-
+    their 6 x ``Settings.low_band`` observations."""
     A, b, c, rows = blocks.total()
     PX, pz = blocks.low_X, blocks.low_z
     AL = np.einsum("lqk,lqm->km", PX, PX)
@@ -565,7 +551,7 @@ def band_tests(blocks: Blocks, null: Fit, alternative: Fit, k: int) -> tuple[flo
     cols = list(alternative.columns)
     idx = np.ix_(cols, cols)
     d = np.sqrt(np.maximum(np.diag(A[idx]), 1e-300))
-    scaled = A[idx] / np.outer(d, d) + RIDGE * np.eye(len(cols))
+    scaled = A[idx] / np.outer(d, d) + Settings.ridge * np.eye(len(cols))
     spent = float(np.trace(np.linalg.solve(scaled, AL[idx] / np.outer(d, d)))) if cols else 0.0
     out = []
     for band, (n, used) in enumerate(((blocks.low_rows, spent),

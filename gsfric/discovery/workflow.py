@@ -25,184 +25,80 @@ Steps (docs/discovery.md explains each decision):
 
 from __future__ import annotations
 
+import dataclasses
 from collections.abc import Sequence
 from dataclasses import dataclass, field
 
 import numpy as np
+from tqdm import tqdm
 
 from gsfric.discovery import lackfit
 from gsfric.discovery import statistics as st
 from gsfric.discovery.candidates import CANDIDATES
+from gsfric.discovery.evidence import Evidence, Rule, accept
+from gsfric.discovery.final_tests import LackOfFit, lack_of_fit
+from gsfric.discovery.refine import half_stability, refine
 from gsfric.discovery.regimes import bands as regime_bands
 from gsfric.discovery.residuals import Problem
+from gsfric.discovery.results import (
+    NOISE_METHOD,
+    Discovery,
+    Finding,
+    FindingEvidence,
+    NoiseEstimate,
+    RefitParameter,
+    RefitReport,
+    RefitTest,
+    Round,
+)
 from gsfric.discovery.selection import (
-    CandidateTest,
     bootstrap_share,
     generic_competitor,
-    half_stability,
     indistinguishable,
     low_band_of,
     noise_model,
-    refine,
     refit_alternatives,
     screen_candidates,
     winner_of,
 )
 from gsfric.discovery.settings import Settings
+from gsfric.models import platform_from
+from gsfric.platform.catalog import EFFECTS
 from gsfric.platform.description import Platform
 from gsfric.trajectory import Motion
-
-
-@dataclass
-class Round:
-    """One round: the tests, the winner and its competitors.
-
-    Attributes
-    ----------
-    index : int
-    tests : list[CandidateTest]
-    winner : str or None
-    indistinguishable : list[str]
-        Significant candidates that the data cannot tell apart from the winner.
-    bootstrap_share : dict[str, float]
-        Share of block-bootstrap draws in which each significant candidate reduced the error
-        most.
-    level : float
-        The per-candidate test level ``alpha / K``.
-    noise_model : dict
-        AR orders and lag-one autocorrelations of the residual of each leg.
-    rms_before, rms_after : float
-        RMS of the residual (N) before and after the round.
-    """
-
-    index: int
-    tests: list[CandidateTest]
-    winner: str | None
-    indistinguishable: list[str] = field(default_factory=list)
-    bootstrap_share: dict[str, float] = field(default_factory=dict)
-    level: float = 0.0
-    noise_model: dict = field(default_factory=dict)
-    rms_before: float = 0.0
-    rms_after: float = 0.0
-    preferred_over: str | None = None
-    generic: dict = field(default_factory=dict)
-    """The winner against the generic out-of-model structure (``generic_competitor``)."""
-    blocked: str | None = None
-    """A winner not named: a generic out-of-catalog structure explains the data better and the
-    winner adds nothing to it (``generic["blocked"]``), or refined on the compiled model it
-    does not lower the residual."""
-    slow: str | None = None
-    """Without a winner: the candidate accepted by every rule but the test on the slowest
-    components (``CandidateTest.slow_only``) that a generic out-of-catalog structure explains
-    as well or better (``generic`` holds that comparison): not slow noise but a structure."""
-
-
-@dataclass
-class Finding:
-    """An effect named by the workflow.
-
-    Attributes
-    ----------
-    name : str
-        Catalog effect name.
-    parameters : dict[str, float]
-        Fitted values (fixed parameters included).
-    interval : dict[str, tuple[float, float]]
-        95% block-bootstrap intervals of the fitted parameters.
-    evidence : dict
-        Test statistics, cross-validation, bootstrap share, effect size, the round it was found
-        in, the candidates it cannot be told apart from, where it shows.
-    """
-
-    name: str
-    parameters: dict[str, float]
-    interval: dict[str, tuple[float, float]]
-    evidence: dict
-
-
-@dataclass
-class Discovery:
-    """Everything the workflow found.
-
-    Attributes
-    ----------
-    effects : list[Finding]
-        Effects named, in the order found (empty: nothing significant is missing).
-    refit : dict
-        The model's own parameters: model value, refitted value, plausible range, the value an
-        unbounded refit would need, and alternative explanations.
-    rounds : list[Round]
-    rms_before, rms_refit, rms_after : float
-        RMS residual (N, all legs, trimmed samples) of the model as given, after the refit
-        alone, and of the final model.
-    noise_rms_estimate : float
-        RMS of the final residual corrected for the parameters fitted: the noise level, if the
-        final model is right.
-    t : ndarray, shape (M,)
-        Times of the samples used, s.
-    residual_before, residual_after : ndarray, shape (M, 6)
-        Residuals of the model as given and of the final model, N.
-    used : slice
-        The samples used, of the data's N.
-    model : Platform
-        The model as given.
-    platform : Platform
-        The final model: refitted parameters, named effects switched on.
-    result_before : gsfric.Result
-        Full evaluation of the given model over the used samples (speeds, lengths, loads).
-    noise_model : dict
-        AR model of the final residual.
-    regimes : list[gsfric.discovery.regimes.Band]
-        The residual before and after per band of speed, load, stroke, pose and time.
-    settings : Settings
-    evaluations : int
-        Calls of the compiled model.
-    notes : list[str]
-        Remarks for the report (implausible refits, flagged steps, ...).
-    """
-
-    effects: list[Finding]
-    refit: dict
-    rounds: list[Round]
-    rms_before: float
-    rms_refit: float
-    rms_after: float
-    noise_rms_estimate: float
-    t: np.ndarray
-    residual_before: np.ndarray
-    residual_after: np.ndarray
-    used: slice
-    model: Platform
-    platform: Platform
-    result_before: object
-    noise_model: dict
-    regimes: list = field(default_factory=list)
-    settings: Settings = field(default_factory=Settings)
-    evaluations: int = 0
-    notes: list[str] = field(default_factory=list)
-    verdict: str = "no_discrepancy"
-    lack_of_fit: dict = field(default_factory=dict)
-    noise: dict = field(default_factory=dict)
-    rms_after_all: float = 0.0
-    sliding: np.ndarray | None = None
-
-    @property
-    def names(self) -> list[str]:
-        """Names of the effects found."""
-        return [f.name for f in self.effects]
-
-    def summary(self) -> dict:
-        """The summary.json content (SPEC), plus the refit, rounds and per-leg gaps."""
-        from gsfric.discovery.summary import summary
-
-        return summary(self)
-
 
 # -- the workflow -------------------------------------------------------------------------------
 
 
 def _rms(r: np.ndarray) -> float:
     return float(np.sqrt(np.mean(r ** 2)))
+
+
+@dataclass
+class _State:
+    """The workflow between its stages: the parameters fitted so far and what was found.
+
+    ``theta`` (n_theta,) holds the parameters, ``names`` those fitted, ``r`` (M, 6) the
+    residual there (N) and ``J`` (M, 6, len(names)) its derivatives; ``refit`` the report of
+    the model's own parameters (``Discovery.refit``); ``active`` the effects named, ``dropped``
+    the winners that, refined, did not lower the residual; ``evidence`` each named effect's
+    evidence (``Finding.evidence``)."""
+
+    problem: Problem
+    rng: np.random.Generator
+    theta0: np.ndarray
+    notes: list[str]
+    theta: np.ndarray | None = None
+    r: np.ndarray | None = None
+    J: np.ndarray | None = None
+    names: list[str] = field(default_factory=list)
+    residual_before: np.ndarray | None = None
+    rms_refit: float = 0.0
+    refit: RefitReport = field(default_factory=RefitReport)
+    active: list[str] = field(default_factory=list)
+    dropped: list[str] = field(default_factory=list)
+    rounds: list[Round] = field(default_factory=list)
+    evidence: dict[str, FindingEvidence] = field(default_factory=dict)
 
 
 def discover(motion: Motion, forces: np.ndarray, platform: Platform | None = None, *,
@@ -217,7 +113,7 @@ def discover(motion: Motion, forces: np.ndarray, platform: Platform | None = Non
     forces : ndarray, shape (N, 6)
         Measured actuator forces F1..F6, N (friction included).
     platform : Platform, optional
-        The current model (default: the reference platform).
+        The current model (default: ``gsfric.models.platform_from(None)``).
     settings : Settings, optional
     seed : int
         Seed of the block bootstrap.
@@ -235,22 +131,36 @@ def discover(motion: Motion, forces: np.ndarray, platform: Platform | None = Non
     -------
     Discovery
     """
-    import dataclasses
-
-    from gsfric.models import reference_platform
-
     settings = dataclasses.replace(settings or Settings(), **options)
-    platform = reference_platform() if platform is None else platform
+    platform = platform_from(platform)
     bar = _Progress(progress, settings.max_effects + 3)
     bar.step("simulating the model along the measured motion")
     problem = Problem(motion, forces, platform, settings, poses=poses)
-    model = problem.model
-    rng = np.random.default_rng(seed)
-    theta0 = model.theta0.copy()
-    notes = [f"candidate {n} not tested: {why}" for n, why in problem.skipped.items()]
-
-    # -- refit of the model's own parameters
+    state = _State(problem, np.random.default_rng(seed), problem.model.theta0.copy(),
+                   notes=[f"candidate {n} not tested: {why}"
+                          for n, why in problem.skipped.items()])
     bar.step("refitting the model's own parameters")
+    _refit_own_parameters(state)
+    while len(state.active) < settings.max_effects:
+        candidates = [c for c in problem.candidates
+                      if c.name not in state.active + state.dropped]
+        if not candidates:
+            break
+        bar.step(f"round {len(state.rounds) + 1}: testing {len(candidates)} candidate effects")
+        if not _round(state, candidates):
+            break
+    bar.step("bootstrap of the final fit")
+    result = _final(state, motion, platform)
+    bar.close()
+    return result
+
+
+def _refit_own_parameters(state: _State) -> None:
+    """Stage 1: the refit of the model's own parameters (``REFIT`` and the parameters of the
+    effects it has), with the unbounded values it would need and its test; sets the state's
+    parameters, residual and Jacobian."""
+    problem, theta0 = state.problem, state.theta0
+    model = problem.model
     names = problem.refit_names([])
     F0, J0 = model.jacobian(theta0, names, rows=problem.used)
     residual_before = problem.mask(problem.y - F0[problem.used])
@@ -259,221 +169,291 @@ def discover(motion: Motion, forces: np.ndarray, platform: Platform | None = Non
     # the refit's columns prewhitened once, for its unbounded values and for its test
     refit_blocks = st.Blocks.whitened(whitener, J0, residual_before, problem.settings.n_blocks,
                                       low=low_band_of(problem, whitener))
-    refit = _refit_report(problem, theta0, refit_blocks)
-    refit["test"] = _refit_test(problem, refit_blocks)
+    refit, notes = _refit_report(problem, theta0, refit_blocks)
+    refit.test = _refit_test(problem, refit_blocks)
     del refit_blocks
     theta, r, J = refine(problem, theta0, names, whitener, start=(residual_before, J0))
     del J0
-    sliding = problem.sliding
-    rms_refit = _rms(r[sliding])
     for name in names:
-        if name not in refit["parameters"]:
-            refit["parameters"][name] = {
-                "model": float(theta0[model.index[name]]), "unbounded": None,
-                "plausible": list(problem.bounds(name)), "plausible_refit": True}
-        refit["parameters"][name]["refit"] = float(theta[model.index[name]])
-    notes += refit.pop("notes")
+        value = float(theta[model.index[name]])
+        if name in refit.parameters:
+            refit.parameters[name].refit = value
+        else:
+            refit.parameters[name] = RefitParameter(
+                float(theta0[model.index[name]]), value, None, list(problem.bounds(name)),
+                True, own_effect=True)
+    state.notes += notes
+    state.theta, state.r, state.J, state.names = theta, r, J, names
+    state.residual_before, state.refit = residual_before, refit
+    state.rms_refit = _rms(r[problem.sliding])
 
-    active: list[str] = []
-    dropped: list[str] = []     # winners that, refined, did not lower the residual
-    rounds: list[Round] = []
-    findings_evidence: dict[str, dict] = {}
-    while len(active) < settings.max_effects:
-        candidates = [c for c in problem.candidates if c.name not in active + dropped]
-        if not candidates:
-            break
-        bar.step(f"round {len(rounds) + 1}: testing {len(candidates)} candidate effects")
-        design = screen = None     # the previous round's, before the next is built
-        design = problem.linearise(theta, active, candidates)
-        whitener = _noise_whitener(design, problem)
-        screen = screen_candidates(problem, design, whitener, candidates)
-        if not rounds:
-            for name, alts in refit_alternatives(problem, design, screen, theta0).items():
-                refit["parameters"][name]["alternatives"] = alts
-                notes.append(f"the refitted change of {name} could equally be explained by "
-                             f"{', '.join(alts)}: the data cannot tell them apart")
-        winner = winner_of(screen)
-        seen = [winner]
-        for _ in range(3):
-            if winner is None:
-                break
-            fit = screen.fits[winner]
-            r_alt = design.r - design.X[:, :, fit.columns] @ fit.coef
-            whitener = st.Whitener.fit(r_alt, valid=problem.sliding)
-            screen = screen_candidates(problem, design, whitener, candidates)
-            new = winner_of(screen)
-            if new == winner:
-                break
-            winner = new
-            if winner in seen:
-                break
-            seen.append(winner)
-        level = settings.alpha / len(candidates)
-        rnd = Round(len(rounds) + 1, list(screen.tests.values()), winner, level=level,
-                    noise_model=noise_model(whitener), rms_before=_rms(design.r[sliding]))
-        rounds.append(rnd)
+
+def _round(state: _State, candidates: list) -> bool:
+    """Stage 2, once per round: test the candidates, choose the winner, refine and add it.
+    Returns whether another round follows."""
+    problem = state.problem
+    design, whitener, screen, winner = _screen_round(state, candidates)
+    level = problem.settings.alpha / len(candidates)
+    rnd = Round(len(state.rounds) + 1, list(screen.tests.values()), winner, level=level,
+                noise_model=noise_model(whitener), rms_before=_rms(design.r[problem.sliding]))
+    state.rounds.append(rnd)
+    if winner is None:
+        rnd.rms_after = rnd.rms_before
+        _slow_structure(problem, design, whitener, screen, rnd, state.notes)
+        return False
+    winner, p_alone = _prefer_simplest(problem, design, screen, rnd, candidates)
+    rnd.generic = generic_competitor(problem, design, whitener, screen, winner)
+    if rnd.generic.blocked:
+        rnd.blocked, rnd.winner = winner, None
+        rnd.rms_after = rnd.rms_before
+        state.notes.append(
+            f"round {rnd.index}: {winner} was significant but adds nothing to a generic "
+            f"out-of-catalog structure (mainly {rnd.generic.main_signal}), which "
+            "explains more: not named")
+        return False
+    rnd.bootstrap_share = bootstrap_share(problem, design, screen, state.rng)
+    start = _winner_start(problem, design, screen, winner)
+    test = screen.tests[winner]
+    del design, screen     # free the round's design before the refinement
+    _refine_winner(state, rnd, start, whitener, test, p_alone,
+                   next(c for c in candidates if c.name == winner))
+    return True
+
+
+def _screen_round(state: _State, candidates: list):
+    """A round's design, noise model, tests and winner: the candidates screened against the
+    refitted model, the noise model re-estimated from the winner's residual and the screen
+    repeated until the winner is stable (Cochrane-Orcutt, at most three times); in the first
+    round, the refitted changes that a candidate explains as well are noted."""
+    problem = state.problem
+    design = problem.linearise(state.theta, state.active, candidates)
+    whitener = _noise_whitener(design, problem)
+    screen = screen_candidates(problem, design, whitener, candidates)
+    if not state.rounds:
+        for name, alts in refit_alternatives(problem, design, screen, state.theta0).items():
+            state.refit.parameters[name].alternatives = alts
+            state.notes.append(f"the refitted change of {name} could equally be explained by "
+                               f"{', '.join(alts)}: the data cannot tell them apart")
+    winner = winner_of(screen)
+    seen = [winner]
+    for _ in range(3):
         if winner is None:
-            rnd.rms_after = rnd.rms_before
-            _slow_structure(problem, design, whitener, screen, rnd, notes)
             break
-        rnd.indistinguishable, p_alone = indistinguishable(problem, design, screen, winner)
-        if rnd.indistinguishable:
-            # parsimony: of explanations the data cannot tell apart, the simpler one
-            group = [winner] + list(rnd.indistinguishable)
-            rank = {c.name: (c.simpler, len(c.fitted)) for c in candidates}
-            simplest = min(group, key=lambda n: rank[n])
-            if rank[simplest] < rank[winner]:
-                rnd.preferred_over = winner
-                winner = rnd.winner = simplest
-                rnd.indistinguishable, p_alone = indistinguishable(problem, design, screen,
-                                                                   winner)
-                if rnd.preferred_over not in rnd.indistinguishable:
-                    rnd.indistinguishable.append(rnd.preferred_over)
-        rnd.generic = generic_competitor(problem, design, whitener, screen, winner)
-        if rnd.generic["blocked"]:
-            rnd.blocked, rnd.winner = winner, None
-            rnd.rms_after = rnd.rms_before
-            notes.append(
-                f"round {rnd.index}: {winner} was significant but adds nothing to a generic "
-                f"out-of-catalog structure (mainly {rnd.generic['main_signal']}), which "
-                "explains more: not named")
+        fit = screen.fits[winner]
+        r_alt = design.r - design.X[:, :, fit.columns] @ fit.coef
+        whitener = st.Whitener.fit(r_alt, valid=problem.sliding)
+        screen = screen_candidates(problem, design, whitener, candidates)
+        new = winner_of(screen)
+        if new == winner:
             break
-        rnd.bootstrap_share = bootstrap_share(problem, design, screen, rng)
-        c = next(c for c in candidates if c.name == winner)
-        start = design.theta.copy()
-        values = screen.tests[winner].parameters
-        for p, v in values.items():
-            start[model.index[f"{winner}.{p}"]] = v
-        step_fit = screen.fits[winner]
-        for col, step in zip(step_fit.columns, step_fit.coef):
-            if col in design.refit:
-                start[model.index[design.names[col]]] += design.signs[col] * step
-        new_names = problem.refit_names(active + [winner])
-        test = screen.tests[winner]
-        design = screen = None     # free the round's design before the refinement
-        theta_new, r_new, J_new = refine(problem, start, new_names, whitener)
-        rnd.rms_after = _rms(r_new[sliding])
-        if rnd.rms_after >= rnd.rms_before:
-            # refined on the compiled model, the effect no longer shrinks the gap
-            # (a change of the refitted parameters that the linearised screening did not
-            # foresee); it says nothing of the other candidates: the round is repeated
-            # without it
-            notes.append(f"round {rnd.index}: {winner} refined on the compiled model does "
-                         f"not lower the residual ({rnd.rms_before:.4g} N -> "
-                         f"{rnd.rms_after:.4g} N): not named, the round repeated without it")
-            rnd.blocked, rnd.winner, rnd.rms_after = winner, None, rnd.rms_before
-            dropped.append(winner)
-            continue
-        theta, r, J, names = theta_new, r_new, J_new, new_names
-        active.append(winner)
-        findings_evidence[winner] = {
-            "round": rnd.index, "F": test.F, "p_value": test.p_value, "dof": test.dof,
-            "level": level, "cv_gain": test.cv_gain, "fold_share": test.fold_share,
-            "bootstrap_share": rnd.bootstrap_share.get(winner, 0.0),
-            "indistinguishable_from": list(rnd.indistinguishable),
-            "preferred_over": rnd.preferred_over,
-            "p_value_beyond": {k: v for k, v in p_alone.items()},
-            "rms_before": rnd.rms_before, "rms_after": rnd.rms_after,
-            "signature": c.signature,
-        }
+        winner = new
+        if winner in seen:
+            break
+        seen.append(winner)
+    return design, whitener, screen, winner
 
-    design = screen = None     # free the last round's design before the final steps
-    bar.step("bootstrap of the final fit")
-    residual_after = r
-    whitener = st.Whitener.fit(residual_after, valid=problem.sliding)
-    intervals = _intervals(problem, J, names, whitener, residual_after, rng, theta)
-    for name in active:
-        findings_evidence[name]["stability"] = half_stability(
-            problem, J, residual_after, names, name, whitener)
-    n_fitted = len(names)
-    rows = int(np.count_nonzero(sliding))
-    noise = float(np.sqrt(np.sum(residual_after ** 2) / max(rows - n_fitted, 1)))
+
+def _prefer_simplest(problem: Problem, design, screen, rnd: Round, candidates: list
+                     ) -> tuple[str, dict[str, float]]:
+    """Parsimony: of the explanations the data cannot tell apart from the round's winner, the
+    simpler one (``Candidate.simpler``, then fewer parameters). Sets the round's
+    ``indistinguishable`` (and ``winner``, ``preferred_over`` when another is preferred);
+    returns the winner and the p-values of it beyond each of the others."""
+    winner = rnd.winner
+    rnd.indistinguishable, p_alone = indistinguishable(problem, design, screen, winner)
+    if not rnd.indistinguishable:
+        return winner, p_alone
+    group = [winner] + list(rnd.indistinguishable)
+    rank = {c.name: (c.simpler, len(c.fitted)) for c in candidates}
+    simplest = min(group, key=lambda n: rank[n])
+    if rank[simplest] < rank[winner]:
+        rnd.preferred_over = winner
+        winner = rnd.winner = simplest
+        rnd.indistinguishable, p_alone = indistinguishable(problem, design, screen, winner)
+        if rnd.preferred_over not in rnd.indistinguishable:
+            rnd.indistinguishable.append(rnd.preferred_over)
+    return winner, p_alone
+
+
+def _winner_start(problem: Problem, design, screen, winner: str) -> np.ndarray:
+    """The parameters from which the winner is refined: the design's, with the winner's
+    linearised values and the refitted parameters stepped by their fit beside it."""
+    index = problem.model.index
+    start = design.theta.copy()
+    for p, v in screen.tests[winner].parameters.items():
+        start[index[f"{winner}.{p}"]] = v
+    step_fit = screen.fits[winner]
+    for col, step in zip(step_fit.columns, step_fit.coef):
+        if col in design.refit:
+            start[index[design.names[col]]] += design.signs[col] * step
+    return start
+
+
+def _refine_winner(state: _State, rnd: Round, start: np.ndarray, whitener: st.Whitener,
+                   test, p_alone: dict[str, float], c) -> None:
+    """Refine the winner ``c`` with the refitted parameters by Gauss-Newton on the compiled
+    model and add it, with its evidence; a winner that, refined, does not lower the residual
+    is dropped (the round repeated without it)."""
+    problem, winner = state.problem, c.name
+    new_names = problem.refit_names(state.active + [winner])
+    theta_new, r_new, J_new = refine(problem, start, new_names, whitener)
+    rnd.rms_after = _rms(r_new[problem.sliding])
+    if rnd.rms_after >= rnd.rms_before:
+        # refined on the compiled model, the effect no longer shrinks the gap (a change of
+        # the refitted parameters that the linearised screening did not foresee); it says
+        # nothing of the other candidates: the round is repeated without it
+        state.notes.append(f"round {rnd.index}: {winner} refined on the compiled model does "
+                           f"not lower the residual ({rnd.rms_before:.4g} N -> "
+                           f"{rnd.rms_after:.4g} N): not named, the round repeated without it")
+        rnd.blocked, rnd.winner, rnd.rms_after = winner, None, rnd.rms_before
+        state.dropped.append(winner)
+        return
+    state.theta, state.r, state.J, state.names = theta_new, r_new, J_new, new_names
+    state.active.append(winner)
+    state.evidence[winner] = FindingEvidence(
+        round=rnd.index, F=test.F, p_value=test.p_value, dof=test.dof, level=rnd.level,
+        cv_gain=test.cv_gain, fold_share=test.fold_share,
+        bootstrap_share=rnd.bootstrap_share.get(winner, 0.0),
+        indistinguishable_from=list(rnd.indistinguishable), preferred_over=rnd.preferred_over,
+        p_value_beyond=dict(p_alone), rms_before=rnd.rms_before, rms_after=rnd.rms_after,
+        signature=c.signature)
+
+
+def _final(state: _State, motion: Motion, platform: Platform) -> Discovery:
+    """Stage 3: the final fit's intervals and findings, the lack-of-fit tests of its
+    residual, the verdict and the regimes."""
+    problem, settings = state.problem, state.problem.settings
+    model, used, sliding = problem.model, problem.used, problem.sliding
+    residual_after = state.r
+    whitener = st.Whitener.fit(residual_after, valid=sliding)
+    findings, final, noise = _findings(state, whitener)
+    _final_notes(state)
+    full_after = problem.y - model.forces(state.theta)[used]
+    lof = lack_of_fit(problem, state.theta, residual_after,
+                      in_model=[c.name for c in problem.own_effects] + state.active)
+    rms_after = _rms(residual_after[sliding])
+    independent = float(np.sqrt(np.mean(problem.force_noise ** 2)))
+    noise_info = _noise_info(problem, independent, noise, whitener)
+    _imitator_notes(state)
+    verdict = _verdict(state, lof, rms_after)
+    table = regime_bands(np.asarray(motion.t[used]), problem.result.D_dot[used],
+                         problem.result.D[used], problem.result.F[used],
+                         motion.rotation[used], state.residual_before, residual_after)
+    return Discovery(
+        effects=findings, refit=state.refit, rounds=state.rounds,
+        rms_before=_rms(state.residual_before[sliding]), rms_refit=state.rms_refit,
+        rms_after=rms_after, noise_rms_estimate=independent,
+        t=np.asarray(motion.t[used]), residual_before=state.residual_before,
+        residual_after=residual_after, used=used, model=platform, platform=final,
+        result_before=problem.result, noise_model=noise_model(whitener), regimes=table,
+        settings=settings, evaluations=model.evaluations, notes=state.notes, verdict=verdict,
+        lack_of_fit=lof, noise=noise_info, rms_after_all=_rms(full_after), sliding=sliding)
+
+
+def _findings(state: _State, whitener: st.Whitener) -> tuple[list[Finding], Platform, float]:
+    """The named effects with their bootstrap intervals, stability, size and contribution;
+    the refit's final values and intervals. Returns the findings, the final platform and the
+    noise level of the final residual corrected for the parameters fitted (N)."""
+    problem, theta, names, r = state.problem, state.theta, state.names, state.r
+    model = problem.model
+    intervals = _intervals(problem, state.J, names, whitener, r, state.rng, theta)
+    for name in state.active:
+        state.evidence[name].stability = half_stability(problem, state.J, r, names, name,
+                                                           whitener)
+    rows = int(np.count_nonzero(problem.sliding))
+    noise = float(np.sqrt(np.sum(r ** 2) / max(rows - len(names), 1)))
     final = model.platform_at(theta, list(dict.fromkeys(
-        [c.name for c in problem.own_effects] + active)))
-    contributions = _contributions(problem, theta, active)
+        [c.name for c in problem.own_effects] + state.active)))
+    contributions = _contributions(problem, theta, state.active)
     findings = []
-    for name in active:
+    for name in state.active:
         c = next(c for c in CANDIDATES if c.name == name)
         params = {p: float(v) for p, v in final.effects[name].items()}
-        ev = findings_evidence[name]
-        ev["effect_size"] = _rms(contributions[name]) / noise if noise > 0 else float("inf")
-        ev["contribution_rms"] = _rms(contributions[name])
+        ev = state.evidence[name]
+        ev.effect_size = _rms(contributions[name]) / noise if noise > 0 else float("inf")
+        ev.contribution_rms = _rms(contributions[name])
         findings.append(Finding(name, params,
                                 {p: intervals[f"{name}.{p}"] for p in c.fitted + c.refined},
                                 ev))
-    for name in list(refit["parameters"]):
-        refit["parameters"][name]["final"] = float(theta[model.index[name]])
-        refit["parameters"][name]["interval"] = intervals.get(name)
-    if len(active) == settings.max_effects and rounds and rounds[-1].winner is not None:
-        notes.append(f"stopped after {settings.max_effects} effects (max_effects)")
+    for name, entry in state.refit.parameters.items():
+        entry.final = float(theta[model.index[name]])
+        entry.interval = intervals.get(name)
+    return findings, final, noise
+
+
+def _final_notes(state: _State) -> None:
+    """Notes on a workflow stopped by ``max_effects`` and on samples the model flags."""
+    problem, settings, rounds = state.problem, state.problem.settings, state.rounds
+    if (len(state.active) == settings.max_effects and rounds
+            and rounds[-1].winner is not None):
+        state.notes.append(f"stopped after {settings.max_effects} effects (max_effects)")
     flagged = int(np.count_nonzero(problem.result.flag[problem.used]))
     if flagged:
-        notes.append(f"{flagged} of {len(residual_before)} samples are flagged by the model "
-                     "(see gsfric.evaluation: stroke, near-singular poses); they are kept")
-    used = problem.used
-    full_after = problem.y - model.forces(theta)[used]
-    lof = _lack_of_fit(problem, theta, residual_after, whitener,
-                       in_model=[c.name for c in problem.own_effects] + active)
-    rms_after = _rms(residual_after[sliding])
-    independent = float(np.sqrt(np.mean(problem.force_noise ** 2)))
-    noise_info = {
-        "high_frequency": independent,
-        "high_frequency_per_leg": [float(v) for v in problem.force_noise],
-        "residual_corrected": noise,
-        "innovation_std": [float(v) for v in whitener.innovation_std],
-        "method": "high_frequency: residual of a local cubic fit of each force channel "
-                  "(robust scale), independent of the model; residual_corrected: final "
-                  "residual corrected for the parameters fitted",
-        "speed_uncertainty": [float(v) for v in problem.sigma_v],
-        "not_sliding_share": float(1.0 - sliding.mean()),
-    }
-    imitators = [rnd.winner for rnd in rounds if rnd.winner and rnd.generic.get("imitates")]
+        state.notes.append(
+            f"{flagged} of {len(state.residual_before)} samples are flagged by the model "
+            "(see gsfric.evaluation: stroke, near-singular poses); they are kept")
+
+
+def _noise_info(problem: Problem, independent: float, noise: float,
+                whitener: st.Whitener) -> NoiseEstimate:
+    """summary.json's ``noise``: the force noise from the force channels alone
+    (``independent``, N), from the final residual (``noise``, N), the final noise model's
+    innovations, the speed uncertainty and the share of pairs that do not slide."""
+    return NoiseEstimate(
+        high_frequency=independent,
+        high_frequency_per_leg=[float(v) for v in problem.force_noise],
+        residual_corrected=noise,
+        innovation_std=[float(v) for v in whitener.innovation_std],
+        method=NOISE_METHOD,
+        speed_uncertainty=[float(v) for v in problem.sigma_v],
+        not_sliding_share=float(1.0 - problem.sliding.mean()))
+
+
+def _imitator_notes(state: _State) -> None:
+    """A note for each named effect that only imitates a generic out-of-catalog structure."""
+    rounds = state.rounds
+    imitators = [rnd.winner for rnd in rounds if rnd.winner and rnd.imitates]
     for name in imitators:
         rnd = next(x for x in rounds if x.winner == name)
-        notes.append(
+        main = rnd.generic.main_signal
+        state.notes.append(
             f"round {rnd.index}: {name} explains nothing that a generic out-of-catalog structure "
-            f"(mainly {rnd.generic['main_signal']}: {lackfit.MEANING.get(rnd.generic['main_signal'], '')}) "
+            f"(mainly {main}: {lackfit.MEANING.get(main, '')}) "
             "does not explain as well or better: the data cannot tell "
             f"{name} from an error outside the catalog; it is named as the simpler explanation, "
             "the verdict is not 'explained'")
-    lof["source"] = "final residual" if lof["significant"] else None
-    by_round = next((rnd for rnd in rounds if rnd.slow or rnd.generic.get("blocked")
-                     or (rnd.winner and rnd.generic.get("imitates"))), None)
-    if lof["significant"] or by_round is not None:
-        verdict = "unexplained_discrepancy"
-        if not lof["significant"]:
+
+
+def _verdict(state: _State, lof: LackOfFit, rms_after: float) -> str:
+    """``unexplained_discrepancy`` (structure in the final residual, or a round's generic
+    structure: ``lof`` then says which), ``explained`` (effects named, or a significant
+    refit that closes ``min_gap``) or ``no_discrepancy``."""
+    lof.source = "final residual" if lof.significant else None
+    by_round = next((rnd for rnd in state.rounds if rnd.slow or rnd.blocked_by_generic
+                     or (rnd.winner and rnd.imitates)), None)
+    if lof.significant or by_round is not None:
+        if not lof.significant:
             _round_structure(lof, by_round)
-    elif active:
-        verdict = "explained"
-    else:
-        closed = np.sqrt(max(_rms(residual_before[sliding]) ** 2 - rms_after ** 2, 0.0))
-        verdict = "explained" if (closed >= settings.min_gap * rms_after
-                                  and refit["test"]["significant"]) else "no_discrepancy"
-    lof.pop("fitted")
-    table = regime_bands(np.asarray(motion.t[used]), problem.result.D_dot[used],
-                         problem.result.D[used], problem.result.F[used],
-                         motion.rotation[used], residual_before, residual_after)
-    bar.close()
-    return Discovery(
-        effects=findings, refit=refit, rounds=rounds, rms_before=_rms(residual_before[sliding]),
-        rms_refit=rms_refit, rms_after=rms_after, noise_rms_estimate=independent,
-        t=np.asarray(motion.t[problem.used]), residual_before=residual_before,
-        residual_after=residual_after, used=problem.used, model=platform, platform=final,
-        result_before=problem.result, noise_model=noise_model(whitener), regimes=table,
-        settings=settings, evaluations=model.evaluations, notes=notes, verdict=verdict,
-        lack_of_fit=lof, noise=noise_info, rms_after_all=_rms(full_after),
-        sliding=sliding)
+        return "unexplained_discrepancy"
+    if state.active:
+        return "explained"
+    sliding = state.problem.sliding
+    closed = np.sqrt(max(_rms(state.residual_before[sliding]) ** 2 - rms_after ** 2, 0.0))
+    significant = (closed >= state.problem.settings.min_gap * rms_after
+                   and state.refit.test.significant)
+    return "explained" if significant else "no_discrepancy"
 
 
-def _round_structure(lof: dict, rnd: Round) -> None:
+def _round_structure(lof: LackOfFit, rnd: Round) -> None:
     """What the lack-of-fit summary ``lof`` says about an ``unexplained_discrepancy`` that a
     round found (a generic structure that blocks its winner, that its winner only imitates, or
     that a slow part fits) while the final residual's tests found none: the round's generic
     signal, and the round as the source, instead of the final basis's weaker signals."""
-    main = rnd.generic.get("main_signal")
-    lof["source"] = f"round {rnd.index}"
-    lof["main_signal"] = main
-    lof["looks_like"] = lackfit.MEANING.get(main, "") if main else ""
+    main = rnd.generic.main_signal if rnd.generic is not None else None
+    lof.source = f"round {rnd.index}"
+    lof.main_signal = main
+    lof.looks_like = lackfit.MEANING.get(main, "") if main else ""
+
 
 
 def _slow_structure(problem: Problem, design, whitener: st.Whitener, screen, rnd: Round,
@@ -491,15 +471,14 @@ def _slow_structure(problem: Problem, design, whitener: st.Whitener, screen, rnd
         return
     name = max(slow, key=lambda t: t.cv_gain).name
     generic = generic_competitor(problem, design, whitener, screen, name)
-    if not ((generic["blocked"] or generic["imitates"])
-            and generic["p_generic_beyond_catalog"] < rnd.level
-            and generic["p_generic_bands"] < rnd.level):
+    beyond = Evidence(generic.p_generic_beyond_catalog, generic.p_generic_bands)
+    if not ((generic.blocked or generic.imitates) and accept(beyond, Rule(rnd.level))):
         return
     rnd.generic, rnd.slow = generic, name
     notes.append(
         f"round {rnd.index}: {name} fits a part of the gap that slow noise could also make "
-        f"(not named), but a generic out-of-catalog structure (mainly {generic['main_signal']}: "
-        f"{lackfit.MEANING.get(generic['main_signal'], '')}) explains it as well or better, "
+        f"(not named), but a generic out-of-catalog structure (mainly {generic.main_signal}: "
+        f"{lackfit.MEANING.get(generic.main_signal, '')}) explains it as well or better, "
         "and a significant part beyond the catalog: the catalog does not explain the data")
 
 
@@ -539,103 +518,11 @@ def _whitener_beyond(problem: Problem, r: np.ndarray, X: np.ndarray, XtX: np.nda
     return st.Whitener.fit(r, valid=problem.sliding)
 
 
-def _lack_of_fit(problem: Problem, theta: np.ndarray, residual: np.ndarray,
-                 whitener: st.Whitener, in_model: Sequence[str] = ()) -> dict:
-    """The lack-of-fit test of the final residual (``lackfit``), with where it lives."""
-
-    s = problem.settings
-    used = problem.used
-    F = problem.model.forces(theta)[used]
-    t = np.asarray(problem.model.t[used])
-    # a signal that an effect of the final model reproduces (a delay's dF/dt once time_offset
-    # is in it) is that effect's parameter, refitted already: not a structure outside the model
-    speed = problem.result.D_dot[used]
-    dF, acceleration = lackfit.rates(t, F, speed)     # once: the basis and the dynamic test
-    X, names = lackfit.basis_outside(t, F, speed, problem.sliding, problem.weight, in_model,
-                                     derivatives=(dF, acceleration))
-    # the noise model from the residual of the basis fit (largest model), as in each round
-    whitener = lackfit.whitener_beyond(residual, X, problem.sliding)
-    out = lackfit.test(residual, X, whitener, alpha=s.alpha, min_gap=s.min_gap,
-                       n_blocks=s.n_blocks, n_folds=s.n_folds,
-                       min_fold_share=s.min_fold_share, names=names,
-                       low=low_band_of(problem, whitener))
-    X = None
-    drift = lackfit.parameter_drift(
-        residual, lackfit.drift_basis(t, speed, problem.sliding) * problem.weight[:, :, None],
-        problem.sliding, t, alpha=s.alpha, min_gap=s.min_gap, n_blocks=s.n_blocks,
-        n_folds=s.n_folds)
-    D = problem.result.D[used]
-    state = lackfit.state_structure(residual, lackfit.state_features(D, speed, F),
-                                    problem.sliding, n_folds=s.n_folds, min_gap=s.min_gap)
-    inputs = {"dF/dt": dF, "acceleration": acceleration}
-    dynamic = lackfit.dynamic_structure(residual, inputs, problem.sliding, alpha=s.alpha,
-                                        min_gap=max(s.min_gap, lackfit.DYNAMIC_MIN_GAP))
-    direction, travel = lackfit.travel_since_reversal(D, speed, problem.sliding)
-    reversal = lackfit.reversal_structure(residual, direction, travel, problem.sliding,
-                                          n_folds=s.n_folds, alpha=s.alpha, min_gap=s.min_gap)
-    out["state"], out["dynamic"], out["reversal"] = state, dynamic, reversal
-    out["rest"] = _rest_test(problem, theta)
-    drift_fitted = drift.pop("fitted")
-    drift["levels"] = lackfit.friction_levels(t, residual, speed, problem.sliding)
-    out["drift"] = drift
-    # structure in a form of the basis says most about what it is; else a friction that
-    # drifts over the record; else structure that repeats with the state; else structure
-    # that follows the motion; else after each reversal; else what happens at the rests
-    tests = {"basis": out, "drift": drift, "state": state, "dynamic": dynamic,
-             "reversal": reversal, "rest": out["rest"]}
-    by = next((k for k, v in tests.items() if v["significant"]), None)
-    if by in ("drift", "state", "dynamic", "reversal", "rest"):
-        out.update(significant=True, gap=tests[by]["gap"],
-                   structure_rms=tests[by]["structure_rms"], per_leg_rms=tests[by]["per_leg_rms"])
-    fitted = drift_fitted if by == "drift" else out["fitted"]
-    thirds = np.array_split(np.arange(len(t)), 3)
-    out["time_rms"] = {f"{t[g[0]]:.4g}-{t[g[-1]]:.4g} s": _rms(fitted[g]) for g in thirds}
-    out["frequency"] = lackfit.dominant_frequency(t, residual)
-    main = max(out["signals"], key=out["signals"].get) if out["signals"] else None
-    out["looks_like"] = lackfit.MEANING.get(main, "") if main else ""
-    if by == "drift":
-        main = "drifts over the record"
-        out["looks_like"] = lackfit.DRIFT_MEANING
-    elif by == "state":
-        main = f"repeats with {state['variable']}"
-        out["looks_like"] = lackfit.state_meaning(state["variable"])
-    elif by == "dynamic":
-        main = "driven by the motion"
-        out["looks_like"] = lackfit.DYNAMIC_MEANING
-    elif by == "reversal":
-        main = "follows the travel since each reversal"
-        out["looks_like"] = lackfit.REVERSAL_MEANING
-    elif by == "rest":
-        main = "transient at the rests"
-        out["looks_like"] = lackfit.REST_MEANING
-    out["main_signal"] = main
-    return out
-
-
-def _rest_test(problem: Problem, theta: np.ndarray) -> dict:
-    """``lackfit.rest_transients`` on the rest cores: the measured force less the final
-    model's frictionless force, where friction is static. The load cells' gains and delay
-    are not applied: at rest the force is constant, a gain changes it by a constant and a
-    delay (shorter than the differentiator's reach cut from the cores) not at all, while a
-    delay fitted to imitate something else would put its own transients into the rests."""
-    s = problem.settings
-    used = problem.used
-    runs = lackfit.rest_runs(problem.sliding, problem.move_reach)
-    if len(runs) < 4:
-        return lackfit.rest_transients(np.zeros_like(problem.y), [], alpha=s.alpha,
-                                       min_gap=s.min_gap)
-    model = problem.model
-    residual = problem.y - model.evaluate(theta, keep=("F0",)).F0[used]
-    return lackfit.rest_transients(residual, runs, alpha=s.alpha, min_gap=s.min_gap)
-
-
 def _contributions(problem: Problem, theta: np.ndarray, active: Sequence[str]
                    ) -> dict[str, np.ndarray]:
     """Each named effect's contribution to F at theta (F minus F with it switched off)."""
     if not active:
         return {}
-    from gsfric.platform.catalog import EFFECTS
-
     model = problem.model
     thetas = [theta]
     for name in active:
@@ -670,7 +557,7 @@ def _intervals(problem: Problem, J: np.ndarray, names: list[str], whitener: st.W
     return {n: (float(q[0, k]), float(q[1, k])) for k, n in enumerate(names)}
 
 
-def _refit_test(problem: Problem, blocks: st.Blocks) -> dict:
+def _refit_test(problem: Problem, blocks: st.Blocks) -> RefitTest:
     """Is the refit of the model's own parameters significant? ``blocks``: its columns (at
     the model's values) and the residual, prewhitened, with the record's slowest components.
     The F-test of all of them against none, and the same test on the record's slowest
@@ -679,26 +566,28 @@ def _refit_test(problem: Problem, blocks: st.Blocks) -> dict:
     a payload mass that follow the wander of 1/f noise) is not a gap closed."""
     k = blocks.XtX.shape[1]
     if k == 0:
-        return {"p_value": 1.0, "p_bands": 1.0, "significant": False}
+        return RefitTest(1.0, 1.0, False)
     lo, hi = np.full(k, -np.inf), np.full(k, np.inf)
     none, every = st.fit(blocks, [], lo, hi), st.fit(blocks, list(range(k)), lo, hi)
     p = st.f_test(none, every)[1]
     p_bands = st.band_p_value(blocks, none, every, k)
-    alpha = problem.settings.alpha
-    return {"p_value": p, "p_bands": p_bands, "significant": bool(p < alpha and p_bands < alpha)}
+    significant = accept(Evidence(p, p_bands), Rule(problem.settings.alpha))
+    return RefitTest(p, p_bands, significant)
 
 
-def _refit_report(problem: Problem, theta0: np.ndarray, blocks: st.Blocks) -> dict:
-    """The unbounded values a refit would need, and their plausibility.
+def _refit_report(problem: Problem, theta0: np.ndarray, blocks: st.Blocks
+                  ) -> tuple[RefitReport, list[str]]:
+    """The unbounded values a refit would need, and their plausibility; and a note for each
+    implausible one.
 
     ``blocks`` holds the prewhitened derivatives of F at theta0 for the refitted parameters
     (the plausible ones first) and the residual there.
     """
     model = problem.model
     names = list(problem.plausible)
-    out = {"parameters": {}, "implausible": [], "notes": []}
+    out, notes = RefitReport(), []
     if not names:
-        return out
+        return out, notes
     A, b, _, _ = blocks.total()
     n = len(names)
     free = st.solve(A[:n, :n], b[:n])
@@ -706,20 +595,17 @@ def _refit_report(problem: Problem, theta0: np.ndarray, blocks: st.Blocks) -> di
     for k, name in enumerate(names):
         lo, hi = problem.plausible[name]
         value0 = float(theta0[model.index[name]])
-        entry = {"model": value0, "refit": value0, "unbounded": float(free[k]),
-                 "plausible": [lo, hi]}
-        if not lo <= free[k] <= hi:
-            entry["plausible_refit"] = False
-            out["implausible"].append(name)
-            out["notes"].append(
+        plausible = bool(lo <= free[k] <= hi)
+        out.parameters[name] = RefitParameter(value0, value0, float(free[k]), [lo, hi],
+                                              plausible)
+        if not plausible:
+            out.implausible.append(name)
+            notes.append(
                 f"an unbounded refit of the model's parameters would need {name} = "
                 f"{free[k]:.4g}, outside its plausible range [{lo:.4g}, {hi:.4g}]: not a wrong "
                 "value but a missing effect is the likely cause; the refit is held within the "
                 "range and the rest of the gap is left to the candidate effects")
-        else:
-            entry["plausible_refit"] = True
-        out["parameters"][name] = entry
-    return out
+    return out, notes
 
 
 class _Progress:
@@ -728,8 +614,6 @@ class _Progress:
     def __init__(self, enabled: bool, total: int) -> None:
         self.bar = None
         if enabled:
-            from tqdm import tqdm
-
             self.bar = tqdm(total=total, unit="stage", desc="discover", leave=False)
 
     def step(self, text: str) -> None:

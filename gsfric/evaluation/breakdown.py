@@ -25,6 +25,7 @@ from collections.abc import Callable
 import numpy as np
 import pandas as pd
 
+from gsfric._optional import optional
 from gsfric.platform.description import Platform
 from gsfric.trajectory import Motion
 
@@ -87,8 +88,7 @@ def to_frame(t: np.ndarray, parts: dict[str, np.ndarray]):
 
 def plot(t: np.ndarray, parts: dict[str, np.ndarray], leg: int = 0, ax=None):
     """Stacked contributions to F of one leg (index from 0) over time; returns the axes."""
-    import matplotlib.pyplot as plt
-
+    plt = optional("matplotlib.pyplot")
     if ax is None:
         _, ax = plt.subplots(figsize=(8, 4))
     for name in PARTS:

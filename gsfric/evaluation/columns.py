@@ -18,6 +18,8 @@ from __future__ import annotations
 import functools
 from dataclasses import dataclass
 
+from gsfric._optional import optional
+
 
 @dataclass(frozen=True)
 class Column:
@@ -178,8 +180,7 @@ def annotate(frame):
 def arrow_table(frame):
     """A pyarrow Table of ``frame`` (a DataFrame or a dict of column arrays) with field metadata
     ``unit`` and ``description``."""
-    import pyarrow as pa
-
+    pa = optional("pyarrow")
     table = pa.table(frame) if isinstance(frame, dict) else \
         pa.Table.from_pandas(frame, preserve_index=False)
     known_units, known_text = _known()

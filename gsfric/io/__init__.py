@@ -7,13 +7,33 @@ where it applies, the row and the column, e.g. ``trajectory.csv: row 17: column 
 
 Modules: ``files`` (atomic writes, output folders), ``tables`` (CSV and Parquet), ``logs``
 (column maps, units, time counters: ``LogFormat``), ``readers`` (trajectories and measured
-data as a ``Motion``).
+data as a ``Motion``). Their main names are attributes of this package, each imported on first
+use: ``gsfric.io.files`` (what the command line needs to write its outputs) loads no NumPy.
 """
 
-from gsfric.io.files import atomic_write, output_folder
-from gsfric.io.logs import LogFormat
-from gsfric.io.readers import motion_from_frame, read_measured, read_trajectory
-from gsfric.io.tables import read_table, write_table
+import importlib
 
-__all__ = ["LogFormat", "atomic_write", "motion_from_frame", "output_folder", "read_measured",
-           "read_table", "read_trajectory", "write_table"]
+_HOMES = {"atomic_write": "gsfric.io.files", "output_folder": "gsfric.io.files",
+          "LogFormat": "gsfric.io.logs", "motion_from_frame": "gsfric.io.readers",
+          "read_measured": "gsfric.io.readers", "read_trajectory": "gsfric.io.readers",
+          "read_table": "gsfric.io.tables", "write_table": "gsfric.io.tables"}
+"""Public name -> the module it lives in."""
+
+_MODULES = ("files", "logs", "readers", "tables")
+
+__all__ = sorted(_HOMES)
+
+
+def __getattr__(name):
+    if name in _HOMES:
+        value = getattr(importlib.import_module(_HOMES[name]), name)
+        globals()[name] = value          # later look-ups skip this function
+        return value
+    if name in _MODULES:
+        return importlib.import_module(f"gsfric.io.{name}")
+    raise AttributeError(f"module 'gsfric.io' has no attribute {name!r}")
+
+
+def __dir__():
+    """The public names and the modules (for ``dir(gsfric.io)`` and tab completion)."""
+    return sorted({*_HOMES, *_MODULES})

@@ -12,12 +12,9 @@ import shutil
 import tempfile
 from collections.abc import Iterable, Iterator
 from pathlib import Path
-from typing import IO, TYPE_CHECKING, Any
+from typing import IO, Any
 
 from gsfric.errors import GsfricError, InputError, OutputError
-
-if TYPE_CHECKING:
-    pass
 
 _COMMIT_CHECK: contextvars.ContextVar = contextvars.ContextVar("gsfric_commit_check",
                                                                default=None)
@@ -158,21 +155,11 @@ def atomic_write(path: str | os.PathLike[str], mode: str = "w", *,
         raise ValueError(f"atomic_write: mode must be 'w', 'wt' or 'wb', got {mode!r}")
     given = Path(path)
     path = resolve_output(given)
-    directory = path.parent
     if path.is_dir():
         raise InputError(f"{given}: is a directory; give a file name")
     with contextlib.suppress(OSError):
         remove_stale_temporaries(path)
-    try:
-        fd, tmp_name = tempfile.mkstemp(prefix=_temp_prefix(path), suffix=".tmp", dir=directory)
-    except FileNotFoundError as error:
-        if directory.is_dir():
-            raise InputError(f"{given}: cannot write ({error.strerror})") from None
-        raise InputError(f"{given}: directory {str(directory)!r} does not exist") from None
-    except NotADirectoryError:
-        raise InputError(f"{given}: {str(directory)!r} is not a directory") from None
-    except OSError as error:
-        raise InputError(f"{given}: cannot write ({error.strerror})") from None
+    fd, tmp_name = _temporary_file(given, path)
     try:
         text_options = {} if "b" in mode else {"encoding": encoding, "newline": newline}
         try:
@@ -181,12 +168,7 @@ def atomic_write(path: str | os.PathLike[str], mode: str = "w", *,
                 handle.flush()
                 os.fsync(handle.fileno())
             _before_commit()
-            try:
-                permissions = path.stat().st_mode & 0o7777
-            except FileNotFoundError:
-                permissions = 0o666 & ~_current_umask()
-            os.chmod(tmp_name, permissions)
-            os.replace(tmp_name, path)
+            _replace_file(tmp_name, path)
         except OSError as error:
             if isinstance(error, (GsfricError, BrokenPipeError)):
                 raise
@@ -195,7 +177,34 @@ def atomic_write(path: str | os.PathLike[str], mode: str = "w", *,
         with contextlib.suppress(FileNotFoundError):
             os.unlink(tmp_name)
         raise
-    _sync_directory(directory)
+    _sync_directory(path.parent)
+
+
+def _temporary_file(given: Path, path: Path) -> tuple[int, str]:
+    """A new temporary file beside ``path`` (descriptor, name); ``InputError`` naming ``given``
+    when its directory is missing or not writable."""
+    directory = path.parent
+    try:
+        return tempfile.mkstemp(prefix=_temp_prefix(path), suffix=".tmp", dir=directory)
+    except FileNotFoundError as error:
+        if directory.is_dir():
+            raise InputError(f"{given}: cannot write ({error.strerror})") from None
+        raise InputError(f"{given}: directory {str(directory)!r} does not exist") from None
+    except NotADirectoryError:
+        raise InputError(f"{given}: {str(directory)!r} is not a directory") from None
+    except OSError as error:
+        raise InputError(f"{given}: cannot write ({error.strerror})") from None
+
+
+def _replace_file(tmp_name: str, path: Path) -> None:
+    """Move the complete temporary file onto ``path``, with ``path``'s permissions if it exists
+    (else 0666 less the umask)."""
+    try:
+        permissions = path.stat().st_mode & 0o7777
+    except FileNotFoundError:
+        permissions = 0o666 & ~_current_umask()
+    os.chmod(tmp_name, permissions)
+    os.replace(tmp_name, path)
 
 
 def _sync_directory(directory: Path) -> None:
@@ -242,15 +251,7 @@ def output_folder(path: str | os.PathLike[str], *,
     """
 
     given = Path(path)
-    path = resolve_output(given)
-    if path.exists() and not path.is_dir():
-        raise InputError(f"{given}: exists and is not a directory")
-    try:
-        path.parent.mkdir(parents=True, exist_ok=True)
-    except FileExistsError:
-        raise InputError(f"{given}: {str(path.parent)!r} is not a directory") from None
-    except OSError as error:
-        raise InputError(f"{given}: cannot create the directory ({error.strerror})") from None
+    path = _output_directory(given)
     with contextlib.suppress(OSError):
         remove_stale_temporaries(path)
     try:
@@ -263,25 +264,8 @@ def output_folder(path: str | os.PathLike[str], *,
             yield tmp
             _before_commit()
             names = sorted(p.name for p in tmp.iterdir())
-            protected = [Path(p) for p in inputs if p is not None]
-            for name in names:
-                target = path / name
-                for source in protected:
-                    with contextlib.suppress(OSError):
-                        if target.exists() and os.path.samefile(target, source):
-                            raise InputError(f"{given}: writing {name} would replace the input "
-                                             f"file {source}; choose another output directory")
-            if not path.exists() or (path.is_dir() and not any(path.iterdir())):
-                os.chmod(tmp, 0o777 & ~_current_umask())
-                if path.exists():
-                    path.rmdir()
-                os.replace(tmp, path)
-            else:
-                if not os.access(path, os.W_OK | os.X_OK):
-                    raise InputError(f"{given}: directory is not writable")
-                for name in names:
-                    os.replace(tmp / name, path / name)
-                tmp.rmdir()
+            _refuse_to_replace_inputs(given, path, names, inputs)
+            _move_folder(given, path, tmp, names)
             _sync_directory(path.parent)
         except OSError as error:
             if isinstance(error, (GsfricError, BrokenPipeError)):
@@ -292,3 +276,46 @@ def output_folder(path: str | os.PathLike[str], *,
     except BaseException:
         shutil.rmtree(tmp, ignore_errors=True)
         raise
+
+
+def _output_directory(given: Path) -> Path:
+    """The directory ``given`` stands for (a link followed), its parents created."""
+    path = resolve_output(given)
+    if path.exists() and not path.is_dir():
+        raise InputError(f"{given}: exists and is not a directory")
+    try:
+        path.parent.mkdir(parents=True, exist_ok=True)
+    except FileExistsError:
+        raise InputError(f"{given}: {str(path.parent)!r} is not a directory") from None
+    except OSError as error:
+        raise InputError(f"{given}: cannot create the directory ({error.strerror})") from None
+    return path
+
+
+def _refuse_to_replace_inputs(given: Path, path: Path, names: list[str],
+                              inputs: Iterable[str | os.PathLike[str] | None]) -> None:
+    """``InputError`` if an output ``path / name`` is the same file as one of ``inputs``."""
+    protected = [Path(p) for p in inputs if p is not None]
+    for name in names:
+        target = path / name
+        for source in protected:
+            with contextlib.suppress(OSError):
+                if target.exists() and os.path.samefile(target, source):
+                    raise InputError(f"{given}: writing {name} would replace the input "
+                                     f"file {source}; choose another output directory")
+
+
+def _move_folder(given: Path, path: Path, tmp: Path, names: list[str]) -> None:
+    """Rename the folder ``tmp`` to ``path`` if that is missing or empty, else each of its files
+    ``names`` into ``path``."""
+    if not path.exists() or (path.is_dir() and not any(path.iterdir())):
+        os.chmod(tmp, 0o777 & ~_current_umask())
+        if path.exists():
+            path.rmdir()
+        os.replace(tmp, path)
+    else:
+        if not os.access(path, os.W_OK | os.X_OK):
+            raise InputError(f"{given}: directory is not writable")
+        for name in names:
+            os.replace(tmp / name, path / name)
+        tmp.rmdir()

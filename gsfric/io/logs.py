@@ -9,7 +9,7 @@ import warnings
 from collections.abc import Mapping
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import TYPE_CHECKING, Any
+from typing import Any
 
 import numpy as np
 import tomllib
@@ -18,10 +18,6 @@ from gsfric._checks import short, suggest
 from gsfric.errors import GsfricWarning, InputError
 from gsfric.io.tables import numeric_columns
 from gsfric.signal.rotations import quaternion_from_rpy
-
-if TYPE_CHECKING:
-    pass
-
 
 TIME_POSITION = ("t", "x", "y", "z")
 
@@ -203,7 +199,6 @@ class LogFormat:
 
 
 def _read_toml(path) -> dict:
-
     path = Path(path)
     try:
         with open(path, "rb") as handle:
@@ -251,50 +246,13 @@ class ColumnReader:
     def check(self, names: list[str]) -> tuple[str, ...]:
         """Validate the header (stripped names); return ``orientation``. Warns of ignored columns."""
         path, fmt = self.path, self.format
-        present = set(names)
-        for key, column in fmt.columns.items():
-            if column not in present:
-                raise InputError(f"{path}: column map {key} = {column!r}: no such column"
-                                 f"{suggest(column, names)}")
-        mapped_sources = set(fmt.columns.values())
-        source = {}
-        for key in KNOWN:
-            column = fmt.columns.get(key, key)
-            if key not in fmt.columns and (key not in present or key in mapped_sources):
-                continue
-            source[key] = column
-        for column in fmt.keep:
-            if column not in present:
-                raise InputError(f"{path}: column {column!r} to keep: no such column"
-                                 f"{suggest(column, names)}")
+        source = _sources(path, fmt, names)
         ignored = [n for n in names if n not in source.values() and n not in fmt.keep]
 
         def missing(key: str, why: str) -> InputError:
-            close = difflib.get_close_matches(key.lower(), [n.lower() for n in ignored], n=1,
-                                              cutoff=0.6)
-            if close:
-                match = next(n for n in ignored if n.lower() == close[0])
-                return InputError(f"{path}: missing column {key!r} (is it {match!r}? map it "
-                                  f"with --column-map {key}={match})")
-            return InputError(f"{path}: missing column {key!r}{why}")
+            return _missing(path, ignored, key, why)
 
-        for key in TIME_POSITION:
-            if key not in source:
-                raise missing(key, f" (map the log's column to it with --column-map {key}=NAME)")
-        has = {group: [n for n in group if n in source] for group in (EULER, QUATERNION, RPY)}
-        for group, found in has.items():
-            if found:
-                for key in group:
-                    if key not in source:
-                        raise missing(key, f" (columns {', '.join(group)} go together)")
-        if not any(has.values()):
-            raise InputError(f"{path}: missing orientation: give columns alpha, beta, gamma, "
-                             "qw, qx, qy, qz or roll, pitch, yaw")
-        angles = QUATERNION if has[QUATERNION] else EULER if has[EULER] else RPY
-        for group in (EULER, QUATERNION, RPY):   # other orientation sets: unused, silently
-            if group is not angles:
-                for key in group:
-                    source.pop(key, None)
+        angles = _orientation(path, source, missing)
         forces = [n for n in FORCES if n in source]
         if (self.measured or forces) and len(forces) < 6:
             raise missing(next(n for n in FORCES if n not in source),
@@ -379,3 +337,57 @@ class ColumnReader:
         return values
 
 
+def _sources(path: Path, fmt: LogFormat, names: list[str]) -> dict[str, str]:
+    """gsfric column -> the log's column, for every known column the log has or maps; the
+    column map's and ``keep``'s columns checked against the header ``names``."""
+    present = set(names)
+    for key, column in fmt.columns.items():
+        if column not in present:
+            raise InputError(f"{path}: column map {key} = {column!r}: no such column"
+                             f"{suggest(column, names)}")
+    mapped_sources = set(fmt.columns.values())
+    source = {}
+    for key in KNOWN:
+        column = fmt.columns.get(key, key)
+        if key not in fmt.columns and (key not in present or key in mapped_sources):
+            continue
+        source[key] = column
+    for column in fmt.keep:
+        if column not in present:
+            raise InputError(f"{path}: column {column!r} to keep: no such column"
+                             f"{suggest(column, names)}")
+    return source
+
+
+def _missing(path: Path, ignored: list[str], key: str, why: str) -> InputError:
+    """The error for a missing column ``key``, naming the closest of the ``ignored`` columns."""
+    close = difflib.get_close_matches(key.lower(), [n.lower() for n in ignored], n=1,
+                                      cutoff=0.6)
+    if close:
+        match = next(n for n in ignored if n.lower() == close[0])
+        return InputError(f"{path}: missing column {key!r} (is it {match!r}? map it "
+                          f"with --column-map {key}={match})")
+    return InputError(f"{path}: missing column {key!r}{why}")
+
+
+def _orientation(path: Path, source: dict[str, str], missing) -> tuple[str, ...]:
+    """The orientation columns used (``QUATERNION``, ``EULER`` or ``RPY``, in this order of
+    preference); the others are dropped from ``source``. Time and position checked first."""
+    for key in TIME_POSITION:
+        if key not in source:
+            raise missing(key, f" (map the log's column to it with --column-map {key}=NAME)")
+    has = {group: [n for n in group if n in source] for group in (EULER, QUATERNION, RPY)}
+    for group, found in has.items():
+        if found:
+            for key in group:
+                if key not in source:
+                    raise missing(key, f" (columns {', '.join(group)} go together)")
+    if not any(has.values()):
+        raise InputError(f"{path}: missing orientation: give columns alpha, beta, gamma, "
+                         "qw, qx, qy, qz or roll, pitch, yaw")
+    angles = QUATERNION if has[QUATERNION] else EULER if has[EULER] else RPY
+    for group in (EULER, QUATERNION, RPY):   # other orientation sets: unused, silently
+        if group is not angles:
+            for key in group:
+                source.pop(key, None)
+    return angles

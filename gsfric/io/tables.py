@@ -10,18 +10,15 @@ import re
 import stat
 import warnings
 from pathlib import Path
-from typing import TYPE_CHECKING, Any
+from typing import Any
 
 import numpy as np
 import pandas as pd
 
 from gsfric._checks import short
+from gsfric._optional import optional
 from gsfric.errors import InputError
 from gsfric.io.files import atomic_write
-
-if TYPE_CHECKING:
-    import pandas as pd
-
 
 NAN_WORDS = ("nan", "-nan", "+nan")
 
@@ -124,8 +121,7 @@ def count_rows(path: str | os.PathLike[str]) -> int | None:
     path = Path(path)
     try:
         if table_kind(path) == "parquet":
-            import pyarrow.parquet as pq
-
+            pq = optional("pyarrow.parquet")
             return int(pq.ParquetFile(path).metadata.num_rows)
         lines, last = 0, b"\n"
         with open(path, "rb") as handle:
@@ -170,8 +166,7 @@ def read_table(path: str | os.PathLike[str]) -> pd.DataFrame:
         names = [str(c) for c in frame.columns]
         check_unique_columns(path, names)
     else:
-        import pyarrow
-
+        pyarrow = optional("pyarrow")
         try:
             frame = pd.read_parquet(path)
         except (pyarrow.ArrowException, ValueError, TypeError, OSError,

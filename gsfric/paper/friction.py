@@ -17,9 +17,11 @@ from __future__ import annotations
 import numpy as np
 import pandas as pd
 
+from gsfric._optional import optional
 from gsfric.compiled import native
 from gsfric.evaluation.breakdown import plot
-from gsfric.evaluation.evaluator import breakdown, effect_vector, parameter_vector
+from gsfric.evaluation.evaluator import breakdown
+from gsfric.evaluation.parameters import effect_vector, parameter_vector
 
 WAYS = ("(35) with R_3", "(35) with R_E", "bushings")
 
@@ -70,12 +72,8 @@ def report_section(run) -> list[str]:
 
 def breakdown_figure(platform, motion):
     """A figure of what each part contributes to F of legs 1 and 4 (kinematic mode)."""
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
-
+    optional("matplotlib").use("Agg")
+    plt = optional("matplotlib.pyplot")
     parts = breakdown(platform, motion)
     fig, axes = plt.subplots(1, 2, figsize=(11, 4), sharex=True)
     for ax, leg in zip(axes, (0, 3)):

@@ -15,9 +15,12 @@ import numpy as np
 import pandas as pd
 
 from gsfric import models
+from gsfric._optional import optional
 from gsfric.evaluation.paper_constants import (
     PAPER_ACCELERATION,
     PAPER_ANGULAR_ACCELERATION,
+    PAPER_JOINT_SPEED,
+    PAPER_LEG_ACCELERATION,
 )
 from gsfric.io.files import atomic_write, output_folder
 from gsfric.paper import friction as paper_friction
@@ -47,9 +50,8 @@ def plot_table(run: PaperRun, number: int):
     -------
     matplotlib.figure.Figure (Agg canvas; no pyplot state)
     """
-    from matplotlib.backends.backend_agg import FigureCanvasAgg
-    from matplotlib.figure import Figure
-
+    FigureCanvasAgg = optional("matplotlib.backends.backend_agg").FigureCanvasAgg
+    Figure = optional("matplotlib.figure").Figure
     spec = TABLES[number]
     ours = np.abs(run.our_values(number))
     paper = np.abs(run.paper[number][spec.columns[1:]].to_numpy(dtype=float))
@@ -142,15 +144,28 @@ def report_text(run: PaperRun, sensitivity: pd.DataFrame | None = None,
     if sensitivity is None:
         sensitivity = geometry_sensitivity(run.platform, run.mode)
     files = files or []
-    res = run.result
-    n = len(res)
+    out = _header_section(run, source)
+    out += _summary_section(run, sensitivity)
+    out += _tables_section(run, files)
+    out += _misprint_section(run)
+    out += _implied_section(run)
+    out += _why_section(run, sensitivity)
+    out += _actuator_section(run)
+    if files:
+        out += ["## Files", ""] + [f"- `{f}`" for f in files] + [""]
+    return "\n".join(out)
+
+
+def _header_section(run: PaperRun, source: str | None) -> list[str]:
+    """The title and what was run: platform, motion, mode, flagged steps."""
+    n = len(run.result)
     mode_text = {
         "paper": ("paper mode: the paper's constant accelerations of platform and leg parts, no "
                   "gyroscopic terms, joint speed 0.02 rad/s in (33)-(34); positions and sliding "
                   "speeds from the motion"),
         "kinematic": "kinematic mode: every velocity and acceleration from the motion itself",
     }[run.mode]
-    out = [
+    return [
         "# The paper's Tables 1-3, reproduced",
         "",
         f"- Platform: {source or 'the built-in paper platform (`gsfric.models.paper_platform()`)'}"
@@ -160,13 +175,16 @@ def report_text(run: PaperRun, sensitivity: pd.DataFrame | None = None,
         f"a = {PAPER_ACCELERATION} m/s^2, alpha = {PAPER_ANGULAR_ACCELERATION} "
         f"rad/s^2, t_j = {models.PAPER_DT} j s.",
         f"- Mode: {mode_text}.",
-        f"- Flagged steps: {len(res.flagged())} of {n}.",
+        f"- Flagged steps: {len(run.result.flagged())} of {n}.",
         "- Every value of every table is negative (friction opposes the motion); the "
         "comparisons below are of magnitudes, with the paper's misprints left out.",
         "",
-        "## Summary",
-        "",
     ]
+
+
+def _summary_section(run: PaperRun, sensitivity: pd.DataFrame) -> list[str]:
+    """The summary: each table's medians, ours against the paper's, and what they say."""
+    out = ["## Summary", ""]
     rows = []
     for number, spec in TABLES.items():
         s = run.summary(number).loc["all"]
@@ -174,8 +192,13 @@ def report_text(run: PaperRun, sensitivity: pd.DataFrame | None = None,
                      _n(s.paper_median), _n(s.ratio)])
     out += [_markdown_table(["table", "quantity", "ours, median", "paper, median",
                              "ratio ours/paper"], rows), ""]
-    out += _summary_text(run, sensitivity)
+    return out + _summary_text(run, sensitivity)
 
+
+def _tables_section(run: PaperRun, files: list[str]) -> list[str]:
+    """One section per table: per column, our and the paper's min / median / max, and the plot
+    if it is among ``files``."""
+    out = []
     for number, spec in TABLES.items():
         out += [f"## Table {number}: {spec.title} ({spec.unit})", ""]
         rows = [[c, _n(r.ours_min), _n(r.ours_median), _n(r.ours_max), _n(r.paper_min),
@@ -185,21 +208,19 @@ def report_text(run: PaperRun, sensitivity: pd.DataFrame | None = None,
                                  "paper median", "paper max", "ratio of medians"], rows), ""]
         if f"table{number}.png" in files:
             out += [f"![Table {number}: ours against the paper's](table{number}.png)", ""]
+    return out
 
-    out += _misprint_section(run)
-    out += _implied_section(run)
-    out += _why_section(run, sensitivity)
 
-    out += ["## Actuator forces (not in the paper)", "",
-            "F: the axial force of each actuator, friction included, positive pushing the "
-            "platform away from the base; F0: the same with frictionless joints.", ""]
+def _actuator_section(run: PaperRun) -> list[str]:
+    """The actuator forces F and F0 per leg (which the paper does not give)."""
+    res = run.result
+    out = ["## Actuator forces (not in the paper)", "",
+           "F: the axial force of each actuator, friction included, positive pushing the "
+           "platform away from the base; F0: the same with frictionless joints.", ""]
     rows = [[f"leg {i + 1}", _n(res.F[:, i].min()), _n(res.F[:, i].max()),
              _n(res.F0[:, i].min()), _n(res.F0[:, i].max())] for i in range(6)]
-    out += [_markdown_table(["leg", "F min (N)", "F max (N)", "F0 min (N)", "F0 max (N)"],
-                            rows), ""]
-    if files:
-        out += ["## Files", ""] + [f"- `{f}`" for f in files] + [""]
-    return "\n".join(out)
+    return out + [_markdown_table(["leg", "F min (N)", "F max (N)", "F0 min (N)", "F0 max (N)"],
+                                  rows), ""]
 
 
 def _geometry_spread(sensitivity: pd.DataFrame) -> float:
@@ -248,26 +269,11 @@ def _misprint_section(run: PaperRun) -> list[str]:
 
 
 def _implied_section(run: PaperRun) -> list[str]:
+    """The reactions the paper's values imply, by inverting (33)-(35), beside ours."""
     fr = PAPER_FRICTION
-    w = models.PAPER_JOINT_SPEED
-    weight = (run.platform.platform.mass + run.platform.platform.payload_mass) \
-        * run.platform.gravity
+    w = PAPER_JOINT_SPEED
     implied = {k: run.implied_reaction(k) for k in TABLES}
-    r3, r_e = run.reaction("R_3"), run.reaction("R_E")
-    with_r_e = run.prismatic_friction_with("R_E")
-    joints = np.concatenate([implied[1], implied[2]])
-    factor = np.nanmedian(implied[1]) / np.median(r_e)
-    high = np.mean(implied[1][np.isfinite(implied[1])] > 45.0)
-    high_ours = np.mean(r_e > 45.0)
-    legs = run.platform.legs
-    bound = max(legs.lower_mass, legs.upper_mass) * run.platform.gravity
-    leg_weight = (legs.lower_mass + legs.upper_mass) * run.platform.gravity
-    inertial = (legs.lower_mass + legs.upper_mass) \
-        * np.linalg.norm(models.PAPER_LEG_ACCELERATION)
-    tolerance = fr.joint_coulomb * fr.joint_radius * inertial
-    gap = np.abs(np.abs(run.paper_values(2)) - np.abs(run.paper_values(1)))
-    disagree = np.mean(gap[np.isfinite(gap)] > tolerance)
-    ours_gap = np.abs(run.our_values(2)) - np.abs(run.our_values(1))
+    r_e = run.reaction("R_E")
     out = ["## What the paper's values imply", "",
            "Inverting (33)-(34) with the paper's constants gives the reaction magnitude that "
            f"each friction moment implies: |R| = (|M| - c_s omega) / (mu r) = (|M| - "
@@ -284,7 +290,28 @@ def _implied_section(run: PaperRun) -> list[str]:
              ["", "our |F| (actuator force), for scale", "", _stats(np.abs(run.result.F))]]
     out += [_markdown_table(["from", "reaction (N)", "implied by the paper: min / median / max",
                              "ours: min / median / max"], rows), ""]
-    out += [
+    return out + _joint_findings(run, implied) + _table3_findings(run, implied) + [""]
+
+
+def _joint_findings(run: PaperRun, implied: dict[int, np.ndarray]) -> list[str]:
+    """Tables 1-2: the joint forces they imply, and how they contradict each other."""
+    fr = PAPER_FRICTION
+    weight = (run.platform.platform.mass + run.platform.platform.payload_mass) \
+        * run.platform.gravity
+    r_e = run.reaction("R_E")
+    joints = np.concatenate([implied[1], implied[2]])
+    factor = np.nanmedian(implied[1]) / np.median(r_e)
+    high = np.mean(implied[1][np.isfinite(implied[1])] > 45.0)
+    high_ours = np.mean(r_e > 45.0)
+    legs = run.platform.legs
+    leg_weight = (legs.lower_mass + legs.upper_mass) * run.platform.gravity
+    inertial = (legs.lower_mass + legs.upper_mass) \
+        * np.linalg.norm(PAPER_LEG_ACCELERATION)
+    tolerance = fr.joint_coulomb * fr.joint_radius * inertial
+    gap = np.abs(np.abs(run.paper_values(2)) - np.abs(run.paper_values(1)))
+    disagree = np.mean(gap[np.isfinite(gap)] > tolerance)
+    ours_gap = np.abs(run.our_values(2)) - np.abs(run.our_values(1))
+    return [
         f"- Tables 1-2 imply joint forces of {_n(np.nanmin(joints), 2)}-"
         f"{_n(np.nanmax(joints), 2)} N, the size of ours ({_n(r_e.min(), 2)}-"
         f"{_n(run.reaction('R_C').max(), 2)} N); the platform and payload weigh {_n(weight)} N, "
@@ -297,6 +324,17 @@ def _implied_section(run: PaperRun) -> list[str]:
         f"{disagree:.0%} of the cells (median difference {_n(np.nanmedian(gap), 2)} N m). In "
         f"our model the legs' weight ({_n(leg_weight, 2)} N) sets the two apart: |MfrC| - |MfrE| "
         f"is {_stats(ours_gap)} N m (min / median / max).",
+    ]
+
+
+def _table3_findings(run: PaperRun, implied: dict[int, np.ndarray]) -> list[str]:
+    """Table 3: the transverse forces it implies cannot be these legs'; the whole joint force
+    gives its size."""
+    r3, r_e = run.reaction("R_3"), run.reaction("R_E")
+    with_r_e = run.prismatic_friction_with("R_E")
+    legs = run.platform.legs
+    bound = max(legs.lower_mass, legs.upper_mass) * run.platform.gravity
+    return [
         f"- Table 3 implies transverse forces of {_n(np.nanmin(implied[3]), 2)}-"
         f"{_n(np.nanmax(implied[3]), 2)} N (median {_n(np.nanmedian(implied[3]), 2)} N) in the "
         f"prismatic joints. Ours are at most {_n(r3.max(), 2)} N. R_3 is the force the joint "
@@ -308,7 +346,7 @@ def _implied_section(run: PaperRun) -> list[str]:
         "what remains comes from the leg parts' inertia. With the paper's leg parts "
         f"({_n(legs.lower_mass)} and {_n(legs.upper_mass)} kg) no placement gives more than "
         f"{_n(bound, 2)} N (a part's whole weight, for a horizontal leg), and their inertial "
-        f"forces are {_n(legs.upper_mass * np.linalg.norm(models.PAPER_LEG_ACCELERATION), 2)} "
+        f"forces are {_n(legs.upper_mass * np.linalg.norm(PAPER_LEG_ACCELERATION), 2)} "
         "N with the paper's leg accelerations: the paper's 10-40 N cannot be a transverse force "
         "of these legs.",
         f"- The paper's Table 3 is of the size of the whole joint force instead: with our "
@@ -319,9 +357,7 @@ def _implied_section(run: PaperRun) -> list[str]:
         "The paper's (28)-(29) define R_3 as a transverse force, so its Table 3 does not follow "
         "from its own equations; it does if the whole force of the spherical joint (or the "
         "actuator force) enters (35).",
-        "",
     ]
-    return out
 
 
 def _why_section(run: PaperRun, sensitivity: pd.DataFrame) -> list[str]:

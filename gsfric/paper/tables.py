@@ -1,7 +1,7 @@
 """The paper's 40-step evaluation, set beside the paper's Tables 1-3.
 
 This module evaluates and compares (the paper's tables as printed, the misprints in them, the
-reactions their values imply, ``evaluate_paper``); ``gsfric.paper_report`` writes the results
+reactions their values imply, ``evaluate_paper``); ``gsfric.paper.report`` writes the results
 (plots, ``report.md``, ``run_paper``).
 
 ``run_paper`` evaluates a platform (default ``gsfric.models.paper_platform()``) over the paper's
@@ -31,12 +31,13 @@ import numpy as np
 import pandas as pd
 
 from gsfric import models
-from gsfric.evaluation.evaluator import Evaluator, Result
+from gsfric.evaluation.evaluator import Evaluator
 from gsfric.evaluation.paper_constants import PAPER_JOINT_SPEED
+from gsfric.evaluation.result import Result
 from gsfric.platform.description import Friction, Platform
 from gsfric.trajectory import Motion
 
-DATA = Path(__file__).resolve().parent / "data"
+DATA = Path(__file__).resolve().parent.parent / "data"
 """The paper's Tables 1-3 as printed (copies of shared/paper/table*.csv, shipped with the package)."""
 
 DIGITS = 4

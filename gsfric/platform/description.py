@@ -37,7 +37,7 @@ import tomllib
 from gsfric._checks import as_array, as_float, fields_equal, short, suggest
 from gsfric.errors import GsfricWarning, InputError
 from gsfric.io.files import atomic_write
-from gsfric.platform.catalog import EFFECTS
+from gsfric.platform import catalog
 
 LEG_MODELS = ("rigid", "paper")
 """Leg models: ``rigid`` (centres of mass at fixed distances from C_i and E_i) and ``paper``
@@ -377,21 +377,26 @@ def _check_plausible(p: Platform) -> None:
                           "outside the body (or lengths in mm)?", GsfricWarning, stacklevel=4)
 
 
+def _effects_catalog() -> Mapping[str, Mapping[str, float]]:
+    """``gsfric.platform.catalog.EFFECTS``: effect name -> {parameter name: default}."""
+    return catalog.EFFECTS
+
+
 def _effects(value: object) -> dict[str, dict[str, float]]:
     """Validated effects, every parameter filled in (catalog default when not given)."""
     if not isinstance(value, Mapping):
         raise InputError(f"effects: expected a table, got {short(value)}")
     if not value:
         return {}
-    catalog = EFFECTS
+    known = _effects_catalog()
     result: dict[str, dict[str, float]] = {}
     for name, params in value.items():
-        if name not in catalog:
-            raise InputError(f"effects.{name}: unknown effect{suggest(str(name), catalog)}")
+        if name not in known:
+            raise InputError(f"effects.{name}: unknown effect{suggest(str(name), known)}")
         if not isinstance(params, Mapping):
             raise InputError(f"effects.{name}: expected a table of parameters, "
                              f"e.g. {name} = {{}}, got {short(params)}")
-        defaults = catalog[name]
+        defaults = known[name]
         for key in params:
             if key not in defaults:
                 raise InputError(f"effects.{name}.{key}: unknown parameter"
@@ -443,7 +448,7 @@ class Platform:
     friction : Friction
     effects : dict[str, dict[str, float]]
         Optional effects switched on, name -> parameters (every parameter present), validated
-        against ``gsfric.catalog.EFFECTS``.
+        against ``gsfric.platform.catalog.EFFECTS``.
     limits : dict[str, float | tuple[float, float]]
         Optional ratings (TOML ``[limits]``, keys in ``LIMITS``) that ``gsfric sweep`` checks
         the load envelopes against; ``actuator_force`` is kept as (min, max), N.
@@ -564,7 +569,6 @@ class Platform:
 
     def to_toml(self, path: str | os.PathLike[str]) -> None:
         """Write the platform as TOML, atomically; ``from_toml`` reads back an equal platform."""
-
         text = tomli_w.dumps(self.to_dict())
         with atomic_write(path, "w") as handle:
             handle.write(text)

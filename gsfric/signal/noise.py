@@ -6,6 +6,8 @@ import numpy as np
 from numpy.lib.stride_tricks import sliding_window_view
 from scipy.special import comb
 
+from gsfric.signal.savgol import savgol_filter, savgol_weights
+
 NOISE_DIFFERENCE_ORDER = 6
 """Order of the differences from which ``white_noise_std`` estimates the noise of a sampled
 signal."""
@@ -60,18 +62,32 @@ def divided_difference_coefficients(x: np.ndarray, width: int) -> np.ndarray:
     return 1.0 / diffs.prod(axis=2)
 
 
+CHI2_1_MEDIAN = 0.454936
+"""Median of the chi-square distribution of one degree of freedom: the median of the
+normalised squared divided differences of white noise of unit variance."""
+
+
+def _divided_squares(t: np.ndarray, y: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """The squared 6th divided differences of each column of y (N, k) at the times t (N,),
+    each divided by its noise variance per unit sigma^2 (``sum w^2``, w the weights):
+    (N - m, k); and the windows of ``m + 1`` samples they come from, (N - m, k, m + 1)."""
+    m = NOISE_DIFFERENCE_ORDER
+    scale = (t[-1] - t[0]) / (len(t) - 1)
+    w = divided_difference_coefficients((t - t[0]) / scale, m + 1)      # (N - m, m + 1)
+    windows = sliding_window_view(y, m + 1, axis=0)                     # (N - m, k, m + 1)
+    d = np.einsum("nkj,nj->nk", windows, w)
+    return d ** 2 / np.sum(w ** 2, axis=1)[:, None], windows
+
+
 def divided_noise_std(t: np.ndarray, y: np.ndarray) -> np.ndarray:
     """White-noise standard deviation of each column of y (N, k) at the non-uniform times t
     (N,), from the 6th divided differences (noise variance ``sigma^2 sum w^2``, w their
     weights; the motion's part ``y^(6) / 6!`` does not grow with a jitter of the times);
-    robust scale (median of the normalised squares), over the windows whose readings change."""
+    robust scale (median of the normalised squares), over the windows whose readings change
+    (as ``white_noise_std``: the noise a smoother of recorded poses must remove; see
+    ``divided_noise_std_every_window`` for the estimate over every window)."""
 
-    m = NOISE_DIFFERENCE_ORDER
-    scale = (t[-1] - t[0]) / (len(t) - 1)
-    w = divided_difference_coefficients((t - t[0]) / scale, m + 1)
-    windows = sliding_window_view(y, m + 1, axis=0)                     # (N - m, k, m + 1)
-    d = np.einsum("nkj,nj->nk", windows, w)
-    z2 = d ** 2 / np.sum(w ** 2, axis=1)[:, None]
+    z2, windows = _divided_squares(t, y)
     # readings that do not change over a window (a rest logged at a finite resolution) carry
     # no noise that the motion would see: the noise is that of the windows that change
     changing = np.ptp(windows, axis=2) > 0.0
@@ -79,5 +95,53 @@ def divided_noise_std(t: np.ndarray, y: np.ndarray) -> np.ndarray:
     for j in range(y.shape[1]):
         changed = z2[:, j][changing[:, j]]
         if len(changed):
-            out[j] = np.sqrt(np.median(changed) / 0.454936)     # median of chi-square(1)
+            out[j] = np.sqrt(np.median(changed) / CHI2_1_MEDIAN)
     return out
+
+
+def divided_noise_std_every_window(t: np.ndarray, y: np.ndarray) -> np.ndarray:
+    """``divided_noise_std`` over every window, those whose readings do not change included:
+    the noise of a signal computed from noisy recordings (the leg lengths of recorded poses),
+    whose windows never repeat a value exactly; zeros when N <= ``NOISE_DIFFERENCE_ORDER``.
+
+    Parameters
+    ----------
+    t : ndarray, shape (N,)
+        Sample times, s (non-uniform: differences on a jittered time base would count the
+        motion times the jitter as noise; divided differences do not).
+    y : ndarray, shape (N, k)
+
+    Returns
+    -------
+    ndarray, shape (k,)
+        In the unit of y.
+    """
+    t, y = np.asarray(t, float), np.asarray(y, float)
+    if len(t) <= NOISE_DIFFERENCE_ORDER:
+        return np.zeros(y.shape[1])
+    z2, _ = _divided_squares(t, y)
+    return np.sqrt(np.median(z2, axis=0) / CHI2_1_MEDIAN)
+
+
+def high_frequency_std(y: np.ndarray, window: int) -> np.ndarray:
+    """Standard deviation of white noise in each column of y (N, k), from the residual of a
+    local cubic fit (corrected by ``1 - h0``, h0 the fit's centre weight).
+
+    Parameters
+    ----------
+    y : ndarray, shape (N, k)
+    window : int
+        Samples of the local fit (odd; shortened to the record).
+
+    Returns
+    -------
+    ndarray, shape (k,)
+    """
+    y = np.asarray(y, float)
+    window = int(min(window, len(y) - (1 - len(y) % 2)))
+    if window < 5:
+        return np.zeros(y.shape[1])
+    smooth = savgol_filter(y, window, 3)
+    h0 = savgol_weights(window, 3)[window // 2]
+    core = slice(window, len(y) - window) if len(y) > 3 * window else slice(None)
+    return robust_std((y - smooth)[core]) / np.sqrt(1.0 - h0)

@@ -104,15 +104,24 @@ def rotation_from_quaternion(quaternion: np.ndarray) -> np.ndarray:
     Returns
     -------
     ndarray, shape (N, 3, 3)
+        Entries written one by one into the result (no intermediate stacks).
     """
     q = np.asarray(quaternion, dtype=float)
     w, x, y, z = np.moveaxis(q / np.linalg.norm(q, axis=-1, keepdims=True), -1, 0)
-    rows = [
-        [1 - 2 * (y * y + z * z), 2 * (x * y - w * z), 2 * (x * z + w * y)],
-        [2 * (x * y + w * z), 1 - 2 * (x * x + z * z), 2 * (y * z - w * x)],
-        [2 * (x * z - w * y), 2 * (y * z + w * x), 1 - 2 * (x * x + y * y)],
-    ]
-    return np.stack([np.stack(row, axis=-1) for row in rows], axis=-2)
+    xx, yy, zz = x * x, y * y, z * z
+    xy, xz, yz = x * y, x * z, y * z
+    wx, wy, wz = w * x, w * y, w * z
+    r = np.empty(q.shape[:-1] + (3, 3))
+    r[..., 0, 0] = 1 - 2 * (yy + zz)
+    r[..., 0, 1] = 2 * (xy - wz)
+    r[..., 0, 2] = 2 * (xz + wy)
+    r[..., 1, 0] = 2 * (xy + wz)
+    r[..., 1, 1] = 1 - 2 * (xx + zz)
+    r[..., 1, 2] = 2 * (yz - wx)
+    r[..., 2, 0] = 2 * (xz - wy)
+    r[..., 2, 1] = 2 * (yz + wx)
+    r[..., 2, 2] = 1 - 2 * (xx + yy)
+    return r
 
 
 def quaternion_multiply(p: np.ndarray, q: np.ndarray) -> np.ndarray:
@@ -133,6 +142,57 @@ def continuous_quaternions(q: np.ndarray) -> np.ndarray:
     dots = np.sum(q[1:] * q[:-1], axis=1)
     signs = np.concatenate([[1.0], np.cumprod(np.where(dots < 0, -1.0, 1.0))])
     return q * signs[:, None]
+
+
+def angular_rates(q0: np.ndarray, q1: np.ndarray, q2: np.ndarray
+                  ) -> tuple[np.ndarray, np.ndarray]:
+    """Angular velocity and acceleration of a smoothed quaternion signal.
+
+    With p = ``q0`` the (not exactly unit) quaternions and ``q1``, ``q2`` their first and
+    second time derivatives, ``omega = 2 vec(q1 p*) / |p|^2`` and
+    ``alpha = 2 vec(q2 p*) / |p|^2 - omega 2 (p . q1) / |p|^2``, which for a unit quaternion
+    are ``omega = 2 vec(qdot q*)`` and ``alpha = 2 vec(qddot q*)``. The products are written
+    out, ``vec(d p*) = w_p v_d - w_d v_p + v_p x v_d``, with the rounding of
+    ``quaternion_multiply(d, quaternion_conjugate(p))``.
+
+    Parameters
+    ----------
+    q0, q1, q2 : ndarray, shape (N, 4)
+        Quaternions ``(qw, qx, qy, qz)`` and their derivatives, /s and /s^2.
+
+    Returns
+    -------
+    omega, alpha : ndarray, shape (N, 3) each
+        Base frame, rad/s and rad/s^2.
+    """
+    w0, v0 = q0[:, :1], q0[:, 1:]
+    squared = np.sum(q0 * q0, axis=1, keepdims=True)
+    dot01 = np.sum(q0 * q1, axis=1, keepdims=True)
+    cross = np.empty((len(q0), 3))
+    omega = _conjugate_product(w0, v0, q1, cross)
+    omega *= 2
+    omega /= squared
+    alpha = _conjugate_product(w0, v0, q2, cross)
+    alpha *= 2
+    alpha /= squared
+    damping = omega * 2
+    damping *= dot01
+    damping /= squared
+    alpha -= damping
+    return omega, alpha
+
+
+def _conjugate_product(w0: np.ndarray, v0: np.ndarray, d: np.ndarray,
+                       cross: np.ndarray) -> np.ndarray:
+    """``vec(d p*)`` (N, 3) for p = (w0 (N, 1), v0 (N, 3)) and quaternions d (N, 4);
+    ``cross`` (N, 3) is scratch."""
+    out = w0 * d[:, 1:]
+    out -= d[:, :1] * v0
+    vd = d[:, 1:]
+    for i, (j, k) in enumerate(((1, 2), (2, 0), (0, 1))):
+        np.subtract(v0[:, j] * vd[:, k], v0[:, k] * vd[:, j], out=cross[:, i])
+    out += cross
+    return out
 
 
 def rotation_from_rpy(angles: np.ndarray) -> np.ndarray:

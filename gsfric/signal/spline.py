@@ -1,4 +1,5 @@
-"""Smoothing splines for non-uniformly sampled signals: the penalty chosen for the second derivative."""
+"""Smoothing splines for non-uniformly sampled signals, with the penalty chosen for the second
+derivative."""
 
 from __future__ import annotations
 

@@ -1,0 +1,135 @@
+"""``gsfric simulate``: evaluate a trajectory or measured-data file, streamed in chunks."""
+
+from __future__ import annotations
+
+import atexit
+import contextlib
+import gc
+import warnings
+from pathlib import Path
+
+import click
+
+from gsfric.commands.common import log_options
+from gsfric.errors import InputError
+from gsfric.evaluation.breakdown import to_frame
+from gsfric.evaluation.columns import DEFAULT_GROUPS as DEFAULT_COLUMN_GROUPS
+from gsfric.evaluation.columns import GROUPS as COLUMN_GROUPS
+from gsfric.evaluation.evaluator import breakdown
+from gsfric.io.logs import LogFormat
+from gsfric.io.readers import read_trajectory
+from gsfric.io.tables import write_table
+from gsfric.models import platform_from
+from gsfric.simulate import parse_columns, simulate_file
+
+
+@contextlib.contextmanager
+def _no_cycle_collection():
+    """No cycle collection inside, and the objects left at exit frozen (the run of ``simulate``).
+
+    A streamed run makes no cyclic garbage to speak of, while its imports (SciPy, pandas,
+    pyarrow) create objects that every collection would walk again, and the interpreter's exit
+    would walk them once more: together a tenth of the CPU time of a million-step run.
+    """
+    collecting = gc.isenabled()
+    gc.disable()
+    atexit.unregister(gc.freeze)
+    atexit.register(gc.freeze)
+    try:
+        yield
+    finally:
+        if collecting:
+            gc.enable()
+
+
+def _options(command):
+    """The options of ``simulate`` besides those of a log's format."""
+    path = click.Path(path_type=Path)
+    options = [
+        click.option("--trajectory", type=path, required=True,
+                     help="Trajectory or measured-data file (CSV or Parquet): t,x,y,z with "
+                          "alpha,beta,gamma, qw,qx,qy,qz or roll,pitch,yaw; other names and "
+                          "units with --column-map and --units."),
+        click.option("--platform", "platform_file", type=path,
+                     help="Platform TOML (default: the reference platform)."),
+        click.option("--out", type=path, required=True,
+                     help="Output file, CSV or Parquet by extension; written to a temporary "
+                          "file and renamed when complete."),
+        click.option("--mode", type=click.Choice(["kinematic", "paper"]), default="kinematic",
+                     show_default=True,
+                     help="kinematic: velocities and accelerations differentiated from the "
+                          "motion; paper: the paper's constant accelerations (its Tables 1-3)."),
+        click.option("--strict", is_flag=True,
+                     help="Fail (exit 1, no output) at the first chunk with a flagged step."),
+        click.option("--threads", type=click.IntRange(1, 64), default=1, show_default=True,
+                     help="Threads of the compiled evaluation (OpenMP)."),
+        click.option("--chunk", type=int, default=100_000, show_default=True,
+                     help="Steps read, differentiated and evaluated at a time (memory grows "
+                          "with it); a file of at most this many rows is read whole."),
+        click.option("--window", type=int, default=None,
+                     help="Savitzky-Golay window, odd, samples [default: a filter per sample "
+                          "for a file read whole, one window by cross-validation on the first "
+                          "chunk for a streamed one]."),
+        click.option("--progress/--no-progress", default=None,
+                     help="A progress bar on stderr, with total and ETA [default: when stderr "
+                          "is a terminal]."),
+        click.option("--quiet", is_flag=True,
+                     help="No progress bar and no summary line (warnings and errors still go "
+                          "to stderr)."),
+        click.option("--columns", default=None, metavar="GROUP[,GROUP...]",
+                     help=f"Output groups: {', '.join(COLUMN_GROUPS)}, or all [default: "
+                          f"{','.join(DEFAULT_COLUMN_GROUPS)}]; t and flag are always written. "
+                          "`gsfric columns` lists every column with its group."),
+        click.option("--float32", is_flag=True,
+                     help="Write the outputs as float32 (relative error up to 6e-8, half the "
+                          "size)."),
+        click.option("--breakdown", "breakdown_file", type=path, default=None,
+                     help="Also write F per leg split into its parts (inertia, gravity, "
+                          "payload, joint friction, prismatic friction by kind, effects) to "
+                          "this CSV or Parquet file (kinematic mode; the trajectory is read "
+                          "whole)."),
+    ]
+    for option in reversed(options):
+        command = option(command)
+    return command
+
+
+@click.command()
+@_options
+@log_options
+@_no_cycle_collection()
+def simulate(trajectory, platform_file, out, mode, strict, threads, chunk, window, progress,
+             quiet, columns, float32, breakdown_file, column_map, units_map, angles, keep_columns):
+    """Evaluate a motion: actuator forces, reactions and friction at every step.
+
+    The trajectory may be a measured-data file: with F1..F6 the output also has
+    F1_measured..F6_measured and F1_residual..F6_residual (measured minus model).
+    `gsfric columns` lists every output column with its unit.
+
+    Long files are streamed: read, differentiated and evaluated chunk by chunk in bounded
+    memory. Flagged steps (see the flag column) are reported with their indices in one
+    warning at the end, or make the run fail with --strict.
+    """
+    if breakdown_file is not None and mode != "kinematic":
+        raise InputError("--breakdown: only in the kinematic mode")
+    with warnings.catch_warnings():                    # shown one line each by the group
+        warnings.simplefilter("always", UserWarning)   # GsfricWarning, flags, build, staleness
+        log_format = LogFormat.from_options(column_map, units_map, angles, keep_columns)
+        platform = platform_from(platform_file)
+        summary = simulate_file(trajectory, out, platform, mode=mode, strict=strict,
+                                chunk=chunk, window=window, n_threads=threads,
+                                progress=False if quiet else progress,
+                                log_format=log_format, columns=parse_columns(columns),
+                                float32=float32)
+        if breakdown_file is not None:
+            _write_breakdown(trajectory, log_format, platform, breakdown_file, quiet)
+    if not quiet:
+        click.echo(f"wrote {out} ({summary.steps} steps, {summary.flagged} flagged)")
+
+
+def _write_breakdown(trajectory, log_format, platform, breakdown_file, quiet) -> None:
+    """``--breakdown``: F per leg split into its parts along the whole trajectory."""
+    motion = read_trajectory(trajectory, log_format=log_format)
+    write_table(to_frame(motion.t, breakdown(platform, motion)), breakdown_file)
+    if not quiet:
+        click.echo(f"wrote {breakdown_file}")

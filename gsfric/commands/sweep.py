@@ -1,0 +1,95 @@
+"""``gsfric sweep``: load envelopes per joint over motions, a workspace and platform variants."""
+
+from __future__ import annotations
+
+import sys
+from pathlib import Path
+
+import click
+
+from gsfric.commands.common import EXIT_CHECK, fail
+from gsfric.sweep import sweep as run_sweep
+from gsfric.sweep.plan import CHUNK_STEPS
+
+
+def _pairs(values, option, ranged):
+    """``NAME=MIN:MAX`` (ranged) or ``NAME=VALUE`` options as a dict; one-line errors."""
+    out = {}
+    for text in values:
+        name, sep, rest = text.partition("=")
+        try:
+            if not sep:
+                raise ValueError
+            if ranged:
+                lo, colon, hi = rest.partition(":")
+                if not colon:
+                    raise ValueError
+                out[name.strip()] = (float(lo), float(hi))
+            else:
+                out[name.strip()] = float(rest)
+        except ValueError:
+            form = "NAME=MIN:MAX" if ranged else "NAME=VALUE"
+            fail(f"{option}: expected {form}, got {text!r}")
+    return out
+
+
+@click.command()
+@click.option("--out", "out_dir", type=click.Path(file_okay=False, path_type=Path),
+              required=True, help="Output folder (built in OUT.partial, renamed when complete; "
+                                  "an unfinished sweep there resumes).")
+@click.option("--trajectories", multiple=True, metavar="GLOB",
+              help="Trajectory files, a glob such as 'runs/*.parquet' (repeatable).")
+@click.option("--workspace", type=click.Path(dir_okay=False, path_type=Path),
+              help="Workspace TOML: pose ranges, sampling, velocity/acceleration bounds.")
+@click.option("--platform", "platform_file", type=click.Path(path_type=Path),
+              help="Platform TOML, with optional [limits] (default: the reference platform).")
+@click.option("--vary", multiple=True, metavar="NAME=MIN:MAX",
+              help="A parameter range of the variants, e.g. platform.payload_mass=0:10 "
+                   "(repeatable).")
+@click.option("--tolerance", multiple=True, metavar="NAME=SD",
+              help="A Monte-Carlo tolerance, e.g. geometry.base_joints=0.0005 (repeatable).")
+@click.option("--variants", type=click.IntRange(1), default=16, show_default=True,
+              help="Variants drawn besides the nominal one (with --vary or --tolerance).")
+@click.option("--seed", type=int, default=0, show_default=True, help="Seed of the variants.")
+@click.option("--scheduler", default=None, metavar="auto|serial|local|tcp://HOST:PORT",
+              help="Where tasks run [default: DASK_SCHEDULER_ADDRESS if set, else serial for "
+                   "small sweeps and a local cluster of one process per core].")
+@click.option("--workers", type=click.IntRange(1, 256), default=None,
+              help="Worker processes of the local cluster [default: one per core].")
+@click.option("--chunk-steps", type=click.IntRange(1), default=None,
+              help="Evaluated steps per task [default: 1000000, a second or more].")
+@click.option("--progress/--no-progress", default=None,
+              help="Progress bar with total and ETA [default: when stderr is a terminal].")
+@click.option("--no-plots", is_flag=True, help="Skip the plots.")
+@click.option("--strict", is_flag=True, help="Exit 1 when a case exceeds the [limits].")
+def sweep(out_dir, trajectories, workspace, platform_file, vary, tolerance, variants, seed,
+          scheduler, workers, chunk_steps, progress, no_plots, strict):
+    """Load envelopes per joint over motions, a workspace and platform variants.
+
+    Writes envelopes.parquet (per case, quantity and leg, with where each extreme occurs),
+    summary.csv, variants.csv, limits.csv (cases beyond the platform's [limits]), sweep.json
+    and plots. See docs/sizing.md.
+    """
+    result = run_sweep(out_dir, trajectories=list(trajectories) or None, workspace=workspace,
+                       platform=platform_file, vary=_pairs(vary, "--vary", True),
+                       tolerances=_pairs(tolerance, "--tolerance", False), variants=variants,
+                       seed=seed, scheduler=scheduler, workers=workers,
+                       chunk_steps=chunk_steps or CHUNK_STEPS, progress=progress,
+                       plots=not no_plots)
+    _report(result, strict)
+
+
+def _report(result, strict: bool) -> None:
+    """The sweep's summary lines: cases, the most loaded universal joint, the limits."""
+    info = result.info
+    click.echo(f"wrote {result.out} ({info['cases']} cases, {info['steps']} steps, "
+               f"{info['flagged']} flagged)")
+    top = result.most_loaded("R_C")
+    click.echo(f"most loaded universal joint: leg {int(top.leg)}, |R_C| = {top.value:.4g} N "
+               f"({top.motion}, variant {int(top.variant)}, step {int(top.step)})")
+    if info["limits"]:
+        n = info["exceeding_cases"]
+        click.echo(f"limits: {n} case(s) exceed them" + (f" (see {result.out / 'limits.csv'})"
+                                                          if n else ""))
+        if n and strict:
+            sys.exit(EXIT_CHECK)

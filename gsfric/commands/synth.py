@@ -1,0 +1,37 @@
+"""``gsfric synth``: synthetic measured data with hidden effects and noise."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import click
+
+from gsfric.synth import run_synth
+
+
+@click.command()
+@click.option("--out", type=click.Path(dir_okay=False, path_type=Path), required=True,
+              help="Measured-data file to write (CSV or Parquet).")
+@click.option("--platform", "platform_file", type=click.Path(dir_okay=False, exists=True),
+              help="Platform TOML of the true system (its [effects] are the hidden effects).")
+@click.option("--effect", "effects", multiple=True, metavar="NAME[:param=value,...]",
+              help="Hidden effect to add, e.g. stribeck:static=2,velocity=0.01 (repeatable).")
+@click.option("--samples", type=click.IntRange(20), default=4000, show_default=True,
+              help="Number of samples (rows) to write.")
+@click.option("--rate", type=click.FloatRange(1.0, 1e6), default=200.0, show_default=True,
+              help="Sampling rate, Hz (1 Hz to 1 MHz).")
+@click.option("--noise", type=float, default=0.1, show_default=True,
+              help="Force noise standard deviation, N.")
+@click.option("--noise-correlation", type=click.FloatRange(0, 0.999), default=0.0,
+              show_default=True, help="AR(1) coefficient of the force noise (0: white).")
+@click.option("--pose-noise", type=float, default=0.0, show_default=True,
+              help="Position noise standard deviation, m (angles: the same number in rad).")
+@click.option("--seed", type=int, default=0, show_default=True,
+              help="Seed of the noise (the same seed gives the same file).")
+def synth(out, platform_file, effects, samples, rate, noise, noise_correlation, pose_noise,
+          seed):
+    """Write synthetic measured data with hidden effects and noise (reproducible by seed)."""
+    path = run_synth(out, platform_file=platform_file, effects=effects, samples=samples,
+                     rate=rate, noise=noise, noise_correlation=noise_correlation,
+                     pose_noise=pose_noise, seed=seed)
+    click.echo(f"wrote {path}")

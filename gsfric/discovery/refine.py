@@ -1,0 +1,212 @@
+"""Fitting a chosen model on the compiled model: Gauss-Newton refinement within bounds, the
+global profile of a delay, and the stability of a named effect across the record's halves."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+from scipy.optimize import minimize_scalar
+from scipy.stats import chi2
+
+from gsfric.discovery import statistics as st
+from gsfric.discovery.evidence import Evidence, Rule, accept
+from gsfric.discovery.residuals import DELAY, Problem
+from gsfric.platform.catalog import shift
+
+# -- Gauss-Newton refinement on the compiled model ---------------------------------------------
+
+
+def refine(problem: Problem, theta: np.ndarray, names: list[str], whitener: st.Whitener,
+           start: tuple[np.ndarray, np.ndarray] | None = None
+           ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Gauss-Newton on the named parameters within their bounds (prewhitened objective).
+
+    ``start``, if given, is the residual (M, 6) and Jacobian (M, 6, k) at theta (which must
+    lie within the bounds). Returns theta, the residual and the Jacobian at the result.
+    """
+    model = problem.model
+    cols = [model.index[n] for n in names]
+    lo = np.array([problem.bounds(n)[0] for n in names])
+    hi = np.array([problem.bounds(n)[1] for n in names])
+    theta = theta.copy()
+    inside = bool(np.all((theta[cols] >= lo) & (theta[cols] <= hi)))
+    theta[cols] = np.clip(theta[cols], lo, hi)
+    if DELAY in names:
+        profiled = delay_profile(problem, theta, names, whitener)
+        if profiled["theta"] is not None:
+            theta, inside = profiled["theta"], False
+
+    def at(th):
+        F, J = model.jacobian(th, names, rows=problem.used)
+        r = problem.mask(problem.y - F[problem.used])
+        J *= problem.weight[:, :, None]
+        return r, J, float(np.sum(whitener.apply(r) ** 2))
+
+    if start is not None and inside:
+        r, J = start
+        current = float(np.sum(whitener.apply(r) ** 2))
+    else:
+        r, J, current = at(theta)
+    for _ in range(problem.settings.gauss_newton):
+        A, b, _, _ = st.Blocks.whitened(whitener, J, r, problem.settings.n_blocks).total()
+        step = st.solve(A, b, lo - theta[cols], hi - theta[cols])
+        for scale in (1.0, 0.5, 0.25):
+            trial = theta.copy()
+            trial[cols] = np.clip(theta[cols] + scale * step, lo, hi)
+            r_t, J_t, value = at(trial)
+            if value <= current:
+                break
+        else:
+            break
+        gain = (current - value) / max(current, 1e-300)
+        theta, r, J, current = trial, r_t, J_t, value
+        if gain < 1e-5:
+            break
+    return theta, r, J
+
+
+def delay_profile(problem: Problem, theta: np.ndarray, names: list[str],
+                  whitener: st.Whitener) -> dict:
+    """The global estimate of ``time_offset.delay``: the profile of the prewhitened residual
+    sum of squares over the delay, the other parameters of ``names`` refitted linearly at each.
+
+    F depends on the delay only through a shift of the model's forces in time (``catalog``:
+    linear interpolation), which moves friction steps and load peaks by whole samples: the
+    sum of squares is a rough, many-valleyed function of the delay, and a Gauss-Newton step
+    from a secant's estimate stops in the nearest valley while the refitted viscous friction
+    and masses take over part of the shifted force. Here the forces and the derivatives of the
+    other parameters are computed once at zero delay and shifted, so each point of the
+    profile costs a shift and a small bounded least-squares fit: a coarse grid of
+    ``Settings.delay_grid`` steps (at least one sample) over +-``Settings.delay_range``, then a
+    bounded scalar search within one grid step either side of the best point; the current value
+    is kept unless the profile's minimum is lower.
+
+    Returns
+    -------
+    dict
+        ``theta`` (the parameters at the profile's minimum, the others stepped by their linear
+        refit; None when the current value is already best), ``delay`` (s), ``sse`` and
+        ``sse_current`` (prewhitened sums of squares at the minimum and at the current delay),
+        ``delays`` and ``profile`` (the coarse grid and its sums of squares).
+    """
+    model = problem.model
+    j = model.index[DELAY]
+    others = [n for n in names if n != DELAY]
+    cols = [model.index[n] for n in others]
+    lo = np.array([problem.bounds(n)[0] for n in others]) - theta[cols]
+    hi = np.array([problem.bounds(n)[1] for n in others]) - theta[cols]
+    d_lo, d_hi = problem.bounds(DELAY)
+    t = model.t
+    span = min(problem.settings.delay_range, 0.25 * float(t[-1] - t[0]))
+    d_lo, d_hi = max(d_lo, -span), min(d_hi, span)
+    at_zero = theta.copy()
+    at_zero[j] = 0.0
+    F, J = model.jacobian(at_zero, others)
+    n, k = len(t), len(others)
+    FJ = np.concatenate([F[:, :, None], J], axis=2).reshape(n, -1)
+    del F, J
+    used, weight = problem.used, problem.weight
+
+    def value(d: float) -> tuple[float, np.ndarray]:
+        moved = shift(t, FJ, d)[used].reshape(-1, 6, k + 1)
+        r = problem.mask(problem.y - moved[:, :, 0])
+        X = moved[:, :, 1:] * weight[:, :, None]
+        A, b, c, _ = st.Blocks.whitened(whitener, X, r, 1).total()
+        step = st.solve(A, b, lo, hi)
+        return st.sse(A, b, c, step), step
+
+    dt = float(np.median(np.diff(t)))
+    h = max(dt, (d_hi - d_lo) / problem.settings.delay_grid)
+    delays = np.arange(d_lo, d_hi + 0.5 * h, h)
+    current = float(theta[j])
+    profile = np.array([value(float(d))[0] for d in delays])
+    best = float(delays[int(np.argmin(profile))])
+    found = minimize_scalar(lambda d: value(d)[0], bounds=(max(d_lo, best - h),
+                                                           min(d_hi, best + h)),
+                            method="bounded", options={"xatol": 1e-3 * dt})
+    candidates = [(float(profile.min()), best), (float(found.fun), float(found.x))]
+    sse_current = value(current)[0]
+    sse_best, delay = min(candidates)
+    out = {"theta": None, "delay": current, "sse": sse_current, "sse_current": sse_current,
+           "delays": delays, "profile": profile}
+    if sse_best < sse_current:
+        _, step = value(delay)
+        new = theta.copy()
+        new[j] = delay
+        # within the bounds exactly (the step's bounds were relative to theta: rounding)
+        bounds = np.array([problem.bounds(n) for n in others]).reshape(-1, 2)
+        new[cols] = np.clip(theta[cols] + step, bounds[:, 0], bounds[:, 1])
+        out.update(theta=new, delay=delay, sse=sse_best)
+    return out
+
+
+# -- stability of a named effect across the halves of the record --------------------------------
+
+
+@dataclass
+class Stability:
+    """A named effect across the halves of the record (``half_stability``).
+
+    Attributes
+    ----------
+    p_value : float
+        Wald test of the difference of the effect's parameters between the halves.
+    change : float
+        RMS change of F between the halves over the RMS of the final residual.
+    half_steps : list of dict[str, float]
+        The effect's parameters fitted on each half, as steps from the final values.
+    stable : bool
+        Not both significant and at least ``Settings.stability_min_change``.
+    """
+
+    p_value: float
+    change: float
+    half_steps: list[dict[str, float]]
+    stable: bool
+
+
+def half_stability(problem: Problem, J: np.ndarray, r: np.ndarray, names: list[str],
+                   effect: str, whitener: st.Whitener) -> Stability:
+    """Is the effect the same in both halves of the record?
+
+    A physical effect has one value of its parameters over the record; a catalog term that
+    imitates an error outside the catalog (per-leg offsets standing in for a nonlinear load
+    cell, a delay standing in for a ringing mode) fits whatever that error looks like on each
+    stretch of motion, and the stretches differ. The model, linearised at the final
+    parameters (J (M, 6, k) with respect to ``names``, residual r (M, 6)), is fitted on the
+    first and on the second half of the blocks separately, every parameter free; the
+    difference of the effect's parameters is tested by a Wald test (chi-square, the two halves'
+    prewhitened covariances summed), and its size is the RMS change of F it makes (N, plain,
+    sliding pairs) over the RMS of the final residual.
+
+    Returns
+    -------
+    Stability
+    """
+    s = problem.settings
+    cols = [k for k, n in enumerate(names) if n.startswith(effect + ".")]
+    if not cols or J.shape[2] == 0:
+        return Stability(1.0, 0.0, [], True)
+    blocks = st.Blocks.whitened(whitener, J, r, s.n_blocks)
+    half = len(blocks.ztz) // 2
+    k = J.shape[2]
+    est = []
+    for g in (slice(0, half), slice(half, None)):
+        A, b, c = blocks.held(g)
+        rows = float(blocks.rows[g].sum())
+        inv = np.linalg.pinv(A)
+        delta = inv @ b
+        s2 = max(c - 2 * delta @ b + delta @ A @ delta, 0.0) / max(rows - k, 1.0)
+        est.append((delta, s2 * inv))
+    d = est[0][0][cols] - est[1][0][cols]
+    V = est[0][1][np.ix_(cols, cols)] + est[1][1][np.ix_(cols, cols)]
+    W = float(d @ np.linalg.pinv(V) @ d)
+    p = float(chi2.sf(W, len(cols)))
+    sliding = problem.sliding
+    change_f = J[:, :, cols] @ d
+    left = float(np.sqrt(np.mean(r[sliding] ** 2)))
+    change = float(np.sqrt(np.mean(change_f[sliding] ** 2))) / max(left, 1e-300)
+    steps = [{names[j].split(".", 1)[1]: float(e[0][j]) for j in cols} for e in est]
+    stable = not accept(Evidence(p, gap=change), Rule(s.alpha, min_gap=s.stability_min_change))
+    return Stability(p, change, steps, bool(stable))

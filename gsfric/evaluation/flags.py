@@ -1,0 +1,114 @@
+"""The step flags: their bits and limits, their settings for the compiled code, and NumPy's copy.
+
+Step flags (bits of ``Result.flag``; 0 = sound step):
+
+* 1 ``FLAG_NONFINITE``: a non-finite input or output value (outputs set to NaN);
+* 2 ``FLAG_STROKE``: a leg length outside ``geometry.stroke``;
+* 4 ``FLAG_SINGULAR``: the platform's 6x6 force Jacobian (columns ``(u_i, (E_i - p) x u_i)``)
+  is near singular: its singularity measure ``h`` (output ``h``, derive/conditioning.py: the
+  volume spanned by the legs' unit wrenches, moments in units of the platform's size, relative
+  to orthogonal ones) is below ``SINGULAR_LIMIT = 2 / COND_LIMIT``. Unflagged steps are
+  guaranteed a condition number below ``COND_LIMIT`` for that Jacobian with its moment rows
+  divided by the platform's size and its columns scaled to unit length;
+* 8 ``FLAG_UNIVERSAL``: a leg within ``UNIVERSAL_LIMIT`` of the direction of its universal
+  joint's first axis (``1 - (u.a1)^2 < UNIVERSAL_LIMIT``), where the joint's torsion moment is
+  undefined;
+* 16 ``FLAG_COUPLING``: the coupled friction model's fixed point has not converged: the axial
+  forces changed by more than ``COUPLING_TOLERANCE * (1 N + |F0|)`` over the last of its
+  iterations (joint friction so large that it nearly locks the mechanism; docs/friction.md).
+
+Every flag is computed in C in the same pass as the outputs (``compiled/batch.c``) with the
+settings of ``flag_spec``; ``numpy_flags`` computes the same in NumPy for the CasADi fallback.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from gsfric.compiled.functions import FlagSpec
+from gsfric.compiled.state import state_layout
+
+FLAG_NONFINITE = 1
+FLAG_STROKE = 2
+FLAG_SINGULAR = 4
+FLAG_UNIVERSAL = 8
+FLAG_COUPLING = 16
+FLAG_NAMES = {FLAG_NONFINITE: "non-finite value", FLAG_STROKE: "leg length outside the stroke",
+              FLAG_SINGULAR: "near-singular platform Jacobian",
+              FLAG_UNIVERSAL: "leg near its universal joint's first axis",
+              FLAG_COUPLING: "coupled friction solve not converged"}
+COUPLING_TOLERANCE = 1e-6
+COND_LIMIT = 1e6
+SINGULAR_LIMIT = 2.0 / COND_LIMIT
+UNIVERSAL_LIMIT = 1e-4
+
+
+def flag_spec(outputs, stroke: tuple[float, float] | None) -> FlagSpec:
+    """The settings of the step flags computed in C (``gsfric_flags`` in ``batch.c``).
+
+    Parameters
+    ----------
+    outputs : sequence of (name, size, shape)
+        The outputs of the function that computes the flags (``CompiledFunction.outputs``):
+        the flags read ``D``, ``s2``, ``h`` and, when there, ``coupling_change`` and ``F0``.
+    stroke : (float, float) or None
+        The legs' length range, m (``geometry.stroke``); None: no stroke flag.
+    """
+    index = {name: k for k, (name, _, _) in enumerate(outputs)}
+    lo, hi = stroke if stroke is not None else (0.0, 0.0)
+    return FlagSpec(index["D"], index["s2"], index["h"], stroke is not None, lo, hi,
+                    UNIVERSAL_LIMIT, SINGULAR_LIMIT, state_layout().size,
+                    index.get("coupling_change", -1), index.get("F0", -1), COUPLING_TOLERANCE)
+
+
+def numpy_flags(x: np.ndarray, arrays: dict, stroke: tuple[float, float] | None) -> np.ndarray:
+    """The flags of ``compiled/batch.c`` in NumPy, for the CasADi fallback (no compiler).
+
+    Parameters
+    ----------
+    x : ndarray (N, 24)
+        The states evaluated.
+    arrays : dict of name -> ndarray (N, size)
+        Every output of the evaluation; a non-finite step's are set to NaN here.
+    stroke : (float, float) or None
+        As for ``flag_spec``.
+
+    Returns
+    -------
+    ndarray (N,) int64
+    """
+    n = x.shape[0]
+    flag = np.zeros(n, dtype=np.int64)
+    finite = np.isfinite(x).all(axis=1)
+    for v in arrays.values():
+        finite &= np.isfinite(v.reshape(n, -1)).all(axis=1)
+    D = arrays["D"]
+    if stroke is not None:
+        lo, hi = stroke
+        flag[((D < lo) | (D > hi)).any(axis=1)] |= FLAG_STROKE
+    flag[(arrays["s2"] < UNIVERSAL_LIMIT).any(axis=1)] |= FLAG_UNIVERSAL
+    flag[arrays["h"][:, 0] < SINGULAR_LIMIT] |= FLAG_SINGULAR
+    if "coupling_change" in arrays:
+        limit = COUPLING_TOLERANCE * (1.0 + np.abs(arrays["F0"]))
+        flag[(finite & (np.abs(arrays["coupling_change"]) > limit).any(axis=1))] |= \
+            FLAG_COUPLING
+    flag[~finite] |= FLAG_NONFINITE
+    for v in arrays.values():
+        v[~finite] = np.nan
+    return flag
+
+
+def _index_list(idx: np.ndarray, limit: int = 10) -> str:
+    shown = ", ".join(str(i) for i in idx[:limit])
+    return shown + (f", ... ({idx.size - limit} more)" if idx.size > limit else "")
+
+
+def flag_message(flag: np.ndarray) -> str | None:
+    """One line on the flagged steps of ``flag`` (how many, which kinds, which steps), or None
+    when no step is flagged."""
+    bad = np.flatnonzero(flag)
+    if not bad.size:
+        return None
+    kinds = sorted({FLAG_NAMES[b] for b in FLAG_NAMES if np.any(flag & b)})
+    return (f"{bad.size} of {flag.shape[0]} steps flagged ({'; '.join(kinds)}): steps "
+            f"{_index_list(bad)}")

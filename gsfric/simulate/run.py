@@ -1,0 +1,355 @@
+"""``simulate_file``: a trajectory file of any length evaluated chunk by chunk and written, in bounded memory.
+
+``simulate_file`` reads a trajectory file (CSV or Parquet) in chunks of ``chunk`` rows,
+differentiates each chunk (``gsfric.simulate.differentiate``), evaluates it, and appends its
+rows to the output, so that memory stays bounded by the chunk size however long the file is
+(10 million steps in well under 2 GB, see docs/robustness.md). It is what ``gsfric simulate``
+runs.
+
+The sensor's ``time_offset`` (``gsfric.platform.catalog``) interpolates F between steps that may
+lie in a neighbouring chunk: it is applied across chunks (``SensorDelay``), with the values
+``evaluate`` gives over the whole file. Step flags (``gsfric.evaluation``) are gathered over the
+whole file with their global step indices and reported at the end as one warning, or, with
+``strict``, as a ``StepFlagError`` at the first chunk with a flagged step.
+
+Output. Rows are appended to a temporary file in the output's directory (a Parquet row group
+or a CSV block per chunk) that is renamed onto the output only when every chunk succeeded;
+on any error or a KeyboardInterrupt it is removed and an existing output is left untouched.
+Reading and differentiating, evaluating, and building the columns and writing run in three
+threads, chunk after chunk.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import functools
+import os
+import sys
+import warnings
+from collections.abc import Callable, Iterable
+from concurrent.futures import Future, ThreadPoolExecutor
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+from tqdm import tqdm
+
+from gsfric.errors import GsfricWarning, InputError, StepFlagError
+from gsfric.evaluation.columns import plan as column_plan
+from gsfric.evaluation.evaluator import Evaluator, evaluate_outputs
+from gsfric.evaluation.flags import FLAG_NAMES, FLAG_NONFINITE
+from gsfric.io.files import atomic_write
+from gsfric.io.tables import check_file, count_rows, table_kind
+from gsfric.models import platform_from
+from gsfric.platform.catalog import sensor_parameters
+from gsfric.signal.savgol import DEFAULT_POLYORDER
+from gsfric.simulate.delay import SensorDelay
+from gsfric.simulate.differentiate import DEFAULT_CHUNK, MotionChunk, iter_motions
+from gsfric.simulate.outputs import (
+    ChunkOutputs,
+    delayed_columns,
+    parse_columns,
+    result_columns,
+    with_carried,
+)
+from gsfric.simulate.writer import Writer
+
+MAX_REPORTED = 10_000
+"""Flagged step indices kept for the summary (the count is always exact)."""
+
+
+@dataclass
+class Summary:
+    """What ``simulate_file`` did.
+
+    Attributes
+    ----------
+    out : Path
+    steps : int
+        Steps evaluated (= data rows of the trajectory = rows written).
+    chunks : int
+    windows : tuple (position, quaternion) of int, "whole" or None
+        Savitzky-Golay windows of a streamed file; "whole" for a file read in one piece with a
+        Savitzky-Golay filter, None for a non-uniform file (smoothing spline).
+    flagged : int
+        Number of flagged steps.
+    flag_counts : dict of str -> int
+        Flagged steps per kind (``FLAG_NAMES``).
+    flagged_steps : ndarray
+        0-based indices of flagged steps (the first ``MAX_REPORTED``).
+    """
+
+    out: Path
+    steps: int = 0
+    chunks: int = 0
+    windows: Any = None
+    flagged: int = 0
+    flag_counts: dict[str, int] = field(default_factory=dict)
+    flagged_steps: np.ndarray = field(default_factory=lambda: np.zeros(0, dtype=np.int64))
+
+    def flag_message(self, trajectory: Path) -> str:
+        kinds = "; ".join(f"{name}: {count}" for name, count in self.flag_counts.items()
+                          if count)
+        return (f"{trajectory}: {self.flagged} of {self.steps} steps flagged ({kinds}): "
+                f"{_steps_text(self.flagged_steps, self.flagged)}")
+
+
+def _steps_text(indices: np.ndarray, total: int, limit: int = 10) -> str:
+    shown = indices[:limit]
+    more = f", ... ({total - len(shown)} more)" if total > len(shown) else ""
+    steps = ", ".join(str(int(i)) for i in shown)
+    rows = ", ".join(str(int(i) + 1) for i in shown)
+    return f"steps {steps}{more} (data rows {rows})"
+
+
+def simulate_file(trajectory: str | os.PathLike[str], out: str | os.PathLike[str],
+                  platform=None, *, mode: str = "kinematic", strict: bool = False,
+                  chunk: int = DEFAULT_CHUNK, window: int | None = None,
+                  polyorder: int = DEFAULT_POLYORDER, n_threads: int = 1,
+                  progress: bool | None = None, log_format=None, columns=None,
+                  float32: bool = False) -> Summary:
+    """Evaluate a trajectory file chunk by chunk and write every step's outputs.
+
+    Parameters
+    ----------
+    trajectory : path-like
+        CSV or Parquet trajectory file (see ``gsfric.io.read_trajectory``).
+    out : path-like
+        Output file, CSV or Parquet by extension; columns of ``Result.to_frame``.
+    platform : Platform or path-like, optional
+        As ``gsfric.models.platform_from``; default: the reference platform.
+    mode : {"kinematic", "paper"}
+    strict : bool
+        Raise ``StepFlagError`` at the first chunk with a flagged step (no output is written).
+    chunk : int
+        Steps per chunk; memory grows with it (about 5 kB per step).
+    window, polyorder :
+        Smoothing of the differentiation, see ``iter_motions``.
+    n_threads : int
+        Threads of the compiled evaluation.
+    progress : bool or None
+        Progress bar on stderr (tqdm); None: only when stderr is a terminal.
+    log_format : gsfric.io.LogFormat, optional
+        Column map, units, angle convention and carried columns of the file. A file with
+        F1..F6 (measured data) also gets ``F1_measured..F6_measured`` and the residuals
+        ``F1_residual..F6_residual`` (measured minus model) in the output.
+    columns : iterable of str, optional
+        Output groups (``COLUMN_GROUPS``); default ``DEFAULT_COLUMN_GROUPS`` (forces, the
+        paper's friction scalars, reactions: 68 values a step). ``t`` and ``flag`` always.
+    float32 : bool
+        Write the outputs (not ``t``) as float32: relative error up to ``FLOAT32_RTOL``
+        (6e-8) of each value, half the file.
+
+    Three stages overlap, each in its own thread: reading and differentiating chunk k + 2
+    (the calling thread), evaluating chunk k + 1 and building its columns, writing chunk k
+    (the compiled code, NumPy's copies and the Parquet writer run without the GIL). The
+    evaluation's outputs and the columns' arrays are reused from chunk to chunk within the
+    call (two sets of columns, one being written while the other is filled).
+
+    Returns
+    -------
+    Summary
+        Flags are also reported as one warning (``GsfricWarning``) when not strict.
+
+    Raises
+    ------
+    InputError
+        Bad trajectory (naming the row and column), bad output path.
+    StepFlagError
+        ``strict`` and a flagged step.
+    """
+    trajectory, out = Path(trajectory), Path(out)
+    kind = _check_paths(trajectory, out)
+    platform = platform_from(platform)
+    plan = column_plan(parse_columns(None) if columns is None else
+                       parse_columns(",".join(columns)))
+    motions = iter_motions(trajectory, chunk=chunk, window=window, polyorder=polyorder,
+                           log_format=log_format)
+    run = _Run(trajectory, out, platform, plan, mode=mode, strict=strict, n_threads=n_threads,
+               float32=float32, progress=progress)
+    Writer.load(kind)
+    try:
+        run.write(motions, kind)
+    finally:
+        run.bar.close()
+    summary = run.finish()
+    if summary.flagged:
+        warnings.warn(summary.flag_message(trajectory) + f"; see the flag column of {out}",
+                      GsfricWarning, stacklevel=2)
+    return summary
+
+
+def _check_paths(trajectory: Path, out: Path) -> str:
+    """The output's kind ("csv" or "parquet"), after checking both paths."""
+    kind = table_kind(out)
+    check_file(trajectory)
+    if out.exists() and out.is_dir():
+        raise InputError(f"{out}: is a directory; give a file name")
+    if not out.parent.is_dir():
+        raise InputError(f"{out}: directory {str(out.parent)!r} does not exist")
+    with contextlib.suppress(OSError):
+        if out.exists() and os.path.samefile(out, trajectory):
+            raise InputError(f"{out}: is the trajectory file itself; choose another output")
+    return kind
+
+
+@dataclass
+class _Flags:
+    """The flagged steps counted so far: their number, the count per kind (bit -> n), and the
+    first ``MAX_REPORTED`` global indices, in arrays of chunk after chunk."""
+
+    flagged: int = 0
+    counts: dict[int, int] = field(default_factory=lambda: dict.fromkeys(FLAG_NAMES, 0))
+    kept: list[np.ndarray] = field(default_factory=list)
+
+    def add(self, flag: np.ndarray, start: int) -> bool:
+        """Count a chunk's flags (N,) (its first step at global index ``start``); whether
+        any step is flagged."""
+        bad = np.flatnonzero(flag)
+        if not bad.size:
+            return False
+        self.flagged += int(bad.size)
+        for bit in FLAG_NAMES:
+            self.counts[bit] += int(np.count_nonzero(flag & bit))
+        room = MAX_REPORTED - sum(len(k) for k in self.kept)
+        if room > 0:
+            self.kept.append(bad[:room] + start)
+        return True
+
+    def fill(self, summary: Summary) -> None:
+        summary.flagged = self.flagged
+        summary.flagged_steps = np.concatenate(self.kept) if self.kept \
+            else np.zeros(0, dtype=np.int64)
+        summary.flag_counts = {FLAG_NAMES[bit]: n for bit, n in self.counts.items()}
+
+
+class _Writes:
+    """The writes in flight in the writing thread, oldest first (at most two wait), and the
+    last write from each of the two sets of evaluation outputs."""
+
+    def __init__(self, pool: ThreadPoolExecutor, write_one: Callable[[Any], None]) -> None:
+        self.pool, self.write_one = pool, write_one
+        self.futures: list[Future] = []
+        self.by_set: list[Future | None] = [None, None]
+
+    def submit(self, ready: list, which: int | None) -> None:
+        """Queue what is ready to be written, from the set ``which`` (None: no set to free)."""
+        for item in ready:
+            while len(self.futures) >= 2:
+                self.futures.pop(0).result()
+            self.futures.append(self.pool.submit(self.write_one, item))
+            if which is not None:
+                self.by_set[which] = self.futures[-1]
+
+    def wait(self) -> None:
+        for done in self.futures:
+            done.result()
+
+
+class _Run:
+    """One ``simulate_file`` call: its options, the state shared by its three threads (the
+    flags counted, the summary, the reused output buffers), and its stages."""
+
+    def __init__(self, trajectory: Path, out: Path, platform, plan, *, mode: str,
+                 strict: bool, n_threads: int, float32: bool, progress: bool | None) -> None:
+        self.trajectory, self.platform, self.plan = trajectory, platform, plan
+        self.mode, self.strict, self.n_threads, self.float32 = mode, strict, n_threads, float32
+        self.summary = Summary(out=out)
+        self.flags = _Flags()
+        self.evaluator: Evaluator | None = None
+        show = sys.stderr.isatty() if progress is None else bool(progress)
+        self.bar = tqdm(total=count_rows(trajectory) if show else None, unit="step",
+                        unit_scale=True, desc="simulate", file=sys.stderr, disable=not show,
+                        dynamic_ncols=True, leave=False)
+        self.sets: tuple[dict, dict] = ({}, {})   # the evaluation's outputs of even, odd chunks
+        self.column_arrays: dict = {}             # the columns' arrays (of the writing thread)
+        gains, delay = sensor_parameters(platform.effects)
+        # a delay reaches across chunks: applied here, over the record, not per chunk
+        self.shift = SensorDelay(gains, delay) if delay != 0.0 else None
+        self.names = list(dict.fromkeys(key for _, key, _, _ in plan))
+        if self.shift is not None and "F" not in self.names:
+            self.names.append("F")
+
+    def write(self, motions: Iterable[MotionChunk], kind: str) -> None:
+        """Evaluate every chunk and write it to the output, atomically."""
+        mode_text = "wb" if kind == "parquet" else "w"
+        options = {"newline": ""} if kind == "csv" else {}
+        with atomic_write(self.summary.out, mode_text, **options) as handle, \
+                ThreadPoolExecutor(1, thread_name_prefix="gsfric-evaluate") as evaluation, \
+                ThreadPoolExecutor(1, thread_name_prefix="gsfric-write") as output:
+            writer = Writer(handle, kind)
+            writes = _Writes(output, functools.partial(self._write_one, writer))
+            pending = None                  # the evaluation in flight
+            try:
+                for k, part in enumerate(motions):
+                    self.summary.windows = part.windows
+                    if self.evaluator is None:
+                        self.evaluator = Evaluator(self.platform, mode=self.mode,
+                                                   n_threads=self.n_threads)
+                    if pending is not None:
+                        writes.submit(pending.result(),
+                                      (k - 1) % 2 if self.shift is None else None)
+                    pending = evaluation.submit(self._evaluate, part, self.sets[k % 2],
+                                                writes.by_set[k % 2])
+                    del part
+                self._drain(pending, writes)
+            except BaseException:
+                for future in [pending, *writes.futures]:
+                    if future is not None:
+                        with contextlib.suppress(BaseException):
+                            future.result()
+                writer.abandon()
+                raise
+            writer.close()
+
+    def _drain(self, pending: Future | None, writes: _Writes) -> None:
+        """Write the last chunk evaluated and what waits for the sensor delay; wait for all."""
+        if pending is not None:
+            writes.submit(pending.result(), None)
+        if self.shift is not None:
+            writes.submit(self.shift.finish(), None)
+        writes.wait()
+
+    def _evaluate(self, part: MotionChunk, buffers: dict, buffers_free: Future | None) -> list:
+        """Evaluate a chunk and count its flags (in the evaluation thread; no warnings issued);
+        what to write: (outputs, carried columns) to be made columns by the writing thread,
+        or, with a sensor delay, the column dicts that are ready. ``buffers_free``: the write
+        of the chunk that last used ``buffers``, waited for before they are overwritten."""
+        if buffers_free is not None:
+            buffers_free.result()
+        start, motion = part.start, part.motion
+        arrays, flag = evaluate_outputs(self.evaluator, motion, self.names, buffers=buffers,
+                                        sensor=self.shift is None)
+        if self.flags.add(flag, start) and self.strict:
+            self.summary.steps = start + len(motion)
+            self.flags.fill(self.summary)
+            raise StepFlagError(
+                self.summary.flag_message(self.trajectory)
+                + " (--strict: stopped at the first chunk with flagged steps; "
+                "no output written)")
+        outputs = ChunkOutputs(np.asarray(motion.t, dtype=np.float64), arrays, flag)
+        if self.shift is None:
+            ready = [(outputs, part.carried)]
+        else:
+            good = (flag & FLAG_NONFINITE) == 0
+            ready = self.shift.add(outputs.t, arrays["F"], good, functools.partial(
+                delayed_columns, result_columns(outputs, self.plan, self.float32), self.plan,
+                self.float32, part.carried))
+        self.summary.steps = start + len(motion)
+        self.summary.chunks += 1
+        self.bar.update(len(motion))
+        return ready
+
+    def _write_one(self, writer: Writer, item) -> None:
+        """Write one chunk (in the writing thread): its columns first, from ``ChunkOutputs``."""
+        if isinstance(item, tuple):
+            outputs, carried = item
+            item = with_carried(result_columns(outputs, self.plan, self.float32,
+                                               reuse=self.column_arrays), carried)
+        writer.write(item)
+
+    def finish(self) -> Summary:
+        """The summary, its flags filled in."""
+        self.flags.fill(self.summary)
+        return self.summary

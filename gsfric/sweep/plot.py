@@ -1,0 +1,85 @@
+"""The plots of a sweep: ``envelope.png`` (each quantity per leg over all cases, with the
+limits) and ``locations.png`` (where each joint's largest load occurs). Matplotlib figures
+without pyplot, so the caller's backend is left alone."""
+
+from __future__ import annotations
+
+from collections.abc import Mapping
+from pathlib import Path
+
+import numpy as np
+import pandas as pd
+
+from gsfric._optional import optional
+from gsfric.sweep.envelope import LIMIT_QUANTITY, QUANTITIES
+
+_SHOWN = ("R_E", "R_C", "M_C", "R_3", "M_3", "F_max", "Ffr", "P_C", "W_C")
+"""Quantities of ``envelope.png``, one panel each (``F_max`` with ``F_min``)."""
+
+_LOCATED = ("R_E", "R_C", "M_C", "R_3", "M_3", "F_max")
+"""Quantities of ``locations.png``."""
+
+
+def _envelope_panel(ax, q: str, envelopes: pd.DataFrame, summary: pd.DataFrame,
+                    limits: Mapping) -> None:
+    """One quantity per leg: every case (grey), the extreme over the cases (bars), limits."""
+    legs = np.arange(1, 7)
+    limit_of = {quantity: key for key, quantity in LIMIT_QUANTITY.items()}
+    sub = envelopes[envelopes.quantity == q]
+    _, unit, meaning = QUANTITIES[q]
+    if sub.value.notna().any():
+        table = sub.pivot_table(index="leg", columns=["motion", "variant"], values="value")
+        ax.plot(legs, table.to_numpy(), color="0.7", lw=0.8, marker=".", ms=3)
+        best = summary[summary.quantity == q].sort_values("leg")
+        ax.bar(legs, best.value, alpha=0.35, color="C0")
+    if q == "F_max":
+        fmin = envelopes[envelopes.quantity == "F_min"].groupby("leg").value.min()
+        ax.bar(legs, fmin.reindex(legs), alpha=0.35, color="C1")
+        ax.set_title("actuator force range")
+        if "actuator_force" in limits:
+            for v in limits["actuator_force"]:
+                ax.axhline(v, color="C3", ls="--")
+    else:
+        ax.set_title(meaning.replace(" (motions only)", ""), fontsize=9)
+    if q in limit_of and limit_of[q] in limits:
+        ax.axhline(limits[limit_of[q]], color="C3", ls="--", label="limit")
+    ax.set_xlabel("leg")
+    ax.set_ylabel(f"{q} [{unit}]")
+
+
+def _locations_panel(ax, i: str, j: str, summary: pd.DataFrame, workspace: dict | None) -> None:
+    """Where each located quantity's extreme occurs, coordinates ``i`` and ``j``."""
+    if workspace is not None:
+        Rectangle = optional("matplotlib.patches").Rectangle
+        (x0, x1), (y0, y1) = workspace["pose"][i], workspace["pose"][j]
+        ax.add_patch(Rectangle((x0, y0), x1 - x0, y1 - y0, fill=False, ls=":",
+                               color="0.4", label="workspace"))
+    for k, q in enumerate(_LOCATED):
+        best = summary[summary.quantity == q]
+        ax.scatter(best[i], best[j], s=40, marker="os^v<>"[k], label=q, alpha=0.8)
+        for _, r in best.iterrows():
+            ax.annotate(str(int(r.leg)), (r[i], r[j]), fontsize=7)
+    ax.set_xlabel(f"{i} [m]")
+    ax.set_ylabel(f"{j} [m]")
+    ax.autoscale()
+
+
+def plot(envelopes: pd.DataFrame, summary: pd.DataFrame, folder: Path, limits: Mapping,
+         workspace: dict | None) -> None:
+    """``envelope.png`` (each quantity per leg, all cases, limits) and ``locations.png``
+    in ``folder``; ``workspace`` is ``Workspace.to_dict()`` (its box is drawn) or None."""
+    Figure = optional("matplotlib.figure").Figure
+    fig = Figure(figsize=(12, 9), layout="constrained")
+    axes = fig.subplots(3, 3)
+    for ax, q in zip(axes.flat, _SHOWN):
+        _envelope_panel(ax, q, envelopes, summary, limits)
+    fig.suptitle("Load envelope per joint: bars = over all cases, grey = each case")
+    fig.savefig(folder / "envelope.png", dpi=90)
+
+    fig = Figure(figsize=(11, 4.5), layout="constrained")
+    axes = fig.subplots(1, 2)
+    for ax, (i, j) in zip(axes, (("x", "y"), ("x", "z"))):
+        _locations_panel(ax, i, j, summary, workspace)
+    axes[0].legend(fontsize=7)
+    fig.suptitle("Where each joint's largest load occurs (numbers: legs)")
+    fig.savefig(folder / "locations.png", dpi=90)

@@ -1,0 +1,149 @@
+"""A sweep's results: task envelopes merged into one envelope per case, the summary over all
+cases, the cases beyond the platform's ``[limits]``, and ``SweepResult`` (``load`` reads a
+finished output folder back)."""
+
+from __future__ import annotations
+
+import json
+import math
+import os
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass
+from pathlib import Path
+
+import pandas as pd
+
+from gsfric.sweep.envelope import ENVELOPE_COLUMNS, LIMIT_QUANTITY, QUANTITIES
+from gsfric.sweep.workspace import POSE
+
+_KEY = ["motion", "variant", "quantity", "leg"]
+LIMIT_COLUMNS = ["motion", "variant", "quantity", "leg", "value", "limit", "ratio", "step", "t",
+                 *POSE]
+"""Columns of ``limits.csv``."""
+
+
+def _sums(sub: pd.DataFrame) -> pd.DataFrame:
+    """The rows of a summed quantity folded: exact sums (NaN when a term is), lowest task."""
+    sub = sub.sort_values(["task", "motion", "variant", "leg"], kind="stable")
+    return sub.groupby(_KEY, sort=True, as_index=False).agg(
+        task=("task", "min"),
+        value=("value", lambda v: math.fsum(v) if v.notna().all() else math.nan),
+        step=("step", "first"), t=("t", "first"), **{c: (c, "first") for c in POSE})
+
+
+def fold(frames: Sequence[pd.DataFrame]) -> pd.DataFrame:
+    """Fold task envelopes (and earlier folds) into one row per case, quantity and leg.
+
+    The result does not depend on the order of ``frames`` or of their rows: an extreme is
+    chosen by (value, then the lowest task index), the counts are integer sums, and an energy
+    has at most one term per case (a motion's variant is one task: files are never split;
+    the workspace has no energy). Rows keep the winning ``task``.
+    """
+    frame = pd.concat(frames, ignore_index=True)
+    counts = (frame[(frame.quantity == "R_E") & (frame.leg == 1)]
+              .groupby(["motion", "variant"], sort=True)[["steps", "flagged"]].sum())
+    parts = []
+    for q, (kind, _, _) in QUANTITIES.items():
+        sub = frame[frame.quantity == q]
+        if kind == "sum":
+            parts.append(_sums(sub))
+            continue
+        ordered = sub.sort_values(["value", "task"], ascending=[kind == "min", True],
+                                  kind="stable", na_position="last")
+        parts.append(ordered.drop_duplicates(_KEY, keep="first"))
+    out = pd.concat(parts, ignore_index=True).drop(columns=["steps", "flagged"],
+                                                   errors="ignore")
+    return out.join(counts, on=["motion", "variant"])
+
+
+def merge(chunks) -> pd.DataFrame:
+    """Per-case envelopes (``ENVELOPE_COLUMNS``) from task envelopes, in any order."""
+    out = fold(list(chunks))
+    out["quantity"] = pd.Categorical(out["quantity"], categories=list(QUANTITIES))
+    out = out.sort_values(_KEY, ignore_index=True)
+    out["quantity"] = out["quantity"].astype(str)
+    out["step"] = out["step"].astype("int64")
+    return out[list(ENVELOPE_COLUMNS)]
+
+
+def summarize(envelopes: pd.DataFrame) -> pd.DataFrame:
+    """The extreme of each quantity and leg over all cases, with its case and location."""
+    parts = []
+    for q, (kind, unit, _) in QUANTITIES.items():
+        sub = envelopes[envelopes.quantity == q]
+        ordered = sub.sort_values("value", ascending=(kind == "min"), kind="stable",
+                                  na_position="last")
+        best = ordered.drop_duplicates("leg", keep="first").sort_values("leg").copy()
+        best.insert(best.columns.get_loc("value") + 1, "unit", unit)
+        parts.append(best)
+    out = pd.concat(parts, ignore_index=True)
+    return out[["quantity", "leg", "value", "unit", "motion", "variant", "step", "t", *POSE]]
+
+
+def check_limits(envelopes: pd.DataFrame, limits: Mapping) -> pd.DataFrame:
+    """Rows of ``envelopes`` beyond the platform's ``[limits]``, with the limit and the ratio
+    (``LIMIT_COLUMNS``)."""
+    parts = []
+    for key, q in LIMIT_QUANTITY.items():
+        if key in limits:
+            sub = envelopes[(envelopes.quantity == q) & (envelopes.value > limits[key])].copy()
+            sub["limit"] = float(limits[key])
+            parts.append(sub)
+    if "actuator_force" in limits:
+        lo, hi = limits["actuator_force"]
+        for q, bad, lim in (("F_max", envelopes.value > hi, hi), ("F_min", envelopes.value < lo,
+                                                                  lo)):
+            sub = envelopes[(envelopes.quantity == q) & bad].copy()
+            sub["limit"] = float(lim)
+            parts.append(sub)
+    if not parts:
+        return pd.DataFrame(columns=LIMIT_COLUMNS)
+    out = pd.concat(parts, ignore_index=True)
+    out["ratio"] = out["value"] / out["limit"]
+    return out[LIMIT_COLUMNS].sort_values(_KEY, ignore_index=True)
+
+
+@dataclass
+class SweepResult:
+    """What ``sweep`` wrote and read back: the envelopes and the paths.
+
+    Attributes
+    ----------
+    out : Path
+        The output folder.
+    envelopes : DataFrame
+        ``envelopes.parquet``: one row per case, quantity and leg (``ENVELOPE_COLUMNS``).
+    summary : DataFrame
+        ``summary.csv``: the extreme of each quantity and leg over all cases.
+    variants : DataFrame
+        ``variants.csv``: each variant's parameter values (variant 0 is the nominal platform).
+    exceeded : DataFrame
+        ``limits.csv``: the rows beyond the platform's ``[limits]`` (``LIMIT_COLUMNS``).
+    info : dict
+        ``sweep.json``: ``fingerprint``, ``tasks``, ``steps``, ``cases``, ``flagged`` (steps
+        left out), ``computed_tasks`` (this run's), ``scheduler``, ``seconds``, ``limits``,
+        ``exceeding_cases``, ``inputs``.
+    """
+
+    out: Path
+    envelopes: pd.DataFrame
+    summary: pd.DataFrame
+    variants: pd.DataFrame
+    exceeded: pd.DataFrame
+    info: dict
+
+    def most_loaded(self, quantity: str = "R_C") -> pd.Series:
+        """The summary row of ``quantity`` with the largest value over the legs."""
+        sub = self.summary[self.summary.quantity == quantity]
+        return sub.loc[sub.value.idxmax()]
+
+
+def load(out: str | os.PathLike) -> SweepResult:
+    """Read a finished sweep's output folder back."""
+    out = Path(out)
+    info = json.loads((out / "sweep.json").read_text())
+    envelopes = pd.read_parquet(out / "envelopes.parquet")
+    exceeded = (pd.read_csv(out / "limits.csv") if (out / "limits.csv").exists()
+                else check_limits(envelopes, {}))
+    return SweepResult(out, envelopes, pd.read_csv(out / "summary.csv"),
+                       pd.read_csv(out / "variants.csv"), exceeded, info)
