@@ -27,7 +27,12 @@ from gsfric.signal.rotations import (
     quaternion_from_rotation,
     rotation_from_quaternion,
 )
-from gsfric.signal.savgol import DEFAULT_POLYORDER, check_window, savgol_derivatives
+from gsfric.signal.savgol import (
+    DEFAULT_POLYORDER,
+    check_polyorder,
+    check_window,
+    savgol_derivatives,
+)
 from gsfric.signal.spline import spline_derivatives
 from gsfric.signal.windows import motion_filters, savgol_adaptive
 
@@ -287,7 +292,7 @@ class Motion:
     def _from_samples(cls, t, position, euler, quaternion, window, polyorder, lam,
                       source) -> Motion:
         t, position, q = _sampled_poses(t, position, euler, quaternion, source)
-        _check_polyorder(polyorder, len(t))
+        check_polyorder(polyorder, len(t))
         if lam is not None:
             lam = as_float(lam, "lam", minimum=0.0)
         (p0, p1, p2), (q0, q1, q2), filters = _smoothed(t, position, q, window, polyorder,
@@ -392,15 +397,6 @@ def _sampled_poses(t, position, euler, quaternion, source: str | None
             raise InputError(f"{_where(source, zero[:1])}: quaternion of zero length")
         q = q / norms[:, None]
     return t, position, continuous_quaternions(q)
-
-
-def _check_polyorder(polyorder: object, n: int) -> None:
-    if isinstance(polyorder, bool) or not isinstance(polyorder, (int, np.integer)) \
-            or polyorder < 2:
-        raise InputError(f"polyorder must be an integer >= 2, got {polyorder!r}")
-    if polyorder + 1 >= n:
-        raise InputError(f"polyorder = {polyorder} needs more than {polyorder + 1} samples, "
-                         f"got {n}")
 
 
 def _smoothed(t, position, q, window, polyorder, lam, source):

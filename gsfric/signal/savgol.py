@@ -111,6 +111,17 @@ def savgol_core(y: np.ndarray, window: int, polyorder: int, step: float,
     return out
 
 
+def check_polyorder(polyorder: object, n: int, what: str = "samples") -> None:
+    """Raise ``InputError`` unless ``polyorder`` is an integer >= 2 below ``n - 1``, n the
+    ``what`` ("samples", or "steps of a chunk") that are filtered together."""
+    if isinstance(polyorder, bool) or not isinstance(polyorder, (int, np.integer)) \
+            or polyorder < 2:
+        raise InputError(f"polyorder must be an integer >= 2, got {polyorder!r}")
+    if polyorder + 1 >= n:
+        raise InputError(f"polyorder = {polyorder} needs more than {polyorder + 1} {what}, "
+                         f"got {n}")
+
+
 def check_window(window: object, polyorder: int, n: int) -> None:
     """Raise ``InputError`` unless ``window`` is an odd integer with
     ``polyorder < window <= n`` (n: the samples it filters)."""

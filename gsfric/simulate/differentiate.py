@@ -30,7 +30,13 @@ from gsfric.errors import InputError
 from gsfric.io.logs import EULER, QUATERNION
 from gsfric.io.readers import motion_from_columns
 from gsfric.signal.rotations import angular_rates, continuous_quaternions, rotation_from_quaternion
-from gsfric.signal.savgol import DEFAULT_POLYORDER, check_window, savgol_core, savgol_derivatives
+from gsfric.signal.savgol import (
+    DEFAULT_POLYORDER,
+    check_polyorder,
+    check_window,
+    savgol_core,
+    savgol_derivatives,
+)
 from gsfric.signal.windows import gcv_window
 from gsfric.simulate.blocks import Block, EulerWatch, read_blocks
 from gsfric.trajectory import MIN_SAMPLES, UNIFORM_RTOL, Motion, is_uniform
@@ -262,12 +268,7 @@ def _windows(path: Path, position: np.ndarray, q: np.ndarray, chunk: int, window
              polyorder) -> tuple[int, int]:
     """The Savitzky-Golay windows (position, quaternion) of a streamed file: ``window``, or
     chosen by cross-validation on the first chunk's samples."""
-    if isinstance(polyorder, bool) or not isinstance(polyorder, (int, np.integer)) \
-            or polyorder < 2:
-        raise InputError(f"polyorder must be an integer >= 2, got {polyorder!r}")
-    if polyorder + 1 >= chunk:
-        raise InputError(f"polyorder = {polyorder} needs a chunk of more than "
-                         f"{polyorder + 1} steps")
+    check_polyorder(polyorder, chunk, "steps in a chunk")
     if window is None:
         with np.errstate(all="ignore"):
             return gcv_window(position, polyorder), gcv_window(q, polyorder)
