@@ -23,7 +23,7 @@ paper: $(STAMP)
 
 ## The whole test suite (the slow statistical suites are left to `make test-slow`).
 test: $(STAMP)
-	$(BIN)/python -m pytest -n 2 tests
+	$(BIN)/python -m pytest -n 2 --dist worksteal tests
 
 test-slow: $(STAMP)
 	$(BIN)/python -m pytest -m slow tests

@@ -1,0 +1,1 @@
+"""The symbolic derivation of the model (SymPy) and the writer of generated/ (CasADi C)."""

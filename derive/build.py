@@ -22,8 +22,8 @@ from pathlib import Path
 import casadi as ca
 import sympy
 
+from . import coupled, envelope, simd
 from . import effects as fx
-from . import envelope, simd
 from . import model as mdl
 from .sources import source_hash
 
@@ -233,7 +233,8 @@ def _io(f, kind: str, meta: dict) -> list[dict]:
 
 def _manifest(funcs: list, meta: dict, files: dict[str, bytes]) -> dict:
     """manifest.json's content: the derivation's source hash, the tools, the files' hashes, the
-    functions' inputs and outputs (``_metadata``), the Jacobian's parameters and the effects."""
+    functions' inputs and outputs (``_metadata``), the coupled solve's iteration count, the
+    Jacobian's parameters and the effects."""
     return dict(
         generator="derive/build.py",
         source_hash=source_hash(),
@@ -245,6 +246,7 @@ def _manifest(funcs: list, meta: dict, files: dict[str, bytes]) -> dict:
                         simd=f.name() in {f"{BASENAME}_{n}" for n in SIMD_FUNCTIONS})
                    for f in funcs],
         simd_lanes=simd.LANES,
+        coupled_iterations=coupled.N_ITERATIONS,
         jacobian_parameters=meta["theta"],
         jacobian_platform_parameters=list(JACOBIAN_P),
         effects=[dict(name=e.name, description=e.description,

@@ -64,6 +64,9 @@ def _check_wheel(wheel):
         assert f"gsfric/_generated/{name}" in names
     assert "gsfric/_generated/manifest.json" in names
     assert "gsfric/compiled/batch.c" in names
+    assert {f"gsfric/export/templates/{t}.in" for t in ("library.h", "library.c", "example.c",
+                                                        "Makefile", "CMakeLists.txt",
+                                                        "README.md", "verify.c")} <= names
     assert {f"gsfric/data/paper_table{k}.csv" for k in (1, 2, 3)} <= names
     tops = {n.split("/")[0] for n in names}
     assert not [t for t in tops if t not in ("gsfric",) and not t.endswith(".dist-info")]

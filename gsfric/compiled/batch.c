@@ -44,19 +44,20 @@ typedef void (*batch_eval_t)(const double **in, const long long *in_stride, doub
                                       batch whose outputs go past the caches (STREAM_STEPS) */
 #define X_SIZE 24                  /* p (3), T (9), v, omega, a, alpha (3 each) */
 
-/* The flags' bits: the same as gsfric/evaluation.py's FLAG_* */
-#define FLAG_NONFINITE 1
-#define FLAG_STROKE 2
-#define FLAG_SINGULAR 4
-#define FLAG_UNIVERSAL 8
-#define FLAG_COUPLING 16
-
 typedef struct {
     batch_eval_t simd;   /* NULL: none */
     casadi_eval_t eval;
     casadi_work_t work;
     int n_in, n_out;
 } gsfric_fn;
+
+/* step flags: begin (this block is copied verbatim into the library of `gsfric export`) */
+/* The flags' bits: the same as gsfric/evaluation/flags.py's FLAG_* */
+#define FLAG_NONFINITE 1
+#define FLAG_STROKE 2
+#define FLAG_SINGULAR 4
+#define FLAG_UNIVERSAL 8
+#define FLAG_COUPLING 16
 
 typedef struct {
     int d, s2, h;        /* output indices of leg lengths (6), s2 (6), singularity measure (1) */
@@ -68,6 +69,30 @@ typedef struct {
     int cc, f0;               /* output indices of coupling_change (6) and F0 (6), or -1 */
     double coupling_tol;      /* flag |cc| > coupling_tol (1 + |F0|) on a finite step */
 } gsfric_flags;
+
+/* The bits of one step from its outputs (NULL: not computed, that flag not raised) and
+ * whether every value of the step is finite. The geometric causes are tested on the values
+ * as computed (a NaN compares false), so that a step made non-finite by one of them still
+ * names it. */
+static long long step_flags(const gsfric_flags *fl, int finite, const double *D,
+                            const double *s2, const double *h, const double *cc,
+                            const double *F0)
+{
+    long long f = 0;
+    if (D && fl->has_stroke)
+        for (int j = 0; j < 6; ++j)
+            if (D[j] < fl->stroke_lo || D[j] > fl->stroke_hi) f |= FLAG_STROKE;
+    if (s2)
+        for (int j = 0; j < 6; ++j)
+            if (s2[j] < fl->universal_limit) f |= FLAG_UNIVERSAL;
+    if (h && h[0] < fl->singular_limit) f |= FLAG_SINGULAR;
+    if (finite && cc && F0)
+        for (int j = 0; j < 6; ++j)
+            if (fabs(cc[j]) > fl->coupling_tol * (1.0 + fabs(F0[j]))) f |= FLAG_COUPLING;
+    if (!finite) f |= FLAG_NONFINITE;
+    return f;
+}
+/* step flags: end */
 
 typedef struct {
     const gsfric_fn *fn;
@@ -97,6 +122,12 @@ static int all_finite(const double *y, long long n)
     return !bad;
 }
 
+/* Step i's row of output k, or NULL when k < 0 or that output is not computed */
+static const double *step_row(const range_task *t, int k, long long i)
+{
+    return k >= 0 && t->out[k] ? t->out[k] + i * t->out_stride[k] : NULL;
+}
+
 /* Flag steps s..e-1 into t->flag. With `checked`, t->flag[i] already holds 1 where some
  * output of step i is non-finite (the SIMD function's `bad`), else the outputs are checked. */
 static void flag_steps(const range_task *t, long long s, long long e, int checked)
@@ -104,7 +135,6 @@ static void flag_steps(const range_task *t, long long s, long long e, int checke
     const gsfric_flags *fl = t->flags;
     int n_out = t->fn->n_out;
     for (long long i = s; i < e; ++i) {
-        long long f = 0;
         int finite = 1;
         const double *x = t->in[0] + i * t->in_stride[0];
         finite &= all_finite(x, fl->x_size);
@@ -114,29 +144,12 @@ static void flag_steps(const range_task *t, long long s, long long e, int checke
             for (int k = 0; k < n_out; ++k)
                 if (t->out[k])
                     finite &= all_finite(t->out[k] + i * t->out_stride[k], t->out_stride[k]);
-        /* the geometric causes on the values as computed (a NaN compares false), so that a
-         * step made non-finite by one of them still names it */
-        if (fl->d >= 0 && fl->has_stroke && t->out[fl->d]) {
-            const double *D = t->out[fl->d] + i * t->out_stride[fl->d];
-            for (int j = 0; j < 6; ++j)
-                if (D[j] < fl->stroke_lo || D[j] > fl->stroke_hi) f |= FLAG_STROKE;
-        }
-        if (fl->s2 >= 0 && t->out[fl->s2]) {
-            const double *s2 = t->out[fl->s2] + i * t->out_stride[fl->s2];
-            for (int j = 0; j < 6; ++j)
-                if (s2[j] < fl->universal_limit) f |= FLAG_UNIVERSAL;
-        }
-        if (fl->h >= 0 && t->out[fl->h]) {
-            if (t->out[fl->h][i * t->out_stride[fl->h]] < fl->singular_limit) f |= FLAG_SINGULAR;
-        }
-        if (finite && fl->cc >= 0 && fl->f0 >= 0 && t->out[fl->cc] && t->out[fl->f0]) {
-            const double *cc = t->out[fl->cc] + i * t->out_stride[fl->cc];
-            const double *F0 = t->out[fl->f0] + i * t->out_stride[fl->f0];
-            for (int j = 0; j < 6; ++j)
-                if (fabs(cc[j]) > fl->coupling_tol * (1.0 + fabs(F0[j]))) f |= FLAG_COUPLING;
-        }
+        const double *D = step_row(t, fl->d, i), *s2 = step_row(t, fl->s2, i);
+        const double *h = step_row(t, fl->h, i);
+        const double *cc = step_row(t, fl->f0, i) ? step_row(t, fl->cc, i) : NULL;
+        const double *F0 = cc ? step_row(t, fl->f0, i) : NULL;
+        long long f = step_flags(fl, finite, D, s2, h, cc, F0);
         if (!finite) {
-            f |= FLAG_NONFINITE;
             for (int k = 0; k < n_out; ++k) {
                 if (!t->out[k]) continue;
                 double *y = t->out[k] + i * t->out_stride[k];

@@ -1,0 +1,205 @@
+"""Writing an export: the folder of a self-contained C library for one platform.
+
+``export_library`` checks what the platform asks of the library, fills the templates of this
+package (``templates/*.in``: ``@name@`` placeholders) and writes the folder atomically
+(``gsfric.io.files.output_folder``). The folder is a function of the platform, the model, the
+prefix and the committed generated code only: no timestamps, so an export is reproducible.
+"""
+
+from __future__ import annotations
+
+import importlib.resources
+import re
+import textwrap
+from dataclasses import dataclass
+from pathlib import Path
+
+from gsfric.compiled.manifest import layout, manifest
+from gsfric.compiled.state import state_layout
+from gsfric.errors import GsfricError, InputError
+from gsfric.evaluation import flags
+from gsfric.evaluation.flags import flag_spec
+from gsfric.evaluation.parameters import effect_vector, model_function, parameter_vector
+from gsfric.export import source, text
+from gsfric.io.files import output_folder
+from gsfric.platform.catalog import GENERATED_EFFECTS, SENSOR_EFFECTS, sensor_parameters
+from gsfric.platform.description import Platform
+
+MODELS = ("coupled", "paper")
+CFLAGS = ("-O2", "-std=c99", "-Wall", "-Wextra", "-pedantic")
+"""The Makefile's default flags (``--verify`` builds with them too)."""
+PLATFORM_FILE = "platform.toml"
+"""The platform as exported (its friction model set), for ``--verify`` and for the record."""
+FILES = {"library.h.in": "{prefix}.h", "library.c.in": "{prefix}.c",
+         "example.c.in": "example.c", "Makefile.in": "Makefile",
+         "CMakeLists.txt.in": "CMakeLists.txt", "README.md.in": "README.md"}
+"""Template -> file name in the export."""
+
+_C_RESERVED = {"auto", "break", "case", "char", "const", "continue", "default", "do", "double",
+               "else", "enum", "extern", "float", "for", "goto", "if", "inline", "int", "long",
+               "register", "restrict", "return", "short", "signed", "sizeof", "static",
+               "struct", "switch", "typedef", "union", "unsigned", "void", "volatile", "while",
+               "example", "main"}
+
+
+@dataclass(frozen=True)
+class Export:
+    """What ``export_library`` wrote.
+
+    Attributes
+    ----------
+    folder : Path
+        The export's folder.
+    prefix : str
+        The C prefix of every public name (``<prefix>_evaluate``, ``<prefix>.h``).
+    model : str
+        The friction model, "coupled" or "paper".
+    function : str
+        The generated function the library carries (e.g. ``eval_coupled``).
+    iterations : int
+        The coupled model's fixed-point iterations (0: the paper's model, none).
+    """
+
+    folder: Path
+    prefix: str
+    model: str
+    function: str
+    iterations: int
+
+
+def check_prefix(prefix: str) -> str:
+    """``prefix`` when it is a C identifier usable as the library's prefix, else ``InputError``."""
+    if not re.fullmatch(r"[A-Za-z_][A-Za-z0-9_]*", prefix or "") or prefix in _C_RESERVED:
+        raise InputError(f"--prefix: {prefix!r} is not a C identifier (letters, digits and _, "
+                         "not starting with a digit, not a C keyword)")
+    if prefix.startswith("__") or prefix.lower() == "gsfric_model":
+        raise InputError(f"--prefix: {prefix!r} is reserved; choose another C identifier")
+    return prefix
+
+
+def check_effects(platform: Platform) -> None:
+    """``InputError`` (one line, naming it) for an effect the exported step cannot apply.
+
+    Every generated effect is an input of the generated code and ``force_scale`` is a gain on
+    F; ``time_offset`` delays F along a time series, which one step does not have.
+    """
+    carried = set(GENERATED_EFFECTS) | {"force_scale"}
+    for name, params in platform.effects.items():
+        if name == "time_offset":
+            if params.get("delay", 0.0) != 0.0:
+                raise InputError("effects.time_offset: a delay of the force readings acts on a "
+                                 "time series, not on one step; the export cannot carry it "
+                                 "(remove it from the platform file, or delay F in the "
+                                 "controller)")
+        elif name not in carried:
+            kind = "sensor " if name in SENSOR_EFFECTS else ""
+            raise InputError(f"effects.{name}: the export does not support this {kind}effect")
+
+
+def coupled_iterations(model: str) -> int:
+    """The coupled model's fixed-point iterations unrolled in the generated code, as the
+    manifest records them (0 for the paper's model)."""
+    if model != "coupled":
+        return 0
+    found = manifest().get("coupled_iterations")
+    if found is None:
+        raise GsfricError("generated/manifest.json does not record the coupled solve's "
+                          "iterations; run `gsfric derive`")
+    return int(found)
+
+
+def _iterations_text(model: str, iterations: int) -> str:
+    if model != "coupled":
+        return "The paper's friction model: no fixed-point iterations."
+    return (f"The coupled friction model's fixed point is solved by {iterations} iterations, "
+            "unrolled in the generated code.")
+
+
+def _platform_file_text(platform: Platform, platform_file: Path | None) -> tuple[str, str]:
+    """(name, text) of the platform file for the header's comment (the reference platform's
+    TOML when there is no file)."""
+    if platform_file is None:
+        return "the reference platform", "(gsfric.reference_platform(): no platform file)"
+    return f"the platform file {Path(platform_file).name}", Path(platform_file).read_text()
+
+
+def _values(platform: Platform, platform_file, model: str, prefix: str) -> dict[str, str]:
+    """Every placeholder of the templates."""
+    name = model_function("eval", model)
+    outs = text.outputs(name)
+    gains, _ = sensor_parameters(platform.effects)
+    iterations = coupled_iterations(model)
+    platform_name, platform_text = _platform_file_text(platform, platform_file)
+    generated = source.generated_function(name, prefix)
+    state = [(b["offset"], b["shape"], b.get("unit") or "1", b["name"], b["description"])
+             for b in layout("eval", "x")]
+    return {
+        "prefix": prefix, "PREFIX": prefix.upper(), "cflags": " ".join(CFLAGS), "model": model,
+        "function": generated.name,
+        "platform_name": platform_name, "platform_comment": text.comment(platform_text),
+        "iterations": str(iterations),
+        "iterations_text": _iterations_text(model, iterations),
+        "iterations_comment": text.comment(textwrap.fill(_iterations_text(model, iterations),
+                                                         92)),
+        "state_size": str(state_layout().size), "state_macros": text.state_macros(prefix),
+        "legs": str(next(o.size for o in outs if o.name == "F")),
+        "flag_macros": text.flag_macros(prefix),
+        "n_parameters": str(parameter_vector(platform).size),
+        "parameters": text.initializer("eval", "P", parameter_vector(platform)),
+        "n_effects": str(effect_vector(platform).size),
+        "effects": text.initializer("eval", "Q", effect_vector(platform)),
+        "gains": "{" + ", ".join(text.number(1.0 + g, "force_scale") for g in gains) + "}",
+        "output_fields": "\n".join(o.declaration() for o in outs),
+        "output_indices": "\n".join([f"#define N_OUT {len(outs)}"] +
+                                    [f"#define OUT_{o.name} {o.index}" for o in outs]),
+        "output_sizes": "{" + ", ".join(str(o.size) for o in outs) + "}",
+        "output_pointers": "\n".join(f"    res[OUT_{o.name}] = {o.pointer('out')};"
+                                     for o in outs),
+        "helpers": source.helper_text(generated.helpers), "flag_block": source.flag_block(),
+        "generated": generated.text,
+        "flag_settings": text.flag_settings(flag_spec([(o.name, o.size, o.shape) for o in outs],
+                                                      platform.geometry.stroke)),
+        "state_table": "\n".join(f"| {o} | {'x'.join(map(str, s))} | {u} | {n}: {d} |"
+                                 for o, s, u, n, d in state),
+        "flag_table": "\n".join(f"| {bit} `{prefix.upper()}_FLAG_{key}` | {flags.FLAG_NAMES[bit]} |"
+                                for key, bit in text.FLAG_BITS.items()),
+    }
+
+
+def _fill(template: str, values: dict[str, str]) -> str:
+    return re.sub(r"@(\w+)@", lambda m: values[m.group(1)] if m.group(1) in values
+                  else m.group(0), template)
+
+
+def export_library(platform: Platform, out, model: str | None = None, prefix: str = "gsfric",
+                   platform_file=None) -> Export:
+    """Write the C library of ``platform`` into the folder ``out`` (atomically).
+
+    Parameters
+    ----------
+    platform : Platform
+    out : path-like
+        The folder (created; files of the same names in an existing folder are replaced).
+    model : {"coupled", "paper"} or None
+        The friction model (None: the platform's own, ``friction.model``).
+    prefix : str
+        A C identifier: the library's header ``<prefix>.h`` and the prefix of its names.
+    platform_file : path-like, optional
+        The platform's file, copied into the header's first comment.
+    """
+    check_prefix(prefix)
+    model = platform.friction.model if model is None else model
+    if model not in MODELS:
+        raise InputError(f"--model: {model!r} is not one of {', '.join(MODELS)}")
+    if model != platform.friction.model:
+        platform = platform.with_friction(model=model)
+    check_effects(platform)
+    values = _values(platform, platform_file, model, prefix)
+    templates = importlib.resources.files("gsfric.export").joinpath("templates")
+    with output_folder(out, inputs=[platform_file]) as tmp:
+        for template, target in FILES.items():
+            content = _fill(templates.joinpath(template).read_text(), values)
+            (tmp / target.format(prefix=prefix)).write_text(content)
+        platform.to_toml(tmp / PLATFORM_FILE)
+    return Export(Path(out), prefix, model, model_function("eval", model),
+                  coupled_iterations(model))

@@ -1,0 +1,165 @@
+"""``gsfric export``: the C library of a platform builds strictly, matches Python, links twice."""
+
+from __future__ import annotations
+
+import shutil
+import subprocess
+from pathlib import Path
+
+import numpy as np
+import pytest
+from click.testing import CliRunner
+
+from gsfric.cli import main
+from gsfric.evaluation.evaluator import Evaluator, state_array
+from gsfric.export.verify import TOLERANCE, check_motions, verify_library
+from gsfric.export.writer import export_library
+from gsfric.models import reference_platform
+
+STRICT = ["-std=c99", "-Wall", "-Wextra", "-Werror", "-pedantic", "-O1"]
+STALE = "gsfric: warning: generated/ is stale"
+
+
+@pytest.fixture(scope="module")
+def exports(tmp_path_factory) -> dict[str, Path]:
+    """One export per friction model of the reference platform (prefixes hexa, hexp)."""
+    root = tmp_path_factory.mktemp("export")
+    export_library(reference_platform(), root / "coupled", model="coupled", prefix="hexa")
+    export_library(reference_platform(), root / "paper", model="paper", prefix="hexp")
+    return {"coupled": root / "coupled", "paper": root / "paper"}
+
+
+def _build(folder: Path, cc: str, flags, tmp: Path, extra=()) -> Path:
+    """example of ``folder`` built by ``cc`` with ``flags`` into ``tmp``."""
+    prefix = next(p.stem for p in folder.glob("*.h"))
+    target = tmp / f"example-{Path(cc).name}"
+    run = subprocess.run([cc, *flags, *extra, "-I", str(folder), "-o", str(target),
+                          str(folder / "example.c"), str(folder / f"{prefix}.c"), "-lm"],
+                         capture_output=True, text=True)
+    assert run.returncode == 0, run.stderr[-3000:]
+    return target
+
+
+def _states(n: int = 5) -> np.ndarray:
+    return state_array(check_motions(reference_platform(), 50, 1))[:n]
+
+
+def _example(program: Path, x: np.ndarray, env=None) -> subprocess.CompletedProcess:
+    text = "\n".join(" ".join(repr(float(v)) for v in row) for row in x) + "\n"
+    return subprocess.run([str(program)], input=text, capture_output=True, text=True, env=env)
+
+
+@pytest.mark.parametrize("cc", ["gcc", "clang"])
+def test_builds_strictly_and_runs(exports, tmp_path, cc):
+    if shutil.which(cc) is None:
+        pytest.skip(f"{cc} is not installed")
+    x = _states()
+    run = _example(_build(exports["coupled"], cc, STRICT, tmp_path), x)
+    assert run.returncode == 0, run.stderr
+    got = np.array([[float(v) for v in line.split()] for line in run.stdout.splitlines()])
+    F = Evaluator(reference_platform()).actuator_forces(x)
+    np.testing.assert_allclose(got[:, :6], F, rtol=1e-12, atol=1e-9)
+    assert np.all(got[:, 6] == 0)
+
+
+def test_makefile_builds(exports, tmp_path):
+    if shutil.which("make") is None:
+        pytest.skip("make is not installed")
+    folder = tmp_path / "copy"
+    shutil.copytree(exports["paper"], folder)
+    run = subprocess.run(["make", "-s", "CFLAGS=" + " ".join(STRICT)], cwd=folder,
+                         capture_output=True, text=True)
+    assert run.returncode == 0, run.stderr
+    assert (folder / "libhexp.a").is_file() and (folder / "example").is_file()
+
+
+@pytest.mark.parametrize("model", ["coupled", "paper"])
+def test_matches_python(exports, model):
+    report = verify_library(exports[model], n_random=400, rounds=200)
+    assert report.flag_mismatches == 0
+    assert report.worst_error <= TOLERANCE, report.lines()
+    assert report.pose_error <= 1e-15
+    assert report.ok and report.model == model and report.latency_ns > 0
+
+
+def test_sanitizers(exports, tmp_path):
+    probe = tmp_path / "probe.c"
+    probe.write_text("int main(void) { return 0; }\n")
+    flags = ["-fsanitize=address,undefined", "-fno-sanitize-recover=all", "-g", "-O1"]
+    if subprocess.run(["cc", *flags, "-o", str(tmp_path / "probe"), str(probe)],
+                      capture_output=True).returncode:
+        pytest.skip("no sanitizer runtime")
+    program = _build(exports["coupled"], "cc", ["-std=c99", *flags], tmp_path)
+    x = _states(3)
+    x[1, 4] = np.nan
+    run = _example(program, x)
+    assert run.returncode == 0, run.stderr[-3000:]
+    rows = run.stdout.splitlines()
+    assert len(rows) == 3 and rows[1].split()[-1] == "1" and "nan" in rows[1]
+
+
+def test_two_prefixes_in_one_program(exports, tmp_path):
+    main_c = tmp_path / "both.c"
+    main_c.write_text("""#include <stdio.h>
+#include "hexa.h"
+#include "hexp.h"
+int main(void)
+{
+    double x[HEXA_STATE_SIZE] = {0}, F[6], G[6];
+    const double p[3] = {0, 0, 0.7}, q[4] = {1, 0, 0, 0}, z[3] = {0, 0, 0};
+    const double v[3] = {0.1, 0.05, 0.2}, w[3] = {0.3, -0.2, 0.4};
+    hexa_pose_state(p, q, v, w, z, z, x);
+    int a = hexa_actuator_forces(x, F), b = hexp_actuator_forces(x, G);
+    printf("%d %d %.17g %.17g\\n", a, b, F[0], G[0]);
+    return 0;
+}
+""")
+    target = tmp_path / "both"
+    run = subprocess.run(["cc", *STRICT, "-I", str(exports["coupled"]), "-I",
+                          str(exports["paper"]), "-o", str(target), str(main_c),
+                          str(exports["coupled"] / "hexa.c"), str(exports["paper"] / "hexp.c"),
+                          "-lm"], capture_output=True, text=True)
+    assert run.returncode == 0, run.stderr[-3000:]
+    out = subprocess.run([str(target)], capture_output=True, text=True).stdout.split()
+    assert out[:2] == ["0", "0"] and float(out[2]) > 0 and float(out[2]) != float(out[3])
+
+
+def test_deterministic_and_force_scale(exports, tmp_path):
+    again = tmp_path / "again"
+    export_library(reference_platform(), again, model="coupled", prefix="hexa")
+    for path in exports["coupled"].iterdir():
+        assert (again / path.name).read_bytes() == path.read_bytes(), path.name
+    scaled = reference_platform().with_effect("force_scale", g1=0.1, g4=-0.05)
+    export_library(scaled, tmp_path / "scaled", prefix="scaled")
+    assert verify_library(tmp_path / "scaled", n_random=100, rounds=100).ok
+
+
+def run(*args):
+    return CliRunner().invoke(main, [str(a) for a in args], catch_exceptions=False)
+
+
+def error_of(result, code: int = 2) -> str:
+    assert result.exit_code == code, (result.exit_code, result.output)
+    got = [line for line in result.stderr.splitlines() if line and not line.startswith(STALE)]
+    assert len(got) == 1 and got[0].startswith("gsfric: error: "), result.stderr
+    return got[0]
+
+
+def test_time_offset_is_refused(tmp_path):
+    platform = tmp_path / "delayed.toml"
+    reference_platform().with_effect("time_offset", delay=0.01).to_toml(platform)
+    message = error_of(run("export", "--platform", platform, "--out", tmp_path / "out"))
+    assert "time_offset" in message
+    assert not (tmp_path / "out").exists()
+
+
+def test_bad_arguments(tmp_path):
+    assert "no such file" in error_of(run("export", "--platform", tmp_path / "missing.toml",
+                                          "--out", tmp_path / "out"))
+    existing = tmp_path / "file.txt"
+    existing.write_text("x")
+    assert "not a directory" in error_of(run("export", "--out", existing))
+    assert "C identifier" in error_of(run("export", "--out", tmp_path / "o", "--prefix", "1x"))
+    assert "C identifier" in error_of(run("export", "--out", tmp_path / "o", "--prefix",
+                                          "a-b"))
+    assert "no library" in error_of(run("export", "--verify", tmp_path))
