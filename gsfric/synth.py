@@ -37,6 +37,7 @@ from scipy.signal import lfilter
 from gsfric._checks import short, suggest
 from gsfric.errors import InputError
 from gsfric.evaluation.evaluator import Evaluator, state_array
+from gsfric.io.files import check_outputs
 from gsfric.io.tables import table_kind, write_table
 from gsfric.models import platform_from, sinusoidal
 from gsfric.platform.catalog import EFFECTS, apply_sensor, sensor_parameters
@@ -348,6 +349,7 @@ def run_synth(out: str | os.PathLike[str], platform_file: str | os.PathLike[str]
     """
 
     out = Path(out)
+    check_outputs([out], {"platform": platform_file})
     table_kind(out)
     platform = platform_from(platform_file)
     data = synthesize(platform, effects, samples=samples, rate=rate, noise=noise,

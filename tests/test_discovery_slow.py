@@ -22,25 +22,14 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-
-try:
-    from test_discovery import (
-        NULL_POSE,
-        RMS_LIMIT,
-        make_case,
-        parameter_error,
-        run_case,
-        tolerance,
-    )
-except ImportError:  # run as a package
-    from tests.test_discovery import (
-        NULL_POSE,
-        RMS_LIMIT,
-        make_case,
-        parameter_error,
-        run_case,
-        tolerance,
-    )
+from test_discovery import (
+    NULL_POSE,
+    RMS_LIMIT,
+    make_case,
+    parameter_error,
+    run_case,
+    tolerance,
+)
 
 from gsfric.discovery import CANDIDATE_NAMES
 

@@ -16,6 +16,7 @@ from gsfric.evaluation.breakdown import to_frame
 from gsfric.evaluation.columns import DEFAULT_GROUPS as DEFAULT_COLUMN_GROUPS
 from gsfric.evaluation.columns import GROUPS as COLUMN_GROUPS
 from gsfric.evaluation.evaluator import breakdown
+from gsfric.io.files import check_outputs
 from gsfric.io.logs import LogFormat
 from gsfric.io.readers import read_trajectory
 from gsfric.io.tables import write_table
@@ -112,6 +113,7 @@ def simulate(trajectory, platform_file, out, mode, strict, threads, chunk, windo
     """
     if breakdown_file is not None and mode != "kinematic":
         raise InputError("--breakdown: only in the kinematic mode")
+    check_outputs([out, breakdown_file], {"trajectory": trajectory, "platform": platform_file})
     with warnings.catch_warnings():                    # shown one line each by the group
         warnings.simplefilter("always", UserWarning)   # GsfricWarning, flags, build, staleness
         log_format = LogFormat.from_options(column_map, units_map, angles, keep_columns)

@@ -23,7 +23,7 @@ from gsfric.discovery.regimes import hotspots
 from gsfric.discovery.rest import poses_from_columns
 from gsfric.discovery.results import Discovery, per_leg_rms, summary
 from gsfric.discovery.workflow import discover
-from gsfric.io.files import atomic_write, output_folder
+from gsfric.io.files import atomic_write, check_outputs, output_folder
 from gsfric.io.readers import read_measured_columns
 from gsfric.models import platform_from
 from gsfric.signal.savgol import DEFAULT_POLYORDER
@@ -355,7 +355,8 @@ def write(d: Discovery, out_dir: str | os.PathLike[str], *, source: str = "",
           platform_source: str = "", figures: bool = True) -> list[Path]:
     """Write summary.json, report.md and (with ``figures``) the plots."""
     written = []
-    with output_folder(out_dir, inputs=[source or None, platform_source or None]) as out:
+    with output_folder(out_dir, inputs={"measured-data": source or None,
+                                        "platform": platform_source or None}) as out:
         path = out / "summary.json"
         data = summary(d)
         data["data"]["file"] = source or None
@@ -404,6 +405,7 @@ def run_discover(measured: str | os.PathLike[str],
     list of Path
         The files written.
     """
+    check_outputs([out_dir], {"measured-data": measured, "platform": platform_file})
     platform = platform_from(platform_file)
     log_format = options.pop("log_format", None)   # column map and units of a log
     motion, forces, lengths, columns = read_measured_columns(measured, None, DEFAULT_POLYORDER,

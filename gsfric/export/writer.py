@@ -196,7 +196,7 @@ def export_library(platform: Platform, out, model: str | None = None, prefix: st
     check_effects(platform)
     values = _values(platform, platform_file, model, prefix)
     templates = importlib.resources.files("gsfric.export").joinpath("templates")
-    with output_folder(out, inputs=[platform_file]) as tmp:
+    with output_folder(out, inputs={"platform": platform_file}) as tmp:
         for template, target in FILES.items():
             content = _fill(templates.joinpath(template).read_text(), values)
             (tmp / target.format(prefix=prefix)).write_text(content)

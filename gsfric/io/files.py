@@ -1,5 +1,7 @@
 """Output files written atomically: a reader never sees a partly written file, and an interrupted
-run leaves nothing behind (temporary names beside the output, renamed when complete)."""
+run leaves nothing behind (temporary names beside the output, renamed when complete). No output
+is ever the same file as an input of the run, and a device or FIFO is written into, never
+replaced."""
 
 from __future__ import annotations
 
@@ -9,8 +11,9 @@ import errno
 import glob
 import os
 import shutil
+import stat
 import tempfile
-from collections.abc import Iterable, Iterator
+from collections.abc import Iterable, Iterator, Mapping
 from pathlib import Path
 from typing import IO, Any
 
@@ -26,6 +29,12 @@ later run can recognise (and remove) those of its own that a killed process (SIG
 cut) left behind."""
 
 _WRITE_ERRNOS = {errno.ENOSPC, errno.EDQUOT, errno.EFBIG, errno.EIO}
+
+PathArg = str | os.PathLike[str]
+Inputs = Mapping[str, PathArg | None] | Iterable[PathArg | tuple[str, PathArg | None] | None]
+"""A run's input files: paths or (what, path) pairs, or a mapping of what each is (e.g.
+"trajectory", "platform") to its path; the error messages name what it is. Entries that are not paths (``None``, a
+``Platform`` given as an object) are ignored."""
 
 
 def _current_umask() -> int:
@@ -93,6 +102,86 @@ def resolve_output(path: str | os.PathLike[str]) -> Path:
     return path
 
 
+def same_file(a: PathArg, b: PathArg) -> bool:
+    """Whether two paths name one file: the same path once symbolic links are resolved
+    (``os.path.realpath``, whether or not the file exists yet), or, both existing, the same
+    device and inode (``os.path.samefile``: hard links)."""
+    try:
+        return os.path.realpath(a) == os.path.realpath(b) or os.path.samefile(a, b)
+    except (OSError, ValueError):
+        return False
+
+
+def _named_inputs(inputs: Inputs) -> list[tuple[str, Path]]:
+    """(what, path) of each given input; "input" where ``inputs`` does not say what it is."""
+    pairs = inputs.items() if isinstance(inputs, Mapping) else (
+        p if isinstance(p, tuple) else ("input", p) for p in inputs)
+    return [(what, Path(p)) for what, p in pairs
+            if isinstance(p, (str, os.PathLike)) and str(p) != ""]
+
+
+def check_outputs(outputs: Iterable[PathArg | None], inputs: Inputs = ()) -> None:
+    """Refuse outputs that would overwrite an input, or each other, before anything is written.
+
+    An output may not be the same file (``same_file``: after symbolic links, or a hard link)
+    as one of ``inputs``, nor as another of ``outputs``; a character device or FIFO
+    (``is_stream``) may be given as several outputs, being written into, not replaced.
+
+    Raises
+    ------
+    InputError
+        One line naming both paths, e.g. ``p.csv: is the same file as the platform file
+        p2.csv; choose another output``.
+    """
+    _check_named(outputs, _named_inputs(inputs))
+
+
+def _check_named(outputs: Iterable[PathArg | None], named: list[tuple[str, Path]]) -> None:
+    """``check_outputs`` with the inputs as (what, path) pairs."""
+    earlier: list[Path] = []
+    for out in (Path(o) for o in outputs if o is not None):
+        for what, source in named:
+            if same_file(out, source):
+                if str(out) == str(source):
+                    raise InputError(f"{out}: is the {what} file itself; choose another output")
+                raise InputError(f"{out}: is the same file as the {what} file {source}; "
+                                 "choose another output")
+        for other in earlier:
+            if same_file(out, other) and not is_stream(out):
+                raise InputError(f"{out}: is the same file as the output {other}; give each "
+                                 "output its own file")
+        earlier.append(out)
+
+
+def is_stream(path: PathArg) -> bool:
+    """Whether ``path`` (a symbolic link followed) is a character device or a FIFO: an output
+    that ``atomic_write`` writes into, as a shell redirection does, instead of replacing it."""
+    try:
+        mode = os.stat(path).st_mode
+    except (OSError, ValueError):
+        return False
+    return stat.S_ISCHR(mode) or stat.S_ISFIFO(mode)
+
+
+def _output_node(given: Path) -> str:
+    """What an output path is now: "stream" (a character device or FIFO, links followed) or
+    "file" (a regular file, or nothing yet); ``InputError`` for any other node."""
+    try:
+        mode = os.stat(given).st_mode
+    except OSError:
+        return "file"               # missing, or a problem the write itself names
+    if stat.S_ISCHR(mode) or stat.S_ISFIFO(mode):
+        return "stream"
+    if stat.S_ISDIR(mode):
+        raise InputError(f"{given}: is a directory; give a file name")
+    if not stat.S_ISREG(mode):
+        what = "a block device" if stat.S_ISBLK(mode) else \
+            "a socket" if stat.S_ISSOCK(mode) else "a special file"
+        raise InputError(f"{given}: is {what}; give a file name (or a character device or "
+                         "FIFO, written into)")
+    return "file"
+
+
 def _write_failure(path: Path, error: OSError, what: str = "file") -> OutputError:
     reason = error.strerror or str(error) or type(error).__name__
     return OutputError(f"{path}: cannot write ({reason}); nothing was written, an earlier "
@@ -120,8 +209,8 @@ def _before_commit() -> None:
 
 
 @contextlib.contextmanager
-def atomic_write(path: str | os.PathLike[str], mode: str = "w", *,
-                 encoding: str = "utf-8", newline: str | None = None) -> Iterator[IO[Any]]:
+def atomic_write(path: PathArg, mode: str = "w", *, encoding: str = "utf-8",
+                 newline: str | None = None, inputs: Inputs = ()) -> Iterator[IO[Any]]:
     """Open a temporary file next to ``path`` and move it onto ``path`` when the block ends.
 
     The temporary file lives in the same directory (so ``os.replace`` is atomic), is named
@@ -131,6 +220,15 @@ def atomic_write(path: str | os.PathLike[str], mode: str = "w", *,
     left as it was. A symbolic link ``path`` is followed: its target is written, the link kept.
     A new file gets the usual permissions (0666 less the umask), a replaced file keeps its own.
 
+    ``path`` must not be the same file as one of ``inputs`` (after symbolic links, or a hard
+    link: ``check_outputs``), checked before anything is written.
+
+    A ``path`` that is a character device or a FIFO (``/dev/null``, ``/dev/stdout``, a named
+    pipe; links followed) is written into directly, as a shell redirection does: no temporary
+    file, no rename, the node is never unlinked or replaced; what the block wrote before an
+    error has then already gone out. Other nodes that are not regular files (a directory, a
+    socket, a block device) are refused.
+
     Parameters
     ----------
     path : path-like
@@ -139,6 +237,8 @@ def atomic_write(path: str | os.PathLike[str], mode: str = "w", *,
         Text or binary.
     encoding, newline :
         As for ``open``, text mode only.
+    inputs : paths, or a mapping of what each is to its path
+        The run's input files, which ``path`` must not be.
 
     Yields
     ------
@@ -147,21 +247,54 @@ def atomic_write(path: str | os.PathLike[str], mode: str = "w", *,
     Raises
     ------
     InputError
-        The directory is missing or not writable, ``path`` is a directory or a link loop.
+        The directory is missing or not writable, ``path`` is an input, a directory, a socket,
+        a block device or a link loop.
     OutputError
         Writing failed part way (a full disk, an I/O error); nothing was left.
     """
     if mode not in ("w", "wt", "wb"):
         raise ValueError(f"atomic_write: mode must be 'w', 'wt' or 'wb', got {mode!r}")
     given = Path(path)
-    path = resolve_output(given)
-    if path.is_dir():
-        raise InputError(f"{given}: is a directory; give a file name")
+    check_outputs([given], inputs)
+    target = resolve_output(given)
+    text_options = {} if "b" in mode else {"encoding": encoding, "newline": newline}
+    if _output_node(given) == "stream":
+        with _write_into(given, mode, text_options) as handle:
+            yield handle
+    else:
+        with _write_replacing(given, target, mode, text_options) as handle:
+            yield handle
+
+
+@contextlib.contextmanager
+def _write_into(given: Path, mode: str, text_options: dict) -> Iterator[IO[Any]]:
+    """Write into the character device or FIFO ``given`` as it is (opened without creating or
+    truncating anything; a FIFO's open waits for its reader)."""
+    try:
+        fd = os.open(given, os.O_WRONLY | os.O_NOCTTY)
+    except OSError as error:
+        raise InputError(f"{given}: cannot write ({error.strerror})") from None
+    try:
+        with os.fdopen(fd, mode, **text_options) as handle:
+            yield handle
+            handle.flush()
+            _before_commit()
+    except OSError as error:
+        if isinstance(error, BrokenPipeError):
+            raise
+        reason = error.strerror or str(error) or type(error).__name__
+        raise OutputError(f"{given}: cannot write ({reason})") from None
+
+
+@contextlib.contextmanager
+def _write_replacing(given: Path, path: Path, mode: str,
+                     text_options: dict) -> Iterator[IO[Any]]:
+    """Write a temporary file beside the regular (or new) file ``path`` and rename it onto
+    ``path`` when the block ends without an error (see ``atomic_write``)."""
     with contextlib.suppress(OSError):
         remove_stale_temporaries(path)
     fd, tmp_name = _temporary_file(given, path)
     try:
-        text_options = {} if "b" in mode else {"encoding": encoding, "newline": newline}
         try:
             with os.fdopen(fd, mode, **text_options) as handle:
                 yield handle
@@ -217,8 +350,7 @@ def _sync_directory(directory: Path) -> None:
 
 
 @contextlib.contextmanager
-def output_folder(path: str | os.PathLike[str], *,
-                  inputs: Iterable[str | os.PathLike[str] | None] = ()) -> Iterator[Path]:
+def output_folder(path: PathArg, *, inputs: Inputs = ()) -> Iterator[Path]:
     """Write a set of outputs into a temporary folder and move them into ``path`` as a whole.
 
     Yields a new empty folder beside ``path`` (``.{name}.gsfric-{pid}-{random}.tmp``). When the
@@ -227,13 +359,14 @@ def output_folder(path: str | os.PathLike[str], *,
     left alone). Only renames happen then, which need no disk space: either every output of
     the run is in place or, if the block raises or a signal interrupts it, none is and the
     temporary folder is removed (earlier outputs stay as they were). Files of ``inputs`` are
-    never replaced: an output of the same name raises ``InputError`` before anything moves.
+    never replaced (``check_outputs``): ``path`` being one is refused at once, an output file
+    that is one before anything moves.
 
     Parameters
     ----------
     path : path-like
         The output directory (created with its parents if missing).
-    inputs : iterable of path-like
+    inputs : paths, or a mapping of what each is to its path
         Files the run reads (``None`` entries are ignored).
 
     Yields
@@ -244,13 +377,14 @@ def output_folder(path: str | os.PathLike[str], *,
     Raises
     ------
     InputError
-        ``path`` exists and is not a directory, cannot be created or written, or an output
-        would replace one of ``inputs``.
+        ``path`` exists and is not a directory (never replaced), cannot be created or written,
+        or ``path`` or an output in it is one of ``inputs``.
     OutputError
         A write failed (a full disk); nothing was left.
     """
-
     given = Path(path)
+    protected = _named_inputs(inputs)
+    _check_named([given], protected)
     path = _output_directory(given)
     with contextlib.suppress(OSError):
         remove_stale_temporaries(path)
@@ -264,7 +398,7 @@ def output_folder(path: str | os.PathLike[str], *,
             yield tmp
             _before_commit()
             names = sorted(p.name for p in tmp.iterdir())
-            _refuse_to_replace_inputs(given, path, names, inputs)
+            _refuse_to_replace_inputs(given, path, names, protected)
             _move_folder(given, path, tmp, names)
             _sync_directory(path.parent)
         except OSError as error:
@@ -293,16 +427,15 @@ def _output_directory(given: Path) -> Path:
 
 
 def _refuse_to_replace_inputs(given: Path, path: Path, names: list[str],
-                              inputs: Iterable[str | os.PathLike[str] | None]) -> None:
-    """``InputError`` if an output ``path / name`` is the same file as one of ``inputs``."""
-    protected = [Path(p) for p in inputs if p is not None]
+                              protected: list[tuple[str, Path]]) -> None:
+    """``InputError`` if an output ``path / name`` is the same file as one of the inputs
+    ``protected`` ((what, path) pairs)."""
     for name in names:
         target = path / name
-        for source in protected:
-            with contextlib.suppress(OSError):
-                if target.exists() and os.path.samefile(target, source):
-                    raise InputError(f"{given}: writing {name} would replace the input "
-                                     f"file {source}; choose another output directory")
+        for _, source in protected:
+            if target.exists() and same_file(target, source):
+                raise InputError(f"{given}: writing {name} would replace the input "
+                                 f"file {source}; choose another output directory")
 
 
 def _move_folder(given: Path, path: Path, tmp: Path, names: list[str]) -> None:

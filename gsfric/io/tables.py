@@ -18,7 +18,7 @@ import pandas as pd
 from gsfric._checks import short
 from gsfric._optional import optional
 from gsfric.errors import InputError
-from gsfric.io.files import atomic_write
+from gsfric.io.files import atomic_write, is_stream
 
 NAN_WORDS = ("nan", "-nan", "+nan")
 
@@ -30,8 +30,10 @@ _PARQUET = (".parquet", ".pq")
 
 
 def table_kind(path: Path) -> str:
+    """"csv" or "parquet", by the extension; "csv" for a character device or FIFO without one
+    (``/dev/null``, ``/dev/stdout``)."""
     suffix = path.suffix.lower()
-    if suffix in _CSV:
+    if suffix in _CSV or (not suffix and is_stream(path)):
         return "csv"
     if suffix in _PARQUET:
         return "parquet"

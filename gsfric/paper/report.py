@@ -453,7 +453,7 @@ def run_paper(out_dir: str | os.PathLike[str], mode: str = "paper",
         else Platform.from_toml(platform_file)
     run = evaluate_paper(platform, mode=mode)
     written = []
-    with output_folder(out, inputs=[platform_file]) as folder:
+    with output_folder(out, inputs={"platform": platform_file}) as folder:
         for number in TABLES:
             path = folder / f"table{number}.csv"
             _write_table(run.ours[number], path)

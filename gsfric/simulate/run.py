@@ -39,7 +39,7 @@ from gsfric.errors import GsfricWarning, InputError, StepFlagError
 from gsfric.evaluation.columns import plan as column_plan
 from gsfric.evaluation.evaluator import Evaluator, evaluate_outputs
 from gsfric.evaluation.flags import FLAG_NAMES, FLAG_NONFINITE
-from gsfric.io.files import atomic_write
+from gsfric.io.files import atomic_write, check_outputs, is_stream
 from gsfric.io.tables import check_file, count_rows, table_kind
 from gsfric.models import platform_from
 from gsfric.platform.catalog import sensor_parameters
@@ -160,7 +160,7 @@ def simulate_file(trajectory: str | os.PathLike[str], out: str | os.PathLike[str
         ``strict`` and a flagged step.
     """
     trajectory, out = Path(trajectory), Path(out)
-    kind = _check_paths(trajectory, out)
+    kind = _check_paths(trajectory, out, platform)
     platform = platform_from(platform)
     plan = column_plan(parse_columns(None) if columns is None else
                        parse_columns(",".join(columns)))
@@ -180,17 +180,17 @@ def simulate_file(trajectory: str | os.PathLike[str], out: str | os.PathLike[str
     return summary
 
 
-def _check_paths(trajectory: Path, out: Path) -> str:
-    """The output's kind ("csv" or "parquet"), after checking both paths."""
-    kind = table_kind(out)
+def _check_paths(trajectory: Path, out: Path, platform) -> str:
+    """The output's kind ("csv" or "parquet"; CSV for a device or FIFO without an extension,
+    such as /dev/null or /dev/stdout), after checking the paths: ``out`` must not be the
+    trajectory, nor the platform's file when ``platform`` is one."""
+    kind = "csv" if not out.suffix and is_stream(out) else table_kind(out)
     check_file(trajectory)
     if out.exists() and out.is_dir():
         raise InputError(f"{out}: is a directory; give a file name")
     if not out.parent.is_dir():
         raise InputError(f"{out}: directory {str(out.parent)!r} does not exist")
-    with contextlib.suppress(OSError):
-        if out.exists() and os.path.samefile(out, trajectory):
-            raise InputError(f"{out}: is the trajectory file itself; choose another output")
+    check_outputs([out], {"trajectory": trajectory, "platform": platform})
     return kind
 
 
@@ -275,7 +275,8 @@ class _Run:
         """Evaluate every chunk and write it to the output, atomically."""
         mode_text = "wb" if kind == "parquet" else "w"
         options = {"newline": ""} if kind == "csv" else {}
-        with atomic_write(self.summary.out, mode_text, **options) as handle, \
+        with atomic_write(self.summary.out, mode_text, inputs={"trajectory": self.trajectory},
+                          **options) as handle, \
                 ThreadPoolExecutor(1, thread_name_prefix="gsfric-evaluate") as evaluation, \
                 ThreadPoolExecutor(1, thread_name_prefix="gsfric-write") as output:
             writer = Writer(handle, kind)

@@ -78,7 +78,7 @@ class Writer:
         self.parquet = None
         self.schema = None
         self.header = True
-        self.flusher = Flusher(handle)
+        self.flusher = Flusher(handle) if handle.seekable() else None   # not a pipe
 
     @staticmethod
     def load(kind: str) -> None:
@@ -95,7 +95,8 @@ class Writer:
             self.header = False
         else:
             self._write_parquet(columns)
-        self.flusher.written()
+        if self.flusher is not None:
+            self.flusher.written()
 
     def _write_parquet(self, columns: dict[str, np.ndarray]) -> None:
         pa = optional("pyarrow")
@@ -116,7 +117,8 @@ class Writer:
                 writer, self.parquet = self.parquet, None
                 writer.close()
         finally:
-            self.flusher.close()
+            if self.flusher is not None:
+                self.flusher.close()
 
     def abandon(self) -> None:
         with contextlib.suppress(BaseException):

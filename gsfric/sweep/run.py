@@ -32,7 +32,7 @@ from tqdm import tqdm
 from gsfric._optional import optional
 from gsfric.compiled import native
 from gsfric.errors import InputError
-from gsfric.io.files import atomic_write
+from gsfric.io.files import atomic_write, check_outputs
 from gsfric.platform.description import Platform
 from gsfric.sweep.plan import CHUNK_STEPS, Plan, plan
 from gsfric.sweep.plot import plot
@@ -240,9 +240,20 @@ def _write(out: Path, progress: _Progress, computed: int, scheduler, seconds: fl
     return SweepResult(out, envelopes, summary, variants_table, exceeded, info)
 
 
+def _partial_folder(out: Path, p: Plan, workspace, platform) -> Path:
+    """``OUT.partial``, where the sweep is built, after checking that neither it nor ``out`` is
+    one of the sweep's input files (trajectories, the workspace's or the platform's file)."""
+    partial = out.with_name(out.name + ".partial")
+    check_outputs([out, partial], [*(("trajectory", f) for f in p.inputs["files"]),
+                                   ("workspace", workspace), ("platform", platform)])
+    return partial
+
+
 def _existing(out: Path, fingerprint: str) -> bool:
     """Whether ``out`` holds this very sweep; ``InputError`` when it holds something else or
     its parent folder is missing."""
+    if out.exists() and not out.is_dir():
+        raise InputError(f"{out}: exists and is not a directory; choose another output folder")
     if out.exists():
         meta = out / "sweep.json"
         if meta.exists() and json.loads(meta.read_text()).get("fingerprint") == fingerprint:
@@ -303,9 +314,10 @@ def sweep(out: str | os.PathLike, trajectories=None,
     """
     out = Path(out)
     p = plan(trajectories, workspace, platform, vary, tolerances, variants, seed, chunk_steps)
+    partial = _partial_folder(out, p, workspace, platform)
     if _existing(out, p.fingerprint):
         return load(out)
-    running = _Progress(out.with_name(out.name + ".partial"), p, on_chunk)
+    running = _Progress(partial, p, on_chunk)
     todo = running.resume()
     chosen = _resolve_scheduler(scheduler, sum(t.steps for t in todo)) if todo else "serial"
     if progress is None:
