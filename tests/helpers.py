@@ -4,6 +4,7 @@ noise."""
 from __future__ import annotations
 
 import numpy as np
+import pandas as pd
 
 import gsfric
 from gsfric import models
@@ -92,3 +93,14 @@ def pink_noise(rng: np.random.Generator, n: int, legs: int = 6, extra: int = 200
     spec[0] = 0.0
     e = np.fft.irfft(spec, n + extra, axis=0)[extra:]
     return e / e.std(axis=0)
+
+
+def trajectory_frame(n: int = 400, rate: float = 100.0) -> pd.DataFrame:
+    """A trajectory file's columns (t, x, y, z and a quaternion) of ``models.sinusoidal`` sampled
+    ``n`` times at ``rate`` Hz."""
+    t = np.arange(n) / rate
+    motion = models.sinusoidal(t)
+    frame = pd.DataFrame({"t": t})
+    frame[["x", "y", "z"]] = motion.position
+    frame[["qw", "qx", "qy", "qz"]] = motion.quaternion()
+    return frame

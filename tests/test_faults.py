@@ -20,10 +20,9 @@ import textwrap
 import time
 from pathlib import Path
 
-import numpy as np
-import pandas as pd
 import pytest
 from click.testing import CliRunner
+from helpers import trajectory_frame
 
 from gsfric import models
 from gsfric.cli import _stop_in_chain, main
@@ -52,15 +51,6 @@ def one_error(stderr: str, code: int, result_code: int) -> str:
 
 def leftovers(folder: Path) -> list[str]:
     return sorted(p.name for p in folder.rglob("*") if ".gsfric-" in p.name)
-
-
-def trajectory_frame(n: int = 400, rate: float = 100.0) -> pd.DataFrame:
-    t = np.arange(n) / rate
-    motion = models.sinusoidal(t)
-    frame = pd.DataFrame({"t": t})
-    frame[["x", "y", "z"]] = motion.position
-    frame[["qw", "qx", "qy", "qz"]] = motion.quaternion()
-    return frame
 
 
 def env(**changes) -> dict:

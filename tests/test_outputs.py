@@ -14,10 +14,9 @@ import stat
 import threading
 from pathlib import Path
 
-import numpy as np
-import pandas as pd
 import pytest
 from click.testing import CliRunner
+from helpers import trajectory_frame
 
 from gsfric import models
 from gsfric.cli import main
@@ -44,20 +43,11 @@ def one_error(result, code: int = 2) -> str:
     return got[0][len("gsfric: error: "):]
 
 
-def trajectory_frame(n: int = 60, rate: float = 50.0) -> pd.DataFrame:
-    t = np.arange(n) / rate
-    motion = models.sinusoidal(t)
-    frame = pd.DataFrame({"t": t})
-    frame[["x", "y", "z"]] = motion.position
-    frame[["qw", "qx", "qy", "qz"]] = motion.quaternion()
-    return frame
-
-
 @pytest.fixture
 def files(tmp_path) -> dict[str, Path]:
     """A trajectory CSV and a platform TOML, with mtimes in the past (a rewrite would show)."""
     trajectory, platform = tmp_path / "t.csv", tmp_path / "p.toml"
-    write_table(trajectory_frame(), trajectory)
+    write_table(trajectory_frame(60, 50.0), trajectory)
     models.reference_platform().to_toml(platform)
     for path in (trajectory, platform):
         os.utime(path, ns=(1_000_000_000, 1_000_000_000))
