@@ -1,7 +1,10 @@
-"""Heavy dependencies loaded on first use (plots, Parquet, Dask): ``optional("pyarrow.parquet")``.
+"""Heavy dependencies loaded on first use (tables, SciPy, plots, Parquet, Dask):
+``optional("pyarrow.parquet")``.
 
 They are installed with gsfric, but loading them costs time that most calls never need: the
-control loop does not plot, a CSV run does not read Parquet. Every such import goes through
+control loop (``from gsfric.evaluation import Evaluator``, ``Evaluator.forces``) reads no table
+and filters no signal, a CSV run does not read Parquet, only a report plots. pandas costs about
+0.2 s to import and SciPy's rotations and splines about 0.2 s more. Every such import goes through
 ``optional``, so that the modules that use them can be imported quickly and a missing or broken
 installation is reported in one line naming the package.
 """
@@ -13,7 +16,7 @@ from types import ModuleType
 
 from gsfric.errors import GsfricError
 
-HEAVY = ("matplotlib", "pyarrow", "dask", "distributed", "casadi")
+HEAVY = ("pandas", "scipy", "matplotlib", "pyarrow", "dask", "distributed", "casadi")
 """The packages loaded through ``optional``."""
 
 

@@ -16,8 +16,8 @@ from __future__ import annotations
 import os
 
 import numpy as np
-from scipy.spatial.transform import Rotation
 
+from gsfric._optional import optional
 from gsfric.evaluation.paper_constants import (
     PAPER_ACCELERATION,
     PAPER_ANGULAR_ACCELERATION,
@@ -142,7 +142,7 @@ def paper_platform() -> Platform:
 def _axis_angle(axis_angle: np.ndarray) -> np.ndarray:
     """Rotation matrices (N, 3, 3) of rotation vectors (N, 3) (Rodrigues)."""
 
-    return Rotation.from_rotvec(axis_angle).as_matrix()
+    return optional("scipy.spatial.transform").Rotation.from_rotvec(axis_angle).as_matrix()
 
 
 def constant_acceleration(t: np.ndarray, acceleration=PAPER_ACCELERATION,

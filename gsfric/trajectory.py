@@ -13,11 +13,12 @@ from __future__ import annotations
 
 import warnings
 from dataclasses import dataclass
+from typing import TYPE_CHECKING
 
 import numpy as np
-import pandas as pd
 
 from gsfric._checks import as_array, as_float, fields_equal
+from gsfric._optional import optional
 from gsfric.errors import GsfricWarning, InputError
 from gsfric.signal.rotations import (
     angular_rates,
@@ -35,6 +36,9 @@ from gsfric.signal.savgol import (
 )
 from gsfric.signal.spline import spline_derivatives
 from gsfric.signal.windows import motion_filters, savgol_adaptive
+
+if TYPE_CHECKING:
+    import pandas as pd
 
 MIN_SAMPLES = 7
 """Fewest samples ``Motion.from_samples`` (and the trajectory readers) accept."""
@@ -355,6 +359,7 @@ class Motion:
         ``derivatives``, also ``vx, vy, vz, omega_x, omega_y, omega_z, ax, ay, az,
         alpha_x, alpha_y, alpha_z``.
         """
+        pd = optional("pandas")
 
         columns: dict[str, np.ndarray] = {"t": self.t}
         columns.update(zip(("x", "y", "z"), self.position.T))

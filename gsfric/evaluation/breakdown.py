@@ -21,13 +21,16 @@ joint_friction + prismatic_* + effects``. Units N, shape (N, 6) each, step leadi
 from __future__ import annotations
 
 from collections.abc import Callable
+from typing import TYPE_CHECKING
 
 import numpy as np
-import pandas as pd
 
 from gsfric._optional import optional
 from gsfric.platform.description import Platform
 from gsfric.trajectory import Motion
+
+if TYPE_CHECKING:
+    pass
 
 PARTS = ("inertia", "gravity", "payload", "joint_friction", "prismatic_viscous",
          "prismatic_coulomb", "prismatic_bushing", "prismatic_seal", "effects")
@@ -78,6 +81,7 @@ def parts(full, run: Callable[[Platform, Motion], object], platform: Platform,
 
 def to_frame(t: np.ndarray, parts: dict[str, np.ndarray]):
     """The parts as a DataFrame: ``t``, then ``{part}{i}`` for each part and leg i = 1..6, N."""
+    pd = optional("pandas")
 
     cols = {"t": np.asarray(t, float)}
     for name in (*PARTS, "F"):

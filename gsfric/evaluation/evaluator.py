@@ -16,10 +16,10 @@ concurrent calls.
 from __future__ import annotations
 
 import functools
+import sys
 import warnings
 
 import numpy as np
-import pandas as pd
 from tqdm import tqdm
 
 from gsfric._checks import short
@@ -278,6 +278,13 @@ def _details(platform: Platform, mode: str, constants, threads: int, motion: Mot
     return evaluator.details(motion, names, flag)
 
 
+def _is_frame(value: object) -> bool:
+    """Whether ``value`` is a pandas DataFrame, without importing pandas: none can exist before
+    pandas is imported."""
+    pandas = sys.modules.get("pandas")
+    return pandas is not None and isinstance(value, pandas.DataFrame)
+
+
 def evaluate(platform: Platform, motion, mode: str = "kinematic", **kwargs) -> Result:
     """Reaction forces and friction in every joint of ``platform`` over a motion.
 
@@ -320,8 +327,7 @@ def evaluate(platform: Platform, motion, mode: str = "kinematic", **kwargs) -> R
     >>> result.F.shape, result.R_E.shape
     ((101, 6), (101, 6, 3))
     """
-    if isinstance(motion, pd.DataFrame):
-
+    if _is_frame(motion):
         reading = {k: kwargs.pop(k) for k in ("window", "polyorder", "log_format")
                    if k in kwargs}
         motion = motion_from_frame(motion, **reading)

@@ -13,8 +13,8 @@ from collections.abc import Callable, MutableMapping
 from dataclasses import dataclass, field
 
 import numpy as np
-import pandas as pd
 
+from gsfric._optional import optional
 from gsfric.compiled.manifest import function
 from gsfric.errors import GsfricError
 from gsfric.evaluation.breakdown import parts as breakdown_parts
@@ -157,7 +157,7 @@ class Result:
         pandas.DataFrame
             6 N rows, MultiIndex levels ``step`` (0..N-1) and ``leg`` (1..6).
         """
-
+        pd = optional("pandas")
         n = len(self.t)
         index = pd.MultiIndex.from_product([np.arange(n), np.arange(1, 7)],
                                            names=["step", "leg"])
@@ -199,7 +199,7 @@ class Result:
         ``attrs["units"]`` maps every column to its unit and ``attrs["descriptions"]`` to its
         meaning and sign convention (``gsfric.columns``; ``gsfric columns`` lists them).
         """
-
+        pd = optional("pandas")
         n = len(self.t)
         cols = {"t": self.t}
         for column, key, index, _ in plan():

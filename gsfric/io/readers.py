@@ -24,15 +24,18 @@ from __future__ import annotations
 
 import os
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 import numpy as np
-import pandas as pd
 
 from gsfric.errors import InputError
 from gsfric.io.logs import FORCES, LENGTHS, QUATERNION, ColumnReader, LogFormat
 from gsfric.io.tables import read_table
 from gsfric.signal.savgol import DEFAULT_POLYORDER
 from gsfric.trajectory import MIN_SAMPLES, Motion
+
+if TYPE_CHECKING:
+    import pandas as pd
 
 MAX_FORCE = 1e8
 """Measured actuator forces beyond this magnitude, N (100 MN, far above any hexapod's), are

@@ -10,15 +10,17 @@ import re
 import stat
 import warnings
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
-import pandas as pd
 
 from gsfric._checks import short
 from gsfric._optional import optional
 from gsfric.errors import InputError
 from gsfric.io.files import atomic_write, is_stream
+
+if TYPE_CHECKING:
+    import pandas as pd
 
 NAN_WORDS = ("nan", "-nan", "+nan")
 
@@ -80,6 +82,7 @@ def check_file(path: Path) -> str:
 
 def csv_options() -> dict[str, Any]:
     """pandas.read_csv options: only an empty cell is missing; floats read back exactly."""
+    pd = optional("pandas")
 
     options: dict[str, Any] = {"index_col": False, "skipinitialspace": True,
                                "keep_default_na": False, "na_values": [""]}
@@ -146,6 +149,7 @@ def read_table(path: str | os.PathLike[str]) -> pd.DataFrame:
     InputError
         Missing file, unknown extension, empty file, unparsable content, duplicate columns.
     """
+    pd = optional("pandas")
 
     path = Path(path)
     kind = check_file(path)
@@ -193,8 +197,11 @@ def write_table(frame: pd.DataFrame, path: str | os.PathLike[str]) -> None:
     else:
         with atomic_write(path, "wb") as handle:
             frame.to_parquet(handle, index=False)
+
+
 def column_values(series: pd.Series, name: str) -> tuple[np.ndarray, tuple[int, str] | None]:
     """The column as floats and the first problem as (0-based row, message), or None."""
+    pd = optional("pandas")
 
     kind = series.dtype.kind
     if kind == "b":

@@ -2,9 +2,10 @@
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 from numpy.lib.stride_tricks import sliding_window_view
-from scipy.special import comb
 
 from gsfric.signal.savgol import savgol_filter, savgol_weights
 
@@ -50,7 +51,7 @@ def white_noise_std(y: np.ndarray) -> np.ndarray:
     differences = np.diff(y, n=m, axis=0)
     changing = np.ptp(sliding_window_view(y, m + 1, axis=0), axis=-1) > 0.0
     return np.array([robust_std(d[c]) if c.any() else 0.0
-                     for d, c in zip(differences.T, changing.T)]) / np.sqrt(comb(2 * m, m))
+                     for d, c in zip(differences.T, changing.T)]) / np.sqrt(math.comb(2 * m, m))
 
 
 def divided_difference_coefficients(x: np.ndarray, width: int) -> np.ndarray:

@@ -13,8 +13,13 @@ from __future__ import annotations
 import warnings
 
 import numpy as np
-from scipy.spatial.transform import Rotation
 
+from gsfric._optional import optional
+
+
+def _scipy_rotation():
+    """SciPy's ``Rotation`` class, loaded on first use (``gsfric._optional``)."""
+    return optional("scipy.spatial.transform").Rotation
 
 def rotation_from_euler(alpha: np.ndarray | float, beta: np.ndarray | float,
                         gamma: np.ndarray | float) -> np.ndarray:
@@ -88,7 +93,7 @@ def quaternion_from_rotation(rotation: np.ndarray) -> np.ndarray:
     """
 
     r = np.asarray(rotation, dtype=float)
-    xyzw = Rotation.from_matrix(r.reshape(-1, 3, 3)).as_quat()
+    xyzw = _scipy_rotation().from_matrix(r.reshape(-1, 3, 3)).as_quat()
     q = np.concatenate([xyzw[:, 3:], xyzw[:, :3]], axis=1)
     q *= np.where(q[:, :1] < 0, -1.0, 1.0)
     return q.reshape(r.shape[:-2] + (4,))
@@ -220,12 +225,12 @@ def rpy_from_rotation(rotation: np.ndarray) -> np.ndarray:
     at gimbal lock (pitch = +-90 deg) roll is set to zero and yaw takes the whole angle."""
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", UserWarning)   # SciPy's gimbal-lock warning
-        return Rotation.from_matrix(rotation).as_euler("ZYX")[:, ::-1]
+        return _scipy_rotation().from_matrix(rotation).as_euler("ZYX")[:, ::-1]
 
 
 def quaternion_from_rpy(angles: np.ndarray, convention: str = "xyz") -> np.ndarray:
     """Unit quaternions (w, x, y, z), (N, 4), of roll, pitch, yaw (N, 3) rad in SciPy's
     ``convention``: "xyz" extrinsic, ``R = Rz(yaw) Ry(pitch) Rx(roll)``; "XYZ" intrinsic,
     ``R = Rx(roll) Ry(pitch) Rz(yaw)``."""
-    xyzw = Rotation.from_euler(convention, angles).as_quat()
+    xyzw = _scipy_rotation().from_euler(convention, angles).as_quat()
     return np.concatenate([xyzw[:, 3:], xyzw[:, :3]], axis=1)

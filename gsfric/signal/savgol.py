@@ -6,8 +6,8 @@ import functools
 
 import numpy as np
 from numpy.polynomial import legendre
-from scipy.ndimage import correlate1d
 
+from gsfric._optional import optional
 from gsfric.errors import InputError
 
 DEFAULT_POLYORDER = 4
@@ -82,6 +82,7 @@ def savgol_filter(y: np.ndarray, window: int, polyorder: int, deriv: int = 0) ->
     derivative = polynomial_derivative(window, polyorder, deriv)
     fit = polynomial_fit(window, polyorder)
     half, n = window // 2, len(y)
+    correlate1d = optional("scipy.ndimage").correlate1d
     out = correlate1d(y, savgol_weights(window, polyorder, deriv), axis=0, mode="constant")
     out[:half] = derivative[:half] @ (fit @ y[:window])
     out[n - half:] = derivative[half + 1:] @ (fit @ y[n - window:])
@@ -102,6 +103,7 @@ def savgol_core(y: np.ndarray, window: int, polyorder: int, step: float,
     weights, run on the rows it needs only)."""
     h = window // 2
     block = y[lo - h:hi + h]
+    correlate1d = optional("scipy.ndimage").correlate1d
     out = []
     for k in (0, 1, 2):
         value = correlate1d(block, savgol_weights(window, polyorder, k), axis=0)[h:h + hi - lo]

@@ -4,9 +4,8 @@ derivative."""
 from __future__ import annotations
 
 import numpy as np
-from scipy.interpolate import BSpline, make_smoothing_spline
-from scipy.linalg import solve_banded
 
+from gsfric._optional import optional
 from gsfric.signal.noise import divided_difference_coefficients, divided_noise_std
 
 SPLINE_GCV_ROWS = 500
@@ -26,7 +25,7 @@ def _natural_spline_system(x: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
 
     n = len(x)
     knots = np.r_[[x[0]] * 3, x, [x[-1]] * 3]
-    b = BSpline.design_matrix(x, knots, 3)
+    b = optional("scipy.interpolate").BSpline.design_matrix(x, knots, 3)
     X = np.zeros((5, n))
     for i in range(1, 4):
         X[i, 2:-2] = b[i: i - 4, 3: -3][np.diag_indices(n - 4)]
@@ -50,6 +49,7 @@ def smoothing_splines(t: np.ndarray, y: np.ndarray, penalties: list[float]):
     set-up of the banded system), as one BSpline with a trailing axis of columns."""
 
     X, E = _natural_spline_system(t)
+    solve_banded = optional("scipy.linalg").solve_banded
     c = np.stack([solve_banded((2, 2), X + lam * E, y[:, j])
                   for j, lam in enumerate(penalties)], axis=1)
     k = np.r_[[t[0]] * 3, t, [t[-1]] * 3]
@@ -57,7 +57,7 @@ def smoothing_splines(t: np.ndarray, y: np.ndarray, penalties: list[float]):
     coefficients = np.r_[c0 * (k[5] + k[4] - 2 * k[3]) + c1, c0 * (k[5] - k[3]) + c1,
                          c[1:-1], cm0 * (k[-4] - k[-6]) + cm1,
                          cm0 * (2 * k[-4] - k[-5] - k[-6]) + cm1]
-    return BSpline.construct_fast(k, coefficients, 3, axis=0)
+    return optional("scipy.interpolate").BSpline.construct_fast(k, coefficients, 3, axis=0)
 
 
 def spline_penalties(t: np.ndarray, y: np.ndarray, lam: float | None = None
@@ -126,6 +126,7 @@ def spline_derivatives(t: np.ndarray, y: np.ndarray, lam: float | None) -> list[
         if penalties is not None:
             spline = smoothing_splines(t, y, penalties)
             return [spline.derivative(k)(t) if k else spline(t) for k in (0, 1, 2)]
-    columns = [make_smoothing_spline(t, y[:, j], lam=lam) for j in range(y.shape[1])]
+    make = optional("scipy.interpolate").make_smoothing_spline
+    columns = [make(t, y[:, j], lam=lam) for j in range(y.shape[1])]
     return [np.stack([c.derivative(k)(t) if k else c(t) for c in columns], axis=1)
             for k in (0, 1, 2)]

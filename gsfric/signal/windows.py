@@ -4,8 +4,8 @@ estimated error of a derivative, and the filtering with those choices."""
 from __future__ import annotations
 
 import numpy as np
-from scipy.ndimage import uniform_filter1d
 
+from gsfric._optional import optional
 from gsfric.signal.noise import white_noise_std
 from gsfric.signal.savgol import DEFAULT_POLYORDER, savgol_filter, savgol_weights
 
@@ -143,6 +143,7 @@ def _choose_windows(y: np.ndarray, p: int, deriv: int, variance: np.ndarray, bes
         h[(width - w) // 2:(width + w) // 2] = savgol_weights(w, p, deriv)
         return h
 
+    uniform_filter1d = optional("scipy.ndimage").uniform_filter1d
     j = (np.arange(width) - width // 2).astype(float)
     previous = savgol_filter(y, candidates[0], p, deriv)
     detected = np.zeros_like(y)
