@@ -37,6 +37,9 @@ FLAG_NAMES = {FLAG_NONFINITE: "non-finite value", FLAG_STROKE: "leg length outsi
               FLAG_SINGULAR: "near-singular platform Jacobian",
               FLAG_UNIVERSAL: "leg near its universal joint's first axis",
               FLAG_COUPLING: "coupled friction solve not converged"}
+FLAG_BITS = {"NONFINITE": FLAG_NONFINITE, "STROKE": FLAG_STROKE, "SINGULAR": FLAG_SINGULAR,
+             "UNIVERSAL": FLAG_UNIVERSAL, "COUPLING": FLAG_COUPLING}
+"""Each flag's name (``FLAG_<name>`` here and in compiled/batch.c) and bit."""
 COUPLING_TOLERANCE = 1e-6
 COND_LIMIT = 1e6
 SINGULAR_LIMIT = 2.0 / COND_LIMIT

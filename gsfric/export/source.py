@@ -24,9 +24,7 @@ from gsfric.evaluation import flags
 
 _FLAG_BEGIN = "/* step flags: begin"
 _FLAG_END = "/* step flags: end */"
-_FLAGS_OF_C = {"FLAG_NONFINITE": flags.FLAG_NONFINITE, "FLAG_STROKE": flags.FLAG_STROKE,
-               "FLAG_SINGULAR": flags.FLAG_SINGULAR, "FLAG_UNIVERSAL": flags.FLAG_UNIVERSAL,
-               "FLAG_COUPLING": flags.FLAG_COUPLING}
+
 
 
 @dataclass(frozen=True)
@@ -120,8 +118,8 @@ def flag_block() -> str:
     except ValueError:
         raise GsfricError("gsfric/compiled/batch.c has no step-flag block") from None
     block = text[start:stop]
-    for macro, value in _FLAGS_OF_C.items():
-        if not re.search(rf"^#define {macro} {value}$", block, re.M):
-            raise GsfricError(f"gsfric/compiled/batch.c: {macro} is not {value} as in "
+    for name, bit in flags.FLAG_BITS.items():
+        if not re.search(rf"^#define FLAG_{name} {bit}$", block, re.M):
+            raise GsfricError(f"gsfric/compiled/batch.c: FLAG_{name} is not {bit} as in "
                               "gsfric.evaluation.flags")
     return block

@@ -17,11 +17,6 @@ from gsfric.compiled.manifest import function, layout
 from gsfric.errors import InputError
 from gsfric.evaluation import flags
 
-FLAG_BITS = {"NONFINITE": flags.FLAG_NONFINITE, "STROKE": flags.FLAG_STROKE,
-             "SINGULAR": flags.FLAG_SINGULAR, "UNIVERSAL": flags.FLAG_UNIVERSAL,
-             "COUPLING": flags.FLAG_COUPLING}
-"""The step flags' names in C (``PREFIX_FLAG_<name>``) and bits (``gsfric.evaluation.flags``)."""
-
 
 @dataclass(frozen=True)
 class Output:
@@ -103,7 +98,7 @@ def flag_macros(prefix: str) -> str:
     """``#define PREFIX_FLAG_<NAME> bit`` for every step flag, with what it means."""
     upper = prefix.upper()
     return "\n".join(f"#define {upper}_FLAG_{name} {bit}  /* {flags.FLAG_NAMES[bit]} */"
-                     for name, bit in FLAG_BITS.items())
+                     for name, bit in flags.FLAG_BITS.items())
 
 
 def flag_settings(spec) -> str:

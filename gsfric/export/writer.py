@@ -162,7 +162,7 @@ def _values(platform: Platform, platform_file, model: str, prefix: str) -> dict[
         "state_table": "\n".join(f"| {o} | {'x'.join(map(str, s))} | {u} | {n}: {d} |"
                                  for o, s, u, n, d in state),
         "flag_table": "\n".join(f"| {bit} `{prefix.upper()}_FLAG_{key}` | {flags.FLAG_NAMES[bit]} |"
-                                for key, bit in text.FLAG_BITS.items()),
+                                for key, bit in flags.FLAG_BITS.items()),
     }
 
 
