@@ -99,6 +99,17 @@ def reference_platform(friction_model: str = "coupled") -> Platform:
         ``"coupled"`` (default): friction loads the mechanism (bushings, seal, per-axis
         universal joints, solved at every step; docs/friction.md). ``"paper"``: the paper's
         post-hoc friction model, (35) as printed with mu = 0.1 at R_3 and no seal.
+
+    Returns
+    -------
+    Platform
+
+    Examples
+    --------
+    >>> import gsfric
+    >>> platform = gsfric.reference_platform()
+    >>> platform.friction.model, platform.geometry.stroke
+    ('coupled', (0.5, 1.1))
     """
     return Platform(
         gravity=9.81,
@@ -128,6 +139,17 @@ def paper_platform() -> Platform:
     Leg parts 0.5 kg with inertia 0.035 kg m^2, the paper's leg model (zone centres at 0.25 D
     and 0.75 D from C_i), friction c_s = 0.02 N m s/rad, mu = 0.04, r = 0.05 m, prismatic
     0.02 N s/m and 0.04, the paper's post-hoc friction model.
+
+    Returns
+    -------
+    Platform
+        With ``[friction] model = "paper"`` and the paper's leg model.
+
+    Examples
+    --------
+    >>> import gsfric
+    >>> gsfric.paper_platform().friction.model
+    'paper'
     """
     return Platform(
         gravity=9.81,

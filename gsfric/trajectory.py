@@ -162,6 +162,16 @@ class Motion:
     Every array must be finite and ``rotation`` orthonormal with determinant +1 (to 1e-6).
     ``t`` need not increase (a set of unrelated poses is a valid Motion); ``from_samples``
     requires it to.
+
+    Examples
+    --------
+    >>> import numpy as np, gsfric
+    >>> t = np.linspace(0.0, 2.0, 401)
+    >>> position = np.column_stack([0.01 * np.sin(t), 0 * t, 0.7 + 0 * t])
+    >>> level = np.tile([1.0, 0.0, 0.0, 0.0], (401, 1))
+    >>> motion = gsfric.Motion.from_samples(t, position, quaternion=level)
+    >>> motion.velocity.shape
+    (401, 3)
     """
 
     t: np.ndarray
@@ -257,7 +267,7 @@ class Motion:
             Platform frame origin in the base frame, m.
         euler : array_like, shape (N, 3), optional
             ZXZ angles (alpha, beta, gamma), rad. Warns (``GsfricWarning``) if any exceeds
-            2 pi in magnitude (degrees?) or if, where |sin(beta)| < ``GIMBAL_SIN_BETA``, alpha
+            2 pi in magnitude (degrees?) or if, where ``abs(sin(beta)) < GIMBAL_SIN_BETA``, alpha
             or gamma jump by more than ``GIMBAL_JUMP`` between samples.
         quaternion : array_like, shape (N, 4), optional
             ``(qw, qx, qy, qz)``, platform frame to base frame; normalized here. Give exactly

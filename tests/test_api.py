@@ -107,16 +107,17 @@ def test_units_travel_with_frames_and_parquet(tmp_path, platform):
         assert meta[b"description"]
 
 
-def test_columns_listing_and_readme_table_come_from_one_source():
+def test_columns_listing_and_reference_table_come_from_one_source():
     listing = CliRunner().invoke(main, ["columns"]).output
     for column in columns.all_columns():
         assert column.label in listing
     table = CliRunner().invoke(main, ["columns", "--markdown"]).output.strip()
     assert table == columns.markdown_table()
-    readme = (ROOT / "README.md").read_text()
-    block = re.search(r"<!-- columns: begin.*?-->\n(.*?)\n<!-- columns: end -->", readme, re.S)
-    assert block, "README.md has no generated output table"
-    assert block.group(1).strip() == table, "README's table is stale: paste `gsfric columns --markdown`"
+    page = (ROOT / "docs" / "reference" / "columns.md").read_text()
+    block = re.search(r"<!-- columns: begin.*?-->\n(.*?)\n<!-- columns: end -->", page, re.S)
+    assert block, "docs/reference/columns.md has no generated output table"
+    assert block.group(1).strip() == table, (
+        "docs/reference/columns.md's table is stale: paste `gsfric columns --markdown`")
 
 
 def test_effects_listing_names_every_parameter_with_its_unit():

@@ -64,6 +64,15 @@ class Evaluator:
         Threads for long evaluations (POSIX threads created per call, at least 2048 steps each).
     paper_constants : ndarray (13,), optional
         Paper mode's constants (default ``gsfric.evaluation.paper_constants.paper_constants()``).
+
+    Examples
+    --------
+    >>> import numpy as np, gsfric
+    >>> from gsfric.evaluation import state_array
+    >>> motion = gsfric.models.sinusoidal(np.linspace(0, 1, 101))
+    >>> evaluator = gsfric.Evaluator(gsfric.reference_platform())
+    >>> evaluator.actuator_forces(state_array(motion)).shape
+    (101, 6)
     """
 
     def __init__(self, platform: Platform, mode: str = "kinematic", n_threads: int = 1,

@@ -95,12 +95,24 @@ class Outputs(MutableMapping):
 class Result:
     """Named arrays of one evaluation, step as the leading axis.
 
-    Attributes (shapes for N steps; units SI): ``t`` (N,), ``F``, ``F0`` (N, 6) N;
-    ``R_E``, ``R_C``, ``R_3`` (N, 6, 3) N; ``M_C`` (N, 6) N m; ``M_3`` (N, 6, 3) N m;
-    ``MfrE``, ``MfrC`` (N, 6, 3) N m; ``Ffr`` (N, 6) N; the paper's signed scalars ``MfrE_s``,
-    ``MfrC_s`` (N, 6) N m and ``Ffr_s`` (N, 6) N; ``D``, ``D_dot`` (N, 6); ``u``, ``omega_leg``,
-    ``omega_rel``, ``R_3_leg``, ``M_3_leg`` (N, 6, 3); ``s2`` (N, 6); ``flag`` (N,) int.
-    See the manifest for every output's description.
+    Attributes
+    ----------
+    t, F, ... : ndarray
+        Shapes for N steps, units SI: ``t`` (N,), ``F``, ``F0`` (N, 6) N;
+        ``R_E``, ``R_C``, ``R_3`` (N, 6, 3) N; ``M_C`` (N, 6) N m; ``M_3`` (N, 6, 3) N m;
+        ``MfrE``, ``MfrC`` (N, 6, 3) N m; ``Ffr`` (N, 6) N; the paper's signed scalars
+        ``MfrE_s``, ``MfrC_s`` (N, 6) N m and ``Ffr_s`` (N, 6) N; ``D``, ``D_dot`` (N, 6);
+        ``u``, ``omega_leg``, ``omega_rel``, ``R_3_leg``, ``M_3_leg`` (N, 6, 3); ``s2``
+        (N, 6); ``flag`` (N,) int. Every output column with its meaning is listed by
+        ``gsfric.columns``.
+
+    Examples
+    --------
+    >>> import numpy as np, gsfric
+    >>> result = gsfric.evaluate(gsfric.reference_platform(),
+    ...                          gsfric.models.sinusoidal(np.linspace(0, 1, 101)))
+    >>> result.F.shape, result.R_E.shape, result.to_frame().attrs["units"]["F1"]
+    ((101, 6), (101, 6, 3), 'N')
     """
 
     t: np.ndarray

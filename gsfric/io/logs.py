@@ -115,6 +115,13 @@ class LogFormat:
         [units]
         t = "us"
         x = "mm"
+
+    Examples
+    --------
+    >>> import gsfric
+    >>> log = gsfric.LogFormat(columns={"t": "time (us)", "x": "pos_x"}, units={"t": "us", "x": "mm"})
+    >>> log.units["x"]
+    'mm'
     """
 
     columns: Mapping[str, str] = field(default_factory=dict)

@@ -155,6 +155,15 @@ def read_trajectory(path: str | os.PathLike[str], *, window: int | None = None,
         Unknown or missing columns, values that are not numbers, NaN or infinite values, times
         that do not increase, too few rows. Warnings (``GsfricWarning``) flag angles that look
         like degrees and jumps of the ZXZ angles near beta = 0.
+
+    Examples
+    --------
+    >>> import pathlib, tempfile
+    >>> import numpy as np, gsfric
+    >>> path = pathlib.Path(tempfile.mkdtemp()) / "motion.csv"
+    >>> gsfric.io.write_table(gsfric.models.sinusoidal(np.linspace(0, 2, 401)).to_frame(), path)
+    >>> gsfric.read_trajectory(path).position.shape
+    (401, 3)
     """
     path, columns, orientation = _read_samples(path, False, log_format)
     return motion_from_columns(path, columns, orientation, window, polyorder)
@@ -165,7 +174,12 @@ def read_measured(path: str | os.PathLike[str], *, window: int | None = None,
                   ) -> tuple[Motion, np.ndarray, np.ndarray | None]:
     """Read a measured-data file: the trajectory columns plus ``F1..F6`` and optional ``D1..D6``.
 
-    ``window``, ``polyorder`` and ``log_format`` as for ``read_trajectory``.
+    Parameters
+    ----------
+    path : str or path-like
+        A CSV or Parquet file with the columns of a trajectory and ``F1..F6`` (N).
+    window, polyorder, log_format
+        As for ``read_trajectory``.
 
     Returns
     -------
@@ -182,6 +196,17 @@ def read_measured(path: str | os.PathLike[str], *, window: int | None = None,
     InputError
         As ``read_trajectory``, and for missing F columns, an incomplete D1..D6 set or a
         non-positive leg length.
+
+    Examples
+    --------
+    >>> import pathlib, tempfile
+    >>> import gsfric
+    >>> from gsfric.synth import synthesize
+    >>> path = pathlib.Path(tempfile.mkdtemp()) / "measured.csv"
+    >>> gsfric.io.write_table(synthesize(samples=400, seed=1).frame, path)
+    >>> motion, forces, lengths = gsfric.read_measured(path)
+    >>> forces.shape[1]
+    6
     """
     return read_measured_columns(path, window, polyorder, log_format)[:3]
 

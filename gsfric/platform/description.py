@@ -455,6 +455,14 @@ class Platform:
 
     Instances are immutable; derive variants with ``replace``, ``with_geometry``, ``with_body``,
     ``with_legs``, ``with_friction``, ``with_effects``, ``with_effect`` and ``without_effects``.
+
+    Examples
+    --------
+    >>> import gsfric
+    >>> platform = gsfric.reference_platform()
+    >>> heavier = platform.with_body(payload_mass=8.0)
+    >>> heavier.platform.payload_mass, platform.platform.payload_mass
+    (8.0, 3.0)
     """
 
     gravity: float = DEFAULT_GRAVITY
