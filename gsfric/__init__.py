@@ -9,7 +9,8 @@ evaluated here over trajectories, with NumPy and the compiled functions only.
 >>> result.F.shape
 (40, 6)
 
-Main names: ``evaluate`` (a platform over a motion -> ``Result``), ``Platform``
+Main names: ``evaluate`` (a platform over a motion -> ``Result``), ``discover`` (measured
+data -> ``Discovery``: which effect the model misses), ``Platform``
 (``reference_platform()``, ``paper_platform()``, ``Platform.from_toml``), ``Motion`` (and
 ``gsfric.models`` for reference motions), ``read_trajectory`` / ``read_measured`` with a
 ``LogFormat`` for other programs' logs, ``Evaluator`` for repeated calls, ``columns`` for the
@@ -26,6 +27,8 @@ _LAZY = {
     "Evaluator": ("gsfric.evaluation.evaluator", "Evaluator"),
     "Result": ("gsfric.evaluation.result", "Result"),
     "evaluate": ("gsfric.evaluation.evaluator", "evaluate"),
+    "discover": ("gsfric.discovery.api", "discover"),
+    "Discovery": ("gsfric.discovery.results", "Discovery"),
     "reference_platform": ("gsfric.models", "reference_platform"),
     "paper_platform": ("gsfric.models", "paper_platform"),
     "LogFormat": ("gsfric.io.logs", "LogFormat"),

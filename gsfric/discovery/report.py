@@ -19,6 +19,7 @@ from pathlib import Path
 import numpy as np
 
 from gsfric._optional import optional
+from gsfric.discovery.answer import GLOSSARY, platform_text, units_of, verdict_line
 from gsfric.discovery.regimes import hotspots
 from gsfric.discovery.rest import poses_from_columns
 from gsfric.discovery.results import Discovery, per_leg_rms, summary
@@ -26,6 +27,7 @@ from gsfric.discovery.workflow import discover
 from gsfric.io.files import atomic_write, check_outputs, output_folder
 from gsfric.io.readers import read_measured_columns
 from gsfric.models import platform_from
+from gsfric.platform import catalog
 from gsfric.signal.savgol import DEFAULT_POLYORDER
 
 PLOTS = ("residuals_time.png", "residuals_speed.png", "regimes.png")
@@ -54,7 +56,7 @@ def report(d: Discovery, source: str = "", platform_source: str = "") -> str:
     """The readable report (Markdown)."""
     L = _header(d, source, platform_source)
     for section in (_unexplained, _effects_named, _disagreement, _own_parameters, _rounds,
-                    _effects_found, _gaps, _method):
+                    _effects_found, _gaps, _method, _glossary):
         L += section(d)
     return "\n".join(L)
 
@@ -67,7 +69,7 @@ def _header(d: Discovery, source: str, platform_source: str) -> list[str]:
     L += [f"Measured data: `{source or '(arrays)'}`; model: `{model}`.",
           f"Samples used: {n} ({d.used.start} left out at each end, where the pose's "
           f"differentiation is least accurate), {d.t[-1] - d.t[0]:.4g} s.", ""]
-    L += ["## Result", "", f"Verdict: **{d.verdict}**.", ""]
+    L += ["## Result", "", f"Verdict: **{d.verdict}**.", "", f"> {verdict_line(d)}", ""]
     return L
 
 
@@ -123,7 +125,9 @@ def _effects_named(d: Discovery) -> list[str]:
               "error outside the catalog would.", ""]
     if d.effects:
         for f in d.effects:
-            params = ", ".join(f"{k} = {_g(v)}" for k, v in f.parameters.items())
+            units = units_of(f.name, f.parameters)
+            params = ", ".join(f"{k} = {catalog.with_unit(v, units[k])}"
+                               for k, v in f.parameters.items())
             twins = f.evidence.indistinguishable_from
             L.append(f"- **{f.name}** ({params}): effect size {_g(f.evidence.effect_size, 3)}"
                      f" x noise, found in round {f.evidence.round}"
@@ -171,7 +175,7 @@ def _own_parameters(d: Discovery) -> list[str]:
     rows = []
     for name, e in d.refit.parameters.items():
         lo, hi = e.plausible
-        rows.append([name, e.model, e.refit, e.final, e.unbounded,
+        rows.append([name, catalog.unit(name) or "1", e.model, e.refit, e.final, e.unbounded,
                      f"[{_g(lo)}, {_g(hi)}]", "yes" if e.plausible_refit else "**no**"])
     if rows:
         L.append("Refitted first, within plausible ranges (a wrong coefficient is not a missing "
@@ -180,15 +184,29 @@ def _own_parameters(d: Discovery) -> list[str]:
                  "need; where it is implausible, the gap it would close is left to the "
                  "candidate effects.")
         L.append("")
-        L += _table(["parameter", "model", "refit", "final", "unbounded", "plausible range",
-                     "plausible"], rows)
+        L.append("Columns: *model* is the value in the platform as given; *refit* the value "
+                 "after refitting the model's own parameters alone (within the plausible "
+                 "range); *final* the value in the final model, refitted again together with "
+                 "the effects found (so a refit that an effect explains better returns towards "
+                 "the model's value); *unbounded* the value a refit without limits would need.")
+        L.append("")
+        L += _table(["parameter", "unit", "model", "refit", "final", "unbounded",
+                     "plausible range", "plausible"], rows)
     return L
 
 
 def _rounds(d: Discovery) -> list[str]:
     """Each round's tests and decision."""
     L: list[str] = []
-    L += ["## Rounds", ""]
+    L += ["## Rounds", "",
+          "Each round fits every candidate effect left and adds the best accepted one. In the "
+          "tables: *F*, *p* the nested F-test against the refitted model; *p slowest / rest* "
+          "the same test on the record's slowest components alone or on the rest alone; "
+          "*held-out gain* the relative drop of the error on stretches of the record left "
+          "out of the fit; *folds improved* the share of those stretches that improved; "
+          "*gap closed* the RMS the candidate removes over the RMS left. The *AR orders* "
+          "are those of each leg's residual model used to prewhiten it. The glossary at the "
+          "end explains each.", ""]
     for rnd in d.rounds:
         L.append(f"### Round {rnd.index}: "
                  + (f"**{rnd.winner}** added" if rnd.winner else "nothing significant; stop"))
@@ -223,8 +241,10 @@ def _effects_found(d: Discovery) -> list[str]:
             L.append("")
             L.append(f.evidence.signature)
             L.append("")
-            L += _table(["parameter", "value", "95% interval (block bootstrap)"],
-                        [[k, v, ("[" + ", ".join(_g(x) for x in f.interval[k]) + "]")
+            units = units_of(f.name, f.parameters)
+            L += _table(["parameter", "unit", "value", "95% interval (block bootstrap)"],
+                        [[k, units[k] or "1", v,
+                          ("[" + ", ".join(_g(x) for x in f.interval[k]) + "]")
                           if k in f.interval else "fixed"] for k, v in f.parameters.items()])
             ev = f.evidence
             L.append(f"F = {_g(ev.F)}, p = {_g(ev.p_value, 3)} (level {_g(ev.level, 3)}),"
@@ -273,6 +293,11 @@ def _method(d: Discovery) -> list[str]:
           "compiled model, and the next round starts; the workflow stops when no candidate is "
           "accepted. See docs/discovery.md.", ""]
     return L
+
+
+def _glossary(d: Discovery) -> list[str]:
+    """What each statistic of the report means."""
+    return ["## Glossary", ""] + [f"- **{term}**: {text}" for term, text in GLOSSARY.items()] + [""]
 
 
 
@@ -359,13 +384,15 @@ def write(d: Discovery, out_dir: str | os.PathLike[str], *, source: str = "",
                                         "platform": platform_source or None}) as out:
         path = out / "summary.json"
         data = summary(d)
+        data["answer"] = verdict_line(d)
         data["data"]["file"] = source or None
         with atomic_write(path) as handle:
             json.dump(data, handle, indent=2, allow_nan=False)
             handle.write("\n")
         written.append(path)
         path = out / "platform.toml"
-        d.platform.to_toml(path)
+        with atomic_write(path, "w") as handle:
+            handle.write(platform_text(d, source, platform_source))
         written.append(path)
         path = out / "report.md"
         with atomic_write(path) as handle:
@@ -374,6 +401,27 @@ def write(d: Discovery, out_dir: str | os.PathLike[str], *, source: str = "",
         if figures:
             written += plots(d, out)
     return [Path(out_dir) / p.name for p in written]
+
+
+def discover_file(measured: str | os.PathLike[str],
+                  platform_file: str | os.PathLike[str] | None = None, *, seed: int = 0,
+                  progress: bool = False, **options) -> Discovery:
+    """Read a measured-data file and run the workflow on it (``run_discover`` without the
+    outputs); parameters as ``run_discover``'s."""
+    platform = platform_from(platform_file)
+    log_format = options.pop("log_format", None)   # column map and units of a log
+    motion, forces, lengths, columns = read_measured_columns(measured, None, DEFAULT_POLYORDER,
+                                                          log_format)
+    result = discover(motion, forces, platform, seed=seed, progress=progress,
+                      poses=poses_from_columns(columns), **options)
+    if lengths is not None:
+        model_lengths = result.result_before.D
+        gap = float(np.sqrt(np.mean((lengths - model_lengths) ** 2)))
+        if gap > 1e-3:
+            result.notes.append(
+                f"the leg lengths D1..D6 in the file differ from those of the recorded pose by "
+                f"{gap * 1e3:.3g} mm RMS: check the platform's geometry")
+    return result
 
 
 def run_discover(measured: str | os.PathLike[str],
@@ -398,27 +446,15 @@ def run_discover(measured: str | os.PathLike[str],
     figures : bool
         Write the plots.
     **options
-        ``Settings`` fields.
+        ``Settings`` fields; ``log_format`` (a ``LogFormat``) for a log's columns and units.
 
     Returns
     -------
     list of Path
-        The files written.
+        The files written (``verdict_line`` of the result is summary.json's ``answer``).
     """
     check_outputs([out_dir], {"measured-data": measured, "platform": platform_file})
-    platform = platform_from(platform_file)
-    log_format = options.pop("log_format", None)   # column map and units of a log
-    motion, forces, lengths, columns = read_measured_columns(measured, None, DEFAULT_POLYORDER,
-                                                          log_format)
-    result = discover(motion, forces, platform, seed=seed, progress=progress,
-                      poses=poses_from_columns(columns), **options)
-    if lengths is not None:
-        model_lengths = result.result_before.D
-        gap = float(np.sqrt(np.mean((lengths - model_lengths) ** 2)))
-        if gap > 1e-3:
-            result.notes.append(
-                f"the leg lengths D1..D6 in the file differ from those of the recorded pose by "
-                f"{gap * 1e3:.3g} mm RMS: check the platform's geometry")
+    result = discover_file(measured, platform_file, seed=seed, progress=progress, **options)
     return write(result, out_dir, source=str(measured),
                  platform_source=str(platform_file) if platform_file else "",
                  figures=figures)
