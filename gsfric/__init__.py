@@ -17,7 +17,7 @@ data -> ``Discovery``: which effect the model misses), ``Platform``
 units and meaning of every output column. ``help(gsfric.evaluate)`` and the README tell more.
 """
 
-import importlib
+import importlib as _importlib
 
 __version__ = "0.1.0"
 
@@ -52,11 +52,11 @@ __all__ = sorted(_LAZY) + ["columns", "io", "models", "sweep"]
 def __getattr__(name):
     if name in _LAZY:
         module, attr = _LAZY[name]
-        value = getattr(importlib.import_module(module), attr)
+        value = getattr(_importlib.import_module(module), attr)
         globals()[name] = value          # later look-ups skip this function
         return value
     if name in _MODULES:
-        return importlib.import_module(_MODULES[name])
+        return _importlib.import_module(_MODULES[name])
     raise AttributeError(f"module 'gsfric' has no attribute {name!r}")
 
 

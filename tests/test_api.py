@@ -208,3 +208,14 @@ def test_the_memory_kept_for_reuse_is_bounded(platform):
     finally:
         _POOL.keep = old
         release_memory()
+
+
+def test_dir_of_gsfric_lists_only_public_names():
+    out = subprocess.run([sys.executable, "-c", "import gsfric; gsfric.evaluate; "
+                          "gsfric.discover; print(' '.join(dir(gsfric)))"],
+                         capture_output=True, text=True, check=True).stdout.split()
+    assert {"evaluate", "discover", "Discovery", "Platform", "Result"} <= set(out)
+    leftovers = [n for n in out if n in ("annotations", "importlib", "_importlib")
+                 or (n.startswith("_") and n != "__version__")]
+    assert not leftovers
+    assert set(gsfric.__all__) <= set(out)

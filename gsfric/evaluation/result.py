@@ -17,6 +17,7 @@ import numpy as np
 from gsfric._optional import optional
 from gsfric.compiled.manifest import function
 from gsfric.errors import GsfricError
+from gsfric.evaluation.breakdown import frame as breakdown_frame
 from gsfric.evaluation.breakdown import parts as breakdown_parts
 from gsfric.evaluation.columns import annotate, plan
 
@@ -113,13 +114,21 @@ class Result:
     """``runner(platform, motion) -> Result``: evaluates the platform variants of ``breakdown``
     (an Evaluator's evaluation without reporting flags)."""
 
-    def breakdown(self) -> dict[str, np.ndarray]:
+    def breakdown(self):
         """F per leg split into inertia, gravity, payload, joint friction carried, prismatic
-        friction by kind and effects, (N, 6) N each (``gsfric.evaluation.breakdown``; kinematic mode)."""
+        friction by kind and effects (``gsfric.evaluation.breakdown``; kinematic mode).
+
+        Returns
+        -------
+        pandas.DataFrame
+            Index ``step``; columns (part, leg), legs 1..6, N, for each part and ``F``, their
+            sum, and ``t``, s: ``frame["gravity"]`` is one part's (N, 6) table.
+            ``attrs["units"]`` gives each part's unit.
+        """
         if self.source is None or self.runner is None or self.mode != "kinematic":
             raise GsfricError("breakdown: needs a kinematic-mode result of Evaluator.evaluate")
         platform, motion = self.source
-        return breakdown_parts(self, self.runner, platform, motion)
+        return breakdown_frame(self.t, breakdown_parts(self, self.runner, platform, motion))
 
     def __getattr__(self, name):
         arrays = self.__dict__.get("arrays", {})
