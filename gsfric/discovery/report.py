@@ -275,8 +275,10 @@ def _method(d: Discovery) -> list[str]:
     L: list[str] = []
     L += ["## Plots", "",
           "- `residuals_time.png`: residual of each leg over time, before and after.",
-          "- `residuals_speed.png`: residual against the leg's sliding speed (friction shows "
-          "as a step or peak at zero speed).",
+          "- `residuals_speed.png`: residual against the leg's sliding speed on a "
+          "symmetric-log axis, linear within the Stribeck velocity scale "
+          f"(+-{stribeck_scale(d):.3g} m/s, shaded) so that the low-speed band is readable "
+          "(friction shows as a step or peak at zero speed).",
           "- `regimes.png`: RMS residual per band of each regime, before and after.", "",
           "## How the decisions are made", "",
           "Each candidate is fitted together with the refitted model parameters on a "
@@ -308,6 +310,78 @@ def _thin(n: int, most: int = 2000) -> slice:
     return slice(None, None, max(1, n // most))
 
 
+def stribeck_scale(d: Discovery) -> float:
+    """The speed scale of the low-speed friction, m/s: the Stribeck velocity found, or the
+    model's, or the catalog's default (the linear band of the speed plot's axis)."""
+    for f in d.effects:
+        if f.name == "stribeck":
+            return float(f.parameters["velocity"])
+    if "stribeck" in d.model.effects:
+        return float(d.model.effects["stribeck"]["velocity"])
+    return float(catalog.EFFECTS["stribeck"]["velocity"])
+
+
+def _binned(u: np.ndarray, r: np.ndarray, bins: int = 40) -> tuple[np.ndarray, np.ndarray]:
+    """Means of ``r`` in ``bins`` equal bins of ``u`` (empty bins dropped)."""
+    edges = np.linspace(u.min(), u.max(), bins + 1)
+    idx = np.clip(np.searchsorted(edges[1:-1], u), 0, bins - 1)
+    keep = [j for j in range(bins) if (idx == j).any()]
+    return (np.array([u[idx == j].mean() for j in keep]),
+            np.array([r[idx == j].mean() for j in keep]))
+
+
+def _speed_figure(plt, d: Discovery):
+    """Residual against each leg's speed, symmetric-log speed axis (linear within the
+    Stribeck scale), binned means evenly spaced on that axis."""
+    rb, ra = d.residual_before, d.residual_after
+    k = _thin(len(d.t))
+    speed = d.result_before.D_dot[d.used]
+    scale = stribeck_scale(d)
+    fig, axes = plt.subplots(2, 3, figsize=(12, 7), sharex=True)
+    for i, ax in enumerate(axes.ravel()):
+        v = speed[:, i]
+        u = np.sign(v) * np.log1p(np.abs(v) / scale)          # the axis' own spacing
+        for r, colour, label in ((rb, "0.5", "before"), (ra, "C0", "after")):
+            centres, means = _binned(u, r[:, i])
+            ax.plot(v[k], r[k, i], ".", ms=1.5, color=colour, alpha=0.25)
+            ax.plot(np.sign(centres) * scale * np.expm1(np.abs(centres)), means, "-",
+                    color=colour, lw=1.8, label=f"{label} (binned mean)")
+        ax.set_xscale("symlog", linthresh=scale, linscale=1.0)
+        ax.axvspan(-scale, scale, color="C1", alpha=0.08, lw=0)
+        ax.axvline(0, color="k", lw=0.5)
+        ax.set_title(f"leg {i + 1}", fontsize=10)
+        ax.tick_params(labelsize=8)
+        ax.grid(True, alpha=0.3)
+    axes[0, 0].legend(fontsize=8, loc="upper left")
+    for ax in axes[1]:
+        ax.set_xlabel("leg speed dD/dt (m/s), symmetric-log axis", fontsize=9)
+    for ax in axes[:, 0]:
+        ax.set_ylabel("residual F_measured - F_model (N)", fontsize=9)
+    fig.suptitle(f"Residual (N) against leg speed (m/s): linear within ±{scale:.3g} m/s "
+                 "(shaded: the Stribeck velocity scale), logarithmic beyond")
+    fig.subplots_adjust(left=0.07, right=0.98, top=0.9, bottom=0.09, wspace=0.22, hspace=0.25)
+    return fig
+
+
+def _regimes_figure(plt, d: Discovery):
+    """RMS residual per band of each regime, before and after, bands as labelled rows."""
+    bands = d.regimes
+    fig, ax = plt.subplots(figsize=(9, 0.32 * len(bands) + 1.6))
+    y = np.arange(len(bands))[::-1]
+    ax.barh(y + 0.2, [b.rms_before for b in bands], 0.4, color="0.6", label="before")
+    ax.barh(y - 0.2, [b.rms_after for b in bands], 0.4, color="C0", label="after")
+    ax.set_yticks(y, [f"{b.regime}: {b.name}" for b in bands], fontsize=9)
+    for n in range(1, len(bands)):
+        if bands[n].regime != bands[n - 1].regime:
+            ax.axhline(y[n] + 0.5, color="0.8", lw=0.8)
+    ax.set_xlabel("RMS residual (N)")
+    ax.legend(fontsize=9, loc="lower right")
+    ax.set_title("Gap per regime: RMS residual (N) in each band, before and after")
+    ax.grid(True, axis="x", alpha=0.3)
+    fig.tight_layout()
+    return fig
+
+
 def plots(d: Discovery, out_dir: Path) -> list[Path]:
     """Write the three figures; returns their paths."""
     optional("matplotlib").use("Agg")
@@ -319,7 +393,7 @@ def plots(d: Discovery, out_dir: Path) -> list[Path]:
     def save(fig, name):
         path = out_dir / name
         with atomic_write(path, "wb") as handle:
-            fig.savefig(handle, format="png", dpi=75)
+            fig.savefig(handle, format="png", dpi=90)
         plt.close(fig)
         written.append(path)
 
@@ -331,45 +405,12 @@ def plots(d: Discovery, out_dir: Path) -> list[Path]:
         ax.plot(t[k], ra[k, i], color="C0", lw=0.6, label="after")
         ax.set_ylabel(f"leg {i + 1}\nN")
     axes[0].legend(loc="upper right", ncol=2, fontsize=8)
-    axes[0].set_title("Residual F_measured - F_model")
+    axes[0].set_title("Residual F_measured - F_model (N) over time (s)")
     axes[-1].set_xlabel("t (s)")
     fig.subplots_adjust(left=0.1, right=0.98, top=0.96, bottom=0.05, hspace=0.15)
     save(fig, PLOTS[0])
-
-    speed = d.result_before.D_dot[d.used]
-    fig, axes = plt.subplots(2, 3, figsize=(10, 6), sharex=True)
-    for i, ax in enumerate(axes.ravel()):
-        v = speed[:, i]
-        order = np.argsort(v)
-        edges = np.quantile(v, np.linspace(0, 1, 41))
-        idx = np.clip(np.searchsorted(edges[1:-1], v[order]), 0, 39)
-        centres = np.array([v[order][idx == j].mean() for j in range(40) if (idx == j).any()])
-        for r, colour, label in ((rb, "0.5", "before"), (ra, "C0", "after")):
-            means = np.array([r[order, i][idx == j].mean() for j in range(40) if (idx == j).any()])
-            ax.plot(v[k], r[k, i], ".", ms=1, color=colour, alpha=0.25)
-            ax.plot(centres, means, "-", color=colour, lw=1.5, label=label)
-        ax.axvline(0, color="k", lw=0.5)
-        ax.set_title(f"leg {i + 1}", fontsize=9)
-    axes[0, 0].legend(fontsize=8)
-    for ax in axes[1]:
-        ax.set_xlabel("leg speed dD/dt (m/s)")
-    for ax in axes[:, 0]:
-        ax.set_ylabel("residual (N)")
-    fig.suptitle("Residual against leg speed (binned means)")
-    fig.subplots_adjust(left=0.08, right=0.98, top=0.9, bottom=0.1, wspace=0.25, hspace=0.25)
-    save(fig, PLOTS[1])
-
-    bands = d.regimes
-    fig, ax = plt.subplots(figsize=(10, 4))
-    x = np.arange(len(bands))
-    ax.bar(x - 0.2, [b.rms_before for b in bands], 0.4, color="0.6", label="before")
-    ax.bar(x + 0.2, [b.rms_after for b in bands], 0.4, color="C0", label="after")
-    ax.set_xticks(x, [f"{b.regime}\n{b.name}" for b in bands], fontsize=7, rotation=90)
-    ax.set_ylabel("RMS residual (N)")
-    ax.legend(fontsize=8)
-    ax.set_title("Gap per regime")
-    fig.subplots_adjust(left=0.07, right=0.99, top=0.92, bottom=0.3)
-    save(fig, PLOTS[2])
+    save(_speed_figure(plt, d), PLOTS[1])
+    save(_regimes_figure(plt, d), PLOTS[2])
     return written
 
 
