@@ -13,6 +13,7 @@ from click.testing import CliRunner
 from gsfric import io, models
 from gsfric.cli import main
 from gsfric.errors import InputError
+from gsfric.sweep import load
 from gsfric.sweep.plot import case_labels
 from gsfric.sweep.variants import make_variants
 
@@ -73,6 +74,8 @@ def test_cli_grid_and_no_limits_note(trajectory, tmp_path):
     assert info["variants_drawn"].startswith("3 on an even grid")
     assert "limits: no limits given" in result.output and "nothing checked" in result.output
     assert "variants: 3 on an even grid" in result.output
+    text = repr(load(out))
+    assert len(text) < 300 and "4 cases" in text and "nothing checked" in text
     both = runner.invoke(main, ["sweep", "--out", str(tmp_path / "x"), "--trajectories",
                                 str(trajectory), "--vary", "platform.payload_mass=0:8",
                                 "--grid", "3", "--variants", "4"])
