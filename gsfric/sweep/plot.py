@@ -124,5 +124,6 @@ def plot(envelopes: pd.DataFrame, summary: pd.DataFrame, folder: Path, limits: M
     for ax, (i, j) in zip(axes, (("x", "y"), ("x", "z"))):
         _locations_panel(ax, i, j, summary, workspace)
     axes[0].legend(fontsize=7)
-    fig.suptitle("Where each joint's largest load occurs (numbers: legs)")
+    fig.suptitle("Where each joint's largest load occurs: platform position x, y, z (m); "
+                 "numbers: legs")
     fig.savefig(folder / "locations.png", dpi=90)
