@@ -79,8 +79,8 @@ def _effect(f: Finding) -> str:
             f"{k} = {catalog.with_unit(v, units[k], 3)}" for k, v in items) + ")"
     values = [v for _, v in items]
     unit = units[items[0][0]]
-    return (f"{f.name} ({items[0][0]}..{items[-1][0]} = "
-            f"{catalog.with_unit(min(values), unit, 3)}..{catalog.with_unit(max(values), unit, 3)})")
+    low, high = catalog.with_unit(min(values), "", 3), catalog.with_unit(max(values), unit, 3)
+    return f"{f.name} ({items[0][0]}..{items[-1][0]} from {low} to {high})"
 
 
 def noise_floor(d: Discovery) -> float:
