@@ -2,7 +2,7 @@
 glossary of the report's statistics, and the commented platform file written back.
 
 >>> GLOSSARY["held-out gain"][:40]
-'Relative drop of the prewhitened squared'
+'relative drop of the prewhitened squared'
 """
 
 from __future__ import annotations
@@ -38,7 +38,7 @@ GLOSSARY: dict[str, str] = {
     "p slowest / rest": "the same F-test on the record's slowest components alone or on the "
                         "rest alone (the smaller p, times two): an effect must stand out of "
                         "slow noise too; '-' where the first test already failed.",
-    "held-out gain": "Relative drop of the prewhitened squared error on held-out stretches "
+    "held-out gain": "relative drop of the prewhitened squared error on held-out stretches "
                      "of the record (block cross-validation): 0.9 means the candidate "
                      "predicts data it was not fitted on with 90 % less error.",
     "folds improved": "share of the held-out stretches (folds) whose error went down.",
