@@ -133,7 +133,7 @@ def test_variants_heavier_payload_loads_the_actuators_more(serial):
 def cluster():
     distributed = pytest.importorskip("distributed")
     with distributed.LocalCluster(n_workers=2, threads_per_worker=1, processes=True,
-                                  dashboard_address=None, silence_logs=logging.ERROR) as c, \
+                                  dashboard_address=":0", silence_logs=logging.ERROR) as c, \
             distributed.Client(c) as client:
         yield client
 

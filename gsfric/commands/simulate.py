@@ -12,7 +12,7 @@ import click
 
 from gsfric.commands.common import log_options
 from gsfric.errors import InputError
-from gsfric.evaluation.breakdown import to_frame
+from gsfric.evaluation.breakdown import flat
 from gsfric.evaluation.columns import DEFAULT_GROUPS as DEFAULT_COLUMN_GROUPS
 from gsfric.evaluation.columns import GROUPS as COLUMN_GROUPS
 from gsfric.evaluation.evaluator import breakdown
@@ -132,6 +132,6 @@ def simulate(trajectory, platform_file, out, mode, strict, threads, chunk, windo
 def _write_breakdown(trajectory, log_format, platform, breakdown_file, quiet) -> None:
     """``--breakdown``: F per leg split into its parts along the whole trajectory."""
     motion = read_trajectory(trajectory, log_format=log_format)
-    write_table(to_frame(motion.t, breakdown(platform, motion)), breakdown_file)
+    write_table(flat(breakdown(platform, motion)), breakdown_file)
     if not quiet:
         click.echo(f"wrote {breakdown_file}")

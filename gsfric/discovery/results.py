@@ -14,6 +14,7 @@ from gsfric.discovery.refine import Stability
 from gsfric.discovery.regimes import hotspots
 from gsfric.discovery.selection import CandidateTest, GenericCompetitor, NoiseModel
 from gsfric.discovery.settings import Settings
+from gsfric.platform import catalog
 from gsfric.platform.description import Platform
 
 
@@ -62,6 +63,11 @@ class Round:
     """Without a winner: the candidate accepted by every rule but the test on the slowest
     components (``CandidateTest.slow_only``) that a generic out-of-catalog structure explains
     as well or better (``generic`` holds that comparison): not slow noise but a structure."""
+
+    def __repr__(self) -> str:
+        what = f"{self.winner} added" if self.winner else "nothing added"
+        return (f"<Round {self.index}: {what}, {len(self.tests)} candidates tested, RMS "
+                f"{self.rms_before:.4g} -> {self.rms_after:.4g} N>")
 
     @property
     def imitates(self) -> bool:
@@ -130,8 +136,9 @@ class RefitParameter:
     final: float | None = None
     interval: tuple[float, float] | None = None
 
-    def to_json(self) -> dict:
-        """summary.json's entry (a parameter of an effect gets its refit value last)."""
+    def to_json(self, name: str = "") -> dict:
+        """summary.json's entry (a parameter of an effect gets its refit value last), with
+        the unit of parameter ``name`` (``catalog.unit``)."""
         keys = (("model", "unbounded", "plausible", "plausible_refit", "refit")
                 if self.own_effect else
                 ("model", "refit", "unbounded", "plausible", "plausible_refit"))
@@ -139,6 +146,7 @@ class RefitParameter:
         if self.alternatives is not None:
             out["alternatives"] = self.alternatives
         out["final"], out["interval"] = self.final, self.interval
+        out["unit"] = catalog.unit(name)
         return out
 
 
@@ -161,7 +169,7 @@ class RefitReport:
 
     def to_json(self) -> dict:
         """summary.json's ``refit``."""
-        return {"parameters": {n: p.to_json() for n, p in self.parameters.items()},
+        return {"parameters": {n: p.to_json(n) for n, p in self.parameters.items()},
                 "implausible": self.implausible,
                 "test": dataclasses.asdict(self.test) if self.test is not None else None}
 
@@ -282,6 +290,12 @@ class Finding:
     interval: dict[str, tuple[float, float]]
     evidence: FindingEvidence
 
+    def __repr__(self) -> str:
+        values = ", ".join(f"{k} = {catalog.with_unit(v, catalog.unit(f'{self.name}.{k}'))}"
+                           for k, v in self.parameters.items())
+        return (f"<Finding {self.name} ({values}): round {self.evidence.round}, effect size "
+                f"{self.evidence.effect_size:.3g} x noise>")
+
 
 @dataclass
 class Discovery:
@@ -362,6 +376,13 @@ class Discovery:
     def names(self) -> list[str]:
         """Names of the effects found."""
         return [f.name for f in self.effects]
+
+    def __repr__(self) -> str:
+        n = self.used.stop - self.used.start
+        effects = ", ".join(self.names) or "no effect named"
+        return (f"<Discovery {self.verdict}: {effects}; residual {self.rms_before:.4g} N -> "
+                f"{self.rms_after:.4g} N RMS over {n} samples, {len(self.rounds)} rounds; "
+                "summary() for summary.json's content>")
 
     def summary(self) -> dict:
         """The summary.json content (SPEC), plus the refit, rounds and per-leg gaps."""
@@ -445,6 +466,7 @@ def _effects(d: Discovery) -> list[dict]:
         # with structure left that the catalog does not explain, a named effect is the best
         # candidate for a part of the gap, not a confident explanation of it
         effects.append({"name": f.name, "parameters": dict(f.parameters),
+                        "units": {k: catalog.unit(f"{f.name}.{k}") for k in f.parameters},
                         "partial": d.verdict == "unexplained_discrepancy",
                         "evidence": evidence})
     return effects
@@ -488,7 +510,9 @@ def _rounds(d: Discovery) -> list[dict]:
                        "cv_gain": t.cv_gain, "fold_share": t.fold_share,
                        "sse_gain": t.sse_gain, "gap": t.gap, "p_bands": t.p_bands,
                        "significant": t.significant, "slow_only": t.slow_only,
-                       "reason": t.reason, "parameters": t.parameters} for t in rnd.tests]})
+                       "reason": t.reason, "parameters": t.parameters,
+                       "units": {k: catalog.unit(f"{t.name}.{k}") for k in t.parameters}}
+                      for t in rnd.tests]})
     return rounds
 
 

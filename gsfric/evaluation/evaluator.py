@@ -388,10 +388,10 @@ def _evaluate_quietly(platform: Platform, motion: Motion) -> Result:
         return Evaluator(platform).evaluate(motion)
 
 
-def breakdown(platform: Platform, motion: Motion) -> dict[str, np.ndarray]:
+def breakdown(platform: Platform, motion: Motion):
     """The actuator forces of ``platform`` along ``motion`` split into their parts
-    (``Result.breakdown``), without reporting the step flags: ``PARTS`` name -> (N, 6) N, and
-    ``F`` (N, 6) N, their sum (``gsfric.evaluation.breakdown``)."""
+    (``Result.breakdown``: a DataFrame, columns (part, leg), N), without reporting the step
+    flags (``gsfric.evaluation.breakdown``)."""
     return _evaluate_quietly(platform, motion).breakdown()
 
 

@@ -19,7 +19,7 @@ import pandas as pd
 
 from gsfric._optional import optional
 from gsfric.compiled import native
-from gsfric.evaluation.breakdown import plot
+from gsfric.evaluation.breakdown import plot, shown_parts
 from gsfric.evaluation.evaluator import breakdown
 from gsfric.evaluation.parameters import effect_vector, parameter_vector
 
@@ -75,8 +75,12 @@ def breakdown_figure(platform, motion):
     optional("matplotlib").use("Agg")
     plt = optional("matplotlib.pyplot")
     parts = breakdown(platform, motion)
-    fig, axes = plt.subplots(1, 2, figsize=(11, 4), sharex=True)
-    for ax, leg in zip(axes, (0, 3)):
-        plot(motion.t, parts, leg, ax)
+    shown = shown_parts(parts, (0, 3))
+    rows = 1 + len(shown)
+    fig, axes = plt.subplots(rows, 2, figsize=(12, 1.4 * rows + 0.8), sharex=True,
+                             squeeze=False)
+    for column, leg in enumerate((0, 3)):
+        plot(parts, leg, axes[:, column], shown)
+    fig.suptitle("Breakdown of the actuator forces F into their parts, legs 1 and 4 (N)")
     fig.tight_layout()
     return fig

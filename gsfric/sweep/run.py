@@ -68,7 +68,7 @@ def local_cluster(workers: int):
     distributed = optional("distributed")
     with dask.config.set(LOCAL_CLUSTER_CONFIG):
         return distributed.LocalCluster(n_workers=workers, threads_per_worker=1,
-                                        processes=True, dashboard_address=None,
+                                        processes=True, dashboard_address=":0",
                                         silence_logs=logging.ERROR)
 
 
@@ -213,7 +213,31 @@ def _info(p: Plan, envelopes: pd.DataFrame, exceeded: pd.DataFrame, computed: in
             "scheduler": str(scheduler) if isinstance(scheduler, str) else "client",
             "seconds": round(seconds, 3), "limits": {k: v for k, v in limits.items()},
             "exceeding_cases": int(exceeded.groupby(["motion", "variant"]).ngroups)
-            if len(exceeded) else 0, "inputs": p.inputs}
+            if len(exceeded) else 0,
+            "limits_check": limits_check(limits, exceeded),
+            "variants_drawn": variants_drawn(p.inputs),
+            "inputs": p.inputs}
+
+
+def limits_check(limits, exceeded: pd.DataFrame) -> str:
+    """What the check of the ``[limits]`` found, in a sentence (sweep.json's ``limits_check``)."""
+    if not limits:
+        return "no limits given: nothing checked"
+    n = int(exceeded.groupby(["motion", "variant"]).ngroups) if len(exceeded) else 0
+    return (f"{n} case(s) exceed the limits ({', '.join(limits)})" if n
+            else f"every case within the limits ({', '.join(limits)})")
+
+
+def variants_drawn(inputs: dict) -> str:
+    """How the variants were chosen (sweep.json's ``variants_drawn``)."""
+    n = inputs["variants"]
+    if not n:
+        return "none: the nominal platform only"
+    names = ", ".join([*inputs["vary"], *inputs["tolerances"]])
+    if "grid" in inputs:
+        return f"{n} on an even grid of {inputs['grid']} values per parameter over {names}"
+    return (f"{n} drawn at random (seed {inputs['seed']}: Latin hypercube over the ranges, "
+            f"normal errors for the tolerances) over {names}")
 
 
 def _write(out: Path, progress: _Progress, computed: int, scheduler, seconds: float,
@@ -232,7 +256,8 @@ def _write(out: Path, progress: _Progress, computed: int, scheduler, seconds: fl
         exceeded.to_csv(partial / "limits.csv", index=False)
     info = _info(p, envelopes, exceeded, computed, scheduler, seconds)
     if plots:
-        plot(envelopes, summary, partial, p.platform.limits, p.inputs.get("workspace"))
+        plot(envelopes, summary, partial, p.platform.limits, p.inputs.get("workspace"),
+             variants_table)
     shutil.rmtree(partial / "chunks")
     (partial / "plan.json").unlink()
     (partial / "sweep.json").write_text(json.dumps(info, indent=1, default=str))
@@ -270,7 +295,8 @@ def sweep(out: str | os.PathLike, trajectories=None,
           variants: int = 16, seed: int = 0, scheduler=None, workers: int | None = None,
           chunk_steps: int = CHUNK_STEPS,
           progress: bool | None = None, plots: bool = True,
-          on_chunk: Callable[[int, int], None] | None = None) -> SweepResult:
+          on_chunk: Callable[[int, int], None] | None = None,
+          grid: int | None = None) -> SweepResult:
     """Load envelopes per joint over motions, a workspace and platform variants.
 
     Parameters
@@ -290,7 +316,8 @@ def sweep(out: str | os.PathLike, trajectories=None,
     tolerances : dict name -> standard deviation
         Monte-Carlo tolerances (``SCALAR_PARAMETERS`` and ``JOINT_TOLERANCES``).
     variants : int
-        Variants drawn besides the nominal one when ``vary`` or ``tolerances`` is given.
+        Variants drawn at random (Latin hypercube over ``vary``, normal ``tolerances``)
+        besides the nominal one when ``vary`` or ``tolerances`` is given.
     seed : int
         Seed of the variants (the workspace has its own).
     scheduler : {"auto", "serial", "local"}, address "tcp://host:port", or a Client
@@ -307,13 +334,18 @@ def sweep(out: str | os.PathLike, trajectories=None,
     plots : bool
     on_chunk : callable (done, total), optional
         Called after each finished task is stored.
+    grid : int, optional
+        Instead of random draws: this many evenly spaced values of each ``vary`` range, ends
+        included, every combination (``grid ** len(vary)`` variants; ``variants`` is then
+        not used; not with ``tolerances``).
 
     Returns
     -------
     SweepResult
     """
     out = Path(out)
-    p = plan(trajectories, workspace, platform, vary, tolerances, variants, seed, chunk_steps)
+    p = plan(trajectories, workspace, platform, vary, tolerances, variants, seed, chunk_steps,
+             grid)
     partial = _partial_folder(out, p, workspace, platform)
     if _existing(out, p.fingerprint):
         return load(out)

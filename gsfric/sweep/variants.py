@@ -1,8 +1,10 @@
-"""Platform variants of a sweep: parameter ranges (Latin hypercube) and Monte-Carlo tolerances
-applied to the nominal platform (``--vary``, ``--tolerance``)."""
+"""Platform variants of a sweep: parameter ranges, drawn at random (Latin hypercube) or on an
+even grid, and Monte-Carlo tolerances applied to the nominal platform (``--vary``, ``--grid``,
+``--tolerance``)."""
 
 from __future__ import annotations
 
+import itertools
 from collections.abc import Mapping
 from typing import Any
 
@@ -47,6 +49,25 @@ def parse_vary(vary: Mapping | None, tolerances: Mapping | None
                              f"{suggest(str(name), SCALAR_PARAMETERS + JOINT_TOLERANCES)}")
         sds[name] = as_float(value, f"tolerance: {name}", minimum=0.0)
     return ranges, sds
+
+
+MAX_GRID_VARIANTS = 100_000
+"""A grid of more variants than this is refused: its count grows as the power of the number
+of varied parameters, and a mistyped count would start hours of evaluation."""
+
+
+def _grid(ranges: Mapping, per: int) -> np.ndarray:
+    """Every combination of ``per`` evenly spaced values of each range, (per^k, k), as unit
+    fractions of the ranges (0 and 1 included; 0.5 for one value)."""
+    if isinstance(per, bool) or not isinstance(per, (int, np.integer)) or per < 1:
+        raise InputError(f"grid: expected an integer >= 1 (values per parameter), got "
+                         f"{short(per)}")
+    if per ** len(ranges) > MAX_GRID_VARIANTS:
+        raise InputError(f"grid: {per} values of {len(ranges)} parameters make "
+                         f"{per ** len(ranges)} variants (more than {MAX_GRID_VARIANTS}); "
+                         "give fewer values")
+    axis = np.linspace(0.0, 1.0, per) if per > 1 else np.array([0.5])
+    return np.array(list(itertools.product(axis, repeat=len(ranges))))
 
 
 def _value(platform: Platform, name: str) -> float:
@@ -109,8 +130,8 @@ def _draw(ranges: Mapping, sds: Mapping, nominal: Mapping, unit: np.ndarray, k: 
 
 def make_variants(platform: Platform, vary: Mapping | None = None,
                   tolerances: Mapping | None = None, samples: int = 16,
-                  seed: int = 0) -> tuple[list[Platform], list[dict]]:
-    """Platform variants: the nominal one, then ``samples`` drawn ones.
+                  seed: int = 0, grid: int | None = None) -> tuple[list[Platform], list[dict]]:
+    """Platform variants: the nominal one, then ``samples`` drawn ones (or a grid).
 
     Parameters
     ----------
@@ -122,8 +143,12 @@ def make_variants(platform: Platform, vary: Mapping | None = None,
         Normal errors added to the nominal (or ranged) value: scalars in their unit, joints
         (``JOINT_TOLERANCES``) in m on every coordinate. Values are truncated at 0.
     samples : int
-        Drawn variants (ignored without ``vary`` and ``tolerances``).
+        Drawn variants (ignored without ``vary`` and ``tolerances``, and with ``grid``).
     seed : int
+    grid : int, optional
+        Instead of random draws: ``grid`` evenly spaced values of each range, ends included,
+        every combination (``grid ** len(vary)`` variants, the first parameter varying
+        slowest); not with ``tolerances`` (random by nature).
 
     Returns
     -------
@@ -135,14 +160,23 @@ def make_variants(platform: Platform, vary: Mapping | None = None,
     names = list(dict.fromkeys([*ranges, *sds]))
     nominal = {n: (_value(platform, n) if n not in JOINT_TOLERANCES else 0.0) for n in names}
     platforms, table = [platform], [{"variant": 0, **nominal}]
+    if grid is not None and not ranges:
+        raise InputError("grid: give the ranges to lay the grid over (vary)")
     if not names:
         return platforms, table
     if isinstance(samples, bool) or not isinstance(samples, (int, np.integer)) or samples < 1:
         raise InputError(f"variants: expected an integer >= 1, got {short(samples)}")
 
     rng = np.random.default_rng(seed)
-    unit = (qmc.LatinHypercube(d=len(ranges), seed=seed).random(samples) if ranges
-            else np.zeros((samples, 0)))
+    if grid is not None:
+        if sds:
+            raise InputError("grid: not with tolerances, which are random draws; sweep the "
+                             "grid, or draw the tolerances with the ranges at random")
+        unit = _grid(ranges, grid)
+        samples = len(unit)
+    else:
+        unit = (qmc.LatinHypercube(d=len(ranges), seed=seed).random(samples) if ranges
+                else np.zeros((samples, 0)))
     for k in range(samples):
         values = _draw(ranges, sds, nominal, unit, k, rng)
         row: dict[str, Any] = {"variant": k + 1}
