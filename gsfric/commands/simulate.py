@@ -126,7 +126,8 @@ def simulate(trajectory, platform_file, out, mode, strict, threads, chunk, windo
         if breakdown_file is not None:
             _write_breakdown(trajectory, log_format, platform, breakdown_file, quiet)
     if not quiet:
-        click.echo(f"wrote {out} ({summary.steps} steps, {summary.flagged} flagged)")
+        click.echo(f"wrote {out} ({summary.steps} steps, {summary.flagged} flagged; "
+                   f"differentiated by {summary.differentiation})")
 
 
 def _write_breakdown(trajectory, log_format, platform, breakdown_file, quiet) -> None:

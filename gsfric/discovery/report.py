@@ -412,6 +412,9 @@ def run_discover(measured: str | os.PathLike[str],
                                                           log_format)
     result = discover(motion, forces, platform, seed=seed, progress=progress,
                       poses=poses_from_columns(columns), **options)
+    how = motion.differentiation()
+    if how is not None:
+        result.notes.append(f"differentiation: {how.describe()}")
     if lengths is not None:
         model_lengths = result.result_before.D
         gap = float(np.sqrt(np.mean((lengths - model_lengths) ** 2)))
