@@ -291,3 +291,31 @@ def test_the_controller_log_reads_simulates_and_discovers(tmp_path):
     assert names == ["seal_friction"]
     assert summary["effects"][0]["parameters"]["force"] == pytest.approx(20.0, rel=0.05)
     assert any(n.startswith("differentiation: savgol") for n in summary["notes"])
+
+
+def test_discover_names_no_effect_from_poses_outside_the_stroke(tmp_path):
+    measured = tmp_path / "m.csv"
+    assert _cli("synth", "--out", measured, "--samples", "300", "--rate", "100").exit_code == 0
+    frame = read_table(measured)
+    frame["z"] += 2.0
+    write_table(frame, measured)
+    result = _cli("discover", "--measured", measured, "--out", tmp_path / "d")
+    assert result.exit_code == 2, result.output
+    assert "300 of 300 steps have a leg outside the stroke" in result.stderr
+    assert f"gsfric: error: {measured}: 300 of 300 steps" in result.stderr
+    assert "(a z offset of -1.9" in result.stderr
+    assert not (tmp_path / "d" / "summary.json").exists()
+
+
+def test_mostly_flagged_steps_and_implausible_speeds_are_data_errors():
+    from gsfric.platform.usable import check_flagged, check_poses
+    check_flagged(50, 100)
+    with pytest.raises(InputError, match=r"log.csv: 51 of 100 steps are flagged by the model"):
+        check_flagged(51, 100, "log.csv")
+    platform = models.reference_platform()
+    t = np.arange(300) / 100.0
+    motion = models.sinusoidal(t)
+    check_poses(platform, motion.position, motion.rotation, t)
+    with pytest.raises(InputError, match=r"the platform moves at .* m/s \(median over the "
+                                         r"steps\), implausible for a stroke of 0.6 m"):
+        check_poses(platform, motion.position, motion.rotation, t / 1000.0)

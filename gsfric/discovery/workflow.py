@@ -65,7 +65,7 @@ from gsfric.discovery.settings import Settings
 from gsfric.models import platform_from
 from gsfric.platform.catalog import EFFECTS
 from gsfric.platform.description import Platform
-from gsfric.platform.usable import check_forces, check_poses
+from gsfric.platform.usable import check_flagged, check_forces, check_poses
 from gsfric.trajectory import Motion
 
 # -- the workflow -------------------------------------------------------------------------------
@@ -141,6 +141,8 @@ def discover(motion: Motion, forces: np.ndarray, platform: Platform | None = Non
     bar = _Progress(progress, settings.max_effects + 3)
     bar.step("simulating the model along the measured motion")
     problem = Problem(motion, forces, platform, settings, poses=poses)
+    used_flags = problem.result.flag[problem.used]
+    check_flagged(int(np.count_nonzero(used_flags)), len(used_flags))
     state = _State(problem, np.random.default_rng(seed), problem.model.theta0.copy(),
                    notes=[f"candidate {n} not tested: {why}"
                           for n, why in problem.skipped.items()])

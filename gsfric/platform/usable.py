@@ -136,3 +136,16 @@ def check_forces(platform: Platform, forces: np.ndarray, where: str = "") -> Non
         raise InputError(f"{prefix}forces: the static load (mean of the summed |F1..F6|, "
                          f"{load:.4g} N) is only {ratio:.3g} times the weight the legs carry "
                          f"({weight:.4g} N): {advice}or give the rig's masses (--platform)")
+
+
+def check_flagged(flagged: int, steps: int, where: str = "") -> None:
+    """Raise ``InputError`` when more than ``MOSTLY`` of the ``steps`` are flagged by the model
+    (``flagged`` of them, flags of ``gsfric.evaluation``: a leg outside the stroke, a
+    near-singular pose, a non-finite value): no statistic of the rest can stand for the
+    record."""
+    if steps and flagged > MOSTLY * steps:
+        prefix = f"{where}: " if where else ""
+        raise InputError(f"{prefix}{flagged} of {steps} steps are flagged by the model (a "
+                         "leg outside the stroke, a near-singular pose, a non-finite value; "
+                         "see the flag column of `gsfric simulate`): the data are mostly "
+                         f"unusable for this platform; fix with {FIXES}")

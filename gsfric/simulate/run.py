@@ -43,7 +43,7 @@ from gsfric.io.files import atomic_write, check_outputs, is_stream
 from gsfric.io.tables import check_file, count_rows, table_kind
 from gsfric.models import platform_from
 from gsfric.platform.catalog import sensor_parameters
-from gsfric.platform.usable import check_forces, check_poses
+from gsfric.platform.usable import check_flagged, check_forces, check_poses
 from gsfric.signal.savgol import DEFAULT_POLYORDER
 from gsfric.simulate.delay import SensorDelay
 from gsfric.simulate.differentiate import DEFAULT_CHUNK, MotionChunk, iter_motions
@@ -312,6 +312,7 @@ class _Run:
                                                 writes.by_set[k % 2])
                     del part
                 self._drain(pending, writes)
+                check_flagged(self.flags.flagged, self.summary.steps, str(self.trajectory))
             except BaseException:
                 for future in [pending, *writes.futures]:
                     if future is not None:
