@@ -68,9 +68,11 @@ def _options(command):
                      help="Steps read, differentiated and evaluated at a time (memory grows "
                           "with it); a file of at most this many rows is read whole."),
         click.option("--window", type=int, default=None,
-                     help="Savitzky-Golay window, odd, samples [default: a filter per sample "
-                          "for a file read whole, one window by cross-validation on the first "
-                          "chunk for a streamed one]."),
+                     help="Savitzky-Golay window, odd, samples; time stamps jittering by less "
+                          "than 1 % of the step are taken as evenly spaced, more uneven ones "
+                          "are fitted with polynomials of this window on their own stamps "
+                          "[default: a filter per sample for a file read whole, one window by "
+                          "cross-validation on the first chunk for a streamed one]."),
         click.option("--progress/--no-progress", default=None,
                      help="A progress bar on stderr, with total and ETA [default: when stderr "
                           "is a terminal]."),
