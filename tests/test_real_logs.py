@@ -69,12 +69,20 @@ def test_a_trailing_zero_row_is_left_out_and_changes_no_other_row(tmp_path):
                       "--out", out)
         assert result.exit_code == 0, result.output
         outputs[name] = (read_table(out), result.stderr)
-    assert "row 301: every value is 0 (a dropout row): left out" in outputs["bad"][1]
+    assert "row 301: every value is 0 and the time stops (a dropout row): left out" in outputs["bad"][1]
     assert "dropout" not in outputs["clean"][1]
     pd.testing.assert_frame_equal(outputs["clean"][0], outputs["bad"][0], check_exact=True)
     with pytest.warns(DataWarning, match="row 301: every value is 0"):
         motion = read_trajectory(tmp_path / "bad.csv", log_format=LogFormat(units={"t": "us"}))
     assert len(motion) == 300
+    # zeros at an advancing time are a pose (the home pose of a controller's frame): kept
+    kept = pd.DataFrame({"t": np.arange(60) / 100.0, "x": 0.0, "y": 0.0, "z": 0.0,
+                         "roll": 0.0, "pitch": 0.0, "yaw": 0.0})
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        read = read_trajectory(_write(tmp_path, kept, "home.csv"),
+                               log_format=LogFormat(offset={"z": 0.7}))
+    assert len(read) == 60 and not [w for w in caught if w.category is DataWarning]
 
 
 def test_a_dropout_row_inside_the_file_keeps_the_rows_of_later_messages(tmp_path):
@@ -277,7 +285,7 @@ def test_the_controller_log_reads_simulates_and_discovers(tmp_path):
     out = tmp_path / "forces.csv"
     result = _cli("simulate", "--trajectory", LOG, "--column-map", LOG_FORMAT, "--out", out)
     assert result.exit_code == 0, result.output
-    assert "row 2001: every value is 0 (a dropout row): left out" in result.stderr
+    assert "row 2001: every value is 0 and the time stops (a dropout row): left out" in result.stderr
     assert "row 752: time counter 'Timestamp [us]' wraps around" in result.stderr
     assert "velocity from the log's columns" in result.stdout
     forces = read_table(out)

@@ -325,8 +325,8 @@ class ColumnReader:
     counter and the rows it left out). ``check`` validates the header once; ``read`` converts
     a block.
 
-    A dropout row (every value read but the time zero, as a controller writes when it stops)
-    is left out with a ``DataWarning`` naming it; the other rows are read as if it were not
+    A dropout row (every value read but the time zero, and the time not advancing, as a
+    controller writes when it stops: its counter drops to 0) is left out with a ``DataWarning`` naming it; the other rows are read as if it were not
     there. A second orientation set (ZXZ angles or roll, pitch, yaw beside the quaternion) is
     read too and must give the same rotation to ``ORIENTATION_TOLERANCE``.
 
@@ -359,6 +359,7 @@ class ColumnReader:
         self._offset = 0
         self._largest = 0
         self._typical: float | None = None
+        self._last_raw = -np.inf
         self._rate_checked = False
         self._warned_radians = False
 
@@ -449,11 +450,17 @@ class ColumnReader:
 
     def _dropouts(self, out: dict[str, np.ndarray], rows: np.ndarray) -> np.ndarray | None:
         """The rows to keep (bool, or None for all): a row whose every value but the time is
-        zero is a dropout, left out with a ``DataWarning``."""
+        zero and whose time does not advance (a counter dropped to 0) is a dropout, left out with a
+        ``DataWarning``. (Zeros at advancing times are kept: a home pose in a controller's
+        frame.)"""
         values = [v for k, v in out.items() if k != "t"]
         if not values or not len(rows):
             return None
-        zero = np.all(np.stack(values, axis=1) == 0, axis=1)
+        t = out["t"]
+        previous = np.concatenate([[self._last_raw], t[:-1]])
+        stopped = ~(t > previous)
+        zero = np.all(np.stack(values, axis=1) == 0, axis=1) & stopped
+        self._last_raw = t[~zero][-1] if (~zero).any() else self._last_raw
         if not zero.any():
             return None
         dropped = rows[zero]
@@ -461,8 +468,8 @@ class ColumnReader:
         shown = ", ".join(str(int(r) + 1) for r in dropped[:10])
         more = f" and {len(dropped) - 10} more" if len(dropped) > 10 else ""
         word = "rows" if len(dropped) > 1 else "row"
-        warnings.warn(f"{self.path}: {word} {shown}{more}: every value is 0 (a dropout "
-                      "row): left out", DataWarning, stacklevel=4)
+        warnings.warn(f"{self.path}: {word} {shown}{more}: every value is 0 and the time "
+                      "stops (a dropout row): left out", DataWarning, stacklevel=4)
         return ~zero
 
     def _orientations(self, out: dict[str, np.ndarray], rows: np.ndarray) -> None:
