@@ -34,6 +34,11 @@ class GsfricWarning(UserWarning):
     """Input that can be used but looks suspicious (angles in degrees, a gimbal-lock jump, ...)."""
 
 
+class DataWarning(GsfricWarning):
+    """Rows of an input that were left out so that the others can be used (a dropout row of a
+    controller log: every value zero); the message names the file and the rows."""
+
+
 class OutputError(GsfricError):
     """An output could not be written completely (a full disk, an I/O error).
 

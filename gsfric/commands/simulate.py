@@ -68,9 +68,11 @@ def _options(command):
                      help="Steps read, differentiated and evaluated at a time (memory grows "
                           "with it); a file of at most this many rows is read whole."),
         click.option("--window", type=int, default=None,
-                     help="Savitzky-Golay window, odd, samples [default: a filter per sample "
-                          "for a file read whole, one window by cross-validation on the first "
-                          "chunk for a streamed one]."),
+                     help="Savitzky-Golay window, odd, samples; time stamps jittering by less "
+                          "than 1 % of the step are taken as evenly spaced, more uneven ones "
+                          "are fitted with polynomials of this window on their own stamps "
+                          "[default: a filter per sample for a file read whole, one window by "
+                          "cross-validation on the first chunk for a streamed one]."),
         click.option("--progress/--no-progress", default=None,
                      help="A progress bar on stderr, with total and ETA [default: when stderr "
                           "is a terminal]."),
@@ -126,7 +128,8 @@ def simulate(trajectory, platform_file, out, mode, strict, threads, chunk, windo
         if breakdown_file is not None:
             _write_breakdown(trajectory, log_format, platform, breakdown_file, quiet)
     if not quiet:
-        click.echo(f"wrote {out} ({summary.steps} steps, {summary.flagged} flagged)")
+        click.echo(f"wrote {out} ({summary.steps} steps, {summary.flagged} flagged; "
+                   f"differentiated by {summary.differentiation})")
 
 
 def _write_breakdown(trajectory, log_format, platform, breakdown_file, quiet) -> None:

@@ -28,6 +28,7 @@ from gsfric.io.files import atomic_write, check_outputs, output_folder
 from gsfric.io.readers import read_measured_columns
 from gsfric.models import platform_from
 from gsfric.platform import catalog
+from gsfric.platform.usable import check_forces, check_poses
 from gsfric.signal.savgol import DEFAULT_POLYORDER
 
 PLOTS = ("residuals_time.png", "residuals_speed.png", "regimes.png")
@@ -453,8 +454,14 @@ def discover_file(measured: str | os.PathLike[str],
     log_format = options.pop("log_format", None)   # column map and units of a log
     motion, forces, lengths, columns = read_measured_columns(measured, None, DEFAULT_POLYORDER,
                                                           log_format)
-    result = discover(motion, forces, platform, seed=seed, progress=progress,
-                      poses=poses_from_columns(columns), **options)
+    poses = poses_from_columns(columns)
+    check_poses(platform, *poses, motion.t, str(measured))
+    check_forces(platform, forces, str(measured))
+    result = discover(motion, forces, platform, seed=seed, progress=progress, poses=poses,
+                      **options)
+    how = motion.differentiation()
+    if how is not None:
+        result.notes.append(f"differentiation: {how.describe()}")
     if lengths is not None:
         model_lengths = result.result_before.D
         gap = float(np.sqrt(np.mean((lengths - model_lengths) ** 2)))

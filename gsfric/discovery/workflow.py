@@ -65,6 +65,7 @@ from gsfric.discovery.settings import Settings
 from gsfric.models import platform_from
 from gsfric.platform.catalog import EFFECTS
 from gsfric.platform.description import Platform
+from gsfric.platform.usable import check_flagged, check_forces, check_poses
 from gsfric.trajectory import Motion
 
 # -- the workflow -------------------------------------------------------------------------------
@@ -133,9 +134,15 @@ def discover(motion: Motion, forces: np.ndarray, platform: Platform | None = Non
     """
     settings = dataclasses.replace(settings or Settings(), **options)
     platform = platform_from(platform)
+    recorded = poses if poses is not None else motion.recorded_poses()
+    check_poses(platform, *(recorded if recorded is not None else (motion.position,
+                                                                   motion.rotation)), motion.t)
+    check_forces(platform, forces)
     bar = _Progress(progress, settings.max_effects + 3)
     bar.step("simulating the model along the measured motion")
     problem = Problem(motion, forces, platform, settings, poses=poses)
+    used_flags = problem.result.flag[problem.used]
+    check_flagged(int(np.count_nonzero(used_flags)), len(used_flags))
     state = _State(problem, np.random.default_rng(seed), problem.model.theta0.copy(),
                    notes=[f"candidate {n} not tested: {why}"
                           for n, why in problem.skipped.items()])

@@ -29,7 +29,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from gsfric.errors import InputError
-from gsfric.io.logs import FORCES, LENGTHS, QUATERNION, ColumnReader, LogFormat
+from gsfric.io.logs import FORCES, LENGTHS, QUATERNION, RATES, ColumnReader, LogFormat
 from gsfric.io.tables import read_table
 from gsfric.signal.savgol import DEFAULT_POLYORDER
 from gsfric.trajectory import MIN_SAMPLES, Motion
@@ -70,11 +70,12 @@ def _samples(path, frame, measured: bool, log_format: LogFormat | None
     bad = np.flatnonzero(steps <= 0)
     if len(bad):
         i = int(bad[0]) + 1
+        row, before = reader.file_row(i) + 1, reader.file_row(i - 1) + 1
         if steps[i - 1] == 0:
-            raise InputError(f"{path}: row {i + 1}: duplicate time t = {float(t[i])!r} "
-                             f"(same as row {i})")
-        raise InputError(f"{path}: row {i + 1}: t = {float(t[i])!r} is less than "
-                         f"t = {float(t[i - 1])!r} in row {i}; t must increase")
+            raise InputError(f"{path}: row {row}: duplicate time t = {float(t[i])!r} "
+                             f"(same as row {before})")
+        raise InputError(f"{path}: row {row}: t = {float(t[i])!r} is less than "
+                         f"t = {float(t[i - 1])!r} in row {before}; t must increase")
     if len(t) < MIN_SAMPLES:
         raise InputError(f"{path}: {len(t)} data rows; at least {MIN_SAMPLES} are needed "
                          "to differentiate the motion")
@@ -83,25 +84,29 @@ def _samples(path, frame, measured: bool, log_format: LogFormat | None
         bad_rows, bad_legs = np.nonzero(np.abs(forces) > MAX_FORCE)
         if len(bad_rows):
             value = forces[bad_rows[0], bad_legs[0]]
-            raise InputError(f"{path}: row {bad_rows[0] + 1}: column 'F{bad_legs[0] + 1}' = "
-                             f"{value:.4g} N is not a plausible actuator force (|F| > "
-                             f"{MAX_FORCE:g} N); forces must be in N")
+            raise InputError(f"{path}: row {reader.file_row(bad_rows[0]) + 1}: column "
+                             f"'F{bad_legs[0] + 1}' = {value:.4g} N is not a plausible actuator "
+                             f"force (|F| > {MAX_FORCE:g} N); forces must be in N")
     if measured and "D1" in columns:
         lengths = np.stack([columns[n] for n in LENGTHS], axis=1)
         bad_rows, bad_legs = np.nonzero(lengths <= 0)
         if len(bad_rows):
-            raise InputError(f"{path}: row {bad_rows[0] + 1}: column "
+            raise InputError(f"{path}: row {reader.file_row(bad_rows[0]) + 1}: column "
                              f"'D{bad_legs[0] + 1}' must be positive (a leg length)")
     return path, columns, orientation
 
 
 def motion_from_columns(path: Path, columns: dict[str, np.ndarray], orientation: tuple[str, ...],
-            window: int | None, polyorder: int) -> Motion:
+                        window: int | None, polyorder: int) -> Motion:
+    """The columns read (``ColumnReader.read``, SI) differentiated into a ``Motion``; the log's
+    own rates (``RATES``) where it has them."""
     position = np.stack([columns[n] for n in ("x", "y", "z")], axis=1)
     angles = np.stack([columns[n] for n in orientation], axis=1)
     key = "quaternion" if orientation == QUATERNION else "euler"
+    rates = {name: np.stack([columns[n] for n in group], axis=1)
+             for name, group in RATES.items() if group[0] in columns}
     return Motion.from_samples(columns["t"], position, window=window, polyorder=polyorder,
-                               source=str(path), **{key: angles})
+                               source=str(path), rates=rates or None, **{key: angles})
 
 
 def motion_from_frame(frame: pd.DataFrame, *, window: int | None = None,

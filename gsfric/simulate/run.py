@@ -43,6 +43,7 @@ from gsfric.io.files import atomic_write, check_outputs, is_stream
 from gsfric.io.tables import check_file, count_rows, table_kind
 from gsfric.models import platform_from
 from gsfric.platform.catalog import sensor_parameters
+from gsfric.platform.usable import check_flagged, check_forces, check_poses
 from gsfric.signal.savgol import DEFAULT_POLYORDER
 from gsfric.simulate.delay import SensorDelay
 from gsfric.simulate.differentiate import DEFAULT_CHUNK, MotionChunk, iter_motions
@@ -78,6 +79,8 @@ class Summary:
         Flagged steps per kind (``FLAG_NAMES``).
     flagged_steps : ndarray
         0-based indices of flagged steps (the first ``MAX_REPORTED``).
+    differentiation : str
+        How velocities and accelerations were obtained (``describe_differentiation``).
     """
 
     out: Path
@@ -87,12 +90,25 @@ class Summary:
     flagged: int = 0
     flag_counts: dict[str, int] = field(default_factory=dict)
     flagged_steps: np.ndarray = field(default_factory=lambda: np.zeros(0, dtype=np.int64))
+    differentiation: str = ""
 
     def flag_message(self, trajectory: Path) -> str:
         kinds = "; ".join(f"{name}: {count}" for name, count in self.flag_counts.items()
                           if count)
         return (f"{trajectory}: {self.flagged} of {self.steps} steps flagged ({kinds}): "
                 f"{_steps_text(self.flagged_steps, self.flagged)}")
+
+
+def describe_differentiation(part: MotionChunk) -> str:
+    """One line on how a chunk's velocities and accelerations were obtained: the motion's
+    own ``Motion.differentiation`` for a file read whole, the fixed windows of a streamed
+    one."""
+    how = part.motion.differentiation()
+    if how is not None:
+        return how.describe()
+    position, orientation = part.windows
+    return (f"savgol (windows {position} for the position, {orientation} for the "
+            "orientation, the same over every chunk)")
 
 
 def _steps_text(indices: np.ndarray, total: int, limit: int = 10) -> str:
@@ -285,6 +301,7 @@ class _Run:
             try:
                 for k, part in enumerate(motions):
                     self.summary.windows = part.windows
+                    self._check_usable(part)
                     if self.evaluator is None:
                         self.evaluator = Evaluator(self.platform, mode=self.mode,
                                                    n_threads=self.n_threads)
@@ -295,6 +312,7 @@ class _Run:
                                                 writes.by_set[k % 2])
                     del part
                 self._drain(pending, writes)
+                check_flagged(self.flags.flagged, self.summary.steps, str(self.trajectory))
             except BaseException:
                 for future in [pending, *writes.futures]:
                     if future is not None:
@@ -303,6 +321,20 @@ class _Run:
                 writer.abandon()
                 raise
             writer.close()
+
+    def _check_usable(self, part: MotionChunk) -> None:
+        """The chunk's poses (and measured forces) checked against the platform before any
+        physics (``gsfric.platform.usable``); the differentiation noted in the summary."""
+        motion = part.motion
+        recorded = motion.recorded_poses()
+        position, rotation = recorded if recorded is not None else (motion.position,
+                                                                    motion.rotation)
+        check_poses(self.platform, position, rotation, motion.t, str(self.trajectory))
+        if "F1" in part.carried:
+            check_forces(self.platform, np.stack([part.carried[f"F{i}"] for i in range(1, 7)],
+                                                 axis=1), str(self.trajectory))
+        if not self.summary.differentiation:
+            self.summary.differentiation = describe_differentiation(part)
 
     def _drain(self, pending: Future | None, writes: _Writes) -> None:
         """Write the last chunk evaluated and what waits for the sensor delay; wait for all."""
