@@ -18,6 +18,7 @@ from pathlib import Path
 
 import numpy as np
 
+from gsfric._checks import as_path
 from gsfric._optional import optional
 from gsfric.discovery.regimes import hotspots
 from gsfric.discovery.rest import poses_from_columns
@@ -404,7 +405,21 @@ def run_discover(measured: str | os.PathLike[str],
     -------
     list of Path
         The files written.
+
+    Raises
+    ------
+    InputTypeError
+        A path that is not a str or os.PathLike.
+    InputError
+        A bad file (naming the row and column), mostly unusable data, an output that is an
+        input, a bad setting.
+    OutputError
+        An output could not be written (a full disk); nothing partial is left.
     """
+    measured = as_path(measured, "measured")
+    out_dir = as_path(out_dir, "out_dir")
+    if platform_file is not None:
+        platform_file = as_path(platform_file, "platform_file")
     check_outputs([out_dir], {"measured-data": measured, "platform": platform_file})
     platform = platform_from(platform_file)
     log_format = options.pop("log_format", None)   # column map and units of a log
