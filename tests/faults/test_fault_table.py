@@ -1,0 +1,25 @@
+"""The fault-injection table: every case of ``cases_*.py`` through the one runner.
+
+Each case asserts its outcome class (a correct result, a correct result with a named warning,
+or a one-line error with its exit code), that no traceback was printed, that no input changed
+and that nothing was left behind (docs: the reference of exit codes and errors).
+"""
+
+from __future__ import annotations
+
+import pytest
+from cases_inputs import good_platform_cases, platform_cases, table_cases
+from cases_logs import log_cases
+from runner import check_case
+
+CASES = [*table_cases(), *platform_cases(), *good_platform_cases(), *log_cases()]
+
+
+def test_case_ids_are_unique():
+    ids = [c.id for c in CASES]
+    assert len(ids) == len(set(ids))
+
+
+@pytest.mark.parametrize("case", CASES, ids=lambda c: c.id)
+def test_fault(case, tmp_path, monkeypatch):
+    check_case(case, tmp_path, monkeypatch)
