@@ -24,7 +24,7 @@ from gsfric.discovery.regimes import hotspots
 from gsfric.discovery.rest import poses_from_columns
 from gsfric.discovery.results import Discovery, per_leg_rms, summary
 from gsfric.discovery.workflow import discover
-from gsfric.io.files import atomic_write, check_outputs, output_folder
+from gsfric.io.files import atomic_write, check_output_folder, check_outputs, output_folder
 from gsfric.io.readers import read_measured_columns
 from gsfric.models import platform_from
 from gsfric.signal.savgol import DEFAULT_POLYORDER
@@ -421,6 +421,7 @@ def run_discover(measured: str | os.PathLike[str],
     if platform_file is not None:
         platform_file = as_path(platform_file, "platform_file")
     check_outputs([out_dir], {"measured-data": measured, "platform": platform_file})
+    check_output_folder(out_dir)
     platform = platform_from(platform_file)
     log_format = options.pop("log_format", None)   # column map and units of a log
     motion, forces, lengths, columns = read_measured_columns(measured, None, DEFAULT_POLYORDER,

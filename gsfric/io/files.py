@@ -136,6 +136,20 @@ def check_outputs(outputs: Iterable[PathArg | None], inputs: Inputs = ()) -> Non
     _check_named(outputs, _named_inputs(inputs))
 
 
+def check_output_folder(path: PathArg) -> None:
+    """Refuse, before any work, an output folder that exists and is not a directory (a
+    file, a device such as /dev/null: ``output_folder`` never replaces one).
+
+    Raises
+    ------
+    InputError
+        ``{path}: exists and is not a directory``.
+    """
+    given = Path(path)
+    if resolve_output(given).exists() and not resolve_output(given).is_dir():
+        raise InputError(f"{given}: exists and is not a directory")
+
+
 def _check_named(outputs: Iterable[PathArg | None], named: list[tuple[str, Path]]) -> None:
     """``check_outputs`` with the inputs as (what, path) pairs."""
     earlier: list[Path] = []

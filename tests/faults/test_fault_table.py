@@ -10,9 +10,11 @@ from __future__ import annotations
 import pytest
 from cases_inputs import good_platform_cases, platform_cases, table_cases
 from cases_logs import log_cases
+from cases_outputs import output_cases
 from runner import check_case
 
-CASES = [*table_cases(), *platform_cases(), *good_platform_cases(), *log_cases()]
+CASES = [*table_cases(), *platform_cases(), *good_platform_cases(), *log_cases(),
+         *output_cases()]
 
 
 def test_case_ids_are_unique():
