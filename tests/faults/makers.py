@@ -78,6 +78,14 @@ def trajectory(name: str = "t.csv") -> Maker:
     return frame_edit(name, lambda f: f)
 
 
+def long_trajectory(name: str = "t.csv", rows: int = 5000) -> Maker:
+    """A trajectory of ``rows`` rows (enough for several threads: 2048 steps each)."""
+    def make(folder: Path) -> Path:
+        trajectory_frame(rows).to_csv(folder / name, index=False)
+        return folder / name
+    return make
+
+
 def platform(name: str = "p.toml", edit: Callable[[str], str] | None = None) -> Maker:
     return content(name, lambda: (edit or (lambda t: t))(platform_text()))
 

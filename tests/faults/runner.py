@@ -59,6 +59,10 @@ class Case:
         outputs).
     kept : tuple of str
         Glob patterns of files that may remain in the folder (a sweep's resumable partial).
+    warning : str
+        Regex of a warning that an error case must also print (before its error line).
+    mutable : tuple of str
+        Names of made files or folders that the run may change (a cache it repairs).
     """
 
     id: str
@@ -73,6 +77,8 @@ class Case:
     check: Callable[[dict], None] | None = None
     absent: tuple[str, ...] = ()
     kept: tuple[str, ...] = ()
+    warning: str = ""
+    mutable: tuple[str, ...] = ()
 
 
 @dataclass(frozen=True)
@@ -131,9 +137,8 @@ def run_cli(case: Case, paths: dict, monkeypatch) -> tuple[int, str]:
     """Exit code and stderr of the case's command."""
     argv = _argv(case, paths)
     if case.process:
-        env = dict(os.environ, **case.env)
-        for key in [k for k, v in case.env.items() if v is None]:
-            env.pop(key)
+        env = dict(os.environ, **{k: v.format(**{n: str(p) for n, p in paths.items()})
+                                  for k, v in case.env.items()})
         done = subprocess.run([sys.executable, "-m", "gsfric.cli", *argv], capture_output=True,
                               text=True, env=env, cwd=paths["tmp"], timeout=600)
         return done.returncode, done.stderr
@@ -158,6 +163,10 @@ def check_case(case: Case, folder: Path, monkeypatch) -> None:
         assert code == case.code, (code, stderr)
         assert len(errors) == 1 and lines[-1] == errors[0], stderr
         assert re.search(case.message, errors[0][len("gsfric: error: "):]), errors[0]
+        if case.warning:
+            assert any(re.search(case.warning, w) for w in warned), stderr
+        if case.check is not None:
+            case.check(paths)
     else:
         assert code == 0 and not errors, (code, stderr)
         if case.expect == WARN:
@@ -167,7 +176,9 @@ def check_case(case: Case, folder: Path, monkeypatch) -> None:
         if case.check is not None:
             case.check(paths)
     after = _snapshot(folder)
-    changed = [str(p) for p, s in before.items() if after.get(p) != s]
+    mutable = [folder / name for name in case.mutable]
+    changed = [str(p) for p, s in before.items() if after.get(p) != s
+               and not any(p == m or m in p.parents for m in mutable)]
     assert not changed, f"inputs changed: {changed}"
     for name in case.absent:
         assert not (folder / name).exists(), f"{name} was written"

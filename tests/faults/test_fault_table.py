@@ -8,13 +8,15 @@ and that nothing was left behind (docs: the reference of exit codes and errors).
 from __future__ import annotations
 
 import pytest
+from cases_env import compiler_cases, interrupt_cases, thread_cases, usage_cases
 from cases_inputs import good_platform_cases, platform_cases, table_cases
 from cases_logs import log_cases
 from cases_outputs import output_cases
 from runner import check_case
 
 CASES = [*table_cases(), *platform_cases(), *good_platform_cases(), *log_cases(),
-         *output_cases()]
+         *output_cases(), *compiler_cases(), *thread_cases(), *usage_cases(),
+         *interrupt_cases()]
 
 
 def test_case_ids_are_unique():
