@@ -193,13 +193,13 @@ def _check_paths(trajectory: Path, out: Path, platform) -> str:
     """The output's kind ("csv" or "parquet"; CSV for a device or FIFO without an extension,
     such as /dev/null or /dev/stdout), after checking the paths: ``out`` must not be the
     trajectory, nor the platform's file when ``platform`` is one."""
+    check_outputs([out], {"trajectory": trajectory, "platform": platform})
     if out.exists() and out.is_dir():
         raise InputError(f"{out}: is a directory; give a file name")
     kind = "csv" if not out.suffix and is_stream(out) else table_kind(out)
     check_file(trajectory)
     if not out.parent.is_dir():
         raise InputError(f"{out}: directory {str(out.parent)!r} does not exist")
-    check_outputs([out], {"trajectory": trajectory, "platform": platform})
     return kind
 
 

@@ -12,11 +12,15 @@ from makers import content, folder, old_output, platform, trajectory
 from runner import ERROR, OK, Case
 
 FILE_COMMANDS = {
-    "simulate": (("simulate", "--trajectory", "{data}", "--no-progress"), "data", "trajectory"),
-    "synth": (("synth", "--samples", "40", "--platform", "{p}"), "p", "platform"),
-    "template": (("platform", "--template"), None, None),
+    "simulate": (("simulate", "--trajectory", "{data}", "--platform", "{p}", "--no-progress"),
+                 ("data", "p")),
+    "synth": (("synth", "--samples", "40", "--platform", "{p}"), ("p",)),
+    "template": (("platform", "--template"), ()),
 }
-"""Commands writing one file: argv before ``--out``, the input an output may alias, its kind."""
+"""Commands writing one file: argv before ``--out``, the inputs an output may alias."""
+
+KINDS = {"data": ("trajectory", "t.csv"), "p": ("platform", "p.toml")}
+"""What each input placeholder is (as the messages name it) and its file name."""
 
 FOLDER_COMMANDS = {
     "paper": (("paper", "--no-plots", "--platform", "{p}"), "p", "platform"),
@@ -62,7 +66,7 @@ def _still_a_device(path: str):
     return check
 
 
-def _file_cases(command: str, argv, alias: str | None, kind: str | None) -> list[Case]:
+def _file_cases(command: str, argv, aliases: tuple[str, ...]) -> list[Case]:
     name = {"template": "o.toml"}.get(command, "o.csv")
     out = f"{{tmp}}/{name}"
     cases = [
@@ -80,7 +84,7 @@ def _file_cases(command: str, argv, alias: str | None, kind: str | None) -> list
              expect=ERROR, code=2, message=r"not a directory|does not exist",
              files={**INPUTS, "f": content("f", "a file")}),
         Case(id=f"out-{command}-full-disk", argv=(*argv, "--out", out), expect=ERROR, code=3,
-             message=rf"{name}: cannot write \(No space left on device\)",
+             message=rf"{name}: cannot write \(No space left on device\); nothing was written",
              files={**INPUTS, "old": old_output(name)}, patch=full_disk),
         Case(id=f"out-{command}-empty-path", argv=(*argv, "--out", ""), expect=ERROR, code=2,
              message=r".", files=dict(INPUTS)),
@@ -89,16 +93,25 @@ def _file_cases(command: str, argv, alias: str | None, kind: str | None) -> list
         cases.append(Case(id=f"out-{command}-unknown-extension",
                           argv=(*argv, "--out", "{tmp}/o.xyz"), expect=ERROR, code=2,
                           message=r"o\.xyz", files=dict(INPUTS), absent=("o.xyz",)))
-    if alias is not None:
-        source = "t.csv" if alias == "data" else "p.toml"
+    if command == "simulate":
+        cases.append(Case(id="out-simulate-full-disk-parquet", argv=(*argv, "--out",
+                                                                     "{tmp}/o.parquet"),
+                          expect=ERROR, code=3, message=r"o\.parquet: cannot write \(No space "
+                          r"left on device\)", files=dict(INPUTS), patch=full_disk,
+                          absent=("o.parquet",)))
+    for alias in aliases:
+        kind, source = KINDS[alias]
         cases += [
-            Case(id=f"out-{command}-is-input", argv=(*argv, "--out", f"{{{alias}}}"),
-                 expect=ERROR, code=2, message=rf"is the {kind} file itself", files=dict(INPUTS)),
-            Case(id=f"out-{command}-symlink-to-input", argv=(*argv, "--out", "{tmp}/l.csv"),
-                 expect=ERROR, code=2, message=rf"is the same file as the {kind} file",
+            Case(id=f"out-{command}-is-{kind}", argv=(*argv, "--out", f"{{{alias}}}"),
+                 expect=ERROR, code=2, message=rf"^{source}: is the {kind} file itself; "
+                 "choose another output$".replace(source, f".*/{source}"), files=dict(INPUTS)),
+            Case(id=f"out-{command}-symlink-to-{kind}", argv=(*argv, "--out", "{tmp}/l.csv"),
+                 expect=ERROR, code=2, message=rf"l\.csv: is the same file as the {kind} "
+                 rf"file .*/{source}; choose another output$",
                  files={**INPUTS, "l": _symlink("l.csv", source)}),
-            Case(id=f"out-{command}-hardlink-to-input", argv=(*argv, "--out", "{tmp}/h.csv"),
-                 expect=ERROR, code=2, message=rf"is the same file as the {kind} file",
+            Case(id=f"out-{command}-hardlink-to-{kind}", argv=(*argv, "--out", "{tmp}/h.csv"),
+                 expect=ERROR, code=2, message=rf"h\.csv: is the same file as the {kind} "
+                 rf"file .*/{source}; choose another output$",
                  files={**INPUTS, "h": _hardlink("h.csv", source)}),
         ]
     return cases
@@ -147,8 +160,8 @@ def _nonempty_folder(path: Path) -> None:
 
 def output_cases() -> list[Case]:
     cases = []
-    for command, (argv, alias, kind) in FILE_COMMANDS.items():
-        cases += _file_cases(command, argv, alias, kind)
+    for command, (argv, aliases) in FILE_COMMANDS.items():
+        cases += _file_cases(command, argv, aliases)
     for command, (argv, alias, kind) in FOLDER_COMMANDS.items():
         cases += _folder_cases(command, argv, alias, kind)
     return cases
