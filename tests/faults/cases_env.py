@@ -5,6 +5,7 @@ arriving while the outputs are written)."""
 from __future__ import annotations
 
 import functools
+import json
 import os
 import signal
 import subprocess
@@ -270,14 +271,14 @@ def interrupt_cases() -> list[Case]:
 
 
 def _stop_task(after: int):
-    """The sweep's ``after + 1``-th task is interrupted (Ctrl-C)."""
+    """The sweep's ``after + 1``-th task is interrupted (Ctrl-C), once."""
     def patch(monkeypatch, paths):
         import gsfric.sweep.run as sweep_run
         real, calls = sweep_run.run_task, []
 
         def run_task(task):
             calls.append(task)
-            if len(calls) > after:
+            if len(calls) == after + 1:
                 raise KeyboardInterrupt
             return real(task)
 
@@ -285,10 +286,16 @@ def _stop_task(after: int):
     return patch
 
 
-def _partial_kept(paths):
+def _partial_kept_and_resumed(paths):
+    """One finished task kept; the same command then resumes (computing only the other)."""
     partial = paths["tmp"] / "o.partial"
     assert len(list((partial / "chunks").glob("*.parquet"))) == 1
     assert not (paths["tmp"] / "o").exists()
+    argv = [a.format(tmp=paths["tmp"]) for a in SWEEP]
+    result = CliRunner().invoke(main, argv)
+    assert result.exit_code == 0, result.output
+    assert json.loads((paths["tmp"] / "o" / "sweep.json").read_text())["computed_tasks"] == 1
+    assert not partial.exists()
 
 
 SWEEP = ("sweep", "--trajectories", "{tmp}/*.csv", "--out", "{tmp}/o", "--no-plots",
@@ -302,7 +309,7 @@ def sweep_stop_cases() -> list[Case]:
              message=r"^interrupted", files=files, patch=_stop_task(0), absent=("o",)),
         Case(id="stop-sweep-second-task-kept", argv=SWEEP, expect=ERROR, code=130,
              message=r"^interrupted", files=files, patch=_stop_task(1), kept=("o.partial",),
-             check=_partial_kept, warning=r"o\.partial: the unfinished sweep is kept \(1 of 2 "
+             check=_partial_kept_and_resumed, warning=r"o\.partial: the unfinished sweep is kept \(1 of 2 "
                                          r"tasks done\); run the same command again to resume"),
     ]
 
