@@ -316,3 +316,39 @@ def sweep_stop_cases() -> list[Case]:
 
 def platform_file() -> dict:
     return {"p": platform()}
+
+
+# -- what a killed run left: removed by the next run ---------------------------------------------
+
+
+def _dead_pid() -> int:
+    proc = subprocess.Popen([sys.executable, "-c", "pass"])
+    proc.wait()
+    return proc.pid
+
+
+def stale_temporary(output: str, folder_like: bool = False):
+    """The 0-byte temporary (or temporary folder) that a SIGKILLed run writing ``output``
+    left beside it."""
+    def make(base: Path) -> Path:
+        path = base / f".{output}.gsfric-{_dead_pid()}-k1ll3d.tmp"
+        if folder_like:
+            path.mkdir()
+            (path / "table1.csv").write_bytes(b"")
+        else:
+            path.write_bytes(b"")
+        return path
+    return make
+
+
+def stale_cases() -> list[Case]:
+    cases = []
+    for command, (argv, out) in WRITERS.items():
+        stale = stale_temporary(out, folder_like=out == "o")
+        cases.append(Case(id=f"stale-{command}-next-run-cleans", argv=argv, expect=OK,
+                          files={"data": trajectory(), "stale": stale}, mutable=("*.gsfric-*",)))
+    cases.append(Case(id="stale-simulate-failing-run-cleans", expect=ERROR, code=2,
+                      argv=("simulate", "--trajectory", "{tmp}/none.csv", "--out",
+                            "{tmp}/o.csv"), message=r"none\.csv: file not found",
+                      files={"stale": stale_temporary("o.csv")}, mutable=("*.gsfric-*",)))
+    return cases

@@ -4,6 +4,7 @@ and checks the outcome class, the message, the inputs and the leftovers."""
 
 from __future__ import annotations
 
+import fnmatch
 import os
 import re
 import stat
@@ -62,7 +63,8 @@ class Case:
     warning : str
         Regex of a warning that an error case must also print (before its error line).
     mutable : tuple of str
-        Names of made files or folders that the run may change (a cache it repairs).
+        Patterns of the names of made files or folders (in the case's folder) that the run
+        may change or remove (a cache it repairs, a dead run's temporary).
     """
 
     id: str
@@ -179,9 +181,8 @@ def check_case(case: Case, folder: Path, monkeypatch) -> None:
         if case.check is not None:
             case.check(paths)
     after = _snapshot(folder)
-    mutable = [folder / name for name in case.mutable]
-    changed = [str(p) for p, s in before.items() if after.get(p) != s
-               and not any(p == m or m in p.parents for m in mutable)]
+    changed = [str(p) for p, s in before.items() if after.get(p) != s and not any(
+        fnmatch.fnmatch(p.relative_to(folder).parts[0], m) for m in case.mutable)]
     assert not changed, f"inputs changed: {changed}"
     for name in case.absent:
         assert not (folder / name).exists(), f"{name} was written"

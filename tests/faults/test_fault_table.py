@@ -9,7 +9,13 @@ from __future__ import annotations
 
 import pytest
 from cases_api import api_cases
-from cases_env import compiler_cases, interrupt_cases, thread_cases, usage_cases
+from cases_env import (
+    compiler_cases,
+    interrupt_cases,
+    stale_cases,
+    thread_cases,
+    usage_cases,
+)
 from cases_inputs import good_platform_cases, platform_cases, table_cases
 from cases_logs import log_cases
 from cases_outputs import output_cases
@@ -17,7 +23,7 @@ from runner import check_api_case, check_case
 
 CASES = [*table_cases(), *platform_cases(), *good_platform_cases(), *log_cases(),
          *output_cases(), *compiler_cases(), *thread_cases(), *usage_cases(),
-         *interrupt_cases()]
+         *interrupt_cases(), *stale_cases()]
 
 
 API_CASES = api_cases()
