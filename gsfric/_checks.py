@@ -40,14 +40,15 @@ def is_number(value: object) -> bool:
 
 
 def as_float(value: object, name: str, *, minimum: float | None = None) -> float:
-    """A finite float from ``value``; ``InputError`` naming ``name`` otherwise.
+    """A finite float from ``value``; ``InputError`` naming ``name`` otherwise
+    (``InputTypeError`` when ``value`` is not a number at all).
 
     ``minimum``, if given, is an inclusive lower bound.
     """
     if isinstance(value, np.ndarray) and value.shape == ():
         value = value[()]
     if not is_number(value):
-        raise InputError(f"{name}: expected a number, got {short(value)}")
+        raise InputTypeError(f"{name}: expected a number, got {short(value)}")
     if isinstance(value, int) and abs(value) > INT64_MAX:
         raise InputError(f"{name}: integer too large ({short(value)}, beyond 64 bits)")
     try:
@@ -110,8 +111,8 @@ def _check_leaves(value: object, depth: int, ndim: int, name: str, shape_text: s
         for item in value:
             _check_leaves(item, depth + 1, ndim, name, shape_text)
     elif not is_number(value):
-        raise InputError(f"{name}: expected an array of shape {shape_text} of numbers, "
-                         f"found {short(value)}")
+        raise InputTypeError(f"{name}: expected an array of shape {shape_text} of numbers, "
+                             f"found {short(value)}")
     elif isinstance(value, int) and abs(value) > INT64_MAX:
         raise InputError(f"{name}: integer too large ({short(value)}, beyond 64 bits)")
 
@@ -120,13 +121,14 @@ def as_array(value: object, shape: tuple[int | None, ...], name: str) -> np.ndar
     """A read-only float64 array of ``shape`` (``None`` matches any length) with finite entries.
 
     Accepts NumPy arrays of integer or floating type and nested lists or tuples of numbers;
-    anything else, a different shape or a non-finite entry raises an ``InputError`` naming
-    ``name``.
+    anything else raises an ``InputTypeError``, a different shape or a non-finite entry an
+    ``InputError``, naming ``name``.
     """
     shape_text = _shape_text(shape)
     if isinstance(value, np.ndarray):
         if value.dtype.kind not in "iuf":
-            raise InputError(f"{name}: expected an array of numbers, got dtype {value.dtype}")
+            raise InputTypeError(f"{name}: expected an array of numbers, got dtype "
+                                 f"{value.dtype}")
         array = np.array(value, dtype=float)
     else:
         _check_leaves(value, 0, len(shape), name, shape_text)

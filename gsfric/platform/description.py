@@ -458,6 +458,16 @@ class Platform:
 
     Instances are immutable; derive variants with ``replace``, ``with_geometry``, ``with_body``,
     ``with_legs``, ``with_friction``, ``with_effects``, ``with_effect`` and ``without_effects``.
+
+    Raises
+    ------
+    InputTypeError
+        A value of the wrong type (a string for a number or an array), naming the key.
+    InputError
+        A wrong shape, a NaN or infinite value, an integer beyond 64 bits, a value out of its
+        range (gravity from 0 to ``MAX_GRAVITY`` m/s^2, masses >= 0, ...), an unknown effect;
+        one line naming the dotted key. The constructors and ``with_*`` methods raise the
+        same.
     """
 
     gravity: float = DEFAULT_GRAVITY
@@ -507,7 +517,7 @@ class Platform:
         try:
             return _from_dict(data)
         except InputError as error:
-            raise InputError(f"{source}: {error}") from None
+            raise type(error)(f"{source}: {error}") from None
 
     @classmethod
     def from_toml(cls, path: str | os.PathLike[str]) -> Platform:
@@ -585,6 +595,7 @@ class Platform:
     def to_toml(self, path: str | os.PathLike[str]) -> None:
         """Write the platform as TOML, atomically; ``from_toml`` reads back an equal platform."""
         text = tomli_w.dumps(self.to_dict())
+        path = as_path(path, "path")
         with atomic_write(path, "w") as handle:
             handle.write(text)
 

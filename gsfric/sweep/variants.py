@@ -183,6 +183,6 @@ def make_variants(platform: Platform, vary: Mapping | None = None,
         try:
             platforms.append(_apply(platform, values))
         except InputError as error:
-            raise InputError(f"variant {k + 1}: {error}") from None
+            raise type(error)(f"variant {k + 1}: {error}") from None
         table.append(row)
     return platforms, table

@@ -150,19 +150,19 @@ MOTION = [
      r"^Motion\.position\[4\]\[2\]: must be finite, got nan$", ValueError),
     ("inf-velocity", lambda f: _motion(velocity=np.full((11, 3), np.inf)), V,
      r"Motion\.velocity\[0\]\[0\]: must be finite", ValueError),
-    ("t-none", lambda f: _motion(t=None), V, r"^Motion\.t: expected an array", ValueError),
-    ("t-text", lambda f: _motion(t="t"), V, r"Motion\.t", ValueError),
+    ("t-none", lambda f: _motion(t=None), T, r"^Motion\.t: expected an array", TypeError),
+    ("t-text", lambda f: _motion(t="t"), T, r"Motion\.t", TypeError),
     ("short-position", lambda f: _motion(position=M().position[:5]), V,
      r"Motion\.position: expected an array of shape \(11, 3\), got \(5, 3\)", ValueError),
     ("not-a-rotation", lambda f: _motion(rotation=np.tile(2 * np.eye(3), (11, 1, 1))), V,
      r"Motion\.rotation", ValueError),
-    ("from-samples-none", lambda f: Motion.from_samples(None, None), V, r"^t: expected",
-     ValueError),
+    ("from-samples-none", lambda f: Motion.from_samples(None, None), T, r"^t: expected",
+     TypeError),
     ("from-samples-nan", lambda f: Motion.from_samples(np.arange(11.0),
                                                          np.full((11, 3), np.nan)), V,
      r"^position\[0\]\[0\]: must be finite", ValueError),
-    ("from-samples-text", lambda f: Motion.from_samples("abc", M().position), V, r"^t:",
-     ValueError),
+    ("from-samples-text", lambda f: Motion.from_samples("abc", M().position), T, r"^t:",
+     TypeError),
     ("from-samples-2^70", lambda f: Motion.from_samples(np.arange(11.0),
                                                           [[2**70, 0, 1]] * 11), V,
      r"position: integer too large", ValueError),
@@ -183,8 +183,8 @@ PLATFORM = [
      ValueError),
     ("payload-nan", lambda f: P().with_body(payload_mass=float("nan")), V,
      r"platform\.payload_mass: must be finite", ValueError),
-    ("friction-text", lambda f: P().with_friction(prismatic_viscous="x"), V,
-     r"friction\.prismatic_viscous: expected a number", ValueError),
+    ("friction-text", lambda f: P().with_friction(prismatic_viscous="x"), T,
+     r"friction\.prismatic_viscous: expected a number", TypeError),
     ("stroke-nan", lambda f: P().with_geometry(stroke=float("nan")), V, r"geometry\.stroke",
      ValueError),
     ("joints-2^70", lambda f: P().with_geometry(base_joints=[[2**70, 0, 0]] * 6), V,
@@ -258,9 +258,26 @@ DISCOVER_API = [
      r"is the measured-data file itself", ValueError),
 ]
 
+IO_API = [
+    ("read-trajectory-none", lambda f: gsfric.read_trajectory(None), T,
+     r"^path: expected a file path", TypeError),
+    ("read-measured-number", lambda f: gsfric.read_measured(3), T, r"got 3", TypeError),
+    ("read-trajectory-window-even", lambda f: gsfric.read_trajectory(f["t"], window=4), V,
+     r"t\.csv: window must be odd", ValueError),
+    ("read-trajectory-missing", lambda f: gsfric.read_trajectory(f["tmp"] / "none.csv"), V,
+     r"none\.csv: file not found", ValueError),
+    ("to-toml-none", lambda f: P().to_toml(None), T, r"^path: expected a file path",
+     TypeError),
+    ("to-toml-onto-a-folder", lambda f: P().to_toml(f["tmp"]), V, r"directory", ValueError),
+    ("sinusoidal-none", lambda f: models.sinusoidal(None), T, r"^t: expected an array",
+     TypeError),
+    ("sinusoidal-nan", lambda f: models.sinusoidal([0.0, np.nan]), V,
+     r"^t\[1\]: must be finite", ValueError),
+]
+
 GROUPS = {"evaluator": EVALUATOR, "evaluate": EVALUATE, "motion": MOTION,
           "platform": PLATFORM, "simulate": SIMULATE_API, "sweep": SWEEP_API,
-          "discover": DISCOVER_API}
+          "discover": DISCOVER_API, "io": IO_API}
 
 
 def api_cases() -> list[ApiCase]:

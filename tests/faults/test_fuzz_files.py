@@ -105,6 +105,8 @@ def _bytes_damage(rng: np.random.Generator, data: bytes) -> bytes:
 def damaged_toml(rng: np.random.Generator) -> bytes:
     lines = platform_text().splitlines()
     for _ in range(rng.integers(1, 4)):
+        if not lines:
+            break
         i = int(rng.integers(0, len(lines)))
         kind = rng.integers(0, 6)
         if kind == 0 and "=" in lines[i]:
