@@ -1,6 +1,7 @@
 """Exceptions and warnings raised by gsfric.
 
-``InputError`` is the only exception that bad input (a platform TOML file, a trajectory or
+``InputError`` (and its subclass ``InputTypeError`` for an argument of the wrong type) is the
+only exception that bad input (a platform TOML file, a trajectory or
 measured-data table, arrays given to a constructor) produces. Its message is a single line that
 names the file, the key or column and, for tables, the 1-based data row, e.g.
 ``trajectory.csv: row 17: column 'x' is NaN``.
@@ -24,6 +25,14 @@ class InputError(GsfricError, ValueError):
 
     def __init__(self, message: str) -> None:
         super().__init__(" ".join(str(message).split()))
+
+
+class InputTypeError(InputError, TypeError):
+    """An argument of the wrong type (None, a string for an array, a list for a Platform...).
+
+    Both an ``InputError`` (``except InputError`` catches every bad input; the command line
+    exits 2) and a ``TypeError`` (what Python code catches for a wrong type). One line.
+    """
 
 
 class StepFlagError(GsfricError):

@@ -17,6 +17,7 @@ import os
 
 import numpy as np
 
+from gsfric._checks import as_array
 from gsfric._optional import optional
 from gsfric.evaluation.paper_constants import (
     PAPER_ACCELERATION,
@@ -221,7 +222,7 @@ def sinusoidal(t: np.ndarray, amplitude=(0.05, 0.05, 0.04, 0.08, 0.08, 0.1),
     t : ndarray (N,), s
     amplitude, frequency, phase : 6 values each (x, y, z in m; psi, theta, phi in rad), Hz, rad
     """
-    t = np.asarray(t, dtype=float)
+    t = as_array(t, (None,), "t")
     A = np.asarray(amplitude, float)
     w = 2 * np.pi * np.asarray(frequency, float)
     ph = np.zeros(6) if phase is None else np.asarray(phase, float)

@@ -262,6 +262,15 @@ class Motion:
     ``t`` need not increase (a set of unrelated poses is a valid Motion); ``from_samples``
     requires it to.
 
+    Raises
+    ------
+    InputTypeError
+        An argument that is not an array of numbers (None, a string), naming the field.
+    InputError
+        A wrong shape, a NaN or infinite value (naming the field and index, e.g.
+        ``Motion.position[4][2]: must be finite, got nan``), a matrix that is not a rotation,
+        no step at all.
+
     Examples
     --------
     >>> import numpy as np, gsfric
@@ -308,7 +317,8 @@ class Motion:
     def from_arrays(cls, t: np.ndarray, position: np.ndarray, rotation: np.ndarray,
                     velocity: np.ndarray, omega: np.ndarray, acceleration: np.ndarray,
                     alpha: np.ndarray) -> Motion:
-        """A motion from its arrays (shapes as the attributes), validated."""
+        """A motion from its arrays (shapes as the attributes), validated; raises as
+        ``Motion``."""
         return cls(t, position, rotation, velocity, omega, acceleration, alpha)
 
     @classmethod
@@ -411,7 +421,7 @@ class Motion:
                                          lam, source, rates)
         except InputError as error:
             if prefix and not str(error).startswith(prefix):
-                raise InputError(prefix + str(error)) from None
+                raise type(error)(prefix + str(error)) from None
             raise
 
     @classmethod

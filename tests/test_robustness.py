@@ -724,7 +724,7 @@ def test_bad_output_paths(tmp_path):
     for out, message in [(tmp_path / "o.txt", "unknown extension '.txt'"),
                          (tmp_path / "missing" / "o.csv", "does not exist"),
                          (path, "is the trajectory file itself"),
-                         (tmp_path, "unknown extension")]:
+                         (tmp_path, "is a directory; give a file name")]:
         with pytest.raises(InputError, match=message):
             simulate_file(path, out)
 

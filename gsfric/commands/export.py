@@ -49,7 +49,8 @@ def export(platform_file, out, model, prefix, verify_dir):
     if out is None:
         raise InputError("--out: missing; name the folder to write (or give --verify DIR)")
     if platform_file is not None and not Path(platform_file).is_file():
-        raise InputError(f"--platform: {platform_file}: no such file")
+        what = "is a directory" if Path(platform_file).is_dir() else "no such file"
+        raise InputError(f"--platform: {platform_file}: {what}")
     written = export_library(platform_from(platform_file), out, model=model, prefix=prefix,
                              platform_file=platform_file)
     click.echo(f"wrote {written.folder} ({written.prefix}.h, {written.prefix}.c; "

@@ -3,11 +3,13 @@
 from __future__ import annotations
 
 import sys
+import warnings
 from pathlib import Path
 
 import click
 
 from gsfric.commands.common import EXIT_CHECK, fail
+from gsfric.errors import GsfricWarning
 from gsfric.sweep import sweep as run_sweep
 from gsfric.sweep.plan import CHUNK_STEPS
 
@@ -101,6 +103,11 @@ def _report(result, strict: bool) -> None:
                f"{info['flagged']} flagged)")
     click.echo(f"variants: {info.get('variants_drawn', '')}")
     top = result.most_loaded("R_C")
+    if top is None:
+        warnings.warn(f"{result.out}: every step of every case is flagged (see the flagged "
+                      "column of envelopes.parquet): no load envelope", GsfricWarning,
+                      stacklevel=2)
+        return
     click.echo(f"most loaded universal joint: leg {int(top.leg)}, |R_C| = {top.value:.4g} N "
                f"({top.motion}, variant {int(top.variant)}, step {int(top.step)})")
     if info["limits"]:

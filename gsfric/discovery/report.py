@@ -18,13 +18,14 @@ from pathlib import Path
 
 import numpy as np
 
+from gsfric._checks import as_path
 from gsfric._optional import optional
 from gsfric.discovery.answer import GLOSSARY, platform_text, units_of, verdict_line
 from gsfric.discovery.regimes import hotspots
 from gsfric.discovery.rest import poses_from_columns
 from gsfric.discovery.results import Discovery, per_leg_rms, summary
 from gsfric.discovery.workflow import discover
-from gsfric.io.files import atomic_write, check_outputs, output_folder
+from gsfric.io.files import atomic_write, check_output_folder, check_outputs, output_folder
 from gsfric.io.readers import read_measured_columns
 from gsfric.models import platform_from
 from gsfric.platform import catalog
@@ -500,8 +501,23 @@ def run_discover(measured: str | os.PathLike[str],
     -------
     list of Path
         The files written (``verdict_line`` of the result is summary.json's ``answer``).
+
+    Raises
+    ------
+    InputTypeError
+        A path that is not a str or os.PathLike.
+    InputError
+        A bad file (naming the row and column), mostly unusable data, an output that is an
+        input, a bad setting.
+    OutputError
+        An output could not be written (a full disk); nothing partial is left.
     """
+    measured = as_path(measured, "measured")
+    out_dir = as_path(out_dir, "out_dir")
+    if platform_file is not None:
+        platform_file = as_path(platform_file, "platform_file")
     check_outputs([out_dir], {"measured-data": measured, "platform": platform_file})
+    check_output_folder(out_dir)
     result = discover_file(measured, platform_file, seed=seed, progress=progress, **options)
     return write(result, out_dir, source=str(measured),
                  platform_source=str(platform_file) if platform_file else "",

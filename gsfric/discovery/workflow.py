@@ -32,6 +32,7 @@ from dataclasses import dataclass, field
 import numpy as np
 from tqdm import tqdm
 
+from gsfric._checks import short
 from gsfric.discovery import lackfit
 from gsfric.discovery import statistics as st
 from gsfric.discovery.candidates import CANDIDATES
@@ -62,6 +63,7 @@ from gsfric.discovery.selection import (
     winner_of,
 )
 from gsfric.discovery.settings import Settings
+from gsfric.errors import InputTypeError
 from gsfric.models import platform_from
 from gsfric.platform.catalog import EFFECTS
 from gsfric.platform.description import Platform
@@ -131,7 +133,22 @@ def discover(motion: Motion, forces: np.ndarray, platform: Platform | None = Non
     Returns
     -------
     Discovery
+
+    Raises
+    ------
+    InputTypeError
+        ``motion`` not a Motion, ``platform`` not a Platform, path or None, an unknown option.
+    InputError
+        ``forces`` of the wrong shape or type, mostly unusable data (NaN, dead or saturated
+        channels), a bad setting; each in one line.
     """
+    if not isinstance(motion, Motion):
+        raise InputTypeError(f"discover: motion must be a gsfric.Motion, got {short(motion)} "
+                             "(gsfric.io.read_measured)")
+    unknown = sorted(set(options) - {f.name for f in dataclasses.fields(Settings)})
+    if unknown:
+        raise InputTypeError(f"discover: unknown option {unknown[0]!r} (a Settings field "
+                             "name)")
     settings = dataclasses.replace(settings or Settings(), **options)
     platform = platform_from(platform)
     recorded = poses if poses is not None else motion.recorded_poses()

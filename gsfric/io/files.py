@@ -127,13 +127,34 @@ def check_outputs(outputs: Iterable[PathArg | None], inputs: Inputs = ()) -> Non
     as one of ``inputs``, nor as another of ``outputs``; a character device or FIFO
     (``is_stream``) may be given as several outputs, being written into, not replaced.
 
+    Once the outputs pass, the temporaries that killed runs left beside them are removed
+    (``remove_stale_temporaries``): the next run cleans up even when it fails later.
+
     Raises
     ------
     InputError
         One line naming both paths, e.g. ``p.csv: is the same file as the platform file
         p2.csv; choose another output``.
     """
+    outputs = [o for o in outputs if o is not None]
     _check_named(outputs, _named_inputs(inputs))
+    for out in outputs:
+        with contextlib.suppress(OSError, ValueError):
+            remove_stale_temporaries(resolve_output(out))
+
+
+def check_output_folder(path: PathArg) -> None:
+    """Refuse, before any work, an output folder that exists and is not a directory (a
+    file, a device such as /dev/null: ``output_folder`` never replaces one).
+
+    Raises
+    ------
+    InputError
+        ``{path}: exists and is not a directory``.
+    """
+    given = Path(path)
+    if resolve_output(given).exists() and not resolve_output(given).is_dir():
+        raise InputError(f"{given}: exists and is not a directory")
 
 
 def _check_named(outputs: Iterable[PathArg | None], named: list[tuple[str, Path]]) -> None:

@@ -28,6 +28,7 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
+from gsfric._checks import as_path
 from gsfric.errors import InputError
 from gsfric.io.logs import FORCES, LENGTHS, QUATERNION, RATES, ColumnReader, LogFormat
 from gsfric.io.tables import read_table
@@ -45,7 +46,7 @@ refused: a wrong unit or a corrupt file."""
 def _read_samples(path: str | os.PathLike[str], measured: bool,
                   log_format: LogFormat | None = None
                   ) -> tuple[Path, dict[str, np.ndarray], tuple[str, ...]]:
-    path = Path(path)
+    path = as_path(path, "path")
     return _samples(path, read_table(path), measured, log_format)
 
 

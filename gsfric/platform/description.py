@@ -27,15 +27,14 @@ import os
 import warnings
 from collections.abc import Mapping
 from dataclasses import dataclass, field
-from pathlib import Path
 from typing import Any
 
 import numpy as np
 import tomli_w
 import tomllib
 
-from gsfric._checks import as_array, as_float, fields_equal, short, suggest
-from gsfric.errors import GsfricWarning, InputError
+from gsfric._checks import as_array, as_float, as_path, fields_equal, short, suggest
+from gsfric.errors import GsfricWarning, InputError, InputTypeError
 from gsfric.io.files import atomic_write
 from gsfric.platform import catalog
 
@@ -66,6 +65,10 @@ _set = object.__setattr__
 _SYMMETRY_TOL = 1e-9
 _UNIT_TOL = 1e-12
 _TRIANGLE_TOL = 1e-9
+
+MAX_GRAVITY = 100.0
+"""The largest gravity accepted, m/s^2: ten times the Earth's, beyond any load case of a rig
+(larger values are a unit or typing error, and 1e308 overflows every force)."""
 
 MAX_JOINT_DISTANCE = 20.0
 """A joint farther than this from its frame's origin, m, draws a ``GsfricWarning``: lengths
@@ -456,6 +459,16 @@ class Platform:
     Instances are immutable; derive variants with ``replace``, ``with_geometry``, ``with_body``,
     ``with_legs``, ``with_friction``, ``with_effects``, ``with_effect`` and ``without_effects``.
 
+    Raises
+    ------
+    InputTypeError
+        A value of the wrong type (a string for a number or an array), naming the key.
+    InputError
+        A wrong shape, a NaN or infinite value, an integer beyond 64 bits, a value out of its
+        range (gravity from 0 to ``MAX_GRAVITY`` m/s^2, masses >= 0, ...), an unknown effect;
+        one line naming the dotted key. The constructors and ``with_*`` methods raise the
+        same.
+
     Examples
     --------
     >>> import gsfric
@@ -475,6 +488,9 @@ class Platform:
 
     def __post_init__(self) -> None:
         _set(self, "gravity", as_float(self.gravity, "gravity", minimum=0.0))
+        if self.gravity > MAX_GRAVITY:
+            raise InputError(f"gravity: {self.gravity:g} m/s^2 is beyond the valid range 0 to "
+                             f"{MAX_GRAVITY:g} m/s^2")
         for name, kind in (("geometry", Geometry), ("platform", Body), ("legs", Legs),
                            ("friction", Friction)):
             if not isinstance(getattr(self, name), kind):
@@ -509,12 +525,21 @@ class Platform:
         try:
             return _from_dict(data)
         except InputError as error:
-            raise InputError(f"{source}: {error}") from None
+            raise type(error)(f"{source}: {error}") from None
 
     @classmethod
     def from_toml(cls, path: str | os.PathLike[str]) -> Platform:
-        """Read a platform TOML file (layout in SPEC.md); ``InputError`` on any problem."""
-        path = Path(path)
+        """Read a platform TOML file (layout in SPEC.md).
+
+        Raises
+        ------
+        InputTypeError
+            ``path`` is not a str or os.PathLike.
+        InputError
+            Any problem of the file, in one line naming the file and the key (a missing or
+            unknown key, a wrong type, a NaN or infinite value, an integer beyond 64 bits).
+        """
+        path = as_path(path, "platform file")
         try:
             raw = path.read_bytes()
         except FileNotFoundError:
@@ -578,6 +603,7 @@ class Platform:
     def to_toml(self, path: str | os.PathLike[str]) -> None:
         """Write the platform as TOML, atomically; ``from_toml`` reads back an equal platform."""
         text = tomli_w.dumps(self.to_dict())
+        path = as_path(path, "path")
         with atomic_write(path, "w") as handle:
             handle.write(text)
 
@@ -604,7 +630,19 @@ class Platform:
         return self.replace(friction=dataclasses.replace(self.friction, **changes))
 
     def with_effects(self, effects: Mapping[str, Mapping[str, float]]) -> Platform:
-        """A copy whose effects are exactly ``effects`` (missing parameters take defaults)."""
+        """A copy whose effects are exactly ``effects`` (missing parameters take defaults).
+
+        Raises
+        ------
+        InputTypeError
+            ``effects`` is not a mapping.
+        InputError
+            An unknown effect or parameter, a bad value.
+        """
+        if not isinstance(effects, Mapping) or not all(
+                isinstance(p, Mapping) for p in effects.values()):
+            raise InputTypeError(f"effects: expected a dict of effect name -> dict of "
+                                 f"parameters, got {short(effects)}")
         return self.replace(effects={name: dict(params) for name, params in effects.items()})
 
     def with_effect(self, name: str, **parameters: float) -> Platform:

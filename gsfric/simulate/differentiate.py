@@ -279,7 +279,7 @@ def _windows(path: Path, position: np.ndarray, q: np.ndarray, chunk: int, window
     try:
         check_window(window, polyorder, chunk)
     except InputError as error:
-        raise InputError(f"{path}: {error}") from None
+        raise type(error)(f"{path}: {error}") from None
     return int(window), int(window)
 
 

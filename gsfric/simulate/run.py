@@ -35,9 +35,10 @@ from typing import Any
 import numpy as np
 from tqdm import tqdm
 
+from gsfric._checks import as_count, as_flag, as_path
 from gsfric.errors import GsfricWarning, InputError, StepFlagError
 from gsfric.evaluation.columns import plan as column_plan
-from gsfric.evaluation.evaluator import Evaluator, evaluate_outputs
+from gsfric.evaluation.evaluator import MAX_THREADS, Evaluator, evaluate_outputs
 from gsfric.evaluation.flags import FLAG_NAMES, FLAG_NONFINITE
 from gsfric.io.files import atomic_write, check_outputs, is_stream
 from gsfric.io.tables import check_file, count_rows, table_kind
@@ -170,12 +171,20 @@ def simulate_file(trajectory: str | os.PathLike[str], out: str | os.PathLike[str
 
     Raises
     ------
+    InputTypeError
+        A path that is not a str or os.PathLike, ``n_threads`` or ``chunk`` not an integer,
+        ``strict`` not a bool.
     InputError
-        Bad trajectory (naming the row and column), bad output path.
+        Bad trajectory (naming the row and column), bad output path (an input, a directory),
+        ``n_threads`` outside 1..``MAX_THREADS``.
+    OutputError
+        The output could not be written (a full disk); an earlier file is unchanged.
     StepFlagError
         ``strict`` and a flagged step.
     """
-    trajectory, out = Path(trajectory), Path(out)
+    trajectory, out = as_path(trajectory, "trajectory"), as_path(out, "out")
+    n_threads = as_count(n_threads, "n_threads", minimum=1, maximum=MAX_THREADS)
+    strict = as_flag(strict, "strict")
     kind = _check_paths(trajectory, out, platform)
     platform = platform_from(platform)
     plan = column_plan(parse_columns(None) if columns is None else
@@ -200,13 +209,13 @@ def _check_paths(trajectory: Path, out: Path, platform) -> str:
     """The output's kind ("csv" or "parquet"; CSV for a device or FIFO without an extension,
     such as /dev/null or /dev/stdout), after checking the paths: ``out`` must not be the
     trajectory, nor the platform's file when ``platform`` is one."""
-    kind = "csv" if not out.suffix and is_stream(out) else table_kind(out)
-    check_file(trajectory)
+    check_outputs([out], {"trajectory": trajectory, "platform": platform})
     if out.exists() and out.is_dir():
         raise InputError(f"{out}: is a directory; give a file name")
+    kind = "csv" if not out.suffix and is_stream(out) else table_kind(out)
+    check_file(trajectory)
     if not out.parent.is_dir():
         raise InputError(f"{out}: directory {str(out.parent)!r} does not exist")
-    check_outputs([out], {"trajectory": trajectory, "platform": platform})
     return kind
 
 

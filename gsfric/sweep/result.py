@@ -140,9 +140,12 @@ class SweepResult:
                 f"{info.get('limits_check', info.get('exceeding_cases'))}; the extremes in "
                 ".summary, each case's in .envelopes>")
 
-    def most_loaded(self, quantity: str = "R_C") -> pd.Series:
-        """The summary row of ``quantity`` with the largest value over the legs."""
+    def most_loaded(self, quantity: str = "R_C") -> pd.Series | None:
+        """The summary row of ``quantity`` with the largest value over the legs; None when
+        no step of any case was evaluated soundly (every step flagged)."""
         sub = self.summary[self.summary.quantity == quantity]
+        if not sub.value.notna().any():
+            return None
         return sub.loc[sub.value.idxmax()]
 
 

@@ -23,15 +23,17 @@ import os
 import shutil
 import sys
 import time
+import warnings
 from collections.abc import Callable
 from pathlib import Path
 
 import pandas as pd
 from tqdm import tqdm
 
+from gsfric._checks import as_path
 from gsfric._optional import optional
 from gsfric.compiled import native
-from gsfric.errors import InputError
+from gsfric.errors import GsfricWarning, InputError
 from gsfric.io.files import atomic_write, check_outputs
 from gsfric.platform.description import Platform
 from gsfric.sweep.plan import CHUNK_STEPS, Plan, plan
@@ -342,8 +344,20 @@ def sweep(out: str | os.PathLike, trajectories=None,
     Returns
     -------
     SweepResult
+
+    Raises
+    ------
+    InputTypeError
+        ``out`` not a path, ``vary`` or ``tolerances`` not a dict.
+    InputError
+        Bad files or settings, in one line: an unknown parameter, a range outside the
+        parameter's valid range (``gsfric.sweep.variants.VALID_RANGES``), an output that is an
+        input.
+    OutputError
+        An output could not be written (a full disk): the ``.partial`` folder is kept and the
+        same call resumes it.
     """
-    out = Path(out)
+    out = as_path(out, "out")
     p = plan(trajectories, workspace, platform, vary, tolerances, variants, seed, chunk_steps,
              grid)
     partial = _partial_folder(out, p, workspace, platform)
@@ -351,8 +365,26 @@ def sweep(out: str | os.PathLike, trajectories=None,
         return load(out)
     running = _Progress(partial, p, on_chunk)
     todo = running.resume()
-    chosen = _resolve_scheduler(scheduler, sum(t.steps for t in todo)) if todo else "serial"
-    if progress is None:
-        progress = sys.stderr.isatty()
-    seconds = _run_tasks(todo, chosen, workers, running, progress)
-    return _write(out, running, len(todo), chosen, seconds, plots)
+    try:
+        chosen = _resolve_scheduler(scheduler, sum(t.steps for t in todo)) if todo else "serial"
+        if progress is None:
+            progress = sys.stderr.isatty()
+        seconds = _run_tasks(todo, chosen, workers, running, progress)
+        return _write(out, running, len(todo), chosen, seconds, plots)
+    except BaseException as exc:
+        _keep_or_remove(running, exc)
+        raise
+
+
+def _keep_or_remove(running: _Progress, exc: BaseException) -> None:
+    """After a failed or interrupted sweep: keep its partial folder when it holds finished
+    tasks that the same command can resume (saying so in a ``GsfricWarning``), else remove it
+    (nothing done, or bad input: fixing a file changes the fingerprint, so nothing could be
+    resumed)."""
+    partial, done, total = running.partial, len(running.done), len(running.plan.tasks)
+    if done and not isinstance(exc, InputError):
+        warnings.warn(f"{partial}: the unfinished sweep is kept ({done} of {total} tasks "
+                      "done); run the same command again to resume it, or remove the folder",
+                      GsfricWarning, stacklevel=3)
+        return
+    shutil.rmtree(partial, ignore_errors=True)

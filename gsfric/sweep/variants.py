@@ -12,8 +12,8 @@ import numpy as np
 from scipy.stats import qmc
 
 from gsfric._checks import as_float, short, suggest
-from gsfric.errors import InputError
-from gsfric.platform.description import Platform
+from gsfric.errors import InputError, InputTypeError
+from gsfric.platform.description import MAX_GRAVITY, Platform
 from gsfric.sweep.workspace import parse_interval
 
 SCALAR_PARAMETERS = (
@@ -24,6 +24,30 @@ SCALAR_PARAMETERS = (
 """Parameters a variant may change: ranges (uniform, Latin hypercube) or tolerances (normal).
 ``geometry.*_scale`` scale the joints' horizontal positions (the joint circles' radii)."""
 
+MAX_MASS = 1e5
+"""The largest mass a range may reach, kg: 100 t, beyond the heaviest motion-simulator
+payloads (about 15 t); larger values are a unit error or overflow the forces."""
+MAX_MU = 2.0
+"""The largest Coulomb coefficient a range may reach: no dry contact exceeds about 1.5."""
+MAX_VISCOUS = 1e6
+"""The largest viscous coefficient a range may reach (N s/m, N m s/rad): a joint this damped
+does not move."""
+MIN_SCALE, MAX_SCALE = 0.1, 10.0
+"""The range of the joint circles' scales: at 0 the joints coincide and the legs meet at a
+point (a singular mechanism); beyond 10 the legs lie nearly flat."""
+
+VALID_RANGES = {
+    "gravity": (0.0, MAX_GRAVITY), "platform.mass": (0.0, MAX_MASS),
+    "platform.payload_mass": (0.0, MAX_MASS), "legs.lower_mass": (0.0, MAX_MASS),
+    "legs.upper_mass": (0.0, MAX_MASS), "friction.joint_viscous": (0.0, MAX_VISCOUS),
+    "friction.joint_coulomb": (0.0, MAX_MU), "friction.joint_radius": (0.0, 1.0),
+    "friction.prismatic_viscous": (0.0, MAX_VISCOUS), "friction.prismatic_coulomb": (0.0, MAX_MU),
+    "geometry.base_scale": (MIN_SCALE, MAX_SCALE),
+    "geometry.platform_scale": (MIN_SCALE, MAX_SCALE)}
+"""The values a range of each of ``SCALAR_PARAMETERS`` may span (inclusive), in its unit:
+a platform outside them is degenerate or absurd (the constants above give the reasons; a
+joint's friction radius beyond 1 m is no joint)."""
+
 JOINT_TOLERANCES = ("geometry.base_joints", "geometry.platform_joints")
 """Tolerances only: a normal error of this standard deviation (m) on every joint coordinate."""
 
@@ -31,6 +55,11 @@ JOINT_TOLERANCES = ("geometry.base_joints", "geometry.platform_joints")
 def parse_vary(vary: Mapping | None, tolerances: Mapping | None
                ) -> tuple[dict[str, tuple[float, float]], dict[str, float]]:
     """The checked ranges (name -> (min, max)) and tolerances (name -> standard deviation)."""
+    for label, given in (("vary", vary), ("tolerances", tolerances)):
+        if given is not None and not isinstance(given, Mapping):
+            raise InputTypeError(f"{label}: expected a dict of parameter name -> "
+                                 f"{'(min, max)' if label == 'vary' else 'standard deviation'}"
+                                 f", got {short(given)}")
     vary = dict(vary or {})
     tolerances = dict(tolerances or {})
     ranges = {}
@@ -40,8 +69,10 @@ def parse_vary(vary: Mapping | None, tolerances: Mapping | None
                              f"{suggest(str(name), SCALAR_PARAMETERS)}; one of "
                              f"{', '.join(SCALAR_PARAMETERS)}")
         ranges[name] = parse_interval(value, f"vary: {name}")
-        if ranges[name][0] < 0:
-            raise InputError(f"vary: {name}: min {ranges[name][0]:g} is negative")
+        lo, hi = VALID_RANGES[name]
+        if ranges[name][0] < lo or ranges[name][1] > hi:
+            raise InputError(f"vary: {name}: {ranges[name][0]:g}:{ranges[name][1]:g} leaves "
+                             f"the valid range {lo:g}:{hi:g}")
     sds = {}
     for name, value in tolerances.items():
         if name not in SCALAR_PARAMETERS + JOINT_TOLERANCES:
@@ -186,6 +217,6 @@ def make_variants(platform: Platform, vary: Mapping | None = None,
         try:
             platforms.append(_apply(platform, values))
         except InputError as error:
-            raise InputError(f"variant {k + 1}: {error}") from None
+            raise type(error)(f"variant {k + 1}: {error}") from None
         table.append(row)
     return platforms, table
