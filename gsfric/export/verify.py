@@ -1,12 +1,13 @@
 """Checking an export (``gsfric export --verify``): build it, compare it with ``Evaluator``.
 
 The folder is copied to a temporary directory and built there with the system compiler (``CC``,
-default ``cc``) and the flags of its Makefile, with a driver (``templates/verify.c.in``) that
-runs the library on states from a file. The states are random valid ones (poses of
-``gsfric.models.random_motion`` with random rates, kept where ``Evaluator`` flags nothing) and
-the reference motions (``gsfric.models.sinusoidal``, ``paper_motion``). Each output's error is
-relative to the largest magnitude of that output (``max |C - Python| / max |Python|``; for
-``coupling_change``, of F0: ``SCALE_OF``); the flags must match exactly. The latency is the
+default ``cc``) and the flags of its Makefile (``CFLAGS`` when set, as ``make`` reads it), with
+a driver (``templates/verify.c.in``) that runs the library on states from a file. The states are
+random valid ones (poses of ``gsfric.models.random_motion`` with random rates, kept where
+``Evaluator`` flags nothing) and the reference motions (``gsfric.models.sinusoidal``,
+``paper_motion``). Each output's error is relative to the largest magnitude of that output
+(``max |C - Python| / max |Python|``; for ``coupling_change``, of F0: ``SCALE_OF``); the flags
+must match exactly. The latency is the
 median time of one ``<prefix>_actuator_forces`` call, measured in C.
 """
 
@@ -123,13 +124,20 @@ def _compiler() -> list[str]:
     return command
 
 
-def build(folder: Path, prefix: str, work: Path, cc: list[str], flags=CFLAGS) -> Path:
+def compiler_flags() -> list[str]:
+    """The flags of the build: ``$CFLAGS`` when set (as ``make`` reads it), else the
+    Makefile's defaults (``CFLAGS`` of gsfric.export.writer)."""
+    return shlex.split(os.environ.get("CFLAGS") or "") or list(CFLAGS)
+
+
+def build(folder: Path, prefix: str, work: Path, cc: list[str], flags=None) -> Path:
     """The verify driver built with the library of ``folder`` in ``work``; its path."""
     shutil.copytree(folder, work / "src")
     driver = importlib.resources.files("gsfric.export").joinpath("templates", "verify.c.in")
     text = driver.read_text().replace("@prefix@", prefix).replace("@PREFIX@", prefix.upper())
     (work / "src" / "verify.c").write_text(text)
     target = work / "verify"
+    flags = compiler_flags() if flags is None else flags
     command = [*cc, *flags, "-o", str(target), str(work / "src" / "verify.c"),
                str(work / "src" / f"{prefix}.c"), "-lm"]
     run = subprocess.run(command, capture_output=True, text=True)
@@ -232,8 +240,9 @@ def verify_library(folder, n_random: int = 2000, seed: int = 0,
         if run.returncode:
             raise BuildError(f"--verify: the check program failed (exit {run.returncode})")
         size, latency = run.stdout.split()
-        worst, where, mismatches = _compare(work, model_function("eval", model), result, n, int(size))
+        worst, where, mismatches = _compare(work, model_function("eval", model), result, n,
+                                            int(size))
         pose = np.fromfile(work / "pose_states.bin").reshape(n, -1)
         pose_error = float(np.max(np.abs(pose - state_array(motion))))
-    return VerifyReport(folder, prefix, model, " ".join([*cc, *CFLAGS]), n, worst, where, mismatches,
-                        pose_error, float(latency))
+    return VerifyReport(folder, prefix, model, " ".join([*cc, *compiler_flags()]), n, worst,
+                        where, mismatches, pose_error, float(latency))
