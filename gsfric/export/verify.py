@@ -117,7 +117,7 @@ def _library(folder: Path) -> tuple[str, str]:
     raise InputError(f"--verify: {folder} holds no library written by `gsfric export`")
 
 
-def _compiler() -> list[str]:
+def compiler() -> list[str]:
     command = shlex.split(os.environ.get("CC", "cc") or "cc")
     if shutil.which(command[0]) is None:
         raise BuildError(f"--verify: no C compiler {command[0]!r} (set CC)")
@@ -175,13 +175,17 @@ def _steps(motion: Motion, keep: np.ndarray) -> Motion:
                               motion.acceleration[keep], motion.alpha[keep])
 
 
-def _write_inputs(work: Path, motion: Motion) -> None:
+def write_inputs(work: Path, motion: Motion) -> list[str]:
+    """The driver's input files of ``motion`` in ``work`` (states.bin, poses.bin); the driver's
+    arguments but the number of timed rounds (outputs written into ``work``)."""
     x = state_array(motion)
     x.astype(np.float64).tofile(work / "states.bin")
     q = quaternion_from_rotation(motion.rotation)
     poses = np.concatenate([motion.position, q, motion.velocity, motion.omega,
                             motion.acceleration, motion.alpha], axis=1)
     np.ascontiguousarray(poses, dtype=np.float64).tofile(work / "poses.bin")
+    return ["states.bin", str(len(motion)), "poses.bin", "outputs.bin", "forces.bin",
+            "flags.bin", "pose_states.bin"]
 
 
 def _relative(c: np.ndarray, py: np.ndarray, reference: np.ndarray | None = None) -> float:
@@ -220,22 +224,22 @@ def _compare(work: Path, function: str, result, n: int, size: int) -> tuple[floa
     return worst, where, mismatches
 
 
-def verify_library(folder, n_random: int = 2000, seed: int = 0,
-                   rounds: int = ROUNDS) -> VerifyReport:
-    """Build the export in ``folder`` and compare it with ``Evaluator`` (see the module)."""
+def verify_library(folder, n_random: int = 2000, seed: int = 0, rounds: int = ROUNDS,
+                   flags=None) -> VerifyReport:
+    """Build the export in ``folder`` and compare it with ``Evaluator`` (see the module);
+    ``flags``: the compiler's flags (None: ``compiler_flags()``)."""
     folder = Path(folder)
     prefix, model = _library(folder)
     platform = Platform.from_toml(folder / PLATFORM_FILE)
-    cc = _compiler()
+    cc = compiler()
     motion = check_motions(platform, n_random, seed)
     result = Evaluator(platform).evaluate_quiet(motion)
     n = len(motion)
     with tempfile.TemporaryDirectory(prefix="gsfric-verify-") as tmp:
         work = Path(tmp)
-        driver = build(folder, prefix, work, cc)
-        _write_inputs(work, motion)
-        names = ["states.bin", str(n), "poses.bin", "outputs.bin", "forces.bin", "flags.bin",
-                 "pose_states.bin", str(rounds)]
+        flags = compiler_flags() if flags is None else list(flags)
+        driver = build(folder, prefix, work, cc, flags)
+        names = [*write_inputs(work, motion), str(rounds)]
         run = subprocess.run([str(driver), *names], capture_output=True, text=True, cwd=work)
         if run.returncode:
             raise BuildError(f"--verify: the check program failed (exit {run.returncode})")
@@ -244,5 +248,5 @@ def verify_library(folder, n_random: int = 2000, seed: int = 0,
                                             int(size))
         pose = np.fromfile(work / "pose_states.bin").reshape(n, -1)
         pose_error = float(np.max(np.abs(pose - state_array(motion))))
-    return VerifyReport(folder, prefix, model, " ".join([*cc, *compiler_flags()]), n, worst,
+    return VerifyReport(folder, prefix, model, " ".join([*cc, *flags]), n, worst,
                         where, mismatches, pose_error, float(latency))

@@ -31,6 +31,11 @@ CODES = ("specialised", "generic")
 CasADi's generated function of every platform with the parameters as data."""
 STEP_OUTPUTS = ("F", "F0", "D", "s2", "h", "coupling_change")
 """The outputs ``<prefix>_actuator_forces`` computes: F and what the step flags read."""
+_CODE_TEXT = {
+    "specialised": "has them folded into its code (every value that depends on the platform "
+                   "alone computed when exported)",
+    "generic": "reads them from there at every call",
+}
 _PARAMETERS_NOTE = {
     "specialised": "The specialised build has P and Q folded\n * into its code: they are "
                    "here for the record (changing them changes nothing; export again).",
@@ -148,8 +153,13 @@ def _model_code(platform: Platform, name: str, prefix: str, code: str) -> str:
                                  [f"OUT_{o}" for o in outs])
         run = folded.function_text(body, "run")
         step = folded.function_text(body, "run_step", {outs.index(o) for o in STEP_OUTPUTS})
+        helpers = source.helpers_called(run)
+        missing = sorted(set(re.findall(r"\b(casadi_\w+)\(", run)) - set(helpers))
+        if missing:
+            raise GsfricError(f"the specialised build calls {missing[0]}, which generated/ "
+                              "does not define; export with --code generic")
         values = {"function": name, "run": run, "run_step": step,
-                  "helpers": source.helper_text(source.helpers_called(run))}
+                  "helpers": source.helper_text(helpers)}
     values["PREFIX"] = prefix.upper()
     template = importlib.resources.files("gsfric.export").joinpath("templates",
                                                                     f"model_{code}.c.in")
@@ -169,6 +179,7 @@ def _values(platform: Platform, platform_file, model: str, prefix: str,
     return {
         "prefix": prefix, "PREFIX": prefix.upper(), "cflags": " ".join(CFLAGS), "model": model,
         "function": name, "code": code, "parameters_note": _PARAMETERS_NOTE[code],
+        "code_text": _CODE_TEXT[code],
         "model_code": _model_code(platform, name, prefix, code),
         "platform_name": platform_name, "platform_comment": text.comment(platform_text),
         "iterations": str(iterations),
