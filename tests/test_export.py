@@ -170,6 +170,7 @@ def test_sanitizers(exports, tmp_path):
 def test_two_prefixes_in_one_program(exports, tmp_path):
     main_c = tmp_path / "both.c"
     main_c.write_text("""#include <stdio.h>
+#include <string.h>
 #include "hexa.h"
 #include "hexp.h"
 int main(void)
@@ -179,7 +180,9 @@ int main(void)
     const double v[3] = {0.1, 0.05, 0.2}, w[3] = {0.3, -0.2, 0.4};
     hexa_pose_state(p, q, v, w, z, z, x);
     int a = hexa_actuator_forces(x, F), b = hexp_actuator_forces(x, G);
-    printf("%d %d %.17g %.17g\\n", a, b, F[0], G[0]);
+    hexa_outputs out;
+    hexa_evaluate(x, &out);
+    printf("%d %d %d %.17g %.17g\\n", a, b, memcmp(F, out.F, sizeof F) == 0, F[0], G[0]);
     return 0;
 }
 """)
@@ -190,7 +193,8 @@ int main(void)
                           "-lm"], capture_output=True, text=True)
     assert run.returncode == 0, run.stderr[-3000:]
     out = subprocess.run([str(target)], capture_output=True, text=True).stdout.split()
-    assert out[:2] == ["0", "0"] and float(out[2]) > 0 and float(out[2]) != float(out[3])
+    assert out[:3] == ["0", "0", "1"]  # evaluate's F is actuator_forces' to the bit
+    assert float(out[3]) > 0 and float(out[3]) != float(out[4])
 
 
 def test_deterministic_and_force_scale(exports, tmp_path):

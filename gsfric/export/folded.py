@@ -203,7 +203,8 @@ def statements(fn, output_index: list[str], arg: str = "x") -> list[Statement]:
                 expr = (_BINARY.get(op) or _UNARY[op]).format(*(v.text for v in a))
                 uses = tuple(n for v in a for n in v.name)
             else:
-                raise GsfricError(f"{fn.name()}: operation {op} has no C text in the export")
+                raise GsfricError(f"{fn.name()}: operation {op} has no C text in the export; "
+                                  "export with --code generic")
             out.append(Statement(f"v{i}", uses, -1, f"const double v{i} = {expr};"))
             slots[slot[0]] = _Value(f"v{i}", i, None, (f"v{i}",))
     return out
