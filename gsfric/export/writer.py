@@ -2,8 +2,10 @@
 
 ``export_library`` checks what the platform asks of the library, fills the templates of this
 package (``templates/*.in``: ``@name@`` placeholders) and writes the folder atomically
-(``gsfric.io.files.output_folder``). The folder is a function of the platform, the model, the
-prefix and the committed generated code only: no timestamps, so an export is reproducible.
+(``gsfric.io.files.output_folder``). The model's C comes from ``templates/model_<code>.c.in``
+filled with the build ``code`` (``CODES``). The folder is a function of the platform, the
+model, the prefix, the build and the committed generated code only: no timestamps, so an
+export is reproducible.
 """
 
 from __future__ import annotations
