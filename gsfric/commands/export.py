@@ -36,9 +36,9 @@ def export(platform_file, out, model, prefix, code, verify_dir):
 
     The folder holds <prefix>.h (the platform's parameters baked in), <prefix>.c (the
     model, by default with the platform folded into its code; no heap, no global state, no
-    I/O, only math.h), a Makefile, a CMakeLists.txt, an example and a README. `gsfric export --verify DIR` builds it and
-    reports the worst relative error against the Python evaluation and the median latency of
-    one step. See docs/export.md.
+    I/O, only math.h), a Makefile, a CMakeLists.txt, an example and a README.
+    `gsfric export --verify DIR` builds it and reports the worst relative error against the
+    Python evaluation and the median latency of one step. See docs/export.md.
     """
     if verify_dir is not None:
         if out is not None or platform_file is not None or model is not None:
