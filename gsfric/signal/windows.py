@@ -147,7 +147,10 @@ def _choose_windows(y: np.ndarray, p: int, deriv: int, variance: np.ndarray, bes
     j = (np.arange(width) - width // 2).astype(float)
     previous = savgol_filter(y, candidates[0], p, deriv)
     detected = np.zeros_like(y)
-    for w, w_next in zip(candidates[:-1], candidates[1:]):
+    # the least noise of any window after each one (a window's noise is variance * gain)
+    gains = [float(np.sum(coefficients(w) ** 2)) for w in candidates[:-1]]
+    least_after = [min(gains[i + 1:], default=np.inf) for i in range(len(gains))]
+    for i, (w, w_next) in enumerate(zip(candidates[:-1], candidates[1:])):
         h, h_next = coefficients(w), coefficients(w_next)
         following = savgol_filter(y, w_next, p, deriv)
         growth = float(np.sum(h_next * j ** m) / np.sum(h * j ** m))
@@ -164,6 +167,18 @@ def _choose_windows(y: np.ndarray, p: int, deriv: int, variance: np.ndarray, bes
         orders[better] = p
         windows[better] = w
         previous = following
+        if _settled(detected, variance * least_after[i], best):
+            break
+
+
+def _settled(detected: np.ndarray, least_noise: np.ndarray, best: np.ndarray) -> bool:
+    """Whether no longer window can be chosen anywhere: a longer window's estimated bias
+    squared is at least ``detected`` (N, k) and its noise variance at least ``least_noise``
+    (k,), so its risk is at least their sum, computed as the risk is (the same rounding,
+    which is monotonic); where that bound already reaches ``best`` (N,), it cannot be lower.
+    """
+    bound = np.sum(BIAS_WEIGHT * detected + least_noise, axis=1)
+    return bool(np.all(bound >= best))
 
 
 def motion_filters(y: np.ndarray, polyorder: int = DEFAULT_POLYORDER
