@@ -57,12 +57,23 @@ def run_simulate(trajectory, out, chunk: int | None = None, threads: int | None 
     waited-for children. Run it from a small process: a child's peak RSS counts the copy of its
     parent's memory it starts as. ``benchmarks/memory_10M.py`` runs it at 10 million steps.
     """
-    cmd = [sys.executable, "-m", "gsfric.cli", "simulate", "--trajectory", str(trajectory),
-           "--out", str(out), "--no-progress", *extra]
+    cmd = ["simulate", "--trajectory", str(trajectory), "--out", str(out), "--no-progress",
+           *extra]
     if chunk is not None:
         cmd += ["--chunk", str(chunk)]
     if threads is not None:
         cmd += ["--threads", str(threads)]
+    run = run_gsfric(cmd)
+    scale = 1 if sys.platform == "darwin" else 1024          # ru_maxrss: bytes or kB
+    children = resource.getrusage(resource.RUSAGE_CHILDREN).ru_maxrss * scale
+    return {**run, "children_max_rss_mb": children / 2**20}
+
+
+def run_gsfric(args: list[str]) -> dict:
+    """``gsfric ARGS`` in a child process: its exit code (``returncode``), ``stdout`` and
+    ``stderr``, wall and CPU seconds (``wall_s``; ``cpu_s``, the sum of ``user_s`` and
+    ``system_s``) and its own peak resident set size (``peak_rss_mb``, from ``os.wait4``)."""
+    cmd = [sys.executable, "-m", "gsfric.cli", *args]
     start = time.perf_counter()
     with tempfile.TemporaryFile("w+") as stdout, tempfile.TemporaryFile("w+") as stderr:
         child = subprocess.Popen(cmd, stdout=stdout, stderr=stderr, text=True)
@@ -72,14 +83,11 @@ def run_simulate(trajectory, out, chunk: int | None = None, threads: int | None 
         stderr.seek(0)
         out_text, err_text = stdout.read(), stderr.read()
     scale = 1 if sys.platform == "darwin" else 1024          # ru_maxrss: bytes or kB
-    children = resource.getrusage(resource.RUSAGE_CHILDREN).ru_maxrss * scale
-    return {"command": " ".join(["gsfric", *cmd[3:]]),
+    return {"command": " ".join(["gsfric", *args]),
             "returncode": os.waitstatus_to_exitcode(status), "stdout": out_text.strip(),
             "stderr": err_text.strip(), "wall_s": wall,
             "cpu_s": usage.ru_utime + usage.ru_stime, "user_s": usage.ru_utime,
-            "system_s": usage.ru_stime,
-            "peak_rss_mb": usage.ru_maxrss * scale / 2**20,
-            "children_max_rss_mb": children / 2**20}
+            "system_s": usage.ru_stime, "peak_rss_mb": usage.ru_maxrss * scale / 2**20}
 
 
 def simulate_child(steps: int, trajectory: str, out: str) -> dict | None:
