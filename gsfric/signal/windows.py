@@ -6,6 +6,7 @@ from __future__ import annotations
 import numpy as np
 
 from gsfric._optional import optional
+from gsfric._threads import in_parallel
 from gsfric.signal.noise import white_noise_std
 from gsfric.signal.savgol import DEFAULT_POLYORDER, savgol_filter, savgol_weights
 
@@ -187,8 +188,9 @@ def motion_filters(y: np.ndarray, polyorder: int = DEFAULT_POLYORDER
     (N, k) when it chooses them (``adaptive_filters``): ((orders, windows) for the value and
     the first derivative, (orders, windows) for the second derivative), each array (N,)."""
     sigma = white_noise_std(y)
-    return (adaptive_filters(y, polyorder, sigma, deriv=1),
-            adaptive_filters(y, polyorder, sigma, deriv=2))
+    first, second = in_parallel(lambda: adaptive_filters(y, polyorder, sigma, deriv=1),
+                                lambda: adaptive_filters(y, polyorder, sigma, deriv=2))
+    return first, second
 
 
 def savgol_adaptive(y: np.ndarray, filters, step: float) -> list[np.ndarray]:
