@@ -193,11 +193,23 @@ def motion_filters(y: np.ndarray, polyorder: int = DEFAULT_POLYORDER
     return first, second
 
 
+def filter_pairs(orders: np.ndarray, windows: np.ndarray) -> np.ndarray:
+    """The distinct (order, window) pairs of per-sample filters (N,) each, (P, 2), sorted by
+    order then window (``np.unique(np.stack([orders, windows], axis=1), axis=0)``, by one
+    integer key per sample)."""
+    orders, windows = np.asarray(orders), np.asarray(windows)
+    if len(orders) == 0:
+        return np.empty((0, 2), dtype=np.result_type(orders, windows))
+    base = int(windows.max()) + 1
+    keys = np.unique(orders * base + windows)
+    return np.stack([keys // base, keys % base], axis=1)
+
+
 def savgol_adaptive(y: np.ndarray, filters, step: float) -> list[np.ndarray]:
     """``savgol_derivatives`` with each sample's own filters (``motion_filters``)."""
     out = [np.empty_like(y, dtype=float) for _ in range(3)]
     for derivatives, (orders, windows) in (((0, 1), filters[0]), ((2,), filters[1])):
-        pairs = np.unique(np.stack([orders, windows], axis=1), axis=0)
+        pairs = filter_pairs(orders, windows)
         for p, w in pairs:
             rows = (orders == p) & (windows == w)
             for k in derivatives:
