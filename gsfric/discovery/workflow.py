@@ -33,6 +33,7 @@ import numpy as np
 from tqdm import tqdm
 
 from gsfric._checks import short
+from gsfric._threads import one_blas_thread
 from gsfric.discovery import lackfit
 from gsfric.discovery import statistics as st
 from gsfric.discovery.candidates import CANDIDATES
@@ -104,6 +105,7 @@ class _State:
     evidence: dict[str, FindingEvidence] = field(default_factory=dict)
 
 
+@one_blas_thread
 def discover(motion: Motion, forces: np.ndarray, platform: Platform | None = None, *,
              settings: Settings | None = None, seed: int = 0, progress: bool = False,
              poses: tuple[np.ndarray, np.ndarray] | None = None, **options) -> Discovery:

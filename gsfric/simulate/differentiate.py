@@ -26,6 +26,7 @@ from typing import Any
 
 import numpy as np
 
+from gsfric._threads import in_parallel
 from gsfric.errors import InputError
 from gsfric.io.logs import EULER, QUATERNION, RATES
 from gsfric.io.readers import motion_from_columns
@@ -275,7 +276,9 @@ def _windows(path: Path, position: np.ndarray, q: np.ndarray, chunk: int, window
     check_polyorder(polyorder, chunk, "steps in a chunk")
     if window is None:
         with np.errstate(all="ignore"):
-            return gcv_window(position, polyorder), gcv_window(q, polyorder)
+            windows = in_parallel(lambda: gcv_window(position, polyorder),
+                                  lambda: gcv_window(q, polyorder))
+        return windows[0], windows[1]
     try:
         check_window(window, polyorder, chunk)
     except InputError as error:
