@@ -9,6 +9,7 @@ import click
 
 from gsfric.commands.common import log_options
 from gsfric.discovery import run_discover
+from gsfric.errors import InputError
 from gsfric.io.logs import LogFormat
 
 
@@ -21,6 +22,15 @@ from gsfric.io.logs import LogFormat
               required=True, help="Directory for summary.json, the report and plots.")
 @click.option("--seed", type=int, default=0, show_default=True,
               help="Seed of the block bootstrap.")
+@click.option("--force-noise", metavar="N|N1,...,N6",
+              help="The load cells' noise (standard deviation, N; the sensor's specification), "
+                   "one value or six, one per leg: the verdict compares the residual with it "
+                   "[default: a --noise-record's, the column map's force_noise, else estimated "
+                   "from the force channels].")
+@click.option("--noise-record", type=click.Path(dir_okay=False, exists=True),
+              help="A recording at rest (F1..F6, read with the column map and units): each "
+                   "force channel's standard deviation about its mean is the load cells' "
+                   "noise.")
 @click.option("--progress/--no-progress", default=None,
               help="A progress bar over the workflow's stages on stderr [default: when stderr "
                    "is a terminal].")
@@ -28,13 +38,25 @@ from gsfric.io.logs import LogFormat
               help="No progress bar and no list of written files (warnings and errors still "
                    "go to stderr).")
 @log_options(keep=False)
-def discover(measured, platform_file, out_dir, seed, progress, quiet, column_map, units_map,
-             angles):
+def discover(measured, platform_file, out_dir, seed, force_noise, noise_record, progress, quiet,
+             column_map, units_map, angles):
     """Find which physical effect the model is missing, fit it, and show the gap shrink."""
     show = False if quiet else sys.stderr.isatty() if progress is None else progress
     log_format = LogFormat.from_options(column_map, units_map, angles, None)
     written = run_discover(measured, platform_file, out_dir, seed=seed, progress=show,
+                           force_noise=_values(force_noise), noise_record=noise_record,
                            **({"log_format": log_format} if log_format else {}))
     if not quiet:
         for path in written:
             click.echo(f"wrote {path}")
+
+
+def _values(text: str | None) -> list[float] | None:
+    """``--force-noise``'s numbers (one or six, by commas); InputError for anything else."""
+    if text is None:
+        return None
+    try:
+        return [float(v) for v in text.split(",")]
+    except ValueError:
+        raise InputError(f"--force-noise: one number (N) or six separated by commas, got "
+                         f"{text!r}") from None
