@@ -13,11 +13,17 @@ from click.testing import CliRunner
 
 from gsfric.cli import main
 from gsfric.discovery import Settings, dictionary, discover
-from gsfric.discovery.floor import ForceNoise, noise_floor, read_noise_record
+from gsfric.discovery.floor import (
+    ForceNoise,
+    noise_floor,
+    pose_noise_forces,
+    read_noise_record,
+)
 from gsfric.discovery.rest import poses_from_columns
 from gsfric.discovery.selection import NoiseModel
 from gsfric.discovery.verdict import decide
 from gsfric.errors import InputError
+from gsfric.evaluation.evaluator import Evaluator
 from gsfric.io.logs import LogFormat
 from gsfric.signal.noise import spectral_noise_std
 from gsfric.synth import synthesize
@@ -83,6 +89,28 @@ def test_the_floor_adds_the_pose_part_in_quadrature():
     assert floor.residual_over_floor == pytest.approx(2.0)
     assert floor.trusted
     assert not noise_floor(None, np.full(6, 0.3), np.zeros(6), "", 1.0).trusted
+
+
+def test_the_pose_part_grows_with_the_pose_noise():
+    """Next to nothing without pose noise, larger on every leg with more of it (over the
+    pairs that slide: the adaptive filters chosen differ with the noise, so not in
+    proportion), and not estimated without recorded poses."""
+    parts = []
+    for sigma in (0.0, 1e-5, 4e-5):
+        data = synthesize(samples=2000, rate=RATE, noise=0.0, pose_noise=sigma, seed=2)
+        frame = data.frame
+        motion = Motion.from_samples(frame.t.values, frame[["x", "y", "z"]].values,
+                                     quaternion=frame[["qw", "qx", "qy", "qz"]].values)
+        rows = slice(100, len(frame) - 100)
+        speed = Evaluator(data.model).evaluate(motion).D_dot[rows]
+        part, how = pose_noise_forces(data.model, motion, poses_from_columns(frame), rows,
+                                      np.abs(speed) > 5e-3, draws=2)
+        assert "draws" in how
+        parts.append(part)
+    assert np.all(parts[0] < 1e-3 * parts[1])
+    assert np.all(parts[1] > 0) and np.all(parts[2] > 1.5 * parts[1])
+    none, how = pose_noise_forces(data.model, motion, None, rows, np.abs(speed) > 0, draws=1)
+    assert not none.any() and "not estimated" in how
 
 
 # -- the dictionary ------------------------------------------------------------------------------

@@ -108,31 +108,49 @@ class Features:
 
 
 def find(residual: np.ndarray, x: Features, settings: Settings) -> list[Unexplained]:
-    """The dictionary's groups that the residual (M, 6), N, holds, each described."""
+    """The dictionary's groups that the residual (M, 6), N, holds, each described.
+
+    Forward selection: every group is tested on the residual; of those accepted, the one of
+    the largest held-out gain is taken and its fit removed, and the others accepted are
+    tested again on what it leaves, until none is: one structure is described once, by the
+    group that explains it best (a cross-talk on a sinusoidal motion is not also a line at
+    the motion's frequency)."""
     level = settings.alpha / len(GROUPS)
-    valid = x.weight > 0
-    out = []
+    built = {}
     for kind in GROUPS:
-        built = BUILDERS[kind](residual, x, settings)
-        if built is None:
-            continue
-        X, describe = built
-        X = _scaled(X * x.weight[:, :, None])
-        whitener = lackfit.whitener_beyond(residual, X, valid)
-        low = whitener.low_band(x.t, valid)
-        result = lackfit.test(residual, X, whitener, alpha=level,
-                              min_gap=settings.dictionary_min_gap, n_blocks=settings.n_blocks,
-                              n_folds=settings.n_folds, min_fold_share=0.0,
-                              names=[kind] * X.shape[2], low=low, by="pairs")
-        if not result.significant:
-            continue
+        columns = BUILDERS[kind](residual, x, settings)
+        if columns is not None:
+            built[kind] = (_scaled(columns[0] * x.weight[:, :, None]), columns[1])
+    left, out, todo = residual, [], list(built)
+    while todo:
+        results = {kind: _test(left, built[kind][0], x, settings, level, kind)
+                   for kind in todo}
+        todo = [kind for kind in todo if results[kind].significant]
+        if not todo:
+            break
+        kind = max(todo, key=lambda k: results[k].details["cv_gain"])
+        todo.remove(kind)
+        result = results[kind]
         per_leg = np.asarray(result.per_leg_rms)
         legs = [i + 1 for i in np.flatnonzero(per_leg >= 0.25 * per_leg.max())]
-        text, details = describe(result.fitted, legs)
+        text, details = built[kind][1](result.fitted, legs)
         out.append(Unexplained(kind, legs, result.structure_rms, result.per_leg_rms,
                                result.gap, float(result.p_value), level,
                                float(result.details["cv_gain"]), text, details))
+        left = left - result.fitted
     return out
+
+
+def _test(residual: np.ndarray, X: np.ndarray, x: Features, s: Settings, level: float,
+          kind: str):
+    """``lackfit.test`` of the group's columns X (M, 6, k) on the residual, prewhitened with
+    the noise model of what they leave, at ``level``."""
+    valid = x.weight > 0
+    whitener = lackfit.whitener_beyond(residual, X, valid)
+    return lackfit.test(residual, X, whitener, alpha=level, min_gap=s.dictionary_min_gap,
+                        n_blocks=s.n_blocks, n_folds=s.n_folds, min_fold_share=0.0,
+                        names=[kind] * X.shape[2], low=whitener.low_band(x.t, valid),
+                        by="pairs")
 
 
 def _scaled(X: np.ndarray) -> np.ndarray:
@@ -187,6 +205,11 @@ def line_frequencies(t: np.ndarray, residual: np.ndarray, most: int, prominence:
 def _lines(residual: np.ndarray, x: Features, s: Settings):
     freqs = line_frequencies(x.t, residual * (x.weight > 0), s.dictionary_lines,
                              s.line_prominence)
+    # a peak at a frequency of the motion's own (a sinusoidal motion's, its harmonics) is a
+    # structure that follows the motion, for the other groups: not a line
+    own = line_frequencies(x.t, x.F, 4 * s.dictionary_lines, s.line_prominence)
+    resolution = 4.0 / max(float(x.t[-1] - x.t[0]), 1e-300)
+    freqs = [f for f in freqs if all(abs(f - g) > resolution for g in own)]
     if not freqs:
         return None
     tau = x.t - x.t[0]

@@ -451,7 +451,8 @@ def summary(d: Discovery) -> dict:
         "settings": {"alpha": s.alpha, "min_fold_share": s.min_fold_share,
                      "min_gap": s.min_gap, "n_blocks": s.n_blocks, "n_folds": s.n_folds,
                      "n_bootstrap": s.n_bootstrap, "candidates": list(s.candidates),
-                     "refit": list(s.refit)},
+                     "refit": list(s.refit), "floor_ratio": s.floor_ratio,
+                     "dictionary_min_gap": s.dictionary_min_gap},
         "notes": d.notes,
         "evaluations": d.evaluations,
     }

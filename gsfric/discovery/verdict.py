@@ -21,6 +21,7 @@ one), with the noise model that whitens it, and what would decide (``--force-noi
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 
 from gsfric.discovery.dictionary import Unexplained
@@ -74,6 +75,10 @@ def decide(*, structures: list[Unexplained], structure_found: bool, structure_te
     ratio = floor.residual_over_floor
     against = (f"the residual is {ratio:.3g} x the noise floor of {floor.rms:.4g} N "
                f"({floor.force_source} force noise and the pose noise in the model's forces)")
+    if not math.isfinite(ratio):
+        # a record too short for the spectral estimate: nothing to compare with
+        ratio, against = 0.0, ("no noise floor could be estimated (too few samples); give "
+                               "--force-noise or --noise-record")
     if structures:
         what = "; ".join(s.description for s in structures)
         return Verdict("unexplained_discrepancy",
