@@ -252,3 +252,19 @@ def test_discover_takes_the_force_noise_from_the_command_line(tmp_path, mains_re
                                     "--force-noise", "0.1,x"])
     assert bad.exit_code == 2 and "--force-noise" in bad.output
 
+
+
+def test_the_command_line_wins_over_the_record_and_the_column_map(tmp_path):
+    from gsfric.discovery.report import _force_noise
+
+    path = tmp_path / "rest.csv"
+    rng = np.random.default_rng(1)
+    pd.DataFrame(0.07 * rng.normal(size=(2000, 6)),
+                 columns=[f"F{i}" for i in range(1, 7)]).to_csv(path, index=False)
+    fmt = LogFormat(force_noise=0.5)
+    assert _force_noise(0.2, path, fmt).std == (0.2,) * 6
+    recorded = _force_noise(None, path, fmt)
+    assert recorded.source == "noise record"
+    assert np.array(recorded.std) == pytest.approx(np.full(6, 0.07), rel=0.1)
+    assert _force_noise(None, None, fmt).std == (0.5,) * 6
+    assert _force_noise(None, None, None) is None

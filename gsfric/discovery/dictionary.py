@@ -235,16 +235,20 @@ def _lines(residual: np.ndarray, x: Features, s: Settings):
             elif all(abs(r) < 30 for r in rel):
                 relation = " in phase"
             elif all(abs(r) < 30 or abs(r) > 150 for r in rel):
-                relation = " in phase or in antiphase"
+                opposite = [leg for leg, r in zip(on, rel) if abs(r) > 150]
+                relation = f", {_legs_text(opposite)} in antiphase to leg {on[0]}"
             else:
                 relation = " with phases " + ", ".join(f"{r:.0f}" for r in rel) + " deg"
             parts.append(f"a {f:.4g} Hz line of {float(np.mean(amplitude[np.array(on) - 1])):.2g}"
                          f" N on {_legs_text(on)}{relation}")
             details.append({"frequency": f, "amplitude": [float(a) for a in amplitude],
                             "phase_deg": [float(p) for p in phase], "legs": on})
+        if not parts:
+            parts = ["lines at " + ", ".join(f"{f:.4g}" for f in freqs) + f" Hz on "
+                     f"{_legs_text(legs)}"]
         text = "; ".join(parts) + (": electrical interference on the load cells or their "
                                    "amplifiers (mains, a drive's switching), or a vibration "
-                                   "at that frequency" if parts else "")
+                                   "at that frequency")
         return text, {"lines": details}
 
     return _per_leg(cols), describe
