@@ -128,6 +128,19 @@ def _features(n: int = 4000, seed: int = 0) -> dictionary.Features:
     return dictionary.Features(t, F, D, speed, position, np.ones((n, 6)), 0.2)
 
 
+def test_play_is_the_backlash_operator():
+    rng = np.random.default_rng(0)
+    F = np.cumsum(rng.normal(size=(500, 3)), axis=0)
+    width = np.array([0.5, 2.0, 5.0])
+    out = dictionary.play(F, width)
+    y = F[0].copy()
+    for k in range(len(F)):     # the reading moves only when the force leaves its band
+        y = np.minimum(np.maximum(y, F[k] - width), F[k] + width)
+        assert out[k] == pytest.approx(y)
+    assert dictionary.play(F, np.stack([width, 2 * width]))[1] == pytest.approx(
+        dictionary.play(F, 2 * width))
+
+
 def test_the_dictionary_finds_nothing_in_white_noise():
     x = _features()
     residual = 0.2 * np.random.default_rng(1).normal(size=x.F.shape)

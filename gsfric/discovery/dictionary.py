@@ -290,35 +290,34 @@ def _coupling(residual: np.ndarray, x: Features, s: Settings):
 
 
 def play(F: np.ndarray, width: float | np.ndarray) -> np.ndarray:
-    """What a reading with a dead band (play) of +-``width`` (one, or one per column) makes of
-    F (M, k): it follows F only when F leaves the band around its last value (backlash
-    operator)."""
-    out = np.empty_like(F, dtype=float)
-    widths = np.broadcast_to(np.asarray(width, float), F.shape[1:])
-    for i in range(F.shape[1]):
-        column, width = F[:, i].tolist(), float(widths[i])
-        y, values = column[0], []
-        for f in column:          # floats, not arrays: a loop over samples
-            y = min(max(y, f - width), f + width)
-            values.append(y)
-        out[:, i] = values
-    return out
+    """What a reading with a dead band (play) of +-``width`` makes of F (M, k): it follows F
+    only when F leaves the band around its last value (backlash operator). ``width``: one,
+    one per column (k,), or several per column (W, k), which give (W, M, k)."""
+    F = np.asarray(F, float)
+    widths = np.asarray(width, float)
+    many = widths.ndim == 2
+    w = np.broadcast_to(widths if many else widths[None], (len(widths) if many else 1,)
+                        + F.shape[1:])
+    out = np.empty((w.shape[0],) + F.shape)
+    y = np.broadcast_to(F[0], w.shape).copy()
+    for k in range(len(F)):       # one step of every width and column at once
+        np.clip(y, F[k] - w, F[k] + w, out=y)
+        out[:, k] = y
+    return out if many else out[0]
 
 
 def _best_width(residual: np.ndarray, valid: np.ndarray, scale: np.ndarray, error,
                 s: Settings) -> np.ndarray:
-    """Per leg, the column of ``error(widths (6,)) -> (M, 6)`` whose width (one of
+    """Per leg, the column of ``error(widths (W, 6)) -> (W, M, 6)`` whose width (one of
     ``Settings.memory_widths`` times the leg's residual RMS ``scale`` (6,)) correlates best
     with the leg's residual: one column per leg, not several nearly equal ones whose
     difference a fit would take for signal."""
-    best, score = np.zeros_like(residual), np.full(residual.shape[1], -1.0)
-    for m in s.memory_widths:
-        c = error(np.maximum(m * scale, 1e-12)) * valid
-        norm = np.sqrt(np.sum(c ** 2, axis=0))
-        r = np.abs(np.sum(c * residual, axis=0)) / np.where(norm > 0, norm, np.inf)
-        better = r > score
-        best[:, better], score[better] = c[:, better], r[better]
-    return best
+    widths = np.maximum(np.outer(s.memory_widths, scale), 1e-12)
+    c = error(widths) * valid[None]
+    norm = np.sqrt(np.sum(c ** 2, axis=1))
+    r = np.abs(np.sum(c * residual[None], axis=1)) / np.where(norm > 0, norm, np.inf)
+    best = np.argmax(r, axis=0)                                   # (6,)
+    return c[best, :, np.arange(residual.shape[1])].T
 
 
 def _memory(residual: np.ndarray, x: Features, s: Settings):
@@ -326,10 +325,10 @@ def _memory(residual: np.ndarray, x: Features, s: Settings):
     rate = np.gradient(F, x.t, axis=0)
     valid = x.weight > 0
     scale = np.sqrt(np.sum(residual ** 2, axis=0) / np.maximum(valid.sum(axis=0), 1))
-    cols = [_best_width(residual, valid, scale, lambda w: play(F, w) - F, s)]
+    cols = [_best_width(residual, valid, scale, lambda w: play(F, w) - F[None], s)]
     if np.any(np.abs(F) < s.memory_widths[-1] * scale.max()):
         cols.append(_best_width(residual, valid, scale,
-                                lambda w: np.clip(F, -w, w), s))
+                                lambda w: np.clip(F[None], -w[:, None], w[:, None]), s))
 
     def describe(fitted: np.ndarray, on: list[int]):
         parts, details = [], []
