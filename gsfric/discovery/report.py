@@ -87,7 +87,7 @@ def _unexplained(d: Discovery) -> list[str]:
               f"p = {_g(s.p_value, 2)} at level {_g(s.level, 2)}, held-out gain "
               f"{_g(s.cv_gain, 2)})" for s in d.structures]
         L.append("")
-    if d.verdict == "unexplained_discrepancy" and d.verdict_decided_by == "lack of fit":
+    if d.verdict == "unexplained_discrepancy" and d.lack_of_fit.source is not None:
         lof = d.lack_of_fit
         source = lof.source or "final residual"
         if source == "final residual":
