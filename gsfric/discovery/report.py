@@ -14,6 +14,7 @@ from __future__ import annotations
 import json
 import math
 import os
+from collections.abc import Sequence
 from pathlib import Path
 
 import numpy as np
@@ -21,6 +22,7 @@ import numpy as np
 from gsfric._checks import as_path
 from gsfric._optional import optional
 from gsfric.discovery.answer import GLOSSARY, platform_text, units_of, verdict_line
+from gsfric.discovery.floor import ForceNoise, read_noise_record
 from gsfric.discovery.regimes import hotspots
 from gsfric.discovery.rest import poses_from_columns
 from gsfric.discovery.results import Discovery, per_leg_rms, summary
@@ -72,13 +74,24 @@ def _header(d: Discovery, source: str, platform_source: str) -> list[str]:
           f"Samples used: {n} ({d.used.start} left out at each end, where the pose's "
           f"differentiation is least accurate), {d.t[-1] - d.t[0]:.4g} s.", ""]
     L += ["## Result", "", f"Verdict: **{d.verdict}**.", "", f"> {verdict_line(d)}", ""]
+    if d.verdict_reason:
+        L += [f"Why: {d.verdict_reason}.", ""]
     return L
 
 
 def _unexplained(d: Discovery) -> list[str]:
     """An ``unexplained_discrepancy``: where the structure was found and what it looks like."""
     L: list[str] = []
-    if d.verdict == "unexplained_discrepancy":
+    if d.structures:
+        L += ["Structure in the final residual that no catalog effect explains (each found by "
+              "a regression on a generic dictionary, accepted by the held-out rule the "
+              "candidate effects face):", ""]
+        L += [f"- **{s.kind}** on {', '.join(map(str, s.legs))}: {s.description} "
+              f"({_g(s.size_rms, 3)} N RMS, {_g(s.gap, 3)} x the residual it leaves; "
+              f"p = {_g(s.p_value, 2)} at level {_g(s.level, 2)}, held-out gain "
+              f"{_g(s.cv_gain, 2)})" for s in d.structures]
+        L.append("")
+    if d.verdict == "unexplained_discrepancy" and d.lack_of_fit.source is not None:
         lof = d.lack_of_fit
         source = lof.source or "final residual"
         if source == "final residual":
@@ -139,10 +152,8 @@ def _effects_named(d: Discovery) -> list[str]:
                  "explains a significant part of the gap.")
     L += ["", f"Gap (RMS of the residual, all legs): **{_g(d.rms_before)} N** with the model as "
           f"given, {_g(d.rms_refit)} N after refitting its own parameters, **{_g(d.rms_after)} N**"
-          f" with the effects found (RMS over the samples where the legs slide). Noise level "
-          f"estimated from the force channels alone (high-frequency part): "
-          f"{_g(d.noise_rms_estimate)} N; from the final residual: "
-          f"{_g(d.noise.residual_corrected)} N. Samples not sliding (speed within "
+          f" with the effects found (RMS over the samples where the legs slide). "
+          + _floor_text(d) + " Samples not sliding (speed within "
           f"the uncertainty of the differentiated poses): "
           f"{_g(d.noise.not_sliding_share, 3)} of the pairs.", ""]
     for note in d.notes:
@@ -150,6 +161,23 @@ def _effects_named(d: Discovery) -> list[str]:
     if d.notes:
         L.append("")
     return L
+
+
+def _floor_text(d: Discovery) -> str:
+    """The noise floor in words: its two parts and their sources, the residual against it,
+    and why the other two noise figures are not the floor."""
+    floor = d.noise.floor
+    force = float(np.sqrt(np.mean(np.square(floor.force))))
+    pose = float(np.sqrt(np.mean(np.square(floor.pose))))
+    return (f"Noise floor: **{_g(floor.rms)} N**, the load cells' noise {_g(force)} N "
+            f"({floor.force_source}: {floor.force_detail}) with the pose noise in the model's "
+            f"forces {_g(pose)} N ({floor.pose_source}); the final residual is "
+            f"{_g(floor.residual_over_floor, 3)} x the floor. The force channels' "
+            f"high-frequency part read alone ({_g(d.noise_rms_estimate)} N) counts the forces' "
+            "own fast changes (friction steps at the reversals, a fast motion) as noise, and "
+            f"the final residual corrected for the parameters fitted "
+            f"({_g(d.noise.residual_corrected)} N) holds whatever the model misses: neither is "
+            "the floor.")
 
 
 def _disagreement(d: Discovery) -> list[str]:
@@ -448,18 +476,21 @@ def write(d: Discovery, out_dir: str | os.PathLike[str], *, source: str = "",
 
 def discover_file(measured: str | os.PathLike[str],
                   platform_file: str | os.PathLike[str] | None = None, *, seed: int = 0,
-                  progress: bool = False, **options) -> Discovery:
+                  progress: bool = False,
+                  force_noise: float | Sequence[float] | None = None,
+                  noise_record: str | os.PathLike[str] | None = None, **options) -> Discovery:
     """Read a measured-data file and run the workflow on it (``run_discover`` without the
     outputs); parameters as ``run_discover``'s."""
     platform = platform_from(platform_file)
     log_format = options.pop("log_format", None)   # column map and units of a log
+    sensor = _force_noise(force_noise, noise_record, log_format)
     motion, forces, lengths, columns = read_measured_columns(measured, None, DEFAULT_POLYORDER,
                                                           log_format)
     poses = poses_from_columns(columns)
     check_poses(platform, *poses, motion.t, str(measured))
     check_forces(platform, forces, str(measured))
     result = discover(motion, forces, platform, seed=seed, progress=progress, poses=poses,
-                      **options)
+                      force_noise=sensor, **options)
     how = motion.differentiation()
     if how is not None:
         result.notes.append(f"differentiation: {how.describe()}")
@@ -476,7 +507,9 @@ def discover_file(measured: str | os.PathLike[str],
 def run_discover(measured: str | os.PathLike[str],
                  platform_file: str | os.PathLike[str] | None = None,
                  out_dir: str | os.PathLike[str] = ".", *, seed: int = 0,
-                 progress: bool = True, figures: bool = True, **options) -> list[Path]:
+                 progress: bool = True, figures: bool = True,
+                 force_noise: float | Sequence[float] | None = None,
+                 noise_record: str | os.PathLike[str] | None = None, **options) -> list[Path]:
     """``gsfric discover``: read measured data, run the workflow, write its outputs.
 
     Parameters
@@ -494,6 +527,13 @@ def run_discover(measured: str | os.PathLike[str],
         Progress on stderr.
     figures : bool
         Write the plots.
+    force_noise : float or sequence of 6 floats, optional
+        The load cells' noise, N (a sensor specification; ``--force-noise``), one value or one
+        per leg. Default: ``noise_record``'s, else the ``force_noise`` of the log's format
+        (``log_format`` in ``options``), else estimated from the force channels.
+    noise_record : path-like, optional
+        A recording at rest (CSV or Parquet with F1..F6): each force channel's standard
+        deviation about its mean is the load cells' noise.
     **options
         ``Settings`` fields; ``log_format`` (a ``LogFormat``) for a log's columns and units.
 
@@ -516,9 +556,23 @@ def run_discover(measured: str | os.PathLike[str],
     out_dir = as_path(out_dir, "out_dir")
     if platform_file is not None:
         platform_file = as_path(platform_file, "platform_file")
-    check_outputs([out_dir], {"measured-data": measured, "platform": platform_file})
+    check_outputs([out_dir], {"measured-data": measured, "platform": platform_file,
+                              "noise-record": noise_record})
     check_output_folder(out_dir)
-    result = discover_file(measured, platform_file, seed=seed, progress=progress, **options)
+    result = discover_file(measured, platform_file, seed=seed, progress=progress,
+                           force_noise=force_noise, noise_record=noise_record, **options)
     return write(result, out_dir, source=str(measured),
                  platform_source=str(platform_file) if platform_file else "",
                  figures=figures)
+
+
+def _force_noise(force_noise, noise_record, log_format) -> ForceNoise | None:
+    """The load cells' noise the user gives, by precedence: ``--force-noise``,
+    ``--noise-record``, the log format's ``force_noise``; None: estimated."""
+    if force_noise is not None:
+        return ForceNoise.specified(force_noise)
+    if noise_record is not None:
+        return read_noise_record(noise_record, log_format)
+    if log_format is not None and log_format.force_noise is not None:
+        return ForceNoise.specified(log_format.force_noise, "force_noise of the column map")
+    return None

@@ -298,6 +298,9 @@ class Problem:
         if poses is None:
             poses = motion.recorded_poses()
         recorded = poses is not None
+        self.poses = poses
+        """The recorded poses (positions (N, 3), m; rotations (N, 3, 3)), None when the motion
+        has none: its smoothed poses underestimate the pose noise."""
         if not recorded:
             poses = (np.asarray(motion.position, float), np.asarray(motion.rotation, float))
         sigma_v, self.reach = np.zeros((n, 6)), np.zeros(n, int)

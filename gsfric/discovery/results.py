@@ -9,7 +9,9 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from gsfric.discovery.candidates import separating_motion
+from gsfric.discovery.dictionary import Unexplained
 from gsfric.discovery.final_tests import LackOfFit
+from gsfric.discovery.floor import NoiseFloor
 from gsfric.discovery.refine import Stability
 from gsfric.discovery.regimes import hotspots
 from gsfric.discovery.selection import CandidateTest, GenericCompetitor, NoiseModel
@@ -202,6 +204,12 @@ class NoiseEstimate:
         Each leg's standard deviation of the differentiated speed due to pose noise, m/s.
     not_sliding_share : float
         Share of the used (sample, leg) pairs that are not known to slide.
+    floor : NoiseFloor or None
+        The noise floor the verdict compares the residual with: the force noise (and its
+        source: ``specified``, ``noise record`` or ``estimated``) and the pose noise
+        propagated into the model's forces. ``high_frequency`` reads the force channels'
+        fast changes (friction steps at the reversals, a fast motion) as noise as well; the
+        floor's force part does not.
     """
 
     high_frequency: float
@@ -211,6 +219,7 @@ class NoiseEstimate:
     method: str
     speed_uncertainty: list[float]
     not_sliding_share: float
+    floor: NoiseFloor | None = None
 
 
 @dataclass
@@ -345,6 +354,14 @@ class Discovery:
         RMS residual (N) of the final model over every used pair, sliding or not.
     sliding : ndarray of bool, shape (M, 6)
         The (sample, leg) pairs known to slide.
+    structures : list of Unexplained
+        The generic dictionary's structures found in the final residual
+        (``dictionary.find``).
+    verdict_reason : str
+        Why the verdict (``verdict.decide``): the evidence that decided, and the residual
+        against the noise floor.
+    verdict_decided_by : str
+        ``dictionary``, ``lack of fit``, ``floor``, ``effects``, ``refit`` or ``none``.
     """
 
     effects: list[Finding]
@@ -371,6 +388,9 @@ class Discovery:
     noise: NoiseEstimate | None = None
     rms_after_all: float = 0.0
     sliding: np.ndarray | None = None
+    structures: list[Unexplained] = field(default_factory=list)
+    verdict_reason: str = ""
+    verdict_decided_by: str = ""
 
     @property
     def names(self) -> list[str]:
@@ -428,6 +448,8 @@ def summary(d: Discovery) -> dict:
     lof = d.lack_of_fit
     out = {
         "verdict": d.verdict,
+        "verdict_reason": d.verdict_reason,
+        "verdict_decided_by": d.verdict_decided_by,
         "unexplained": _unexplained(d, lof),
         "lack_of_fit": lof.to_json(),
         "noise": _asdict(d.noise),
@@ -450,7 +472,8 @@ def summary(d: Discovery) -> dict:
         "settings": {"alpha": s.alpha, "min_fold_share": s.min_fold_share,
                      "min_gap": s.min_gap, "n_blocks": s.n_blocks, "n_folds": s.n_folds,
                      "n_bootstrap": s.n_bootstrap, "candidates": list(s.candidates),
-                     "refit": list(s.refit)},
+                     "refit": list(s.refit), "floor_ratio": s.floor_ratio,
+                     "dictionary_min_gap": s.dictionary_min_gap},
         "notes": d.notes,
         "evaluations": d.evaluations,
     }
@@ -528,7 +551,14 @@ def _unexplained(d: Discovery, lof: LackOfFit) -> dict | None:
             "partial_effects": [f.name for f in d.effects],
             "speed_bands": {b.name: b.rms_after for b in d.regimes if b.regime == "speed"},
             "source": lof.source,
-            "message": _unexplained_message(lof)}
+            "message": _unexplained_message(lof),
+            "structures": [dataclasses.asdict(s) for s in d.structures],
+            "decided_by": d.verdict_decided_by}
+        if d.verdict_decided_by in ("dictionary", "floor"):
+            unexplained["message"] = (
+                "the catalog does not explain the data: "
+                + ("; ".join(s.description for s in d.structures) if d.structures
+                   else d.verdict_reason))
     return unexplained
 
 

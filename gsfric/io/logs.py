@@ -4,6 +4,7 @@
 from __future__ import annotations
 
 import difflib
+import math
 import os
 import re
 import warnings
@@ -165,6 +166,10 @@ class LogFormat:
         Pose offset applied after ``axes``: ``x, y, z``, m, added to the position, and
         ``roll, pitch, yaw``, rad (convention ``angles``), a rotation of the log's frame
         (``LogFrame``). E.g. ``{"z": 1.1}`` for a heave that is zero at the home pose.
+    force_noise : float or sequence of 6 floats, optional
+        The load cells' noise (standard deviation in N, whatever the units of F1..F6: the
+        sensor's specification), one value or one per leg: ``gsfric discover`` compares its
+        residual with it (``--force-noise`` on the command line wins).
 
     The TOML form (``LogFormat.from_toml``; ``gsfric simulate --column-map FILE.toml``)::
 
@@ -173,6 +178,7 @@ class LogFormat:
         axes = ["x", "-y", "-z"]
         [offset]
         z = 1.1
+        force_noise = 0.05
         [columns]
         t = "C2H time (us)"
         x = "pos_x"
@@ -195,6 +201,7 @@ class LogFormat:
     keep: tuple[str, ...] = ()
     axes: Any = ("x", "y", "z")
     offset: Mapping[str, float] = field(default_factory=dict)
+    force_noise: float | tuple[float, ...] | None = None
 
     def __post_init__(self) -> None:
         columns = {str(k): str(v) for k, v in dict(self.columns).items()}
@@ -229,6 +236,7 @@ class LogFormat:
             raise InputError(f"wrap: must be an integer >= 2, got {short(wrap)}")
         keep = (self.keep,) if isinstance(self.keep, str) else tuple(map(str, self.keep))
         frame = LogFrame(self.axes, self.offset)
+        object.__setattr__(self, "force_noise", _force_noise(self.force_noise))
         object.__setattr__(self, "columns", columns)
         object.__setattr__(self, "units", units)
         object.__setattr__(self, "keep", keep)
@@ -253,7 +261,8 @@ class LogFormat:
 
     @classmethod
     def from_mapping(cls, data: Mapping[str, Any], where: str = "column map") -> LogFormat:
-        allowed = ("columns", "units", "angles", "wrap", "keep", "axes", "offset")
+        allowed = ("columns", "units", "angles", "wrap", "keep", "axes", "offset",
+                   "force_noise")
         for key in data:
             if key not in allowed:
                 raise InputError(f"{where}: unknown key {short(key)}{suggest(key, allowed)}")
@@ -264,7 +273,8 @@ class LogFormat:
             return cls(columns=data.get("columns", {}), units=data.get("units", {}),
                        angles=data.get("angles", "xyz"), wrap=data.get("wrap"),
                        keep=tuple(data.get("keep", ())), axes=data.get("axes", ("x", "y", "z")),
-                       offset=data.get("offset", {}))
+                       offset=data.get("offset", {},
+                       force_noise=data.get("force_noise"))
         except InputError as error:
             raise InputError(f"{where}: {error}") from None
 
@@ -295,6 +305,20 @@ class LogFormat:
         if keep is not None:
             data["keep"] = [k.strip() for k in keep.split(",") if k.strip()]
         return cls.from_mapping(data, where)
+
+
+def _force_noise(value) -> tuple[float, ...] | None:
+    """``force_noise`` as six standard deviations, N (None: not given); InputError for
+    anything but one positive number or six."""
+    if value is None:
+        return None
+    values = list(value) if isinstance(value, (list, tuple)) else [value]
+    if len(values) not in (1, 6) or not all(
+            isinstance(v, (int, float)) and not isinstance(v, bool) and math.isfinite(v)
+            and v > 0 for v in values):
+        raise InputError(f"force_noise: one number > 0 (N) or six, one per leg, got "
+                         f"{short(value)}")
+    return tuple(float(v) for v in values) * (6 if len(values) == 1 else 1)
 
 
 def _read_toml(path) -> dict:
