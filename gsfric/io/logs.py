@@ -273,8 +273,7 @@ class LogFormat:
             return cls(columns=data.get("columns", {}), units=data.get("units", {}),
                        angles=data.get("angles", "xyz"), wrap=data.get("wrap"),
                        keep=tuple(data.get("keep", ())), axes=data.get("axes", ("x", "y", "z")),
-                       offset=data.get("offset", {},
-                       force_noise=data.get("force_noise"))
+                       offset=data.get("offset", {}), force_noise=data.get("force_noise"))
         except InputError as error:
             raise InputError(f"{where}: {error}") from None
 
