@@ -1,4 +1,4 @@
-"""Rates of the discovery workflow on generated rig data (docs/discovery.md).
+"""Rates of the discovery workflow on generated rig data (docs/explanation/discovery.md).
 
 Its own generator: three motion families (sines, chirps, point-to-point minimum-jerk moves
 with rests), two platforms (the reference platform, and one with a 1.5x payload and 2x

@@ -1,7 +1,7 @@
 """Reference platforms and motions, shared by the CLI, tests, notebooks and benchmarks.
 
 The paper's figures 6-7 (the dimensions) are not in its text, so the reference geometry is the
-project's own, documented in docs/reference.md: a three-fold symmetric hexapod, base joints on a
+project's own, documented in docs/explanation/reference-platform.md: a three-fold symmetric hexapod, base joints on a
 circle of radius 0.5 m in pairs 30 degrees apart, platform joints on a circle of radius 0.3 m in
 pairs 30 degrees apart (the pairs turned by 60 degrees against the base's), home height 0.7 m.
 
@@ -66,7 +66,7 @@ def reference_leg() -> Legs:
 
     Lower part (body, screw, motor) 2.6 kg, centre 0.21 m from C_i; upper part (rod, nut, rod
     end) 0.7 kg, centre 0.25 m from E_i: the mass of an SMC LEY32 with 250 mm of stroke, split
-    and placed from its parts. The numbers and how they were obtained: docs/reference.md.
+    and placed from its parts. The numbers and how they were obtained: docs/explanation/reference-platform.md.
     """
     return Legs(model="rigid", weight=True,
                 lower_mass=REFERENCE_LEG["lower_mass"], lower_com=REFERENCE_LEG["lower_com"],
@@ -78,7 +78,7 @@ def reference_leg() -> Legs:
 REFERENCE_LEG = dict(lower_mass=2.6, lower_com=0.21, lower_inertia=(0.071, 0.071, 0.0012),
                      upper_mass=0.7, upper_com=0.25, upper_inertia=(0.019, 0.019, 0.0001))
 """The reference leg's masses (kg), centre distances (m, from C_i and from E_i) and principal
-inertias (kg m^2, leg body frame: transverse, transverse, axial); see docs/reference.md."""
+inertias (kg m^2, leg body frame: transverse, transverse, axial); see docs/explanation/reference-platform.md."""
 
 REFERENCE_FRICTION = dict(model="coupled", bushing_offset=0.25, bushing_spacing=0.1,
                           prismatic_seal=2.0, prismatic_coulomb=0.1)
@@ -92,13 +92,13 @@ def reference_platform(friction_model: str = "coupled") -> Platform:
 
     Platform 10 kg with inertia 0.07 kg m^2 (times identity), payload 3 kg; joints
     c_s = 0.02 N m s/rad, mu = 0.04, r = 0.05 m; prismatic joints 0.02 N s/m, bushings with
-    mu = 0.1 at 0.25 m and 0.35 m from C_i, seal 2 N (docs/reference.md, docs/friction.md).
+    mu = 0.1 at 0.25 m and 0.35 m from C_i, seal 2 N (docs/explanation/reference-platform.md, docs/explanation/friction.md).
 
     Parameters
     ----------
     friction_model : {"coupled", "paper"}
         ``"coupled"`` (default): friction loads the mechanism (bushings, seal, per-axis
-        universal joints, solved at every step; docs/friction.md). ``"paper"``: the paper's
+        universal joints, solved at every step; docs/explanation/friction.md). ``"paper"``: the paper's
         post-hoc friction model, (35) as printed with mu = 0.1 at R_3 and no seal.
 
     Returns

@@ -1,6 +1,6 @@
 """Platform motions: poses with their velocities and accelerations, from arrays or from sampled poses.
 
-Conventions (see docs/architecture.md): SI units, radians, the step as the leading axis.
+Conventions (see docs/explanation/architecture.md): SI units, radians, the step as the leading axis.
 The orientation ``R`` maps platform-frame vectors to the base frame. In ZXZ angles,
 ``R = Rz(gamma) Rx(beta) Rz(alpha)``, whose entries are the paper's b_ij; this is
 ``scipy.spatial.transform.Rotation.from_euler("zxz", [alpha, beta, gamma])`` (extrinsic).

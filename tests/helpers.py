@@ -22,7 +22,7 @@ PAPER_MISPRINTS = {
     (3, 14, "Ffr1", "-0.6234", ("digits",)),            # an extra digit
     (3, 27, "Ffr5", "-0.0687", ("digits", "small")),    # an order of magnitude low
 }
-"""Misprints of the paper's tables, found by reading them (docs/errata.md, E32):
+"""Misprints of the paper's tables, found by reading them (docs/reference/errata.md, E32):
 (table, step, column, as printed, kinds in alphabetical order)."""
 
 

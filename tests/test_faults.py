@@ -4,7 +4,7 @@ Each test provokes one failure and checks what the user gets (one line, the docu
 code) and what is left on disk (nothing partial, earlier outputs unchanged, no temporary file,
 no compiler process). Faults that would disturb the session's own compiled library (its
 ``functools.lru_cache``) run in fresh processes with their own ``GSFRIC_CACHE``.
-See docs/robustness.md, section 8.
+See docs/explanation/robustness.md, section 8.
 """
 
 from __future__ import annotations

@@ -1,6 +1,6 @@
 """Real log files: column maps, units, roll/pitch/yaw, wrapping counters, extra columns.
 
-The worked example of docs/logs.md is run as written (its Python and its TOML) and checked
+The worked example of docs/howto/read-a-log.md is run as written (its Python and its TOML) and checked
 against the motion it was made from.
 """
 

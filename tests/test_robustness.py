@@ -1,5 +1,5 @@
 """Robustness of the evaluation: step flags, friction at zero speed, the level pose, bad input
-to the API, and the streamed evaluation of long files (docs/robustness.md)."""
+to the API, and the streamed evaluation of long files (docs/explanation/robustness.md)."""
 
 from __future__ import annotations
 

@@ -2,7 +2,7 @@
 
 Exit codes: 0 success; ``EXIT_CHECK`` (1) a check failed; ``EXIT_INPUT`` (2) bad input or usage;
 ``EXIT_INTERNAL`` (3) an internal or build failure; ``EXIT_PIPE`` (141) the reader of stdout
-went away. See ``gsfric.cli`` and docs/robustness.md.
+went away. See ``gsfric.cli`` and docs/explanation/robustness.md.
 """
 
 from __future__ import annotations
@@ -33,7 +33,7 @@ def log_options(command=None, *, keep=True):
                           "'t=C2H time (us),x=pos_x,roll=Roll'; or a TOML file with a "
                           "[columns] table (and [units], angles, wrap, keep, the controller's frame: "
                           "axes, [offset]; the log's own rates: vx..vz, omega_x.., ax.., "
-                          "alpha_x..). See docs/logs.md."),
+                          "alpha_x..). See docs/howto/read-a-log.md."),
         click.option("--units", "units_map", metavar="NAME=UNIT,...",
                      help="Units of the log's columns, by gsfric name, e.g. "
                           "'t=us,x=mm,y=mm,z=mm,roll=deg' (s ms us ns; m cm mm um; rad deg "

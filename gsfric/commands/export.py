@@ -38,7 +38,7 @@ def export(platform_file, out, model, prefix, code, verify_dir):
     model, by default with the platform folded into its code; no heap, no global state, no
     I/O, only math.h), a Makefile, a CMakeLists.txt, an example and a README.
     `gsfric export --verify DIR` builds it and reports the worst relative error against the
-    Python evaluation and the median latency of one step. See docs/export.md.
+    Python evaluation and the median latency of one step. See docs/howto/export.md.
     """
     if verify_dir is not None:
         if out is not None or platform_file is not None or model is not None:

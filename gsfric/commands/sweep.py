@@ -78,7 +78,7 @@ def sweep(out_dir, trajectories, workspace, platform_file, vary, tolerance, vari
     --tolerance as normal errors, --variants of them, reproducible by --seed); --grid N lays
     N evenly spaced values over each range instead. Writes envelopes.parquet (per case,
     quantity and leg, with where each extreme occurs), summary.csv, variants.csv, limits.csv
-    (cases beyond the platform's [limits]), sweep.json and plots. See docs/sizing.md.
+    (cases beyond the platform's [limits]), sweep.json and plots. See docs/howto/sizing.md.
     """
     if grid is not None and variants is not None:
         fail("--grid: gives the number of values per parameter; leave out --variants")

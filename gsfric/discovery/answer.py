@@ -21,8 +21,10 @@ GLOSSARY: dict[str, str] = {
     "gap closed (console)": "(RMS before - RMS after) / (RMS before - noise floor): the share "
                             "of the gap above the noise that the final model removes; the "
                             "noise floor is the smaller of the noise level and the final RMS.",
-    "noise floor": "the force channels' own noise, from the high-frequency part of each "
-                   "channel alone (independent of the model), N RMS.",
+    "noise floor": "what model and data can agree to, N RMS over the legs: the load cells' "
+                   "noise (as given with --force-noise or --noise-record, or estimated from "
+                   "the force channels in a way the discrepancy cannot inflate) plus what the "
+                   "pose noise puts into the model's forces through differentiation.",
     "model / refit / final / unbounded": "a parameter's value in the platform as given "
                                          "(model), after refitting the model's own parameters "
                                          "alone, within the plausible range (refit), in the "
@@ -84,8 +86,13 @@ def _effect(f: Finding) -> str:
 
 
 def noise_floor(d: Discovery) -> float:
-    """The noise floor the console line compares with, N RMS (``GLOSSARY``)."""
-    return float(d.noise.high_frequency) if d.noise is not None else float(d.noise_rms_estimate)
+    """The noise floor the console line compares with, N RMS (``GLOSSARY``): the verdict's
+    floor, or the force channels' high-frequency noise where no floor was made."""
+    if d.noise is None:
+        return float(d.noise_rms_estimate)
+    if d.noise.floor is not None:
+        return float(d.noise.floor.rms)
+    return float(d.noise.high_frequency)
 
 
 def gap_closed(d: Discovery) -> float:

@@ -281,7 +281,7 @@ def separating_motion(a: str, b: str) -> str:
     """A sentence on the motion that would separate candidates a and b."""
     return SEPARATING_MOTION.get(frozenset({a, b}),
                                  f"a motion that changes the ratio of the {a} and {b} "
-                                 "signatures (see docs/effects.md) separates them")
+                                 "signatures (see docs/reference/effects.md) separates them")
 
 CANDIDATE_NAMES = tuple(c.name for c in CANDIDATES)
 

@@ -323,7 +323,7 @@ def _method(d: Discovery) -> list[str]:
           f"closes a gap of at least {d.settings.min_gap:g} x the noise level. The accepted "
           "candidate with the largest held-out gain is added, refined by Gauss-Newton on the "
           "compiled model, and the next round starts; the workflow stops when no candidate is "
-          "accepted. See docs/discovery.md.", ""]
+          "accepted. See docs/explanation/discovery.md.", ""]
     return L
 
 

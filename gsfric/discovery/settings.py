@@ -49,7 +49,7 @@ class Settings:
         Threads of the compiled evaluation (0: every core).
 
     The thresholds below (one line each on why) are fixed by the documented calibrations
-    (docs/discovery.md); change them only with the calibration.
+    (docs/explanation/discovery.md); change them only with the calibration.
     """
 
     alpha: float = 0.01

@@ -1,6 +1,6 @@
 """The discrepancy workflow: refit the model, test the candidate effects, add the winner, repeat.
 
-Steps (docs/discovery.md explains each decision):
+Steps (docs/explanation/discovery.md explains each decision):
 
 1. Simulate the measured motion with the current model; residuals ``r = F_measured - F_model``
    per leg. The first and last ``trim`` samples, where the differentiation of the recorded pose

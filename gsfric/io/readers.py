@@ -15,7 +15,7 @@ them.
 
 A log written by another program (a controller's names and units, a wrapping microsecond
 counter, roll/pitch/yaw) is read with a ``LogFormat``: a column map, units per column, the
-angle convention and the columns to carry through; see docs/logs.md.
+angle convention and the columns to carry through; see docs/howto/read-a-log.md.
 
 Writes are atomic (``atomic_write``): a reader never sees a partly written file.
 """

@@ -7,7 +7,7 @@ paper's run, each beside the paper's values (magnitudes, N):
   (our Table 3);
 * ``(35) with R_E``: the same formula with the whole joint force |R_E|, which is what the size of
   the paper's values implies;
-* ``bushings``: the coupled model's prismatic friction (docs/friction.md) from the same R_3 and
+* ``bushings``: the coupled model's prismatic friction (docs/explanation/friction.md) from the same R_3 and
   M_3: two bushings ``bushing_spacing`` apart, ``bushing_offset`` from C_i, the same mu, plus
   viscous and seal terms.
 """
@@ -63,7 +63,7 @@ def report_section(run) -> list[str]:
     lines += ["",
               "(35) with R_3 is the paper's formula as printed (our table3.csv); with the whole "
               "joint force |R_E| it has the size of the paper's values; the bushing model "
-              f"(docs/friction.md: bushings {fr.bushing_spacing:g} m apart, the first "
+              f"(docs/explanation/friction.md: bushings {fr.bushing_spacing:g} m apart, the first "
               f"{fr.bushing_offset:g} m from C_i, mu = {fr.prismatic_coulomb:g}, seal "
               f"{fr.prismatic_seal:g} N) adds the normal forces that the joint's moment M_3 "
               "puts on the bushings."]

@@ -171,7 +171,7 @@ def _header_section(run: PaperRun, source: str | None) -> list[str]:
         "",
         f"- Platform: {source or 'the built-in paper platform (`gsfric.models.paper_platform()`)'}"
         ", written to `platform.toml`. The paper's dimensions (its figures 6-7) are missing, so "
-        "the geometry is the project's reference geometry (docs/reference.md).",
+        "the geometry is the project's reference geometry (docs/explanation/reference-platform.md).",
         f"- Motion: {n} steps from rest at the home pose with constant accelerations "
         f"a = {PAPER_ACCELERATION} m/s^2, alpha = {PAPER_ANGULAR_ACCELERATION} "
         f"rad/s^2, t_j = {models.PAPER_DT} j s.",

@@ -44,7 +44,7 @@ LEG_MODELS = ("rigid", "paper")
 
 FRICTION_MODELS = ("paper", "coupled")
 """Friction models (``[friction] model``): the paper's post-hoc evaluation, and the coupled model
-in which friction loads the mechanism (docs/friction.md)."""
+in which friction loads the mechanism (docs/explanation/friction.md)."""
 
 PAPER_LEG_FRACTION = 0.25
 """Fraction of the leg length at which the paper model places the lower and upper centres."""
@@ -311,7 +311,7 @@ class Friction:
     model : {"paper", "coupled"}
         ``"paper"``: the paper's post-hoc (33)-(35), nothing fed back; ``"coupled"``: friction
         loads the mechanism (solved at every step), prismatic friction from two bushings,
-        universal joints per bearing axis (docs/friction.md). Default ``"paper"``: the meaning
+        universal joints per bearing axis (docs/explanation/friction.md). Default ``"paper"``: the meaning
         of every file written before the key existed.
     bushing_offset : float
         Distance of the first bushing from C_i along the leg, m (coupled model). Default 0.25.

@@ -32,7 +32,7 @@ SPEED_STROKES = 50.0
 20 ms): positions in mm given as m, or times in ms given as s. The median, because a wrong unit
 scales every step while a few glitches (steps flagged one by one) do not move it."""
 
-FIXES = ("a pose offset and axes in the log format ([offset], axes; see docs/logs.md), "
+FIXES = ("a pose offset and axes in the log format ([offset], axes; see docs/howto/read-a-log.md), "
          "`gsfric platform --template` with the rig's sizes, or --platform with the rig's "
          "platform file")
 

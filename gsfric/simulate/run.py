@@ -3,7 +3,7 @@
 ``simulate_file`` reads a trajectory file (CSV or Parquet) in chunks of ``chunk`` rows,
 differentiates each chunk (``gsfric.simulate.differentiate``), evaluates it, and appends its
 rows to the output, so that memory stays bounded by the chunk size however long the file is
-(10 million steps in well under 2 GB, see docs/robustness.md). It is what ``gsfric simulate``
+(10 million steps in well under 2 GB, see docs/explanation/robustness.md). It is what ``gsfric simulate``
 runs.
 
 The sensor's ``time_offset`` (``gsfric.platform.catalog``) interpolates F between steps that may

@@ -25,7 +25,7 @@ from gsfric.sweep.variants import make_variants, parse_vary
 from gsfric.sweep.workspace import Workspace, check_reachable
 
 CHUNK_STEPS = 1_000_000
-"""Default evaluated steps per task: one to a few seconds of one core (docs/sizing.md)."""
+"""Default evaluated steps per task: one to a few seconds of one core (docs/howto/sizing.md)."""
 
 _POSE_BYTES = 48
 _VARIANT_BYTES = 17_000

@@ -45,7 +45,7 @@ from gsfric.sweep.workspace import Workspace
 SERIAL_BELOW = 2_000_000
 """``scheduler="auto"`` runs sweeps of fewer steps in this process: below two tasks a cluster
 has nothing to share out, and starting one (0.5-5 s with the workers' imports and first task)
-costs about what a second core saves on a million steps (docs/sizing.md)."""
+costs about what a second core saves on a million steps (docs/howto/sizing.md)."""
 
 MERGE_EVERY = 64
 """Task envelopes held before they are folded into the running merge (bounds client memory)."""
@@ -60,7 +60,7 @@ tick (a check that a loop is not blocked) once a second instead of every 20 ms, 
 monitors (the nannies', which run in this process, and the workers') once a second instead of
 10 times, the system monitor every 2 s instead of 0.5 s. Measured on an idle cluster of one
 worker, Dask's defaults cost the worker 2.0 % of a core and this process (the scheduler and the
-nannies) 3.2 %; these settings, 0.3 % and 0.7 % (docs/sizing.md)."""
+nannies) 3.2 %; these settings, 0.3 % and 0.7 % (docs/howto/sizing.md)."""
 
 
 def local_cluster(workers: int):
@@ -309,7 +309,7 @@ def sweep(out: str | os.PathLike, trajectories=None,
     trajectories : str, path or list of them
         Glob pattern(s) of trajectory files (CSV or Parquet); each file is one motion.
     workspace : Workspace or path of its TOML
-        Poses and velocity/acceleration bounds (docs/sizing.md).
+        Poses and velocity/acceleration bounds (docs/howto/sizing.md).
     platform : Platform or path of its TOML
         The nominal platform (default: ``gsfric.models.platform_from(None)``, the reference
         platform); its ``[limits]`` are checked.

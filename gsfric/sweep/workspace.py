@@ -1,7 +1,7 @@
 """The sizing workspace: pose ranges with velocity and acceleration bounds, sampled into poses
 and dynamic states, and the check that every pose is reachable.
 
-A workspace is read from TOML (layout in docs/sizing.md); its poses are a grid or a Latin
+A workspace is read from TOML (layout in docs/howto/sizing.md); its poses are a grid or a Latin
 hypercube, and each pose has ``states`` dynamic states laid out as the generated functions'
 state input x (``gsfric.compiled.state.state_layout``, from the manifest).
 """
@@ -129,7 +129,7 @@ class Workspace:
 
     @classmethod
     def from_dict(cls, data: Mapping, source: str = "workspace") -> Workspace:
-        """Build from the TOML layout (docs/sizing.md); ``InputError`` naming the key."""
+        """Build from the TOML layout (docs/howto/sizing.md); ``InputError`` naming the key."""
         _check_keys(data, _WORKSPACE_KEYS, "", "key", source)
         sampling = data.get("sampling", "lhs")
         if sampling not in ("grid", "lhs"):
@@ -142,7 +142,7 @@ class Workspace:
 
     @classmethod
     def from_toml(cls, path: str | os.PathLike) -> Workspace:
-        """Read a workspace TOML file (layout in docs/sizing.md)."""
+        """Read a workspace TOML file (layout in docs/howto/sizing.md)."""
         path = Path(path)
         try:
             data = tomllib.loads(path.read_text(encoding="utf-8"))
