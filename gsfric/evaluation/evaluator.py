@@ -72,13 +72,12 @@ class Evaluator:
     Raises
     ------
     InputTypeError
-        ``platform`` is not a Platform; ``n_threads`` is not an integer.
+        ``platform`` is not a Platform; ``n_threads`` is not an integer. Every method raises
+        it (a ``TypeError``) for an argument of the wrong type, and ``InputError`` (a
+        ``ValueError``) for a wrong shape or a NaN or infinite state, in one line: no NaN row
+        comes from a NaN state.
     InputError
         ``mode`` is not one of ``MODES``; ``n_threads`` is not from 1 to ``MAX_THREADS``.
-
-    Every method raises ``InputTypeError`` (a ``TypeError``) for an argument of the wrong type
-    and ``InputError`` (a ``ValueError``) for a wrong shape or a NaN or infinite state, in one
-    line: no NaN row comes from a NaN state.
 
     Examples
     --------

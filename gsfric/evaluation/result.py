@@ -164,8 +164,9 @@ class Result:
                 f"arrays {names}>")
 
     def summary(self) -> str:
-        """The long form of the repr: per leg, the largest |F| (N), |R_E|, |R_C| (N), |M_C|
-        (N m) and friction |Ffr| (N) over the steps, and what the flags say."""
+        """The long form of the repr: per leg, the largest magnitudes of ``F`` (N), ``R_E``,
+        ``R_C`` (N), ``M_C`` (N m) and the friction ``Ffr`` (N) over the steps, and what the
+        flags say."""
         n = len(self.t)
         lines = [repr(self)]
         rows = (("|F| (N)", "F", None), ("|R_E| (N)", "R_E", 2), ("|R_C| (N)", "R_C", 2),
