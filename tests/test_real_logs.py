@@ -69,7 +69,8 @@ def test_a_trailing_zero_row_is_left_out_and_changes_no_other_row(tmp_path):
                       "--out", out)
         assert result.exit_code == 0, result.output
         outputs[name] = (read_table(out), result.stderr)
-    assert "row 301: every value is 0 and the time stops (a dropout row): left out" in outputs["bad"][1]
+    assert "row 301: every value is 0 and the time stops (a dropout row): left out" \
+        in outputs["bad"][1]
     assert "dropout" not in outputs["clean"][1]
     pd.testing.assert_frame_equal(outputs["clean"][0], outputs["bad"][0], check_exact=True)
     with pytest.warns(DataWarning, match="row 301: every value is 0"):
@@ -285,7 +286,8 @@ def test_the_controller_log_reads_simulates_and_discovers(tmp_path):
     out = tmp_path / "forces.csv"
     result = _cli("simulate", "--trajectory", LOG, "--column-map", LOG_FORMAT, "--out", out)
     assert result.exit_code == 0, result.output
-    assert "row 2001: every value is 0 and the time stops (a dropout row): left out" in result.stderr
+    assert "row 2001: every value is 0 and the time stops (a dropout row): left out" \
+        in result.stderr
     assert "row 752: time counter 'Timestamp [us]' wraps around" in result.stderr
     assert "velocity from the log's columns" in result.stdout
     forces = read_table(out)

@@ -31,9 +31,9 @@ def log_options(command=None, *, keep=True):
         click.option("--column-map", metavar="FILE.toml|NAME=COLUMN,...",
                      help="The log's column for each gsfric column, e.g. "
                           "'t=C2H time (us),x=pos_x,roll=Roll'; or a TOML file with a "
-                          "[columns] table (and [units], angles, wrap, keep, the controller's frame: "
-                          "axes, [offset]; the log's own rates: vx..vz, omega_x.., ax.., "
-                          "alpha_x..). See docs/howto/read-a-log.md."),
+                          "[columns] table (and [units], angles, wrap, keep, the controller's "
+                          "frame: axes, [offset]; the log's own rates: vx..vz, omega_x.., "
+                          "ax.., alpha_x..). See docs/howto/read-a-log.md."),
         click.option("--units", "units_map", metavar="NAME=UNIT,...",
                      help="Units of the log's columns, by gsfric name, e.g. "
                           "'t=us,x=mm,y=mm,z=mm,roll=deg' (s ms us ns; m cm mm um; rad deg "

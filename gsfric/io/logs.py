@@ -356,9 +356,10 @@ class ColumnReader:
     a block.
 
     A dropout row (every value read but the time zero, and the time not advancing, as a
-    controller writes when it stops: its counter drops to 0) is left out with a ``DataWarning`` naming it; the other rows are read as if it were not
-    there. A second orientation set (ZXZ angles or roll, pitch, yaw beside the quaternion) is
-    read too and must give the same rotation to ``ORIENTATION_TOLERANCE``.
+    controller writes when it stops: its counter drops to 0) is left out with a
+    ``DataWarning`` naming it; the other rows are read as if it were not there. A second
+    orientation set (ZXZ angles or roll, pitch, yaw beside the quaternion) is read too and
+    must give the same rotation to ``ORIENTATION_TOLERANCE``.
 
     Attributes
     ----------
