@@ -62,6 +62,18 @@ def discover(data, forces: np.ndarray | None = None,
     ------
     InputError
         Unreadable data, or a Motion without forces of shape (N, 6).
+
+    Examples
+    --------
+    A record with a hidden low-speed friction peak (a run takes seconds, so it is not run as a
+    doctest):
+
+    >>> import gsfric
+    >>> from gsfric.synth import synthesize
+    >>> record = synthesize(effects=["stribeck:static=2,velocity=0.01"], noise=0.1, seed=1)
+    >>> result = gsfric.discover(record.frame)                      # doctest: +SKIP
+    >>> result.verdict, result.names                                # doctest: +SKIP
+    ('explained', ['stribeck'])
     """
     source = ""
     platform_file = platform if isinstance(platform, (str, os.PathLike)) else None

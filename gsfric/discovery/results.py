@@ -362,6 +362,13 @@ class Discovery:
         against the noise floor.
     verdict_decided_by : str
         ``dictionary``, ``lack of fit``, ``floor``, ``effects``, ``refit`` or ``none``.
+
+    Examples
+    --------
+    >>> result = gsfric.discover("measured.csv", out="out")         # doctest: +SKIP
+    >>> result                                                      # doctest: +SKIP
+    <Discovery explained: stribeck (static = 2 N, velocity = 0.00998 m/s) ...>
+    >>> print(result.summary()["answer"])                           # doctest: +SKIP
     """
 
     effects: list[Finding]
