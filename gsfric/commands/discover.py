@@ -11,7 +11,7 @@ from gsfric.commands.common import log_options
 from gsfric.discovery.answer import verdict_line
 from gsfric.discovery.report import discover_file, write
 from gsfric.errors import InputError
-from gsfric.io.files import check_outputs
+from gsfric.io.files import check_output_folder, check_outputs
 from gsfric.io.logs import LogFormat
 
 
@@ -52,6 +52,7 @@ def discover(measured, platform_file, out_dir, seed, force_noise, noise_record, 
     log_format = LogFormat.from_options(column_map, units_map, angles, None)
     check_outputs([out_dir], {"measured-data": measured, "platform": platform_file,
                               "noise-record": noise_record})
+    check_output_folder(out_dir)
     result = discover_file(measured, platform_file, seed=seed, progress=show,
                            force_noise=_values(force_noise), noise_record=noise_record,
                            **({"log_format": log_format} if log_format else {}))

@@ -48,7 +48,7 @@ from gsfric.discovery.floor import (
 )
 from gsfric.discovery.refine import half_stability, refine
 from gsfric.discovery.regimes import bands as regime_bands
-from gsfric.discovery.residuals import Problem
+from gsfric.discovery.residuals import Problem, checked_forces
 from gsfric.discovery.results import (
     NOISE_METHOD,
     Discovery,
@@ -169,6 +169,7 @@ def discover(motion: Motion, forces: np.ndarray, platform: Platform | None = Non
                              "name)")
     settings = dataclasses.replace(settings or Settings(), **options)
     platform = platform_from(platform)
+    forces = checked_forces(motion, forces)
     recorded = poses if poses is not None else motion.recorded_poses()
     check_poses(platform, *(recorded if recorded is not None else (motion.position,
                                                                    motion.rotation)), motion.t)
