@@ -1,4 +1,5 @@
-"""Threads of the linear-algebra library (BLAS) that NumPy and SciPy call."""
+"""Threads: the linear-algebra library's (BLAS, which NumPy and SciPy call) held to one, and
+independent calls run side by side (``in_parallel``)."""
 
 from __future__ import annotations
 

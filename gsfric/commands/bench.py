@@ -20,8 +20,9 @@ from gsfric.sweep.scaling import dask_scaling
 @click.option("--out", type=click.Path(dir_okay=False, path_type=Path),
               help="Also write the table as JSON.")
 def bench(quick, every, out):
-    """Print the throughput table: compiled vs NumPy-vectorised vs per-step loop (with --all:
-    every user path against its goal)."""
+    """Print the throughput table: compiled vs NumPy-vectorised vs per-step loop.
+
+    With --all: every user path against its goal, measured in one run."""
     if every:
         run_all(quick=quick, out=out, dask=dask_scaling)
     else:
