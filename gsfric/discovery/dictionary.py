@@ -12,14 +12,16 @@ one cell's):
 * ``line``: sine and cosine at each of the residual's most prominent spectral peaks
   (interference on the load cells: mains, a drive's switching, a pump);
 * ``coupling``: the other legs' model forces (cross-talk between load-cell channels);
-* ``sensor memory``: the reading's error of a load cell with a dead band (play) of a few
-  noise widths, the sign of the force's rate of change, a dead band around zero force
-  (hysteresis, a reading that depends on the direction of the force change);
+* ``sensor memory``: the reading's error of a load cell with a dead band (play) whose width
+  is chosen per leg (from a tenth of the residual, the sign of the force's rate of change,
+  to three times it), and a dead band around zero force (hysteresis, a reading that depends
+  on the direction of the force change);
 * ``drift``: time polynomials and piecewise levels (a zero drifting, a step over the record);
 * ``state``: the leg's stroke, its square, its speed, its speed's magnitude and the
   platform's position (a dependence on speed, stroke or pose that no candidate removed).
 
-Each accepted group is described in a rig engineer's words (``Unexplained.description``).
+The groups are taken by forward selection (``find``), and each accepted group is described
+in a rig engineer's words (``Unexplained.description``).
 """
 
 from __future__ import annotations
