@@ -33,8 +33,11 @@ def perturbed_platform(rng: np.random.Generator, legs_model: str = "rigid") -> g
     axes = g.universal_axes + rng.uniform(-0.3, 0.3, (6, 3))
 
     def inertia(scale):
+        """A full inertia of a rigid body (its principal moments obey the triangle
+        inequality: the added trace bounds the largest by the sum of the other two)."""
         a = rng.normal(size=(3, 3)) * scale
-        return a @ a.T + np.eye(3) * scale
+        full = a @ a.T + np.eye(3) * scale
+        return full + np.trace(full) * np.eye(3)
 
     return (base.with_geometry(base_joints=g.base_joints + rng.uniform(-0.03, 0.03, (6, 3)),
                                platform_joints=g.platform_joints

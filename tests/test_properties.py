@@ -88,7 +88,7 @@ def symmetric_platform(rng: np.random.Generator) -> gsfric.Platform:
 
     def axial_inertia():
         a, b = rng.uniform(0.01, 0.2, 2)
-        return np.diag([a, a, b])
+        return np.diag([a, a, min(b, 2 * a)])       # a rigid body's: b <= a + a
 
     return (ref
             .with_geometry(base_joints=threefold(g.base_joints[:2] + rng.uniform(-0.03, 0.03,

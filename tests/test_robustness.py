@@ -4,6 +4,7 @@ to the API, and the streamed evaluation of long files (docs/explanation/robustne
 from __future__ import annotations
 
 import json
+import re
 import subprocess
 import sys
 import warnings
@@ -207,8 +208,9 @@ def test_singularity_measure_is_independent_of_the_platform_size():
     """Every length of platform and motion times 1000: the same h and the same flags."""
     platform = models.reference_platform()
     g = platform.geometry
-    big = platform.with_geometry(base_joints=1000 * g.base_joints,
-                                 platform_joints=1000 * g.platform_joints, stroke=None)
+    with pytest.warns(GsfricWarning, match="lengths must be in m, not mm"):
+        big = platform.with_geometry(base_joints=1000 * g.base_joints,
+                                     platform_joints=1000 * g.platform_joints, stroke=None)
     rotation = Rotation.from_rotvec(np.linspace(1.2, 1.7, 30)[:, None] * [0, 0, 1.0]).as_matrix()
     small = quiet(evaluate, platform.with_geometry(stroke=None),
                   poses(np.tile(HOME, (30, 1)), rotation))
@@ -815,10 +817,12 @@ def test_positions_in_millimetres_warn():
 
 def test_platform_in_millimetres_warns(platform):
     geometry = platform.geometry
-    with pytest.warns(GsfricWarning, match=r"geometry\.base_joints: a joint is \d+(\.\d+)? m "
-                                           r"from the origin .*lengths must be in m, not mm"):
+    with pytest.warns(GsfricWarning) as record:
         platform.with_geometry(base_joints=geometry.base_joints * 1000.0,
                                platform_joints=geometry.platform_joints * 1000.0, stroke=None)
+    for name in ("base_joints", "platform_joints"):
+        assert any(re.search(rf"geometry\.{name}: a joint is \d+(\.\d+)? m from the origin "
+                             r".*lengths must be in m, not mm", str(w.message)) for w in record)
 
 
 def test_inertia_violating_the_triangle_inequality_warns(platform):
