@@ -338,7 +338,7 @@ class Discovery:
         Full evaluation of the given model over the used samples (speeds, lengths, loads).
     noise_model : NoiseModel
         AR model of the final residual.
-    regimes : list of Band (gsfric.discovery.regimes)
+    regimes : list of Band
         The residual before and after per band of speed, load, stroke, pose and time.
     settings : Settings
     evaluations : int
