@@ -42,7 +42,7 @@ from gsfric.paper import tables as paper
 from gsfric.trajectory import Motion
 
 PAPER = Path(__file__).resolve().parents[2] / "shared" / "paper"
-DOC = Path(__file__).resolve().parents[1] / "docs" / "errata.md"
+DOC = Path(__file__).resolve().parents[1] / "docs" / "reference" / "errata.md"
 HOLDS = 1e-9
 FAILS = 1e-3
 SEED = 20261122
