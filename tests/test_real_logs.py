@@ -16,6 +16,7 @@ import numpy as np
 import pandas as pd
 import pytest
 from click.testing import CliRunner
+from helpers import trajectory_frame
 
 from gsfric import models
 from gsfric.cli import main
@@ -35,13 +36,8 @@ def _cli(*args):
     return CliRunner().invoke(main, [str(a) for a in args], catch_exceptions=False)
 
 
-def _frame(n: int = 300, rate: float = 100.0) -> pd.DataFrame:
-    t = np.arange(n) / rate
-    motion = models.sinusoidal(t)
-    frame = pd.DataFrame({"t": t})
-    frame[["x", "y", "z"]] = motion.position
-    frame[["qw", "qx", "qy", "qz"]] = motion.quaternion()
-    return frame
+def _frame(n: int = 300) -> pd.DataFrame:
+    return trajectory_frame(n)
 
 
 def _quiet(function, *args, **kwargs):

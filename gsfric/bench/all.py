@@ -23,7 +23,6 @@ table, not for figures.
 
 from __future__ import annotations
 
-import json
 import sys
 import tempfile
 from collections.abc import Callable
@@ -34,7 +33,7 @@ import numpy as np
 
 import gsfric
 from gsfric.bench.cases import bench_motion, best_times
-from gsfric.bench.machine import describe_machine, load_average, parallel_capacity
+from gsfric.bench.machine import describe_machine, load_average, parallel_capacity, publish
 from gsfric.bench.paths import busy_core_paths, control_loop_paths
 from gsfric.bench.simulate import run_gsfric, simulate_case
 from gsfric.evaluation.evaluator import Evaluator, state_array
@@ -258,10 +257,5 @@ def run_all(quick: bool = False, out: Path | None = None,
             dask: Callable[[int], dict] | None = None) -> AllReport:
     """``measure_all``, the table printed, and with ``out`` the report written as JSON."""
     report = measure_all(quick, dask, progress=lambda s: print(s, file=sys.stderr, flush=True))
-    print(format_all(report))
-    if out is not None:
-        out = Path(out)
-        out.parent.mkdir(parents=True, exist_ok=True)
-        out.write_text(json.dumps(report.as_dict(), indent=2) + "\n")
-        print(f"wrote {out}")
+    publish(format_all(report), report.as_dict(), out)
     return report

@@ -6,7 +6,6 @@ from __future__ import annotations
 import difflib
 import math
 import os
-import re
 import warnings
 from collections.abc import Mapping
 from dataclasses import dataclass, field
@@ -14,10 +13,10 @@ from pathlib import Path
 from typing import Any
 
 import numpy as np
-import tomllib
 
 from gsfric._checks import short, suggest
 from gsfric.errors import DataWarning, GsfricWarning, InputError
+from gsfric.io.files import read_toml
 from gsfric.io.frames import LogFrame
 from gsfric.io.tables import numeric_columns
 from gsfric.signal.rotations import quaternion_from_euler, quaternion_from_rpy
@@ -257,7 +256,7 @@ class LogFormat:
     def from_toml(cls, path: str | os.PathLike[str]) -> LogFormat:
         """Read a TOML file with ``[columns]``, ``[units]``, ``angles``, ``wrap``, ``keep``,
         ``axes``, ``[offset]``."""
-        return cls.from_mapping(_read_toml(path), str(path))
+        return cls.from_mapping(read_toml(path), str(path))
 
     @classmethod
     def from_mapping(cls, data: Mapping[str, Any], where: str = "column map") -> LogFormat:
@@ -287,7 +286,7 @@ class LogFormat:
         data: dict[str, Any] = {}
         if column_map is not None:
             if str(column_map).lower().endswith(".toml"):
-                data = dict(_read_toml(column_map))
+                data = dict(read_toml(column_map))
             else:
                 data["columns"] = _pairs(column_map, "--column-map")
         where = str(column_map) if data and column_map and str(column_map).lower().endswith(
@@ -318,34 +317,6 @@ def _force_noise(value) -> tuple[float, ...] | None:
         raise InputError(f"force_noise: one number > 0 (N) or six, one per leg, got "
                          f"{short(value)}")
     return tuple(float(v) for v in values) * (6 if len(values) == 1 else 1)
-
-
-def _read_toml(path) -> dict:
-    path = Path(path)
-    try:
-        with open(path, "rb") as handle:
-            return tomllib.load(handle)
-    except FileNotFoundError:
-        raise InputError(f"{path}: file not found") from None
-    except OSError as error:
-        raise InputError(f"{path}: cannot read ({error.strerror})") from None
-    except tomllib.TOMLDecodeError as error:
-        raise InputError(f"{path}: {_toml_problem(path, error)}") from None
-
-
-def _toml_problem(path: Path, error: Exception) -> str:
-    """The TOML error, naming the key of a repeated key (``Cannot overwrite a value``)."""
-    text = str(error)
-    line = re.search(r"at line (\d+)", text)
-    if "overwrite" in text and line:
-        try:
-            source = path.read_text(encoding="utf-8").splitlines()[int(line.group(1)) - 1]
-        except (OSError, UnicodeDecodeError, IndexError):
-            source = ""
-        key = source.split("=")[0].strip().strip("[]").strip()
-        if key:
-            return f"line {line.group(1)}: key {key!r} given twice; give each key once"
-    return f"not valid TOML ({text})"
 
 
 class ColumnReader:

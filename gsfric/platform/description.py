@@ -31,11 +31,10 @@ from typing import Any
 
 import numpy as np
 import tomli_w
-import tomllib
 
 from gsfric._checks import as_array, as_float, as_path, fields_equal, short, suggest
 from gsfric.errors import GsfricWarning, InputError, InputTypeError
-from gsfric.io.files import atomic_write
+from gsfric.io.files import atomic_write, read_toml
 from gsfric.platform import catalog
 
 LEG_MODELS = ("rigid", "paper")
@@ -540,24 +539,7 @@ class Platform:
             unknown key, a wrong type, a NaN or infinite value, an integer beyond 64 bits).
         """
         path = as_path(path, "platform file")
-        try:
-            raw = path.read_bytes()
-        except FileNotFoundError:
-            raise InputError(f"{path}: file not found") from None
-        except IsADirectoryError:
-            raise InputError(f"{path}: is a directory, not a file") from None
-        except OSError as error:
-            raise InputError(f"{path}: cannot read ({error.strerror})") from None
-        try:
-            text = raw.decode("utf-8")
-        except UnicodeDecodeError as error:
-            raise InputError(f"{path}: not UTF-8 text (byte {error.start})") from None
-        try:
-            data = tomllib.loads(text)
-        except tomllib.TOMLDecodeError as error:
-            raise InputError(f"{path}: invalid TOML: {error}") from None
-        except RecursionError:
-            raise InputError(f"{path}: invalid TOML: nested too deeply") from None
+        data = read_toml(path)
         return cls.from_dict(data, source=str(path))
 
     # -- writing --------------------------------------------------------------------------

@@ -44,10 +44,10 @@ from pathlib import Path
 from typing import Any
 
 import numpy as np
-import tomllib
 
 from gsfric._checks import as_float, short, suggest
 from gsfric.errors import InputError
+from gsfric.io.files import read_toml
 from gsfric.platform.description import FRICTION_MODELS, Body, Friction, Geometry, Legs, Platform
 from gsfric.platform.text import commented_toml
 
@@ -165,14 +165,7 @@ class Rig:
     def from_toml(cls, path: str | os.PathLike[str]) -> Rig:
         """Read a rig TOML file (keys: the ``Rig`` fields); ``InputError`` on any problem."""
         path = Path(path)
-        try:
-            data = tomllib.loads(path.read_text(encoding="utf-8"))
-        except FileNotFoundError:
-            raise InputError(f"{path}: file not found") from None
-        except (OSError, UnicodeDecodeError) as error:
-            raise InputError(f"{path}: cannot read ({error})") from None
-        except tomllib.TOMLDecodeError as error:
-            raise InputError(f"{path}: invalid TOML: {error}") from None
+        data = read_toml(path)
         return cls.from_dict(data, source=str(path))
 
     @classmethod

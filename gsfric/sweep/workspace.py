@@ -14,12 +14,12 @@ from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
-import tomllib
 from scipy.stats import qmc
 
 from gsfric._checks import as_float, short, suggest
 from gsfric.compiled.state import state_layout
 from gsfric.errors import InputError
+from gsfric.io.files import read_toml
 from gsfric.platform.description import Platform
 from gsfric.signal.rotations import rotation_from_rpy
 
@@ -144,14 +144,7 @@ class Workspace:
     def from_toml(cls, path: str | os.PathLike) -> Workspace:
         """Read a workspace TOML file (layout in docs/howto/sizing.md)."""
         path = Path(path)
-        try:
-            data = tomllib.loads(path.read_text(encoding="utf-8"))
-        except FileNotFoundError:
-            raise InputError(f"{path}: file not found") from None
-        except (OSError, UnicodeDecodeError) as error:
-            raise InputError(f"{path}: cannot read ({error})") from None
-        except tomllib.TOMLDecodeError as error:
-            raise InputError(f"{path}: invalid TOML: {error}") from None
+        data = read_toml(path)
         return cls.from_dict(data, source=str(path))
 
     def to_dict(self) -> dict:
