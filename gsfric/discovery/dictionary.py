@@ -30,8 +30,8 @@ from collections.abc import Callable
 from dataclasses import dataclass, field
 
 import numpy as np
-from scipy.ndimage import median_filter
 
+from gsfric._optional import optional
 from gsfric.discovery import lackfit
 from gsfric.discovery.settings import Settings
 
@@ -190,6 +190,7 @@ def line_frequencies(t: np.ndarray, residual: np.ndarray, most: int, prominence:
     r = residual - residual.mean(axis=0)
     power = np.sum(np.abs(np.fft.rfft(r * np.hanning(n)[:, None], 8 * n, axis=0)) ** 2, axis=1)
     freqs = np.fft.rfftfreq(8 * n, step)
+    median_filter = optional("scipy.ndimage").median_filter
     baseline = np.repeat(median_filter(power[::8], size=81, mode="reflect"), 8)[:len(power)]
     peak = (power > prominence * baseline) & (power >= np.roll(power, 1)) & (
         power >= np.roll(power, -1))
