@@ -4,7 +4,7 @@ VENV   := .venv
 BIN    := $(VENV)/bin
 STAMP  := $(VENV)/.installed
 
-.PHONY: install paper test test-slow bench derive clean
+.PHONY: install paper test test-slow bench derive docs clean
 
 $(STAMP): pyproject.toml
 	$(PYTHON) -m venv $(VENV)
@@ -31,8 +31,12 @@ test-slow: $(STAMP)
 bench: $(STAMP)
 	$(BIN)/gsfric bench
 
+## The documentation site, tutorials executed, into docs/_build/html (warnings are errors).
+docs: $(STAMP)
+	$(BIN)/python -m sphinx -b html -W -n --keep-going docs docs/_build/html
+
 derive: $(STAMP)
 	$(BIN)/gsfric derive
 
 clean:
-	rm -rf $(VENV) out
+	rm -rf $(VENV) out docs/_build docs/_generated

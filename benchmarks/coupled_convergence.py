@@ -12,7 +12,7 @@ thread, N = 1e5, both friction models (best of 15 calls)::
 
 To compare variants of the solve (``N_ITERATIONS``, ``ACCELERATE`` in derive/coupled.py), copy
 generated/ after each ``gsfric derive`` and run this script on each copy in turn, alternating,
-with ``GSFRIC_GENERATED=<copy>``; docs/friction.md has the table of one such session.
+with ``GSFRIC_GENERATED=<copy>``; docs/explanation/friction.md has the table of one such session.
 """
 
 from __future__ import annotations

@@ -1,6 +1,6 @@
 """Discovery on rig-like logs from a generator of its own, read through the command line.
 
-Independent of benchmarks/discovery_rates.py (docs/discovery.md, "Rates on logs of a second
+Independent of benchmarks/discovery_rates.py (docs/explanation/discovery.md, "Rates on logs of a second
 generator"). Every case draws:
 
 * a platform: base radius 0.35-0.8 m, platform radius 0.45-0.8 of it, joint pairs 10-40 deg

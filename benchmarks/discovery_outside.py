@@ -1,4 +1,4 @@
-"""Discovery on cases outside benchmarks/discovery_rates.py's generator (docs/discovery.md).
+"""Discovery on cases outside benchmarks/discovery_rates.py's generator (docs/explanation/discovery.md).
 
 Other motion families (triangle-like reversals, point-to-point moves with long rests, chirps
 to 3 Hz), a wider platform with 6 kg of payload, pink-like force noise (a sum of AR(1)

@@ -1,4 +1,4 @@
-"""Discovery on point-to-point translations with a fixed orientation (docs/discovery.md).
+"""Discovery on point-to-point translations with a fixed orientation (docs/explanation/discovery.md).
 
 A test rig often moves the platform in translation only: minimum-jerk moves between random
 targets, a rest after each, the orientation held. Each case draws a sampling rate (200, 500 or

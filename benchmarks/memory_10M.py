@@ -9,7 +9,7 @@ too), the wall time and the user and system CPU time::
     .venv/bin/python benchmarks/memory_10M.py                       # 10M steps, chunk 100000
     .venv/bin/python benchmarks/memory_10M.py --steps 200000 --chunk 5000
 
-The figures of a run are in docs/performance.md (``simulate``) and docs/robustness.md. Not
+The figures of a run are in docs/explanation/performance.md (``simulate``) and docs/explanation/robustness.md. Not
 part of the test suite (it takes minutes and several GB of disk); tests/test_robustness.py
 runs the same functions on 200k steps.
 """

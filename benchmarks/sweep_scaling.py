@@ -33,7 +33,7 @@ of 2 workers over 1 (target >= 1.7x), fastest over fastest and run by run::
     .venv/bin/python benchmarks/sweep_scaling.py --steps 1e7 --repeat 3   # the target's size
     .venv/bin/python benchmarks/sweep_scaling.py --steps 2e6 --paths dask-1 --json out.json
 
-docs/sizing.md has the figures of one run and the cost of a 1e10-step sweep computed from them.
+docs/howto/sizing.md has the figures of one run and the cost of a 1e10-step sweep computed from them.
 """
 
 from __future__ import annotations

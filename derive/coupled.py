@@ -32,7 +32,7 @@ The reported reactions are ``R^(N)``, in equilibrium with the reported friction 
 ``x^(N)``; the output ``coupling_change`` is ``f^(N) - f^(N-1)``, the change the last plain step
 made, which the runtime compares with a tolerance (``gsfric.evaluation.COUPLING_TOLERANCE``) to
 flag steps where the iteration has not converged (mu r so large that friction locks the
-mechanism). The plain map contracts with a factor proportional to ``mu r / D``; docs/friction.md
+mechanism). The plain map contracts with a factor proportional to ``mu r / D``; docs/explanation/friction.md
 states the limits checked by the tests and what the acceleration gains.
 
 The universal joint's friction is taken per bearing axis: the leg's angular velocity relative to

@@ -2,7 +2,7 @@
 
 Every effect is always present in the generated functions; its parameters switch it on (all
 defaults leave the model unchanged). The names are a contract (see SPEC); the parameters are
-documented here and in docs/effects.md.
+documented here and in docs/reference/effects.md.
 
 Prismatic-joint friction effects add to the friction force on the upper part ``F_fr`` (along u,
 opposing the sliding speed v, with the regularised sign of friction.py):

@@ -3,7 +3,7 @@
 The project derives its mechanics from vectors (the other modules of derive/); this module and
 derive/printed_legs.py keep the paper's printed equations, so that every difference between a
 printed equation and the derived one is written down, named (``E01``, ``E02``, ... in ``ERRATA``
-and docs/errata.md) and tested (tests/test_errata.py). This module holds the errata, the terms'
+and docs/reference/errata.md) and tested (tests/test_errata.py). This module holds the errata, the terms'
 arithmetic, the platform's equations (1)-(7), the tables and their display; derive/printed_legs.py
 the legs' equations (11)-(35).
 
@@ -61,7 +61,7 @@ class Erratum:
     Attributes
     ----------
     id : str
-        ``E01``, ``E02``, ...: the name used in docs/errata.md and in the test's name.
+        ``E01``, ``E02``, ...: the name used in docs/reference/errata.md and in the test's name.
     where : str
         Equation numbers, or the table or section of the paper.
     kind : str

@@ -143,7 +143,7 @@ static inline vd v_exp(vd x)
 # magnitude and on the special values. Lanes whose operand or result is outside the range where the residual is
 # exact (0, below 2^-960, subnormal, infinite, NaN, negative for the square root) take the
 # divider's instruction instead. A square root that is not only a divisor keeps vsqrtpd (see
-# docs/performance.md). With other lane widths they are the C operators and the C library's
+# docs/explanation/performance.md). With other lane widths they are the C operators and the C library's
 # sqrt, lane by lane.
 _DIVIDER = r"""
 #if GSFRIC_LANES == 8 && defined(__AVX512F__)

@@ -9,14 +9,15 @@ evaluated here over trajectories, with NumPy and the compiled functions only.
 >>> result.F.shape
 (40, 6)
 
-Main names: ``evaluate`` (a platform over a motion -> ``Result``), ``Platform``
+Main names: ``evaluate`` (a platform over a motion -> ``Result``), ``discover`` (measured
+data -> ``Discovery``: which effect the model misses), ``Platform``
 (``reference_platform()``, ``paper_platform()``, ``Platform.from_toml``), ``Motion`` (and
 ``gsfric.models`` for reference motions), ``read_trajectory`` / ``read_measured`` with a
 ``LogFormat`` for other programs' logs, ``Evaluator`` for repeated calls, ``columns`` for the
 units and meaning of every output column. ``help(gsfric.evaluate)`` and the README tell more.
 """
 
-import importlib
+import importlib as _importlib
 
 __version__ = "0.1.0"
 
@@ -26,6 +27,8 @@ _LAZY = {
     "Evaluator": ("gsfric.evaluation.evaluator", "Evaluator"),
     "Result": ("gsfric.evaluation.result", "Result"),
     "evaluate": ("gsfric.evaluation.evaluator", "evaluate"),
+    "discover": ("gsfric.discovery.api", "discover"),
+    "Discovery": ("gsfric.discovery.results", "Discovery"),
     "reference_platform": ("gsfric.models", "reference_platform"),
     "paper_platform": ("gsfric.models", "paper_platform"),
     "LogFormat": ("gsfric.io.logs", "LogFormat"),
@@ -49,11 +52,11 @@ __all__ = sorted(_LAZY) + ["columns", "io", "models", "sweep"]
 def __getattr__(name):
     if name in _LAZY:
         module, attr = _LAZY[name]
-        value = getattr(importlib.import_module(module), attr)
+        value = getattr(_importlib.import_module(module), attr)
         globals()[name] = value          # later look-ups skip this function
         return value
     if name in _MODULES:
-        return importlib.import_module(_MODULES[name])
+        return _importlib.import_module(_MODULES[name])
     raise AttributeError(f"module 'gsfric' has no attribute {name!r}")
 
 

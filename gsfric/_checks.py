@@ -5,11 +5,17 @@ from __future__ import annotations
 import dataclasses
 import difflib
 import math
+import os
 from collections.abc import Iterable
+from pathlib import Path
 
 import numpy as np
 
-from gsfric.errors import InputError
+from gsfric.errors import InputError, InputTypeError
+
+INT64_MAX = 2**63 - 1
+"""The largest integer a file may hold (TOML's integers are 64-bit; a larger one is a typo or
+garbage, never a physical value)."""
 
 
 def short(value: object, limit: int = 40) -> str:
@@ -34,14 +40,17 @@ def is_number(value: object) -> bool:
 
 
 def as_float(value: object, name: str, *, minimum: float | None = None) -> float:
-    """A finite float from ``value``; ``InputError`` naming ``name`` otherwise.
+    """A finite float from ``value``; ``InputError`` naming ``name`` otherwise
+    (``InputTypeError`` when ``value`` is not a number at all).
 
     ``minimum``, if given, is an inclusive lower bound.
     """
     if isinstance(value, np.ndarray) and value.shape == ():
         value = value[()]
     if not is_number(value):
-        raise InputError(f"{name}: expected a number, got {short(value)}")
+        raise InputTypeError(f"{name}: expected a number, got {short(value)}")
+    if isinstance(value, int) and abs(value) > INT64_MAX:
+        raise InputError(f"{name}: integer too large ({short(value)}, beyond 64 bits)")
     try:
         result = float(value)
     except OverflowError:
@@ -51,6 +60,43 @@ def as_float(value: object, name: str, *, minimum: float | None = None) -> float
     if minimum is not None and result < minimum:
         raise InputError(f"{name}: must be >= {minimum:g}, got {result:g}")
     return result
+
+
+def as_count(value: object, name: str, *, minimum: int = 1, maximum: int | None = None) -> int:
+    """An integer in [minimum, maximum] from ``value`` (int or NumPy integer, not bool).
+
+    Raises
+    ------
+    InputTypeError
+        ``value`` is not an integer (a float, a string, None, a bool), naming ``name``.
+    InputError
+        ``value`` is outside the range, naming ``name`` and the range.
+    """
+    if isinstance(value, (bool, np.bool_)) or not isinstance(value, (int, np.integer)):
+        raise InputTypeError(f"{name}: expected an integer, got {short(value)}")
+    value = int(value)
+    if value < minimum or (maximum is not None and value > maximum):
+        bound = f">= {minimum}" if maximum is None else f"from {minimum} to {maximum}"
+        raise InputError(f"{name}: must be an integer {bound}, got {value}")
+    return value
+
+
+def as_flag(value: object, name: str) -> bool:
+    """``value`` as a bool (bool or NumPy bool only); ``InputTypeError`` naming ``name``."""
+    if not isinstance(value, (bool, np.bool_)):
+        raise InputTypeError(f"{name}: expected True or False, got {short(value)}")
+    return bool(value)
+
+
+def as_path(value: object, name: str) -> Path:
+    """``value`` (str or os.PathLike, not empty) as a Path; ``InputTypeError`` naming ``name``."""
+    if isinstance(value, bytes) or not isinstance(value, (str, os.PathLike)):
+        raise InputTypeError(f"{name}: expected a file path (str or pathlib.Path), "
+                             f"got {short(value)}")
+    path = Path(value)
+    if str(value) == "":
+        raise InputError(f"{name}: the path is empty")
+    return path
 
 
 def _shape_text(shape: tuple[int | None, ...]) -> str:
@@ -65,21 +111,24 @@ def _check_leaves(value: object, depth: int, ndim: int, name: str, shape_text: s
         for item in value:
             _check_leaves(item, depth + 1, ndim, name, shape_text)
     elif not is_number(value):
-        raise InputError(f"{name}: expected an array of shape {shape_text} of numbers, "
-                         f"found {short(value)}")
+        raise InputTypeError(f"{name}: expected an array of shape {shape_text} of numbers, "
+                             f"found {short(value)}")
+    elif isinstance(value, int) and abs(value) > INT64_MAX:
+        raise InputError(f"{name}: integer too large ({short(value)}, beyond 64 bits)")
 
 
 def as_array(value: object, shape: tuple[int | None, ...], name: str) -> np.ndarray:
     """A read-only float64 array of ``shape`` (``None`` matches any length) with finite entries.
 
     Accepts NumPy arrays of integer or floating type and nested lists or tuples of numbers;
-    anything else, a different shape or a non-finite entry raises an ``InputError`` naming
-    ``name``.
+    anything else raises an ``InputTypeError``, a different shape or a non-finite entry an
+    ``InputError``, naming ``name``.
     """
     shape_text = _shape_text(shape)
     if isinstance(value, np.ndarray):
         if value.dtype.kind not in "iuf":
-            raise InputError(f"{name}: expected an array of numbers, got dtype {value.dtype}")
+            raise InputTypeError(f"{name}: expected an array of numbers, got dtype "
+                                 f"{value.dtype}")
         array = np.array(value, dtype=float)
     else:
         _check_leaves(value, 0, len(shape), name, shape_text)

@@ -5,7 +5,7 @@ found generated/ stale, ``simulate --strict`` found flagged steps); 2 bad input 
 one-line reason on stderr); 3 an internal or build failure (also a full disk); 128 + the
 signal number when stopped by SIGINT (130), SIGHUP (129) or SIGTERM (143), after removing the
 temporary outputs; 141 when the reader of stdout went away (``gsfric bench | head``), quietly.
-See docs/robustness.md.
+See docs/explanation/robustness.md.
 
 Each command lives in a module of ``gsfric.commands``, imported only when that command runs
 or shows its own help, so that ``gsfric --help`` loads none of the numerical stack.

@@ -1,6 +1,7 @@
 """Exceptions and warnings raised by gsfric.
 
-``InputError`` is the only exception that bad input (a platform TOML file, a trajectory or
+``InputError`` (and its subclass ``InputTypeError`` for an argument of the wrong type) is the
+only exception that bad input (a platform TOML file, a trajectory or
 measured-data table, arrays given to a constructor) produces. Its message is a single line that
 names the file, the key or column and, for tables, the 1-based data row, e.g.
 ``trajectory.csv: row 17: column 'x' is NaN``.
@@ -26,12 +27,25 @@ class InputError(GsfricError, ValueError):
         super().__init__(" ".join(str(message).split()))
 
 
+class InputTypeError(InputError, TypeError):
+    """An argument of the wrong type (None, a string for an array, a list for a Platform...).
+
+    Both an ``InputError`` (``except InputError`` catches every bad input; the command line
+    exits 2) and a ``TypeError`` (what Python code catches for a wrong type). One line.
+    """
+
+
 class StepFlagError(GsfricError):
     """A trajectory step could not be evaluated soundly (see the ``flag`` column of results)."""
 
 
 class GsfricWarning(UserWarning):
     """Input that can be used but looks suspicious (angles in degrees, a gimbal-lock jump, ...)."""
+
+
+class DataWarning(GsfricWarning):
+    """Rows of an input that were left out so that the others can be used (a dropout row of a
+    controller log: every value zero); the message names the file and the rows."""
 
 
 class OutputError(GsfricError):

@@ -1,7 +1,7 @@
 """Reference platforms and motions, shared by the CLI, tests, notebooks and benchmarks.
 
 The paper's figures 6-7 (the dimensions) are not in its text, so the reference geometry is the
-project's own, documented in docs/reference.md: a three-fold symmetric hexapod, base joints on a
+project's own, documented in docs/explanation/reference-platform.md: a three-fold symmetric hexapod, base joints on a
 circle of radius 0.5 m in pairs 30 degrees apart, platform joints on a circle of radius 0.3 m in
 pairs 30 degrees apart (the pairs turned by 60 degrees against the base's), home height 0.7 m.
 
@@ -17,6 +17,7 @@ import os
 
 import numpy as np
 
+from gsfric._checks import as_array
 from gsfric._optional import optional
 from gsfric.evaluation.paper_constants import (
     PAPER_ACCELERATION,
@@ -65,7 +66,7 @@ def reference_leg() -> Legs:
 
     Lower part (body, screw, motor) 2.6 kg, centre 0.21 m from C_i; upper part (rod, nut, rod
     end) 0.7 kg, centre 0.25 m from E_i: the mass of an SMC LEY32 with 250 mm of stroke, split
-    and placed from its parts. The numbers and how they were obtained: docs/reference.md.
+    and placed from its parts. The numbers and how they were obtained: docs/explanation/reference-platform.md.
     """
     return Legs(model="rigid", weight=True,
                 lower_mass=REFERENCE_LEG["lower_mass"], lower_com=REFERENCE_LEG["lower_com"],
@@ -77,7 +78,7 @@ def reference_leg() -> Legs:
 REFERENCE_LEG = dict(lower_mass=2.6, lower_com=0.21, lower_inertia=(0.071, 0.071, 0.0012),
                      upper_mass=0.7, upper_com=0.25, upper_inertia=(0.019, 0.019, 0.0001))
 """The reference leg's masses (kg), centre distances (m, from C_i and from E_i) and principal
-inertias (kg m^2, leg body frame: transverse, transverse, axial); see docs/reference.md."""
+inertias (kg m^2, leg body frame: transverse, transverse, axial); see docs/explanation/reference-platform.md."""
 
 REFERENCE_FRICTION = dict(model="coupled", bushing_offset=0.25, bushing_spacing=0.1,
                           prismatic_seal=2.0, prismatic_coulomb=0.1)
@@ -91,14 +92,25 @@ def reference_platform(friction_model: str = "coupled") -> Platform:
 
     Platform 10 kg with inertia 0.07 kg m^2 (times identity), payload 3 kg; joints
     c_s = 0.02 N m s/rad, mu = 0.04, r = 0.05 m; prismatic joints 0.02 N s/m, bushings with
-    mu = 0.1 at 0.25 m and 0.35 m from C_i, seal 2 N (docs/reference.md, docs/friction.md).
+    mu = 0.1 at 0.25 m and 0.35 m from C_i, seal 2 N (docs/explanation/reference-platform.md, docs/explanation/friction.md).
 
     Parameters
     ----------
     friction_model : {"coupled", "paper"}
         ``"coupled"`` (default): friction loads the mechanism (bushings, seal, per-axis
-        universal joints, solved at every step; docs/friction.md). ``"paper"``: the paper's
+        universal joints, solved at every step; docs/explanation/friction.md). ``"paper"``: the paper's
         post-hoc friction model, (35) as printed with mu = 0.1 at R_3 and no seal.
+
+    Returns
+    -------
+    Platform
+
+    Examples
+    --------
+    >>> import gsfric
+    >>> platform = gsfric.reference_platform()
+    >>> platform.friction.model, platform.geometry.stroke
+    ('coupled', (0.5, 1.1))
     """
     return Platform(
         gravity=9.81,
@@ -128,6 +140,17 @@ def paper_platform() -> Platform:
     Leg parts 0.5 kg with inertia 0.035 kg m^2, the paper's leg model (zone centres at 0.25 D
     and 0.75 D from C_i), friction c_s = 0.02 N m s/rad, mu = 0.04, r = 0.05 m, prismatic
     0.02 N s/m and 0.04, the paper's post-hoc friction model.
+
+    Returns
+    -------
+    Platform
+        With ``[friction] model = "paper"`` and the paper's leg model.
+
+    Examples
+    --------
+    >>> import gsfric
+    >>> gsfric.paper_platform().friction.model
+    'paper'
     """
     return Platform(
         gravity=9.81,
@@ -199,7 +222,7 @@ def sinusoidal(t: np.ndarray, amplitude=(0.05, 0.05, 0.04, 0.08, 0.08, 0.1),
     t : ndarray (N,), s
     amplitude, frequency, phase : 6 values each (x, y, z in m; psi, theta, phi in rad), Hz, rad
     """
-    t = np.asarray(t, dtype=float)
+    t = as_array(t, (None,), "t")
     A = np.asarray(amplitude, float)
     w = 2 * np.pi * np.asarray(frequency, float)
     ph = np.zeros(6) if phase is None else np.asarray(phase, float)

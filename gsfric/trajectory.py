@@ -1,6 +1,6 @@
 """Platform motions: poses with their velocities and accelerations, from arrays or from sampled poses.
 
-Conventions (see docs/architecture.md): SI units, radians, the step as the leading axis.
+Conventions (see docs/explanation/architecture.md): SI units, radians, the step as the leading axis.
 The orientation ``R`` maps platform-frame vectors to the base frame. In ZXZ angles,
 ``R = Rz(gamma) Rx(beta) Rz(alpha)``, whose entries are the paper's b_ij; this is
 ``scipy.spatial.transform.Rotation.from_euler("zxz", [alpha, beta, gamma])`` (extrinsic).
@@ -20,6 +20,7 @@ import numpy as np
 from gsfric._checks import as_array, as_float, fields_equal
 from gsfric._optional import optional
 from gsfric.errors import GsfricWarning, InputError
+from gsfric.signal.local import local_polynomial_derivatives
 from gsfric.signal.rotations import (
     angular_rates,
     continuous_quaternions,
@@ -43,8 +44,12 @@ if TYPE_CHECKING:
 MIN_SAMPLES = 7
 """Fewest samples ``Motion.from_samples`` (and the trajectory readers) accept."""
 
-UNIFORM_RTOL = 1e-4
-"""Sampling counts as uniform when every time step is within this fraction of the mean step."""
+UNIFORM_RTOL = 1e-2
+"""Sampling counts as uniform when every time step is within this fraction of the mean step:
+time stamps that jitter by less (a controller's clock read with 0.3 % jitter, stamps rounded to
+a log's decimals) are taken as evenly spaced at the mean step, and the Savitzky-Golay filter
+(with the ``window`` given) is used. A stamp error of 1 % of the step moves a pose by at most
+1 % of a step's travel, below the pose noise of a measured log."""
 
 GIMBAL_SIN_BETA = 1e-3
 GIMBAL_JUMP = 0.5
@@ -54,8 +59,54 @@ GIMBAL_JUMP rad from its neighbour triggers a warning."""
 _ROTATION_TOL = 1e-6
 
 SAMPLING_RATE_RANGE = (1.0, 1e6)
-"""Sampling rates, Hz, outside which ``Motion.from_samples`` warns that t is probably not in
-seconds (integer nanoseconds or milliseconds)."""
+"""Plausible sampling rates, Hz, of a motion log: outside them t is in another unit than the one
+declared (a microsecond counter read as seconds gives 1e-4 Hz at 100 Hz), an error naming the
+likely unit (``time_unit_hint``)."""
+
+TIME_UNITS = {"s": 1.0, "ms": 1e-3, "us": 1e-6, "ns": 1e-9}
+"""Time units and their factor to s."""
+
+TYPICAL_RATE = 300.0
+"""Sampling rate, Hz, in the middle of motion logs' usual 10 Hz .. 10 kHz: of the units that
+put a time step inside ``SAMPLING_RATE_RANGE``, the one closest to it (on a log scale) is named."""
+
+
+def time_unit_hint(step: float, unit: str = "s") -> str | None:
+    """The time unit that makes a median time step ``step`` (in ``unit``) a plausible sampling
+    interval, or None when ``unit`` already does (or no unit does)."""
+    low, high = SAMPLING_RATE_RANGE
+    if not np.isfinite(step) or step <= 0:
+        return None
+    if low <= 1.0 / (step * TIME_UNITS[unit]) <= high:
+        return None
+    fits = [u for u, f in TIME_UNITS.items() if low <= 1.0 / (step * f) <= high]
+    if not fits:
+        return None
+    return min(fits, key=lambda u: abs(np.log(1.0 / (step * TIME_UNITS[u]) / TYPICAL_RATE)))
+
+
+def check_sampling_rate(t: np.ndarray, what: str = "t", unit: str = "s",
+                        factor: float = 1.0) -> None:
+    """Raise ``InputError`` when the median time step of t (N,), s, is not a plausible sampling
+    interval (``SAMPLING_RATE_RANGE``), naming the likely unit: ``what`` names the column,
+    ``unit`` and ``factor`` (to s) the unit it was declared in."""
+    if len(t) < 2:
+        return
+    with np.errstate(all="ignore"):
+        step = float(np.median(np.diff(t)))
+    if not np.isfinite(step) or step <= 0:
+        return
+    low, high = SAMPLING_RATE_RANGE
+    rate = 1.0 / step
+    if low <= rate <= high:
+        return
+    raw = step / factor
+    hint = time_unit_hint(raw, unit if unit in TIME_UNITS else "s")
+    advice = (f" -> looks like {hint}; declare t={hint} (--units t={hint}, or [units] t = "
+              f"\"{hint}\" in the log format)" if hint else "; check the time column")
+    raise InputError(f"{what}: median time step {raw:.4g} {unit}, a sampling rate of "
+                     f"{rate:.4g} Hz, outside {low:g} Hz .. {high:g} Hz{advice}")
+
 
 MAX_POSITION = 100.0
 """Positions farther than this from the base frame's origin, m, draw a warning (mm given as m)."""
@@ -94,12 +145,12 @@ def _check_euler(euler: np.ndarray, source: str | None) -> None:
 
 def check_units(t: np.ndarray, position: np.ndarray, source: str | None = None,
                 stacklevel: int = 4) -> None:
-    """Warn (``GsfricWarning``) when times or positions look like the wrong unit.
+    """Check that times and positions are in s and m.
 
-    A mean time step outside 1 us .. 1 s (a sampling rate outside ``SAMPLING_RATE_RANGE``,
-    1 Hz .. 1 MHz) suggests t in ns or ms rather than s; a position beyond ``MAX_POSITION``
-    (100 m) suggests mm rather than m. Warnings, not errors: silence them with
-    ``warnings.filterwarnings("ignore", category=GsfricWarning)`` where such values are meant.
+    A median time step outside 1 us .. 1 s (a sampling rate outside ``SAMPLING_RATE_RANGE``,
+    1 Hz .. 1 MHz) is an ``InputError`` naming the likely unit (``check_sampling_rate``); a
+    position beyond ``MAX_POSITION`` (100 m) draws a warning (``GsfricWarning``): mm rather
+    than m.
 
     Parameters
     ----------
@@ -112,12 +163,7 @@ def check_units(t: np.ndarray, position: np.ndarray, source: str | None = None,
     """
     prefix = f"{source}: " if source else ""
     if len(t) > 1 and np.isfinite(t[-1] - t[0]):
-        step = (t[-1] - t[0]) / (len(t) - 1)
-        low, high = SAMPLING_RATE_RANGE
-        if step > 0 and not low <= 1.0 / step <= high:
-            warnings.warn(f"{prefix}t: mean time step {step:.4g} s, a sampling rate of "
-                          f"{1.0 / step:.4g} Hz, outside {low:g} Hz .. {high:g} Hz; t must be "
-                          "in s (not ns or ms)", GsfricWarning, stacklevel=stacklevel)
+        check_sampling_rate(t)
     far = float(np.abs(position).max()) if len(position) else 0.0
     if far > MAX_POSITION:
         warnings.warn(f"{prefix}position: up to {far:.4g} m from the base frame's origin (more "
@@ -125,14 +171,67 @@ def check_units(t: np.ndarray, position: np.ndarray, source: str | None = None,
                       GsfricWarning, stacklevel=stacklevel)
 
 
+def jitter(t: np.ndarray) -> float:
+    """The largest deviation of a time step from the mean step, as a fraction of the mean
+    step, of times t (N,), s (0 for evenly spaced stamps)."""
+    t = np.asarray(t, float)
+    mean_step = (t[-1] - t[0]) / (len(t) - 1)
+    return float(np.max(np.abs(np.diff(t) - mean_step)) / mean_step)
+
+
 def is_uniform(t: np.ndarray) -> bool:
     """Whether the times t (N,), s, are uniformly sampled as ``Motion.from_samples`` takes
-    them: every step within ``UNIFORM_RTOL`` of the mean step (time stamps rounded to less
-    than that, a log's ms with four decimals, still are)."""
+    them: every step within ``UNIFORM_RTOL`` of the mean step (time stamps that jitter by
+    less are taken as evenly spaced)."""
     t = np.asarray(t, float)
     steps = np.diff(t)
     mean_step = (t[-1] - t[0]) / (len(t) - 1)
     return bool(np.all(np.abs(steps - mean_step) <= UNIFORM_RTOL * mean_step))
+
+
+@dataclass(frozen=True)
+class Differentiation:
+    """How ``Motion.from_samples`` got the velocities and accelerations of a motion.
+
+    Attributes
+    ----------
+    method : str
+        "savgol, per-sample filters" (uniform stamps, no window: a filter chosen per sample),
+        "savgol" (uniform stamps, the window given), "local polynomial" (uneven stamps, the
+        window given: the window's polynomial fitted on the stamps themselves) or
+        "smoothing spline" (uneven stamps, no window).
+    window : int or None
+        Samples of the window given.
+    polyorder : int
+        Polynomial order of the Savitzky-Golay and local fits.
+    jitter : float
+        Largest deviation of a time step from the mean step, fraction of the mean step.
+    rates : tuple of str
+        The ``Motion`` rates taken from the log's own columns (``velocity``, ``omega``,
+        ``acceleration``, ``alpha``); the others are differentiated.
+    """
+
+    method: str
+    window: int | None
+    polyorder: int
+    jitter: float
+    rates: tuple[str, ...] = ()
+
+    def describe(self) -> str:
+        """One line, e.g. ``savgol (window 21, order 4) on stamps with 0.3 % jitter taken as
+        evenly spaced; velocity from the log's columns``."""
+        parts = [f"window {self.window}"] if self.window is not None else []
+        if self.method != "smoothing spline":
+            parts.append(f"order {self.polyorder}")
+        text = f"{self.method} ({', '.join(parts)})" if parts else self.method
+        if self.method.startswith("savgol") and self.jitter > 1e-9:
+            text += (f" on stamps with {100 * self.jitter:.2g} % jitter taken as evenly "
+                     "spaced")
+        elif not self.method.startswith("savgol"):
+            text += f" on uneven stamps ({100 * self.jitter:.2g} % jitter)"
+        if self.rates:
+            text += f"; {', '.join(self.rates)} from the log's columns"
+        return text
 
 
 # -- Motion -------------------------------------------------------------------------------------
@@ -162,6 +261,25 @@ class Motion:
     Every array must be finite and ``rotation`` orthonormal with determinant +1 (to 1e-6).
     ``t`` need not increase (a set of unrelated poses is a valid Motion); ``from_samples``
     requires it to.
+
+    Raises
+    ------
+    InputTypeError
+        An argument that is not an array of numbers (None, a string), naming the field.
+    InputError
+        A wrong shape, a NaN or infinite value (naming the field and index, e.g.
+        ``Motion.position[4][2]: must be finite, got nan``), a matrix that is not a rotation,
+        no step at all.
+
+    Examples
+    --------
+    >>> import numpy as np, gsfric
+    >>> t = np.linspace(0.0, 2.0, 401)
+    >>> position = np.column_stack([0.01 * np.sin(t), 0 * t, 0.7 + 0 * t])
+    >>> level = np.tile([1.0, 0.0, 0.0, 0.0], (401, 1))
+    >>> motion = gsfric.Motion.from_samples(t, position, quaternion=level)
+    >>> motion.velocity.shape
+    (401, 3)
     """
 
     t: np.ndarray
@@ -199,7 +317,8 @@ class Motion:
     def from_arrays(cls, t: np.ndarray, position: np.ndarray, rotation: np.ndarray,
                     velocity: np.ndarray, omega: np.ndarray, acceleration: np.ndarray,
                     alpha: np.ndarray) -> Motion:
-        """A motion from its arrays (shapes as the attributes), validated."""
+        """A motion from its arrays (shapes as the attributes), validated; raises as
+        ``Motion``."""
         return cls(t, position, rotation, velocity, omega, acceleration, alpha)
 
     @classmethod
@@ -220,7 +339,8 @@ class Motion:
     def from_samples(cls, t: np.ndarray, position: np.ndarray, *,
                      euler: np.ndarray | None = None, quaternion: np.ndarray | None = None,
                      window: int | None = None, polyorder: int = DEFAULT_POLYORDER,
-                     lam: float | None = None, source: str | None = None) -> Motion:
+                     lam: float | None = None, source: str | None = None,
+                     rates: dict[str, np.ndarray] | None = None) -> Motion:
         """A motion from sampled poses, by smoothing differentiation.
 
         The orientation is converted to unit quaternions (never are angles differentiated),
@@ -237,11 +357,20 @@ class Motion:
           acceleration, as the one of least estimated mean squared error
           (``adaptive_filters``): short filters where the motion is fast or the pose
           noise-free, long ones where it is slow or noisy.
-        * Non-uniform sampling: a cubic smoothing spline of every component
+        * Non-uniform sampling with a ``window``: at every sample, the polynomial of order
+          ``polyorder`` fitted to ``window`` samples on their own time stamps
+          (``local_polynomial_derivatives``; the Savitzky-Golay filter of that window on
+          uneven stamps).
+        * Non-uniform sampling without a window: a cubic smoothing spline of every component
           (``scipy.interpolate.make_smoothing_spline``) with penalty ``lam``, chosen by
           generalized cross-validation when None. Being natural splines, their second
           derivative vanishes at both ends, so the accelerations of the first and last few
           samples are biased towards zero.
+
+        Rates given (``rates``, e.g. a log's own velocity columns) are taken as they are; an
+        acceleration not given whose velocity is (or angular acceleration whose angular
+        velocity is) is that velocity's smoothed derivative, by the same method as the poses'.
+        ``differentiation()`` tells which method and rates were used.
 
         With p the smoothed (not exactly unit) quaternion and dots time derivatives,
         ``omega = 2 vec(pdot p*) / |p|^2`` and
@@ -257,13 +386,13 @@ class Motion:
             Platform frame origin in the base frame, m.
         euler : array_like, shape (N, 3), optional
             ZXZ angles (alpha, beta, gamma), rad. Warns (``GsfricWarning``) if any exceeds
-            2 pi in magnitude (degrees?) or if, where |sin(beta)| < ``GIMBAL_SIN_BETA``, alpha
+            2 pi in magnitude (degrees?) or if, where ``abs(sin(beta)) < GIMBAL_SIN_BETA``, alpha
             or gamma jump by more than ``GIMBAL_JUMP`` between samples.
         quaternion : array_like, shape (N, 4), optional
             ``(qw, qx, qy, qz)``, platform frame to base frame; normalized here. Give exactly
             one of ``euler`` and ``quaternion``.
         window : int, optional
-            Odd Savitzky-Golay window, ``polyorder < window <= N`` (uniform sampling only).
+            Odd Savitzky-Golay window, ``polyorder < window <= N``.
         polyorder : int
             Savitzky-Golay polynomial order, >= 2.
         lam : float, optional
@@ -271,6 +400,9 @@ class Motion:
         source : str, optional
             File name for messages; when given, messages start with it and name 1-based rows,
             otherwise they name 0-based sample indices.
+        rates : dict of str to array_like (N, 3), optional
+            Any of ``velocity``, ``omega`` (rad/s), ``acceleration``, ``alpha`` (rad/s^2) in
+            the base frame, SI: used instead of the differentiated ones.
 
         Returns
         -------
@@ -286,22 +418,27 @@ class Motion:
         try:
             with np.errstate(all="ignore"):
                 return cls._from_samples(t, position, euler, quaternion, window, polyorder,
-                                         lam, source)
+                                         lam, source, rates)
         except InputError as error:
             if prefix and not str(error).startswith(prefix):
-                raise InputError(prefix + str(error)) from None
+                raise type(error)(prefix + str(error)) from None
             raise
 
     @classmethod
     def _from_samples(cls, t, position, euler, quaternion, window, polyorder, lam,
-                      source) -> Motion:
+                      source, rates) -> Motion:
         t, position, q = _sampled_poses(t, position, euler, quaternion, source)
         check_polyorder(polyorder, len(t))
         if lam is not None:
             lam = as_float(lam, "lam", minimum=0.0)
+        rates = _checked_rates(rates, len(t))
         (p0, p1, p2), (q0, q1, q2), filters = _smoothed(t, position, q, window, polyorder,
                                                         lam, source)
         omega, alpha = angular_rates(q0, q1, q2)
+        p1, p2 = _given_rates(t, rates, "velocity", "acceleration", p1, p2, window, polyorder,
+                              lam)
+        omega, alpha = _given_rates(t, rates, "omega", "alpha", omega, alpha, window,
+                                    polyorder, lam)
         rotation = rotation_from_quaternion(q0)
         results = (p0, p1, p2, rotation, omega, alpha)
         if not all(np.isfinite(r).all() for r in results):
@@ -311,7 +448,14 @@ class Motion:
         if filters is not None:
             object.__setattr__(motion, "_filters", (int(polyorder), filters))
         object.__setattr__(motion, "_recorded", (position, q))
+        object.__setattr__(motion, "_differentiation",
+                           _how(t, window, polyorder, tuple(rates)))
         return motion
+
+    def differentiation(self) -> Differentiation | None:
+        """How ``from_samples`` differentiated this motion (method, window, jitter, rates from
+        the log), or None for a motion not made by it, or a slice."""
+        return getattr(self, "_differentiation", None)
 
     def recorded_poses(self) -> tuple[np.ndarray, np.ndarray] | None:
         """The samples ``from_samples`` differentiated: positions (N, 3), m, and rotations
@@ -419,10 +563,62 @@ def _smoothed(t, position, q, window, polyorder, lam, source):
         return (savgol_derivatives(position, window, polyorder, mean_step),
                 savgol_derivatives(q, window, polyorder, mean_step), None)
     if window is not None:
-        warnings.warn(f"{source + ': ' if source else ''}t is not uniformly "
-                      "sampled: window is ignored, a smoothing spline is used",
-                      GsfricWarning, stacklevel=4)
+        check_window(window, polyorder, n)
+        return (local_polynomial_derivatives(t, position, window, polyorder),
+                local_polynomial_derivatives(t, q, window, polyorder), None)
     try:
         return (spline_derivatives(t, position, lam), spline_derivatives(t, q, lam), None)
     except ValueError as error:
         raise InputError(f"smoothing spline failed: {error}") from None
+
+
+def _smoothed_signal(t, y, window, polyorder, lam) -> list[np.ndarray]:
+    """A signal (N, k) smoothed and differentiated twice as ``_smoothed`` does the poses."""
+    n = len(t)
+    if is_uniform(t):
+        step = (t[-1] - t[0]) / (n - 1)
+        if window is None:
+            return savgol_adaptive(y, motion_filters(y, polyorder), step)
+        return savgol_derivatives(y, window, polyorder, step)
+    if window is not None:
+        return local_polynomial_derivatives(t, y, window, polyorder)
+    try:
+        return spline_derivatives(t, y, lam)
+    except ValueError as error:
+        raise InputError(f"smoothing spline failed: {error}") from None
+
+
+RATE_NAMES = ("velocity", "omega", "acceleration", "alpha")
+
+
+def _checked_rates(rates, n: int) -> dict[str, np.ndarray]:
+    if rates is None:
+        return {}
+    out = {}
+    for name, values in dict(rates).items():
+        if name not in RATE_NAMES:
+            raise InputError(f"rates: unknown rate {name!r}; use {', '.join(RATE_NAMES)}")
+        out[name] = as_array(values, (n, 3), f"rates[{name!r}]")
+    return out
+
+
+def _given_rates(t, rates, first: str, second: str, d1, d2, window, polyorder, lam):
+    """The first and second derivative (N, 3) of a pose part: those given in ``rates``, the
+    second otherwise derived from a given first one, else the differentiated ``d1, d2``."""
+    if first in rates:
+        d1 = rates[first]
+        if second not in rates:
+            d2 = _smoothed_signal(t, d1, window, polyorder, lam)[1]
+    if second in rates:
+        d2 = rates[second]
+    return d1, d2
+
+
+def _how(t, window, polyorder, rates) -> Differentiation:
+    """The ``Differentiation`` that ``_smoothed`` used on the times t."""
+    if is_uniform(t):
+        method = "savgol, per-sample filters" if window is None else "savgol"
+    else:
+        method = "smoothing spline" if window is None else "local polynomial"
+    return Differentiation(method, None if window is None else int(window), int(polyorder),
+                           jitter(t), tuple(r for r in RATE_NAMES if r in rates))

@@ -22,7 +22,7 @@ PAPER_MISPRINTS = {
     (3, 14, "Ffr1", "-0.6234", ("digits",)),            # an extra digit
     (3, 27, "Ffr5", "-0.0687", ("digits", "small")),    # an order of magnitude low
 }
-"""Misprints of the paper's tables, found by reading them (docs/errata.md, E32):
+"""Misprints of the paper's tables, found by reading them (docs/reference/errata.md, E32):
 (table, step, column, as printed, kinds in alphabetical order)."""
 
 
@@ -33,8 +33,11 @@ def perturbed_platform(rng: np.random.Generator, legs_model: str = "rigid") -> g
     axes = g.universal_axes + rng.uniform(-0.3, 0.3, (6, 3))
 
     def inertia(scale):
+        """A full inertia of a rigid body (its principal moments obey the triangle
+        inequality: the added trace bounds the largest by the sum of the other two)."""
         a = rng.normal(size=(3, 3)) * scale
-        return a @ a.T + np.eye(3) * scale
+        full = a @ a.T + np.eye(3) * scale
+        return full + np.trace(full) * np.eye(3)
 
     return (base.with_geometry(base_joints=g.base_joints + rng.uniform(-0.03, 0.03, (6, 3)),
                                platform_joints=g.platform_joints

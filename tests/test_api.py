@@ -107,16 +107,17 @@ def test_units_travel_with_frames_and_parquet(tmp_path, platform):
         assert meta[b"description"]
 
 
-def test_columns_listing_and_readme_table_come_from_one_source():
+def test_columns_listing_and_reference_table_come_from_one_source():
     listing = CliRunner().invoke(main, ["columns"]).output
     for column in columns.all_columns():
         assert column.label in listing
     table = CliRunner().invoke(main, ["columns", "--markdown"]).output.strip()
     assert table == columns.markdown_table()
-    readme = (ROOT / "README.md").read_text()
-    block = re.search(r"<!-- columns: begin.*?-->\n(.*?)\n<!-- columns: end -->", readme, re.S)
-    assert block, "README.md has no generated output table"
-    assert block.group(1).strip() == table, "README's table is stale: paste `gsfric columns --markdown`"
+    page = (ROOT / "docs" / "reference" / "columns.md").read_text()
+    block = re.search(r"<!-- columns: begin.*?-->\n(.*?)\n<!-- columns: end -->", page, re.S)
+    assert block, "docs/reference/columns.md has no generated output table"
+    assert block.group(1).strip() == table, (
+        "docs/reference/columns.md's table is stale: paste `gsfric columns --markdown`")
 
 
 def test_effects_listing_names_every_parameter_with_its_unit():
@@ -208,3 +209,23 @@ def test_the_memory_kept_for_reuse_is_bounded(platform):
     finally:
         _POOL.keep = old
         release_memory()
+
+
+def test_dir_of_gsfric_lists_only_public_names():
+    out = subprocess.run([sys.executable, "-c", "import gsfric; gsfric.evaluate; "
+                          "gsfric.discover; print(' '.join(dir(gsfric)))"],
+                         capture_output=True, text=True, check=True).stdout.split()
+    assert {"evaluate", "discover", "Discovery", "Platform", "Result"} <= set(out)
+    leftovers = [n for n in out if n in ("annotations", "importlib", "_importlib")
+                 or (n.startswith("_") and n != "__version__")]
+    assert not leftovers
+    assert set(gsfric.__all__) <= set(out)
+
+
+def test_result_summary_is_the_long_form_with_the_peaks_per_leg(platform):
+    result = gsfric.evaluate(platform, models.sinusoidal(np.linspace(0.0, 1.0, 201)))
+    lines = result.summary().splitlines()
+    assert lines[0] == repr(result) and lines[-1] == "flags: none"
+    row = next(line for line in lines if line.strip().startswith("|F| (N)"))
+    peaks = [float(v) for v in row.split()[2:]]
+    assert peaks == pytest.approx(np.abs(result.F).max(axis=0), rel=1e-3)

@@ -19,7 +19,24 @@ def case():
         .with_effect("sensor_bias", b1=0.5)
     motion = models.sinusoidal(np.linspace(0.0, 4.0, 201))
     result = gsfric.evaluate(platform, motion)
-    return platform, motion, result, result.breakdown()
+    return platform, motion, result, _arrays(result.breakdown())
+
+
+def _arrays(frame) -> dict:
+    """Each part's (N, 6) array of a breakdown frame."""
+    return {name: frame[name].to_numpy() for name in (*PARTS, "F")}
+
+
+def test_breakdown_is_a_frame_by_step_with_a_column_per_part_and_leg(case):
+    _, motion, result, parts = case
+    frame = result.breakdown()
+    assert frame.index.name == "step" and len(frame) == len(motion.t)
+    assert list(frame["gravity"].columns) == [1, 2, 3, 4, 5, 6]
+    assert np.array_equal(frame["t"].to_numpy(), result.t)
+    assert frame.attrs["units"]["t"] == "s"
+    assert all(frame.attrs["units"][name] == "N" for name in PARTS)
+    assert np.array_equal(frame["prismatic_seal"][3].to_numpy(),
+                          parts["prismatic_seal"][:, 2])
 
 
 def test_parts_add_up_to_the_actuator_force(case):
@@ -34,7 +51,7 @@ def test_gravity_is_the_static_solve_and_payload_its_weight_at_rest(case):
     zero = np.zeros_like(motion.velocity)
     at_rest = gsfric.Motion.from_arrays(motion.t, motion.position, motion.rotation, zero, zero,
                                         zero, zero.copy())
-    still = gsfric.evaluate(platform, at_rest).breakdown()
+    still = _arrays(gsfric.evaluate(platform, at_rest).breakdown())
     assert np.allclose(still["inertia"], 0.0, atol=1e-9)
     assert np.allclose(still["gravity"], parts["gravity"], atol=1e-12)
     # at rest the legs' axial forces carry the weights: the vertical parts add up to m g

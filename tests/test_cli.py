@@ -94,7 +94,8 @@ def test_simulate_writes_every_column(tmp_path, good, suffix):
     out = tmp_path / f"forces{suffix}"
     result = run("simulate", "--trajectory", good, "--out", out)
     assert result.exit_code == 0, result.output
-    assert result.stdout == f"wrote {out} (60 steps, 0 flagged)\n"
+    assert result.stdout == (f"wrote {out} (60 steps, 0 flagged; differentiated by savgol, "
+                             "per-sample filters (order 4))\n")
     assert warnings_of(result) == []
     frame = read_table(out)
     assert len(frame) == 60
@@ -287,18 +288,20 @@ def test_missing_platform_file(tmp_path, good):
 # -- suspicious input: warnings, flags, --strict ----------------------------------------------
 
 
-def test_degrees_give_a_warning_and_a_result(tmp_path):
+def test_degrees_give_a_warning_and_no_result(tmp_path):
     frame = trajectory(orientation="euler")
     frame[["alpha", "beta", "gamma"]] = np.degrees(frame[["alpha", "beta", "gamma"]]) + 40
     path = tmp_path / "deg.csv"
     write_table(frame, path)
     result = run("simulate", "--trajectory", path, "--out", tmp_path / "o.csv")
-    assert result.exit_code == 0
-    found = warnings_of(result)
-    assert found[0].startswith(f"{path}: angles look like degrees")
+    assert result.exit_code == 2
+    found = lines(result.stderr)
+    assert found[0].startswith(f"gsfric: warning: {path}: angles look like degrees")
     assert "angles must be in radians" in found[0]
-    # such angles turn the platform far out of its workspace: those steps are flagged too
-    assert all("steps flagged" in line for line in found[1:])
+    # such angles turn the platform far out of its workspace: a data error, before physics
+    assert found[-1].startswith(f"gsfric: error: {path}: ")
+    assert "steps have a leg outside the stroke" in found[-1] and len(found) == 2
+    assert not (tmp_path / "o.csv").exists()
 
 
 def test_euler_jumps_at_the_level_pose_warn_and_match_the_quaternion(tmp_path):

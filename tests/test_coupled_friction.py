@@ -215,8 +215,8 @@ def test_actuator_hot_path_equals_the_full_evaluation():
 
 
 def test_iterations_stated_in_the_docs():
-
-    text = (Path(__file__).resolve().parents[1] / "docs" / "friction.md").read_text()
+    page = Path(__file__).resolve().parents[1] / "docs" / "explanation" / "friction.md"
+    text = page.read_text()
     assert f"{coupled.N_ITERATIONS} iterations" in text
     assert f"mu r <= {MU_R_CONVERGED}" in text
 

@@ -162,7 +162,7 @@ def parameter_error(case: Case, name: str, found: dict[str, float]) -> float:
     errors of static and velocity; effects with a vector of parameters in one unit
     (payload_offset, sensor_bias, leg_weight): the relative error of the effect's contribution
     to F, i.e. the error of the parameter vector weighted by each parameter's effect on F (the
-    lower leg part's weight moves F 16 times less than the upper part's, see docs/discovery.md).
+    lower leg part's weight moves F 16 times less than the upper part's, see docs/explanation/discovery.md).
     """
     true = case.parameters[name]
     if name == "force_scale":

@@ -1,5 +1,5 @@
 """Discovery on data as rigs produce it: rests, sensor errors, effects outside the catalog, bad
-channels, and the fitted model written back (docs/discovery.md)."""
+channels, and the fitted model written back (docs/explanation/discovery.md)."""
 
 from __future__ import annotations
 
@@ -60,7 +60,7 @@ def test_sensor_jacobian_matches_differences():
 def test_speed_uncertainty_follows_the_pose_noise():
     """sigma_v from the recorded poses scales with the pose noise and is of the size of the
     spread of the differentiated leg speed where the legs are truly at rest (within a factor:
-    docs/discovery.md gives the measured ratio)."""
+    docs/explanation/discovery.md gives the measured ratio)."""
     from gsfric.evaluation.evaluator import evaluate
 
     out = []

@@ -9,7 +9,7 @@ With two hidden effects it must name both.
 
 Each test writes its trials to ``$GSFRIC_DISCOVERY_RESULTS/<test>.json`` when that variable is
 set; ``python tests/test_discovery_slow.py DIR`` prints the confusion matrix and the rates as
-Markdown (docs/discovery.md).
+Markdown (docs/explanation/discovery.md).
 """
 
 from __future__ import annotations
@@ -96,7 +96,7 @@ def test_two_effect_rates():
     assert np.mean([sorted(t["found"]) == sorted(t["hidden"]) for t in trials]) >= RATE, trials
 
 
-# -- the tables of docs/discovery.md -----------------------------------------------------------
+# -- the tables of docs/explanation/discovery.md -----------------------------------------------------------
 
 
 def markdown(folder: str | os.PathLike[str]) -> str:

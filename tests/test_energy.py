@@ -4,7 +4,7 @@ The work of the actuators, integrated over the motion, must equal the change of 
 kinetic plus potential energy, plus the work lost to friction when the actuators carry it.
 
 The platforms use the paper's friction model unless a test says otherwise; the coupled model
-(docs/friction.md) has its own balance below.
+(docs/explanation/friction.md) has its own balance below.
 
 The energies are computed independently of gsfric's dynamics (tests/helpers_validation.py):
 from the platform pose alone, every body's centre and orientation (platform, payload, each leg's

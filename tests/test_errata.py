@@ -1,4 +1,4 @@
-"""The errata of the paper (docs/errata.md): each printed form against the derived one.
+"""The errata of the paper (docs/reference/errata.md): each printed form against the derived one.
 
 Every equation of derive/printed.py and derive/printed_legs.py is evaluated at states of seeded
 random motions, with the reactions and body accelerations of the derivation (the chain of
@@ -42,7 +42,7 @@ from gsfric.paper import tables as paper
 from gsfric.trajectory import Motion
 
 PAPER = Path(__file__).resolve().parents[2] / "shared" / "paper"
-DOC = Path(__file__).resolve().parents[1] / "docs" / "errata.md"
+DOC = Path(__file__).resolve().parents[1] / "docs" / "reference" / "errata.md"
 HOLDS = 1e-9
 FAILS = 1e-3
 SEED = 20261122
@@ -710,6 +710,6 @@ def test_every_erratum_has_a_test_and_a_row():
     doc = DOC.read_text() if DOC.exists() else ""
     for e in pr.ERRATA:
         assert any(n.startswith(f"test_{e.id}_") for n in names), e.id
-        assert re.search(rf"\b{e.id}\b", doc), f"{e.id} is not in docs/errata.md"
+        assert re.search(rf"\b{e.id}\b", doc), f"{e.id} is not in docs/reference/errata.md"
     listed = set(re.findall(r"\bE\d\d\b", doc))
     assert listed == {e.id for e in pr.ERRATA}

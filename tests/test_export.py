@@ -6,12 +6,14 @@ import shutil
 import subprocess
 from pathlib import Path
 
+import casadi as ca
 import numpy as np
 import pytest
 from click.testing import CliRunner
 
 from gsfric.cli import main
 from gsfric.evaluation.evaluator import Evaluator, state_array
+from gsfric.export import folded, source
 from gsfric.export.verify import TOLERANCE, check_motions, verify_library
 from gsfric.export.writer import export_library
 from gsfric.models import reference_platform
@@ -22,11 +24,14 @@ STALE = "gsfric: warning: generated/ is stale"
 
 @pytest.fixture(scope="module")
 def exports(tmp_path_factory) -> dict[str, Path]:
-    """One export per friction model of the reference platform (prefixes hexa, hexp)."""
+    """One export per friction model of the reference platform (prefixes hexa, hexp), and
+    the coupled model's generic build (hexg)."""
     root = tmp_path_factory.mktemp("export")
     export_library(reference_platform(), root / "coupled", model="coupled", prefix="hexa")
     export_library(reference_platform(), root / "paper", model="paper", prefix="hexp")
-    return {"coupled": root / "coupled", "paper": root / "paper"}
+    export_library(reference_platform(), root / "generic", model="coupled", prefix="hexg",
+                   code="generic")
+    return {"coupled": root / "coupled", "paper": root / "paper", "generic": root / "generic"}
 
 
 def _build(folder: Path, cc: str, flags, tmp: Path, extra=()) -> Path:
@@ -44,6 +49,11 @@ def _states(n: int = 5) -> np.ndarray:
     return state_array(check_motions(reference_platform(), 50, 1))[:n]
 
 
+def _numbers(run: subprocess.CompletedProcess) -> np.ndarray:
+    """The numbers a program printed, a row a line."""
+    return np.array([[float(v) for v in line.split()] for line in run.stdout.splitlines()])
+
+
 def _example(program: Path, x: np.ndarray, env=None) -> subprocess.CompletedProcess:
     text = "\n".join(" ".join(repr(float(v)) for v in row) for row in x) + "\n"
     return subprocess.run([str(program)], input=text, capture_output=True, text=True, env=env)
@@ -56,10 +66,69 @@ def test_builds_strictly_and_runs(exports, tmp_path, cc):
     x = _states()
     run = _example(_build(exports["coupled"], cc, STRICT, tmp_path), x)
     assert run.returncode == 0, run.stderr
-    got = np.array([[float(v) for v in line.split()] for line in run.stdout.splitlines()])
+    got = _numbers(run)
     F = Evaluator(reference_platform()).actuator_forces(x)
     np.testing.assert_allclose(got[:, :6], F, rtol=1e-12, atol=1e-9)
     assert np.all(got[:, 6] == 0)
+
+
+def test_generic_build_agrees(exports, tmp_path):
+    x = _states(20)
+    runs = {}
+    for code, folder in (("specialised", "coupled"), ("generic", "generic")):
+        header = next(exports[folder].glob("*.h")).read_text()
+        assert f'_CODE "{code}"' in header
+        (tmp_path / code).mkdir()
+        run = _example(_build(exports[folder], "cc", STRICT, tmp_path / code), x)
+        assert run.returncode == 0, run.stderr
+        runs[code] = _numbers(run)
+    F = Evaluator(reference_platform()).actuator_forces(x)
+    for got in runs.values():
+        np.testing.assert_allclose(got[:, :6], F, rtol=1e-12, atol=1e-9)
+    assert "PARAMETERS[" in (exports["generic"] / "hexg.c").read_text()
+    assert "PARAMETERS[" not in (exports["coupled"] / "hexa.c").read_text()
+
+
+def test_straight_line_c_matches_casadi(tmp_path):
+    x = ca.SX.sym("x", 4)
+    d = x[0] * x[0] + 1.5
+    first = ca.vertcat(x[1] / d, x[2] / d, x[3] / 3.0, x[0] / (x[1] + 7.0))
+    second = ca.vertcat(ca.sqrt(d), ca.exp(-x[2]), ca.fabs(x[3]), ca.fmax(x[0], x[1]),
+                        2.0 * x[1], -x[3], x[2] ** 2, ca.tanh(x[0]), ca.atan2(x[1], x[2]),
+                        1.0 / x[0], ca.log(d) * x[3] - x[1])
+    fn = ca.Function("probe", [x], [first, second])
+    body = folded.statements(fn, ["0", "1"])
+    only_first = folded.function_text(body, "first", {0})
+    assert only_first.count("/") == 2  # one reciprocal of d, x[0] / (x[1] + 7); 1/3 a product
+    assert "sqrt" not in only_first and "exp" not in only_first
+    text = folded.function_text(body, "probe")
+    program = tmp_path / "probe.c"
+    program.write_text("#include <math.h>\n#include <stdio.h>\ntypedef double casadi_real;\n"
+                       + source.helper_text(source.helpers_called(text)) + "\n" + text
+                       + only_first + """
+int main(void)
+{
+    double x[4], a[4], b[11], c[4], *res[2] = {a, b}, *part[1] = {c};
+    while (scanf("%lf %lf %lf %lf", &x[0], &x[1], &x[2], &x[3]) == 4) {
+        probe(x, res);
+        first(x, part);
+        for (int k = 0; k < 4; ++k) printf("%.17g %.17g ", a[k], c[k]);
+        for (int k = 0; k < 11; ++k) printf("%.17g ", b[k]);
+        printf("\\n");
+    }
+    return 0;
+}
+""")
+    built = subprocess.run(["cc", *STRICT, "-o", str(tmp_path / "probe"), str(program), "-lm"],
+                           capture_output=True, text=True)
+    assert built.returncode == 0, built.stderr[-3000:]
+    rows = np.random.default_rng(3).uniform(-2.0, 2.0, (25, 4))
+    got = _numbers(_example(tmp_path / "probe", rows))
+    for row, values in zip(rows, got):
+        want = [np.asarray(v).ravel() for v in fn(row)]
+        np.testing.assert_array_equal(values[0:8:2], values[1:8:2])
+        np.testing.assert_allclose(values[0:8:2], want[0], rtol=4e-16)
+        np.testing.assert_allclose(values[8:], want[1], rtol=4e-16)
 
 
 def test_makefile_builds(exports, tmp_path):
@@ -85,7 +154,7 @@ def test_matches_python(exports, model):
 def test_sanitizers(exports, tmp_path):
     probe = tmp_path / "probe.c"
     probe.write_text("int main(void) { return 0; }\n")
-    flags = ["-fsanitize=address,undefined", "-fno-sanitize-recover=all", "-g", "-O1"]
+    flags = ["-fsanitize=address,undefined", "-fno-sanitize-recover=all", "-g", "-O0"]
     if subprocess.run(["cc", *flags, "-o", str(tmp_path / "probe"), str(probe)],
                       capture_output=True).returncode:
         pytest.skip("no sanitizer runtime")
@@ -101,6 +170,7 @@ def test_sanitizers(exports, tmp_path):
 def test_two_prefixes_in_one_program(exports, tmp_path):
     main_c = tmp_path / "both.c"
     main_c.write_text("""#include <stdio.h>
+#include <string.h>
 #include "hexa.h"
 #include "hexp.h"
 int main(void)
@@ -110,7 +180,9 @@ int main(void)
     const double v[3] = {0.1, 0.05, 0.2}, w[3] = {0.3, -0.2, 0.4};
     hexa_pose_state(p, q, v, w, z, z, x);
     int a = hexa_actuator_forces(x, F), b = hexp_actuator_forces(x, G);
-    printf("%d %d %.17g %.17g\\n", a, b, F[0], G[0]);
+    hexa_outputs out;
+    hexa_evaluate(x, &out);
+    printf("%d %d %d %.17g %.17g\\n", a, b, memcmp(F, out.F, sizeof F) == 0, F[0], G[0]);
     return 0;
 }
 """)
@@ -121,7 +193,8 @@ int main(void)
                           "-lm"], capture_output=True, text=True)
     assert run.returncode == 0, run.stderr[-3000:]
     out = subprocess.run([str(target)], capture_output=True, text=True).stdout.split()
-    assert out[:2] == ["0", "0"] and float(out[2]) > 0 and float(out[2]) != float(out[3])
+    assert out[:3] == ["0", "0", "1"]  # evaluate's F is actuator_forces' to the bit
+    assert float(out[3]) > 0 and float(out[3]) != float(out[4])
 
 
 def test_deterministic_and_force_scale(exports, tmp_path):

@@ -330,11 +330,30 @@ def test_earliest_bad_row_is_reported(tmp_path):
 
 def test_both_orientations_use_the_quaternion(tmp_path):
     frame = trajectory_frame(orientation="quaternion")
-    frame[["alpha", "beta", "gamma"]] = 5.0
-    motion = read_trajectory(_write(tmp_path, frame))
+    motion = trajectory_frame(orientation="euler")
+    frame[["alpha", "beta", "gamma"]] = motion[["alpha", "beta", "gamma"]]
+    both = read_trajectory(_write(tmp_path, frame))
     plain = trajectory_frame(orientation="quaternion")
     expected = read_trajectory(_write(tmp_path, plain, "q.csv"))
-    np.testing.assert_array_equal(motion.rotation, expected.rotation)
+    np.testing.assert_array_equal(both.rotation, expected.rotation)
+
+
+def test_contradicting_orientations_are_an_error_naming_the_first_row(tmp_path):
+    frame = trajectory_frame(orientation="quaternion")
+    frame[["alpha", "beta", "gamma"]] = trajectory_frame(orientation="euler")[
+        ["alpha", "beta", "gamma"]]
+    frame.loc[17:, "gamma"] += 0.01
+    path = _write(tmp_path, frame)
+    with pytest.raises(InputError, match=r"row 18: the orientation columns disagree: alpha, "
+                                         r"beta, gamma and qw, qx, qy, qz give rotations "
+                                         r"0.01 rad apart \(tolerance 0.001 rad"):
+        read_trajectory(path)
+    frame[["alpha", "beta", "gamma"]] = 5.0                # junk in one set
+    with pytest.raises(InputError, match="row 1: the orientation columns disagree"):
+        read_trajectory(_write(tmp_path, frame))
+    frame["beta"] = "n/a"
+    with pytest.raises(InputError, match="row 1: column 'beta' is not a number"):
+        read_trajectory(_write(tmp_path, frame))
 
 
 def test_degree_warning_names_the_file(tmp_path):

@@ -1,6 +1,6 @@
 """Real log files: column maps, units, roll/pitch/yaw, wrapping counters, extra columns.
 
-The worked example of docs/logs.md is run as written (its Python and its TOML) and checked
+The worked example of docs/howto/read-a-log.md is run as written (its Python and its TOML) and checked
 against the motion it was made from.
 """
 
@@ -26,7 +26,7 @@ from gsfric.simulate.differentiate import iter_motions
 from gsfric.simulate.run import simulate_file
 
 ROOT = Path(__file__).resolve().parent.parent
-DOC = ROOT / "docs" / "logs.md"
+DOC = ROOT / "docs" / "howto" / "read-a-log.md"
 
 
 def _blocks(language: str) -> list[str]:
@@ -51,7 +51,7 @@ def controller(tmp_path, monkeypatch):
     python, = [b for b in _blocks("python") if "controller.csv" in b and "to_csv" in b]
     namespace: dict = {}
     exec(compile(python, str(DOC), "exec"), namespace)
-    toml, = _blocks("toml")
+    toml, = [b for b in _blocks("toml") if "C2H time (us)" in b]
     (tmp_path / "controller.toml").write_text(toml)
     return tmp_path, namespace["motion"]
 

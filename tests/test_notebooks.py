@@ -1,4 +1,4 @@
-"""Every notebook in notebooks/ executes headless, top to bottom, without an error."""
+"""Every tutorial notebook (docs/tutorials/) executes headless, top to bottom, without an error."""
 
 from __future__ import annotations
 
@@ -6,14 +6,14 @@ from pathlib import Path
 
 import pytest
 
-NOTEBOOK_DIR = Path(__file__).resolve().parents[1] / "notebooks"
+NOTEBOOK_DIR = Path(__file__).resolve().parents[1] / "docs" / "tutorials"
 NOTEBOOKS = sorted(NOTEBOOK_DIR.glob("*.ipynb"))
 CELL_TIMEOUT = 300  # s, per cell; the notebooks take seconds
 
 
 @pytest.mark.parametrize(
     "path",
-    NOTEBOOKS or [pytest.param(None, marks=pytest.mark.skip(reason="no notebooks in notebooks/"))],
+    NOTEBOOKS or [pytest.param(None, marks=pytest.mark.skip(reason="no notebooks in docs/tutorials/"))],
     ids=lambda p: p.name if isinstance(p, Path) else "none",
 )
 def test_notebook_executes(path: Path) -> None:

@@ -81,22 +81,6 @@ def refused(result, out: Path, source: Path, code: int = 2) -> str:
 
 
 @pytest.mark.parametrize("how", LINKS)
-@pytest.mark.parametrize("which", ["trajectory", "platform"])
-def test_simulate_out_onto_an_input(files, how, which):
-    before = {k: state(p) for k, p in files.items()}
-    out = alias(files[which], how, "o.csv")
-    result = run("simulate", "--trajectory", files["trajectory"], "--platform",
-                 files["platform"], "--out", out)
-    message = refused(result, out, files[which])
-    if how == "same":
-        assert message == f"{out}: is the {which} file itself; choose another output"
-    else:
-        assert message == (f"{out}: is the same file as the {which} file {files[which]}; "
-                           "choose another output")
-    assert {k: state(p) for k, p in files.items()} == before
-
-
-@pytest.mark.parametrize("how", LINKS)
 def test_simulate_breakdown_onto_an_input_or_the_output(files, tmp_path, how):
     before = {k: state(p) for k, p in files.items()}
     out = tmp_path / "o.csv"
@@ -114,15 +98,6 @@ def test_simulate_breakdown_onto_an_input_or_the_output(files, tmp_path, how):
                                 "output its own file"
     assert not out.exists()
     assert {k: state(p) for k, p in files.items()} == before
-
-
-@pytest.mark.parametrize("how", LINKS)
-def test_synth_out_onto_its_platform(files, how):
-    before = state(files["platform"])
-    out = alias(files["platform"], how, "m.csv")
-    result = run("synth", "--platform", files["platform"], "--out", out, "--samples", "40")
-    assert "platform file" in refused(result, out, files["platform"])
-    assert state(files["platform"]) == before
 
 
 @pytest.mark.parametrize("how", LINKS)
@@ -213,15 +188,6 @@ def test_a_fifo_is_written_into(files, tmp_path, name, command):
     assert result.exit_code == 0, result.output
     assert len(got) == 1 and len(got[0]) > 100
     assert sorted(p.name for p in tmp_path.iterdir() if ".gsfric-" in p.name) == []
-
-
-@pytest.mark.parametrize("command", [("simulate",), ("platform", "--template")])
-def test_dev_null_is_a_sink(files, command):
-    extra = ("--trajectory", files["trajectory"]) if command[0] == "simulate" else ()
-    result = run(*command, *extra, "--out", "/dev/null")
-    assert result.exit_code == 0, result.output
-    assert stat.S_ISCHR(os.lstat("/dev/null").st_mode)
-    assert not [p for p in Path("/dev").glob(".null.gsfric-*")]
 
 
 def test_a_character_device_named_like_a_table(files, tmp_path):

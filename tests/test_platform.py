@@ -130,7 +130,8 @@ def full_platform() -> Platform:
     data["geometry"]["platform_joints"][0][0] = 0.1 + 0.2
     data["geometry"]["universal_axes"] = rng.standard_normal((6, 3)).tolist()
     data["geometry"]["stroke"] = [0.45, 0.95]
-    data["platform"]["inertia"] = (a @ a.T / 3).tolist()
+    spd = a @ a.T / 3
+    data["platform"]["inertia"] = (spd + np.trace(spd) * np.eye(3)).tolist()   # a rigid body's
     data["platform"]["com"] = [1e-17, -2.5e-3, 1 / 3]
     data["platform"]["payload_inertia"] = (np.eye(3) / 7).tolist()
     data["platform"]["payload_com"] = [0.01, 0.0, 0.02]

@@ -80,7 +80,7 @@ def symmetric_platform(rng: np.random.Generator) -> gsfric.Platform:
     """A three-fold symmetric hexapod: joints, universal axes, bodies invariant under a turn by
     120 degrees about z (which carries leg i onto leg i + 2); the leg parts are arbitrary.
     The joints' mu r (coulomb x radius) stays within 0.006, where the coupled friction solve
-    converges (docs/friction.md); beyond it a step may be flagged, and ``evaluate`` is strict."""
+    converges (docs/explanation/friction.md); beyond it a step may be flagged, and ``evaluate`` is strict."""
     ref = models.reference_platform()
     g = ref.geometry
     axes = g.universal_axes[:2] + rng.uniform(-0.3, 0.3, (2, 3))
@@ -88,7 +88,7 @@ def symmetric_platform(rng: np.random.Generator) -> gsfric.Platform:
 
     def axial_inertia():
         a, b = rng.uniform(0.01, 0.2, 2)
-        return np.diag([a, a, b])
+        return np.diag([a, a, min(b, 2 * a)])       # a rigid body's: b <= a + a
 
     return (ref
             .with_geometry(base_joints=threefold(g.base_joints[:2] + rng.uniform(-0.03, 0.03,

@@ -1,6 +1,6 @@
 """Rests and the speed band with a differentiator whose filter varies along the record: the band
 follows the filter of each sample, and each sample looks for rests as far as its own window
-reaches (docs/discovery.md, "The motion estimate")."""
+reaches (docs/explanation/discovery.md, "The motion estimate")."""
 
 from __future__ import annotations
 

@@ -21,7 +21,7 @@ from scipy.spatial.transform import Rotation
 import gsfric
 from gsfric import io, models
 from gsfric.compiled.state import state_layout
-from gsfric.errors import InputError
+from gsfric.errors import GsfricWarning, InputError
 from gsfric.evaluation.evaluator import Evaluator, evaluate
 from gsfric.evaluation.flags import FLAG_COUPLING, FLAG_STROKE
 from gsfric.platform.description import Platform
@@ -133,7 +133,7 @@ def test_variants_heavier_payload_loads_the_actuators_more(serial):
 def cluster():
     distributed = pytest.importorskip("distributed")
     with distributed.LocalCluster(n_workers=2, threads_per_worker=1, processes=True,
-                                  dashboard_address=None, silence_logs=logging.ERROR) as c, \
+                                  dashboard_address=":0", silence_logs=logging.ERROR) as c, \
             distributed.Client(c) as client:
         yield client
 
@@ -173,7 +173,8 @@ def test_resumed_sweep_equals_an_uninterrupted_one(serial, inputs, tmp_path, mon
         if done == 3:
             raise Stop
 
-    with pytest.raises(Stop):
+    with pytest.raises(Stop), pytest.warns(GsfricWarning, match=r"out\.partial: the unfinished "
+                                           r"sweep is kept \(3 of [0-9]+ tasks done\)"):
         sweep(out, scheduler="serial", plots=False, on_chunk=stop_after_three, **inputs)
     assert not out.exists()
     assert len(list((tmp_path / "out.partial" / "chunks").glob("*.parquet"))) == 3

@@ -1,6 +1,6 @@
 """The motion estimated from noisy poses: closed-form motions whose derivatives are known,
 differentiated from their noisy samples; the force error of the true model evaluated on the
-estimate must stay well below the force noise (docs/discovery.md, "The motion estimate")."""
+estimate must stay well below the force noise (docs/explanation/discovery.md, "The motion estimate")."""
 
 from __future__ import annotations
 

@@ -66,8 +66,8 @@ def measure_paths(budget: float, memory: bool, progress=print, simulate: bool = 
     motion = bench_motion(100_000)
     out["evaluate_1e5"] = _evaluate_path(platform, motion, budget)
     progress("  README control loop, 40 steps")
-    out.update(_control_loop_paths(platform, budget))
-    out["busy_core"] = _busy_core_paths(platform, state_array(motion), budget, progress)
+    out.update(control_loop_paths(platform, budget))
+    out["busy_core"] = busy_core_paths(platform, state_array(motion), budget, progress)
     if memory:
         progress("  evaluate memory, N=1,000,000 (fresh process)")
         code = ("import json; from gsfric.bench.memory import evaluate_memory_child; "
@@ -108,7 +108,7 @@ def _evaluate_path(platform, motion, budget: float) -> dict:
     return paths
 
 
-def _control_loop_paths(platform, budget: float) -> dict:
+def control_loop_paths(platform, budget: float) -> dict:
     """The README's control loop (a new Evaluator and ``forces`` over 40 steps) and the
     Evaluator's construction alone, in microseconds."""
     m40 = bench_motion(40)
@@ -121,12 +121,14 @@ def _control_loop_paths(platform, budget: float) -> dict:
     return out
 
 
-def _busy_core_paths(platform, x: np.ndarray, budget: float, progress) -> dict:
-    """One and two threads of the compiled map with another process keeping a core busy."""
+def busy_core_paths(platform, x: np.ndarray, budget: float, progress,
+                    sizes=(1_000, 100_000)) -> dict:
+    """One and two threads of the compiled map with another process keeping a core busy, at
+    each of ``sizes`` steps (the first rows of the states x)."""
     busy = {}
     worker = _busy_core()
     try:
-        for n in (1_000, 100_000):
+        for n in sizes:
             progress(f"  one and two threads, other core busy, N={n:,}")
             xs = np.ascontiguousarray(x[:n])
             row = {}

@@ -13,7 +13,6 @@ import resource
 import subprocess
 import sys
 import tempfile
-import time
 from pathlib import Path
 
 import numpy as np
@@ -57,29 +56,58 @@ def run_simulate(trajectory, out, chunk: int | None = None, threads: int | None 
     waited-for children. Run it from a small process: a child's peak RSS counts the copy of its
     parent's memory it starts as. ``benchmarks/memory_10M.py`` runs it at 10 million steps.
     """
-    cmd = [sys.executable, "-m", "gsfric.cli", "simulate", "--trajectory", str(trajectory),
-           "--out", str(out), "--no-progress", *extra]
+    cmd = ["simulate", "--trajectory", str(trajectory), "--out", str(out), "--no-progress",
+           *extra]
     if chunk is not None:
         cmd += ["--chunk", str(chunk)]
     if threads is not None:
         cmd += ["--threads", str(threads)]
-    start = time.perf_counter()
-    with tempfile.TemporaryFile("w+") as stdout, tempfile.TemporaryFile("w+") as stderr:
-        child = subprocess.Popen(cmd, stdout=stdout, stderr=stderr, text=True)
-        _, status, usage = os.wait4(child.pid, 0)
-        wall = time.perf_counter() - start
+    run = run_gsfric(cmd)
+    scale = 1 if sys.platform == "darwin" else 1024          # ru_maxrss: bytes or kB
+    children = resource.getrusage(resource.RUSAGE_CHILDREN).ru_maxrss * scale
+    return {**run, "children_max_rss_mb": children / 2**20}
+
+
+_RUNNER = """
+import json, os, subprocess, sys, time
+start = time.perf_counter()
+child = subprocess.Popen(sys.argv[2:])
+_, status, usage = os.wait4(child.pid, 0)
+with open(sys.argv[1], "w") as out:
+    json.dump({"wall_s": time.perf_counter() - start, "status": status,
+               "user_s": usage.ru_utime, "system_s": usage.ru_stime,
+               "maxrss": usage.ru_maxrss}, out)
+"""
+"""Run by a small interpreter between the caller and the measured command: a child's peak RSS
+counts the memory of the process it was forked from, which is then this one's (a few MB), not
+the caller's (hundreds of MB by the end of a benchmark)."""
+
+
+def run_gsfric(args: list[str]) -> dict:
+    """``gsfric ARGS`` in a child process: its exit code (``returncode``), ``stdout`` and
+    ``stderr``, wall and CPU seconds (``wall_s``; ``cpu_s``, the sum of ``user_s`` and
+    ``system_s``) and its own peak resident set size (``peak_rss_mb``, ``os.wait4``, started
+    from a small interpreter so that the caller's size does not count)."""
+    cmd = [sys.executable, "-m", "gsfric.cli", *args]
+    with tempfile.TemporaryDirectory(prefix="gsfric-bench-") as tmp, \
+            tempfile.TemporaryFile("w+") as stdout, tempfile.TemporaryFile("w+") as stderr:
+        usage_file = Path(tmp) / "usage.json"
+        subprocess.run([sys.executable, "-I", "-c", _RUNNER, str(usage_file), *cmd],
+                       stdout=stdout, stderr=stderr, text=True, check=False)
         stdout.seek(0)
         stderr.seek(0)
         out_text, err_text = stdout.read(), stderr.read()
+        usage = json.loads(usage_file.read_text()) if usage_file.exists() else None
+    if usage is None:
+        return {"command": " ".join(["gsfric", *args]), "returncode": -1, "stdout": out_text,
+                "stderr": err_text.strip(), "wall_s": float("nan"), "cpu_s": float("nan"),
+                "user_s": float("nan"), "system_s": float("nan"), "peak_rss_mb": float("nan")}
     scale = 1 if sys.platform == "darwin" else 1024          # ru_maxrss: bytes or kB
-    children = resource.getrusage(resource.RUSAGE_CHILDREN).ru_maxrss * scale
-    return {"command": " ".join(["gsfric", *cmd[3:]]),
-            "returncode": os.waitstatus_to_exitcode(status), "stdout": out_text.strip(),
-            "stderr": err_text.strip(), "wall_s": wall,
-            "cpu_s": usage.ru_utime + usage.ru_stime, "user_s": usage.ru_utime,
-            "system_s": usage.ru_stime,
-            "peak_rss_mb": usage.ru_maxrss * scale / 2**20,
-            "children_max_rss_mb": children / 2**20}
+    return {"command": " ".join(["gsfric", *args]),
+            "returncode": os.waitstatus_to_exitcode(usage["status"]),
+            "stdout": out_text.strip(), "stderr": err_text.strip(), "wall_s": usage["wall_s"],
+            "cpu_s": usage["user_s"] + usage["system_s"], "user_s": usage["user_s"],
+            "system_s": usage["system_s"], "peak_rss_mb": usage["maxrss"] * scale / 2**20}
 
 
 def simulate_child(steps: int, trajectory: str, out: str) -> dict | None:

@@ -23,7 +23,6 @@ figures cannot exceed it.
 
 from __future__ import annotations
 
-import json
 import sys
 import tempfile
 from pathlib import Path
@@ -31,7 +30,7 @@ from pathlib import Path
 import numpy as np
 
 from gsfric.bench.cases import Case, states, time_case
-from gsfric.bench.machine import describe_machine, load_average, parallel_capacity
+from gsfric.bench.machine import describe_machine, load_average, parallel_capacity, publish
 from gsfric.bench.memory import memory_case
 from gsfric.bench.paths import import_time, measure_paths
 from gsfric.bench.report import Report, format_report, ratios, targets
@@ -105,10 +104,5 @@ def run_bench(quick: bool = False, out: Path | None = None) -> Report:
     sizes = QUICK_SIZES if quick else SIZES
     report = measure(sizes=sizes, budget=0.5 if quick else 2.0,
                      progress=lambda s: print(s, file=sys.stderr, flush=True))
-    print(format_report(report))
-    if out is not None:
-        out = Path(out)
-        out.parent.mkdir(parents=True, exist_ok=True)
-        out.write_text(json.dumps(report.as_dict(), indent=2) + "\n")
-        print(f"wrote {out}")
+    publish(format_report(report), report.as_dict(), out)
     return report

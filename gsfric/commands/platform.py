@@ -1,25 +1,85 @@
-"""``gsfric platform --template``: a commented platform TOML to start from."""
+"""``gsfric platform --template``: a commented platform TOML to start from, of the reference
+platform or of a rig's sizes (options, or a rig TOML: ``gsfric.platform.rig``)."""
 
 from __future__ import annotations
 
+import dataclasses
 from pathlib import Path
 
 import click
 
+from gsfric.commands.common import fail
+from gsfric.errors import InputError
 from gsfric.io.files import atomic_write
 from gsfric.models import reference_platform
-from gsfric.platform.description import Platform
+from gsfric.platform.rig import Rig, rig_platform_toml, rig_toml
+from gsfric.platform.text import commented_toml
+
+SIZES = ("base_radius", "base_half_angle", "platform_radius", "platform_half_angle",
+         "home_height", "stroke", "platform_mass", "lower_mass", "upper_mass", "payload_mass",
+         "friction_model")
+"""The size options, by ``Rig`` field."""
+
+
+def _size_options(command):
+    options = [
+        click.option("--base-radius", type=float, metavar="M",
+                     help="Radius of the circle of the universal joints C_i, m."),
+        click.option("--base-half-angle", type=float, metavar="RAD",
+                     help="Half the angle between the two joints of a base pair, rad."),
+        click.option("--platform-radius", type=float, metavar="M",
+                     help="Radius of the circle of the spherical joints E_i, m."),
+        click.option("--platform-half-angle", type=float, metavar="RAD",
+                     help="Half the angle between the two joints of a platform pair, rad."),
+        click.option("--home-height", type=float, metavar="M",
+                     help="Platform frame above the base frame at home, m [default: the "
+                          "height of mid-stroke legs]."),
+        click.option("--stroke", type=float, nargs=2, metavar="MIN MAX",
+                     help="Shortest and longest leg length, m."),
+        click.option("--platform-mass", type=float, metavar="KG", help="Moving platform, kg."),
+        click.option("--lower-mass", type=float, metavar="KG",
+                     help="Each leg's lower part (moves with the universal joint), kg."),
+        click.option("--upper-mass", type=float, metavar="KG",
+                     help="Each leg's upper part (moves with the spherical joint end), kg."),
+        click.option("--payload-mass", type=float, metavar="KG", help="Payload, kg."),
+        click.option("--friction-model", type=click.Choice(["coupled", "paper"]),
+                     help="Friction model [default: coupled]."),
+    ]
+    for option in reversed(options):
+        command = option(command)
+    return command
 
 
 @click.command()
-@click.option("--template", is_flag=True, required=True,
-              help="Write a commented, minimal platform TOML (the reference platform's "
-                   "values, units in the comments).")
+@click.option("--template", is_flag=True,
+              help="Write a commented platform TOML: the reference platform's, or, with "
+                   "--rig or size options, the platform of those sizes (units in comments).")
+@click.option("--rig", "rig_file", type=click.Path(dir_okay=False, exists=True),
+              help="A rig TOML (the size options as keys, e.g. base_radius = 2.0) to expand; "
+                   "options given override its values.")
+@click.option("--rig-template", is_flag=True,
+              help="Write a commented rig TOML (the reference platform's sizes) to edit and "
+                   "expand with --template --rig.")
+@_size_options
 @click.option("--out", type=click.Path(dir_okay=False, path_type=Path),
               help="File to write [default: standard output].")
-def platform(template, out):
-    """Write a platform file to start from: `gsfric platform --template --out my.toml`."""
-    text = platform_template()
+def platform(template, rig_file, rig_template, out, **sizes):
+    """Write a platform file to start from: `gsfric platform --template --out my.toml`.
+
+    With sizes (options or --rig FILE) the platform is built from them: joint pairs at 0, 120,
+    240 deg (base) and 60, 180, 300 deg (platform); inertias, leg parts and bushings derived
+    from the masses and sizes (stated in the file's comments); sizes not given are the
+    reference platform's. Values drawn from the rig are checked: the home pose must lie
+    within the stroke.
+    """
+    given = {k: v for k, v in sizes.items() if v is not None}
+    if template == rig_template:
+        fail("give one of --template and --rig-template")
+    if not (rig_file or given):
+        text = rig_toml(_reference_rig()) if rig_template else platform_template()
+    else:
+        rig = _rig(rig_file, given)
+        text = rig_toml(rig) if rig_template else rig_platform_toml(rig, rig_file or "")
     if out is None:
         click.echo(text, nl=False)
         return
@@ -28,72 +88,36 @@ def platform(template, out):
     click.echo(f"wrote {out}")
 
 
-def _rows(a) -> str:
-    """The rows of a matrix as TOML array lines, one a line."""
-    return "\n".join(f"    [{', '.join(repr(float(v)) for v in row)}]," for row in a)
+def _reference_rig() -> Rig:
+    return Rig.from_platform(reference_platform())
 
 
-def _matrix(a) -> str:
-    """A matrix as a TOML array of arrays on one line."""
-    return "[" + ", ".join("[" + ", ".join(repr(float(v)) for v in row) + "]"
-                           for row in a) + "]"
+def _rig(rig_file, given: dict) -> Rig:
+    """The rig of a rig file (or the reference platform's sizes) with the options given."""
+    if rig_file:
+        base = dataclasses.asdict(Rig.from_toml(rig_file))
+    else:
+        base = dataclasses.asdict(_reference_rig())
+        base["home_height"] = None
+    names = {"stroke": "--stroke"}
+    try:
+        return Rig(**{**base, **given})
+    except InputError as error:
+        message = str(error)
+        key = message.partition(":")[0]
+        option = names.get(key, "--" + key.replace("_", "-"))
+        if key in given:
+            message = f"{option}: {message.partition(': ')[2]}"
+        raise InputError(message) from None
 
 
 def platform_template() -> str:
     """The reference platform as a commented TOML: what `Platform.from_toml` needs, with units."""
-    p = reference_platform()
-    g = p.geometry
-    stroke = "" if g.stroke is None else (
-        f"stroke = [{g.stroke[0]:.6g}, {g.stroke[1]:.6g}]   # m, shortest and longest leg "
-        "(steps outside are flagged)\n")
-    b = p.platform
-    return f"""# A gsfric platform (SI units, angles in rad). Read with `gsfric simulate --platform FILE`
-# or gsfric.Platform.from_toml(FILE). Required: [geometry] base_joints, platform_joints and
-# [platform] mass, inertia; everything else has the default shown. `gsfric effects` lists
-# the optional [effects].
-
-gravity = {p.gravity:g}                 # m/s^2, along -z of the base frame
-
-[geometry]
-# C_i, the universal joints, in the base frame (m), one row per leg 1..6
-base_joints = [
-{_rows(g.base_joints)}
-]
-# E_i, the spherical joints, in the platform frame (m), leg i joins C_i and E_i
-platform_joints = [
-{_rows(g.platform_joints)}
-]
-{stroke}
-[platform]
-mass = {b.mass:g}                     # kg, the moving platform
-inertia = [[{b.inertia[0, 0]:g}, 0, 0], [0, {b.inertia[1, 1]:g}, 0], [0, 0, {b.inertia[2, 2]:g}]]   # kg m^2, about its centre of mass, platform frame
-payload_mass = {b.payload_mass:g}              # kg, at payload_com (platform frame, m)
-""" + _legs_and_friction(p)
-
-
-def _legs_and_friction(p: Platform) -> str:
-    """The template's [legs], [friction] and [effects] tables."""
-    f = p.friction
-    return f"""
-[legs]
-model = "{p.legs.model}"                # "rigid", or "paper": the paper's zone centres at 0.25 D and 0.75 D
-lower_mass = {p.legs.lower_mass:g}               # kg, moves with the universal joint
-lower_com = {p.legs.lower_com:g}                # m from C_i along the leg (rigid model)
-lower_inertia = {_matrix(p.legs.lower_inertia)}   # kg m^2, leg body frame (z along the leg)
-upper_mass = {p.legs.upper_mass:g}               # kg, moves with the spherical joint end
-upper_com = {p.legs.upper_com:g}                # m from E_i along the leg (rigid model)
-upper_inertia = {_matrix(p.legs.upper_inertia)}   # kg m^2, leg body frame
-
-[friction]
-joint_viscous = {f.joint_viscous:g}          # c_s, N m s/rad, spherical and universal joints
-joint_coulomb = {f.joint_coulomb:g}          # mu, 1
-joint_radius = {f.joint_radius:g}           # r, m
-prismatic_viscous = {f.prismatic_viscous:g}      # N s/m
-prismatic_coulomb = {f.prismatic_coulomb:g}      # mu, 1
-model = "{f.model}"               # "paper": post-hoc, (35) with R_3; "coupled": friction loads the actuators
-bushing_offset = {f.bushing_offset:g}          # m, first bushing from C_i (coupled model)
-bushing_spacing = {f.bushing_spacing:g}         # m, between the two bushings (coupled model)
-prismatic_seal = {f.prismatic_seal:g}           # N, seal friction (coupled model)
-
-[effects]                       # none switched on; e.g. stribeck = {{ static = 2.0, velocity = 0.01 }}
-"""
+    return commented_toml(reference_platform(), header=[
+        "A gsfric platform (SI units, angles in rad): the reference platform. Read with",
+        "`gsfric simulate --platform FILE` or gsfric.Platform.from_toml(FILE). Required:",
+        "[geometry] base_joints, platform_joints and [platform] mass, inertia; the other keys",
+        "have defaults. `gsfric effects` lists the optional [effects]. For a platform of your",
+        "rig's sizes: `gsfric platform --template --base-radius 2 --stroke 3 4.6 ...` or",
+        "`gsfric platform --rig-template --out rig.toml`, edit, then",
+        "`gsfric platform --template --rig rig.toml --out platform.toml`."])

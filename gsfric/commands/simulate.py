@@ -12,7 +12,7 @@ import click
 
 from gsfric.commands.common import log_options
 from gsfric.errors import InputError
-from gsfric.evaluation.breakdown import to_frame
+from gsfric.evaluation.breakdown import flat
 from gsfric.evaluation.columns import DEFAULT_GROUPS as DEFAULT_COLUMN_GROUPS
 from gsfric.evaluation.columns import GROUPS as COLUMN_GROUPS
 from gsfric.evaluation.evaluator import breakdown
@@ -68,9 +68,11 @@ def _options(command):
                      help="Steps read, differentiated and evaluated at a time (memory grows "
                           "with it); a file of at most this many rows is read whole."),
         click.option("--window", type=int, default=None,
-                     help="Savitzky-Golay window, odd, samples [default: a filter per sample "
-                          "for a file read whole, one window by cross-validation on the first "
-                          "chunk for a streamed one]."),
+                     help="Savitzky-Golay window, odd, samples; time stamps jittering by less "
+                          "than 1 % of the step are taken as evenly spaced, more uneven ones "
+                          "are fitted with polynomials of this window on their own stamps "
+                          "[default: a filter per sample for a file read whole, one window by "
+                          "cross-validation on the first chunk for a streamed one]."),
         click.option("--progress/--no-progress", default=None,
                      help="A progress bar on stderr, with total and ETA [default: when stderr "
                           "is a terminal]."),
@@ -126,12 +128,13 @@ def simulate(trajectory, platform_file, out, mode, strict, threads, chunk, windo
         if breakdown_file is not None:
             _write_breakdown(trajectory, log_format, platform, breakdown_file, quiet)
     if not quiet:
-        click.echo(f"wrote {out} ({summary.steps} steps, {summary.flagged} flagged)")
+        click.echo(f"wrote {out} ({summary.steps} steps, {summary.flagged} flagged; "
+                   f"differentiated by {summary.differentiation})")
 
 
 def _write_breakdown(trajectory, log_format, platform, breakdown_file, quiet) -> None:
     """``--breakdown``: F per leg split into its parts along the whole trajectory."""
     motion = read_trajectory(trajectory, log_format=log_format)
-    write_table(to_frame(motion.t, breakdown(platform, motion)), breakdown_file)
+    write_table(flat(breakdown(platform, motion)), breakdown_file)
     if not quiet:
         click.echo(f"wrote {breakdown_file}")

@@ -3,11 +3,13 @@
 from __future__ import annotations
 
 import sys
+import warnings
 from pathlib import Path
 
 import click
 
 from gsfric.commands.common import EXIT_CHECK, fail
+from gsfric.errors import GsfricWarning
 from gsfric.sweep import sweep as run_sweep
 from gsfric.sweep.plan import CHUNK_STEPS
 
@@ -48,8 +50,14 @@ def _pairs(values, option, ranged):
                    "(repeatable).")
 @click.option("--tolerance", multiple=True, metavar="NAME=SD",
               help="A Monte-Carlo tolerance, e.g. geometry.base_joints=0.0005 (repeatable).")
-@click.option("--variants", type=click.IntRange(1), default=16, show_default=True,
-              help="Variants drawn besides the nominal one (with --vary or --tolerance).")
+@click.option("--variants", type=click.IntRange(1), default=None,
+              help="Variants drawn at random besides the nominal one (with --vary or "
+                   "--tolerance): a Latin hypercube over the --vary ranges, normal errors for "
+                   "the --tolerance ones [default: 16].")
+@click.option("--grid", type=click.IntRange(1), default=None, metavar="N",
+              help="Instead of random draws: N evenly spaced values of each --vary range, "
+                   "ends included, every combination (N^k variants for k ranges). Not with "
+                   "--variants or --tolerance.")
 @click.option("--seed", type=int, default=0, show_default=True, help="Seed of the variants.")
 @click.option("--scheduler", default=None, metavar="auto|serial|local|tcp://HOST:PORT",
               help="Where tasks run [default: DASK_SCHEDULER_ADDRESS if set, else serial for "
@@ -62,17 +70,26 @@ def _pairs(values, option, ranged):
               help="Progress bar with total and ETA [default: when stderr is a terminal].")
 @click.option("--no-plots", is_flag=True, help="Skip the plots.")
 @click.option("--strict", is_flag=True, help="Exit 1 when a case exceeds the [limits].")
-def sweep(out_dir, trajectories, workspace, platform_file, vary, tolerance, variants, seed,
+def sweep(out_dir, trajectories, workspace, platform_file, vary, tolerance, variants, grid, seed,
           scheduler, workers, chunk_steps, progress, no_plots, strict):
     """Load envelopes per joint over motions, a workspace and platform variants.
 
-    Writes envelopes.parquet (per case, quantity and leg, with where each extreme occurs),
-    summary.csv, variants.csv, limits.csv (cases beyond the platform's [limits]), sweep.json
-    and plots. See docs/sizing.md.
+    Platform variants are drawn at random by default (--vary ranges by Latin hypercube,
+    --tolerance as normal errors, --variants of them, reproducible by --seed); --grid N lays
+    N evenly spaced values over each range instead. Writes envelopes.parquet (per case,
+    quantity and leg, with where each extreme occurs), summary.csv, variants.csv, limits.csv
+    (cases beyond the platform's [limits]), sweep.json and plots. See docs/howto/sizing.md.
     """
+    if grid is not None and variants is not None:
+        fail("--grid: gives the number of values per parameter; leave out --variants")
+    if grid is not None and tolerance:
+        fail("--grid: not with --tolerance, which are random draws")
+    if grid is not None and not vary:
+        fail("--grid: give the ranges to lay it over with --vary NAME=MIN:MAX")
     result = run_sweep(out_dir, trajectories=list(trajectories) or None, workspace=workspace,
                        platform=platform_file, vary=_pairs(vary, "--vary", True),
-                       tolerances=_pairs(tolerance, "--tolerance", False), variants=variants,
+                       tolerances=_pairs(tolerance, "--tolerance", False),
+                       variants=16 if variants is None else variants, grid=grid,
                        seed=seed, scheduler=scheduler, workers=workers,
                        chunk_steps=chunk_steps or CHUNK_STEPS, progress=progress,
                        plots=not no_plots)
@@ -84,7 +101,13 @@ def _report(result, strict: bool) -> None:
     info = result.info
     click.echo(f"wrote {result.out} ({info['cases']} cases, {info['steps']} steps, "
                f"{info['flagged']} flagged)")
+    click.echo(f"variants: {info.get('variants_drawn', '')}")
     top = result.most_loaded("R_C")
+    if top is None:
+        warnings.warn(f"{result.out}: every step of every case is flagged (see the flagged "
+                      "column of envelopes.parquet): no load envelope", GsfricWarning,
+                      stacklevel=2)
+        return
     click.echo(f"most loaded universal joint: leg {int(top.leg)}, |R_C| = {top.value:.4g} N "
                f"({top.motion}, variant {int(top.variant)}, step {int(top.step)})")
     if info["limits"]:
@@ -93,3 +116,5 @@ def _report(result, strict: bool) -> None:
                                                           if n else ""))
         if n and strict:
             sys.exit(EXIT_CHECK)
+    else:
+        click.echo("limits: no limits given (the platform has no [limits]): nothing checked")

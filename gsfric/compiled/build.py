@@ -65,7 +65,7 @@ SIMD_CFLAGS = ("-O3", "-fschedule-insns")
 """Added for the SIMD-over-steps source (generated/*_batch.c, the hot paths) when it is
 compiled at -O2: instruction scheduling before register allocation, which GCC leaves off on
 x86, cuts the spills of vector registers in its long straight-line bodies (1.4x the hot path,
-the same results bit for bit: docs/performance.md). CasADi's per-step source keeps -O2 (it is
+the same results bit for bit: docs/explanation/performance.md). CasADi's per-step source keeps -O2 (it is
 large, and compiles much longer with these)."""
 LIBRARY = "libgsfric.so"
 RECORD = "libgsfric.json"

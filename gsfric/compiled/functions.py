@@ -17,7 +17,7 @@ import numpy as np
 
 from gsfric.compiled.manifest import BASENAME, function
 from gsfric.compiled.state import motion_arrays, state_layout, state_of
-from gsfric.errors import GsfricError
+from gsfric.errors import GsfricError, InputError, InputTypeError
 
 
 class _Fn(ctypes.Structure):
@@ -151,7 +151,7 @@ class CompiledFunction:
         if flags is not None:
             if flag is None or flag.shape != (n,) or flag.dtype != np.int64 or \
                     not flag.flags.c_contiguous:
-                raise GsfricError(f"{self.name}: flag must be a C-contiguous int64 array of "
+                raise InputError(f"{self.name}: flag must be a C-contiguous int64 array of "
                                   f"shape ({n},)")
             flag_ptr = flag.ctypes.data
         failed = self._lib.gsfric_run(ctypes.byref(self._fn), in_ptrs, in_strides, out_ptrs,
@@ -170,18 +170,24 @@ class CompiledFunction:
             if value is None and parts is not None:
                 arrays.append(None)
                 continue
-            a = np.ascontiguousarray(value, dtype=np.float64)
+            if value is None:
+                raise InputTypeError(f"{self.name}: input {name} is None; give an array")
+            try:
+                a = np.ascontiguousarray(value, dtype=np.float64)
+            except (TypeError, ValueError):
+                raise InputTypeError(f"{self.name}: input {name} must be an array of numbers, "
+                                     f"got {type(value).__name__}") from None
             if a.ndim == 1:
                 if a.shape[0] != size:
-                    raise GsfricError(f"{self.name}: input {name} has {a.shape[0]} values, "
+                    raise InputError(f"{self.name}: input {name} has {a.shape[0]} values, "
                                       f"expected {size}")
             elif a.ndim == 2 and a.shape[1] == size:
                 if n is not None and a.shape[0] != n:
-                    raise GsfricError(f"{self.name}: input {name} has {a.shape[0]} steps, "
+                    raise InputError(f"{self.name}: input {name} has {a.shape[0]} steps, "
                                       f"expected {n}")
                 n = a.shape[0]
             else:
-                raise GsfricError(f"{self.name}: input {name} has shape {a.shape}, expected "
+                raise InputError(f"{self.name}: input {name} has shape {a.shape}, expected "
                                   f"(N, {size}) or ({size},)")
             arrays.append(a)
         return arrays, 1 if n is None else n
@@ -199,7 +205,7 @@ class CompiledFunction:
                 buf = np.empty((n, size))
             elif buf.shape != (n, size) or buf.dtype != np.float64 or \
                     not buf.flags.c_contiguous:
-                raise GsfricError(f"{self.name}: output buffer {name} must be a C-contiguous "
+                raise InputError(f"{self.name}: output buffer {name} must be a C-contiguous "
                                   f"float64 array of shape ({n}, {size})")
             out_ptrs[k] = buf.ctypes.data
             result[name] = buf
@@ -229,10 +235,15 @@ class CompiledFunction:
         run_tuple = self._lib.gsfric_bound_states
 
         def call(x: np.ndarray, out: np.ndarray) -> np.ndarray:
-            if (x.dtype != np.float64 or x.ndim != 2 or x.shape[1] != size_x
-                    or not x.flags.c_contiguous or out.dtype != np.float64
-                    or out.shape != (x.shape[0], size_out) or not out.flags.c_contiguous):
-                raise GsfricError(f"{name}: x must be C-contiguous float64 (N, {size_x}) "
+            try:
+                wrong = (x.dtype != np.float64 or x.ndim != 2 or x.shape[1] != size_x
+                         or not x.flags.c_contiguous or out.dtype != np.float64
+                         or out.shape != (x.shape[0], size_out) or not out.flags.c_contiguous)
+            except AttributeError:
+                raise InputTypeError(f"{name}: x and out must be NumPy arrays, got "
+                                     f"{type(x).__name__} and {type(out).__name__}") from None
+            if wrong:
+                raise InputError(f"{name}: x must be C-contiguous float64 (N, {size_x}) "
                                   f"and out (N, {size_out})")
             if tuples:
                 run_tuple(bound_ref, (x, out), x.shape[0])
@@ -284,23 +295,28 @@ class CompiledFunction:
         empty = np.empty
 
         def call(position, rotation, velocity, omega, acceleration, alpha, out=None):
-            p = np.ascontiguousarray(position, dtype=f64)
-            T = np.ascontiguousarray(rotation, dtype=f64)
-            v = np.ascontiguousarray(velocity, dtype=f64)
-            w = np.ascontiguousarray(omega, dtype=f64)
-            a = np.ascontiguousarray(acceleration, dtype=f64)
-            al = np.ascontiguousarray(alpha, dtype=f64)
+            try:
+                p = np.ascontiguousarray(position, dtype=f64)
+                T = np.ascontiguousarray(rotation, dtype=f64)
+                v = np.ascontiguousarray(velocity, dtype=f64)
+                w = np.ascontiguousarray(omega, dtype=f64)
+                a = np.ascontiguousarray(acceleration, dtype=f64)
+                al = np.ascontiguousarray(alpha, dtype=f64)
+            except (TypeError, ValueError):
+                raise InputTypeError(f"{name}: position, rotation, velocity, omega, "
+                                     "acceleration and alpha must be arrays of numbers") from None
             n = p.shape[0] if p.ndim == 2 else -1
             three = (n, 3)
             if (p.shape, v.shape, w.shape, a.shape, al.shape, T.shape) != \
                     (three, three, three, three, three, (n, 3, 3)):
-                raise GsfricError(f"{name}: position, velocity, omega, acceleration, alpha "
+                raise InputError(f"{name}: position, velocity, omega, acceleration, alpha "
                                   "must be (N, 3) and rotation (N, 3, 3) with the same N; got "
                                   f"{[x.shape for x in (p, T, v, w, a, al)]}")
             if out is None:
                 out = empty((n, size_out))
-            elif out.dtype != f64 or out.shape != (n, size_out) or not out.flags.c_contiguous:
-                raise GsfricError(f"{name}: out must be C-contiguous float64 ({n}, {size_out})")
+            elif not isinstance(out, np.ndarray) or out.dtype != f64 or \
+                    out.shape != (n, size_out) or not out.flags.c_contiguous:
+                raise InputError(f"{name}: out must be C-contiguous float64 ({n}, {size_out})")
             if tuples:
                 run_tuple(bound_ref, (p, T, v, w, a, al, out), n)
             elif by_object:

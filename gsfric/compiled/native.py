@@ -70,6 +70,16 @@ def _serialized() -> dict:
     return out
 
 
+def serialized(name: str):
+    """CasADi's function ``gsfric_model_<name>`` as serialized in generated/ (a
+    ``casadi.Function``; needs casadi): for building other functions from it."""
+    found = _serialized().get(f"{BASENAME}_{name}")
+    if found is None:
+        raise GsfricError(f"generated/{BASENAME}.casadi has no function {BASENAME}_{name}; "
+                          "run `gsfric derive`")
+    return found
+
+
 @functools.lru_cache(maxsize=None)
 def get(name: str):
     """The evaluator of generated function ``name`` (e.g. "eval", "actuator", "jacobian")."""

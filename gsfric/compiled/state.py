@@ -14,7 +14,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from gsfric.compiled.manifest import layout
-from gsfric.errors import GsfricError
+from gsfric.errors import GsfricError, InputError, InputTypeError
 
 MOTION_NAMES = ("position", "rotation", "velocity", "omega", "acceleration", "alpha")
 """The parts of a motion, in the order of the arrays of ``state_of``."""
@@ -73,17 +73,33 @@ def state_layout() -> StateLayout:
 
 
 def motion_arrays(name: str, motion) -> list[np.ndarray]:
-    """The six arrays of a motion, C-contiguous float64 with one N, else ``GsfricError``
+    """The six arrays of a motion, C-contiguous float64 with one N, else ``InputError``
     naming the caller ``name``."""
-    parts = [np.ascontiguousarray(a, dtype=np.float64) for a in motion]
+    try:
+        parts = [np.ascontiguousarray(a, dtype=np.float64) for a in motion]
+    except (TypeError, ValueError):
+        raise InputTypeError(f"{name}: a motion is 6 arrays of numbers") from None
     if len(parts) != 6:
-        raise GsfricError(f"{name}: a motion is 6 arrays, got {len(parts)}")
+        raise InputError(f"{name}: a motion is 6 arrays, got {len(parts)}")
     n = parts[0].shape[0] if parts[0].ndim else 0
     for part, shape, label in zip(parts, MOTION_SHAPES, MOTION_NAMES):
         if part.shape != (n,) + shape:
-            raise GsfricError(f"{name}: {label} has shape {part.shape}, expected "
+            raise InputError(f"{name}: {label} has shape {part.shape}, expected "
                               f"{(n,) + shape}")
     return parts
+
+
+def first_nonfinite(x: np.ndarray) -> str | None:
+    """Where the states x (N, size) first hold a NaN or an infinity, as ``"row 3
+    (omega)"`` (0-based row, the motion part of its column), or None when all are finite."""
+    bad = ~np.isfinite(np.asarray(x, dtype=float).reshape(len(x), -1))
+    rows = np.flatnonzero(bad.any(axis=1))
+    if not len(rows):
+        return None
+    column = int(np.flatnonzero(bad[rows[0]])[0])
+    part = next((n for n, s in zip(MOTION_NAMES, state_layout().slots())
+                 if s.start <= column < s.stop), f"column {column}")
+    return f"row {int(rows[0])} ({part})"
 
 
 def state_of(motion) -> np.ndarray:

@@ -8,7 +8,9 @@
 measured-data file, runs ``discover`` and writes ``summary.json``, ``report.md`` and plots.
 Modules: ``model`` (the compiled model as a function of its parameters), ``candidates`` (what
 may change), ``statistics`` (prewhitening, block cross-validation, block bootstrap),
-``regimes`` (where the residuals concentrate), ``workflow`` (the rounds), ``report``.
+``regimes`` (where the residuals concentrate), ``workflow`` (the rounds), ``floor`` (the
+noise floor of the verdict), ``dictionary`` (structure outside the catalog), ``verdict``
+(the decision and its reason), ``report``.
 """
 
 from gsfric.discovery.candidates import CANDIDATE_NAMES, CANDIDATES, REFIT

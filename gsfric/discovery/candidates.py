@@ -23,6 +23,7 @@ import numpy as np
 
 from gsfric._checks import suggest
 from gsfric.errors import InputError
+from gsfric.platform import catalog
 from gsfric.platform.catalog import EFFECTS
 from gsfric.platform.description import Platform
 
@@ -42,7 +43,7 @@ class Refit:
         model's value.
     relative : bool
         Whether ``lower`` and ``upper`` multiply the model's value.
-    unit, reason : str
+    reason : str
         For the report.
     """
 
@@ -50,8 +51,12 @@ class Refit:
     lower: float
     upper: float
     relative: bool = False
-    unit: str = ""
     reason: str = ""
+
+    @property
+    def unit(self) -> str:
+        """The parameter's unit (``gsfric.platform.catalog.unit``)."""
+        return catalog.unit(self.name)
 
     def bounds(self, value: float) -> tuple[float, float]:
         """The plausible range for a model whose value is ``value``."""
@@ -61,11 +66,11 @@ class Refit:
 
 
 REFIT: tuple[Refit, ...] = (
-    Refit("prismatic_viscous", 0.0, 50.0, unit="N s/m",
+    Refit("prismatic_viscous", 0.0, 50.0,
           reason="viscous friction of a lubricated actuator of this size"),
-    Refit("prismatic_coulomb", 0.0, 0.3, unit="1",
+    Refit("prismatic_coulomb", 0.0, 0.3,
           reason="Coulomb coefficient of a lubricated sliding joint"),
-    Refit("payload_mass", 0.5, 1.5, relative=True, unit="kg",
+    Refit("payload_mass", 0.5, 1.5, relative=True,
           reason="payload known to within 50%"),
 )
 """Default plausible ranges of the refitted model parameters (override with ``plausible=``)."""
@@ -276,7 +281,7 @@ def separating_motion(a: str, b: str) -> str:
     """A sentence on the motion that would separate candidates a and b."""
     return SEPARATING_MOTION.get(frozenset({a, b}),
                                  f"a motion that changes the ratio of the {a} and {b} "
-                                 "signatures (see docs/effects.md) separates them")
+                                 "signatures (see docs/reference/effects.md) separates them")
 
 CANDIDATE_NAMES = tuple(c.name for c in CANDIDATES)
 

@@ -14,18 +14,24 @@ from __future__ import annotations
 import json
 import math
 import os
+from collections.abc import Sequence
 from pathlib import Path
 
 import numpy as np
 
+from gsfric._checks import as_path
 from gsfric._optional import optional
+from gsfric.discovery.answer import GLOSSARY, platform_text, units_of, verdict_line
+from gsfric.discovery.floor import ForceNoise, read_noise_record
 from gsfric.discovery.regimes import hotspots
 from gsfric.discovery.rest import poses_from_columns
 from gsfric.discovery.results import Discovery, per_leg_rms, summary
 from gsfric.discovery.workflow import discover
-from gsfric.io.files import atomic_write, check_outputs, output_folder
+from gsfric.io.files import atomic_write, check_output_folder, check_outputs, output_folder
 from gsfric.io.readers import read_measured_columns
 from gsfric.models import platform_from
+from gsfric.platform import catalog
+from gsfric.platform.usable import check_forces, check_poses
 from gsfric.signal.savgol import DEFAULT_POLYORDER
 
 PLOTS = ("residuals_time.png", "residuals_speed.png", "regimes.png")
@@ -54,7 +60,7 @@ def report(d: Discovery, source: str = "", platform_source: str = "") -> str:
     """The readable report (Markdown)."""
     L = _header(d, source, platform_source)
     for section in (_unexplained, _effects_named, _disagreement, _own_parameters, _rounds,
-                    _effects_found, _gaps, _method):
+                    _effects_found, _gaps, _method, _glossary):
         L += section(d)
     return "\n".join(L)
 
@@ -67,14 +73,25 @@ def _header(d: Discovery, source: str, platform_source: str) -> list[str]:
     L += [f"Measured data: `{source or '(arrays)'}`; model: `{model}`.",
           f"Samples used: {n} ({d.used.start} left out at each end, where the pose's "
           f"differentiation is least accurate), {d.t[-1] - d.t[0]:.4g} s.", ""]
-    L += ["## Result", "", f"Verdict: **{d.verdict}**.", ""]
+    L += ["## Result", "", f"Verdict: **{d.verdict}**.", "", f"> {verdict_line(d)}", ""]
+    if d.verdict_reason:
+        L += [f"Why: {d.verdict_reason}.", ""]
     return L
 
 
 def _unexplained(d: Discovery) -> list[str]:
     """An ``unexplained_discrepancy``: where the structure was found and what it looks like."""
     L: list[str] = []
-    if d.verdict == "unexplained_discrepancy":
+    if d.structures:
+        L += ["Structure in the final residual that no catalog effect explains (each found by "
+              "a regression on a generic dictionary, accepted by the held-out rule the "
+              "candidate effects face):", ""]
+        L += [f"- **{s.kind}** on {', '.join(map(str, s.legs))}: {s.description} "
+              f"({_g(s.size_rms, 3)} N RMS, {_g(s.gap, 3)} x the residual it leaves; "
+              f"p = {_g(s.p_value, 2)} at level {_g(s.level, 2)}, held-out gain "
+              f"{_g(s.cv_gain, 2)})" for s in d.structures]
+        L.append("")
+    if d.verdict == "unexplained_discrepancy" and d.lack_of_fit.source is not None:
         lof = d.lack_of_fit
         source = lof.source or "final residual"
         if source == "final residual":
@@ -123,7 +140,9 @@ def _effects_named(d: Discovery) -> list[str]:
               "error outside the catalog would.", ""]
     if d.effects:
         for f in d.effects:
-            params = ", ".join(f"{k} = {_g(v)}" for k, v in f.parameters.items())
+            units = units_of(f.name, f.parameters)
+            params = ", ".join(f"{k} = {catalog.with_unit(v, units[k])}"
+                               for k, v in f.parameters.items())
             twins = f.evidence.indistinguishable_from
             L.append(f"- **{f.name}** ({params}): effect size {_g(f.evidence.effect_size, 3)}"
                      f" x noise, found in round {f.evidence.round}"
@@ -133,10 +152,8 @@ def _effects_named(d: Discovery) -> list[str]:
                  "explains a significant part of the gap.")
     L += ["", f"Gap (RMS of the residual, all legs): **{_g(d.rms_before)} N** with the model as "
           f"given, {_g(d.rms_refit)} N after refitting its own parameters, **{_g(d.rms_after)} N**"
-          f" with the effects found (RMS over the samples where the legs slide). Noise level "
-          f"estimated from the force channels alone (high-frequency part): "
-          f"{_g(d.noise_rms_estimate)} N; from the final residual: "
-          f"{_g(d.noise.residual_corrected)} N. Samples not sliding (speed within "
+          f" with the effects found (RMS over the samples where the legs slide). "
+          + _floor_text(d) + " Samples not sliding (speed within "
           f"the uncertainty of the differentiated poses): "
           f"{_g(d.noise.not_sliding_share, 3)} of the pairs.", ""]
     for note in d.notes:
@@ -144,6 +161,23 @@ def _effects_named(d: Discovery) -> list[str]:
     if d.notes:
         L.append("")
     return L
+
+
+def _floor_text(d: Discovery) -> str:
+    """The noise floor in words: its two parts and their sources, the residual against it,
+    and why the other two noise figures are not the floor."""
+    floor = d.noise.floor
+    force = float(np.sqrt(np.mean(np.square(floor.force))))
+    pose = float(np.sqrt(np.mean(np.square(floor.pose))))
+    return (f"Noise floor: **{_g(floor.rms)} N**, the load cells' noise {_g(force)} N "
+            f"({floor.force_source}: {floor.force_detail}) with the pose noise in the model's "
+            f"forces {_g(pose)} N ({floor.pose_source}); the final residual is "
+            f"{_g(floor.residual_over_floor, 3)} x the floor. The force channels' "
+            f"high-frequency part read alone ({_g(d.noise_rms_estimate)} N) counts the forces' "
+            "own fast changes (friction steps at the reversals, a fast motion) as noise, and "
+            f"the final residual corrected for the parameters fitted "
+            f"({_g(d.noise.residual_corrected)} N) holds whatever the model misses: neither is "
+            "the floor.")
 
 
 def _disagreement(d: Discovery) -> list[str]:
@@ -171,7 +205,7 @@ def _own_parameters(d: Discovery) -> list[str]:
     rows = []
     for name, e in d.refit.parameters.items():
         lo, hi = e.plausible
-        rows.append([name, e.model, e.refit, e.final, e.unbounded,
+        rows.append([name, catalog.unit(name) or "1", e.model, e.refit, e.final, e.unbounded,
                      f"[{_g(lo)}, {_g(hi)}]", "yes" if e.plausible_refit else "**no**"])
     if rows:
         L.append("Refitted first, within plausible ranges (a wrong coefficient is not a missing "
@@ -180,15 +214,29 @@ def _own_parameters(d: Discovery) -> list[str]:
                  "need; where it is implausible, the gap it would close is left to the "
                  "candidate effects.")
         L.append("")
-        L += _table(["parameter", "model", "refit", "final", "unbounded", "plausible range",
-                     "plausible"], rows)
+        L.append("Columns: *model* is the value in the platform as given; *refit* the value "
+                 "after refitting the model's own parameters alone (within the plausible "
+                 "range); *final* the value in the final model, refitted again together with "
+                 "the effects found (so a refit that an effect explains better returns towards "
+                 "the model's value); *unbounded* the value a refit without limits would need.")
+        L.append("")
+        L += _table(["parameter", "unit", "model", "refit", "final", "unbounded",
+                     "plausible range", "plausible"], rows)
     return L
 
 
 def _rounds(d: Discovery) -> list[str]:
     """Each round's tests and decision."""
     L: list[str] = []
-    L += ["## Rounds", ""]
+    L += ["## Rounds", "",
+          "Each round fits every candidate effect left and adds the best accepted one. In the "
+          "tables: *F*, *p* the nested F-test against the refitted model; *p slowest / rest* "
+          "the same test on the record's slowest components alone or on the rest alone; "
+          "*held-out gain* the relative drop of the error on stretches of the record left "
+          "out of the fit; *folds improved* the share of those stretches that improved; "
+          "*gap closed* the RMS the candidate removes over the RMS left. The *AR orders* "
+          "are those of each leg's residual model used to prewhiten it. The glossary at the "
+          "end explains each.", ""]
     for rnd in d.rounds:
         L.append(f"### Round {rnd.index}: "
                  + (f"**{rnd.winner}** added" if rnd.winner else "nothing significant; stop"))
@@ -223,8 +271,10 @@ def _effects_found(d: Discovery) -> list[str]:
             L.append("")
             L.append(f.evidence.signature)
             L.append("")
-            L += _table(["parameter", "value", "95% interval (block bootstrap)"],
-                        [[k, v, ("[" + ", ".join(_g(x) for x in f.interval[k]) + "]")
+            units = units_of(f.name, f.parameters)
+            L += _table(["parameter", "unit", "value", "95% interval (block bootstrap)"],
+                        [[k, units[k] or "1", v,
+                          ("[" + ", ".join(_g(x) for x in f.interval[k]) + "]")
                           if k in f.interval else "fixed"] for k, v in f.parameters.items()])
             ev = f.evidence
             L.append(f"F = {_g(ev.F)}, p = {_g(ev.p_value, 3)} (level {_g(ev.level, 3)}),"
@@ -255,8 +305,10 @@ def _method(d: Discovery) -> list[str]:
     L: list[str] = []
     L += ["## Plots", "",
           "- `residuals_time.png`: residual of each leg over time, before and after.",
-          "- `residuals_speed.png`: residual against the leg's sliding speed (friction shows "
-          "as a step or peak at zero speed).",
+          "- `residuals_speed.png`: residual against the leg's sliding speed on a "
+          "symmetric-log axis, linear within the Stribeck velocity scale "
+          f"(+-{stribeck_scale(d):.3g} m/s, shaded) so that the low-speed band is readable "
+          "(friction shows as a step or peak at zero speed).",
           "- `regimes.png`: RMS residual per band of each regime, before and after.", "",
           "## How the decisions are made", "",
           "Each candidate is fitted together with the refitted model parameters on a "
@@ -271,8 +323,13 @@ def _method(d: Discovery) -> list[str]:
           f"closes a gap of at least {d.settings.min_gap:g} x the noise level. The accepted "
           "candidate with the largest held-out gain is added, refined by Gauss-Newton on the "
           "compiled model, and the next round starts; the workflow stops when no candidate is "
-          "accepted. See docs/discovery.md.", ""]
+          "accepted. See docs/explanation/discovery.md.", ""]
     return L
+
+
+def _glossary(d: Discovery) -> list[str]:
+    """What each statistic of the report means."""
+    return ["## Glossary", ""] + [f"- **{term}**: {text}" for term, text in GLOSSARY.items()] + [""]
 
 
 
@@ -281,6 +338,78 @@ def _method(d: Discovery) -> list[str]:
 
 def _thin(n: int, most: int = 2000) -> slice:
     return slice(None, None, max(1, n // most))
+
+
+def stribeck_scale(d: Discovery) -> float:
+    """The speed scale of the low-speed friction, m/s: the Stribeck velocity found, or the
+    model's, or the catalog's default (the linear band of the speed plot's axis)."""
+    for f in d.effects:
+        if f.name == "stribeck":
+            return float(f.parameters["velocity"])
+    if "stribeck" in d.model.effects:
+        return float(d.model.effects["stribeck"]["velocity"])
+    return float(catalog.EFFECTS["stribeck"]["velocity"])
+
+
+def _binned(u: np.ndarray, r: np.ndarray, bins: int = 40) -> tuple[np.ndarray, np.ndarray]:
+    """Means of ``r`` in ``bins`` equal bins of ``u`` (empty bins dropped)."""
+    edges = np.linspace(u.min(), u.max(), bins + 1)
+    idx = np.clip(np.searchsorted(edges[1:-1], u), 0, bins - 1)
+    keep = [j for j in range(bins) if (idx == j).any()]
+    return (np.array([u[idx == j].mean() for j in keep]),
+            np.array([r[idx == j].mean() for j in keep]))
+
+
+def _speed_figure(plt, d: Discovery):
+    """Residual against each leg's speed, symmetric-log speed axis (linear within the
+    Stribeck scale), binned means evenly spaced on that axis."""
+    rb, ra = d.residual_before, d.residual_after
+    k = _thin(len(d.t))
+    speed = d.result_before.D_dot[d.used]
+    scale = stribeck_scale(d)
+    fig, axes = plt.subplots(2, 3, figsize=(12, 7), sharex=True)
+    for i, ax in enumerate(axes.ravel()):
+        v = speed[:, i]
+        u = np.sign(v) * np.log1p(np.abs(v) / scale)          # the axis' own spacing
+        for r, colour, label in ((rb, "0.5", "before"), (ra, "C0", "after")):
+            centres, means = _binned(u, r[:, i])
+            ax.plot(v[k], r[k, i], ".", ms=1.5, color=colour, alpha=0.25)
+            ax.plot(np.sign(centres) * scale * np.expm1(np.abs(centres)), means, "-",
+                    color=colour, lw=1.8, label=f"{label} (binned mean)")
+        ax.set_xscale("symlog", linthresh=scale, linscale=1.0)
+        ax.axvspan(-scale, scale, color="C1", alpha=0.08, lw=0)
+        ax.axvline(0, color="k", lw=0.5)
+        ax.set_title(f"leg {i + 1}", fontsize=10)
+        ax.tick_params(labelsize=8)
+        ax.grid(True, alpha=0.3)
+    axes[0, 0].legend(fontsize=8, loc="upper left")
+    for ax in axes[1]:
+        ax.set_xlabel("leg speed dD/dt (m/s), symmetric-log axis", fontsize=9)
+    for ax in axes[:, 0]:
+        ax.set_ylabel("residual F_measured - F_model (N)", fontsize=9)
+    fig.suptitle(f"Residual (N) against leg speed (m/s): linear within ±{scale:.3g} m/s "
+                 "(shaded: the Stribeck velocity scale), logarithmic beyond")
+    fig.subplots_adjust(left=0.07, right=0.98, top=0.9, bottom=0.09, wspace=0.22, hspace=0.25)
+    return fig
+
+
+def _regimes_figure(plt, d: Discovery):
+    """RMS residual per band of each regime, before and after, bands as labelled rows."""
+    bands = d.regimes
+    fig, ax = plt.subplots(figsize=(9, 0.32 * len(bands) + 1.6))
+    y = np.arange(len(bands))[::-1]
+    ax.barh(y + 0.2, [b.rms_before for b in bands], 0.4, color="0.6", label="before")
+    ax.barh(y - 0.2, [b.rms_after for b in bands], 0.4, color="C0", label="after")
+    ax.set_yticks(y, [f"{b.regime}: {b.name}" for b in bands], fontsize=9)
+    for n in range(1, len(bands)):
+        if bands[n].regime != bands[n - 1].regime:
+            ax.axhline(y[n] + 0.5, color="0.8", lw=0.8)
+    ax.set_xlabel("RMS residual (N)")
+    ax.legend(fontsize=9, loc="lower right")
+    ax.set_title("Gap per regime: RMS residual (N) in each band, before and after")
+    ax.grid(True, axis="x", alpha=0.3)
+    fig.tight_layout()
+    return fig
 
 
 def plots(d: Discovery, out_dir: Path) -> list[Path]:
@@ -294,7 +423,7 @@ def plots(d: Discovery, out_dir: Path) -> list[Path]:
     def save(fig, name):
         path = out_dir / name
         with atomic_write(path, "wb") as handle:
-            fig.savefig(handle, format="png", dpi=75)
+            fig.savefig(handle, format="png", dpi=90)
         plt.close(fig)
         written.append(path)
 
@@ -306,45 +435,12 @@ def plots(d: Discovery, out_dir: Path) -> list[Path]:
         ax.plot(t[k], ra[k, i], color="C0", lw=0.6, label="after")
         ax.set_ylabel(f"leg {i + 1}\nN")
     axes[0].legend(loc="upper right", ncol=2, fontsize=8)
-    axes[0].set_title("Residual F_measured - F_model")
+    axes[0].set_title("Residual F_measured - F_model (N) over time (s)")
     axes[-1].set_xlabel("t (s)")
     fig.subplots_adjust(left=0.1, right=0.98, top=0.96, bottom=0.05, hspace=0.15)
     save(fig, PLOTS[0])
-
-    speed = d.result_before.D_dot[d.used]
-    fig, axes = plt.subplots(2, 3, figsize=(10, 6), sharex=True)
-    for i, ax in enumerate(axes.ravel()):
-        v = speed[:, i]
-        order = np.argsort(v)
-        edges = np.quantile(v, np.linspace(0, 1, 41))
-        idx = np.clip(np.searchsorted(edges[1:-1], v[order]), 0, 39)
-        centres = np.array([v[order][idx == j].mean() for j in range(40) if (idx == j).any()])
-        for r, colour, label in ((rb, "0.5", "before"), (ra, "C0", "after")):
-            means = np.array([r[order, i][idx == j].mean() for j in range(40) if (idx == j).any()])
-            ax.plot(v[k], r[k, i], ".", ms=1, color=colour, alpha=0.25)
-            ax.plot(centres, means, "-", color=colour, lw=1.5, label=label)
-        ax.axvline(0, color="k", lw=0.5)
-        ax.set_title(f"leg {i + 1}", fontsize=9)
-    axes[0, 0].legend(fontsize=8)
-    for ax in axes[1]:
-        ax.set_xlabel("leg speed dD/dt (m/s)")
-    for ax in axes[:, 0]:
-        ax.set_ylabel("residual (N)")
-    fig.suptitle("Residual against leg speed (binned means)")
-    fig.subplots_adjust(left=0.08, right=0.98, top=0.9, bottom=0.1, wspace=0.25, hspace=0.25)
-    save(fig, PLOTS[1])
-
-    bands = d.regimes
-    fig, ax = plt.subplots(figsize=(10, 4))
-    x = np.arange(len(bands))
-    ax.bar(x - 0.2, [b.rms_before for b in bands], 0.4, color="0.6", label="before")
-    ax.bar(x + 0.2, [b.rms_after for b in bands], 0.4, color="C0", label="after")
-    ax.set_xticks(x, [f"{b.regime}\n{b.name}" for b in bands], fontsize=7, rotation=90)
-    ax.set_ylabel("RMS residual (N)")
-    ax.legend(fontsize=8)
-    ax.set_title("Gap per regime")
-    fig.subplots_adjust(left=0.07, right=0.99, top=0.92, bottom=0.3)
-    save(fig, PLOTS[2])
+    save(_speed_figure(plt, d), PLOTS[1])
+    save(_regimes_figure(plt, d), PLOTS[2])
     return written
 
 
@@ -359,13 +455,15 @@ def write(d: Discovery, out_dir: str | os.PathLike[str], *, source: str = "",
                                         "platform": platform_source or None}) as out:
         path = out / "summary.json"
         data = summary(d)
+        data["answer"] = verdict_line(d)
         data["data"]["file"] = source or None
         with atomic_write(path) as handle:
             json.dump(data, handle, indent=2, allow_nan=False)
             handle.write("\n")
         written.append(path)
         path = out / "platform.toml"
-        d.platform.to_toml(path)
+        with atomic_write(path, "w") as handle:
+            handle.write(platform_text(d, source, platform_source))
         written.append(path)
         path = out / "report.md"
         with atomic_write(path) as handle:
@@ -376,10 +474,42 @@ def write(d: Discovery, out_dir: str | os.PathLike[str], *, source: str = "",
     return [Path(out_dir) / p.name for p in written]
 
 
+def discover_file(measured: str | os.PathLike[str],
+                  platform_file: str | os.PathLike[str] | None = None, *, seed: int = 0,
+                  progress: bool = False,
+                  force_noise: float | Sequence[float] | None = None,
+                  noise_record: str | os.PathLike[str] | None = None, **options) -> Discovery:
+    """Read a measured-data file and run the workflow on it (``run_discover`` without the
+    outputs); parameters as ``run_discover``'s."""
+    platform = platform_from(platform_file)
+    log_format = options.pop("log_format", None)   # column map and units of a log
+    sensor = _force_noise(force_noise, noise_record, log_format)
+    motion, forces, lengths, columns = read_measured_columns(measured, None, DEFAULT_POLYORDER,
+                                                          log_format)
+    poses = poses_from_columns(columns)
+    check_poses(platform, *poses, motion.t, str(measured))
+    check_forces(platform, forces, str(measured))
+    result = discover(motion, forces, platform, seed=seed, progress=progress, poses=poses,
+                      force_noise=sensor, **options)
+    how = motion.differentiation()
+    if how is not None:
+        result.notes.append(f"differentiation: {how.describe()}")
+    if lengths is not None:
+        model_lengths = result.result_before.D
+        gap = float(np.sqrt(np.mean((lengths - model_lengths) ** 2)))
+        if gap > 1e-3:
+            result.notes.append(
+                f"the leg lengths D1..D6 in the file differ from those of the recorded pose by "
+                f"{gap * 1e3:.3g} mm RMS: check the platform's geometry")
+    return result
+
+
 def run_discover(measured: str | os.PathLike[str],
                  platform_file: str | os.PathLike[str] | None = None,
                  out_dir: str | os.PathLike[str] = ".", *, seed: int = 0,
-                 progress: bool = True, figures: bool = True, **options) -> list[Path]:
+                 progress: bool = True, figures: bool = True,
+                 force_noise: float | Sequence[float] | None = None,
+                 noise_record: str | os.PathLike[str] | None = None, **options) -> list[Path]:
     """``gsfric discover``: read measured data, run the workflow, write its outputs.
 
     Parameters
@@ -397,28 +527,52 @@ def run_discover(measured: str | os.PathLike[str],
         Progress on stderr.
     figures : bool
         Write the plots.
+    force_noise : float or sequence of 6 floats, optional
+        The load cells' noise, N (a sensor specification; ``--force-noise``), one value or one
+        per leg. Default: ``noise_record``'s, else the ``force_noise`` of the log's format
+        (``log_format`` in ``options``), else estimated from the force channels.
+    noise_record : path-like, optional
+        A recording at rest (CSV or Parquet with F1..F6): each force channel's standard
+        deviation about its mean is the load cells' noise.
     **options
-        ``Settings`` fields.
+        ``Settings`` fields; ``log_format`` (a ``LogFormat``) for a log's columns and units.
 
     Returns
     -------
     list of Path
-        The files written.
+        The files written (``verdict_line`` of the result is summary.json's ``answer``).
+
+    Raises
+    ------
+    InputTypeError
+        A path that is not a str or os.PathLike.
+    InputError
+        A bad file (naming the row and column), mostly unusable data, an output that is an
+        input, a bad setting.
+    OutputError
+        An output could not be written (a full disk); nothing partial is left.
     """
-    check_outputs([out_dir], {"measured-data": measured, "platform": platform_file})
-    platform = platform_from(platform_file)
-    log_format = options.pop("log_format", None)   # column map and units of a log
-    motion, forces, lengths, columns = read_measured_columns(measured, None, DEFAULT_POLYORDER,
-                                                          log_format)
-    result = discover(motion, forces, platform, seed=seed, progress=progress,
-                      poses=poses_from_columns(columns), **options)
-    if lengths is not None:
-        model_lengths = result.result_before.D
-        gap = float(np.sqrt(np.mean((lengths - model_lengths) ** 2)))
-        if gap > 1e-3:
-            result.notes.append(
-                f"the leg lengths D1..D6 in the file differ from those of the recorded pose by "
-                f"{gap * 1e3:.3g} mm RMS: check the platform's geometry")
+    measured = as_path(measured, "measured")
+    out_dir = as_path(out_dir, "out_dir")
+    if platform_file is not None:
+        platform_file = as_path(platform_file, "platform_file")
+    check_outputs([out_dir], {"measured-data": measured, "platform": platform_file,
+                              "noise-record": noise_record})
+    check_output_folder(out_dir)
+    result = discover_file(measured, platform_file, seed=seed, progress=progress,
+                           force_noise=force_noise, noise_record=noise_record, **options)
     return write(result, out_dir, source=str(measured),
                  platform_source=str(platform_file) if platform_file else "",
                  figures=figures)
+
+
+def _force_noise(force_noise, noise_record, log_format) -> ForceNoise | None:
+    """The load cells' noise the user gives, by precedence: ``--force-noise``,
+    ``--noise-record``, the log format's ``force_noise``; None: estimated."""
+    if force_noise is not None:
+        return ForceNoise.specified(force_noise)
+    if noise_record is not None:
+        return read_noise_record(noise_record, log_format)
+    if log_format is not None and log_format.force_noise is not None:
+        return ForceNoise.specified(log_format.force_noise, "force_noise of the column map")
+    return None

@@ -200,7 +200,7 @@ class Design:
         return cols
 
 
-def _checked_forces(motion: Motion, forces: np.ndarray) -> np.ndarray:
+def checked_forces(motion: Motion, forces: np.ndarray) -> np.ndarray:
     """The measured forces (N, 6), N, as floats; an ``InputError`` for a wrong shape, a
     problem of the data that no model effect explains (``rest.data_problems``) or a row that
     is not finite."""
@@ -252,7 +252,7 @@ class Problem:
                  settings: Settings, poses: tuple[np.ndarray, np.ndarray] | None = None
                  ) -> None:
         n = len(motion)
-        forces = _checked_forces(motion, forces)
+        forces = checked_forces(motion, forces)
         trim, needed = _trim(n, settings)
         self.settings = settings
         self.lazy = True
@@ -298,6 +298,9 @@ class Problem:
         if poses is None:
             poses = motion.recorded_poses()
         recorded = poses is not None
+        self.poses = poses
+        """The recorded poses (positions (N, 3), m; rotations (N, 3, 3)), None when the motion
+        has none: its smoothed poses underestimate the pose noise."""
         if not recorded:
             poses = (np.asarray(motion.position, float), np.asarray(motion.rotation, float))
         sigma_v, self.reach = np.zeros((n, 6)), np.zeros(n, int)

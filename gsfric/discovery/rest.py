@@ -36,7 +36,7 @@ from gsfric.signal.rotations import (
 )
 from gsfric.signal.savgol import DEFAULT_POLYORDER, savgol_weights
 from gsfric.signal.spline import smoothing_splines, spline_penalties
-from gsfric.signal.windows import candidate_windows, motion_filters
+from gsfric.signal.windows import candidate_windows, filter_pairs, motion_filters
 
 
 def differentiator(position: np.ndarray, rotation: np.ndarray, polyorder: int | None = None,
@@ -65,7 +65,7 @@ def differentiator(position: np.ndarray, rotation: np.ndarray, polyorder: int | 
     for chosen, signal in zip(filters, signals):
         orders, windows = chosen[0]
         gain = np.empty(len(windows))
-        for p, w in np.unique(np.stack([orders, windows], axis=1), axis=0):
+        for p, w in filter_pairs(orders, windows):
             rows = (orders == p) & (windows == w)
             gain[rows] = np.linalg.norm(savgol_weights(int(w), int(p), 1))
         gains.append(gain)

@@ -9,11 +9,14 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from gsfric.discovery.candidates import separating_motion
+from gsfric.discovery.dictionary import Unexplained
 from gsfric.discovery.final_tests import LackOfFit
+from gsfric.discovery.floor import NoiseFloor
 from gsfric.discovery.refine import Stability
 from gsfric.discovery.regimes import hotspots
 from gsfric.discovery.selection import CandidateTest, GenericCompetitor, NoiseModel
 from gsfric.discovery.settings import Settings
+from gsfric.platform import catalog
 from gsfric.platform.description import Platform
 
 
@@ -62,6 +65,11 @@ class Round:
     """Without a winner: the candidate accepted by every rule but the test on the slowest
     components (``CandidateTest.slow_only``) that a generic out-of-catalog structure explains
     as well or better (``generic`` holds that comparison): not slow noise but a structure."""
+
+    def __repr__(self) -> str:
+        what = f"{self.winner} added" if self.winner else "nothing added"
+        return (f"<Round {self.index}: {what}, {len(self.tests)} candidates tested, RMS "
+                f"{self.rms_before:.4g} -> {self.rms_after:.4g} N>")
 
     @property
     def imitates(self) -> bool:
@@ -130,8 +138,9 @@ class RefitParameter:
     final: float | None = None
     interval: tuple[float, float] | None = None
 
-    def to_json(self) -> dict:
-        """summary.json's entry (a parameter of an effect gets its refit value last)."""
+    def to_json(self, name: str = "") -> dict:
+        """summary.json's entry (a parameter of an effect gets its refit value last), with
+        the unit of parameter ``name`` (``catalog.unit``)."""
         keys = (("model", "unbounded", "plausible", "plausible_refit", "refit")
                 if self.own_effect else
                 ("model", "refit", "unbounded", "plausible", "plausible_refit"))
@@ -139,6 +148,7 @@ class RefitParameter:
         if self.alternatives is not None:
             out["alternatives"] = self.alternatives
         out["final"], out["interval"] = self.final, self.interval
+        out["unit"] = catalog.unit(name)
         return out
 
 
@@ -161,7 +171,7 @@ class RefitReport:
 
     def to_json(self) -> dict:
         """summary.json's ``refit``."""
-        return {"parameters": {n: p.to_json() for n, p in self.parameters.items()},
+        return {"parameters": {n: p.to_json(n) for n, p in self.parameters.items()},
                 "implausible": self.implausible,
                 "test": dataclasses.asdict(self.test) if self.test is not None else None}
 
@@ -194,6 +204,12 @@ class NoiseEstimate:
         Each leg's standard deviation of the differentiated speed due to pose noise, m/s.
     not_sliding_share : float
         Share of the used (sample, leg) pairs that are not known to slide.
+    floor : NoiseFloor or None
+        The noise floor the verdict compares the residual with: the force noise (and its
+        source: ``specified``, ``noise record`` or ``estimated``) and the pose noise
+        propagated into the model's forces. ``high_frequency`` reads the force channels'
+        fast changes (friction steps at the reversals, a fast motion) as noise as well; the
+        floor's force part does not.
     """
 
     high_frequency: float
@@ -203,6 +219,7 @@ class NoiseEstimate:
     method: str
     speed_uncertainty: list[float]
     not_sliding_share: float
+    floor: NoiseFloor | None = None
 
 
 @dataclass
@@ -282,6 +299,12 @@ class Finding:
     interval: dict[str, tuple[float, float]]
     evidence: FindingEvidence
 
+    def __repr__(self) -> str:
+        values = ", ".join(f"{k} = {catalog.with_unit(v, catalog.unit(f'{self.name}.{k}'))}"
+                           for k, v in self.parameters.items())
+        return (f"<Finding {self.name} ({values}): round {self.evidence.round}, effect size "
+                f"{self.evidence.effect_size:.3g} x noise>")
+
 
 @dataclass
 class Discovery:
@@ -315,7 +338,7 @@ class Discovery:
         Full evaluation of the given model over the used samples (speeds, lengths, loads).
     noise_model : NoiseModel
         AR model of the final residual.
-    regimes : list[gsfric.discovery.regimes.Band]
+    regimes : list of Band
         The residual before and after per band of speed, load, stroke, pose and time.
     settings : Settings
     evaluations : int
@@ -331,6 +354,21 @@ class Discovery:
         RMS residual (N) of the final model over every used pair, sliding or not.
     sliding : ndarray of bool, shape (M, 6)
         The (sample, leg) pairs known to slide.
+    structures : list of Unexplained
+        The generic dictionary's structures found in the final residual
+        (``dictionary.find``).
+    verdict_reason : str
+        Why the verdict (``verdict.decide``): the evidence that decided, and the residual
+        against the noise floor.
+    verdict_decided_by : str
+        ``dictionary``, ``lack of fit``, ``floor``, ``effects``, ``refit`` or ``none``.
+
+    Examples
+    --------
+    >>> result = gsfric.discover("measured.csv", out="out")         # doctest: +SKIP
+    >>> result                                                      # doctest: +SKIP
+    <Discovery explained: stribeck (static = 2 N, velocity = 0.00998 m/s) ...>
+    >>> print(result.summary()["answer"])                           # doctest: +SKIP
     """
 
     effects: list[Finding]
@@ -357,11 +395,21 @@ class Discovery:
     noise: NoiseEstimate | None = None
     rms_after_all: float = 0.0
     sliding: np.ndarray | None = None
+    structures: list[Unexplained] = field(default_factory=list)
+    verdict_reason: str = ""
+    verdict_decided_by: str = ""
 
     @property
     def names(self) -> list[str]:
         """Names of the effects found."""
         return [f.name for f in self.effects]
+
+    def __repr__(self) -> str:
+        n = self.used.stop - self.used.start
+        effects = ", ".join(self.names) or "no effect named"
+        return (f"<Discovery {self.verdict}: {effects}; residual {self.rms_before:.4g} N -> "
+                f"{self.rms_after:.4g} N RMS over {n} samples, {len(self.rounds)} rounds; "
+                "summary() for summary.json's content>")
 
     def summary(self) -> dict:
         """The summary.json content (SPEC), plus the refit, rounds and per-leg gaps."""
@@ -407,6 +455,8 @@ def summary(d: Discovery) -> dict:
     lof = d.lack_of_fit
     out = {
         "verdict": d.verdict,
+        "verdict_reason": d.verdict_reason,
+        "verdict_decided_by": d.verdict_decided_by,
         "unexplained": _unexplained(d, lof),
         "lack_of_fit": lof.to_json(),
         "noise": _asdict(d.noise),
@@ -429,7 +479,8 @@ def summary(d: Discovery) -> dict:
         "settings": {"alpha": s.alpha, "min_fold_share": s.min_fold_share,
                      "min_gap": s.min_gap, "n_blocks": s.n_blocks, "n_folds": s.n_folds,
                      "n_bootstrap": s.n_bootstrap, "candidates": list(s.candidates),
-                     "refit": list(s.refit)},
+                     "refit": list(s.refit), "floor_ratio": s.floor_ratio,
+                     "dictionary_min_gap": s.dictionary_min_gap},
         "notes": d.notes,
         "evaluations": d.evaluations,
     }
@@ -445,6 +496,7 @@ def _effects(d: Discovery) -> list[dict]:
         # with structure left that the catalog does not explain, a named effect is the best
         # candidate for a part of the gap, not a confident explanation of it
         effects.append({"name": f.name, "parameters": dict(f.parameters),
+                        "units": {k: catalog.unit(f"{f.name}.{k}") for k in f.parameters},
                         "partial": d.verdict == "unexplained_discrepancy",
                         "evidence": evidence})
     return effects
@@ -488,7 +540,9 @@ def _rounds(d: Discovery) -> list[dict]:
                        "cv_gain": t.cv_gain, "fold_share": t.fold_share,
                        "sse_gain": t.sse_gain, "gap": t.gap, "p_bands": t.p_bands,
                        "significant": t.significant, "slow_only": t.slow_only,
-                       "reason": t.reason, "parameters": t.parameters} for t in rnd.tests]})
+                       "reason": t.reason, "parameters": t.parameters,
+                       "units": {k: catalog.unit(f"{t.name}.{k}") for k in t.parameters}}
+                      for t in rnd.tests]})
     return rounds
 
 
@@ -504,7 +558,14 @@ def _unexplained(d: Discovery, lof: LackOfFit) -> dict | None:
             "partial_effects": [f.name for f in d.effects],
             "speed_bands": {b.name: b.rms_after for b in d.regimes if b.regime == "speed"},
             "source": lof.source,
-            "message": _unexplained_message(lof)}
+            "message": _unexplained_message(lof),
+            "structures": [dataclasses.asdict(s) for s in d.structures],
+            "decided_by": d.verdict_decided_by}
+        if d.verdict_decided_by in ("dictionary", "floor"):
+            unexplained["message"] = (
+                "the catalog does not explain the data: "
+                + ("; ".join(s.description for s in d.structures) if d.structures
+                   else d.verdict_reason))
     return unexplained
 
 

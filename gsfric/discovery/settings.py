@@ -49,7 +49,7 @@ class Settings:
         Threads of the compiled evaluation (0: every core).
 
     The thresholds below (one line each on why) are fixed by the documented calibrations
-    (docs/discovery.md); change them only with the calibration.
+    (docs/explanation/discovery.md); change them only with the calibration.
     """
 
     alpha: float = 0.01
@@ -154,6 +154,43 @@ class Settings:
     rest_lags: tuple[int, ...] = (1, 4, 16)
     """Lags (samples) of the differences whose energy ``transients.rest_transients`` compares:
     fast and slow transients."""
+
+    # -- the dictionary of out-of-catalog structure and the noise floor ----------------------
+    dictionary_min_gap: float = 0.5
+    """Smallest part of the final residual, relative to the RMS it leaves, that a group of the
+    dictionary must explain (``dictionary.find``): as ``dynamic_min_gap``, above what a motion
+    differentiated from noisy poses leaves that follows the motion (up to 0.31 times the
+    noise), below an out-of-catalog structure at twice the noise."""
+    dictionary_lines: int = 3
+    """Spectral peaks of the residual tested as lines (``dictionary.line_frequencies``): mains,
+    its harmonic and one more source; a peak not there is not fitted."""
+    line_prominence: float = 30.0
+    """A peak is a line candidate when its power (legs summed) is this many times the median
+    power around it: the sum of six legs' white periodograms exceeds 30 times its median with
+    a probability below 1e-20 per ordinate; a line of a tenth of the noise over a record of
+    6000 samples stands 75 times above it."""
+    memory_widths: tuple[float, ...] = (0.1, 0.2, 0.4, 0.8, 1.6, 3.2)
+    """Widths of the dead bands (play) that the sensor-memory group tries per leg, in
+    multiples of the leg's residual RMS (the one that correlates best with the residual is
+    its column): a dead band's error is about its width, so from a tenth of the residual
+    (the sign of the force's rate of change) to three times it (a play that the force
+    seldom crosses)."""
+    drift_pieces: int = 4
+    """Equal stretches of the record whose levels the drift group fits beside its cubic in
+    time: a step of the zero between them (a knock, a re-zeroing)."""
+    floor_ratio: float = 2.0
+    """The residual's RMS over the noise floor (force noise and propagated pose noise) above
+    which ``no_discrepancy`` needs a stated reason, and which, with a floor the user gave
+    (a specification, a recording at rest), is a discrepancy: a model right to within the
+    noise leaves about one floor; twice it is a part of the size of the noise unexplained."""
+    floor_segment: int = 32
+    """Samples per segment of the force floor's spectral estimate
+    (``gsfric.signal.noise.spectral_noise_std``): short enough that the friction steps at the
+    reversals of a motion touch fewer than half of the segments, long enough for eight
+    frequencies above a quarter of the sample rate."""
+    floor_draws: int = 2
+    """Draws of pose noise through the differentiating filters and the model
+    (``floor.pose_noise_forces``): each gives a per-leg RMS over thousands of pairs."""
 
     # -- the regimes of the report ------------------------------------------------------------
     reversal_quantile: float = 0.05

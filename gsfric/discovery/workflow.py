@@ -1,6 +1,6 @@
 """The discrepancy workflow: refit the model, test the candidate effects, add the winner, repeat.
 
-Steps (docs/discovery.md explains each decision):
+Steps (docs/explanation/discovery.md explains each decision):
 
 1. Simulate the measured motion with the current model; residuals ``r = F_measured - F_model``
    per leg. The first and last ``trim`` samples, where the differentiation of the recorded pose
@@ -32,14 +32,23 @@ from dataclasses import dataclass, field
 import numpy as np
 from tqdm import tqdm
 
-from gsfric.discovery import lackfit
+from gsfric._checks import short
+from gsfric._threads import one_blas_thread
+from gsfric.discovery import dictionary, lackfit
 from gsfric.discovery import statistics as st
 from gsfric.discovery.candidates import CANDIDATES
 from gsfric.discovery.evidence import Evidence, Rule, accept
 from gsfric.discovery.final_tests import LackOfFit, lack_of_fit
+from gsfric.discovery.floor import (
+    ForceNoise,
+    NoiseFloor,
+    estimated_force_noise,
+    noise_floor,
+    pose_noise_forces,
+)
 from gsfric.discovery.refine import half_stability, refine
 from gsfric.discovery.regimes import bands as regime_bands
-from gsfric.discovery.residuals import Problem
+from gsfric.discovery.residuals import Problem, checked_forces
 from gsfric.discovery.results import (
     NOISE_METHOD,
     Discovery,
@@ -62,9 +71,12 @@ from gsfric.discovery.selection import (
     winner_of,
 )
 from gsfric.discovery.settings import Settings
+from gsfric.discovery.verdict import Verdict, decide
+from gsfric.errors import InputTypeError
 from gsfric.models import platform_from
 from gsfric.platform.catalog import EFFECTS
 from gsfric.platform.description import Platform
+from gsfric.platform.usable import check_flagged, check_forces, check_poses
 from gsfric.trajectory import Motion
 
 # -- the workflow -------------------------------------------------------------------------------
@@ -82,7 +94,8 @@ class _State:
     residual there (N) and ``J`` (M, 6, len(names)) its derivatives; ``refit`` the report of
     the model's own parameters (``Discovery.refit``); ``active`` the effects named, ``dropped``
     the winners that, refined, did not lower the residual; ``evidence`` each named effect's
-    evidence (``Finding.evidence``)."""
+    evidence (``Finding.evidence``); ``force_noise`` the load cells' noise the user gave,
+    ``seed`` the seed of the pose noise's draws."""
 
     problem: Problem
     rng: np.random.Generator
@@ -99,11 +112,15 @@ class _State:
     dropped: list[str] = field(default_factory=list)
     rounds: list[Round] = field(default_factory=list)
     evidence: dict[str, FindingEvidence] = field(default_factory=dict)
+    force_noise: ForceNoise | None = None
+    seed: int = 0
 
 
+@one_blas_thread
 def discover(motion: Motion, forces: np.ndarray, platform: Platform | None = None, *,
              settings: Settings | None = None, seed: int = 0, progress: bool = False,
-             poses: tuple[np.ndarray, np.ndarray] | None = None, **options) -> Discovery:
+             poses: tuple[np.ndarray, np.ndarray] | None = None,
+             force_noise: ForceNoise | None = None, **options) -> Discovery:
     """Find which effects the model misses, fit them, and measure how much of the gap closes.
 
     Parameters
@@ -124,21 +141,48 @@ def discover(motion: Motion, forces: np.ndarray, platform: Platform | None = Non
         the uncertainty of the leg speeds are estimated (``rest.speed_uncertainty``; see
         ``rest.poses_from_columns``). Default: the samples the motion was made from
         (``Motion.recorded_poses``), else its smoothed poses, which underestimate it.
+    force_noise : ForceNoise, optional
+        The load cells' noise as the user gives it (a specification, a recording at rest):
+        the force part of the noise floor the verdict compares the residual with
+        (``floor``); default: estimated from the force channels.
     **options
         Fields of ``Settings`` overriding ``settings``.
 
     Returns
     -------
     Discovery
+
+    Raises
+    ------
+    InputTypeError
+        ``motion`` not a Motion, ``platform`` not a Platform, path or None, an unknown option.
+    InputError
+        ``forces`` of the wrong shape or type, mostly unusable data (NaN, dead or saturated
+        channels), a bad setting; each in one line.
     """
+    if not isinstance(motion, Motion):
+        raise InputTypeError(f"discover: motion must be a gsfric.Motion, got {short(motion)} "
+                             "(gsfric.io.read_measured)")
+    unknown = sorted(set(options) - {f.name for f in dataclasses.fields(Settings)})
+    if unknown:
+        raise InputTypeError(f"discover: unknown option {unknown[0]!r} (a Settings field "
+                             "name)")
     settings = dataclasses.replace(settings or Settings(), **options)
     platform = platform_from(platform)
+    forces = checked_forces(motion, forces)
+    recorded = poses if poses is not None else motion.recorded_poses()
+    check_poses(platform, *(recorded if recorded is not None else (motion.position,
+                                                                   motion.rotation)), motion.t)
+    check_forces(platform, forces)
     bar = _Progress(progress, settings.max_effects + 3)
     bar.step("simulating the model along the measured motion")
     problem = Problem(motion, forces, platform, settings, poses=poses)
+    used_flags = problem.result.flag[problem.used]
+    check_flagged(int(np.count_nonzero(used_flags)), len(used_flags))
     state = _State(problem, np.random.default_rng(seed), problem.model.theta0.copy(),
                    notes=[f"candidate {n} not tested: {why}"
-                          for n, why in problem.skipped.items()])
+                          for n, why in problem.skipped.items()], force_noise=force_noise,
+                   seed=seed)
     bar.step("refitting the model's own parameters")
     _refit_own_parameters(state)
     while len(state.active) < settings.max_effects:
@@ -333,9 +377,13 @@ def _final(state: _State, motion: Motion, platform: Platform) -> Discovery:
                       in_model=[c.name for c in problem.own_effects] + state.active)
     rms_after = _rms(residual_after[sliding])
     independent = float(np.sqrt(np.mean(problem.force_noise ** 2)))
-    noise_info = _noise_info(problem, independent, noise, whitener)
+    floor = _floor(state, motion, final, full_after, rms_after)
+    noise_info = _noise_info(problem, independent, noise, whitener, floor)
+    structures = dictionary.find(residual_after, _features(problem, motion, state.theta,
+                                                           floor), settings)
     _imitator_notes(state)
-    verdict = _verdict(state, lof, rms_after)
+    decision = _verdict(state, lof, rms_after, floor, structures, whitener)
+    verdict = decision.verdict
     table = regime_bands(np.asarray(motion.t[used]), problem.result.D_dot[used],
                          problem.result.D[used], problem.result.F[used],
                          motion.rotation[used], state.residual_before, residual_after)
@@ -347,7 +395,9 @@ def _final(state: _State, motion: Motion, platform: Platform) -> Discovery:
         residual_after=residual_after, used=used, model=platform, platform=final,
         result_before=problem.result, noise_model=noise_model(whitener), regimes=table,
         settings=settings, evaluations=model.evaluations, notes=state.notes, verdict=verdict,
-        lack_of_fit=lof, noise=noise_info, rms_after_all=_rms(full_after), sliding=sliding)
+        lack_of_fit=lof, noise=noise_info, rms_after_all=_rms(full_after), sliding=sliding,
+        structures=structures, verdict_reason=decision.reason,
+        verdict_decided_by=decision.decided_by)
 
 
 def _findings(state: _State, whitener: st.Whitener) -> tuple[list[Finding], Platform, float]:
@@ -395,10 +445,11 @@ def _final_notes(state: _State) -> None:
 
 
 def _noise_info(problem: Problem, independent: float, noise: float,
-                whitener: st.Whitener) -> NoiseEstimate:
+                whitener: st.Whitener, floor: NoiseFloor) -> NoiseEstimate:
     """summary.json's ``noise``: the force noise from the force channels alone
     (``independent``, N), from the final residual (``noise``, N), the final noise model's
-    innovations, the speed uncertainty and the share of pairs that do not slide."""
+    innovations, the speed uncertainty, the share of pairs that do not slide and the noise
+    floor of the verdict."""
     return NoiseEstimate(
         high_frequency=independent,
         high_frequency_per_leg=[float(v) for v in problem.force_noise],
@@ -406,7 +457,32 @@ def _noise_info(problem: Problem, independent: float, noise: float,
         innovation_std=[float(v) for v in whitener.innovation_std],
         method=NOISE_METHOD,
         speed_uncertainty=[float(v) for v in problem.sigma_v],
-        not_sliding_share=float(1.0 - problem.sliding.mean()))
+        not_sliding_share=float(1.0 - problem.sliding.mean()), floor=floor)
+
+
+def _floor(state: _State, motion: Motion, final: Platform, full_after: np.ndarray,
+           rms_after: float) -> NoiseFloor:
+    """The noise floor of the verdict (``floor``): the user's force noise or its estimate from
+    the final model's residual over every used pair (``full_after`` (M, 6), N), and the pose
+    noise through the final model."""
+    problem, s = state.problem, state.problem.settings
+    t = np.asarray(motion.t, float)
+    step = (t[-1] - t[0]) / max(len(t) - 1, 1)
+    estimate = estimated_force_noise(full_after, step, s.floor_segment)
+    pose, how = pose_noise_forces(final, motion, problem.poses, problem.used,
+                                  problem.sliding, s.floor_draws, seed=state.seed)
+    return noise_floor(state.force_noise, estimate, pose, how, rms_after)
+
+
+def _features(problem: Problem, motion: Motion, theta: np.ndarray, floor: NoiseFloor
+              ) -> dictionary.Features:
+    """What the dictionary reads of the record at the final parameters theta."""
+    used = problem.used
+    return dictionary.Features(
+        np.asarray(motion.t[used], float), problem.model.forces(theta)[used],
+        problem.result.D[used], problem.result.D_dot[used],
+        np.asarray(motion.position[used], float), problem.weight,
+        float(np.sqrt(np.mean(np.square(floor.force)))))
 
 
 def _imitator_notes(state: _State) -> None:
@@ -424,24 +500,26 @@ def _imitator_notes(state: _State) -> None:
             "the verdict is not 'explained'")
 
 
-def _verdict(state: _State, lof: LackOfFit, rms_after: float) -> str:
-    """``unexplained_discrepancy`` (structure in the final residual, or a round's generic
-    structure: ``lof`` then says which), ``explained`` (effects named, or a significant
-    refit that closes ``min_gap``) or ``no_discrepancy``."""
+def _verdict(state: _State, lof: LackOfFit, rms_after: float, floor: NoiseFloor,
+             structures: list, whitener: st.Whitener) -> Verdict:
+    """The verdict and its reason (``verdict.decide``): structure in the final residual
+    (the dictionary's, the lack-of-fit tests', or a round's generic structure: ``lof`` then
+    says which), a residual above the floor the user gave, effects named, or a significant
+    refit that closes ``min_gap``."""
     lof.source = "final residual" if lof.significant else None
     by_round = next((rnd for rnd in state.rounds if rnd.slow or rnd.blocked_by_generic
                      or (rnd.winner and rnd.imitates)), None)
-    if lof.significant or by_round is not None:
-        if not lof.significant:
-            _round_structure(lof, by_round)
-        return "unexplained_discrepancy"
-    if state.active:
-        return "explained"
+    if not lof.significant and by_round is not None:
+        _round_structure(lof, by_round)
     sliding = state.problem.sliding
     closed = np.sqrt(max(_rms(state.residual_before[sliding]) ** 2 - rms_after ** 2, 0.0))
-    significant = (closed >= state.problem.settings.min_gap * rms_after
-                   and state.refit.test.significant)
-    return "explained" if significant else "no_discrepancy"
+    refit_closes = bool(closed >= state.problem.settings.min_gap * rms_after
+                        and state.refit.test.significant)
+    found = lof.significant or by_round is not None
+    return decide(structures=structures, structure_found=found,
+                  structure_text=lof.looks_like if found else "", floor=floor,
+                  ratio_limit=state.problem.settings.floor_ratio, named=list(state.active),
+                  refit_closes=refit_closes, noise=noise_model(whitener))
 
 
 def _round_structure(lof: LackOfFit, rnd: Round) -> None:

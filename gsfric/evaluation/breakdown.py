@@ -79,28 +79,68 @@ def parts(full, run: Callable[[Platform, Motion], object], platform: Platform,
     return split
 
 
-def to_frame(t: np.ndarray, parts: dict[str, np.ndarray]):
-    """The parts as a DataFrame: ``t``, then ``{part}{i}`` for each part and leg i = 1..6, N."""
+UNITS = {"t": "s", **{name: "N" for name in (*PARTS, "F")}}
+"""Unit of each column group of ``frame``."""
+
+
+def frame(t: np.ndarray, parts: dict[str, np.ndarray]):
+    """The parts as a DataFrame: step as the index, columns (part, leg) for each of ``PARTS``
+    and ``F`` and legs 1..6, N, and ``t``, s.
+
+    ``frame["gravity"]`` is then the (N, 6) table of one part (columns legs 1..6),
+    ``frame["t"]`` the times; ``attrs["units"]`` maps ``t`` and each part to its unit.
+    """
     pd = optional("pandas")
+    names = (*PARTS, "F")
+    columns = pd.MultiIndex.from_tuples(
+        [("t", "")] + [(name, leg) for name in names for leg in range(1, 7)],
+        names=["part", "leg"])
+    values = np.column_stack([np.asarray(t, float)] + [parts[name] for name in names])
+    out = pd.DataFrame(values, columns=columns, index=pd.RangeIndex(len(values), name="step"))
+    out.attrs["units"] = dict(UNITS)
+    return out
 
-    cols = {"t": np.asarray(t, float)}
-    for name in (*PARTS, "F"):
-        for i in range(6):
-            cols[f"{name}{i + 1}"] = parts[name][:, i]
-    return pd.DataFrame(cols)
+
+def flat(parts_frame):
+    """A ``frame`` as the table ``gsfric simulate --breakdown`` writes: columns ``t``, then
+    ``{part}{i}`` for each part and leg i = 1..6, N."""
+    out = parts_frame.copy()
+    out.columns = [part if part == "t" else f"{part}{leg}" for part, leg in out.columns]
+    return out.reset_index(drop=True)
 
 
-def plot(t: np.ndarray, parts: dict[str, np.ndarray], leg: int = 0, ax=None):
-    """Stacked contributions to F of one leg (index from 0) over time; returns the axes."""
+ROUNDING = 1e-9
+"""A part smaller than this times the largest |F| (at least 1 N) is rounding: drawn as zero."""
+
+
+def shown_parts(parts_frame, legs) -> list[str]:
+    """The parts not zero (beyond rounding, ``ROUNDING``) on any of ``legs`` (indices from 0)."""
+    columns = [leg + 1 for leg in legs]
+    scale = ROUNDING * max(1.0, float(np.abs(parts_frame["F"][columns].to_numpy()).max()))
+    return [name for name in PARTS
+            if np.abs(parts_frame[name][columns].to_numpy()).max() > scale]
+
+
+def plot(parts_frame, leg: int = 0, axes=None, shown=None):
+    """What each part contributes to F of one leg (index from 0) over time, in panels: F on
+    top, then each part of ``shown`` (default: those not zero, ``shown_parts``) on a scale of
+    its own; the parts left out are named in the title. Returns the axes."""
     plt = optional("matplotlib.pyplot")
-    if ax is None:
-        _, ax = plt.subplots(figsize=(8, 4))
-    for name in PARTS:
-        values = parts[name][:, leg]
-        if np.any(values != 0.0):
-            ax.plot(t, values, label=name.replace("_", " "))
-    ax.plot(t, parts["F"][:, leg], "k", lw=2, label="F")
-    ax.set_xlabel("t (s)")
-    ax.set_ylabel(f"force of leg {leg + 1} (N)")
-    ax.legend(fontsize=7, ncol=2)
-    return ax
+    t = parts_frame["t"].to_numpy()
+    shown = shown_parts(parts_frame, [leg]) if shown is None else list(shown)
+    if axes is None:
+        _, axes = plt.subplots(len(shown) + 1, 1, figsize=(8, 1.3 * (len(shown) + 1)),
+                               sharex=True, squeeze=False)
+        axes = axes[:, 0]
+    axes[0].plot(t, parts_frame["F"][leg + 1], "k", lw=1.5)
+    axes[0].set_ylabel("F (N)", fontsize=9)
+    zero = [name.replace("_", " ") for name in PARTS if name not in shown]
+    axes[0].set_title(f"Actuator force of leg {leg + 1} and its parts (N)"
+                      + (f"\nzero: {', '.join(zero)}" if zero else ""), fontsize=10)
+    for ax, name in zip(axes[1:], shown):
+        ax.plot(t, parts_frame[name][leg + 1], lw=1.2)
+        ax.axhline(0.0, color="0.7", lw=0.6)
+        ax.set_ylabel(f"{name.replace('_', ' ')}\n(N)", fontsize=8, rotation=0, ha="right",
+                      va="center")
+    axes[-1].set_xlabel("t (s)")
+    return axes

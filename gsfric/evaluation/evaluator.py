@@ -16,17 +16,18 @@ concurrent calls.
 from __future__ import annotations
 
 import functools
+import math
 import sys
 import warnings
 
 import numpy as np
 from tqdm import tqdm
 
-from gsfric._checks import short
+from gsfric._checks import as_count, as_flag, short
 from gsfric.compiled import native
 from gsfric.compiled.functions import FlagSpec
-from gsfric.compiled.state import state_of
-from gsfric.errors import GsfricError, InputError, StepFlagError
+from gsfric.compiled.state import first_nonfinite, state_of
+from gsfric.errors import InputError, InputTypeError, StepFlagError
 from gsfric.evaluation.flags import FLAG_NONFINITE, flag_message, flag_spec, numpy_flags
 from gsfric.evaluation.memory import aligned_empty
 from gsfric.evaluation.paper_constants import paper_constants as pc
@@ -39,6 +40,9 @@ from gsfric.trajectory import Motion
 
 MODES = ("kinematic", "paper")
 CHUNK = 200_000
+MAX_THREADS = 1024
+"""The largest ``n_threads`` accepted: a sane bound on a count of threads (the compiled code
+starts at most 64 per call, and at least 2048 steps each)."""
 
 
 def state_array(motion: Motion) -> np.ndarray:
@@ -64,15 +68,38 @@ class Evaluator:
         Threads for long evaluations (POSIX threads created per call, at least 2048 steps each).
     paper_constants : ndarray (13,), optional
         Paper mode's constants (default ``gsfric.evaluation.paper_constants.paper_constants()``).
+
+    Raises
+    ------
+    InputTypeError
+        ``platform`` is not a Platform; ``n_threads`` is not an integer. Every method raises
+        it (a ``TypeError``) for an argument of the wrong type, and ``InputError`` (a
+        ``ValueError``) for a wrong shape or a NaN or infinite state, in one line: no NaN row
+        comes from a NaN state.
+    InputError
+        ``mode`` is not one of ``MODES``; ``n_threads`` is not from 1 to ``MAX_THREADS``.
+
+    Examples
+    --------
+    >>> import numpy as np, gsfric
+    >>> from gsfric.evaluation import state_array
+    >>> motion = gsfric.models.sinusoidal(np.linspace(0, 1, 101))
+    >>> evaluator = gsfric.Evaluator(gsfric.reference_platform())
+    >>> evaluator.actuator_forces(state_array(motion)).shape
+    (101, 6)
     """
 
     def __init__(self, platform: Platform, mode: str = "kinematic", n_threads: int = 1,
                  paper_constants=None) -> None:
-        if mode not in MODES:
+        if not isinstance(platform, Platform):
+            raise InputTypeError(f"Evaluator: platform must be a gsfric.Platform, got "
+                                 f"{_kind(platform)} (gsfric.reference_platform() or "
+                                 "Platform.from_toml(path))")
+        if not isinstance(mode, str) or mode not in MODES:
             raise InputError(f"mode: unknown mode {mode!r}; expected one of {', '.join(MODES)}")
         self.platform = platform
         self.mode = mode
-        self.n_threads = int(n_threads)
+        self.n_threads = as_count(n_threads, "n_threads", minimum=1, maximum=MAX_THREADS)
         self.P, self.Q, self._calls = packed(platform)
         self.K = None
         if mode == "paper":
@@ -92,22 +119,31 @@ class Evaluator:
         """Actuator forces with friction, (N, 6) N, for states x (N, 24) (``state_array``).
 
         ``P`` and ``Q`` may be given per step, (N, size), to vary parameters along the batch.
-        No flags, no checks beyond shapes: the control loop's call.
+        No flags: the control loop's call. A finite state whose forces are not finite (a
+        singular pose) gives its NaN or infinite row; ``evaluate`` flags such steps.
+
+        Raises
+        ------
+        InputTypeError
+            ``x`` or ``out`` is not an array (with ``out``, ``x`` must be a NumPy array).
+        InputError
+            A wrong shape or dtype, a NaN or infinite state (naming its row), paper mode.
         """
         if self.mode != "kinematic":
-            raise GsfricError("actuator_forces is the kinematic mode's hot path")
+            raise InputError("actuator_forces: the kinematic mode's hot path; this Evaluator "
+                             "is in paper mode")
         if P is None and Q is None and out is not None:
             key = ("actuator", self.n_threads)
             actuator = self._calls.get(key)
             if actuator is None:  # two threads may both build one: either is right
                 actuator = self._calls[key] = native.get(self._actuator).bound(
                     [self.P, self.Q], "F", self.n_threads)
-            return actuator(x, out)
+            return _finite_states(actuator(x, out), "actuator_forces", x)
         f = native.get(self._actuator if P is None
                        else model_function("actuator", uniform_model(P)))
         res = f([x, self.P if P is None else P, self.Q if Q is None else Q],
                 None if out is None else {"F": out}, self.n_threads)
-        return res["F"]
+        return _finite_states(res["F"], "actuator_forces", x)
 
     def forces(self, position, rotation, velocity, omega, acceleration, alpha,
                out: np.ndarray | None = None) -> np.ndarray:
@@ -125,21 +161,49 @@ class Evaluator:
             C-contiguous float64 buffer for the result.
 
         The states are laid out in C, block by block (no ``state_array``); no flags.
+
+        Raises
+        ------
+        InputTypeError
+            An argument that is not an array of numbers.
+        InputError
+            Wrong shapes, a NaN or infinite value (naming the array and row), paper mode.
         """
         if self.mode != "kinematic":
-            raise GsfricError("forces is the kinematic mode's hot path")
+            raise InputError("forces: the kinematic mode's hot path; this Evaluator is in "
+                             "paper mode")
         key = ("forces", self.n_threads)
         call = self._calls.get(key)
         if call is None:  # two threads may both build one: either is right
             call = self._calls[key] = native.get(self._actuator).bound_motion(
                 [self.P, self.Q], "F", self.n_threads)
-        return call(position, rotation, velocity, omega, acceleration, alpha, out)
+        F = call(position, rotation, velocity, omega, acceleration, alpha, out)
+        if not math.isfinite(_total(F, None)):
+            motion = (position, rotation, velocity, omega, acceleration, alpha)
+            for name, value in zip(("position", "rotation", "velocity", "omega",
+                                    "acceleration", "alpha"), motion):
+                value = np.asarray(value, dtype=float)
+                rows = np.flatnonzero(~np.isfinite(value.reshape(len(value), -1)).all(axis=1))
+                if len(rows):
+                    raise InputError(f"forces: {name} row {int(rows[0])} is not finite "
+                                     f"({len(rows)} rows); give finite states")
+        return F
 
     def jacobian(self, x: np.ndarray, Q=None) -> tuple[np.ndarray, np.ndarray]:
-        """F (N, 6) and dF/dtheta (N, 6, n_theta); theta names in ``jacobian_parameters()``."""
+        """F (N, 6) and dF/dtheta (N, 6, n_theta); theta names in ``jacobian_parameters()``.
+
+        Raises
+        ------
+        InputTypeError, InputError
+            As ``actuator_forces``: not an array, a wrong shape, a NaN or infinite state.
+        """
         res = native.get("jacobian")([x, self.P, self.Q if Q is None else Q], None,
                                      self.n_threads)
-        n = x.shape[0]
+        x = np.asarray(x, dtype=float)
+        where = first_nonfinite(x.reshape(-1, x.shape[-1]))
+        if where is not None:
+            raise InputError(f"jacobian: state {where} is not finite; give finite states")
+        n = res["F"].shape[0]
         # CasADi stores the (6, n_theta) Jacobian column-major
         return res["F"], res["dF"].reshape(n, -1, 6).transpose(0, 2, 1)
 
@@ -157,7 +221,18 @@ class Evaluator:
             Show a progress bar (tqdm) over chunks.
         chunk : int
             Steps per call to the compiled code (bounds the temporary memory).
+
+        Raises
+        ------
+        InputTypeError
+            ``motion`` is not a Motion; ``strict`` or ``progress`` not a bool; ``chunk`` not
+            an integer.
+        InputError
+            ``chunk`` < 1.
+        StepFlagError
+            ``strict=True`` and a flagged step.
         """
+        strict = as_flag(strict, "strict")
         result = self.evaluate_quiet(motion, progress=progress, chunk=chunk)
         msg = flag_message(result.flag)
         if msg is not None:
@@ -176,9 +251,12 @@ class Evaluator:
         leaves F as the mechanism's (no sensor effects): for a caller that applies them
         over a longer record than this motion (``gsfric.stream``).
         """
+        if not isinstance(motion, Motion):
+            raise InputTypeError(f"motion: expected a gsfric.Motion, got {_kind(motion)} "
+                                 "(Motion.from_samples or gsfric.io.read_trajectory)")
+        chunk = as_count(chunk, "chunk")
+        progress = as_flag(progress, "progress")
         n = len(motion)
-        if int(chunk) < 1:
-            raise InputError(f"chunk: must be a positive number of steps, got {chunk!r}")
         details = [name for name, _, _ in self._full.outputs if name in DETAILS]
         kept = [(name, size) for name, size, _ in self._full.outputs if name not in DETAILS]
         if buffers is None:
@@ -285,6 +363,10 @@ def _is_frame(value: object) -> bool:
     return pandas is not None and isinstance(value, pandas.DataFrame)
 
 
+_EVALUATE_OPTIONS = ("strict", "progress", "chunk", "window", "polyorder", "log_format")
+"""The keyword arguments of ``evaluate`` besides ``mode``."""
+
+
 def evaluate(platform: Platform, motion, mode: str = "kinematic", **kwargs) -> Result:
     """Reaction forces and friction in every joint of ``platform`` over a motion.
 
@@ -313,9 +395,10 @@ def evaluate(platform: Platform, motion, mode: str = "kinematic", **kwargs) -> R
     InputError
         A DataFrame with missing or bad columns (one line naming the row and column);
         ``chunk`` not an integer >= 1.
-    TypeError
+    InputTypeError
         ``platform`` is not a Platform or ``motion`` not a Motion or DataFrame (swapped
-        arguments, None, a NumPy array), in one line saying what to give.
+        arguments, None, a NumPy array), in one line saying what to give; an unknown keyword
+        argument; ``strict`` not a bool.
     StepFlagError
         ``strict=True`` and a flagged step.
 
@@ -327,6 +410,10 @@ def evaluate(platform: Platform, motion, mode: str = "kinematic", **kwargs) -> R
     >>> result.F.shape, result.R_E.shape
     ((101, 6), (101, 6, 3))
     """
+    unknown = sorted(set(kwargs) - set(_EVALUATE_OPTIONS))
+    if unknown:
+        raise InputTypeError(f"evaluate: unknown argument {unknown[0]!r}; expected "
+                             f"{', '.join(_EVALUATE_OPTIONS)}")
     if _is_frame(motion):
         reading = {k: kwargs.pop(k) for k in ("window", "polyorder", "log_format")
                    if k in kwargs}
@@ -334,6 +421,22 @@ def evaluate(platform: Platform, motion, mode: str = "kinematic", **kwargs) -> R
 
     evaluation_arguments(platform, motion, kwargs.get("chunk", 1))
     return Evaluator(platform, mode=mode).evaluate(motion, **kwargs)
+
+
+_total = np.add.reduce
+"""The sum of an array's values: NaN or infinite when one value is (the hot paths' check)."""
+
+
+def _finite_states(F: np.ndarray, name: str, x) -> np.ndarray:
+    """``F``, after checking that a non-finite force comes from no non-finite state ``x``
+    (one sum when all is finite); ``InputError`` naming the first non-finite state's row."""
+    if math.isfinite(_total(F, None)):
+        return F
+    x = np.asarray(x, dtype=float)
+    where = first_nonfinite(x.reshape(-1, x.shape[-1]))
+    if where is not None:
+        raise InputError(f"{name}: state {where} is not finite; give finite states")
+    return F
 
 
 def _kind(value: object) -> str:
@@ -347,7 +450,7 @@ def evaluation_arguments(platform: object, motion: object, chunk: object = 1) ->
 
     Raises
     ------
-    TypeError
+    InputTypeError
         ``platform`` not a ``Platform`` or ``motion`` not a ``Motion`` (naming what was given,
         and saying so when the two are swapped).
     InputError
@@ -355,16 +458,16 @@ def evaluation_arguments(platform: object, motion: object, chunk: object = 1) ->
     """
 
     if isinstance(platform, Motion) and isinstance(motion, Platform):
-        raise TypeError("evaluate(platform, motion): the arguments are swapped; give the "
+        raise InputTypeError("evaluate(platform, motion): the arguments are swapped; give the "
                         "Platform first, then the Motion")
     if not isinstance(platform, Platform):
-        raise TypeError(f"evaluate: platform must be a gsfric.Platform, got {_kind(platform)} "
+        raise InputTypeError(f"evaluate: platform must be a gsfric.Platform, got {_kind(platform)} "
                         "(gsfric.reference_platform() or Platform.from_toml(path))")
     if not isinstance(motion, Motion):
         hint = ("; for states (N, 24) use Evaluator.actuator_forces, for samples "
                 "Motion.from_samples") if isinstance(motion, np.ndarray) else \
             " (Motion.from_samples, Motion.from_arrays or gsfric.io.read_trajectory)"
-        raise TypeError(f"evaluate: motion must be a gsfric.Motion or a pandas DataFrame of "
+        raise InputTypeError(f"evaluate: motion must be a gsfric.Motion or a pandas DataFrame of "
                         f"trajectory columns, got {_kind(motion)}{hint}")
     if isinstance(chunk, (bool, np.bool_)) or not isinstance(chunk, (int, np.integer)) \
             or chunk < 1:
@@ -379,10 +482,10 @@ def _evaluate_quietly(platform: Platform, motion: Motion) -> Result:
         return Evaluator(platform).evaluate(motion)
 
 
-def breakdown(platform: Platform, motion: Motion) -> dict[str, np.ndarray]:
+def breakdown(platform: Platform, motion: Motion):
     """The actuator forces of ``platform`` along ``motion`` split into their parts
-    (``Result.breakdown``), without reporting the step flags: ``PARTS`` name -> (N, 6) N, and
-    ``F`` (N, 6) N, their sum (``gsfric.evaluation.breakdown``)."""
+    (``Result.breakdown``: a DataFrame, columns (part, leg), N), without reporting the step
+    flags (``gsfric.evaluation.breakdown``)."""
     return _evaluate_quietly(platform, motion).breakdown()
 
 

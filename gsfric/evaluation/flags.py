@@ -15,7 +15,7 @@ Step flags (bits of ``Result.flag``; 0 = sound step):
   undefined;
 * 16 ``FLAG_COUPLING``: the coupled friction model's fixed point has not converged: the axial
   forces changed by more than ``COUPLING_TOLERANCE * (1 N + |F0|)`` over the last of its
-  iterations (joint friction so large that it nearly locks the mechanism; docs/friction.md).
+  iterations (joint friction so large that it nearly locks the mechanism; docs/explanation/friction.md).
 
 Every flag is computed in C in the same pass as the outputs (``compiled/batch.c``) with the
 settings of ``flag_spec``; ``numpy_flags`` computes the same in NumPy for the CasADi fallback.

@@ -17,8 +17,10 @@ import numpy as np
 from gsfric._optional import optional
 from gsfric.compiled.manifest import function
 from gsfric.errors import GsfricError
+from gsfric.evaluation.breakdown import frame as breakdown_frame
 from gsfric.evaluation.breakdown import parts as breakdown_parts
 from gsfric.evaluation.columns import annotate, plan
+from gsfric.evaluation.flags import flag_message
 
 DETAILS = ("R_3_leg", "M_3_leg", "coupling_change", "Ffr_viscous", "Ffr_coulomb",
            "Ffr_bushing", "Ffr_seal", "Ffr_effects", "N_bushing")
@@ -95,12 +97,24 @@ class Outputs(MutableMapping):
 class Result:
     """Named arrays of one evaluation, step as the leading axis.
 
-    Attributes (shapes for N steps; units SI): ``t`` (N,), ``F``, ``F0`` (N, 6) N;
-    ``R_E``, ``R_C``, ``R_3`` (N, 6, 3) N; ``M_C`` (N, 6) N m; ``M_3`` (N, 6, 3) N m;
-    ``MfrE``, ``MfrC`` (N, 6, 3) N m; ``Ffr`` (N, 6) N; the paper's signed scalars ``MfrE_s``,
-    ``MfrC_s`` (N, 6) N m and ``Ffr_s`` (N, 6) N; ``D``, ``D_dot`` (N, 6); ``u``, ``omega_leg``,
-    ``omega_rel``, ``R_3_leg``, ``M_3_leg`` (N, 6, 3); ``s2`` (N, 6); ``flag`` (N,) int.
-    See the manifest for every output's description.
+    Attributes
+    ----------
+    t, F, ... : ndarray
+        Shapes for N steps, units SI: ``t`` (N,), ``F``, ``F0`` (N, 6) N;
+        ``R_E``, ``R_C``, ``R_3`` (N, 6, 3) N; ``M_C`` (N, 6) N m; ``M_3`` (N, 6, 3) N m;
+        ``MfrE``, ``MfrC`` (N, 6, 3) N m; ``Ffr`` (N, 6) N; the paper's signed scalars
+        ``MfrE_s``, ``MfrC_s`` (N, 6) N m and ``Ffr_s`` (N, 6) N; ``D``, ``D_dot`` (N, 6);
+        ``u``, ``omega_leg``, ``omega_rel``, ``R_3_leg``, ``M_3_leg`` (N, 6, 3); ``s2``
+        (N, 6); ``flag`` (N,) int. Every output column with its meaning is listed by
+        ``gsfric.columns``.
+
+    Examples
+    --------
+    >>> import numpy as np, gsfric
+    >>> result = gsfric.evaluate(gsfric.reference_platform(),
+    ...                          gsfric.models.sinusoidal(np.linspace(0, 1, 101)))
+    >>> result.F.shape, result.R_E.shape, result.to_frame().attrs["units"]["F1"]
+    ((101, 6), (101, 6, 3), 'N')
     """
 
     t: np.ndarray
@@ -113,13 +127,21 @@ class Result:
     """``runner(platform, motion) -> Result``: evaluates the platform variants of ``breakdown``
     (an Evaluator's evaluation without reporting flags)."""
 
-    def breakdown(self) -> dict[str, np.ndarray]:
+    def breakdown(self):
         """F per leg split into inertia, gravity, payload, joint friction carried, prismatic
-        friction by kind and effects, (N, 6) N each (``gsfric.evaluation.breakdown``; kinematic mode)."""
+        friction by kind and effects (``gsfric.evaluation.breakdown``; kinematic mode).
+
+        Returns
+        -------
+        pandas.DataFrame
+            Index ``step``; columns (part, leg), legs 1..6, N, for each part and ``F``, their
+            sum, and ``t``, s: ``frame["gravity"]`` is one part's (N, 6) table.
+            ``attrs["units"]`` gives each part's unit.
+        """
         if self.source is None or self.runner is None or self.mode != "kinematic":
             raise GsfricError("breakdown: needs a kinematic-mode result of Evaluator.evaluate")
         platform, motion = self.source
-        return breakdown_parts(self, self.runner, platform, motion)
+        return breakdown_frame(self.t, breakdown_parts(self, self.runner, platform, motion))
 
     def __getattr__(self, name):
         arrays = self.__dict__.get("arrays", {})
@@ -140,6 +162,27 @@ class Result:
         names = ", ".join(sorted(self.arrays))
         return (f"<Result: {n} steps, {span}, mode {self.mode!r}, {flagged} flagged; "
                 f"arrays {names}>")
+
+    def summary(self) -> str:
+        """The long form of the repr: per leg, the largest magnitudes of ``F`` (N), ``R_E``,
+        ``R_C`` (N), ``M_C`` (N m) and the friction ``Ffr`` (N) over the steps, and what the
+        flags say."""
+        n = len(self.t)
+        lines = [repr(self)]
+        rows = (("|F| (N)", "F", None), ("|R_E| (N)", "R_E", 2), ("|R_C| (N)", "R_C", 2),
+                ("|M_C| (N m)", "M_C", None), ("|Ffr| (N)", "Ffr", None))
+        if n:
+            lines.append("largest over the steps, legs 1..6:")
+            for label, key, axis in rows:
+                values = self.arrays.get(key)
+                if values is None:
+                    continue
+                size = np.abs(values) if axis is None else np.linalg.norm(values, axis=axis)
+                peak = np.nanmax(size, axis=0) if np.isfinite(size).any() else size[0]
+                lines.append(f"  {label:12s}" + "".join(f"{v:11.4g}" for v in peak))
+        message = flag_message(self.flag)
+        lines.append(f"flags: {message}" if message else "flags: none")
+        return "\n".join(lines)
 
     def flagged(self) -> np.ndarray:
         """Indices of the steps with a non-zero flag."""

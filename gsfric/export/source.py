@@ -96,9 +96,15 @@ def generated_function(name: str, prefix: str) -> GeneratedFunction:
                           "the export cannot carry it")
     exported = f"{prefix}_{name}"
     head = f"static int {exported}(const casadi_real** arg, casadi_real** res) {{"
-    helpers = tuple(h for h in _helper_definitions(source) if re.search(rf"\b{h}\(", rest))
+    helpers = helpers_called(rest)
     comment = f"/* {exported}: {entry['name']} of generated/{BASENAME}.c */\n"
     return GeneratedFunction(exported, comment + head + "\n" + rest, helpers)
+
+
+def helpers_called(c_text: str) -> tuple[str, ...]:
+    """The CasADi helpers of the generated file that ``c_text`` calls, in the file's order."""
+    return tuple(h for h in _helper_definitions(_model_source())
+                 if re.search(rf"\b{h}\(", c_text))
 
 
 def helper_text(names) -> str:

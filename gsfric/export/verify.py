@@ -1,12 +1,13 @@
 """Checking an export (``gsfric export --verify``): build it, compare it with ``Evaluator``.
 
 The folder is copied to a temporary directory and built there with the system compiler (``CC``,
-default ``cc``) and the flags of its Makefile, with a driver (``templates/verify.c.in``) that
-runs the library on states from a file. The states are random valid ones (poses of
-``gsfric.models.random_motion`` with random rates, kept where ``Evaluator`` flags nothing) and
-the reference motions (``gsfric.models.sinusoidal``, ``paper_motion``). Each output's error is
-relative to the largest magnitude of that output (``max |C - Python| / max |Python|``; for
-``coupling_change``, of F0: ``SCALE_OF``); the flags must match exactly. The latency is the
+default ``cc``) and the flags of its Makefile (``CFLAGS`` when set, as ``make`` reads it), with
+a driver (``templates/verify.c.in``) that runs the library on states from a file. The states are
+random valid ones (poses of ``gsfric.models.random_motion`` with random rates, kept where
+``Evaluator`` flags nothing) and the reference motions (``gsfric.models.sinusoidal``,
+``paper_motion``). Each output's error is relative to the largest magnitude of that output
+(``max |C - Python| / max |Python|``; for ``coupling_change``, of F0: ``SCALE_OF``); the flags
+must match exactly. The latency is the
 median time of one ``<prefix>_actuator_forces`` call, measured in C.
 """
 
@@ -116,20 +117,27 @@ def _library(folder: Path) -> tuple[str, str]:
     raise InputError(f"--verify: {folder} holds no library written by `gsfric export`")
 
 
-def _compiler() -> list[str]:
+def compiler() -> list[str]:
     command = shlex.split(os.environ.get("CC", "cc") or "cc")
     if shutil.which(command[0]) is None:
         raise BuildError(f"--verify: no C compiler {command[0]!r} (set CC)")
     return command
 
 
-def build(folder: Path, prefix: str, work: Path, cc: list[str], flags=CFLAGS) -> Path:
+def compiler_flags() -> list[str]:
+    """The flags of the build: ``$CFLAGS`` when set (as ``make`` reads it), else the
+    Makefile's defaults (``CFLAGS`` of gsfric.export.writer)."""
+    return shlex.split(os.environ.get("CFLAGS") or "") or list(CFLAGS)
+
+
+def build(folder: Path, prefix: str, work: Path, cc: list[str], flags=None) -> Path:
     """The verify driver built with the library of ``folder`` in ``work``; its path."""
     shutil.copytree(folder, work / "src")
     driver = importlib.resources.files("gsfric.export").joinpath("templates", "verify.c.in")
     text = driver.read_text().replace("@prefix@", prefix).replace("@PREFIX@", prefix.upper())
     (work / "src" / "verify.c").write_text(text)
     target = work / "verify"
+    flags = compiler_flags() if flags is None else flags
     command = [*cc, *flags, "-o", str(target), str(work / "src" / "verify.c"),
                str(work / "src" / f"{prefix}.c"), "-lm"]
     run = subprocess.run(command, capture_output=True, text=True)
@@ -167,13 +175,17 @@ def _steps(motion: Motion, keep: np.ndarray) -> Motion:
                               motion.acceleration[keep], motion.alpha[keep])
 
 
-def _write_inputs(work: Path, motion: Motion) -> None:
+def write_inputs(work: Path, motion: Motion) -> list[str]:
+    """The driver's input files of ``motion`` in ``work`` (states.bin, poses.bin); the driver's
+    arguments but the number of timed rounds (outputs written into ``work``)."""
     x = state_array(motion)
     x.astype(np.float64).tofile(work / "states.bin")
     q = quaternion_from_rotation(motion.rotation)
     poses = np.concatenate([motion.position, q, motion.velocity, motion.omega,
                             motion.acceleration, motion.alpha], axis=1)
     np.ascontiguousarray(poses, dtype=np.float64).tofile(work / "poses.bin")
+    return ["states.bin", str(len(motion)), "poses.bin", "outputs.bin", "forces.bin",
+            "flags.bin", "pose_states.bin"]
 
 
 def _relative(c: np.ndarray, py: np.ndarray, reference: np.ndarray | None = None) -> float:
@@ -212,28 +224,29 @@ def _compare(work: Path, function: str, result, n: int, size: int) -> tuple[floa
     return worst, where, mismatches
 
 
-def verify_library(folder, n_random: int = 2000, seed: int = 0,
-                   rounds: int = ROUNDS) -> VerifyReport:
-    """Build the export in ``folder`` and compare it with ``Evaluator`` (see the module)."""
+def verify_library(folder, n_random: int = 2000, seed: int = 0, rounds: int = ROUNDS,
+                   flags=None) -> VerifyReport:
+    """Build the export in ``folder`` and compare it with ``Evaluator`` (see the module);
+    ``flags``: the compiler's flags (None: ``compiler_flags()``)."""
     folder = Path(folder)
     prefix, model = _library(folder)
     platform = Platform.from_toml(folder / PLATFORM_FILE)
-    cc = _compiler()
+    cc = compiler()
     motion = check_motions(platform, n_random, seed)
     result = Evaluator(platform).evaluate_quiet(motion)
     n = len(motion)
     with tempfile.TemporaryDirectory(prefix="gsfric-verify-") as tmp:
         work = Path(tmp)
-        driver = build(folder, prefix, work, cc)
-        _write_inputs(work, motion)
-        names = ["states.bin", str(n), "poses.bin", "outputs.bin", "forces.bin", "flags.bin",
-                 "pose_states.bin", str(rounds)]
+        flags = compiler_flags() if flags is None else list(flags)
+        driver = build(folder, prefix, work, cc, flags)
+        names = [*write_inputs(work, motion), str(rounds)]
         run = subprocess.run([str(driver), *names], capture_output=True, text=True, cwd=work)
         if run.returncode:
             raise BuildError(f"--verify: the check program failed (exit {run.returncode})")
         size, latency = run.stdout.split()
-        worst, where, mismatches = _compare(work, model_function("eval", model), result, n, int(size))
+        worst, where, mismatches = _compare(work, model_function("eval", model), result, n,
+                                            int(size))
         pose = np.fromfile(work / "pose_states.bin").reshape(n, -1)
         pose_error = float(np.max(np.abs(pose - state_array(motion))))
-    return VerifyReport(folder, prefix, model, " ".join([*cc, *CFLAGS]), n, worst, where, mismatches,
-                        pose_error, float(latency))
+    return VerifyReport(folder, prefix, model, " ".join([*cc, *flags]), n, worst,
+                        where, mismatches, pose_error, float(latency))

@@ -2,8 +2,10 @@
 
 ``export_library`` checks what the platform asks of the library, fills the templates of this
 package (``templates/*.in``: ``@name@`` placeholders) and writes the folder atomically
-(``gsfric.io.files.output_folder``). The folder is a function of the platform, the model, the
-prefix and the committed generated code only: no timestamps, so an export is reproducible.
+(``gsfric.io.files.output_folder``). The model's C comes from ``templates/model_<code>.c.in``
+filled with the build ``code`` (``CODES``). The folder is a function of the platform, the
+model, the prefix, the build and the committed generated code only: no timestamps, so an
+export is reproducible.
 """
 
 from __future__ import annotations
@@ -20,12 +22,27 @@ from gsfric.errors import GsfricError, InputError
 from gsfric.evaluation import flags
 from gsfric.evaluation.flags import flag_spec
 from gsfric.evaluation.parameters import effect_vector, model_function, parameter_vector
-from gsfric.export import source, text
+from gsfric.export import folded, source, text
 from gsfric.io.files import output_folder
 from gsfric.platform.catalog import GENERATED_EFFECTS, SENSOR_EFFECTS, sensor_parameters
 from gsfric.platform.description import Platform
 
 MODELS = ("coupled", "paper")
+CODES = ("specialised", "generic")
+"""The builds of the model: the platform folded into the code (``gsfric.export.folded``), or
+CasADi's generated function of every platform with the parameters as data."""
+STEP_OUTPUTS = ("F", "F0", "D", "s2", "h", "coupling_change")
+"""The outputs ``<prefix>_actuator_forces`` computes: F and what the step flags read."""
+_CODE_TEXT = {
+    "specialised": "has them folded into its code (every value that depends on the platform "
+                   "alone computed when exported)",
+    "generic": "reads them from there at every call",
+}
+_PARAMETERS_NOTE = {
+    "specialised": "The specialised build has P and Q folded\n * into its code: they are "
+                   "here for the record (changing them changes nothing; export again).",
+    "generic": "The generic build reads P and Q from these values.",
+}
 CFLAGS = ("-O2", "-std=c99", "-Wall", "-Wextra", "-pedantic")
 """The Makefile's default flags (``--verify`` builds with them too)."""
 PLATFORM_FILE = "platform.toml"
@@ -54,6 +71,8 @@ class Export:
         The C prefix of every public name (``<prefix>_evaluate``, ``<prefix>.h``).
     model : str
         The friction model, "coupled" or "paper".
+    code : str
+        The build of the model, "specialised" or "generic" (``CODES``).
     function : str
         The generated function the library carries (e.g. ``eval_coupled``).
     iterations : int
@@ -63,6 +82,7 @@ class Export:
     folder: Path
     prefix: str
     model: str
+    code: str
     function: str
     iterations: int
 
@@ -123,19 +143,46 @@ def _platform_file_text(platform: Platform, platform_file: Path | None) -> tuple
     return f"the platform file {Path(platform_file).name}", Path(platform_file).read_text()
 
 
-def _values(platform: Platform, platform_file, model: str, prefix: str) -> dict[str, str]:
+def _model_code(platform: Platform, name: str, prefix: str, code: str) -> str:
+    """The C of the model (``run`` and ``run_step``) in build ``code``, from its template."""
+    outs = [o.name for o in text.outputs(name)]
+    if code == "generic":
+        generated = source.generated_function(name, prefix)
+        values = {"function": generated.name, "generated": generated.text,
+                  "helpers": source.helper_text(generated.helpers)}
+    else:
+        body = folded.statements(folded.folded_function(name, platform, outs),
+                                 [f"OUT_{o}" for o in outs])
+        run = folded.function_text(body, "run")
+        step = folded.function_text(body, "run_step", {outs.index(o) for o in STEP_OUTPUTS})
+        helpers = source.helpers_called(run)
+        missing = sorted(set(re.findall(r"\b(casadi_\w+)\(", run)) - set(helpers))
+        if missing:
+            raise GsfricError(f"the specialised build calls {missing[0]}, which generated/ "
+                              "does not define; export with --code generic")
+        values = {"function": name, "run": run, "run_step": step,
+                  "helpers": source.helper_text(helpers)}
+    values["PREFIX"] = prefix.upper()
+    template = importlib.resources.files("gsfric.export").joinpath("templates",
+                                                                    f"model_{code}.c.in")
+    return _fill(template.read_text(), values)
+
+
+def _values(platform: Platform, platform_file, model: str, prefix: str,
+            code: str) -> dict[str, str]:
     """Every placeholder of the templates."""
     name = model_function("eval", model)
     outs = text.outputs(name)
     gains, _ = sensor_parameters(platform.effects)
     iterations = coupled_iterations(model)
     platform_name, platform_text = _platform_file_text(platform, platform_file)
-    generated = source.generated_function(name, prefix)
     state = [(b["offset"], b["shape"], b.get("unit") or "1", b["name"], b["description"])
              for b in layout("eval", "x")]
     return {
         "prefix": prefix, "PREFIX": prefix.upper(), "cflags": " ".join(CFLAGS), "model": model,
-        "function": generated.name,
+        "function": name, "code": code, "parameters_note": _PARAMETERS_NOTE[code],
+        "code_text": _CODE_TEXT[code],
+        "model_code": _model_code(platform, name, prefix, code),
         "platform_name": platform_name, "platform_comment": text.comment(platform_text),
         "iterations": str(iterations),
         "iterations_text": _iterations_text(model, iterations),
@@ -155,8 +202,7 @@ def _values(platform: Platform, platform_file, model: str, prefix: str) -> dict[
         "output_sizes": "{" + ", ".join(str(o.size) for o in outs) + "}",
         "output_pointers": "\n".join(f"    res[OUT_{o.name}] = {o.pointer('out')};"
                                      for o in outs),
-        "helpers": source.helper_text(generated.helpers), "flag_block": source.flag_block(),
-        "generated": generated.text,
+        "flag_block": source.flag_block(),
         "flag_settings": text.flag_settings(flag_spec([(o.name, o.size, o.shape) for o in outs],
                                                       platform.geometry.stroke)),
         "state_table": "\n".join(f"| {o} | {'x'.join(map(str, s))} | {u} | {n}: {d} |"
@@ -172,7 +218,7 @@ def _fill(template: str, values: dict[str, str]) -> str:
 
 
 def export_library(platform: Platform, out, model: str | None = None, prefix: str = "gsfric",
-                   platform_file=None) -> Export:
+                   platform_file=None, code: str = "specialised") -> Export:
     """Write the C library of ``platform`` into the folder ``out`` (atomically).
 
     Parameters
@@ -186,20 +232,25 @@ def export_library(platform: Platform, out, model: str | None = None, prefix: st
         A C identifier: the library's header ``<prefix>.h`` and the prefix of its names.
     platform_file : path-like, optional
         The platform's file, copied into the header's first comment.
+    code : {"specialised", "generic"}
+        The build of the model: the platform folded into straight-line code (fast; needs
+        casadi when exporting), or CasADi's generated function reading the parameters.
     """
     check_prefix(prefix)
     model = platform.friction.model if model is None else model
     if model not in MODELS:
         raise InputError(f"--model: {model!r} is not one of {', '.join(MODELS)}")
+    if code not in CODES:
+        raise InputError(f"--code: {code!r} is not one of {', '.join(CODES)}")
     if model != platform.friction.model:
         platform = platform.with_friction(model=model)
     check_effects(platform)
-    values = _values(platform, platform_file, model, prefix)
+    values = _values(platform, platform_file, model, prefix, code)
     templates = importlib.resources.files("gsfric.export").joinpath("templates")
     with output_folder(out, inputs={"platform": platform_file}) as tmp:
         for template, target in FILES.items():
             content = _fill(templates.joinpath(template).read_text(), values)
             (tmp / target.format(prefix=prefix)).write_text(content)
         platform.to_toml(tmp / PLATFORM_FILE)
-    return Export(Path(out), prefix, model, model_function("eval", model),
+    return Export(Path(out), prefix, model, code, model_function("eval", model),
                   coupled_iterations(model))

@@ -10,12 +10,15 @@ import contextvars
 import errno
 import glob
 import os
+import re
 import shutil
 import stat
 import tempfile
 from collections.abc import Iterable, Iterator, Mapping
 from pathlib import Path
 from typing import IO, Any
+
+import tomllib
 
 from gsfric.errors import GsfricError, InputError, OutputError
 
@@ -127,13 +130,34 @@ def check_outputs(outputs: Iterable[PathArg | None], inputs: Inputs = ()) -> Non
     as one of ``inputs``, nor as another of ``outputs``; a character device or FIFO
     (``is_stream``) may be given as several outputs, being written into, not replaced.
 
+    Once the outputs pass, the temporaries that killed runs left beside them are removed
+    (``remove_stale_temporaries``): the next run cleans up even when it fails later.
+
     Raises
     ------
     InputError
         One line naming both paths, e.g. ``p.csv: is the same file as the platform file
         p2.csv; choose another output``.
     """
+    outputs = [o for o in outputs if o is not None]
     _check_named(outputs, _named_inputs(inputs))
+    for out in outputs:
+        with contextlib.suppress(OSError, ValueError):
+            remove_stale_temporaries(resolve_output(out))
+
+
+def check_output_folder(path: PathArg) -> None:
+    """Refuse, before any work, an output folder that exists and is not a directory (a
+    file, a device such as /dev/null: ``output_folder`` never replaces one).
+
+    Raises
+    ------
+    InputError
+        ``{path}: exists and is not a directory``.
+    """
+    given = Path(path)
+    if resolve_output(given).exists() and not resolve_output(given).is_dir():
+        raise InputError(f"{given}: exists and is not a directory")
 
 
 def _check_named(outputs: Iterable[PathArg | None], named: list[tuple[str, Path]]) -> None:
@@ -452,3 +476,43 @@ def _move_folder(given: Path, path: Path, tmp: Path, names: list[str]) -> None:
         for name in names:
             os.replace(tmp / name, path / name)
         tmp.rmdir()
+
+
+def read_toml(path: str | os.PathLike[str]) -> dict[str, Any]:
+    """The tables of a TOML file; ``InputError`` in one line naming the file for a missing or
+    unreadable file, a folder, text that is not UTF-8, invalid TOML (naming a repeated key and
+    its line) or nesting too deep."""
+    path = Path(path)
+    try:
+        raw = path.read_bytes()
+    except FileNotFoundError:
+        raise InputError(f"{path}: file not found") from None
+    except IsADirectoryError:
+        raise InputError(f"{path}: is a directory, not a file") from None
+    except OSError as error:
+        raise InputError(f"{path}: cannot read ({error.strerror})") from None
+    try:
+        text = raw.decode("utf-8")
+    except UnicodeDecodeError as error:
+        raise InputError(f"{path}: not UTF-8 text (byte {error.start})") from None
+    try:
+        return tomllib.loads(text)
+    except tomllib.TOMLDecodeError as error:
+        raise InputError(f"{path}: {_toml_problem(text, error)}") from None
+    except RecursionError:
+        raise InputError(f"{path}: invalid TOML: nested too deeply") from None
+
+
+def _toml_problem(text: str, error: Exception) -> str:
+    """The TOML error, naming the key of a repeated key (``Cannot overwrite a value``)."""
+    message = str(error)
+    line = re.search(r"at line (\d+)", message)
+    if "overwrite" in message and line:
+        lines = text.splitlines()
+        number = int(line.group(1))
+        source = lines[number - 1] if 0 < number <= len(lines) else ""
+        key = source.split("=")[0].strip().strip("[]").strip()
+        if key:
+            return f"line {number}: key {key!r} given twice; give each key once"
+    return f"invalid TOML: {message}"
+

@@ -15,7 +15,7 @@ them.
 
 A log written by another program (a controller's names and units, a wrapping microsecond
 counter, roll/pitch/yaw) is read with a ``LogFormat``: a column map, units per column, the
-angle convention and the columns to carry through; see docs/logs.md.
+angle convention and the columns to carry through; see docs/howto/read-a-log.md.
 
 Writes are atomic (``atomic_write``): a reader never sees a partly written file.
 """
@@ -28,8 +28,9 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
+from gsfric._checks import as_path
 from gsfric.errors import InputError
-from gsfric.io.logs import FORCES, LENGTHS, QUATERNION, ColumnReader, LogFormat
+from gsfric.io.logs import FORCES, LENGTHS, QUATERNION, RATES, ColumnReader, LogFormat
 from gsfric.io.tables import read_table
 from gsfric.signal.savgol import DEFAULT_POLYORDER
 from gsfric.trajectory import MIN_SAMPLES, Motion
@@ -45,7 +46,7 @@ refused: a wrong unit or a corrupt file."""
 def _read_samples(path: str | os.PathLike[str], measured: bool,
                   log_format: LogFormat | None = None
                   ) -> tuple[Path, dict[str, np.ndarray], tuple[str, ...]]:
-    path = Path(path)
+    path = as_path(path, "path")
     return _samples(path, read_table(path), measured, log_format)
 
 
@@ -70,11 +71,12 @@ def _samples(path, frame, measured: bool, log_format: LogFormat | None
     bad = np.flatnonzero(steps <= 0)
     if len(bad):
         i = int(bad[0]) + 1
+        row, before = reader.file_row(i) + 1, reader.file_row(i - 1) + 1
         if steps[i - 1] == 0:
-            raise InputError(f"{path}: row {i + 1}: duplicate time t = {float(t[i])!r} "
-                             f"(same as row {i})")
-        raise InputError(f"{path}: row {i + 1}: t = {float(t[i])!r} is less than "
-                         f"t = {float(t[i - 1])!r} in row {i}; t must increase")
+            raise InputError(f"{path}: row {row}: duplicate time t = {float(t[i])!r} "
+                             f"(same as row {before})")
+        raise InputError(f"{path}: row {row}: t = {float(t[i])!r} is less than "
+                         f"t = {float(t[i - 1])!r} in row {before}; t must increase")
     if len(t) < MIN_SAMPLES:
         raise InputError(f"{path}: {len(t)} data rows; at least {MIN_SAMPLES} are needed "
                          "to differentiate the motion")
@@ -83,25 +85,29 @@ def _samples(path, frame, measured: bool, log_format: LogFormat | None
         bad_rows, bad_legs = np.nonzero(np.abs(forces) > MAX_FORCE)
         if len(bad_rows):
             value = forces[bad_rows[0], bad_legs[0]]
-            raise InputError(f"{path}: row {bad_rows[0] + 1}: column 'F{bad_legs[0] + 1}' = "
-                             f"{value:.4g} N is not a plausible actuator force (|F| > "
-                             f"{MAX_FORCE:g} N); forces must be in N")
+            raise InputError(f"{path}: row {reader.file_row(bad_rows[0]) + 1}: column "
+                             f"'F{bad_legs[0] + 1}' = {value:.4g} N is not a plausible actuator "
+                             f"force (|F| > {MAX_FORCE:g} N); forces must be in N")
     if measured and "D1" in columns:
         lengths = np.stack([columns[n] for n in LENGTHS], axis=1)
         bad_rows, bad_legs = np.nonzero(lengths <= 0)
         if len(bad_rows):
-            raise InputError(f"{path}: row {bad_rows[0] + 1}: column "
+            raise InputError(f"{path}: row {reader.file_row(bad_rows[0]) + 1}: column "
                              f"'D{bad_legs[0] + 1}' must be positive (a leg length)")
     return path, columns, orientation
 
 
 def motion_from_columns(path: Path, columns: dict[str, np.ndarray], orientation: tuple[str, ...],
-            window: int | None, polyorder: int) -> Motion:
+                        window: int | None, polyorder: int) -> Motion:
+    """The columns read (``ColumnReader.read``, SI) differentiated into a ``Motion``; the log's
+    own rates (``RATES``) where it has them."""
     position = np.stack([columns[n] for n in ("x", "y", "z")], axis=1)
     angles = np.stack([columns[n] for n in orientation], axis=1)
     key = "quaternion" if orientation == QUATERNION else "euler"
+    rates = {name: np.stack([columns[n] for n in group], axis=1)
+             for name, group in RATES.items() if group[0] in columns}
     return Motion.from_samples(columns["t"], position, window=window, polyorder=polyorder,
-                               source=str(path), **{key: angles})
+                               source=str(path), rates=rates or None, **{key: angles})
 
 
 def motion_from_frame(frame: pd.DataFrame, *, window: int | None = None,
@@ -155,6 +161,15 @@ def read_trajectory(path: str | os.PathLike[str], *, window: int | None = None,
         Unknown or missing columns, values that are not numbers, NaN or infinite values, times
         that do not increase, too few rows. Warnings (``GsfricWarning``) flag angles that look
         like degrees and jumps of the ZXZ angles near beta = 0.
+
+    Examples
+    --------
+    >>> import pathlib, tempfile
+    >>> import numpy as np, gsfric
+    >>> path = pathlib.Path(tempfile.mkdtemp()) / "motion.csv"
+    >>> gsfric.io.write_table(gsfric.models.sinusoidal(np.linspace(0, 2, 401)).to_frame(), path)
+    >>> gsfric.read_trajectory(path).position.shape
+    (401, 3)
     """
     path, columns, orientation = _read_samples(path, False, log_format)
     return motion_from_columns(path, columns, orientation, window, polyorder)
@@ -165,7 +180,12 @@ def read_measured(path: str | os.PathLike[str], *, window: int | None = None,
                   ) -> tuple[Motion, np.ndarray, np.ndarray | None]:
     """Read a measured-data file: the trajectory columns plus ``F1..F6`` and optional ``D1..D6``.
 
-    ``window``, ``polyorder`` and ``log_format`` as for ``read_trajectory``.
+    Parameters
+    ----------
+    path : str or path-like
+        A CSV or Parquet file with the columns of a trajectory and ``F1..F6`` (N).
+    window, polyorder, log_format
+        As for ``read_trajectory``.
 
     Returns
     -------
@@ -182,6 +202,17 @@ def read_measured(path: str | os.PathLike[str], *, window: int | None = None,
     InputError
         As ``read_trajectory``, and for missing F columns, an incomplete D1..D6 set or a
         non-positive leg length.
+
+    Examples
+    --------
+    >>> import pathlib, tempfile
+    >>> import gsfric
+    >>> from gsfric.synth import synthesize
+    >>> path = pathlib.Path(tempfile.mkdtemp()) / "measured.csv"
+    >>> gsfric.io.write_table(synthesize(samples=400, seed=1).frame, path)
+    >>> motion, forces, lengths = gsfric.read_measured(path)
+    >>> forces.shape[1]
+    6
     """
     return read_measured_columns(path, window, polyorder, log_format)[:3]
 

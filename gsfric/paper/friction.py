@@ -7,7 +7,7 @@ paper's run, each beside the paper's values (magnitudes, N):
   (our Table 3);
 * ``(35) with R_E``: the same formula with the whole joint force |R_E|, which is what the size of
   the paper's values implies;
-* ``bushings``: the coupled model's prismatic friction (docs/friction.md) from the same R_3 and
+* ``bushings``: the coupled model's prismatic friction (docs/explanation/friction.md) from the same R_3 and
   M_3: two bushings ``bushing_spacing`` apart, ``bushing_offset`` from C_i, the same mu, plus
   viscous and seal terms.
 """
@@ -19,7 +19,7 @@ import pandas as pd
 
 from gsfric._optional import optional
 from gsfric.compiled import native
-from gsfric.evaluation.breakdown import plot
+from gsfric.evaluation.breakdown import plot, shown_parts
 from gsfric.evaluation.evaluator import breakdown
 from gsfric.evaluation.parameters import effect_vector, parameter_vector
 
@@ -63,7 +63,7 @@ def report_section(run) -> list[str]:
     lines += ["",
               "(35) with R_3 is the paper's formula as printed (our table3.csv); with the whole "
               "joint force |R_E| it has the size of the paper's values; the bushing model "
-              f"(docs/friction.md: bushings {fr.bushing_spacing:g} m apart, the first "
+              f"(docs/explanation/friction.md: bushings {fr.bushing_spacing:g} m apart, the first "
               f"{fr.bushing_offset:g} m from C_i, mu = {fr.prismatic_coulomb:g}, seal "
               f"{fr.prismatic_seal:g} N) adds the normal forces that the joint's moment M_3 "
               "puts on the bushings."]
@@ -75,8 +75,12 @@ def breakdown_figure(platform, motion):
     optional("matplotlib").use("Agg")
     plt = optional("matplotlib.pyplot")
     parts = breakdown(platform, motion)
-    fig, axes = plt.subplots(1, 2, figsize=(11, 4), sharex=True)
-    for ax, leg in zip(axes, (0, 3)):
-        plot(motion.t, parts, leg, ax)
+    shown = shown_parts(parts, (0, 3))
+    rows = 1 + len(shown)
+    fig, axes = plt.subplots(rows, 2, figsize=(12, 1.4 * rows + 0.8), sharex=True,
+                             squeeze=False)
+    for column, leg in enumerate((0, 3)):
+        plot(parts, leg, axes[:, column], shown)
+    fig.suptitle("Breakdown of the actuator forces F into their parts, legs 1 and 4 (N)")
     fig.tight_layout()
     return fig

@@ -43,7 +43,8 @@ from gsfric.platform.description import Platform
 def plot_table(run: PaperRun, number: int):
     """Ours against the paper's for one table: |value| against the step, one panel per joint.
 
-    Log scale, so that values an order of magnitude apart and the misprints (red crosses) show.
+    Log scale, so that values an order of magnitude apart and the misprints show (red crosses:
+    the values left out of the comparison; printing slips that are kept are not marked).
     For Table 3 a dashed line shows (35) with our |R_E| in place of |R_3|.
 
     Returns
@@ -69,10 +70,10 @@ def plot_table(run: PaperRun, number: int):
         if alternative is not None:
             ax.semilogy(steps, alternative[:, j], "--", color="C2",
                         label="ours with |R_E| in place of |R_3|")
-        bad = [m for m in run.misprints[number] if m.column == column]
+        bad = [m for m in run.misprints[number] if m.column == column and m.excluded]
         if bad:
             ax.semilogy([m.pos for m in bad], [abs(m.value) for m in bad], "x", color="red",
-                        ms=9, mew=2, label="misprint")
+                        ms=9, mew=2, label="misprint (left out of the comparison)")
         ax.set_title(column)
         ax.grid(True, alpha=0.3)
     handles = {}
@@ -83,7 +84,7 @@ def plot_table(run: PaperRun, number: int):
                frameon=False)
     fig.supxlabel("step", y=0.07)
     fig.supylabel(f"|{spec.prefix}| ({spec.unit}), log scale")
-    fig.suptitle(f"Table {number}: {spec.title}")
+    fig.suptitle(f"Table {number}: {spec.title}, |{spec.prefix}| in {spec.unit}")
     return fig
 
 
@@ -170,7 +171,7 @@ def _header_section(run: PaperRun, source: str | None) -> list[str]:
         "",
         f"- Platform: {source or 'the built-in paper platform (`gsfric.models.paper_platform()`)'}"
         ", written to `platform.toml`. The paper's dimensions (its figures 6-7) are missing, so "
-        "the geometry is the project's reference geometry (docs/reference.md).",
+        "the geometry is the project's reference geometry (docs/explanation/reference-platform.md).",
         f"- Motion: {n} steps from rest at the home pose with constant accelerations "
         f"a = {PAPER_ACCELERATION} m/s^2, alpha = {PAPER_ANGULAR_ACCELERATION} "
         f"rad/s^2, t_j = {models.PAPER_DT} j s.",

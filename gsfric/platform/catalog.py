@@ -126,3 +126,54 @@ def __getattr__(name):
     if name == "GENERATED_EFFECTS":
         return _generated()
     raise AttributeError(name)
+
+
+PLATFORM_UNITS: dict[str, str] = {
+    "gravity": "m/s^2",
+    "geometry.base_joints": "m", "geometry.platform_joints": "m",
+    "geometry.universal_axes": "1", "geometry.stroke": "m",
+    "platform.mass": "kg", "platform.inertia": "kg m^2", "platform.com": "m",
+    "platform.payload_mass": "kg", "platform.payload_inertia": "kg m^2",
+    "platform.payload_com": "m",
+    "legs.lower_mass": "kg", "legs.lower_com": "m", "legs.lower_inertia": "kg m^2",
+    "legs.upper_mass": "kg", "legs.upper_com": "m", "legs.upper_inertia": "kg m^2",
+    "friction.joint_viscous": "N m s/rad", "friction.joint_coulomb": "1",
+    "friction.joint_radius": "m", "friction.prismatic_viscous": "N s/m",
+    "friction.prismatic_coulomb": "1", "friction.bushing_offset": "m",
+    "friction.bushing_spacing": "m", "friction.prismatic_seal": "N",
+}
+"""Units of the platform's own numbers, by dotted TOML key."""
+
+_REFIT_SECTIONS = {"payload_mass": "platform", "prismatic_viscous": "friction",
+                   "prismatic_coulomb": "friction", "prismatic_seal": "friction",
+                   "joint_viscous": "friction", "joint_coulomb": "friction"}
+
+
+def unit(name: str) -> str:
+    """The unit of a parameter: ``effect.parameter`` (catalog), a dotted platform key
+    (``friction.prismatic_viscous``) or a bare refitted key (``payload_mass``); "" if unknown.
+
+    Examples
+    --------
+    >>> unit("stribeck.velocity"), unit("payload_mass")
+    ('m/s', 'kg')
+    """
+    if name in PLATFORM_UNITS:
+        return PLATFORM_UNITS[name]
+    if name in _REFIT_SECTIONS:
+        return PLATFORM_UNITS[f"{_REFIT_SECTIONS[name]}.{name}"]
+    effect, _, parameter = name.partition(".")
+    for entry in describe():
+        if entry["name"] == effect:
+            for p in entry["parameters"]:
+                if p["name"] == parameter:
+                    return p["unit"]
+    return ""
+
+
+def with_unit(value: float, unit_: str, digits: int = 4) -> str:
+    """``value`` with its unit for a reader: ``12.3 N``, ``4.1 ms`` (a time below 1 s in ms),
+    ``0.04`` (unit "1")."""
+    if unit_ == "s" and abs(value) < 1.0:
+        return f"{value * 1e3:.{digits}g} ms"
+    return f"{value:.{digits}g}" + ("" if unit_ in ("", "1") else f" {unit_}")

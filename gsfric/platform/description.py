@@ -27,16 +27,14 @@ import os
 import warnings
 from collections.abc import Mapping
 from dataclasses import dataclass, field
-from pathlib import Path
 from typing import Any
 
 import numpy as np
 import tomli_w
-import tomllib
 
-from gsfric._checks import as_array, as_float, fields_equal, short, suggest
-from gsfric.errors import GsfricWarning, InputError
-from gsfric.io.files import atomic_write
+from gsfric._checks import as_array, as_float, as_path, fields_equal, short, suggest
+from gsfric.errors import GsfricWarning, InputError, InputTypeError
+from gsfric.io.files import atomic_write, read_toml
 from gsfric.platform import catalog
 
 LEG_MODELS = ("rigid", "paper")
@@ -45,7 +43,7 @@ LEG_MODELS = ("rigid", "paper")
 
 FRICTION_MODELS = ("paper", "coupled")
 """Friction models (``[friction] model``): the paper's post-hoc evaluation, and the coupled model
-in which friction loads the mechanism (docs/friction.md)."""
+in which friction loads the mechanism (docs/explanation/friction.md)."""
 
 PAPER_LEG_FRACTION = 0.25
 """Fraction of the leg length at which the paper model places the lower and upper centres."""
@@ -66,6 +64,10 @@ _set = object.__setattr__
 _SYMMETRY_TOL = 1e-9
 _UNIT_TOL = 1e-12
 _TRIANGLE_TOL = 1e-9
+
+MAX_GRAVITY = 100.0
+"""The largest gravity accepted, m/s^2: ten times the Earth's, beyond any load case of a rig
+(larger values are a unit or typing error, and 1e308 overflows every force)."""
 
 MAX_JOINT_DISTANCE = 20.0
 """A joint farther than this from its frame's origin, m, draws a ``GsfricWarning``: lengths
@@ -308,7 +310,7 @@ class Friction:
     model : {"paper", "coupled"}
         ``"paper"``: the paper's post-hoc (33)-(35), nothing fed back; ``"coupled"``: friction
         loads the mechanism (solved at every step), prismatic friction from two bushings,
-        universal joints per bearing axis (docs/friction.md). Default ``"paper"``: the meaning
+        universal joints per bearing axis (docs/explanation/friction.md). Default ``"paper"``: the meaning
         of every file written before the key existed.
     bushing_offset : float
         Distance of the first bushing from C_i along the leg, m (coupled model). Default 0.25.
@@ -455,6 +457,24 @@ class Platform:
 
     Instances are immutable; derive variants with ``replace``, ``with_geometry``, ``with_body``,
     ``with_legs``, ``with_friction``, ``with_effects``, ``with_effect`` and ``without_effects``.
+
+    Raises
+    ------
+    InputTypeError
+        A value of the wrong type (a string for a number or an array), naming the key.
+    InputError
+        A wrong shape, a NaN or infinite value, an integer beyond 64 bits, a value out of its
+        range (gravity from 0 to ``MAX_GRAVITY`` m/s^2, masses >= 0, ...), an unknown effect;
+        one line naming the dotted key. The constructors and ``with_*`` methods raise the
+        same.
+
+    Examples
+    --------
+    >>> import gsfric
+    >>> platform = gsfric.reference_platform()
+    >>> heavier = platform.with_body(payload_mass=8.0)
+    >>> heavier.platform.payload_mass, platform.platform.payload_mass
+    (8.0, 3.0)
     """
 
     gravity: float = DEFAULT_GRAVITY
@@ -467,6 +487,9 @@ class Platform:
 
     def __post_init__(self) -> None:
         _set(self, "gravity", as_float(self.gravity, "gravity", minimum=0.0))
+        if self.gravity > MAX_GRAVITY:
+            raise InputError(f"gravity: {self.gravity:g} m/s^2 is beyond the valid range 0 to "
+                             f"{MAX_GRAVITY:g} m/s^2")
         for name, kind in (("geometry", Geometry), ("platform", Body), ("legs", Legs),
                            ("friction", Friction)):
             if not isinstance(getattr(self, name), kind):
@@ -501,30 +524,22 @@ class Platform:
         try:
             return _from_dict(data)
         except InputError as error:
-            raise InputError(f"{source}: {error}") from None
+            raise type(error)(f"{source}: {error}") from None
 
     @classmethod
     def from_toml(cls, path: str | os.PathLike[str]) -> Platform:
-        """Read a platform TOML file (layout in SPEC.md); ``InputError`` on any problem."""
-        path = Path(path)
-        try:
-            raw = path.read_bytes()
-        except FileNotFoundError:
-            raise InputError(f"{path}: file not found") from None
-        except IsADirectoryError:
-            raise InputError(f"{path}: is a directory, not a file") from None
-        except OSError as error:
-            raise InputError(f"{path}: cannot read ({error.strerror})") from None
-        try:
-            text = raw.decode("utf-8")
-        except UnicodeDecodeError as error:
-            raise InputError(f"{path}: not UTF-8 text (byte {error.start})") from None
-        try:
-            data = tomllib.loads(text)
-        except tomllib.TOMLDecodeError as error:
-            raise InputError(f"{path}: invalid TOML: {error}") from None
-        except RecursionError:
-            raise InputError(f"{path}: invalid TOML: nested too deeply") from None
+        """Read a platform TOML file (layout in SPEC.md).
+
+        Raises
+        ------
+        InputTypeError
+            ``path`` is not a str or os.PathLike.
+        InputError
+            Any problem of the file, in one line naming the file and the key (a missing or
+            unknown key, a wrong type, a NaN or infinite value, an integer beyond 64 bits).
+        """
+        path = as_path(path, "platform file")
+        data = read_toml(path)
         return cls.from_dict(data, source=str(path))
 
     # -- writing --------------------------------------------------------------------------
@@ -570,6 +585,7 @@ class Platform:
     def to_toml(self, path: str | os.PathLike[str]) -> None:
         """Write the platform as TOML, atomically; ``from_toml`` reads back an equal platform."""
         text = tomli_w.dumps(self.to_dict())
+        path = as_path(path, "path")
         with atomic_write(path, "w") as handle:
             handle.write(text)
 
@@ -596,7 +612,19 @@ class Platform:
         return self.replace(friction=dataclasses.replace(self.friction, **changes))
 
     def with_effects(self, effects: Mapping[str, Mapping[str, float]]) -> Platform:
-        """A copy whose effects are exactly ``effects`` (missing parameters take defaults)."""
+        """A copy whose effects are exactly ``effects`` (missing parameters take defaults).
+
+        Raises
+        ------
+        InputTypeError
+            ``effects`` is not a mapping.
+        InputError
+            An unknown effect or parameter, a bad value.
+        """
+        if not isinstance(effects, Mapping) or not all(
+                isinstance(p, Mapping) for p in effects.values()):
+            raise InputTypeError(f"effects: expected a dict of effect name -> dict of "
+                                 f"parameters, got {short(effects)}")
         return self.replace(effects={name: dict(params) for name, params in effects.items()})
 
     def with_effect(self, name: str, **parameters: float) -> Platform:

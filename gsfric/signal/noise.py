@@ -146,3 +146,59 @@ def high_frequency_std(y: np.ndarray, window: int) -> np.ndarray:
     h0 = savgol_weights(window, 3)[window // 2]
     core = slice(window, len(y) - window) if len(y) > 3 * window else slice(None)
     return robust_std((y - smooth)[core]) / np.sqrt(1.0 - h0)
+
+
+
+EXPONENTIAL_MEDIAN = math.log(2.0)
+"""Median of the exponential distribution of unit mean: the median of a white noise's
+periodogram ordinates (away from 0 and the Nyquist frequency) over their mean."""
+
+
+def spectral_noise_std(y: np.ndarray, step: float, low: float, segment: int = 32
+                       ) -> np.ndarray:
+    """Standard deviation of white noise in each column of y (N, k), from the median level of
+    its spectrum above the frequency ``low`` (Hz), robust in time and in frequency.
+
+    The record is cut into segments of ``segment`` samples, each detrended (a line) and
+    tapered (Hann); at each frequency, the median of the segments' periodogram ordinates
+    over ``ln 2`` is the level (a white noise of standard deviation sigma has ordinates of
+    mean ``2 sigma^2 step``, exponentially distributed): what happens in fewer than half
+    of the segments (a friction step at a reversal, a jump) does not count. Of the levels
+    above ``low`` the lower quartile is taken: what occupies up to three quarters of the
+    frequencies (narrowband lines, each widened by the taper to three or four of the
+    segment's frequencies; the harmonics of the motion) does not count either (each level is
+    a median over the record's segments, nearly constant over the frequencies for white
+    noise, so that its quartile is within a few percent of its median). A noise that is not
+    white reads at its level above ``low``.
+
+    Parameters
+    ----------
+    y : ndarray, shape (N, k)
+    step : float
+        Sample step, s.
+    low : float
+        Lowest frequency counted, Hz.
+    segment : int
+        Samples per segment (even).
+
+    Returns
+    -------
+    ndarray, shape (k,)
+        In the unit of y; zeros when the record holds fewer than 3 segments or no frequency
+        of a segment lies above ``low``.
+    """
+    y = np.asarray(y, float)
+    n, segment = len(y), int(segment)
+    count = n // segment
+    freqs = np.fft.rfftfreq(segment, step)
+    above = (freqs > low) & (freqs < freqs[-1])
+    if count < 3 or not above.any():
+        return np.zeros(y.shape[1:])
+    parts = y[:count * segment].reshape(count, segment, -1)
+    x = np.arange(segment) - (segment - 1) / 2
+    slope = np.einsum("j,ijk->ik", x, parts) / np.sum(x ** 2)
+    e = parts - parts.mean(axis=1, keepdims=True) - slope[:, None, :] * x[None, :, None]
+    taper = np.hanning(segment + 2)[1:-1]
+    power = np.abs(np.fft.rfft(e * taper[None, :, None], axis=1)) ** 2 / np.sum(taper ** 2)
+    level = np.median(power[:, above], axis=0) / EXPONENTIAL_MEDIAN     # (frequencies, k)
+    return np.sqrt(np.quantile(level, 0.25, axis=0))

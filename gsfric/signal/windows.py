@@ -6,6 +6,7 @@ from __future__ import annotations
 import numpy as np
 
 from gsfric._optional import optional
+from gsfric._threads import in_parallel
 from gsfric.signal.noise import white_noise_std
 from gsfric.signal.savgol import DEFAULT_POLYORDER, savgol_filter, savgol_weights
 
@@ -147,7 +148,10 @@ def _choose_windows(y: np.ndarray, p: int, deriv: int, variance: np.ndarray, bes
     j = (np.arange(width) - width // 2).astype(float)
     previous = savgol_filter(y, candidates[0], p, deriv)
     detected = np.zeros_like(y)
-    for w, w_next in zip(candidates[:-1], candidates[1:]):
+    # the least noise of any window after each one (a window's noise is variance * gain)
+    gains = [float(np.sum(coefficients(w) ** 2)) for w in candidates[:-1]]
+    least_after = [min(gains[i + 1:], default=np.inf) for i in range(len(gains))]
+    for i, (w, w_next) in enumerate(zip(candidates[:-1], candidates[1:])):
         h, h_next = coefficients(w), coefficients(w_next)
         following = savgol_filter(y, w_next, p, deriv)
         growth = float(np.sum(h_next * j ** m) / np.sum(h * j ** m))
@@ -164,6 +168,18 @@ def _choose_windows(y: np.ndarray, p: int, deriv: int, variance: np.ndarray, bes
         orders[better] = p
         windows[better] = w
         previous = following
+        if _settled(detected, variance * least_after[i], best):
+            break
+
+
+def _settled(detected: np.ndarray, least_noise: np.ndarray, best: np.ndarray) -> bool:
+    """Whether no longer window can be chosen anywhere: a longer window's estimated bias
+    squared is at least ``detected`` (N, k) and its noise variance at least ``least_noise``
+    (k,), so its risk is at least their sum, computed as the risk is (the same rounding,
+    which is monotonic); where that bound already reaches ``best`` (N,), it cannot be lower.
+    """
+    bound = np.sum(BIAS_WEIGHT * detected + least_noise, axis=1)
+    return bool(np.all(bound >= best))
 
 
 def motion_filters(y: np.ndarray, polyorder: int = DEFAULT_POLYORDER
@@ -172,15 +188,28 @@ def motion_filters(y: np.ndarray, polyorder: int = DEFAULT_POLYORDER
     (N, k) when it chooses them (``adaptive_filters``): ((orders, windows) for the value and
     the first derivative, (orders, windows) for the second derivative), each array (N,)."""
     sigma = white_noise_std(y)
-    return (adaptive_filters(y, polyorder, sigma, deriv=1),
-            adaptive_filters(y, polyorder, sigma, deriv=2))
+    first, second = in_parallel(lambda: adaptive_filters(y, polyorder, sigma, deriv=1),
+                                lambda: adaptive_filters(y, polyorder, sigma, deriv=2))
+    return first, second
+
+
+def filter_pairs(orders: np.ndarray, windows: np.ndarray) -> np.ndarray:
+    """The distinct (order, window) pairs of per-sample filters (N,) each, (P, 2), sorted by
+    order then window (``np.unique(np.stack([orders, windows], axis=1), axis=0)``, by one
+    integer key per sample)."""
+    orders, windows = np.asarray(orders), np.asarray(windows)
+    if len(orders) == 0:
+        return np.empty((0, 2), dtype=np.result_type(orders, windows))
+    base = int(windows.max()) + 1
+    keys = np.unique(orders * base + windows)
+    return np.stack([keys // base, keys % base], axis=1)
 
 
 def savgol_adaptive(y: np.ndarray, filters, step: float) -> list[np.ndarray]:
     """``savgol_derivatives`` with each sample's own filters (``motion_filters``)."""
     out = [np.empty_like(y, dtype=float) for _ in range(3)]
     for derivatives, (orders, windows) in (((0, 1), filters[0]), ((2,), filters[1])):
-        pairs = np.unique(np.stack([orders, windows], axis=1), axis=0)
+        pairs = filter_pairs(orders, windows)
         for p, w in pairs:
             rows = (orders == p) & (windows == w)
             for k in derivatives:

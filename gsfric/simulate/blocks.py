@@ -76,10 +76,12 @@ def read_blocks(path: Path, rows: int, log_format=None) -> Iterator[Block]:
         carried = {k: v for k, v in columns.items() if k in FORCES or k.startswith("keep:")} \
             if reader.forces or reader.keep else {}
         t = columns["t"]
-        _check_increasing(path, t, last_t, start)
+        if len(t) == 0:                    # only dropout rows
+            continue
+        _check_increasing(path, t, last_t, start, reader.file_row)
         position = np.stack([columns[n] for n in ("x", "y", "z")], axis=1)
         q, euler = _quaternions(path, np.stack([columns[n] for n in orientation], axis=1),
-                                orientation, start)
+                                orientation, start, reader.file_row)
         yield Block(start, t, position, q, euler, columns, carried)
         start += len(t)
         last_t = t[-1]
@@ -95,9 +97,11 @@ def _check_header(path: Path, reader: ColumnReader, names: list[str]) -> tuple[s
     return reader.check(names)
 
 
-def _check_increasing(path: Path, t: np.ndarray, last_t: float | None, start: int) -> None:
+def _check_increasing(path: Path, t: np.ndarray, last_t: float | None, start: int,
+                      file_row=int) -> None:
     """Raise ``InputError`` naming the first row of ``t`` (first row ``start``, 0-based; the
-    previous block's last time ``last_t``) whose time does not increase."""
+    previous block's last time ``last_t``) whose time does not increase; ``file_row`` maps an
+    index of the rows read to the file's 0-based data row (``ColumnReader.file_row``)."""
     with np.errstate(over="ignore", invalid="ignore"):
         steps = np.diff(t if last_t is None else np.concatenate([[last_t], t]))
     bad = np.flatnonzero(steps <= 0)
@@ -105,16 +109,16 @@ def _check_increasing(path: Path, t: np.ndarray, last_t: float | None, start: in
         return
     local = int(bad[0]) + (1 if last_t is None else 0)   # index in t of the bad row
     previous = t[local - 1] if local > 0 else last_t
-    row = start + local + 1
+    row, before = file_row(start + local) + 1, file_row(start + local - 1) + 1
     if steps[bad[0]] == 0:
         raise InputError(f"{path}: row {row}: duplicate time t = {float(t[local])!r} "
-                         f"(same as row {row - 1})")
+                         f"(same as row {before})")
     raise InputError(f"{path}: row {row}: t = {float(t[local])!r} is less than "
-                     f"t = {float(previous)!r} in row {row - 1}; t must increase")
+                     f"t = {float(previous)!r} in row {before}; t must increase")
 
 
-def _quaternions(path: Path, angles: np.ndarray, orientation: tuple[str, ...], start: int
-                 ) -> tuple[np.ndarray, np.ndarray | None]:
+def _quaternions(path: Path, angles: np.ndarray, orientation: tuple[str, ...], start: int,
+                 file_row=int) -> tuple[np.ndarray, np.ndarray | None]:
     """Unit quaternions (n, 4) of the orientation columns (n, 3 or 4), and the ZXZ angles
     themselves when they are given (else None)."""
     if orientation != QUATERNION:
@@ -122,7 +126,8 @@ def _quaternions(path: Path, angles: np.ndarray, orientation: tuple[str, ...], s
     norms = np.linalg.norm(angles, axis=1)
     zero = np.flatnonzero(norms < 1e-12)
     if len(zero):
-        raise InputError(f"{path}: row {start + int(zero[0]) + 1}: quaternion of zero length")
+        raise InputError(f"{path}: row {file_row(start + int(zero[0])) + 1}: quaternion of "
+                         "zero length")
     return angles / norms[:, None], None
 
 

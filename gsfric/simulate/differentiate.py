@@ -26,8 +26,9 @@ from typing import Any
 
 import numpy as np
 
+from gsfric._threads import in_parallel
 from gsfric.errors import InputError
-from gsfric.io.logs import EULER, QUATERNION
+from gsfric.io.logs import EULER, QUATERNION, RATES
 from gsfric.io.readers import motion_from_columns
 from gsfric.signal.rotations import angular_rates, continuous_quaternions, rotation_from_quaternion
 from gsfric.signal.savgol import (
@@ -115,6 +116,10 @@ def iter_motions(path: str | os.PathLike[str], *, chunk: int = DEFAULT_CHUNK,
         windows = "whole" if is_uniform(motion.t) else None
         yield MotionChunk(0, motion, windows, carry.take(len(motion)))
         return
+    if any(group[0] in first[0].columns for group in RATES.values()):
+        raise InputError(f"{path}: the log's own rates (velocity or acceleration columns) "
+                         f"are read with the file whole: give a --chunk above its {count}+ "
+                         "rows, or leave the rate columns out of the column map")
     watch = EulerWatch(path)
     for block in first:
         watch.add(block)
@@ -271,11 +276,13 @@ def _windows(path: Path, position: np.ndarray, q: np.ndarray, chunk: int, window
     check_polyorder(polyorder, chunk, "steps in a chunk")
     if window is None:
         with np.errstate(all="ignore"):
-            return gcv_window(position, polyorder), gcv_window(q, polyorder)
+            windows = in_parallel(lambda: gcv_window(position, polyorder),
+                                  lambda: gcv_window(q, polyorder))
+        return windows[0], windows[1]
     try:
         check_window(window, polyorder, chunk)
     except InputError as error:
-        raise InputError(f"{path}: {error}") from None
+        raise type(error)(f"{path}: {error}") from None
     return int(window), int(window)
 
 

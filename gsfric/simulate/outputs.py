@@ -1,7 +1,7 @@
 """The output columns of ``gsfric simulate``: the groups chosen, and each chunk's columns built from its evaluation.
 
 The columns are those of the chosen groups (``DEFAULT_COLUMN_GROUPS`` unless told; the formats
-are described in docs/formats.md), ``t`` and ``flag`` always; a measured-data file's forces and
+are described in docs/reference/formats.md), ``t`` and ``flag`` always; a measured-data file's forces and
 residuals and the kept input columns are appended (``with_carried``).
 """
 

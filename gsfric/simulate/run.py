@@ -3,7 +3,7 @@
 ``simulate_file`` reads a trajectory file (CSV or Parquet) in chunks of ``chunk`` rows,
 differentiates each chunk (``gsfric.simulate.differentiate``), evaluates it, and appends its
 rows to the output, so that memory stays bounded by the chunk size however long the file is
-(10 million steps in well under 2 GB, see docs/robustness.md). It is what ``gsfric simulate``
+(10 million steps in well under 2 GB, see docs/explanation/robustness.md). It is what ``gsfric simulate``
 runs.
 
 The sensor's ``time_offset`` (``gsfric.platform.catalog``) interpolates F between steps that may
@@ -35,14 +35,16 @@ from typing import Any
 import numpy as np
 from tqdm import tqdm
 
+from gsfric._checks import as_count, as_flag, as_path
 from gsfric.errors import GsfricWarning, InputError, StepFlagError
 from gsfric.evaluation.columns import plan as column_plan
-from gsfric.evaluation.evaluator import Evaluator, evaluate_outputs
+from gsfric.evaluation.evaluator import MAX_THREADS, Evaluator, evaluate_outputs
 from gsfric.evaluation.flags import FLAG_NAMES, FLAG_NONFINITE
 from gsfric.io.files import atomic_write, check_outputs, is_stream
 from gsfric.io.tables import check_file, count_rows, table_kind
 from gsfric.models import platform_from
 from gsfric.platform.catalog import sensor_parameters
+from gsfric.platform.usable import check_flagged, check_forces, check_poses
 from gsfric.signal.savgol import DEFAULT_POLYORDER
 from gsfric.simulate.delay import SensorDelay
 from gsfric.simulate.differentiate import DEFAULT_CHUNK, MotionChunk, iter_motions
@@ -78,6 +80,8 @@ class Summary:
         Flagged steps per kind (``FLAG_NAMES``).
     flagged_steps : ndarray
         0-based indices of flagged steps (the first ``MAX_REPORTED``).
+    differentiation : str
+        How velocities and accelerations were obtained (``describe_differentiation``).
     """
 
     out: Path
@@ -87,12 +91,25 @@ class Summary:
     flagged: int = 0
     flag_counts: dict[str, int] = field(default_factory=dict)
     flagged_steps: np.ndarray = field(default_factory=lambda: np.zeros(0, dtype=np.int64))
+    differentiation: str = ""
 
     def flag_message(self, trajectory: Path) -> str:
         kinds = "; ".join(f"{name}: {count}" for name, count in self.flag_counts.items()
                           if count)
         return (f"{trajectory}: {self.flagged} of {self.steps} steps flagged ({kinds}): "
                 f"{_steps_text(self.flagged_steps, self.flagged)}")
+
+
+def describe_differentiation(part: MotionChunk) -> str:
+    """One line on how a chunk's velocities and accelerations were obtained: the motion's
+    own ``Motion.differentiation`` for a file read whole, the fixed windows of a streamed
+    one."""
+    how = part.motion.differentiation()
+    if how is not None:
+        return how.describe()
+    position, orientation = part.windows
+    return (f"savgol (windows {position} for the position, {orientation} for the "
+            "orientation, the same over every chunk)")
 
 
 def _steps_text(indices: np.ndarray, total: int, limit: int = 10) -> str:
@@ -154,12 +171,20 @@ def simulate_file(trajectory: str | os.PathLike[str], out: str | os.PathLike[str
 
     Raises
     ------
+    InputTypeError
+        A path that is not a str or os.PathLike, ``n_threads`` or ``chunk`` not an integer,
+        ``strict`` not a bool.
     InputError
-        Bad trajectory (naming the row and column), bad output path.
+        Bad trajectory (naming the row and column), bad output path (an input, a directory),
+        ``n_threads`` outside 1..``MAX_THREADS``.
+    OutputError
+        The output could not be written (a full disk); an earlier file is unchanged.
     StepFlagError
         ``strict`` and a flagged step.
     """
-    trajectory, out = Path(trajectory), Path(out)
+    trajectory, out = as_path(trajectory, "trajectory"), as_path(out, "out")
+    n_threads = as_count(n_threads, "n_threads", minimum=1, maximum=MAX_THREADS)
+    strict = as_flag(strict, "strict")
     kind = _check_paths(trajectory, out, platform)
     platform = platform_from(platform)
     plan = column_plan(parse_columns(None) if columns is None else
@@ -184,13 +209,13 @@ def _check_paths(trajectory: Path, out: Path, platform) -> str:
     """The output's kind ("csv" or "parquet"; CSV for a device or FIFO without an extension,
     such as /dev/null or /dev/stdout), after checking the paths: ``out`` must not be the
     trajectory, nor the platform's file when ``platform`` is one."""
-    kind = "csv" if not out.suffix and is_stream(out) else table_kind(out)
-    check_file(trajectory)
+    check_outputs([out], {"trajectory": trajectory, "platform": platform})
     if out.exists() and out.is_dir():
         raise InputError(f"{out}: is a directory; give a file name")
+    kind = "csv" if not out.suffix and is_stream(out) else table_kind(out)
+    check_file(trajectory)
     if not out.parent.is_dir():
         raise InputError(f"{out}: directory {str(out.parent)!r} does not exist")
-    check_outputs([out], {"trajectory": trajectory, "platform": platform})
     return kind
 
 
@@ -285,6 +310,7 @@ class _Run:
             try:
                 for k, part in enumerate(motions):
                     self.summary.windows = part.windows
+                    self._check_usable(part)
                     if self.evaluator is None:
                         self.evaluator = Evaluator(self.platform, mode=self.mode,
                                                    n_threads=self.n_threads)
@@ -295,6 +321,7 @@ class _Run:
                                                 writes.by_set[k % 2])
                     del part
                 self._drain(pending, writes)
+                check_flagged(self.flags.flagged, self.summary.steps, str(self.trajectory))
             except BaseException:
                 for future in [pending, *writes.futures]:
                     if future is not None:
@@ -303,6 +330,20 @@ class _Run:
                 writer.abandon()
                 raise
             writer.close()
+
+    def _check_usable(self, part: MotionChunk) -> None:
+        """The chunk's poses (and measured forces) checked against the platform before any
+        physics (``gsfric.platform.usable``); the differentiation noted in the summary."""
+        motion = part.motion
+        recorded = motion.recorded_poses()
+        position, rotation = recorded if recorded is not None else (motion.position,
+                                                                    motion.rotation)
+        check_poses(self.platform, position, rotation, motion.t, str(self.trajectory))
+        if "F1" in part.carried:
+            check_forces(self.platform, np.stack([part.carried[f"F{i}"] for i in range(1, 7)],
+                                                 axis=1), str(self.trajectory))
+        if not self.summary.differentiation:
+            self.summary.differentiation = describe_differentiation(part)
 
     def _drain(self, pending: Future | None, writes: _Writes) -> None:
         """Write the last chunk evaluated and what waits for the sensor delay; wait for all."""

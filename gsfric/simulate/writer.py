@@ -18,7 +18,7 @@ from gsfric._optional import optional
 from gsfric.evaluation.columns import arrow_table
 
 PARQUET_COMPRESSION = "lz4"
-"""Compression of ``simulate``'s Parquet output (docs/formats.md gives the measured choices:
+"""Compression of ``simulate``'s Parquet output (docs/reference/formats.md gives the measured choices:
 the outputs' float64 mantissas are close to random bytes, so general-purpose compression
 saves little unless the bytes are split by significance first, ``PARQUET_SPLIT_FLOATS``)."""
 

@@ -25,7 +25,7 @@ from gsfric.sweep.variants import make_variants, parse_vary
 from gsfric.sweep.workspace import Workspace, check_reachable
 
 CHUNK_STEPS = 1_000_000
-"""Default evaluated steps per task: one to a few seconds of one core (docs/sizing.md)."""
+"""Default evaluated steps per task: one to a few seconds of one core (docs/howto/sizing.md)."""
 
 _POSE_BYTES = 48
 _VARIANT_BYTES = 17_000
@@ -164,12 +164,13 @@ def _checked_inputs(trajectories, workspace, chunk_steps
 
 def plan(trajectories=None, workspace: Workspace | str | os.PathLike | None = None,
          platform: Platform | str | os.PathLike | None = None, vary=None, tolerances=None,
-         variants: int = 16, seed: int = 0, chunk_steps: int = CHUNK_STEPS) -> Plan:
+         variants: int = 16, seed: int = 0, chunk_steps: int = CHUNK_STEPS,
+         grid: int | None = None) -> Plan:
     """Cut a sweep into tasks (see ``gsfric.sweep.sweep`` for the parameters); checks every
     input."""
     platform = platform_from(platform)
     files, workspace, source = _checked_inputs(trajectories, workspace, chunk_steps)
-    platforms, table = make_variants(platform, vary, tolerances, variants, seed)
+    platforms, table = make_variants(platform, vary, tolerances, variants, seed, grid)
     tasks: list[Task] = []
     hasher = hashlib.sha256()
     _file_tasks(files, platforms, chunk_steps, tasks, hasher)
@@ -184,6 +185,7 @@ def plan(trajectories=None, workspace: Workspace | str | os.PathLike | None = No
               "platform": platform.to_dict(), "vary": {k: list(v) for k, v in
                                                       parse_vary(vary, tolerances)[0].items()},
               "tolerances": dict(tolerances or {}), "variants": len(platforms) - 1,
-              "seed": seed, "chunk_steps": int(chunk_steps)}
+              "seed": seed, "chunk_steps": int(chunk_steps),
+              **({"grid": int(grid)} if grid is not None else {})}
     hasher.update(json.dumps(inputs, sort_keys=True, default=str).encode())
     return Plan(tasks, hasher.hexdigest()[:16], inputs, table, platform, n_poses)

@@ -122,7 +122,8 @@ class SweepResult:
     info : dict
         ``sweep.json``: ``fingerprint``, ``tasks``, ``steps``, ``cases``, ``flagged`` (steps
         left out), ``computed_tasks`` (this run's), ``scheduler``, ``seconds``, ``limits``,
-        ``exceeding_cases``, ``inputs``.
+        ``exceeding_cases``, ``limits_check`` (what the check of the limits found, in a
+        sentence), ``variants_drawn`` (how the variants were chosen), ``inputs``.
     """
 
     out: Path
@@ -132,9 +133,19 @@ class SweepResult:
     exceeded: pd.DataFrame
     info: dict
 
-    def most_loaded(self, quantity: str = "R_C") -> pd.Series:
-        """The summary row of ``quantity`` with the largest value over the legs."""
+    def __repr__(self) -> str:
+        info = self.info
+        return (f"<SweepResult {self.out}: {info.get('cases')} cases, {info.get('steps')} "
+                f"steps, {info.get('flagged')} flagged; limits: "
+                f"{info.get('limits_check', info.get('exceeding_cases'))}; the extremes in "
+                ".summary, each case's in .envelopes>")
+
+    def most_loaded(self, quantity: str = "R_C") -> pd.Series | None:
+        """The summary row of ``quantity`` with the largest value over the legs; None when
+        no step of any case was evaluated soundly (every step flagged)."""
         sub = self.summary[self.summary.quantity == quantity]
+        if not sub.value.notna().any():
+            return None
         return sub.loc[sub.value.idxmax()]
 
 

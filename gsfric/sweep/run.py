@@ -23,15 +23,17 @@ import os
 import shutil
 import sys
 import time
+import warnings
 from collections.abc import Callable
 from pathlib import Path
 
 import pandas as pd
 from tqdm import tqdm
 
+from gsfric._checks import as_path
 from gsfric._optional import optional
 from gsfric.compiled import native
-from gsfric.errors import InputError
+from gsfric.errors import GsfricWarning, InputError
 from gsfric.io.files import atomic_write, check_outputs
 from gsfric.platform.description import Platform
 from gsfric.sweep.plan import CHUNK_STEPS, Plan, plan
@@ -43,7 +45,7 @@ from gsfric.sweep.workspace import Workspace
 SERIAL_BELOW = 2_000_000
 """``scheduler="auto"`` runs sweeps of fewer steps in this process: below two tasks a cluster
 has nothing to share out, and starting one (0.5-5 s with the workers' imports and first task)
-costs about what a second core saves on a million steps (docs/sizing.md)."""
+costs about what a second core saves on a million steps (docs/howto/sizing.md)."""
 
 MERGE_EVERY = 64
 """Task envelopes held before they are folded into the running merge (bounds client memory)."""
@@ -58,7 +60,7 @@ tick (a check that a loop is not blocked) once a second instead of every 20 ms, 
 monitors (the nannies', which run in this process, and the workers') once a second instead of
 10 times, the system monitor every 2 s instead of 0.5 s. Measured on an idle cluster of one
 worker, Dask's defaults cost the worker 2.0 % of a core and this process (the scheduler and the
-nannies) 3.2 %; these settings, 0.3 % and 0.7 % (docs/sizing.md)."""
+nannies) 3.2 %; these settings, 0.3 % and 0.7 % (docs/howto/sizing.md)."""
 
 
 def local_cluster(workers: int):
@@ -68,7 +70,7 @@ def local_cluster(workers: int):
     distributed = optional("distributed")
     with dask.config.set(LOCAL_CLUSTER_CONFIG):
         return distributed.LocalCluster(n_workers=workers, threads_per_worker=1,
-                                        processes=True, dashboard_address=None,
+                                        processes=True, dashboard_address=":0",
                                         silence_logs=logging.ERROR)
 
 
@@ -213,7 +215,31 @@ def _info(p: Plan, envelopes: pd.DataFrame, exceeded: pd.DataFrame, computed: in
             "scheduler": str(scheduler) if isinstance(scheduler, str) else "client",
             "seconds": round(seconds, 3), "limits": {k: v for k, v in limits.items()},
             "exceeding_cases": int(exceeded.groupby(["motion", "variant"]).ngroups)
-            if len(exceeded) else 0, "inputs": p.inputs}
+            if len(exceeded) else 0,
+            "limits_check": limits_check(limits, exceeded),
+            "variants_drawn": variants_drawn(p.inputs),
+            "inputs": p.inputs}
+
+
+def limits_check(limits, exceeded: pd.DataFrame) -> str:
+    """What the check of the ``[limits]`` found, in a sentence (sweep.json's ``limits_check``)."""
+    if not limits:
+        return "no limits given: nothing checked"
+    n = int(exceeded.groupby(["motion", "variant"]).ngroups) if len(exceeded) else 0
+    return (f"{n} case(s) exceed the limits ({', '.join(limits)})" if n
+            else f"every case within the limits ({', '.join(limits)})")
+
+
+def variants_drawn(inputs: dict) -> str:
+    """How the variants were chosen (sweep.json's ``variants_drawn``)."""
+    n = inputs["variants"]
+    if not n:
+        return "none: the nominal platform only"
+    names = ", ".join([*inputs["vary"], *inputs["tolerances"]])
+    if "grid" in inputs:
+        return f"{n} on an even grid of {inputs['grid']} values per parameter over {names}"
+    return (f"{n} drawn at random (seed {inputs['seed']}: Latin hypercube over the ranges, "
+            f"normal errors for the tolerances) over {names}")
 
 
 def _write(out: Path, progress: _Progress, computed: int, scheduler, seconds: float,
@@ -232,7 +258,8 @@ def _write(out: Path, progress: _Progress, computed: int, scheduler, seconds: fl
         exceeded.to_csv(partial / "limits.csv", index=False)
     info = _info(p, envelopes, exceeded, computed, scheduler, seconds)
     if plots:
-        plot(envelopes, summary, partial, p.platform.limits, p.inputs.get("workspace"))
+        plot(envelopes, summary, partial, p.platform.limits, p.inputs.get("workspace"),
+             variants_table)
     shutil.rmtree(partial / "chunks")
     (partial / "plan.json").unlink()
     (partial / "sweep.json").write_text(json.dumps(info, indent=1, default=str))
@@ -270,7 +297,8 @@ def sweep(out: str | os.PathLike, trajectories=None,
           variants: int = 16, seed: int = 0, scheduler=None, workers: int | None = None,
           chunk_steps: int = CHUNK_STEPS,
           progress: bool | None = None, plots: bool = True,
-          on_chunk: Callable[[int, int], None] | None = None) -> SweepResult:
+          on_chunk: Callable[[int, int], None] | None = None,
+          grid: int | None = None) -> SweepResult:
     """Load envelopes per joint over motions, a workspace and platform variants.
 
     Parameters
@@ -281,7 +309,7 @@ def sweep(out: str | os.PathLike, trajectories=None,
     trajectories : str, path or list of them
         Glob pattern(s) of trajectory files (CSV or Parquet); each file is one motion.
     workspace : Workspace or path of its TOML
-        Poses and velocity/acceleration bounds (docs/sizing.md).
+        Poses and velocity/acceleration bounds (docs/howto/sizing.md).
     platform : Platform or path of its TOML
         The nominal platform (default: ``gsfric.models.platform_from(None)``, the reference
         platform); its ``[limits]`` are checked.
@@ -290,7 +318,8 @@ def sweep(out: str | os.PathLike, trajectories=None,
     tolerances : dict name -> standard deviation
         Monte-Carlo tolerances (``SCALAR_PARAMETERS`` and ``JOINT_TOLERANCES``).
     variants : int
-        Variants drawn besides the nominal one when ``vary`` or ``tolerances`` is given.
+        Variants drawn at random (Latin hypercube over ``vary``, normal ``tolerances``)
+        besides the nominal one when ``vary`` or ``tolerances`` is given.
     seed : int
         Seed of the variants (the workspace has its own).
     scheduler : {"auto", "serial", "local"}, address "tcp://host:port", or a Client
@@ -307,20 +336,55 @@ def sweep(out: str | os.PathLike, trajectories=None,
     plots : bool
     on_chunk : callable (done, total), optional
         Called after each finished task is stored.
+    grid : int, optional
+        Instead of random draws: this many evenly spaced values of each ``vary`` range, ends
+        included, every combination (``grid ** len(vary)`` variants; ``variants`` is then
+        not used; not with ``tolerances``).
 
     Returns
     -------
     SweepResult
+
+    Raises
+    ------
+    InputTypeError
+        ``out`` not a path, ``vary`` or ``tolerances`` not a dict.
+    InputError
+        Bad files or settings, in one line: an unknown parameter, a range outside the
+        parameter's valid range (``gsfric.sweep.variants.VALID_RANGES``), an output that is an
+        input.
+    OutputError
+        An output could not be written (a full disk): the ``.partial`` folder is kept and the
+        same call resumes it.
     """
-    out = Path(out)
-    p = plan(trajectories, workspace, platform, vary, tolerances, variants, seed, chunk_steps)
+    out = as_path(out, "out")
+    p = plan(trajectories, workspace, platform, vary, tolerances, variants, seed, chunk_steps,
+             grid)
     partial = _partial_folder(out, p, workspace, platform)
     if _existing(out, p.fingerprint):
         return load(out)
     running = _Progress(partial, p, on_chunk)
     todo = running.resume()
-    chosen = _resolve_scheduler(scheduler, sum(t.steps for t in todo)) if todo else "serial"
-    if progress is None:
-        progress = sys.stderr.isatty()
-    seconds = _run_tasks(todo, chosen, workers, running, progress)
-    return _write(out, running, len(todo), chosen, seconds, plots)
+    try:
+        chosen = _resolve_scheduler(scheduler, sum(t.steps for t in todo)) if todo else "serial"
+        if progress is None:
+            progress = sys.stderr.isatty()
+        seconds = _run_tasks(todo, chosen, workers, running, progress)
+        return _write(out, running, len(todo), chosen, seconds, plots)
+    except BaseException as exc:
+        _keep_or_remove(running, exc)
+        raise
+
+
+def _keep_or_remove(running: _Progress, exc: BaseException) -> None:
+    """After a failed or interrupted sweep: keep its partial folder when it holds finished
+    tasks that the same command can resume (saying so in a ``GsfricWarning``), else remove it
+    (nothing done, or bad input: fixing a file changes the fingerprint, so nothing could be
+    resumed)."""
+    partial, done, total = running.partial, len(running.done), len(running.plan.tasks)
+    if done and not isinstance(exc, InputError):
+        warnings.warn(f"{partial}: the unfinished sweep is kept ({done} of {total} tasks "
+                      "done); run the same command again to resume it, or remove the folder",
+                      GsfricWarning, stacklevel=3)
+        return
+    shutil.rmtree(partial, ignore_errors=True)

@@ -1,7 +1,7 @@
 """The sizing workspace: pose ranges with velocity and acceleration bounds, sampled into poses
 and dynamic states, and the check that every pose is reachable.
 
-A workspace is read from TOML (layout in docs/sizing.md); its poses are a grid or a Latin
+A workspace is read from TOML (layout in docs/howto/sizing.md); its poses are a grid or a Latin
 hypercube, and each pose has ``states`` dynamic states laid out as the generated functions'
 state input x (``gsfric.compiled.state.state_layout``, from the manifest).
 """
@@ -14,12 +14,12 @@ from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
-import tomllib
 from scipy.stats import qmc
 
 from gsfric._checks import as_float, short, suggest
 from gsfric.compiled.state import state_layout
 from gsfric.errors import InputError
+from gsfric.io.files import read_toml
 from gsfric.platform.description import Platform
 from gsfric.signal.rotations import rotation_from_rpy
 
@@ -129,7 +129,7 @@ class Workspace:
 
     @classmethod
     def from_dict(cls, data: Mapping, source: str = "workspace") -> Workspace:
-        """Build from the TOML layout (docs/sizing.md); ``InputError`` naming the key."""
+        """Build from the TOML layout (docs/howto/sizing.md); ``InputError`` naming the key."""
         _check_keys(data, _WORKSPACE_KEYS, "", "key", source)
         sampling = data.get("sampling", "lhs")
         if sampling not in ("grid", "lhs"):
@@ -142,16 +142,9 @@ class Workspace:
 
     @classmethod
     def from_toml(cls, path: str | os.PathLike) -> Workspace:
-        """Read a workspace TOML file (layout in docs/sizing.md)."""
+        """Read a workspace TOML file (layout in docs/howto/sizing.md)."""
         path = Path(path)
-        try:
-            data = tomllib.loads(path.read_text(encoding="utf-8"))
-        except FileNotFoundError:
-            raise InputError(f"{path}: file not found") from None
-        except (OSError, UnicodeDecodeError) as error:
-            raise InputError(f"{path}: cannot read ({error})") from None
-        except tomllib.TOMLDecodeError as error:
-            raise InputError(f"{path}: invalid TOML: {error}") from None
+        data = read_toml(path)
         return cls.from_dict(data, source=str(path))
 
     def to_dict(self) -> dict:

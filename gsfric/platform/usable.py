@@ -1,0 +1,151 @@
+"""Whether a record's poses and forces can be this platform's at all: the one check, before any
+physics, that ``simulate`` and ``discover`` run on what they read.
+
+Data that are mostly unusable for the platform are an ``InputError`` that says how far off they
+are and which option fixes it, never a result: poses mostly outside the stroke (a controller's
+frame with another origin, another rig, mm given as m), speeds no hexapod of this size reaches,
+and forces whose static load is a thousand times the platform's weight (N declared as kN).
+Problems of the force channels themselves (constant, saturated, time gaps) are discovery's
+(``gsfric.discovery.rest.data_problems``).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from gsfric.errors import InputError
+from gsfric.platform.description import Platform
+
+MOSTLY = 0.5
+"""Fraction of the steps outside the stroke above which the record is unusable: the model
+flags those steps and every statistic of the rest would stand on fewer than half."""
+
+UNIT_RATIO = 30.0
+"""Factor between the static load (mean over the steps of the summed magnitudes of F1..F6) and
+the weight the legs carry beyond which the forces are in another unit: inclined legs and
+accelerations put the static load at 1 to 5 times the weight; a wrong unit (N and kN) puts it
+1000 times off."""
+
+SPEED_STROKES = 50.0
+"""Strokes per second: a median speed of the platform above this many times the legs' stroke
+(d_max - d_min) per second is implausible for the platform (no hexapod crosses its stroke in
+20 ms): positions in mm given as m, or times in ms given as s. The median, because a wrong unit
+scales every step while a few glitches (steps flagged one by one) do not move it."""
+
+FIXES = ("a pose offset and axes in the log format ([offset], axes; see docs/howto/read-a-log.md), "
+         "`gsfric platform --template` with the rig's sizes, or --platform with the rig's "
+         "platform file")
+
+
+def home_height(platform: Platform) -> float | None:
+    """Height, m, of the platform frame's origin above the base frame's at which the legs are
+    at mid-stroke with the platform level (None without a stroke)."""
+    g = platform.geometry
+    if g.stroke is None:
+        return None
+    gap = np.asarray(g.platform_joints, float) - np.asarray(g.base_joints, float)
+    mid = 0.5 * (g.stroke[0] + g.stroke[1])
+    across = np.hypot(gap[:, 0], gap[:, 1])
+    if np.any(across >= mid):
+        return None
+    return float(np.mean(np.sqrt(mid**2 - across**2) - gap[:, 2]))
+
+
+def check_poses(platform: Platform, position: np.ndarray, rotation: np.ndarray,
+                t: np.ndarray | None = None, where: str = "") -> None:
+    """Raise ``InputError`` when most poses are outside the platform's stroke, or the platform
+    moves implausibly fast for its size.
+
+    Parameters
+    ----------
+    platform : Platform
+    position : ndarray, shape (N, 3)
+        Platform frame origin in the base frame, m.
+    rotation : ndarray, shape (N, 3, 3)
+    t : ndarray, shape (N,), optional
+        Times, s (for the speed check).
+    where : str
+        What the message starts with (a file name).
+    """
+    prefix = f"{where}: " if where else ""
+    stroke = platform.geometry.stroke
+    position = np.asarray(position, float)
+    if stroke is not None and len(position):
+        lengths = platform.leg_lengths(position, np.asarray(rotation, float))
+        outside = np.any((lengths < stroke[0]) | (lengths > stroke[1]), axis=1)
+        if np.mean(outside) > MOSTLY:
+            raise InputError(prefix + _stroke_message(platform, position, lengths, outside))
+    if stroke is not None and t is not None and len(t) > 2:
+        _check_speed(prefix, np.asarray(t, float), position, stroke[1] - stroke[0])
+
+
+def _stroke_message(platform: Platform, position: np.ndarray, lengths: np.ndarray,
+                    outside: np.ndarray) -> str:
+    lo, hi = platform.geometry.stroke
+    heave = float(np.mean(position[:, 2]))
+    text = (f"{int(outside.sum())} of {len(outside)} steps have a leg outside the stroke: leg "
+            f"lengths {lengths.min():.3g}-{lengths.max():.3g} m vs stroke {lo:.3g}-{hi:.3g} m; "
+            f"heave mean {heave:.3g} m")
+    home = home_height(platform)
+    if home is not None:
+        text += f" vs home height {home:.3g} m"
+        if abs(home - heave) > 0.25 * (hi - lo):
+            text += f" (a z offset of {home - heave:.3g} m?)"
+    reach = float(np.max(np.abs(position)))
+    if home is not None and reach > 300.0 * max(abs(home), hi):
+        text += "; the poses look like mm: declare x=mm,y=mm,z=mm (--units)"
+    return f"{text}; the poses are not this platform's: fix with {FIXES}"
+
+
+def _check_speed(prefix: str, t: np.ndarray, position: np.ndarray, stroke: float) -> None:
+    with np.errstate(all="ignore"):
+        speed = np.linalg.norm(np.diff(position, axis=0), axis=1) / np.diff(t)
+    speed = speed[np.isfinite(speed)]
+    if not speed.size or stroke <= 0:
+        return
+    fast = float(np.median(speed))
+    limit = SPEED_STROKES * stroke
+    if fast > limit:
+        hint = " (positions in mm declared as m? --units x=mm,y=mm,z=mm)" \
+            if fast / 1000.0 <= limit else ""
+        raise InputError(f"{prefix}the platform moves at {fast:.4g} m/s (median over the "
+                         f"steps), implausible for a stroke of {stroke:.3g} m (more than "
+                         f"{limit:.3g} m/s){hint}; check the units of t and x, y, z")
+
+
+def check_forces(platform: Platform, forces: np.ndarray, where: str = "") -> None:
+    """Raise ``InputError`` when measured actuator forces (N, 6), N, are in another unit than
+    N: their static load (the mean over the steps of sum |F_i|) more than ``UNIT_RATIO``
+    times the weight the legs carry, or less than its inverse."""
+    prefix = f"{where}: " if where else ""
+    weight = platform.gravity * (platform.platform.mass + platform.platform.payload_mass)
+    forces = np.asarray(forces, float)
+    if weight <= 0 or forces.ndim != 2 or forces.shape[1:] != (6,) or not len(forces) \
+            or not np.isfinite(forces).all():
+        return
+    load = float(np.mean(np.sum(np.abs(forces), axis=1)))
+    ratio = load / weight
+    if ratio > UNIT_RATIO:
+        advice = ("forces in N declared as kN? declare F1..F6 in N, " if ratio > 300 else "")
+        raise InputError(f"{prefix}forces: the static load (mean of the summed |F1..F6|, "
+                         f"{load:.4g} N) is {ratio:.3g} times the weight the legs carry "
+                         f"({weight:.4g} N): {advice}or give the rig's masses (--platform)")
+    if ratio < 1.0 / UNIT_RATIO:
+        advice = ("forces in kN read as N? declare F1..F6 = kN (--units F1=kN,...), "
+                  if ratio < 1.0 / 300 else "")
+        raise InputError(f"{prefix}forces: the static load (mean of the summed |F1..F6|, "
+                         f"{load:.4g} N) is only {ratio:.3g} times the weight the legs carry "
+                         f"({weight:.4g} N): {advice}or give the rig's masses (--platform)")
+
+
+def check_flagged(flagged: int, steps: int, where: str = "") -> None:
+    """Raise ``InputError`` when more than ``MOSTLY`` of the ``steps`` are flagged by the model
+    (``flagged`` of them, flags of ``gsfric.evaluation``: a leg outside the stroke, a
+    near-singular pose, a non-finite value): no statistic of the rest can stand for the
+    record."""
+    if steps and flagged > MOSTLY * steps:
+        prefix = f"{where}: " if where else ""
+        raise InputError(f"{prefix}{flagged} of {steps} steps are flagged by the model (a "
+                         "leg outside the stroke, a near-singular pose, a non-finite value; "
+                         "see the flag column of `gsfric simulate`): the data are mostly "
+                         f"unusable for this platform; fix with {FIXES}")

@@ -1,0 +1,355 @@
+"""Fault cases of the environment and the command line: compilers (CC), the compiled-library
+cache (GSFRIC_CACHE), threads, usage mistakes and interruptions (Ctrl-C, SIGTERM, SIGHUP
+arriving while the outputs are written)."""
+
+from __future__ import annotations
+
+import functools
+import json
+import os
+import signal
+import subprocess
+import sys
+import tempfile
+import textwrap
+from pathlib import Path
+
+import numpy as np
+import pandas as pd
+from click.testing import CliRunner
+from makers import content, long_trajectory, old_output, platform, trajectory
+from runner import ERROR, OK, WARN, Case
+
+from gsfric.cli import main
+from gsfric.compiled import build
+from gsfric.errors import Interrupted
+
+SIMULATE = ("simulate", "--trajectory", "{data}", "--out", "{tmp}/o.csv", "--no-progress")
+
+
+@functools.cache
+def reference_output(rows: int | None = None) -> pd.DataFrame:
+    """``simulate`` of the base trajectory (or of a long one of ``rows`` rows) by the
+    compiled library in one thread, in this process."""
+    with tempfile.TemporaryDirectory() as folder:
+        data = (trajectory() if rows is None else long_trajectory("t.csv", rows))(Path(folder))
+        out = Path(folder) / "o.csv"
+        result = CliRunner().invoke(main, ["simulate", "--trajectory", str(data), "--out",
+                                           str(out), "--no-progress"])
+        assert result.exit_code == 0, result.output
+        return pd.read_csv(out)
+
+
+def same_as_reference(rtol: float, rows: int | None = None):
+    def check(paths):
+        got = pd.read_csv(paths["tmp"] / "o.csv")
+        want = reference_output(rows)
+        assert list(got.columns) == list(want.columns)
+        np.testing.assert_allclose(got.to_numpy(), want.to_numpy(), rtol=rtol, atol=1e-9)
+    return check
+
+
+# -- compilers and the cache (fresh processes: the library is loaded once per process) ----------
+
+
+@functools.cache
+def real_library() -> Path:
+    return build.build_library()
+
+
+def fake_compiler(base: Path) -> Path:
+    """A 'compiler' that copies the real library to the link's -o target."""
+    script = base / "fakecc"
+    script.write_text(textwrap.dedent(f"""\
+        #!/bin/sh
+        out=""; shared=0
+        while [ $# -gt 0 ]; do
+            case "$1" in -o) out="$2"; shift;; -shared) shared=1;; esac
+            shift
+        done
+        if [ $shared = 1 ]; then cp "{real_library()}" "$out"; else : > "$out"; fi
+    """))
+    script.chmod(0o755)
+    return script
+
+
+def damaged_cache(how: str):
+    """A cache filled by a first run with the fake compiler, then its library damaged."""
+    def make(base: Path) -> Path:
+        cc = fake_compiler(base)
+        cache = base / "cache"
+        data = trajectory("warm.csv")(base)
+        env = dict(os.environ, CC=str(cc), GSFRIC_CACHE=str(cache))
+        done = subprocess.run([sys.executable, "-m", "gsfric.cli", "simulate", "--trajectory",
+                               str(data), "--out", "/dev/null", "--no-progress"], env=env,
+                              capture_output=True, text=True, timeout=600)
+        assert done.returncode == 0, done.stderr
+        (library,) = cache.glob("build-*/libgsfric.so")
+        if how == "truncated":
+            with open(library, "r+b") as handle:     # a crash mid-copy, a bad sector
+                handle.truncate(4096)
+        else:
+            size = library.stat().st_size          # garbage of the recorded size
+            library.write_bytes(b"\x7fELF" + bytes(k * 7 % 256 for k in range(size - 4)))
+        return cache
+    return make
+
+
+def compiler_cases() -> list[Case]:
+    base = {"data": trajectory()}
+    cases = [
+        Case(id="cc-simulate-false", argv=SIMULATE, expect=WARN, process=True,
+             env={"CC": "false", "GSFRIC_CACHE": "{tmp}/cache"}, files=dict(base),
+             message=r"compiling the generated model failed: false exited with status 1.*"
+                     r"falling back to CasADi", check=same_as_reference(1e-9)),
+        Case(id="cc-simulate-missing", argv=SIMULATE, expect=WARN, process=True,
+             env={"CC": "/nonexistent/cc", "GSFRIC_CACHE": "{tmp}/cache"}, files=dict(base),
+             message=r"no C compiler: '/nonexistent/cc' was not found",
+             check=same_as_reference(1e-9)),
+        Case(id="cc-simulate-empty", argv=SIMULATE, expect=ERROR, code=3, process=True,
+             env={"CC": "", "GSFRIC_CACHE": "{tmp}/cache"}, files=dict(base),
+             message=r"^CC is set but empty", absent=("o.csv",)),
+        Case(id="cc-paper-unparsable", argv=("paper", "--out", "{tmp}/o", "--no-plots"),
+             expect=ERROR, code=3, process=True,
+             env={"CC": "'unclosed", "GSFRIC_CACHE": "{tmp}/cache"},
+             message=r"cannot be parsed as a command", absent=("o",)),
+        Case(id="cache-simulate-is-a-file", argv=SIMULATE, expect=ERROR, code=3, process=True,
+             env={"GSFRIC_CACHE": "{cachefile}"},
+             files={**base, "cachefile": content("cachefile", "not a folder")},
+             message=r"cachefile: the compiled-library cache \(GSFRIC_CACHE\) is not a "
+                     r"directory", absent=("o.csv",)),
+    ]
+    for how in ("truncated", "garbage"):
+        cases.append(Case(
+            id=f"cache-simulate-{how}-library", argv=SIMULATE, expect=WARN, process=True,
+            env={"CC": "{tmp}/fakecc", "GSFRIC_CACHE": "{cache}"},
+            files={**base, "cache": damaged_cache(how)},
+            message=r"libgsfric\.so: the cached compiled library is damaged \(its "
+                    + (r"size is 4096 bytes" if how == "truncated" else r"SHA-256 differs"),
+            check=same_as_reference(0),
+            mutable=("cache",)))
+    return cases
+
+
+# -- threads ------------------------------------------------------------------------------------
+
+
+def thread_cases() -> list[Case]:
+    cases = [Case(id=f"threads-simulate-{name}", argv=(*SIMULATE, "--threads", value),
+                  expect=ERROR, code=2, message=r"--threads", files={"data": trajectory()},
+                  absent=("o.csv",))
+             for name, value in (("zero", "0"), ("negative", "-5"), ("text", "abc"),
+                                 ("fraction", "1.5"), ("too-many", "65"), ("empty", ""))]
+    cases += [Case(id=f"threads-simulate-{n}", argv=(*SIMULATE, "--threads", str(n)),
+                   expect=OK, files={"data": long_trajectory()},
+                   check=same_as_reference(0, rows=5000))
+              for n in (2, 3, 64)]
+    return cases
+
+
+# -- usage mistakes -----------------------------------------------------------------------------
+
+USAGE = {
+    "simulate": ("simulate", "--trajectory", "{data}", "--out", "{tmp}/o.csv"),
+    "synth": ("synth", "--out", "{tmp}/o.csv"),
+    "platform": ("platform", "--template", "--out", "{tmp}/o.toml"),
+    "paper": ("paper", "--out", "{tmp}/o"),
+    "sweep": ("sweep", "--trajectories", "{data}", "--out", "{tmp}/o"),
+    "export": ("export", "--out", "{tmp}/o"),
+    "discover": ("discover", "--measured", "{data}", "--out", "{tmp}/o"),
+    "columns": ("columns",),
+    "effects": ("effects",),
+    "derive": ("derive", "--check"),
+    "bench": ("bench",),
+}
+"""A valid command line of each command (the usage cases add one mistake to it)."""
+
+MISSING = {"simulate": ("--trajectory", "{data}"), "discover": ("--measured", "{data}"),
+           "paper": ("--out", "{tmp}/o"), "sweep": ("--out", "{tmp}/o"),
+           "synth": ("--out", "{tmp}/o.csv")}
+"""A required option of each command that has one (left out by a case)."""
+
+BAD_VALUES = [
+    ("simulate-mode", ("simulate", "--trajectory", "{data}", "--out", "{tmp}/o.csv", "--mode",
+                       "fast"), r"--mode"),
+    ("simulate-chunk", ("simulate", "--trajectory", "{data}", "--out", "{tmp}/o.csv",
+                        "--chunk", "0"), r"chunk"),
+    ("simulate-columns", ("simulate", "--trajectory", "{data}", "--out", "{tmp}/o.csv",
+                          "--columns", "nonsense"), r"nonsense"),
+    ("synth-samples", ("synth", "--out", "{tmp}/o.csv", "--samples", "-3"), r"--samples"),
+    ("synth-rate", ("synth", "--out", "{tmp}/o.csv", "--rate", "1e9"), r"--rate"),
+    ("synth-effect", ("synth", "--out", "{tmp}/o.csv", "--effect", "warp_drive"),
+     r"warp_drive"),
+    ("paper-mode", ("paper", "--out", "{tmp}/o", "--mode", "fast"), r"--mode"),
+    ("export-prefix", ("export", "--out", "{tmp}/o", "--prefix", "1 bad"), r"prefix"),
+    ("export-model", ("export", "--out", "{tmp}/o", "--model", "magic"), r"--model"),
+    ("sweep-vary-unknown", ("sweep", "--trajectories", "{data}", "--out", "{tmp}/o",
+                            "--vary", "base_scale=0:1"), r"base_scale: unknown parameter"),
+    ("sweep-vary-degenerate", ("sweep", "--trajectories", "{data}", "--out", "{tmp}/o",
+                               "--vary", "geometry.base_scale=0:0"),
+     r"vary: geometry\.base_scale: 0:0 leaves the valid range 0\.1:10"),
+    ("sweep-vary-absurd", ("sweep", "--trajectories", "{data}", "--out", "{tmp}/o",
+                           "--vary", "gravity=0:1e308"),
+     r"vary: gravity: 0:1e\+308 leaves the valid range 0:100"),
+    ("sweep-vary-mass", ("sweep", "--trajectories", "{data}", "--out", "{tmp}/o",
+                         "--vary", "platform.mass=1:1e30"), r"platform\.mass: .*valid range"),
+    ("sweep-vary-mu", ("sweep", "--trajectories", "{data}", "--out", "{tmp}/o",
+                       "--vary", "friction.prismatic_coulomb=0:50"),
+     r"prismatic_coulomb: .*valid range 0:2"),
+    ("sweep-vary-reversed", ("sweep", "--trajectories", "{data}", "--out", "{tmp}/o",
+                             "--vary", "gravity=9:1"), r"gravity"),
+    ("sweep-vary-nan", ("sweep", "--trajectories", "{data}", "--out", "{tmp}/o",
+                        "--vary", "gravity=nan:1"), r"gravity"),
+    ("sweep-vary-syntax", ("sweep", "--trajectories", "{data}", "--out", "{tmp}/o",
+                           "--vary", "gravity"), r"--vary"),
+    ("sweep-tolerance-negative", ("sweep", "--trajectories", "{data}", "--out", "{tmp}/o",
+                                  "--tolerance", "gravity=-1"), r"gravity"),
+    ("sweep-scheduler", ("sweep", "--trajectories", "{data}", "--out", "{tmp}/o",
+                         "--scheduler", "cloud9"), r"scheduler"),
+    ("sweep-no-match", ("sweep", "--trajectories", "{tmp}/none*.csv", "--out", "{tmp}/o"),
+     r"matches no file"),
+]
+
+
+def usage_cases() -> list[Case]:
+    files = {"data": trajectory()}
+    cases = [Case(id="usage-unknown-command", argv=("simulat",), expect=ERROR, code=2,
+                  message=r"No such command 'simulat'", files=files)]
+    for command, argv in USAGE.items():
+        cases.append(Case(id=f"usage-{command}-unknown-option", argv=(*argv, "--bogus"),
+                          expect=ERROR, code=2, message=r"No such option '--bogus'",
+                          files=files, absent=("o", "o.csv", "o.toml")))
+    for command, option in MISSING.items():
+        argv = list(USAGE[command])
+        k = argv.index(option[0])
+        del argv[k:k + 2]
+        cases.append(Case(id=f"usage-{command}-missing-option", argv=tuple(argv), expect=ERROR,
+                          code=2, message=rf"Missing option '{option[0]}'", files=files))
+    for name, argv, message in BAD_VALUES:
+        cases.append(Case(id=f"usage-{name}", argv=argv, expect=ERROR, code=2,
+                          message=message, files=files, absent=("o", "o.csv")))
+    return cases
+
+
+# -- interruptions while the outputs are written ------------------------------------------------
+
+
+def stop_while_writing(stop: BaseException):
+    """The first fsync of a regular file raises ``stop``: the signal arrives mid-write."""
+    def patch(monkeypatch, paths):
+        def fsync(fd):
+            raise stop
+
+        monkeypatch.setattr(os, "fsync", fsync)
+    return patch
+
+
+STOPS = [("ctrl-c", KeyboardInterrupt(), 130, r"^interrupted; no output was left half-written"),
+         ("sigterm", Interrupted(signal.SIGTERM), 143,
+          r"^stopped by SIGTERM; no output was left half-written"),
+         ("sighup", Interrupted(signal.SIGHUP), 129,
+          r"^stopped by SIGHUP; no output was left half-written")]
+
+WRITERS = {
+    "simulate": (SIMULATE, "o.csv"),
+    "synth": (("synth", "--out", "{tmp}/o.csv", "--samples", "40"), "o.csv"),
+    "template": (("platform", "--template", "--out", "{tmp}/o.toml"), "o.toml"),
+    "paper": (("paper", "--out", "{tmp}/o", "--no-plots"), "o"),
+    "export": (("export", "--out", "{tmp}/o"), "o"),
+}
+
+
+def interrupt_cases() -> list[Case]:
+    cases = []
+    for command, (argv, out) in WRITERS.items():
+        for name, stop, code, message in STOPS:
+            earlier = {} if out == "o" else {"old": old_output(out)}
+            cases.append(Case(id=f"stop-{command}-{name}", argv=argv, expect=ERROR, code=code,
+                              message=message, files={"data": trajectory(), **earlier},
+                              patch=stop_while_writing(stop),
+                              absent=("o",) if out == "o" else ()))
+    return cases + sweep_stop_cases()
+
+
+def _stop_task(after: int):
+    """The sweep's ``after + 1``-th task is interrupted (Ctrl-C), once."""
+    def patch(monkeypatch, paths):
+        import gsfric.sweep.run as sweep_run
+        real, calls = sweep_run.run_task, []
+
+        def run_task(task):
+            calls.append(task)
+            if len(calls) == after + 1:
+                raise KeyboardInterrupt
+            return real(task)
+
+        monkeypatch.setattr(sweep_run, "run_task", run_task)
+    return patch
+
+
+def _partial_kept_and_resumed(paths):
+    """One finished task kept; the same command then resumes (computing only the other)."""
+    partial = paths["tmp"] / "o.partial"
+    assert len(list((partial / "chunks").glob("*.parquet"))) == 1
+    assert not (paths["tmp"] / "o").exists()
+    argv = [a.format(tmp=paths["tmp"]) for a in SWEEP]
+    result = CliRunner().invoke(main, argv)
+    assert result.exit_code == 0, result.output
+    assert json.loads((paths["tmp"] / "o" / "sweep.json").read_text())["computed_tasks"] == 1
+    assert not partial.exists()
+
+
+SWEEP = ("sweep", "--trajectories", "{tmp}/*.csv", "--out", "{tmp}/o", "--no-plots",
+         "--no-progress", "--scheduler", "serial")
+
+
+def sweep_stop_cases() -> list[Case]:
+    files = {"a": trajectory("a.csv"), "b": trajectory("b.csv")}
+    return [
+        Case(id="stop-sweep-first-task", argv=SWEEP, expect=ERROR, code=130,
+             message=r"^interrupted", files=files, patch=_stop_task(0), absent=("o",)),
+        Case(id="stop-sweep-second-task-kept", argv=SWEEP, expect=ERROR, code=130,
+             message=r"^interrupted", files=files, patch=_stop_task(1), kept=("o.partial",),
+             check=_partial_kept_and_resumed, warning=r"o\.partial: the unfinished sweep is kept \(1 of 2 "
+                                         r"tasks done\); run the same command again to resume"),
+    ]
+
+
+def platform_file() -> dict:
+    return {"p": platform()}
+
+
+# -- what a killed run left: removed by the next run ---------------------------------------------
+
+
+def _dead_pid() -> int:
+    proc = subprocess.Popen([sys.executable, "-c", "pass"])
+    proc.wait()
+    return proc.pid
+
+
+def stale_temporary(output: str, folder_like: bool = False):
+    """The 0-byte temporary (or temporary folder) that a SIGKILLed run writing ``output``
+    left beside it."""
+    def make(base: Path) -> Path:
+        path = base / f".{output}.gsfric-{_dead_pid()}-k1ll3d.tmp"
+        if folder_like:
+            path.mkdir()
+            (path / "table1.csv").write_bytes(b"")
+        else:
+            path.write_bytes(b"")
+        return path
+    return make
+
+
+def stale_cases() -> list[Case]:
+    cases = []
+    for command, (argv, out) in WRITERS.items():
+        stale = stale_temporary(out, folder_like=out == "o")
+        cases.append(Case(id=f"stale-{command}-next-run-cleans", argv=argv, expect=OK,
+                          files={"data": trajectory(), "stale": stale}, mutable=("*.gsfric-*",)))
+    cases.append(Case(id="stale-simulate-failing-run-cleans", expect=ERROR, code=2,
+                      argv=("simulate", "--trajectory", "{tmp}/none.csv", "--out",
+                            "{tmp}/o.csv"), message=r"none\.csv: file not found",
+                      files={"stale": stale_temporary("o.csv")}, mutable=("*.gsfric-*",)))
+    return cases

@@ -1,0 +1,238 @@
+"""Fault cases of the input files: trajectory and measured-data tables (simulate, sweep,
+discover) and platform files (every command that reads one)."""
+
+from __future__ import annotations
+
+import numpy as np
+import pandas as pd
+from makers import (
+    base_csv,
+    base_frame,
+    content,
+    csv_edit,
+    folder,
+    frame_edit,
+    missing,
+    platform,
+    set_key,
+    symlink,
+    trajectory,
+)
+from runner import ERROR, OK, WARN, Case
+
+# -- trajectory and measured-data tables --------------------------------------------------------
+
+
+def _cell(row: int, column: str, value: str):
+    """A CSV edit: data row ``row`` (1-based) of ``column`` set to ``value``."""
+    def edit(lines):
+        header = lines[0].split(",")
+        cells = lines[row].split(",")
+        cells[header.index(column)] = value
+        return [*lines[:row], ",".join(cells), *lines[row + 1:]]
+    return edit
+
+
+def _drop(column: str):
+    return lambda f: f.drop(columns=[column])
+
+
+def _rows(n: int):
+    return lambda lines: lines[:n + 1]
+
+
+def _scale(columns, factor: float):
+    def edit(f):
+        f[list(columns)] = f[list(columns)] * factor
+        return f
+    return edit
+
+
+def _euler_degrees(f: pd.DataFrame) -> pd.DataFrame:
+    f = f.drop(columns=["qw", "qx", "qy", "qz"])
+    f["alpha"] = np.degrees(0.1 * np.sin(f["t"]))
+    f["beta"] = np.degrees(0.2 + 0.05 * np.cos(f["t"]))
+    f["gamma"] = np.degrees(-0.1 * np.sin(f["t"]))
+    return f
+
+
+def _ns_time(f: pd.DataFrame) -> pd.DataFrame:
+    f["t"] = (f["t"] * 1e9).round().astype(np.int64)
+    return f
+
+
+def _truncated_parquet(folder_path):
+    path = frame_edit("t.parquet", lambda f: f)(folder_path)
+    data = path.read_bytes()
+    path.write_bytes(data[: len(data) // 2])
+    return path
+
+
+def _swap_rows(a: int, b: int):
+    def edit(lines):
+        lines = list(lines)
+        lines[a], lines[b] = lines[b], lines[a]
+        return lines
+    return edit
+
+
+TABLE_FAULTS = [
+    # (id, maker, expect, code, message)
+    ("missing", missing("t.csv"), ERROR, 2, r"t\.csv'?:? .*(not found|not exist|matches no)"),
+    ("directory", folder("t.csv"), ERROR, 2, r"t\.csv'?:? .*(directory|matches no)"),
+    ("empty", content("t.csv", ""), ERROR, 2, r"t\.csv"),
+    ("header-only", csv_edit("t.csv", _rows(0)), ERROR, 2, r"t\.csv"),
+    ("one-row", csv_edit("t.csv", _rows(1)), ERROR, 2, r"t\.csv"),
+    ("two-rows", csv_edit("t.csv", _rows(2)), ERROR, 2, r"t\.csv"),
+    ("binary", content("t.csv", bytes(range(256)) * 8), ERROR, 2, r"t\.csv"),
+    ("not-utf8", content("t.csv", lambda: base_csv().encode() + b"\xff\xfe,\x80\n"), ERROR, 2,
+     r"t\.csv"),
+    ("no-x", frame_edit("t.csv", _drop("x")), ERROR, 2, r"t\.csv.*'?x'?"),
+    ("no-t", frame_edit("t.csv", _drop("t")), ERROR, 2, r"t\.csv.*'?t'?"),
+    ("nan-cell", csv_edit("t.csv", _cell(5, "x", "nan")), ERROR, 2, r"t\.csv.*row 5"),
+    ("inf-cell", csv_edit("t.csv", _cell(5, "y", "inf")), ERROR, 2, r"t\.csv.*row 5"),
+    ("empty-cell", csv_edit("t.csv", _cell(7, "z", "")), ERROR, 2, r"t\.csv.*row 7"),
+    ("text-cell", csv_edit("t.csv", _cell(9, "x", "abc")), ERROR, 2, r"t\.csv.*row 9"),
+    ("huge-cell", csv_edit("t.csv", _cell(9, "x", "1e999")), ERROR, 2, r"t\.csv.*row 9"),
+    ("t-repeated", csv_edit("t.csv", _cell(6, "t", "0.04")), ERROR, 2, r"t\.csv.*row [56]"),
+    ("t-backwards", csv_edit("t.csv", _swap_rows(10, 11)), ERROR, 2, r"t\.csv.*row 1[01]"),
+    ("zero-quaternion", csv_edit("t.csv", lambda ls: _cell(4, "qz", "0")(_cell(4, "qy", "0")(
+        _cell(4, "qx", "0")(_cell(4, "qw", "0")(ls))))), ERROR, 2, r"t\.csv.*row 4"),
+    ("semicolons", csv_edit("t.csv", lambda ls: [x.replace(",", ";") for x in ls]), ERROR, 2,
+     r"t\.csv"),
+    ("duplicate-column", csv_edit("t.csv", lambda ls: [x + "," + x.split(",")[1]
+                                                       for x in ls[:1]] + [
+        x + "," + x.split(",")[1] for x in ls[1:]]), ERROR, 2, r"t\.csv"),
+    ("dangling-link", symlink("t.csv", "gone.csv"), ERROR, 2, r"t\.csv"),
+    ("parquet-garbage", content("t.parquet", b"PAR1" + bytes(300) + b"PAR1"), ERROR, 2,
+     r"t\.parquet"),
+    ("parquet-truncated", _truncated_parquet, ERROR, 2, r"t\.parquet"),
+    ("unknown-extension", content("t.xyz", base_csv), ERROR, 2, r"t\.xyz"),
+    ("crlf", csv_edit("t.csv", lambda ls: ls, newline="\r\n"), OK, 0, ""),
+    ("trailing-blank-lines", csv_edit("t.csv", lambda ls: ls + ["", ""]), OK, 0, ""),
+    ("parquet", trajectory("t.parquet"), OK, 0, ""),
+    ("extra-column", frame_edit("t.csv", lambda f: f.assign(note=1.0)), WARN, 0,
+     r"t\.csv: ignored columns 'note'"),
+    ("negative-start", frame_edit("t.csv", lambda f: f.assign(t=f["t"] - 10.0)), OK, 0, ""),
+    ("time-in-ns", frame_edit("t.csv", _ns_time), ERROR, 2, r"t\.csv: time column 't'.*looks like ns"),
+    ("euler-in-degrees", frame_edit("t.csv", _euler_degrees), ERROR, 2,
+     r"t\.csv: \d+ of 100 steps have a leg outside the stroke"),
+    ("positions-in-mm", frame_edit("t.csv", _scale("xyz", 1000.0)), ERROR, 2,
+     r"t\.csv: 100 of 100 steps have a leg outside the stroke.*look like mm"),
+]
+"""Faults of a table file: each becomes a case of every command that reads one."""
+
+TABLE_COMMANDS = {
+    "simulate": ("simulate", "--trajectory", "{data}", "--out", "{tmp}/o.csv", "--no-progress"),
+    "sweep": ("sweep", "--trajectories", "{data}", "--out", "{tmp}/sw", "--no-plots",
+              "--no-progress", "--scheduler", "serial"),
+    "discover": ("discover", "--measured", "{data}", "--out", "{tmp}/dd", "--quiet"),
+}
+"""The commands reading a table, with ``{data}`` the faulty file; outputs absent on error."""
+
+SWEEP_KEEPS = {
+    "euler-in-degrees": (WARN, 0, r"degree"),
+    "positions-in-mm": (WARN, 0, r"mm|flagged|no load envelope"),
+}
+"""Faults that ``sweep`` reads with a warning where the other commands stop: a sweep checks its
+motions against the platform's stroke step by step (flagged steps leave the envelope) instead
+of refusing a motion that is mostly outside it."""
+
+TOO_SHORT_FOR_DISCOVER = r"samples.*needs at least"
+"""What ``discover`` says about the 100 rows of a table it could read: too short for its
+block cross-validation (a correct one-line error, before any physics)."""
+
+
+def table_cases() -> list[Case]:
+    cases = []
+    for fault, maker, expect, code, message in TABLE_FAULTS:
+        for command, argv in TABLE_COMMANDS.items():
+            if command == "sweep" and fault in ("unknown-extension",):
+                message_here = r"t\.xyz|no (trajectory|file)"
+            else:
+                message_here = message
+            if command == "sweep" and fault in SWEEP_KEEPS:
+                expect_here, code_here, message_here = SWEEP_KEEPS[fault]
+            elif command == "discover" and expect != ERROR:
+                expect_here, code_here, message_here = ERROR, 2, TOO_SHORT_FOR_DISCOVER
+            else:
+                expect_here, code_here = expect, code
+            out = {"simulate": "o.csv", "sweep": "sw", "discover": "dd"}[command]
+            cases.append(Case(
+                id=f"table-{command}-{fault}", argv=argv, expect=expect_here, code=code_here,
+                message=message_here, files={"data": maker},
+                absent=(out,) if expect_here == ERROR else (),
+                check=None if expect_here == ERROR else _output_exists(out)))
+    return cases
+
+
+def _output_exists(name: str):
+    def check(paths):
+        assert (paths["tmp"] / name).exists()
+    return check
+
+
+# -- platform files -----------------------------------------------------------------------------
+
+PLATFORM_FAULTS = [
+    ("missing", missing("p.toml"), r"p\.toml'?\.?:? .*(not found|not exist|no such file)"),
+    ("directory", folder("p.toml"), r"p\.toml'?:? .*directory"),
+    ("empty", content("p.toml", ""), r"p\.toml: .*geometry"),
+    ("binary", content("p.toml", bytes(range(256))), r"p\.toml"),
+    ("syntax", platform(edit=lambda t: t.replace("gravity = 9.81", "gravity = = 9.81")),
+     r"p\.toml"),
+    ("repeated-key", platform(edit=lambda t: "gravity = 9.81\n" + t), r"p\.toml"),
+    ("unknown-key", platform(edit=lambda t: "gravitee = 9.81\n" + t), r"p\.toml: gravitee"),
+    ("gravity-nan", platform(edit=set_key("gravity", "nan")), r"p\.toml: gravity: .*finite"),
+    ("gravity-inf", platform(edit=set_key("gravity", "inf")), r"p\.toml: gravity: .*finite"),
+    ("gravity-2^70", platform(edit=set_key("gravity", str(2**70))),
+     r"p\.toml: gravity: integer too large"),
+    ("gravity-1e308", platform(edit=set_key("gravity", "1e308")),
+     r"p\.toml: gravity: .*valid range 0 to 100"),
+    ("gravity-negative", platform(edit=set_key("gravity", "-9.81")), r"p\.toml: gravity: .*>= 0"),
+    ("gravity-text", platform(edit=set_key("gravity", '"9.81"')), r"p\.toml: gravity: .*number"),
+    ("mass-negative", platform(edit=set_key("mass", "-10.0")), r"p\.toml: platform\.mass"),
+    ("mass-2^70", platform(edit=set_key("mass", str(2**70))),
+     r"p\.toml: platform\.mass: integer too large"),
+    ("mass-nan", platform(edit=set_key("mass", "nan")), r"p\.toml: platform\.mass: .*finite"),
+    ("payload-inf", platform(edit=set_key("payload_mass", "-inf")),
+     r"p\.toml: platform\.payload_mass"),
+    ("lower-mass-array", platform(edit=set_key("lower_mass", "[1, 2]")),
+     r"p\.toml: legs\.lower_mass"),
+    ("not-utf8", content("p.toml", lambda: b"\xff\xfe" + b"gravity = 9.81\n"), r"p\.toml"),
+]
+"""Faults of a platform file: each becomes a case of every command that reads one; all are
+one-line errors (exit 2) naming the file and the key."""
+
+PLATFORM_COMMANDS = {
+    "simulate": ("simulate", "--trajectory", "{data}", "--platform", "{p}", "--out",
+                 "{tmp}/o.csv", "--no-progress"),
+    "synth": ("synth", "--platform", "{p}", "--out", "{tmp}/o.csv", "--samples", "50"),
+    "paper": ("paper", "--platform", "{p}", "--out", "{tmp}/o", "--no-plots"),
+    "sweep": ("sweep", "--trajectories", "{data}", "--platform", "{p}", "--out", "{tmp}/o",
+              "--no-plots", "--no-progress", "--scheduler", "serial"),
+    "export": ("export", "--platform", "{p}", "--out", "{tmp}/o"),
+    "discover": ("discover", "--measured", "{data}", "--platform", "{p}", "--out", "{tmp}/o",
+                 "--quiet"),
+}
+
+
+def platform_cases() -> list[Case]:
+    cases = []
+    for fault, maker, message in PLATFORM_FAULTS:
+        for command, argv in PLATFORM_COMMANDS.items():
+            cases.append(Case(id=f"platform-{command}-{fault}", argv=argv, expect=ERROR,
+                              code=2, message=message, absent=("o", "o.csv"),
+                              files={"data": trajectory(), "p": maker}))
+    return cases
+
+
+def good_platform_cases() -> list[Case]:
+    """A valid platform file with each command: a correct result."""
+    return [Case(id=f"platform-{command}-valid", argv=argv, expect=OK,
+                 files={"data": trajectory(), "p": platform()})
+            for command, argv in PLATFORM_COMMANDS.items() if command != "discover"]
+
+
+def base_rows() -> int:
+    return len(base_frame())

@@ -1,0 +1,200 @@
+"""A long fuzz run of the file readers and the command line: 10,000 seeded CSV and TOML inputs
+(``make test-slow``).
+
+Each input is a valid trajectory or platform file damaged by a seeded generator (cells,
+rows, header, bytes, truncation; values such as NaN, 2^70, 1e999, text, tables) or random
+bytes. Each must give a valid result or one ``InputError`` of one line naming the file; never
+another exception, a warning other than a one-line ``GsfricWarning``, or a hang (each input
+has ``LIMIT`` seconds). One input in ``CLI_EVERY`` also goes through ``gsfric simulate`` or
+``gsfric export --platform`` in this process: exit 0 or 2, one error line, no traceback, the
+input unchanged and nothing left behind.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import signal
+import warnings
+from pathlib import Path
+
+import numpy as np
+import pytest
+from click.testing import CliRunner
+from makers import base_csv, platform_text
+
+from gsfric.cli import main
+from gsfric.errors import GsfricWarning, InputError
+from gsfric.io.readers import read_trajectory
+from gsfric.platform.description import Platform
+
+INPUTS = 5_000
+"""Inputs of each kind (CSV and TOML): 10,000 in all."""
+LIMIT = 20
+"""Seconds an input may take (a hang fails the run instead of stalling it)."""
+CLI_EVERY = 25
+"""One input in this many also goes through the command line."""
+
+TOKENS = ["", "nan", "NaN", "inf", "-inf", "1e999", "-1e999", "1e308", "2e-308", "5e-324",
+          str(2**70), str(-2**63), "abc", '"', "'", ",", ",,", ";", "\t", "NULL", "None",
+          "1,5", "0x1p3", "\x00", "é", "#", "\r", "true", "[]", "{}", "[1, 2]", "{a = 1}",
+          "1_000", "+1", "-0", "0.0.1", "1e", "e1", " 1 ", "∞", "\ufeff"]
+"""Values put in place of a cell or a TOML value."""
+
+
+@contextlib.contextmanager
+def time_limit(seconds: int):
+    def stop(signum, frame):
+        raise TimeoutError(f"an input took more than {seconds} s")
+
+    previous = signal.signal(signal.SIGALRM, stop)
+    signal.alarm(seconds)
+    try:
+        yield
+    finally:
+        signal.alarm(0)
+        signal.signal(signal.SIGALRM, previous)
+
+
+def damaged_csv(rng: np.random.Generator) -> bytes:
+    lines = base_csv().splitlines()[:rng.integers(2, 60)]
+    for _ in range(rng.integers(1, 5)):
+        i = int(rng.integers(0, len(lines)))
+        kind = rng.integers(0, 8)
+        if kind == 0:
+            cells = lines[i].split(",")
+            cells[rng.integers(0, len(cells))] = TOKENS[rng.integers(0, len(TOKENS))]
+            lines[i] = ",".join(cells)
+        elif kind == 1 and len(lines) > 1:
+            del lines[i]
+        elif kind == 2:
+            lines.insert(i, lines[i])
+        elif kind == 3 and i > 1:
+            lines[i], lines[i - 1] = lines[i - 1], lines[i]
+        elif kind == 4:
+            names = lines[0].split(",")
+            names[rng.integers(0, len(names))] = ["", "x", "t", "qw", "F1", "gamma", "T "][
+                rng.integers(0, 7)]
+            lines[0] = ",".join(names)
+        elif kind == 5:
+            lines = lines[:i + 1]
+            lines[i] = lines[i][:rng.integers(0, len(lines[i]) + 1)]
+        elif kind == 6:
+            lines.insert(i, TOKENS[rng.integers(0, len(TOKENS))])
+        else:
+            cells = lines[i].split(",")
+            k = rng.integers(0, len(cells))
+            with contextlib.suppress(ValueError):
+                cells[k] = repr(float(cells[k]) * 10.0 ** rng.integers(-300, 300))
+            lines[i] = ",".join(cells)
+    data = ("\n".join(lines) + "\n").encode("utf-8", "surrogatepass")
+    return _bytes_damage(rng, data)
+
+
+def _bytes_damage(rng: np.random.Generator, data: bytes) -> bytes:
+    """Sometimes a flipped byte, random bytes, or nothing at all."""
+    roll = rng.random()
+    if roll < 0.05:
+        return bytes(rng.integers(0, 256, rng.integers(0, 400), dtype=np.uint8))
+    if roll < 0.15 and data:
+        raw = bytearray(data)
+        raw[rng.integers(0, len(raw))] = int(rng.integers(0, 256))
+        return bytes(raw)
+    return data
+
+
+def damaged_toml(rng: np.random.Generator) -> bytes:
+    lines = platform_text().splitlines()
+    for _ in range(rng.integers(1, 4)):
+        if not lines:
+            break
+        i = int(rng.integers(0, len(lines)))
+        kind = rng.integers(0, 6)
+        if kind == 0 and "=" in lines[i]:
+            key = lines[i].split("=")[0]
+            lines[i] = f"{key}= {TOKENS[rng.integers(0, len(TOKENS))]}"
+        elif kind == 1:
+            del lines[i]
+        elif kind == 2:
+            lines.insert(i, lines[i])
+        elif kind == 3 and "=" in lines[i]:
+            key = lines[i].split("=")[0].strip()
+            lines[i] = f"{key[:-1] or 'x'} = 1.0"
+        elif kind == 4:
+            lines = lines[:i + 1]
+        elif "=" in lines[i]:
+            key = lines[i].split("=")[0]
+            lines[i] = f"{key}= {rng.choice(['2e70', '1e308', '-1.0', '0.0', 'nan', '-0.0'])}"
+    data = ("\n".join(lines) + "\n").encode()
+    return _bytes_damage(rng, data)
+
+
+def _outcome(function, path: Path):
+    """The result, or None after a one-line InputError naming ``path``; warnings checked."""
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        try:
+            with time_limit(LIMIT):
+                return function()
+        except InputError as error:
+            message = str(error)
+            assert message and "\n" not in message, message
+            assert message.startswith(str(path)), message
+            return None
+        finally:
+            for w in caught:
+                assert issubclass(w.category, GsfricWarning), (w.category, str(w.message))
+                assert "\n" not in str(w.message)
+
+
+def _cli(argv: list[str], folder: Path, source: Path) -> None:
+    before = source.read_bytes() if source.is_file() else None
+    with time_limit(LIMIT):
+        result = CliRunner().invoke(main, argv, catch_exceptions=False)
+    assert result.exit_code in (0, 2), (result.exit_code, result.output)
+    lines = [x for x in result.stderr.splitlines() if x]
+    assert all(x.startswith(("gsfric: error:", "gsfric: warning:")) for x in lines), lines
+    assert sum(x.startswith("gsfric: error:") for x in lines) == (result.exit_code == 2)
+    assert (source.read_bytes() if source.is_file() else None) == before
+    assert not [p for p in folder.iterdir() if ".gsfric-" in p.name]
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("part", range(10))
+def test_damaged_csv_files(tmp_path, part):
+    rng = np.random.default_rng([20261127, part])
+    for k in range(INPUTS // 10):
+        path = tmp_path / f"t{k}.csv"
+        path.write_bytes(damaged_csv(rng))
+        motion = _outcome(lambda: read_trajectory(path), path)
+        if motion is not None:
+            assert np.isfinite(motion.acceleration).all() and np.isfinite(motion.alpha).all()
+        if k % CLI_EVERY == 0:
+            out = tmp_path / "o.csv"
+            _cli(["simulate", "--trajectory", str(path), "--out", str(out), "--no-progress"],
+                 tmp_path, path)
+            out.unlink(missing_ok=True)
+        path.unlink()
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("part", range(10))
+def test_damaged_toml_files(tmp_path, part):
+    rng = np.random.default_rng([20261128, part])
+    for k in range(INPUTS // 10):
+        path = tmp_path / f"p{k}.toml"
+        path.write_bytes(damaged_toml(rng))
+        platform = _outcome(lambda: Platform.from_toml(path), path)
+        if platform is not None:
+            assert 0 <= platform.gravity <= 100
+        if k % CLI_EVERY == 0:
+            _cli(["export", "--platform", str(path), "--out", str(tmp_path / "x")], tmp_path,
+                 path)
+            _rmtree(tmp_path / "x")
+        path.unlink()
+
+
+def _rmtree(path: Path) -> None:
+    if path.is_dir():
+        for child in sorted(path.rglob("*"), reverse=True):
+            child.rmdir() if child.is_dir() else child.unlink()
+        path.rmdir()
