@@ -26,6 +26,7 @@ from gsfric.io.readers import read_measured, read_trajectory
 from gsfric.io.tables import read_table, write_table
 from gsfric.signal.local import local_polynomial_derivatives
 from gsfric.signal.savgol import savgol_derivatives
+from gsfric.simulate.run import simulate_file
 from gsfric.trajectory import Motion
 
 DATA = Path(__file__).resolve().parent / "data"
@@ -325,3 +326,21 @@ def test_mostly_flagged_steps_and_implausible_speeds_are_data_errors():
     with pytest.raises(InputError, match=r"the platform moves at .* m/s \(median over the "
                                          r"steps\), implausible for a stroke of 0.6 m"):
         check_poses(platform, motion.position, motion.rotation, t / 1000.0)
+
+
+def test_a_gap_in_the_times_is_named_and_a_mostly_missing_record_refused(tmp_path):
+    frame = _frame(400)
+    late = frame.copy()
+    late.loc[200:, "t"] += 1.0                       # 1 s lost after row 200 of a 4 s record
+    write_table(late, tmp_path / "gap.csv")
+    with pytest.warns(DataWarning, match=r"gap\.csv: t: 1 gap\(s\).*about 100 samples\), "
+                                         r"the first after row 200"):
+        simulate_file(tmp_path / "gap.csv", tmp_path / "gap_out.csv", progress=False)
+    assert (tmp_path / "gap_out.csv").is_file()
+    late.loc[200:, "t"] += 10.0                      # now 11 s lost against 4 s recorded
+    write_table(late, tmp_path / "gone.csv")
+    result = _cli("simulate", "--trajectory", tmp_path / "gone.csv", "--out",
+                  tmp_path / "gone_out.csv")
+    assert result.exit_code == 2
+    assert "record is mostly missing" in result.output and "\n" not in result.output.strip()
+    assert not (tmp_path / "gone_out.csv").exists()

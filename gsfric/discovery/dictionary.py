@@ -118,28 +118,30 @@ def find(residual: np.ndarray, x: Features, settings: Settings) -> list[Unexplai
     group that explains it best (a cross-talk on a sinusoidal motion is not also a line at
     the motion's frequency)."""
     level = settings.alpha / len(GROUPS)
-    built = {}
-    for kind in GROUPS:
-        columns = BUILDERS[kind](residual, x, settings)
-        if columns is not None:
-            built[kind] = (_scaled(columns[0] * x.weight[:, :, None]), columns[1])
-    left, out, todo = residual, [], list(built)
-    while todo:
-        results = {kind: _test(left, built[kind][0], x, settings, level, kind)
-                   for kind in todo}
-        todo = [kind for kind in todo if results[kind].significant]
-        if not todo:
-            break
-        kind = max(todo, key=lambda k: results[k].details["cv_gain"])
-        todo.remove(kind)
-        result = results[kind]
+    built, results = {}, {}
+    for kind in GROUPS:               # one group's columns at a time: only those that count
+        columns = BUILDERS[kind](residual, x, settings)           # are kept for the rounds
+        if columns is None:
+            continue
+        design, describe = _scaled(columns[0] * x.weight[:, :, None]), columns[1]
+        del columns
+        result = _test(residual, design, x, settings, level, kind)
+        if result.significant:
+            built[kind], results[kind] = (design, describe), result
+        del design
+    left, out = residual, []
+    while built:
+        kind = max(built, key=lambda k: results[k].details["cv_gain"])
+        result, describe = results[kind], built.pop(kind)[1]
         per_leg = np.asarray(result.per_leg_rms)
         legs = [i + 1 for i in np.flatnonzero(per_leg >= 0.25 * per_leg.max())]
-        text, details = built[kind][1](result.fitted, legs)
+        text, details = describe(result.fitted, legs)
         out.append(Unexplained(kind, legs, result.structure_rms, result.per_leg_rms,
                                result.gap, float(result.p_value), level,
                                float(result.details["cv_gain"]), text, details))
         left = left - result.fitted
+        results = {k: _test(left, built[k][0], x, settings, level, k) for k in built}
+        built = {k: v for k, v in built.items() if results[k].significant}
     return out
 
 

@@ -97,16 +97,23 @@ class Outputs(MutableMapping):
 class Result:
     """Named arrays of one evaluation, step as the leading axis.
 
+    The outputs are attributes, for N steps in SI units and the base frame: ``t`` (N,) s;
+    ``F``, ``F0`` (N, 6) N; ``R_E``, ``R_C``, ``R_3`` (N, 6, 3) N; ``M_C`` (N, 6) N m;
+    ``M_3`` (N, 6, 3) N m; ``MfrE``, ``MfrC`` (N, 6, 3) N m; ``Ffr`` (N, 6) N; the paper's
+    signed scalars ``MfrE_s``, ``MfrC_s`` (N, 6) N m and ``Ffr_s`` (N, 6) N; ``D``, ``D_dot``
+    (N, 6); ``u``, ``omega_leg``, ``omega_rel``, ``R_3_leg``, ``M_3_leg`` (N, 6, 3); ``s2``
+    (N, 6); ``flag`` (N,) int. Every output column with its meaning is listed by
+    ``gsfric.columns``.
+
     Attributes
     ----------
-    t, F, ... : ndarray
-        Shapes for N steps, units SI: ``t`` (N,), ``F``, ``F0`` (N, 6) N;
-        ``R_E``, ``R_C``, ``R_3`` (N, 6, 3) N; ``M_C`` (N, 6) N m; ``M_3`` (N, 6, 3) N m;
-        ``MfrE``, ``MfrC`` (N, 6, 3) N m; ``Ffr`` (N, 6) N; the paper's signed scalars
-        ``MfrE_s``, ``MfrC_s`` (N, 6) N m and ``Ffr_s`` (N, 6) N; ``D``, ``D_dot`` (N, 6);
-        ``u``, ``omega_leg``, ``omega_rel``, ``R_3_leg``, ``M_3_leg`` (N, 6, 3); ``s2``
-        (N, 6); ``flag`` (N,) int. Every output column with its meaning is listed by
-        ``gsfric.columns``.
+    F : ndarray, shape (N, 6)
+        Actuator force of each leg with friction and effects, N; positive pushes the platform
+        away from the base.
+    R_E : ndarray, shape (N, 6, 3)
+        Force of each leg on the platform at its spherical joint E_i, base frame, N.
+    flag : ndarray of int, shape (N,)
+        0 for a sound step, else the sum of the flag bits (``gsfric.evaluation.flags``).
 
     Examples
     --------

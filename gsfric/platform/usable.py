@@ -5,15 +5,18 @@ Data that are mostly unusable for the platform are an ``InputError`` that says h
 are and which option fixes it, never a result: poses mostly outside the stroke (a controller's
 frame with another origin, another rig, mm given as m), speeds no hexapod of this size reaches,
 and forces whose static load is a thousand times the platform's weight (N declared as kN).
-Problems of the force channels themselves (constant, saturated, time gaps) are discovery's
+Gaps in the sample times are reported (``check_gaps``), and an error when they hold most of
+the record. Problems of the force channels themselves (constant, saturated) are discovery's
 (``gsfric.discovery.rest.data_problems``).
 """
 
 from __future__ import annotations
 
+import warnings
+
 import numpy as np
 
-from gsfric.errors import InputError
+from gsfric.errors import DataWarning, InputError
 from gsfric.platform.description import Platform
 
 MOSTLY = 0.5
@@ -31,6 +34,11 @@ SPEED_STROKES = 50.0
 (d_max - d_min) per second is implausible for the platform (no hexapod crosses its stroke in
 20 ms): positions in mm given as m, or times in ms given as s. The median, because a wrong unit
 scales every step while a few glitches (steps flagged one by one) do not move it."""
+
+GAP_STEPS = 20.0
+"""A time step above this many times the median step is a gap in the record (samples lost, a
+pause of the logger): jittered or randomly spaced stamps almost never reach it (an exponential
+spacing once in a million steps), a lost block of samples always does."""
 
 FIXES = ("a pose offset and axes in the log format ([offset], axes; see docs/howto/read-a-log.md), "
          "`gsfric platform --template` with the rig's sizes, or --platform with the rig's "
@@ -149,3 +157,29 @@ def check_flagged(flagged: int, steps: int, where: str = "") -> None:
                          "leg outside the stroke, a near-singular pose, a non-finite value; "
                          "see the flag column of `gsfric simulate`): the data are mostly "
                          f"unusable for this platform; fix with {FIXES}")
+
+
+def check_gaps(t: np.ndarray, where: str = "") -> None:
+    """Warn (``DataWarning``) of gaps in the sample times (N,), s: steps above ``GAP_STEPS``
+    times the median, across which the motion is differentiated as if it went on smoothly;
+    ``InputError`` when the gaps hold more time than the samples do (the record is mostly
+    missing)."""
+    steps = np.diff(np.asarray(t, float))
+    if steps.size < 2:
+        return
+    median = float(np.median(steps))
+    gaps = np.flatnonzero(steps > GAP_STEPS * median)
+    if median <= 0 or not gaps.size:
+        return
+    prefix = f"{where}: " if where else ""
+    lost = float(np.sum(steps[gaps])) - gaps.size * median
+    first = int(gaps[0])
+    text = (f"{prefix}t: {gaps.size} gap(s) in the sample times, {lost:.4g} s in all (about "
+            f"{lost / median:.0f} samples), the first after row {first + 1} "
+            f"(t = {float(t[first]):.6g} s, a step of {float(steps[first]):.4g} s against "
+            f"{median:.4g} s)")
+    if lost > float(np.asarray(t, float)[-1] - t[0]) - lost:
+        raise InputError(f"{text}: the record is mostly missing; cut it at the gaps")
+    warnings.warn(f"{text}: the motion is differentiated across them; cut the record at the "
+                  "gaps for forces there", DataWarning, stacklevel=2)
+

@@ -44,7 +44,7 @@ from gsfric.io.files import atomic_write, check_outputs, is_stream
 from gsfric.io.tables import check_file, count_rows, table_kind
 from gsfric.models import platform_from
 from gsfric.platform.catalog import sensor_parameters
-from gsfric.platform.usable import check_flagged, check_forces, check_poses
+from gsfric.platform.usable import check_flagged, check_forces, check_gaps, check_poses
 from gsfric.signal.savgol import DEFAULT_POLYORDER
 from gsfric.simulate.delay import SensorDelay
 from gsfric.simulate.differentiate import DEFAULT_CHUNK, MotionChunk, iter_motions
@@ -339,6 +339,7 @@ class _Run:
         position, rotation = recorded if recorded is not None else (motion.position,
                                                                     motion.rotation)
         check_poses(self.platform, position, rotation, motion.t, str(self.trajectory))
+        check_gaps(motion.t, str(self.trajectory))
         if "F1" in part.carried:
             check_forces(self.platform, np.stack([part.carried[f"F{i}"] for i in range(1, 7)],
                                                  axis=1), str(self.trajectory))
