@@ -70,9 +70,13 @@ def test_a_trailing_zero_row_is_left_out_and_changes_no_other_row(tmp_path):
         in outputs["bad"][1]
     assert "dropout" not in outputs["clean"][1]
     pd.testing.assert_frame_equal(outputs["clean"][0], outputs["bad"][0], check_exact=True)
-    with pytest.warns(DataWarning, match="row 301: every value is 0"):
+    with pytest.warns(GsfricWarning) as caught:
         motion = read_trajectory(tmp_path / "bad.csv", log_format=LogFormat(units={"t": "us"}))
     assert len(motion) == 300
+    dropouts = [w for w in caught if issubclass(w.category, DataWarning)]
+    assert [str(w.message).split(": ", 1)[1] for w in dropouts] == [
+        "row 301: every value is 0 and the time stops (a dropout row): left out"]
+    assert any("wraps around" in str(w.message) for w in caught)      # the counter's wrap
     # zeros at an advancing time are a pose (the home pose of a controller's frame): kept
     kept = pd.DataFrame({"t": np.arange(60) / 100.0, "x": 0.0, "y": 0.0, "z": 0.0,
                          "roll": 0.0, "pitch": 0.0, "yaw": 0.0})
