@@ -343,40 +343,22 @@ class Motion:
                      rates: dict[str, np.ndarray] | None = None) -> Motion:
         """A motion from sampled poses, by smoothing differentiation.
 
-        The orientation is converted to unit quaternions (never are angles differentiated),
-        made sign-continuous, and position and quaternion are smoothed and differentiated
-        twice:
+        The orientation becomes sign-continuous unit quaternions (angles are never
+        differentiated); position and quaternion are smoothed and differentiated twice:
 
-        * Uniform sampling (every step within ``UNIFORM_RTOL`` of the mean step): a
-          Savitzky-Golay filter (``savgol_filter``: SciPy's with ``mode="interp"``, on
-          well-conditioned weights; orders 0, 1 and 2) of ``window`` samples and polynomial
-          order ``polyorder``. With
-          ``window=None`` the filter (order ``polyorder`` or ``polyorder + 2``, odd window up
-          to ``MAX_AUTO_WINDOW`` samples) is chosen per sample, separately for position and
-          quaternion and for the velocity (which position and velocity use) and the
-          acceleration, as the one of least estimated mean squared error
-          (``adaptive_filters``): short filters where the motion is fast or the pose
-          noise-free, long ones where it is slow or noisy.
-        * Non-uniform sampling with a ``window``: at every sample, the polynomial of order
-          ``polyorder`` fitted to ``window`` samples on their own time stamps
-          (``local_polynomial_derivatives``; the Savitzky-Golay filter of that window on
-          uneven stamps).
-        * Non-uniform sampling without a window: a cubic smoothing spline of every component
-          (``scipy.interpolate.make_smoothing_spline``) with penalty ``lam``, chosen by
-          generalized cross-validation when None. Being natural splines, their second
-          derivative vanishes at both ends, so the accelerations of the first and last few
-          samples are biased towards zero.
+        * uniform stamps (within ``UNIFORM_RTOL`` of the mean step): a Savitzky-Golay filter
+          of ``window`` samples and order ``polyorder``, or, with ``window=None``, the filter
+          of least estimated error chosen per sample (``adaptive_filters``);
+        * uneven stamps with a ``window``: the polynomial of that window fitted on the stamps
+          themselves (``local_polynomial_derivatives``);
+        * uneven stamps without a window: a cubic smoothing spline with penalty ``lam``, chosen
+          from the data when None (``spline_penalties``); its accelerations at the ends are
+          biased towards zero.
 
-        Rates given (``rates``, e.g. a log's own velocity columns) are taken as they are; an
-        acceleration not given whose velocity is (or angular acceleration whose angular
-        velocity is) is that velocity's smoothed derivative, by the same method as the poses'.
-        ``differentiation()`` tells which method and rates were used.
-
-        With p the smoothed (not exactly unit) quaternion and dots time derivatives,
-        ``omega = 2 vec(pdot p*) / |p|^2`` and
-        ``alpha = 2 vec(pddot p*) / |p|^2 - omega 2 (p . pdot) / |p|^2``, which for a unit
-        quaternion are ``omega = 2 vec(qdot q*)`` and ``alpha = 2 vec(qddot q*)``, in the base
-        frame. Position and rotation of the result are the smoothed ones.
+        ``rates`` given are taken as they are; an acceleration not given whose velocity is, is
+        that velocity's smoothed derivative. ``differentiation()`` tells what was used. From
+        the smoothed quaternion p: ``omega = 2 vec(pdot p*) / |p|^2`` and
+        ``alpha = 2 vec(pddot p*) / |p|^2 - omega 2 (p . pdot) / |p|^2`` (base frame).
 
         Parameters
         ----------

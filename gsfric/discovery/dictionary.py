@@ -33,7 +33,9 @@ import numpy as np
 
 from gsfric._optional import optional
 from gsfric.discovery import lackfit
+from gsfric.discovery.residuals import Problem
 from gsfric.discovery.settings import Settings
+from gsfric.trajectory import Motion
 
 GROUPS = ("line", "coupling", "sensor memory", "drift", "state")
 """The dictionary's groups, in the order of the report."""
@@ -107,6 +109,17 @@ class Features:
     position: np.ndarray
     weight: np.ndarray
     noise: float
+
+    @classmethod
+    def of(cls, problem: Problem, motion: Motion, theta: np.ndarray, force_noise: np.ndarray
+           ) -> Features:
+        """What the dictionary reads of the record at the final parameters theta, with the
+        floor's force noise per leg (6,), N."""
+        used = problem.used
+        return cls(np.asarray(motion.t[used], float), problem.model.forces(theta)[used],
+                   problem.result.D[used], problem.result.D_dot[used],
+                   np.asarray(motion.position[used], float), problem.weight,
+                   float(np.sqrt(np.mean(np.square(force_noise)))))
 
 
 def find(residual: np.ndarray, x: Features, settings: Settings) -> list[Unexplained]:

@@ -379,8 +379,8 @@ def _final(state: _State, motion: Motion, platform: Platform) -> Discovery:
     independent = float(np.sqrt(np.mean(problem.force_noise ** 2)))
     floor = _floor(state, motion, final, full_after, rms_after)
     noise_info = _noise_info(problem, independent, noise, whitener, floor)
-    structures = dictionary.find(residual_after, _features(problem, motion, state.theta,
-                                                           floor), settings)
+    features = dictionary.Features.of(problem, motion, state.theta, floor.force)
+    structures = dictionary.find(residual_after, features, settings)
     _imitator_notes(state)
     decision = _verdict(state, lof, rms_after, floor, structures, whitener)
     verdict = decision.verdict
@@ -472,17 +472,6 @@ def _floor(state: _State, motion: Motion, final: Platform, full_after: np.ndarra
     pose, how = pose_noise_forces(final, motion, problem.poses, problem.used,
                                   problem.sliding, s.floor_draws, seed=state.seed)
     return noise_floor(state.force_noise, estimate, pose, how, rms_after)
-
-
-def _features(problem: Problem, motion: Motion, theta: np.ndarray, floor: NoiseFloor
-              ) -> dictionary.Features:
-    """What the dictionary reads of the record at the final parameters theta."""
-    used = problem.used
-    return dictionary.Features(
-        np.asarray(motion.t[used], float), problem.model.forces(theta)[used],
-        problem.result.D[used], problem.result.D_dot[used],
-        np.asarray(motion.position[used], float), problem.weight,
-        float(np.sqrt(np.mean(np.square(floor.force)))))
 
 
 def _imitator_notes(state: _State) -> None:

@@ -158,12 +158,6 @@ def simulate_file(trajectory: str | os.PathLike[str], out: str | os.PathLike[str
         Write the outputs (not ``t``) as float32: relative error up to ``FLOAT32_RTOL``
         (6e-8) of each value, half the file.
 
-    Three stages overlap, each in its own thread: reading and differentiating chunk k + 2
-    (the calling thread), evaluating chunk k + 1 and building its columns, writing chunk k
-    (the compiled code, NumPy's copies and the Parquet writer run without the GIL). The
-    evaluation's outputs and the columns' arrays are reused from chunk to chunk within the
-    call (two sets of columns, one being written while the other is filled).
-
     Returns
     -------
     Summary
@@ -274,7 +268,13 @@ class _Writes:
 
 class _Run:
     """One ``simulate_file`` call: its options, the state shared by its three threads (the
-    flags counted, the summary, the reused output buffers), and its stages."""
+    flags counted, the summary, the reused output buffers), and its stages.
+
+    Three stages overlap, each in its own thread: reading and differentiating chunk k + 2
+    (the calling thread), evaluating chunk k + 1 and building its columns, writing chunk k
+    (the compiled code, NumPy's copies and the Parquet writer run without the GIL). The
+    evaluation's outputs and the columns' arrays are reused from chunk to chunk within the
+    call (two sets of columns, one being written while the other is filled)."""
 
     def __init__(self, trajectory: Path, out: Path, platform, plan, *, mode: str,
                  strict: bool, n_threads: int, float32: bool, progress: bool | None) -> None:

@@ -325,14 +325,12 @@ def sweep(out: str | os.PathLike, trajectories=None,
     scheduler : {"auto", "serial", "local"}, address "tcp://host:port", or a Client
         "auto" (None): ``DASK_SCHEDULER_ADDRESS`` if set, else "serial" below
         ``SERIAL_BELOW`` steps and "local" (a LocalCluster, one process per core) above.
-        Each task evaluates in one thread; the parallelism is Dask's processes.
     workers : int, optional
         Worker processes of the "local" cluster (default: one per core).
     chunk_steps : int
-        Evaluated steps per task (a trajectory file is never split: a longer file is a task of
-        its own per variant, streamed in ``STREAM_CHUNK`` steps).
+        Evaluated steps per task (a trajectory file is never split).
     progress : bool, optional
-        Progress bar with total and ETA on stderr (default: when stderr is a terminal).
+        Progress bar on stderr (default: when stderr is a terminal).
     plots : bool
     on_chunk : callable (done, total), optional
         Called after each finished task is stored.
@@ -350,9 +348,8 @@ def sweep(out: str | os.PathLike, trajectories=None,
     InputTypeError
         ``out`` not a path, ``vary`` or ``tolerances`` not a dict.
     InputError
-        Bad files or settings, in one line: an unknown parameter, a range outside the
-        parameter's valid range (``gsfric.sweep.variants.VALID_RANGES``), an output that is an
-        input.
+        Bad files or settings, in one line: an unknown parameter, a range outside
+        ``gsfric.sweep.variants.VALID_RANGES``, an output that is an input.
     OutputError
         An output could not be written (a full disk): the ``.partial`` folder is kept and the
         same call resumes it.
