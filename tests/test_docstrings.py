@@ -18,7 +18,8 @@ PUBLIC = sorted(name for name in gsfric.__all__ if name[0].isupper() or callable
 
 DOCTEST_MODULES = ("gsfric", "gsfric.evaluation.evaluator", "gsfric.evaluation.result",
                    "gsfric.trajectory", "gsfric.models", "gsfric.platform.description",
-                   "gsfric.io.readers", "gsfric.io.logs", "gsfric.errors")
+                   "gsfric.io.readers", "gsfric.io.logs", "gsfric.errors",
+                   "gsfric.signal.filters", "gsfric.discovery.pvalues")
 """Modules whose examples run as doctests."""
 
 

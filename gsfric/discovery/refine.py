@@ -7,10 +7,10 @@ from dataclasses import dataclass
 
 import numpy as np
 from scipy.optimize import minimize_scalar
-from scipy.stats import chi2
 
 from gsfric.discovery import statistics as st
 from gsfric.discovery.evidence import Evidence, Rule, accept
+from gsfric.discovery.pvalues import chi2_sf
 from gsfric.discovery.residuals import DELAY, Problem
 from gsfric.platform.catalog import shift
 
@@ -202,7 +202,7 @@ def half_stability(problem: Problem, J: np.ndarray, r: np.ndarray, names: list[s
     d = est[0][0][cols] - est[1][0][cols]
     V = est[0][1][np.ix_(cols, cols)] + est[1][1][np.ix_(cols, cols)]
     W = float(d @ np.linalg.pinv(V) @ d)
-    p = float(chi2.sf(W, len(cols)))
+    p = chi2_sf(W, len(cols))
     sliding = problem.sliding
     change_f = J[:, :, cols] @ d
     left = float(np.sqrt(np.mean(r[sliding] ** 2)))

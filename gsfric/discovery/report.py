@@ -360,14 +360,15 @@ def _binned(u: np.ndarray, r: np.ndarray, bins: int = 40) -> tuple[np.ndarray, n
             np.array([r[idx == j].mean() for j in keep]))
 
 
-def _speed_figure(plt, d: Discovery):
+def _speed_figure(figure, d: Discovery):
     """Residual against each leg's speed, symmetric-log speed axis (linear within the
     Stribeck scale), binned means evenly spaced on that axis."""
     rb, ra = d.residual_before, d.residual_after
     k = _thin(len(d.t))
     speed = d.result_before.D_dot[d.used]
     scale = stribeck_scale(d)
-    fig, axes = plt.subplots(2, 3, figsize=(12, 7), sharex=True)
+    fig = figure(figsize=(12, 7))
+    axes = fig.subplots(2, 3, sharex=True)
     for i, ax in enumerate(axes.ravel()):
         v = speed[:, i]
         u = np.sign(v) * np.log1p(np.abs(v) / scale)          # the axis' own spacing
@@ -393,10 +394,11 @@ def _speed_figure(plt, d: Discovery):
     return fig
 
 
-def _regimes_figure(plt, d: Discovery):
+def _regimes_figure(figure, d: Discovery):
     """RMS residual per band of each regime, before and after, bands as labelled rows."""
     bands = d.regimes
-    fig, ax = plt.subplots(figsize=(9, 0.32 * len(bands) + 1.6))
+    fig = figure(figsize=(9, 0.32 * len(bands) + 1.6))
+    ax = fig.subplots()
     y = np.arange(len(bands))[::-1]
     ax.barh(y + 0.2, [b.rms_before for b in bands], 0.4, color="0.6", label="before")
     ax.barh(y - 0.2, [b.rms_after for b in bands], 0.4, color="C0", label="after")
@@ -414,8 +416,13 @@ def _regimes_figure(plt, d: Discovery):
 
 def plots(d: Discovery, out_dir: Path) -> list[Path]:
     """Write the three figures; returns their paths."""
-    optional("matplotlib").use("Agg")
-    plt = optional("matplotlib.pyplot")
+    FigureCanvasAgg = optional("matplotlib.backends.backend_agg").FigureCanvasAgg
+    Figure = optional("matplotlib.figure").Figure
+
+    def figure(**kwargs):   # on an Agg canvas: no pyplot state, no GUI
+        fig = Figure(**kwargs)
+        FigureCanvasAgg(fig)
+        return fig
 
     out_dir = Path(out_dir)
     written = []
@@ -424,12 +431,12 @@ def plots(d: Discovery, out_dir: Path) -> list[Path]:
         path = out_dir / name
         with atomic_write(path, "wb") as handle:
             fig.savefig(handle, format="png", dpi=90)
-        plt.close(fig)
         written.append(path)
 
     t, rb, ra = d.t, d.residual_before, d.residual_after
     k = _thin(len(t))
-    fig, axes = plt.subplots(6, 1, figsize=(9, 10), sharex=True)
+    fig = figure(figsize=(9, 10))
+    axes = fig.subplots(6, 1, sharex=True)
     for i, ax in enumerate(axes):
         ax.plot(t[k], rb[k, i], color="0.6", lw=0.6, label="before")
         ax.plot(t[k], ra[k, i], color="C0", lw=0.6, label="after")
@@ -439,8 +446,8 @@ def plots(d: Discovery, out_dir: Path) -> list[Path]:
     axes[-1].set_xlabel("t (s)")
     fig.subplots_adjust(left=0.1, right=0.98, top=0.96, bottom=0.05, hspace=0.15)
     save(fig, PLOTS[0])
-    save(_speed_figure(plt, d), PLOTS[1])
-    save(_regimes_figure(plt, d), PLOTS[2])
+    save(_speed_figure(figure, d), PLOTS[1])
+    save(_regimes_figure(figure, d), PLOTS[2])
     return written
 
 

@@ -32,10 +32,10 @@ from collections.abc import Sequence
 from dataclasses import dataclass
 
 import numpy as np
-from scipy.signal import lfilter
 from scipy.special import fdtrc
 
 from gsfric.discovery.settings import Settings
+from gsfric.signal.filters import fir
 
 # -- AR noise model ---------------------------------------------------------------------------
 
@@ -154,7 +154,7 @@ class Whitener:
             if len(phi) == 0:
                 out[:, i] = a[p:, i]
             else:
-                out[:, i] = lfilter(np.concatenate([[1.0], -phi]), [1.0], a[:, i], axis=0)[p:]
+                out[:, i] = fir(np.concatenate([[1.0], -phi]), a[:, i], start=p)
         if valid is not None:
             window = self.kept(valid)
             out *= window.reshape(window.shape + (1,) * (out.ndim - 2))

@@ -31,11 +31,11 @@ from __future__ import annotations
 
 import numpy as np
 import pandas as pd
-from scipy import stats
-from scipy.signal import lfilter
 
 from gsfric.discovery.evidence import Evidence, Rule, Structure, accept
+from gsfric.discovery.pvalues import alexander_govern, f_sf
 from gsfric.discovery.settings import Settings
+from gsfric.signal.filters import all_pole, fir
 
 STATE_MEANING = {
     "leg length": "a function of the stroke position, the same at every visit: a spring or "
@@ -209,7 +209,7 @@ def dynamic_structure(residual: np.ndarray, inputs: dict[str, np.ndarray], valid
     if rss_full <= 0 or df2 <= 0:
         return empty
     f = ((rss_ar - rss_full) / k_in) / (rss_full / df2)
-    p = float(stats.f.sf(f, k_in, df2))
+    p = f_sf(f, k_in, df2)
     driven, shares = _driven_part(r, coef, scaled, design, names, order, lags)
     mask = np.zeros_like(valid)
     for leg in range(legs):
@@ -288,11 +288,15 @@ def _driven_part(r: np.ndarray, coef: np.ndarray, scaled: dict, design: list,
         a = coef[leg * order:(leg + 1) * order]
         den = np.concatenate([[1.0], -a])
         stable = np.all(np.abs(np.roots(den)) < 0.999) if order else True
+        # each input through its taps from rest, then all of them through the recursion
+        taps = np.stack([fir(coef[legs * order + n_i * (lags + 1):
+                                  legs * order + (n_i + 1) * (lags + 1)],
+                             np.concatenate([np.zeros(lags), scaled[leg][n_i]]), start=lags)
+                         for n_i in range(len(names))], axis=1)
+        parts = all_pole(den, taps) if stable else taps
         for n_i, name in enumerate(names):
-            bj = coef[legs * order + n_i * (lags + 1):legs * order + (n_i + 1) * (lags + 1)]
-            part = lfilter(bj, den if stable else [1.0], scaled[leg][n_i])
-            driven[:, leg] += part
-            shares[name] += float(np.sum(part[design[leg]] ** 2))
+            driven[:, leg] += parts[:, n_i]
+            shares[name] += float(np.sum(parts[design[leg], n_i] ** 2))
     return driven, shares
 
 
@@ -499,7 +503,7 @@ def _one_way_p(y: np.ndarray, b: np.ndarray, nb: int, unit: np.ndarray) -> float
     u_mean = np.bincount(inv, y) / n_u
     u_bin = np.bincount(inv, b, minlength=len(n_u)) // n_u
     groups = [u_mean[u_bin == k] for k in range(nb) if np.count_nonzero(u_bin == k) >= 3]
-    p = float(stats.alexandergovern(*groups).pvalue) if len(groups) >= 2 else 1.0
+    p = alexander_govern(groups) if len(groups) >= 2 else 1.0
     return p if np.isfinite(p) else 1.0
 
 

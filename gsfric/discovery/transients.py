@@ -12,9 +12,9 @@ larger at the start.
 from __future__ import annotations
 
 import numpy as np
-from scipy import stats
 
 from gsfric.discovery.evidence import Evidence, Rule, Structure, accept
+from gsfric.discovery.pvalues import t_greater
 from gsfric.discovery.settings import Settings
 
 
@@ -168,7 +168,7 @@ def _lag_test(residual: np.ndarray, runs: list[tuple[int, int, int]], group: np.
     means = np.array([u[gk == k].mean() for k in np.unique(gk)])
     if len(means) < min_rests or np.ptp(means) == 0:
         return None
-    p = float(stats.ttest_1samp(means, 0.0, alternative="greater").pvalue)
+    p = t_greater(means)
     excess = max(float(e0.mean() - e1.mean()), 0.0)
     gap = float(np.sqrt(excess / e1.mean())) if e1.mean() > 0 else 0.0
     return {"p_value": p, "gap": gap, "lag": int(h), "u": float(means.mean()),
