@@ -13,10 +13,12 @@ from threadpoolctl import threadpool_limits
 def one_blas_thread(function):
     """``function`` run with BLAS limited to one thread (restored afterwards).
 
-    The discovery's products are small (tens of columns, stretches of a record): a second
-    BLAS thread halves little, and on a machine whose cores are busy the threads of a
-    multithreaded BLAS wait for each other at every call; one thread keeps the cost at the
-    arithmetic. The compiled model's own threads (``n_threads``) are not affected.
+    The discovery's and the streamed simulation's products are small (tens of columns,
+    stretches of a record, a chunk's 3 x 3 rotations): a second BLAS thread halves little,
+    and on a machine whose cores are busy the threads of a multithreaded BLAS wait for each
+    other at every call (the simulation's own threads are such work); one thread keeps the
+    cost at the arithmetic. The compiled model's own threads (``n_threads``) are not
+    affected.
     """
 
     @functools.wraps(function)

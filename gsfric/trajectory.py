@@ -465,9 +465,10 @@ class Motion:
         part = slice(start, stop)
         if len(self.t[part]) == 0:
             raise InputError(f"Motion.slice({start}, {stop}): no steps in a motion of {len(self)}")
-        return Motion(self.t[part], self.position[part], self.rotation[part],
-                      self.velocity[part], self.omega[part], self.acceleration[part],
-                      self.alpha[part])
+        # the steps of a valid motion are valid: no second validation pass
+        return Motion._trusted(self.t[part], self.position[part], self.rotation[part],
+                               self.velocity[part], self.omega[part], self.acceleration[part],
+                               self.alpha[part])
 
     def quaternion(self) -> np.ndarray:
         """The orientation as sign-continuous unit quaternions ``(qw, qx, qy, qz)``, (N, 4)."""

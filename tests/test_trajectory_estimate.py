@@ -280,3 +280,31 @@ def test_long_savgol_windows_reproduce_the_polynomials_of_their_order(window, de
         x, np.polynomial.polynomial.polyder(coefficients, deriv)) / n**deriv
     got = savgol_filter(y[:, None], window, 6, deriv)[:, 0]
     np.testing.assert_allclose(got, exact, rtol=0, atol=1e-9 * np.abs(exact).max())
+
+
+def _gcv_by_filtering(y, polyorder):
+    """The generalized cross-validation window by filtering with every candidate."""
+    candidates = windows.candidate_windows(len(y), polyorder)
+    return candidates[int(np.argmin([windows._gcv_score(y, w, polyorder)
+                                     for w in candidates]))]
+
+
+@pytest.mark.parametrize("noise", [0.0, 1e-15, 1e-9, 1e-6, 1e-4])
+@pytest.mark.parametrize("shape", [(3000,), (4000, 3), (20_000, 4)])
+def test_gcv_window_is_the_window_filtering_gives(noise, shape):
+    """The scores from FFT convolutions, with their rounding bound, leave the window that
+    filtering with every candidate gives: on noise-free samples (rounding-level residuals),
+    at the rounding's level, and with noise."""
+    rng = np.random.default_rng(int(noise * 1e15) % 1000 + shape[0])
+    t = np.arange(shape[0]) / 500.0
+    columns = shape[1] if len(shape) > 1 else 1
+    y = np.stack([0.7 + 0.05 * np.sin(2 * np.pi * rng.uniform(0.1, 3) * t + rng.uniform(0, 6))
+                  for _ in range(columns)], axis=1).reshape(shape)
+    y = y + noise * rng.standard_normal(shape)
+    for polyorder in (2, 4):
+        assert gcv_window(y, polyorder) == _gcv_by_filtering(y, polyorder)
+
+
+def test_gcv_window_needs_a_window():
+    with pytest.raises(ValueError, match="fewer than the shortest window"):
+        gcv_window(np.ones(4), 4)

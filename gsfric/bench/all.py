@@ -42,7 +42,8 @@ from gsfric.evaluation.evaluator import Evaluator, state_array
 @dataclass(frozen=True)
 class Sizes:
     """The sizes of one run: steps of ``evaluate``, ``simulate``, each N of ``threads``,
-    (samples, rate in Hz) of the two discover records, steps of the Dask sweep, and the
+    (samples, rate in Hz) of the two discover records, steps of the Dask sweep and its runs
+    on each cluster (the fastest kept, as every in-process row keeps its best call), and the
     timing budget of one in-process measurement, s."""
 
     evaluate: int
@@ -51,12 +52,13 @@ class Sizes:
     discover_long: tuple[int, float]
     discover_short: tuple[int, float]
     sweep: int
+    sweep_runs: int
     budget: float
 
 
 FULL = Sizes(100_000, 1_000_000, (1_000, 100_000), (100_000, 500.0), (6_000, 200.0),
-             2_000_000, 2.0)
-QUICK = Sizes(2_000, 20_000, (1_000,), (1_500, 500.0), (1_000, 200.0), 16_000, 0.2)
+             2_000_000, 3, 2.0)
+QUICK = Sizes(2_000, 20_000, (1_000,), (1_500, 500.0), (1_000, 200.0), 16_000, 1, 0.2)
 
 ROWS = ("evaluate", "simulate", "threads", "discover_long", "discover_short", "control_loop",
         "dask")
@@ -164,8 +166,8 @@ def _control_loop_row(sizes: Sizes, row: Row) -> None:
     row.met = loop["median_us"] <= 15.0
 
 
-def _dask_row(sizes: Sizes, row: Row, dask: Callable[[int], dict]) -> None:
-    scaling = dask(sizes.sweep)
+def _dask_row(sizes: Sizes, row: Row, dask: Callable[[int, int], dict]) -> None:
+    scaling = dask(sizes.sweep, sizes.sweep_runs)
     row.values = scaling
     row.measured = f"{scaling['two_vs_one']:.2f} ({scaling['one_worker_s']:.2f} s on one " \
                    f"worker, {scaling['two_workers_s']:.2f} s on two, " \
@@ -193,10 +195,11 @@ def _rows(sizes: Sizes) -> dict[str, Row]:
     return {r.key: r for r in rows}
 
 
-def measure_all(quick: bool = False, dask: Callable[[int], dict] | None = None,
+def measure_all(quick: bool = False, dask: Callable[[int, int], dict] | None = None,
                 progress=print) -> AllReport:
     """Measure every row of ``ROWS`` (``dask``: the function that times the sweep on one and
-    two workers, ``gsfric.sweep.scaling.dask_scaling``; without it that row is "not run").
+    two workers, ``dask(steps, runs)``, ``gsfric.sweep.scaling.dask_scaling``; without it that
+    row is "not run").
 
     Returns
     -------
@@ -254,7 +257,7 @@ def format_all(report: AllReport) -> str:
 
 
 def run_all(quick: bool = False, out: Path | None = None,
-            dask: Callable[[int], dict] | None = None) -> AllReport:
+            dask: Callable[[int, int], dict] | None = None) -> AllReport:
     """``measure_all``, the table printed, and with ``out`` the report written as JSON."""
     report = measure_all(quick, dask, progress=lambda s: print(s, file=sys.stderr, flush=True))
     publish(format_all(report), report.as_dict(), out)

@@ -649,9 +649,14 @@ class Platform:
         orientations (N, 3, 3) in the base frame (e_i, c_i the platform's and the base's
         joints)."""
         g = self.geometry
-        E = np.einsum("nij,kj->nki", rotation, np.asarray(g.platform_joints, float))
-        return np.linalg.norm(position[:, None, :] + E - np.asarray(g.base_joints, float)[None],
-                              axis=2)
+        n = len(position)
+        # the rows of every rotation at once times the joints, (3N, 3) @ (3, 6): the legs'
+        # vectors (N, 3, 6), coordinate by leg
+        d = (np.reshape(rotation, (3 * n, 3)) @ np.asarray(g.platform_joints, float).T
+             ).reshape(n, 3, 6)
+        d += position[:, :, None]
+        d -= np.asarray(g.base_joints, float).T[None]
+        return np.sqrt(np.einsum("nik,nik->nk", d, d))
 
 
 _SECTIONS: dict[str, type] = {

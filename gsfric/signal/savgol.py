@@ -79,14 +79,22 @@ def savgol_filter(y: np.ndarray, window: int, polyorder: int, deriv: int = 0) ->
 
     y = np.asarray(y, float)
     window, polyorder, deriv = int(window), int(polyorder), int(deriv)
+    correlate1d = optional("scipy.ndimage").correlate1d
+    out = correlate1d(y, savgol_weights(window, polyorder, deriv), axis=0, mode="constant")
+    fill_ends(out, y, window, polyorder, deriv)
+    return out
+
+
+def fill_ends(out: np.ndarray, y: np.ndarray, window: int, polyorder: int,
+              deriv: int = 0) -> None:
+    """Write ``savgol_filter``'s first and last ``window // 2`` rows into ``out`` (the shape of
+    y, (N, ...)): the ``deriv``-th derivative of the polynomial of order ``polyorder`` through
+    the first and the last ``window`` samples of y."""
     derivative = polynomial_derivative(window, polyorder, deriv)
     fit = polynomial_fit(window, polyorder)
     half, n = window // 2, len(y)
-    correlate1d = optional("scipy.ndimage").correlate1d
-    out = correlate1d(y, savgol_weights(window, polyorder, deriv), axis=0, mode="constant")
     out[:half] = derivative[:half] @ (fit @ y[:window])
     out[n - half:] = derivative[half + 1:] @ (fit @ y[n - window:])
-    return out
 
 
 def savgol_derivatives(y: np.ndarray, window: int, polyorder: int, step: float) -> list[np.ndarray]:

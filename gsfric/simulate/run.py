@@ -26,7 +26,8 @@ import functools
 import os
 import sys
 import warnings
-from collections.abc import Callable, Iterable
+from collections import deque
+from collections.abc import Callable, Iterable, Iterator
 from concurrent.futures import Future, ThreadPoolExecutor
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -36,6 +37,7 @@ import numpy as np
 from tqdm import tqdm
 
 from gsfric._checks import as_count, as_flag, as_path
+from gsfric._threads import one_blas_thread
 from gsfric.errors import GsfricWarning, InputError, StepFlagError
 from gsfric.evaluation.columns import plan as column_plan
 from gsfric.evaluation.evaluator import MAX_THREADS, Evaluator, evaluate_outputs
@@ -59,6 +61,12 @@ from gsfric.simulate.writer import Writer
 
 MAX_REPORTED = 10_000
 """Flagged step indices kept for the summary (the count is always exact)."""
+
+EVALUATE_STEPS = 50_000
+"""Steps evaluated and written at a time (a Parquet row group): a chunk read and
+differentiated whole is evaluated in pieces of at most this many steps, so the outputs and
+columns in flight (two pieces' worth each, about 1.1 kB a step with the default columns) stay
+small whatever the chunk."""
 
 
 @dataclass
@@ -120,6 +128,20 @@ def _steps_text(indices: np.ndarray, total: int, limit: int = 10) -> str:
     return f"steps {steps}{more} (data rows {rows})"
 
 
+def _pieces(parts: Iterable[MotionChunk], size: int) -> Iterator[MotionChunk]:
+    """The chunks cut into consecutive pieces of at most ``size`` steps (views, no copies)."""
+    for part in parts:
+        n = len(part.motion)
+        if n <= size:
+            yield part
+            continue
+        for s in range(0, n, size):
+            e = min(n, s + size)
+            yield MotionChunk(part.start + s, part.motion.slice(s, e), part.windows,
+                              {name: v[s:e] for name, v in part.carried.items()})
+
+
+@one_blas_thread
 def simulate_file(trajectory: str | os.PathLike[str], out: str | os.PathLike[str],
                   platform=None, *, mode: str = "kinematic", strict: bool = False,
                   chunk: int = DEFAULT_CHUNK, window: int | None = None,
@@ -270,11 +292,12 @@ class _Run:
     """One ``simulate_file`` call: its options, the state shared by its three threads (the
     flags counted, the summary, the reused output buffers), and its stages.
 
-    Three stages overlap, each in its own thread: reading and differentiating chunk k + 2
-    (the calling thread), evaluating chunk k + 1 and building its columns, writing chunk k
-    (the compiled code, NumPy's copies and the Parquet writer run without the GIL). The
-    evaluation's outputs and the columns' arrays are reused from chunk to chunk within the
-    call (two sets of columns, one being written while the other is filled)."""
+    Three stages overlap, each in its own thread: reading and differentiating the next chunk
+    (the calling thread, which queues at most two pieces of ``EVALUATE_STEPS`` ahead),
+    evaluating piece k + 1 and queuing its write, building the columns of piece k and
+    writing them (the compiled code, NumPy's copies and the Parquet writer run without the
+    GIL). The evaluation's outputs and the columns' arrays are reused from piece to piece
+    within the call (two sets of each, one being written while the other is filled)."""
 
     def __init__(self, trajectory: Path, out: Path, platform, plan, *, mode: str,
                  strict: bool, n_threads: int, float32: bool, progress: bool | None) -> None:
@@ -287,6 +310,7 @@ class _Run:
         self.bar = tqdm(total=count_rows(trajectory) if show else None, unit="step",
                         unit_scale=True, desc="simulate", file=sys.stderr, disable=not show,
                         dynamic_ncols=True, leave=False)
+        self.stopped = False                      # a stage failed: evaluate no more
         self.sets: tuple[dict, dict] = ({}, {})   # the evaluation's outputs of even, odd chunks
         self.column_arrays: dict = {}             # the columns' arrays (of the writing thread)
         gains, delay = sensor_parameters(platform.effects)
@@ -306,30 +330,37 @@ class _Run:
                 ThreadPoolExecutor(1, thread_name_prefix="gsfric-write") as output:
             writer = Writer(handle, kind)
             writes = _Writes(output, functools.partial(self._write_one, writer))
-            pending = None                  # the evaluation in flight
+            pending: deque[Future] = deque()     # the evaluations queued or running
             try:
-                for k, part in enumerate(motions):
-                    self.summary.windows = part.windows
-                    self._check_usable(part)
+                for k, part in enumerate(_pieces(self._checked(motions), EVALUATE_STEPS)):
                     if self.evaluator is None:
                         self.evaluator = Evaluator(self.platform, mode=self.mode,
                                                    n_threads=self.n_threads)
-                    if pending is not None:
-                        writes.submit(pending.result(),
-                                      (k - 1) % 2 if self.shift is None else None)
-                    pending = evaluation.submit(self._evaluate, part, self.sets[k % 2],
-                                                writes.by_set[k % 2])
+                    while len(pending) >= 2:
+                        pending.popleft().result()
+                    pending.append(evaluation.submit(self._evaluate, part, k % 2, writes))
                     del part
                 self._drain(pending, writes)
                 check_flagged(self.flags.flagged, self.summary.steps, str(self.trajectory))
             except BaseException:
-                for future in [pending, *writes.futures]:
-                    if future is not None:
-                        with contextlib.suppress(BaseException):
-                            future.result()
+                self.stopped = True         # the evaluations queued return at once
+                for future in [*pending, *list(writes.futures)]:
+                    with contextlib.suppress(BaseException):
+                        future.result()
+                for future in list(writes.futures):  # any the last evaluations queued
+                    with contextlib.suppress(BaseException):
+                        future.result()
                 writer.abandon()
                 raise
             writer.close()
+
+    def _checked(self, motions: Iterable[MotionChunk]) -> Iterator[MotionChunk]:
+        """The chunks, each checked (``_check_usable``) and counted as it is read."""
+        for part in motions:
+            self.summary.windows = part.windows
+            self._check_usable(part)
+            self.summary.chunks += 1
+            yield part
 
     def _check_usable(self, part: MotionChunk) -> None:
         """The chunk's poses (and measured forces) checked against the platform before any
@@ -346,24 +377,36 @@ class _Run:
         if not self.summary.differentiation:
             self.summary.differentiation = describe_differentiation(part)
 
-    def _drain(self, pending: Future | None, writes: _Writes) -> None:
-        """Write the last chunk evaluated and what waits for the sensor delay; wait for all."""
-        if pending is not None:
-            writes.submit(pending.result(), None)
+    def _drain(self, pending: deque[Future], writes: _Writes) -> None:
+        """Wait for the evaluations left and their writes, and write what waits for the
+        sensor delay."""
+        while pending:
+            pending.popleft().result()
         if self.shift is not None:
             writes.submit(self.shift.finish(), None)
         writes.wait()
 
-    def _evaluate(self, part: MotionChunk, buffers: dict, buffers_free: Future | None) -> list:
-        """Evaluate a chunk and count its flags (in the evaluation thread; no warnings issued);
-        what to write: (outputs, carried columns) to be made columns by the writing thread,
-        or, with a sensor delay, the column dicts that are ready. ``buffers_free``: the write
-        of the chunk that last used ``buffers``, waited for before they are overwritten."""
+    def _evaluate(self, part: MotionChunk, which: int, writes: _Writes) -> None:
+        """Evaluate a piece into the output set ``which`` (0 or 1) and count its flags, then
+        queue its writing (in the evaluation thread, one piece after the other; no warnings
+        issued): (outputs, carried columns) that the writing thread makes columns of, or,
+        with a sensor delay, the column dicts that are ready. The set's last write is waited
+        for before its arrays are overwritten."""
+        if self.stopped:
+            return
+        try:
+            self._evaluate_piece(part, which, writes)
+        except BaseException:
+            self.stopped = True             # the pieces queued after this one are not run
+            raise
+
+    def _evaluate_piece(self, part: MotionChunk, which: int, writes: _Writes) -> None:
+        buffers_free = writes.by_set[which]
         if buffers_free is not None:
             buffers_free.result()
         start, motion = part.start, part.motion
-        arrays, flag = evaluate_outputs(self.evaluator, motion, self.names, buffers=buffers,
-                                        sensor=self.shift is None)
+        arrays, flag = evaluate_outputs(self.evaluator, motion, self.names,
+                                        buffers=self.sets[which], sensor=self.shift is None)
         if self.flags.add(flag, start) and self.strict:
             self.summary.steps = start + len(motion)
             self.flags.fill(self.summary)
@@ -373,16 +416,14 @@ class _Run:
                 "no output written)")
         outputs = ChunkOutputs(np.asarray(motion.t, dtype=np.float64), arrays, flag)
         if self.shift is None:
-            ready = [(outputs, part.carried)]
+            writes.submit([(outputs, part.carried)], which)
         else:
             good = (flag & FLAG_NONFINITE) == 0
-            ready = self.shift.add(outputs.t, arrays["F"], good, functools.partial(
+            writes.submit(self.shift.add(outputs.t, arrays["F"], good, functools.partial(
                 delayed_columns, result_columns(outputs, self.plan, self.float32), self.plan,
-                self.float32, part.carried))
+                self.float32, part.carried)), None)
         self.summary.steps = start + len(motion)
-        self.summary.chunks += 1
         self.bar.update(len(motion))
-        return ready
 
     def _write_one(self, writer: Writer, item) -> None:
         """Write one chunk (in the writing thread): its columns first, from ``ChunkOutputs``."""

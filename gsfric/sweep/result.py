@@ -42,15 +42,15 @@ def fold(frames: Sequence[pd.DataFrame]) -> pd.DataFrame:
     frame = pd.concat(frames, ignore_index=True)
     counts = (frame[(frame.quantity == "R_E") & (frame.leg == 1)]
               .groupby(["motion", "variant"], sort=True)[["steps", "flagged"]].sum())
-    parts = []
-    for q, (kind, _, _) in QUANTITIES.items():
-        sub = frame[frame.quantity == q]
-        if kind == "sum":
-            parts.append(_sums(sub))
-            continue
-        ordered = sub.sort_values(["value", "task"], ascending=[kind == "min", True],
-                                  kind="stable", na_position="last")
-        parts.append(ordered.drop_duplicates(_KEY, keep="first"))
+    kind = frame.quantity.map({q: k for q, (k, _, _) in QUANTITIES.items()})
+    summed = (kind == "sum").to_numpy()
+    extremes = frame[~summed]
+    # every extreme at once: a minimum by its value, a maximum by its negative
+    order = extremes.value.where(kind[~summed] == "min", -extremes.value)
+    best = (extremes.assign(_order=order)
+            .sort_values(["_order", "task"], kind="stable", na_position="last")
+            .drop_duplicates(_KEY, keep="first").drop(columns="_order"))
+    parts = [best, _sums(frame[summed])] if summed.any() else [best]
     out = pd.concat(parts, ignore_index=True).drop(columns=["steps", "flagged"],
                                                    errors="ignore")
     return out.join(counts, on=["motion", "variant"])
@@ -68,15 +68,16 @@ def merge(chunks) -> pd.DataFrame:
 
 def summarize(envelopes: pd.DataFrame) -> pd.DataFrame:
     """The extreme of each quantity and leg over all cases, with its case and location."""
-    parts = []
-    for q, (kind, unit, _) in QUANTITIES.items():
-        sub = envelopes[envelopes.quantity == q]
-        ordered = sub.sort_values("value", ascending=(kind == "min"), kind="stable",
-                                  na_position="last")
-        best = ordered.drop_duplicates("leg", keep="first").sort_values("leg").copy()
-        best.insert(best.columns.get_loc("value") + 1, "unit", unit)
-        parts.append(best)
-    out = pd.concat(parts, ignore_index=True)
+    kind = envelopes.quantity.map({q: k for q, (k, _, _) in QUANTITIES.items()})
+    # every quantity at once: a minimum by its value, a maximum (or sum) by its negative;
+    # ties keep the envelopes' order
+    order = envelopes.value.where(kind == "min", -envelopes.value)
+    best = (envelopes.assign(_order=order)
+            .sort_values("_order", kind="stable", na_position="last")
+            .drop_duplicates(["quantity", "leg"], keep="first"))
+    best = best.assign(_q=best.quantity.map({q: i for i, q in enumerate(QUANTITIES)}),
+                       unit=best.quantity.map({q: u for q, (_, u, _) in QUANTITIES.items()}))
+    out = best.sort_values(["_q", "leg"]).reset_index(drop=True)
     return out[["quantity", "leg", "value", "unit", "motion", "variant", "step", "t", *POSE]]
 
 
