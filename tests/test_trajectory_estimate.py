@@ -289,17 +289,17 @@ def _gcv_by_filtering(y, polyorder):
                                      for w in candidates]))]
 
 
-@pytest.mark.parametrize("noise", [0.0, 1e-15, 1e-9, 1e-6, 1e-4])
+@pytest.mark.parametrize("noise", [0.0, 1e-15, 1e-9, 1e-7, 1e-6, 1e-4])
 @pytest.mark.parametrize("shape", [(3000,), (4000, 3), (20_000, 4)])
 def test_gcv_window_is_the_window_filtering_gives(noise, shape):
-    """The scores from FFT convolutions, with their rounding bound, leave the window that
-    filtering with every candidate gives: on noise-free samples (rounding-level residuals),
-    at the rounding's level, and with noise."""
+    """The scores from the spectrum and from transforms, with their rounding bounds, leave
+    the window that filtering with every candidate gives: on noise-free samples
+    (rounding-level residuals), at the rounding's level, and with noise."""
     rng = np.random.default_rng(int(noise * 1e15) % 1000 + shape[0])
     t = np.arange(shape[0]) / 500.0
     columns = shape[1] if len(shape) > 1 else 1
     y = np.stack([0.7 + 0.05 * np.sin(2 * np.pi * rng.uniform(0.1, 3) * t + rng.uniform(0, 6))
-                  for _ in range(columns)], axis=1).reshape(shape)
+                  + rng.uniform(-0.2, 0.2) * t for _ in range(columns)], axis=1).reshape(shape)
     y = y + noise * rng.standard_normal(shape)
     for polyorder in (2, 4):
         assert gcv_window(y, polyorder) == _gcv_by_filtering(y, polyorder)

@@ -649,14 +649,15 @@ class Platform:
         orientations (N, 3, 3) in the base frame (e_i, c_i the platform's and the base's
         joints)."""
         g = self.geometry
-        n = len(position)
-        # the rows of every rotation at once times the joints, (3N, 3) @ (3, 6): the legs'
-        # vectors (N, 3, 6), coordinate by leg
-        d = (np.reshape(rotation, (3 * n, 3)) @ np.asarray(g.platform_joints, float).T
-             ).reshape(n, 3, 6)
-        d += position[:, :, None]
-        d -= np.asarray(g.base_joints, float).T[None]
-        return np.sqrt(np.einsum("nik,nik->nk", d, d))
+        e = np.asarray(g.platform_joints, float)
+        rotation = np.asarray(rotation, float)
+        # R e_i summed term by term, (N, 6, 3), in place
+        d = rotation[:, None, :, 0] * e[None, :, 0, None]
+        d += rotation[:, None, :, 1] * e[None, :, 1, None]
+        d += rotation[:, None, :, 2] * e[None, :, 2, None]
+        d += position[:, None, :]
+        d -= np.asarray(g.base_joints, float)[None]
+        return np.linalg.norm(d, axis=2)
 
 
 _SECTIONS: dict[str, type] = {

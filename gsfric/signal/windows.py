@@ -3,6 +3,8 @@ estimated error of a derivative, and the filtering with those choices."""
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 
 from gsfric._optional import optional
@@ -29,9 +31,13 @@ def candidate_windows(n: int, polyorder: int) -> list[int]:
 
 
 GCV_ROUNDING = 10.0
-"""Safety factor on the rounding error of an FFT convolution in ``gcv_window``: the error of
-each output sample is at most ``GCV_ROUNDING * u * log2(L) * ||y||_2 * ||h||_2`` (u the unit
-roundoff, L the transform's length); the known bound's constant is below 5."""
+"""Safety factor on the rounding of the FFTs in ``gcv_window``: a transform of length L is
+taken to be within ``GCV_ROUNDING * u * log2(L)`` of the exact one, relative to its norm (u the
+unit roundoff; the known bound's constant is below 5)."""
+
+GCV_DIRECT_BELOW = 40
+"""Windows up to this length are filtered directly when ``gcv_window`` needs their score
+closer than the spectrum gives it (cheaper than a transform of the record)."""
 
 
 def gcv_window(y: np.ndarray, polyorder: int) -> int:
@@ -40,22 +46,37 @@ def gcv_window(y: np.ndarray, polyorder: int) -> int:
     ``GCV(w) = RSS(w) / (1 - h(w))^2`` with RSS the squared residual of the smoothed signal
     (``savgol_filter``) and h the filter's central weight (the hat matrix's diagonal).
 
-    Every candidate's score is first computed with an FFT convolution, with a bound on how far
-    its rounding can put it from the score computed directly; only the candidates whose scores
-    could be the least are then computed directly, as ``savgol_filter`` does. The window is
-    the one the direct scores give (the first of equal scores), at a fraction of the cost of
-    filtering with every candidate: on noisy poses one candidate is left, on noise-free ones
-    the short windows whose residuals are all rounding.
+    Computed in steps that each bound their rounding, so that the window is the one filtering
+    with every candidate gives (the first of equal scores), at a fraction of the cost: every
+    score from the signal's spectrum (Parseval's theorem), then, for the candidates whose
+    scores could still be the least, the residual from one transform of the record, and at
+    last their direct filtering. On noisy poses one candidate is filtered; on noise-free ones
+    the short windows, whose residuals are all rounding.
     """
     y = np.asarray(y, float)
     windows = candidate_windows(len(y), polyorder)
     if not windows:
         raise ValueError(f"gcv_window: {len(y)} samples are fewer than the shortest window")
-    approx, error = _fft_scores(y.reshape(len(y), -1), windows, polyorder)
-    cutoff = np.min(approx + error)
-    close = [i for i in range(len(windows)) if approx[i] - error[i] <= cutoff]
-    exact = [_gcv_score(y, windows[i], polyorder) for i in close]
-    return windows[close[int(np.argmin(exact))]]
+    record = _Record(y.reshape(len(y), -1), windows[-1])
+    approx, error = zip(*(record.spectral(w, polyorder) for w in windows))
+    lo, hi = np.subtract(approx, error), np.add(approx, error)
+    exact = np.zeros(len(windows), bool)
+    transformed = np.zeros(len(windows), bool)
+    while True:
+        open_ = np.flatnonzero((lo <= hi.min()) & ~exact)
+        if not len(open_):
+            break
+        for i in open_:
+            w = windows[i]
+            if w <= GCV_DIRECT_BELOW or transformed[i]:
+                lo[i] = hi[i] = _gcv_score(y, w, polyorder)
+                exact[i] = True
+            else:
+                a, e = record.transformed(w, polyorder)
+                lo[i], hi[i] = max(lo[i], a - e), min(hi[i], a + e)
+                transformed[i] = True
+    left = np.flatnonzero(lo <= hi.min())
+    return windows[left[int(np.argmin(lo[left]))]]
 
 
 def _gcv_score(y: np.ndarray, window: int, polyorder: int) -> float:
@@ -65,33 +86,103 @@ def _gcv_score(y: np.ndarray, window: int, polyorder: int) -> float:
     return np.sum((y - smooth) ** 2) / (1.0 - centre) ** 2
 
 
-def _fft_scores(y: np.ndarray, windows: list[int], polyorder: int
-                ) -> tuple[np.ndarray, np.ndarray]:
-    """``gcv_window``'s scores of every window (y (N, k)) from FFT convolutions, and a bound on
-    each one's distance from the score ``_gcv_score`` computes."""
-    fft = optional("scipy.fft")
-    n = len(y)
-    length = fft.next_fast_len(n + windows[-1] - 1, real=True)
-    spectrum = fft.rfft(y, length, axis=0)
+class _Record:
+    """``gcv_window``'s signal y (N, k) in the frequency domain, and the approximate scores of
+    windows with bounds on their distance from ``_gcv_score``'s.
+
+    The residual inside (a whole window from each end) is y convolved with g, the identity
+    less the smoothing weights reversed; g sums to zero, so the centred y gives the same one
+    (to rounding, bounded). The first and last half windows are computed as ``savgol_filter``
+    does (``_end_residual``)."""
+
+    def __init__(self, y: np.ndarray, longest: int) -> None:
+        self.fft = optional("scipy.fft")
+        self.y, self.n = y, len(y)
+        self.length = self.fft.next_fast_len(self.n + longest - 1, real=True)
+        self.mean = y.mean(axis=0)
+        self.centred = y - self.mean
+        self.spectrum = self.fft.rfft(self.centred, self.length, axis=0)
+        bins = np.full(len(self.spectrum), 2.0 / self.length)   # a bin and its mirror
+        bins[0] = 1.0 / self.length
+        if self.length % 2 == 0:
+            bins[-1] = 1.0 / self.length
+        self.power = bins * np.sum(self.spectrum.real ** 2 + self.spectrum.imag ** 2, axis=1)
+        self.u = np.finfo(float).eps / 2
+        self.fft_rounding = GCV_ROUNDING * self.u * np.log2(self.length)
+        self.energy = np.sum(self.centred ** 2, axis=0)            # per column
+        self.top, self.top_centred = np.abs(y).max(axis=0), np.abs(self.centred).max(axis=0)
+
+    def _filter(self, window: int, polyorder: int) -> tuple[np.ndarray, np.ndarray, float]:
+        h = savgol_weights(window, polyorder)
+        g = -h[::-1]
+        g[window // 2] += 1.0
+        return h, g, (1.0 - h[window // 2]) ** 2
+
+    def spectral(self, window: int, polyorder: int) -> tuple[float, float]:
+        """The score from the energy of the whole convolution of the centred y with g
+        (Parseval) less its partial overlaps at both ends (computed directly), and a bound."""
+        h, g, scale = self._filter(window, polyorder)
+        response = self.fft.rfft(g, self.length)
+        terms = self.power * (response.real ** 2 + response.imag ** 2)
+        total = float(np.sum(terms))
+        partial, partial_error = _partial_overlaps(self.centred, g, self.top_centred)
+        rss = max(total - partial, 0.0) + _end_residual(self.y, window, polyorder)
+        l1 = np.sum(np.abs(g))
+        # both transforms (each bin within the rounding times the l1 norm of g, the spectrum
+        # normwise) and the pairwise sum over the bins
+        spectral = 4 * self.fft_rounding * l1 * l1 * float(np.sum(self.energy)) \
+            + self.u * np.log2(len(terms)) * total
+        error = spectral + partial_error + self._inside(h, g, rss + spectral, 0.0)
+        return rss / scale, error / scale
+
+    def transformed(self, window: int, polyorder: int) -> tuple[float, float]:
+        """The score from the residual inside as one inverse transform, and a bound."""
+        h, g, scale = self._filter(window, polyorder)
+        response = self.fft.rfft(g, self.length)
+        inside = self.fft.irfft(self.spectrum * response[:, None], self.length,
+                                axis=0)[window - 1:self.n]
+        rss = float(np.sum(inside * inside)) + _end_residual(self.y, window, polyorder)
+        per_sample = self.fft_rounding * np.sqrt(self.energy) * np.sqrt(np.sum(g * g))
+        return rss / scale, self._inside(h, g, rss, per_sample) / scale
+
+    def _inside(self, h: np.ndarray, g: np.ndarray, rss: float, per_sample) -> float:
+        """A bound on the squared residual's error from per-sample errors inside, per column:
+        ``per_sample`` (N,) or 0, the centring (g's sum times the mean; the subtraction's
+        rounding through g) and the direct filtering's own rounding (w products and sums);
+        and the sums' rounding."""
+        u, w = self.u, len(g)
+        offset = per_sample + np.abs(self.mean) * (abs(math.fsum(g)) + u) \
+            + np.sum(np.abs(g)) * u * self.top_centred \
+            + (2 * w * np.sum(np.abs(h)) + 1) * u * self.top
+        e = float(np.sqrt(np.sum(offset ** 2)))
+        return 2 * np.sqrt(self.n * max(rss, 0.0)) * e + self.n * e * e + 1e-12 * rss
+
+
+def _partial_overlaps(centred: np.ndarray, g: np.ndarray, top: np.ndarray
+                      ) -> tuple[float, float]:
+    """The squared sum of the convolution of each column of ``centred`` (N, k) with g where
+    they overlap partly (the first and last ``len(g) - 1`` values), and a bound on its
+    rounding (``top`` (k,): the columns' largest magnitudes)."""
+    m, n = len(g) - 1, len(centred)
+    energy = 0.0
+    for c in range(centred.shape[1]):
+        head = np.convolve(centred[:m, c], g)[:m]
+        tail = np.convolve(centred[n - m:, c], g)[m:]
+        energy += float(head @ head + tail @ tail)
+    size = len(g) * np.sum(np.abs(g)) * top
     u = np.finfo(float).eps / 2
-    norm, top = np.sqrt(np.sum(y * y, axis=0)), np.abs(y).max(axis=0)
-    approx, error = np.empty(len(windows)), np.empty(len(windows))
-    for i, w in enumerate(windows):
-        h, half = savgol_weights(w, polyorder), w // 2
-        smooth = fft.irfft(spectrum * fft.rfft(h[::-1], length)[:, None], length,
-                           axis=0)[half:half + n]
-        fill_ends(smooth, y, w, polyorder)
-        rss = np.sum((y - smooth) ** 2, axis=0)
-        # per sample: the FFT's rounding and the direct correlation's (w products and sums)
-        e = GCV_ROUNDING * u * np.log2(length) * norm * np.sqrt(np.sum(h * h)) \
-            + 2 * w * u * np.sum(np.abs(h)) * top
-        # |RSS' - RSS| <= 2 ||r|| ||e|| + ||e||^2 over n samples, r the residual; and the sum's
-        # own rounding
-        spread = 2 * (np.sqrt(rss) + np.sqrt(n) * e) * np.sqrt(n) * e + n * e * e
-        scale = (1.0 - h[half]) ** 2
-        approx[i] = rss.sum() / scale
-        error[i] = (spread.sum() + 1e-12 * rss.sum()) / scale
-    return approx, error
+    e = u * np.sqrt(np.sum(size ** 2))
+    return energy, 2 * np.sqrt(2 * m * energy) * e + 2 * m * e * e + 2 * m * u * energy
+
+
+def _end_residual(y: np.ndarray, window: int, polyorder: int) -> float:
+    """The squared residual of ``savgol_filter`` in its first and last ``window // 2`` rows."""
+    half, n = window // 2, len(y)
+    ends = np.concatenate([y[:window], y[n - window:]])
+    smooth = np.empty_like(ends)
+    fill_ends(smooth, ends, window, polyorder)
+    return float(np.sum((ends[:half] - smooth[:half]) ** 2)
+                 + np.sum((ends[-half:] - smooth[-half:]) ** 2))
 
 
 def _bias_degree(polyorder: int, deriv: int) -> int:
