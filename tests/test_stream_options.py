@@ -261,6 +261,25 @@ def test_flushing_while_writing_changes_nothing_in_the_file(full, tmp_path, monk
     assert again.read_bytes() == out.read_bytes()
 
 
+@pytest.mark.parametrize("delay", [0.0, 0.0175])
+def test_pieces_of_a_chunk_give_the_chunks_values(tmp_path, monkeypatch, delay):
+    """A chunk evaluated and written in pieces (``EVALUATE_STEPS``, here 64 steps of chunks
+    of 200) gives every value and flag of the chunk evaluated whole, with a sensor delay
+    too; the summary counts the chunks read."""
+    path = _trajectory(tmp_path / "t.parquet")
+    platform = models.reference_platform().with_effect("time_offset", delay=delay) \
+        if delay else models.reference_platform()
+    whole = tmp_path / "whole.parquet"
+    simulate_file(path, whole, platform, chunk=200, window=9, columns=("all",))
+    monkeypatch.setattr(gsfric.simulate.run, "EVALUATE_STEPS", 64)
+    pieces = tmp_path / "pieces.parquet"
+    summary = simulate_file(path, pieces, platform, chunk=200, window=9, columns=("all",))
+    assert summary.chunks == 4 and summary.steps == 700
+    assert pq.ParquetFile(pieces).metadata.num_row_groups > pq.ParquetFile(
+        whole).metadata.num_row_groups
+    pd.testing.assert_frame_equal(pd.read_parquet(pieces), pd.read_parquet(whole))
+
+
 def test_streamed_chunks_carry_their_rows_of_the_measured_forces(tmp_path):
     """Each chunk's carried columns are the file's F1..F6 of its own steps, and every chunk
     names the windows of the streamed file."""

@@ -65,8 +65,9 @@ def _options(command):
         click.option("--threads", type=click.IntRange(1, 64), default=1, show_default=True,
                      help="Threads of the compiled evaluation (OpenMP)."),
         click.option("--chunk", type=int, default=100_000, show_default=True,
-                     help="Steps read, differentiated and evaluated at a time (memory grows "
-                          "with it); a file of at most this many rows is read whole."),
+                     help="Steps read and differentiated at a time (memory grows with it, "
+                          "about 1.3 kB a step; they are evaluated 50,000 at a time); a file "
+                          "of at most this many rows is read whole."),
         click.option("--window", type=int, default=None,
                      help="Savitzky-Golay window, odd, samples; time stamps jittering by less "
                           "than 1 % of the step are taken as evenly spaced, more uneven ones "

@@ -162,7 +162,8 @@ def simulate_file(trajectory: str | os.PathLike[str], out: str | os.PathLike[str
     strict : bool
         Raise ``StepFlagError`` at the first chunk with a flagged step (no output is written).
     chunk : int
-        Steps per chunk; memory grows with it (about 5 kB per step).
+        Steps read and differentiated at a time; memory grows with it (about 1.3 kB per
+        step). They are evaluated and written ``EVALUATE_STEPS`` at a time.
     window, polyorder :
         Smoothing of the differentiation, see ``iter_motions``.
     n_threads : int
