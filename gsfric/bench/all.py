@@ -64,6 +64,11 @@ ROWS = ("evaluate", "simulate", "threads", "discover_long", "discover_short", "c
         "dask")
 """The rows of the table, in order."""
 
+TIMING_RESOLUTION = 0.005
+"""Relative difference of two best-of-many timings that counts as none (``threads``): a
+two-thread Evaluator runs one thread below two blocks of 2048 steps, so at N = 1,000 both
+timings are of the same call, and their ratio is 1 within this."""
+
 DISCOVER_EFFECT = "stribeck:static=2,velocity=0.01"
 """The hidden effect of the discover records."""
 
@@ -137,7 +142,7 @@ def _threads_row(sizes: Sizes, row: Row, progress) -> None:
     ratios = {int(n): v["two_vs_one"] for n, v in busy.items()}
     row.values = busy
     row.measured = ", ".join(f"{r:.2f} at N = {n:,}" for n, r in ratios.items())
-    row.met = min(ratios.values()) >= 1.0
+    row.met = min(ratios.values()) >= 1.0 - TIMING_RESOLUTION
 
 
 def _discover_row(samples: int, rate: float, row: Row, goal_s: float,
