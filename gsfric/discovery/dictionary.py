@@ -136,7 +136,9 @@ def find(residual: np.ndarray, x: Features, settings: Settings) -> list[Unexplai
         columns = BUILDERS[kind](residual, x, settings)           # are kept for the rounds
         if columns is None:
             continue
-        design, describe = _scaled(columns[0] * x.weight[:, :, None]), columns[1]
+        design, describe = columns          # the builder's own array: weighted and scaled
+        design *= x.weight[:, :, None]        # in place (a group holds up to 200 MB)
+        _scale(design)
         del columns
         result = _test(residual, design, x, settings, level, kind)
         if result.significant:
@@ -170,10 +172,11 @@ def _test(residual: np.ndarray, X: np.ndarray, x: Features, s: Settings, level: 
                         by="pairs")
 
 
-def _scaled(X: np.ndarray) -> np.ndarray:
-    """Each column at unit RMS (a column without values left at zero)."""
-    scale = np.sqrt(np.mean(X ** 2, axis=(0, 1)))
-    return X / np.where(scale > 0, scale, 1.0)
+def _scale(X: np.ndarray) -> None:
+    """Each column of X (M, 6, k) brought to unit RMS in place (a column without values left
+    at zero)."""
+    scale = np.sqrt(np.einsum("ijk,ijk->k", X, X) / (X.shape[0] * X.shape[1]))
+    X /= np.where(scale > 0, scale, 1.0)
 
 
 def _per_leg(columns: list[np.ndarray]) -> np.ndarray:

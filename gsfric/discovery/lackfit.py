@@ -67,30 +67,35 @@ MEANING = {
 
 def basis(t: np.ndarray, F: np.ndarray, speed: np.ndarray, sliding: np.ndarray,
           derivatives: tuple[np.ndarray, np.ndarray] | None = None,
-          pose: np.ndarray | None = None) -> np.ndarray:
+          pose: np.ndarray | None = None, keep: list[int] | None = None) -> np.ndarray:
     """The generic columns (M, 6, k) of ``SIGNALS`` (drift: three columns; dF/dt between legs:
     five; pose scale: the three columns of ``pose`` (M, 6, 3), dF/de per position axis, if
-    given); ``derivatives``, if given, are dF/dt and the legs' acceleration (from ``rates``),
-    not computed again."""
+    given), only those of ``keep`` (their indices in ``column_names``, in order) if given;
+    ``derivatives``, if given, are dF/dt and the legs' acceleration (from ``rates``), not
+    computed again."""
     t = np.asarray(t, float)
     legs = F.shape[1]
     extra = 0 if pose is None else pose.shape[2]
-    X = np.zeros(F.shape + (9 + legs - 1 + extra,))
+    keep = list(range(9 + legs - 1 + extra)) if keep is None else list(keep)
+    at = {j: i for i, j in enumerate(keep)}
+    X = np.zeros(F.shape + (len(keep),))
+
+    def put(j, value, leg=slice(None)) -> None:
+        if j in at:
+            X[:, leg, at[j]] = value
+
     dF, acceleration = derivatives if derivatives is not None else rates(t, F, speed)
-    X[:, :, 0] = dF
-    X[:, :, 1] = F * np.abs(F)
-    X[:, :, 2] = F ** 3
-    X[:, :, 3] = F
-    X[:, :, 4] = np.sign(speed) * sliding
-    X[:, :, 5] = acceleration
+    for j, value in enumerate((dF, F * np.abs(F), F ** 3, F, np.sign(speed) * sliding,
+                               acceleration)):
+        put(j, value)
     tau = 2 * (t - t[0]) / max(t[-1] - t[0], 1e-300) - 1
     for p in (1, 2, 3):
-        X[:, :, 5 + p] = np.polynomial.legendre.legval(tau, [0] * p + [1])[:, None]
+        put(5 + p, np.polynomial.legendre.legval(tau, [0] * p + [1])[:, None])
     for k in range(legs - 1):     # leg k's delay against the last leg's: sum zero
-        X[:, k, 9 + k] = dF[:, k]
-        X[:, legs - 1, 9 + k] = -dF[:, legs - 1]
-    if extra:
-        X[:, :, 9 + legs - 1:] = pose
+        put(9 + k, dF[:, k], k)
+        put(9 + k, -dF[:, legs - 1], legs - 1)
+    for e in range(extra):
+        put(9 + legs - 1 + e, pose[:, :, e])
     for j in range(X.shape[2]):     # unit RMS per signal over all legs (one coefficient: one cause)
         scale = float(np.sqrt(np.mean(X[:, :, j] ** 2)))
         X[:, :, j] /= scale if scale > 0 else 1.0
@@ -120,9 +125,7 @@ def basis_outside(t: np.ndarray, F: np.ndarray, speed: np.ndarray, sliding: np.n
     signals."""
     names = column_names(0 if pose is None else pose.shape[2])
     keep = [j for j, name in enumerate(names) if CATALOG_EQUIVALENT.get(name) not in catalog]
-    X = basis(t, F, speed, sliding, derivatives, pose)
-    if len(keep) < X.shape[2]:
-        X = X[:, :, keep]
+    X = basis(t, F, speed, sliding, derivatives, pose, keep)
     X *= weight[:, :, None]
     return X, [names[j] for j in keep]
 
@@ -277,13 +280,26 @@ def parameter_drift(residual: np.ndarray, X: np.ndarray, valid: np.ndarray, t: n
                 low=whitener.low_band(t, valid), nuisance=1, by="pairs")
 
 
-def whitener_beyond(residual: np.ndarray, X: np.ndarray, valid: np.ndarray) -> st.Whitener:
+def whitener_beyond(residual: np.ndarray, X, valid: np.ndarray, cols=None,
+                    cross: tuple[np.ndarray, np.ndarray] | None = None) -> st.Whitener:
     """The AR noise model of the residual (M, 6) left by its least-squares fit by the columns
     X (M, 6, k), on the ``valid`` pairs (M, 6): the largest model's, so that the structure
-    the columns test is not whitened away before it is tested."""
-    flat = X.reshape(-1, X.shape[2])
-    coef = st.solve(flat.T @ flat, flat.T @ residual.reshape(-1))
-    return st.Whitener.fit(residual - X @ coef, valid=valid)
+    the columns test is not whitened away before it is tested.
+
+    ``cols``: only these columns of X, read one at a time (X may then be a round's design,
+    ``residuals.Columns``: no copy of it); ``cross``: their cross-products (X'X (k, k),
+    X'r (k,)) when known, else computed from X (an array)."""
+    if cross is None:
+        flat = (X if cols is None else X[:, :, list(cols)])
+        flat = flat.reshape(-1, flat.shape[2])
+        cross = (flat.T @ flat, flat.T @ residual.reshape(-1))
+    coef = st.solve(*cross)
+    if cols is None:
+        return st.Whitener.fit(residual - X @ coef, valid=valid)
+    left = residual.copy()
+    for c, value in zip(cols, coef):
+        left -= X[:, :, c] * value
+    return st.Whitener.fit(left, valid=valid)
 
 
 def friction_levels(t: np.ndarray, residual: np.ndarray, speed: np.ndarray,

@@ -560,7 +560,8 @@ def _largest_model_whitener(problem: Problem, residual: np.ndarray, J: np.ndarra
     refit then weighs the differences of the residual over its level: it stopped at 2.07
     times the noise where the refitted parameters reach 1.04 times."""
     flat = J.reshape(-1, J.shape[2])
-    return _whitener_beyond(problem, residual, J, flat.T @ flat, flat.T @ residual.reshape(-1))
+    return lackfit.whitener_beyond(residual, J, problem.sliding, range(J.shape[2]),
+                                   (flat.T @ flat, flat.T @ residual.reshape(-1)))
 
 
 def _noise_whitener(design, problem: Problem) -> st.Whitener:
@@ -570,19 +571,8 @@ def _noise_whitener(design, problem: Problem) -> st.Whitener:
     step-like effect (Coulomb friction) is not whitened away before it is tested, and the
     noise is not under-modelled either."""
     cols = design.largest_model()
-    return _whitener_beyond(problem, design.r, design.X[:, :, cols],
-                            design.XtX[np.ix_(cols, cols)], design.Xtr[cols])
-
-
-def _whitener_beyond(problem: Problem, r: np.ndarray, X: np.ndarray, XtX: np.ndarray,
-                     Xtr: np.ndarray) -> st.Whitener:
-    """The AR noise model of the residual r (M, 6) less its least-squares fit by the columns
-    X (M, 6, k), given their cross-products XtX (k, k) and Xtr (k,)."""
-    coef = st.solve(XtX, Xtr)
-    r = r.copy()
-    for j in range(X.shape[2]):
-        r -= X[:, :, j] * coef[j]
-    return st.Whitener.fit(r, valid=problem.sliding)
+    return lackfit.whitener_beyond(design.r, design.X, problem.sliding, cols,
+                                   (design.XtX[np.ix_(cols, cols)], design.Xtr[cols]))
 
 
 def _contributions(problem: Problem, theta: np.ndarray, active: Sequence[str]
