@@ -65,8 +65,7 @@ MAX_REPORTED = 10_000
 EVALUATE_STEPS = 50_000
 """Steps evaluated and written at a time (a Parquet row group): a chunk read and
 differentiated whole is evaluated in pieces of at most this many steps, so the outputs and
-columns in flight (two pieces' worth each, about 1.1 kB a step with the default columns) stay
-small whatever the chunk."""
+columns in flight (two pieces' worth of each) stay small whatever the chunk."""
 
 
 @dataclass

@@ -18,9 +18,10 @@ from gsfric._optional import optional
 from gsfric.evaluation.columns import arrow_table
 
 PARQUET_COMPRESSION = "lz4"
-"""Compression of ``simulate``'s Parquet output (docs/reference/formats.md gives the measured choices:
-the outputs' float64 mantissas are close to random bytes, so general-purpose compression
-saves little unless the bytes are split by significance first, ``PARQUET_SPLIT_FLOATS``)."""
+"""Compression of ``simulate``'s Parquet output: the outputs' float64 mantissas are close to
+random bytes, so general-purpose compression saves little unless the bytes are split by
+significance first (``PARQUET_SPLIT_FLOATS``); the choices compared are in
+benchmarks/results/2026-11-27-parquet-encodings.md."""
 
 PARQUET_SPLIT_FLOATS = True
 """Write the float columns with Parquet's BYTE_STREAM_SPLIT encoding (pays only with a

@@ -161,40 +161,48 @@ def _cli(argv: list[str], folder: Path, source: Path) -> None:
 @pytest.mark.slow
 @pytest.mark.parametrize("part", range(10))
 def test_damaged_csv_files(tmp_path, part):
-    rng = np.random.default_rng([20261127, part])
-    for k in range(INPUTS // 10):
-        path = tmp_path / f"t{k}.csv"
-        path.write_bytes(damaged_csv(rng))
-        motion = _outcome(lambda: read_trajectory(path), path)
-        if motion is not None:
-            assert np.isfinite(motion.acceleration).all() and np.isfinite(motion.alpha).all()
-        if k % CLI_EVERY == 0:
-            out = tmp_path / "o.csv"
-            _cli(["simulate", "--trajectory", str(path), "--out", str(out), "--no-progress"],
-                 tmp_path, path)
-            out.unlink(missing_ok=True)
-        path.unlink()
+    def finite(motion):
+        assert np.isfinite(motion.acceleration).all() and np.isfinite(motion.alpha).all()
+
+    _fuzz(tmp_path, [20261127, part], damaged_csv, "t{k}.csv", read_trajectory, finite,
+          lambda path, out: ["simulate", "--trajectory", str(path), "--out", str(out),
+                             "--no-progress"], tmp_path / "o.csv")
 
 
 @pytest.mark.slow
 @pytest.mark.parametrize("part", range(10))
 def test_damaged_toml_files(tmp_path, part):
-    rng = np.random.default_rng([20261128, part])
+    def plausible(platform):
+        assert 0 <= platform.gravity <= 100
+
+    _fuzz(tmp_path, [20261128, part], damaged_toml, "p{k}.toml", Platform.from_toml, plausible,
+          lambda path, out: ["export", "--platform", str(path), "--out", str(out)],
+          tmp_path / "x")
+
+
+def _fuzz(folder: Path, seed, damage, name: str, load, check, command, out: Path) -> None:
+    """``INPUTS // 10`` damaged files (``damage(rng)``, named ``name.format(k=k)``): each
+    loads and passes ``check``, or fails in one line (``_outcome``); every ``CLI_EVERY``-th
+    one also goes through the command line (``command(path, out)``, ``_cli``), its output
+    ``out`` removed after."""
+    rng = np.random.default_rng(seed)
     for k in range(INPUTS // 10):
-        path = tmp_path / f"p{k}.toml"
-        path.write_bytes(damaged_toml(rng))
-        platform = _outcome(lambda: Platform.from_toml(path), path)
-        if platform is not None:
-            assert 0 <= platform.gravity <= 100
+        path = folder / name.format(k=k)
+        path.write_bytes(damage(rng))
+        loaded = _outcome(lambda: load(path), path)
+        if loaded is not None:
+            check(loaded)
         if k % CLI_EVERY == 0:
-            _cli(["export", "--platform", str(path), "--out", str(tmp_path / "x")], tmp_path,
-                 path)
-            _rmtree(tmp_path / "x")
+            _cli(command(path, out), folder, path)
+            _rmtree(out)
         path.unlink()
 
 
 def _rmtree(path: Path) -> None:
-    if path.is_dir():
-        for child in sorted(path.rglob("*"), reverse=True):
-            child.rmdir() if child.is_dir() else child.unlink()
-        path.rmdir()
+    """Remove a file or a folder, if there."""
+    if not path.is_dir():
+        path.unlink(missing_ok=True)
+        return
+    for child in sorted(path.rglob("*"), reverse=True):
+        child.rmdir() if child.is_dir() else child.unlink()
+    path.rmdir()
