@@ -220,7 +220,7 @@ def read_noise_record(path: str | os.PathLike[str], log_format: LogFormat | None
     if missing:
         raise InputError(f"{path}: no column {missing[0]!r}: a noise record needs the force "
                          "channels F1..F6")
-    columns = numeric_columns(Path(path), frame[names], list(FORCES))
+    columns = numeric_columns(Path(path), [frame[n] for n in names], list(FORCES))
     scale = np.array([UNITS["force"][fmt.units.get(name, "N")] for name in FORCES])
     forces = np.stack([columns[name] for name in FORCES], axis=1) * scale
     return ForceNoise.from_record(forces, f"noise record {path}")

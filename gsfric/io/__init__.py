@@ -7,7 +7,7 @@ where it applies, the row and the column, e.g. ``trajectory.csv: row 17: column 
 
 Modules: ``files`` (atomic writes, output folders), ``tables`` (CSV and Parquet), ``logs``
 (column maps, units, time counters: ``LogFormat``), ``readers`` (trajectories and measured
-data as a ``Motion``). Their main names are attributes of this package, each imported on first
+data as a ``Motion``), ``arrow`` (Arrow arrays of numbers to NumPy and back, without pandas). Their main names are attributes of this package, each imported on first
 use: ``gsfric.io.files`` (what the command line needs to write its outputs) loads no NumPy.
 """
 

@@ -411,25 +411,26 @@ class ColumnReader:
         return row
 
     def read(self, frame, first_row: int = 0) -> dict[str, np.ndarray]:
-        """The block's columns (a DataFrame with the stripped header) as gsfric's, SI units.
+        """The block's columns as gsfric's, SI units.
 
-        Keys: ``t, x, y, z``, the orientation columns, F1..F6 and D1..D6 where present, the
-        mapped rate columns (``RATES``), and ``keep:NAME`` for each column carried through
-        (values as in the file). Dropout rows are left out. ``first_row``: the 0-based data
-        row of the frame's first row in the file.
+        ``frame``: a DataFrame with the stripped header, or a dict of stripped column name ->
+        NumPy array or Series. Keys: ``t, x, y, z``, the orientation columns, F1..F6 and
+        D1..D6 where present, the mapped rate columns (``RATES``), and ``keep:NAME`` for each
+        column carried through (values as in the file). Dropout rows are left out.
+        ``first_row``: the 0-based data row of the frame's first row in the file.
         """
         keys = list(self.source)
-        raw = numeric_columns(self.path, frame[[self.source[k] for k in keys]],
+        raw = numeric_columns(self.path, [frame[self.source[k]] for k in keys],
                               [self.source[k] for k in keys], first_row)
         out = {key: raw[self.source[key]] for key in keys}
-        rows = np.arange(first_row, first_row + len(frame))
+        rows = np.arange(first_row, first_row + len(out["t"]))
         kept = self._dropouts(out, rows)
         if kept is not None:
             out = {key: values[kept] for key, values in out.items()}
             rows = rows[kept]
         counter = frame[self.source["t"]]
         if counter.dtype.kind in "iu":
-            counts = counter.to_numpy()
+            counts = np.asarray(counter)
             out["t"] = self._unwrap(counts if kept is None else counts[kept], rows)
         for key in keys:
             unit = self.format.units.get(key)
@@ -446,7 +447,7 @@ class ColumnReader:
         self._orientations(out, rows)
         self._map_frame(out)
         for column in self.keep:
-            values = frame[column].to_numpy()
+            values = np.asarray(frame[column])
             out[f"keep:{column}"] = values if kept is None else values[kept]
         return out
 

@@ -99,22 +99,23 @@ def check_unique_columns(path: Path, names: list[str]) -> None:
             raise InputError(f"{path}: column {match.group(1)!r} appears more than once")
 
 
-def numeric_columns(path: Path, frame, names: list[str], first_row: int = 0) -> dict:
-    """The frame's columns as float arrays under ``names``; InputError naming the first bad row.
+def numeric_columns(path: Path, columns: list, names: list[str], first_row: int = 0) -> dict:
+    """The ``columns`` (Series or NumPy arrays) as float arrays under ``names``; InputError
+    naming the first bad row.
 
-    ``first_row`` is the 0-based data row of the frame's first row in the file (for blocks).
+    ``first_row`` is the 0-based data row of the columns' first row in the file (for blocks).
     """
-    columns: dict[str, np.ndarray] = {}
+    values_of: dict[str, np.ndarray] = {}
     problems = []
-    for original, name in zip(frame.columns, names):
-        values, problem = column_values(frame[original], name)
-        columns[name] = values
+    for column, name in zip(columns, names):
+        values, problem = column_values(column, name)
+        values_of[name] = values
         if problem is not None:
             problems.append(problem)
     if problems:
         row, message = min(problems, key=lambda p: p[0])
         raise InputError(f"{path}: row {first_row + row + 1}: {message}")
-    return columns
+    return values_of
 
 
 def count_rows(path: str | os.PathLike[str]) -> int | None:
@@ -199,16 +200,20 @@ def write_table(frame: pd.DataFrame, path: str | os.PathLike[str]) -> None:
             frame.to_parquet(handle, index=False)
 
 
-def column_values(series: pd.Series, name: str) -> tuple[np.ndarray, tuple[int, str] | None]:
-    """The column as floats and the first problem as (0-based row, message), or None."""
-    pd = optional("pandas")
-
+def column_values(series: pd.Series | np.ndarray,
+                  name: str) -> tuple[np.ndarray, tuple[int, str] | None]:
+    """The column (a Series, or a NumPy array of numbers) as floats and the first problem as
+    (0-based row, message), or None."""
     kind = series.dtype.kind
     if kind == "b":
         return np.empty(0), (0, f"column {name!r} holds true/false values, not numbers")
-    if kind in "iuf":
+    if kind in "iuf" and isinstance(series, np.ndarray):
+        values = series.astype(float, copy=False)
+    elif kind in "iuf":
         values = series.to_numpy(dtype=float, na_value=np.nan)
     elif kind in "OUS":
+        pd = optional("pandas")
+        series = pd.Series(series, copy=False)
         try:
             numeric = pd.to_numeric(series, errors="coerce")
         except (TypeError, ValueError):

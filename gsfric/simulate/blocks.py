@@ -14,10 +14,10 @@ from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
-import pandas as pd
 
 from gsfric._optional import optional
 from gsfric.errors import GsfricWarning, InputError
+from gsfric.io.arrow import numpy_view
 from gsfric.io.logs import FORCES, QUATERNION, ColumnReader
 from gsfric.io.tables import check_file, check_unique_columns, csv_options, field_count_problem
 from gsfric.signal.rotations import quaternion_from_euler
@@ -65,14 +65,13 @@ def read_blocks(path: Path, rows: int, log_format=None) -> Iterator[Block]:
     start = 0
     last_t = None
     orientation = None
-    for frame in frames:
-        names = [name.strip() for name in frame.columns]
+    for names, values in frames:
+        names = [name.strip() for name in names]
         if orientation is None:
             orientation = _check_header(path, reader, names)
-        if len(frame) == 0:
+        if len(values[0]) == 0:
             continue
-        frame.columns = names
-        columns = reader.read(frame, first_row=start)
+        columns = reader.read(dict(zip(names, values)), first_row=start)
         carried = {k: v for k, v in columns.items() if k in FORCES or k.startswith("keep:")} \
             if reader.forces or reader.keep else {}
         t = columns["t"]
@@ -134,8 +133,13 @@ def _quaternions(path: Path, angles: np.ndarray, orientation: tuple[str, ...], s
 # -- CSV and Parquet frames ---------------------------------------------------------------------
 
 
-def _csv_frames(path: Path, rows: int) -> Iterator[pd.DataFrame]:
-    """DataFrames of at most ``rows`` rows; errors as ``read_table`` gives them."""
+Frame = tuple[list[str], list]
+"""A block of rows as read: the column names and the columns (NumPy arrays or Series)."""
+
+
+def _csv_frames(path: Path, rows: int) -> Iterator[Frame]:
+    """Blocks of at most ``rows`` rows; errors as ``read_table`` gives them."""
+    pd = optional("pandas")
     try:
         with warnings.catch_warnings():
             warnings.simplefilter("error", pd.errors.ParserWarning)
@@ -165,8 +169,7 @@ def _csv_frames(path: Path, rows: int) -> Iterator[pd.DataFrame]:
                 raise InputError(f"{path}: cannot read ({error.strerror})") from None
             names = [str(c) for c in frame.columns]
             check_unique_columns(path, names)
-            frame.columns = names
-            yield frame
+            yield names, [column for _, column in frame.items()]
 
 
 def _csv_parse_error(path: Path, error: Exception) -> InputError:
@@ -174,8 +177,8 @@ def _csv_parse_error(path: Path, error: Exception) -> InputError:
     return InputError(f"{path}: cannot parse as CSV: {reason}")
 
 
-def _parquet_frames(path: Path, rows: int) -> Iterator[pd.DataFrame]:
-    """DataFrames of the file's record batches of at most ``rows`` rows."""
+def _parquet_frames(path: Path, rows: int) -> Iterator[Frame]:
+    """The file's record batches of at most ``rows`` rows."""
     pyarrow = optional("pyarrow")
     pq = optional("pyarrow.parquet")
     errors = (pyarrow.ArrowException, ValueError, TypeError, OSError, NotImplementedError)
@@ -189,28 +192,26 @@ def _parquet_frames(path: Path, rows: int) -> Iterator[pd.DataFrame]:
     if len(set(names)) != len(names):
         raise InputError(f"{path}: a column name appears more than once")
     if source.metadata.num_rows == 0:
-        yield pd.DataFrame({n: [] for n in names})
+        yield names, [np.empty(0) for _ in names]
         return
     batches = source.iter_batches(batch_size=rows)
     while True:
         try:
             batch = next(batches)
-            frame = pd.DataFrame({name: _column_values(pyarrow, batch.column(i))
-                                  for i, name in enumerate(names)}, copy=False)
+            values = [_column_values(column) for column in batch.columns]
         except StopIteration:
             return
         except errors as error:
             raise InputError(f"{path}: cannot read as Parquet: {error}") from None
-        yield frame
+        yield names, values
 
 
-def _column_values(pa, array):
-    """A column of a record batch as NumPy: floats without nulls as a view of the Arrow buffer
-    (no copy), anything else as pandas converts it (nulls, strings, timestamps...)."""
-    if array.null_count == 0 and (pa.types.is_floating(array.type)
-                                  or pa.types.is_integer(array.type)):
-        return array.to_numpy(zero_copy_only=True)
-    return array.to_pandas()
+def _column_values(array):
+    """A column of a record batch: numbers without nulls as a NumPy view of the Arrow buffer
+    (no copy), anything else as a Series, as pandas converts it (nulls, strings,
+    timestamps...)."""
+    values = numpy_view(array)
+    return array.to_pandas() if values is None else values
 
 
 # -- Euler checks across blocks -----------------------------------------------------------------

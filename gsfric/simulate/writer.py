@@ -12,10 +12,10 @@ import os
 from concurrent.futures import ThreadPoolExecutor
 
 import numpy as np
-import pandas as pd
 
 from gsfric._optional import optional
 from gsfric.evaluation.columns import arrow_table
+from gsfric.io.arrow import arrow_array
 
 PARQUET_COMPRESSION = "lz4"
 """Compression of ``simulate``'s Parquet output: the outputs' float64 mantissas are close to
@@ -86,11 +86,11 @@ class Writer:
         """Import what writing ``kind`` needs, before the temporary output exists: a stop
         signal that lands inside an import comes out as whatever error the import makes of it
         (or is swallowed in an import's callback), not as the stop."""
-        if kind != "csv":
-            optional("pyarrow.parquet")
+        optional("pandas" if kind == "csv" else "pyarrow.parquet")
 
     def write(self, columns: dict[str, np.ndarray]) -> None:
         if self.kind == "csv":
+            pd = optional("pandas")
             pd.DataFrame(columns, copy=False).to_csv(self.handle, index=False,
                                                      header=self.header)
             self.header = False
@@ -102,7 +102,7 @@ class Writer:
     def _write_parquet(self, columns: dict[str, np.ndarray]) -> None:
         pa = optional("pyarrow")
         pq = optional("pyarrow.parquet")
-        arrays = [pa.array(values) for values in columns.values()]
+        arrays = [arrow_array(values) for values in columns.values()]
         if self.parquet is None:
             self.schema = arrow_table(dict(zip(columns, arrays))).schema
             floats = [f.name for f in self.schema if pa.types.is_floating(f.type)]

@@ -1,0 +1,80 @@
+"""Arrow arrays of numbers to NumPy and back (``gsfric.io.arrow``), and a streamed Parquet run
+that needs no pandas."""
+
+from __future__ import annotations
+
+import subprocess
+import sys
+
+import numpy as np
+import pandas as pd
+import pyarrow as pa
+import pyarrow.parquet as pq
+import pytest
+from hypothesis import given
+from hypothesis import strategies as st
+from hypothesis.extra import numpy as hnp
+
+from gsfric import models
+from gsfric.io.arrow import arrow_array, numpy_view
+from gsfric.io.tables import write_table
+from gsfric.signal.rotations import quaternion_from_rotation
+from gsfric.simulate.run import simulate_file
+
+NUMBERS = st.sampled_from(["<f8", "<f4", "<f2", "<i8", "<i4", "<i2", "<i1", "<u8", "<u4",
+                           "<u1"])
+
+
+@given(hnp.arrays(NUMBERS, st.integers(0, 50)), st.integers(0, 10), st.integers(0, 10))
+def test_numbers_round_trip_as_pyarrow_converts_them(values, start, stop):
+    array, expected = arrow_array(values), pa.array(values)
+    assert array.type == expected.type and array.null_count == expected.null_count == 0
+    np.testing.assert_array_equal(array.to_numpy(), expected.to_numpy())   # NaN == NaN here
+    part = array.slice(start, max(0, len(values) - start - stop))   # an offset into the buffer
+    view = numpy_view(part)
+    expected = part.to_numpy(zero_copy_only=True)
+    assert view.dtype == expected.dtype
+    np.testing.assert_array_equal(view, expected)
+
+
+def test_contiguous_numbers_share_memory_both_ways():
+    values = np.arange(6.0)
+    array = arrow_array(values)
+    assert array.buffers()[1].address == values.ctypes.data
+    assert np.shares_memory(numpy_view(array), values)
+
+
+@pytest.mark.parametrize("array", [pa.array([1.0, None, 3.0]), pa.array([True, False]),
+                                   pa.array(["a", "b"]), pa.array([1, 2], pa.timestamp("s"))],
+                         ids=["nulls", "booleans", "strings", "times"])
+def test_anything_but_numbers_without_nulls_is_left_to_pyarrow(array):
+    assert numpy_view(array) is None
+
+
+@pytest.mark.parametrize("values", [np.arange(10.0)[::2], np.array([True, False]),
+                                    np.array(["a", "bc"])],
+                         ids=["strided", "booleans", "strings"])
+def test_other_arrays_convert_as_pyarrow_converts_them(values):
+    assert arrow_array(values).equals(pa.array(values))
+
+
+def test_streamed_parquet_run_loads_no_pandas_and_matches_csv(tmp_path):
+    """A Parquet trajectory streamed to Parquet gives the values of the same trajectory read
+    from CSV (through pandas), without loading pandas."""
+    t = np.arange(600) / 200.0
+    motion = models.sinusoidal(t)
+    q = quaternion_from_rotation(motion.rotation)
+    frame = pd.DataFrame({"t": t, **dict(zip("xyz", motion.position.T)),
+                          **dict(zip(("qw", "qx", "qy", "qz"), q.T))})
+    write_table(frame, tmp_path / "t.parquet")
+    write_table(frame, tmp_path / "t.csv")
+    code = ("import sys; from gsfric.simulate.run import simulate_file\n"
+            f"simulate_file({str(tmp_path / 't.parquet')!r}, {str(tmp_path / 'a.parquet')!r},"
+            " chunk=250, window=9, progress=False)\n"
+            "print('pandas' in sys.modules)")
+    result = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
+                            timeout=120, check=True)
+    assert result.stdout.split()[-1] == "False"
+    simulate_file(tmp_path / "t.csv", tmp_path / "b.parquet", chunk=250, window=9,
+                  progress=False)
+    assert pq.read_table(tmp_path / "a.parquet").equals(pq.read_table(tmp_path / "b.parquet"))
