@@ -42,6 +42,12 @@ class FlagSpec(ctypes.Structure):
                 ("singular_limit", ctypes.c_double), ("x_size", ctypes.c_longlong),
                 ("cc", ctypes.c_int), ("f0", ctypes.c_int), ("coupling_tol", ctypes.c_double)]
 
+    def outputs_read(self) -> tuple[int, ...]:
+        """The indices of the outputs the flags read (``flag_outputs`` in ``batch.c``): they
+        are computed whether or not they are selected, into a buffer allocated for the call
+        unless the caller passes one."""
+        return tuple(k for k in (self.d, self.s2, self.h, self.cc, self.f0) if k >= 0)
+
 
 def declare(lib: ctypes.CDLL) -> ctypes.CDLL:
     """The loaded library with the C signatures of its entry points (``batch.c``) set."""

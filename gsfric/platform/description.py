@@ -650,14 +650,20 @@ class Platform:
         joints)."""
         g = self.geometry
         e = np.asarray(g.platform_joints, float)
+        c = np.asarray(g.base_joints, float)
         rotation = np.asarray(rotation, float)
-        # R e_i summed term by term, (N, 6, 3), in place
-        d = rotation[:, None, :, 0] * e[None, :, 0, None]
-        d += rotation[:, None, :, 1] * e[None, :, 1, None]
-        d += rotation[:, None, :, 2] * e[None, :, 2, None]
-        d += position[:, None, :]
-        d -= np.asarray(g.base_joints, float)[None]
-        return np.linalg.norm(d, axis=2)
+        # coordinate by coordinate, (N, 6) at a time, in place: (R e_i)_k term by term, then
+        # the squares summed in the order of np.linalg.norm
+        squares = np.zeros((len(rotation), len(e)))
+        for k in range(3):
+            d = rotation[:, k, 0, None] * e[:, 0]
+            d += rotation[:, k, 1, None] * e[:, 1]
+            d += rotation[:, k, 2, None] * e[:, 2]
+            d += position[:, k, None]
+            d -= c[:, k]
+            d *= d
+            squares += d
+        return np.sqrt(squares, out=squares)
 
 
 _SECTIONS: dict[str, type] = {

@@ -61,6 +61,7 @@ class Block:
         self.states = np.empty(size * (state_layout().size + SCRATCH))
         self.times = np.zeros(size)
         self._flag = np.empty(size, dtype=np.int64)
+        self._buffers: dict[str, np.ndarray] = {}
         self.n = 0
 
     def use(self, n: int) -> None:
@@ -72,6 +73,15 @@ class Block:
         self.values = self._values[:n * rows * 6].reshape(n, rows, 6)
         self.out = {"G": self.values.reshape(n, rows * 6)}
         self.flag = self._flag[:n]
+
+    def buffer(self, name: str, width: int) -> np.ndarray:
+        """A buffer (n, width) of the current block for the output ``name``, reused from
+        block to block: the outputs the step flags read, which the compiled code would
+        otherwise allocate for every call."""
+        buf = self._buffers.get(name)
+        if buf is None or buf.size < self.size * width:
+            buf = self._buffers[name] = np.empty(self.size * width)
+        return buf[:self.n * width].reshape(self.n, width)
 
 
 class Evaluation:
@@ -94,6 +104,10 @@ class Evaluation:
             # the platform's own model (derived with its friction model fixed, as evaluate's)
             self.fn = native.get(model_function("envelope", platform.friction.model))
             self.spec = flag_spec(self.fn.outputs, platform.geometry.stroke)
+            read = self.spec.outputs_read()
+            self.read = [(name, size) for k, (name, size, _) in enumerate(self.fn.outputs)
+                         if k in read and name != "G"]
+            self.select = ("G", *(name for name, _ in self.read))
 
     def blocks(self, block: Block, x: np.ndarray, t: np.ndarray) -> Iterator[tuple[int, int]]:
         """Fill ``block`` with the steps ``s:e`` of states x (n, 24) at times t (n,) block
@@ -108,7 +122,9 @@ class Evaluation:
         for s in range(0, n, block.size):
             e = min(n, s + block.size)
             block.use(e - s)
-            self.fn([x[s:e], ev.P, ev.Q], block.out, 1, select=("G",), flags=self.spec,
+            out = {"G": block.out["G"], **{name: block.buffer(name, width)
+                                           for name, width in self.read}}
+            self.fn([x[s:e], ev.P, ev.Q], out, 1, select=self.select, flags=self.spec,
                     flag=block.flag)
             yield s, e
 

@@ -16,7 +16,6 @@ import pandas as pd
 
 from gsfric.evaluation.evaluator import state_array
 from gsfric.platform.description import Platform
-from gsfric.signal.rotations import rotation_from_rpy
 from gsfric.simulate.differentiate import iter_motions
 from gsfric.sweep.blocks import Block, Evaluation
 from gsfric.sweep.envelope import ENVELOPE_COLUMNS, Envelope
@@ -79,10 +78,9 @@ def _pieces(task: Task, block: Block) -> Iterator[tuple[int, np.ndarray, np.ndar
         return
     ws = task.workspace
     per = max(1, block.size // ws.states)
-    rotation = rotation_from_rpy(task.poses[:, 3:6])
     for p0 in range(0, len(task.poses), per):
         first = task.first_pose + p0
-        x = ws.states_of(task.poses[p0:p0 + per], first, rotation[p0:p0 + per], block.states)
+        x = ws.states_of(task.poses[p0:p0 + per], first, block.states)
         yield first * ws.states, x, block.times[:len(x)]
 
 

@@ -172,15 +172,14 @@ class Workspace:
             out[:, varying] = lo[varying] + unit * (hi[varying] - lo[varying])
         return out
 
-    def states_of(self, poses: np.ndarray, first: int, rotation: np.ndarray | None = None,
+    def states_of(self, poses: np.ndarray, first: int,
                   out: np.ndarray | None = None) -> np.ndarray:
         """The ``states`` dynamic states of poses ``first, first + 1, ...``, (n * states, 24).
 
         Laid out as ``gsfric.evaluation.evaluator.state_array`` (``gsfric.compiled.state``).
         The signs come from a counter-based generator (Philox) positioned at the first pose,
         so each pose's states depend on the seed and its index only: the same on every
-        worker, in every run, for any chunking. ``rotation`` (n, 3, 3), the poses' rotation
-        matrices, saves computing them again; ``out``, a contiguous float64 buffer of at least
+        worker, in every run, for any chunking. ``out``, a contiguous float64 buffer of at least
         24 + ``SCRATCH`` (36) values per state, receives the states in its first 24 per state (the
         rest is scratch): nothing of the size of the states is allocated then.
         """
@@ -203,9 +202,7 @@ class Workspace:
             np.copysign(bound, uniform[:, :, 3 * k:3 * k + 3], out=slot)  # -bound below 0.5
             slot[:, 0, :] = 0.0                                           # the static state
         x[:, :, states.position] = poses[:, None, :3]
-        if rotation is None:
-            rotation = rotation_from_rpy(poses[:, 3:6])
-        x[:, :, states.rotation] = rotation.reshape(n, 1, 9)
+        x[:, :, states.rotation] = rotation_from_rpy(poses[:, 3:6]).reshape(n, 1, 9)
         return x.reshape(n * s, states.size)
 
 
