@@ -17,7 +17,7 @@ from hypothesis.extra import numpy as hnp
 
 from gsfric import models
 from gsfric.io.arrow import arrow_array, numpy_view
-from gsfric.io.tables import write_table
+from gsfric.io.tables import column_values, read_columns, read_table, write_table
 from gsfric.signal.rotations import quaternion_from_rotation
 from gsfric.simulate.run import simulate_file
 
@@ -78,3 +78,31 @@ def test_streamed_parquet_run_loads_no_pandas_and_matches_csv(tmp_path):
     simulate_file(tmp_path / "t.csv", tmp_path / "b.parquet", chunk=250, window=9,
                   progress=False)
     assert pq.read_table(tmp_path / "a.parquet").equals(pq.read_table(tmp_path / "b.parquet"))
+
+
+def test_read_columns_gives_read_tables_columns(tmp_path):
+    """Numbers as NumPy (without pandas), anything else (here a NaN, which pandas stores as
+    null) as pyarrow converts it, and a stored pandas index left out: the same numbers and
+    the same first problem as the columns of ``read_table`` (pandas)."""
+    frame = pd.DataFrame({"f": [0.5, 1.0, 2.0], "nan": [0.5, np.nan, 2.0], "i": [1, 2, 3],
+                          "gap": pd.array([1, None, 3], dtype="Int64"), "s": ["a", "b", "c"],
+                          "b": [True, False, True], "f32": np.float32([1, 2, 3])},
+                         index=pd.Index([7, 8, 9], name="sample"))
+    path = tmp_path / "t.parquet"
+    frame.to_parquet(path)      # the index is stored as a column
+    names, columns = read_columns(path)
+    expected = read_table(path)
+    assert names == list(expected.columns) == ["f", "nan", "i", "gap", "s", "b", "f32"]
+    for name, column in zip(names, columns):
+        assert isinstance(column, np.ndarray) == (name in ("f", "i", "f32")), name
+        got, want = column_values(column, name), column_values(expected[name], name)
+        np.testing.assert_array_equal(got[0], want[0])
+        assert got[1] == want[1]
+
+
+def test_read_columns_of_a_csv_file_are_read_tables(tmp_path):
+    path = tmp_path / "t.csv"
+    path.write_text("t,x\n0,1.5\n1,2.5\n")
+    names, columns = read_columns(path)
+    assert names == ["t", "x"]
+    np.testing.assert_array_equal(columns[1], [1.5, 2.5])

@@ -5,7 +5,11 @@ stays silent on noise, white or slow, with a static friction level of its own at
 from __future__ import annotations
 
 import numpy as np
+import pandas as pd
 import pytest
+from hypothesis import given
+from hypothesis import strategies as st
+from hypothesis.extra import numpy as hnp
 from scipy.signal import lfilter
 
 from gsfric.discovery import structure
@@ -13,6 +17,18 @@ from gsfric.discovery import structure
 RATE = 250.0
 M = 6000
 BAND = 2e-3     # m/s: the not-sliding band of these tests
+
+
+@given(hnp.arrays(float, st.tuples(st.integers(0, 40), st.integers(1, 6)),
+                  elements=st.sampled_from([-2.0, -1.0, 0.0, 1.0, 3.0])),
+       st.data())
+def test_direction_is_the_next_sliding_sign_as_a_backward_fill_gives(speed, data):
+    """A not-sliding sample takes the sign of its leg's next sliding one (0 after the last):
+    what pandas' backward fill of the sliding signs gives."""
+    sliding = data.draw(hnp.arrays(bool, speed.shape))
+    expected = pd.DataFrame(np.where(sliding, np.sign(speed), np.nan)).bfill().fillna(0.0)
+    got = structure._next_sliding_sign(np.sign(speed), sliding)
+    np.testing.assert_array_equal(got, expected.to_numpy())
 
 
 def _moves(rng, m=M):

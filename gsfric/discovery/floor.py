@@ -33,7 +33,7 @@ import numpy as np
 from gsfric.errors import InputError
 from gsfric.evaluation.evaluator import Evaluator, state_array
 from gsfric.io.logs import FORCES, UNITS, LogFormat
-from gsfric.io.tables import numeric_columns, read_table
+from gsfric.io.tables import numeric_columns, read_columns
 from gsfric.platform.description import Platform
 from gsfric.signal.noise import spectral_noise_std, white_noise_std
 from gsfric.signal.rotations import (
@@ -214,13 +214,13 @@ def read_noise_record(path: str | os.PathLike[str], log_format: LogFormat | None
     the columns and units a log's format maps to them); InputError naming the file and the
     column for a missing or bad one."""
     fmt = log_format or LogFormat()
-    frame = read_table(path)
+    found = dict(zip(*read_columns(path)))
     names = [fmt.columns.get(name, name) for name in FORCES]
-    missing = [n for n in names if n not in frame.columns]
+    missing = [n for n in names if n not in found]
     if missing:
         raise InputError(f"{path}: no column {missing[0]!r}: a noise record needs the force "
                          "channels F1..F6")
-    columns = numeric_columns(Path(path), [frame[n] for n in names], list(FORCES))
+    columns = numeric_columns(Path(path), [found[n] for n in names], list(FORCES))
     scale = np.array([UNITS["force"][fmt.units.get(name, "N")] for name in FORCES])
     forces = np.stack([columns[name] for name in FORCES], axis=1) * scale
     return ForceNoise.from_record(forces, f"noise record {path}")

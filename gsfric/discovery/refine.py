@@ -6,8 +6,8 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
-from scipy.optimize import minimize_scalar
 
+from gsfric._optional import optional
 from gsfric.discovery import statistics as st
 from gsfric.discovery.evidence import Evidence, Rule, accept
 from gsfric.discovery.pvalues import chi2_sf
@@ -122,6 +122,7 @@ def delay_profile(problem: Problem, theta: np.ndarray, names: list[str],
     current = float(theta[j])
     profile = np.array([value(float(d))[0] for d in delays])
     best = float(delays[int(np.argmin(profile))])
+    minimize_scalar = optional("scipy.optimize").minimize_scalar   # only a delay needs it
     found = minimize_scalar(lambda d: value(d)[0], bounds=(max(d_lo, best - h),
                                                            min(d_hi, best + h)),
                             method="bounded", options={"xatol": 1e-3 * dt})

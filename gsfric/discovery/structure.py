@@ -30,7 +30,6 @@ whether the bin means of the other folds predict the held-out fold.
 from __future__ import annotations
 
 import numpy as np
-import pandas as pd
 
 from gsfric.discovery.evidence import Evidence, Rule, Structure, accept
 from gsfric.discovery.pvalues import alexander_govern, f_sf
@@ -303,6 +302,16 @@ def _driven_part(r: np.ndarray, coef: np.ndarray, scaled: dict, design: list,
 # -- reversals: what the speed does not describe ----------------------------------------------
 
 
+def _next_sliding_sign(sign: np.ndarray, sliding: np.ndarray) -> np.ndarray:
+    """Each sample's ``sign`` (M, 6) at the first sliding sample of its leg at or after it; 0
+    after the leg's last sliding sample."""
+    m = len(sign)
+    rows = np.where(sliding, np.arange(m)[:, None], m)
+    following = np.minimum.accumulate(rows[::-1], axis=0)[::-1]
+    padded = np.vstack([sign, np.zeros((1, sign.shape[1]))])
+    return np.take_along_axis(padded, following, axis=0)
+
+
 def travel_since_reversal(D: np.ndarray, speed: np.ndarray, sliding: np.ndarray
                           ) -> tuple[np.ndarray, np.ndarray]:
     """Each leg's direction of travel and its travel since the last reversal of that direction.
@@ -332,7 +341,7 @@ def travel_since_reversal(D: np.ndarray, speed: np.ndarray, sliding: np.ndarray
         seen yet: the travel since an unseen reversal is unknown).
     """
     D = np.asarray(D, float)
-    d = pd.DataFrame(np.where(sliding, np.sign(speed), np.nan)).bfill().fillna(0.0).to_numpy()
+    d = _next_sliding_sign(np.sign(speed), sliding)
     travel = np.full(D.shape, np.nan)
     for leg in range(D.shape[1]):
         col = d[:, leg]

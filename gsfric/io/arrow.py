@@ -8,6 +8,8 @@ sides, and are converted here; anything else is left to pyarrow and pandas.
 
 from __future__ import annotations
 
+import json
+
 import numpy as np
 
 from gsfric._optional import optional
@@ -34,3 +36,29 @@ def arrow_array(values: np.ndarray):
         return pa.array(values)
     return pa.Array.from_buffers(pa.from_numpy_dtype(values.dtype), len(values),
                                  [None, pa.py_buffer(values)])
+
+
+def column_from_arrow(array):
+    """A column of an Arrow table or record batch (``Array`` or ``ChunkedArray``): numbers
+    without nulls as NumPy (a view of a single chunk), anything else as the pandas Series
+    pyarrow converts it to (nulls, strings, timestamps...)."""
+    chunks = getattr(array, "chunks", [array])
+    views = [numpy_view(chunk) for chunk in chunks]
+    if not views or any(v is None for v in views):
+        return array.to_pandas()
+    return views[0] if len(views) == 1 else np.concatenate(views)
+
+
+def data_columns(schema) -> list[int]:
+    """The indices of the columns of an Arrow ``schema`` that hold data: all but the index a
+    pandas DataFrame stored with its columns (named in the schema's pandas metadata), as
+    ``pandas.read_parquet`` reads the file."""
+    stored = (schema.metadata or {}).get(b"pandas")
+    index = set()
+    if stored is not None:
+        try:
+            index = {c for c in json.loads(stored).get("index_columns", [])
+                     if isinstance(c, str)}
+        except (ValueError, AttributeError):
+            index = set()
+    return [k for k, name in enumerate(schema.names) if name not in index]

@@ -31,7 +31,7 @@ import numpy as np
 from gsfric._checks import as_path
 from gsfric.errors import InputError
 from gsfric.io.logs import FORCES, LENGTHS, QUATERNION, RATES, ColumnReader, LogFormat
-from gsfric.io.tables import read_table
+from gsfric.io.tables import read_columns
 from gsfric.signal.savgol import DEFAULT_POLYORDER
 from gsfric.trajectory import MIN_SAMPLES, Motion
 
@@ -47,24 +47,23 @@ def _read_samples(path: str | os.PathLike[str], measured: bool,
                   log_format: LogFormat | None = None
                   ) -> tuple[Path, dict[str, np.ndarray], tuple[str, ...]]:
     path = as_path(path, "path")
-    return _samples(path, read_table(path), measured, log_format)
+    return _samples(path, *read_columns(path), measured, log_format)
 
 
-def _samples(path, frame, measured: bool, log_format: LogFormat | None
+def _samples(path, names: list, values: list, measured: bool, log_format: LogFormat | None
              ) -> tuple[Path, dict[str, np.ndarray], tuple[str, ...]]:
-    """The checked columns of a whole table; ``path`` names it in messages."""
-    frame = frame.copy(deep=False)
-    names = [str(name).strip() for name in frame.columns]
+    """The checked columns of a whole table (its column ``names`` and ``values``, NumPy arrays
+    or Series); ``path`` names it in messages."""
+    names = [str(name).strip() for name in names]
     if len(set(names)) != len(names):
         duplicate = next(n for n in names if names.count(n) > 1)
         raise InputError(f"{path}: column {duplicate!r} appears more than once")
     reader = ColumnReader(path, log_format, measured)
     orientation = reader.check(names)
-    if len(frame) == 0:
+    if len(values[0]) == 0:
         raise InputError(f"{path}: no data rows")
 
-    frame.columns = names
-    columns = reader.read(frame)
+    columns = reader.read(dict(zip(names, values)))
     t = columns["t"]
     with np.errstate(over="ignore", invalid="ignore"):
         steps = np.diff(t)
@@ -131,8 +130,10 @@ def motion_from_frame(frame: pd.DataFrame, *, window: int | None = None,
     Motion
         N steps.
     """
-    path, columns, orientation = _samples(name, frame.reset_index(drop=True), False,
-                                          log_format)
+    frame = frame.reset_index(drop=True)
+    path, columns, orientation = _samples(
+        name, list(frame.columns), [frame.iloc[:, k] for k in range(frame.shape[1])], False,
+        log_format)
     return motion_from_columns(path, columns, orientation, window, polyorder)
 
 

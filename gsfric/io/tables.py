@@ -17,6 +17,7 @@ import numpy as np
 from gsfric._checks import short
 from gsfric._optional import optional
 from gsfric.errors import InputError
+from gsfric.io.arrow import column_from_arrow, data_columns
 from gsfric.io.files import atomic_write, is_stream
 
 if TYPE_CHECKING:
@@ -184,6 +185,31 @@ def read_table(path: str | os.PathLike[str]) -> pd.DataFrame:
             raise InputError(f"{path}: a column name appears more than once")
     frame.columns = names
     return frame
+
+
+def read_columns(path: str | os.PathLike[str]) -> tuple[list[str], list]:
+    """The columns of a CSV or Parquet file, with the checks and messages of ``read_table``.
+
+    Returns the column names and the columns: NumPy arrays for numbers without gaps, pandas
+    Series for anything else. A Parquet file of numbers is read without pandas.
+    """
+    path = Path(path)
+    if check_file(path) == "csv":
+        frame = read_table(path)
+        return list(frame.columns), [frame.iloc[:, k] for k in range(frame.shape[1])]
+    pyarrow = optional("pyarrow")
+    pq = optional("pyarrow.parquet")
+    try:
+        table = pq.ParquetFile(path).read()
+        keep = data_columns(table.schema)
+        names = [str(table.schema.names[k]) for k in keep]
+        columns = [column_from_arrow(table.column(k)) for k in keep]
+    except (pyarrow.ArrowException, ValueError, TypeError, OSError,
+            NotImplementedError) as error:
+        raise InputError(f"{path}: cannot read as Parquet: {error}") from None
+    if len(set(names)) != len(names):
+        raise InputError(f"{path}: a column name appears more than once")
+    return names, columns
 
 
 def write_table(frame: pd.DataFrame, path: str | os.PathLike[str]) -> None:

@@ -17,7 +17,7 @@ import numpy as np
 
 from gsfric._optional import optional
 from gsfric.errors import GsfricWarning, InputError
-from gsfric.io.arrow import numpy_view
+from gsfric.io.arrow import column_from_arrow, data_columns
 from gsfric.io.logs import FORCES, QUATERNION, ColumnReader
 from gsfric.io.tables import check_file, check_unique_columns, csv_options, field_count_problem
 from gsfric.signal.rotations import quaternion_from_euler
@@ -186,7 +186,8 @@ def _parquet_frames(path: Path, rows: int) -> Iterator[Frame]:
         # without pre-buffering: pre-buffered row groups stay cached in the reader, so memory
         # would grow by a row group for every row group read
         source = pq.ParquetFile(path, pre_buffer=False)
-        names = [str(n) for n in source.schema_arrow.names]
+        keep = data_columns(source.schema_arrow)
+        names = [str(source.schema_arrow.names[k]) for k in keep]
     except errors as error:
         raise InputError(f"{path}: cannot read as Parquet: {error}") from None
     if len(set(names)) != len(names):
@@ -194,24 +195,16 @@ def _parquet_frames(path: Path, rows: int) -> Iterator[Frame]:
     if source.metadata.num_rows == 0:
         yield names, [np.empty(0) for _ in names]
         return
-    batches = source.iter_batches(batch_size=rows)
+    batches = source.iter_batches(batch_size=rows, columns=names)
     while True:
         try:
             batch = next(batches)
-            values = [_column_values(column) for column in batch.columns]
+            values = [column_from_arrow(column) for column in batch.columns]
         except StopIteration:
             return
         except errors as error:
             raise InputError(f"{path}: cannot read as Parquet: {error}") from None
         yield names, values
-
-
-def _column_values(array):
-    """A column of a record batch: numbers without nulls as a NumPy view of the Arrow buffer
-    (no copy), anything else as a Series, as pandas converts it (nulls, strings,
-    timestamps...)."""
-    values = numpy_view(array)
-    return array.to_pandas() if values is None else values
 
 
 # -- Euler checks across blocks -----------------------------------------------------------------
