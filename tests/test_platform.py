@@ -13,6 +13,7 @@ from hypothesis import strategies as st
 
 import gsfric.platform.description as platform_module
 from gsfric.errors import InputError
+from gsfric.models import reference_platform
 from gsfric.platform.description import (
     Body,
     Friction,
@@ -21,6 +22,7 @@ from gsfric.platform.description import (
     Platform,
     default_universal_axes,
 )
+from gsfric.signal.rotations import rotation_from_rpy
 
 EFFECTS = {
     "stribeck": {"static": 0.0, "velocity": 0.01},
@@ -398,3 +400,18 @@ def test_random_toml_documents_raise_only_input_error(tmp_path_factory, lines):
         Platform.from_toml(path)
     except InputError as error:
         assert "\n" not in str(error)
+
+
+@given(st.integers(1, 40), st.integers(0, 2**32 - 1))
+def test_leg_lengths_are_the_joint_distances(n, seed):
+    """|p + R e_i - c_i| for every pose and leg, against a loop over the legs with matmul."""
+    rng = np.random.default_rng(seed)
+    platform = reference_platform()
+    position = rng.normal([0, 0, 0.7], 0.1, (n, 3))
+    rotation = rotation_from_rpy(rng.uniform(-0.5, 0.5, (n, 3)))
+    e = np.asarray(platform.geometry.platform_joints)
+    c = np.asarray(platform.geometry.base_joints)
+    expected = np.stack([np.linalg.norm(position + rotation @ e[i] - c[i], axis=1)
+                         for i in range(6)], axis=1)
+    np.testing.assert_allclose(platform.leg_lengths(position, rotation), expected,
+                               rtol=1e-14)

@@ -4,7 +4,7 @@ A ``Platform`` is built from a TOML file (``Platform.from_toml``), from a dictio
 layout (``Platform.from_dict``) or directly from its parts, and written back with ``to_toml``;
 reading what ``to_toml`` wrote gives an equal ``Platform`` (floats round-trip exactly).
 
-Units are SI: m, kg, kg m^2, N, s. The TOML layout (see SPEC.md)::
+Units are SI: m, kg, kg m^2, N, s. The TOML layout (docs/reference/platform-file.md)::
 
     gravity = 9.81
     [geometry]       base_joints, platform_joints, universal_axes (optional), stroke (optional)
@@ -528,7 +528,7 @@ class Platform:
 
     @classmethod
     def from_toml(cls, path: str | os.PathLike[str]) -> Platform:
-        """Read a platform TOML file (layout in SPEC.md).
+        """Read a platform TOML file (layout in docs/reference/platform-file.md).
 
         Raises
         ------
@@ -648,14 +648,11 @@ class Platform:
         """Leg lengths ``|p + R e_i - c_i|`` (N, 6), m, of platform positions (N, 3), m, and
         orientations (N, 3, 3) in the base frame (e_i, c_i the platform's and the base's
         joints)."""
-        g = self.geometry
-        e = np.asarray(g.platform_joints, float)
-        c = np.asarray(g.base_joints, float)
+        e, c = (np.asarray(j, float) for j in (self.geometry.platform_joints,
+                                               self.geometry.base_joints))
         rotation = np.asarray(rotation, float)
-        # coordinate by coordinate, (N, 6) at a time, in place: (R e_i)_k term by term, then
-        # the squares summed in the order of np.linalg.norm
-        squares = np.zeros((len(rotation), len(e)))
-        for k in range(3):
+        squares = np.zeros((len(rotation), len(e)))   # summed as np.linalg.norm sums them
+        for k in range(3):                             # coordinate k, (N, 6), in place
             d = rotation[:, k, 0, None] * e[:, 0]
             d += rotation[:, k, 1, None] * e[:, 1]
             d += rotation[:, k, 2, None] * e[:, 2]
