@@ -413,8 +413,8 @@ class ColumnReader:
     def read(self, frame, first_row: int = 0) -> dict[str, np.ndarray]:
         """The block's columns as gsfric's, SI units.
 
-        ``frame``: a DataFrame with the stripped header, or a dict of stripped column name ->
-        NumPy array or Series. Keys: ``t, x, y, z``, the orientation columns, F1..F6 and
+        ``frame``: the block's columns by stripped name (NumPy arrays, or Series for columns
+        that are not plain numbers). Keys: ``t, x, y, z``, the orientation columns, F1..F6 and
         D1..D6 where present, the mapped rate columns (``RATES``), and ``keep:NAME`` for each
         column carried through (values as in the file). Dropout rows are left out.
         ``first_row``: the 0-based data row of the frame's first row in the file.
