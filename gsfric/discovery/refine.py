@@ -34,8 +34,8 @@ def refine(problem: Problem, theta: np.ndarray, names: list[str], whitener: st.W
     theta[cols] = np.clip(theta[cols], lo, hi)
     if DELAY in names:
         profiled = delay_profile(problem, theta, names, whitener)
-        if profiled["theta"] is not None:
-            theta, inside = profiled["theta"], False
+        if profiled.theta is not None:
+            theta, inside = profiled.theta, False
 
     def at(th):
         F, J = model.jacobian(th, names, rows=problem.used)
@@ -66,10 +66,35 @@ def refine(problem: Problem, theta: np.ndarray, names: list[str], whitener: st.W
     return theta, r, J
 
 
+@dataclass
+class DelayProfile:
+    """The global estimate of ``time_offset.delay`` (``delay_profile``).
+
+    Attributes
+    ----------
+    theta : ndarray or None
+        The parameters at the profile's minimum, the others stepped by their linear refit;
+        None when the current delay is already best.
+    delay : float
+        The delay at the minimum (the current one when ``theta`` is None), s.
+    sse, sse_current : float
+        Prewhitened residual sums of squares at ``delay`` and at the current delay.
+    delays, profile : ndarray, shape (n,)
+        The coarse grid of delays, s, and its sums of squares.
+    """
+
+    theta: np.ndarray | None
+    delay: float
+    sse: float
+    sse_current: float
+    delays: np.ndarray
+    profile: np.ndarray
+
+
 def delay_profile(problem: Problem, theta: np.ndarray, names: list[str],
-                  whitener: st.Whitener) -> dict:
-    """The global estimate of ``time_offset.delay``: the profile of the prewhitened residual
-    sum of squares over the delay, the other parameters of ``names`` refitted linearly at each.
+                  whitener: st.Whitener) -> DelayProfile:
+    """The profile of the prewhitened residual sum of squares over ``time_offset.delay``, the
+    other parameters of ``names`` refitted linearly at each delay.
 
     F depends on the delay only through a shift of the model's forces in time (``catalog``:
     linear interpolation), which moves friction steps and load peaks by whole samples: the
@@ -81,41 +106,15 @@ def delay_profile(problem: Problem, theta: np.ndarray, names: list[str],
     ``Settings.delay_grid`` steps (at least one sample) over +-``Settings.delay_range``, then a
     bounded scalar search within one grid step either side of the best point; the current value
     is kept unless the profile's minimum is lower.
-
-    Returns
-    -------
-    dict
-        ``theta`` (the parameters at the profile's minimum, the others stepped by their linear
-        refit; None when the current value is already best), ``delay`` (s), ``sse`` and
-        ``sse_current`` (prewhitened sums of squares at the minimum and at the current delay),
-        ``delays`` and ``profile`` (the coarse grid and its sums of squares).
     """
-    model = problem.model
-    j = model.index[DELAY]
+    j = problem.model.index[DELAY]
     others = [n for n in names if n != DELAY]
-    cols = [model.index[n] for n in others]
-    lo = np.array([problem.bounds(n)[0] for n in others]) - theta[cols]
-    hi = np.array([problem.bounds(n)[1] for n in others]) - theta[cols]
-    d_lo, d_hi = problem.bounds(DELAY)
-    t = model.t
+    cols = [problem.model.index[n] for n in others]
+    value = _refitted_sse(problem, theta, others, whitener)
+    t = problem.model.t
     span = min(problem.settings.delay_range, 0.25 * float(t[-1] - t[0]))
+    d_lo, d_hi = problem.bounds(DELAY)
     d_lo, d_hi = max(d_lo, -span), min(d_hi, span)
-    at_zero = theta.copy()
-    at_zero[j] = 0.0
-    F, J = model.jacobian(at_zero, others)
-    n, k = len(t), len(others)
-    FJ = np.concatenate([F[:, :, None], J], axis=2).reshape(n, -1)
-    del F, J
-    used, weight = problem.used, problem.weight
-
-    def value(d: float) -> tuple[float, np.ndarray]:
-        moved = shift(t, FJ, d)[used].reshape(-1, 6, k + 1)
-        r = problem.mask(problem.y - moved[:, :, 0])
-        X = moved[:, :, 1:] * weight[:, :, None]
-        A, b, c, _ = st.Blocks.whitened(whitener, X, r, 1).total()
-        step = st.solve(A, b, lo, hi)
-        return st.sse(A, b, c, step), step
-
     dt = float(np.median(np.diff(t)))
     h = max(dt, (d_hi - d_lo) / problem.settings.delay_grid)
     delays = np.arange(d_lo, d_hi + 0.5 * h, h)
@@ -129,17 +128,43 @@ def delay_profile(problem: Problem, theta: np.ndarray, names: list[str],
     candidates = [(float(profile.min()), best), (float(found.fun), float(found.x))]
     sse_current = value(current)[0]
     sse_best, delay = min(candidates)
-    out = {"theta": None, "delay": current, "sse": sse_current, "sse_current": sse_current,
-           "delays": delays, "profile": profile}
-    if sse_best < sse_current:
-        _, step = value(delay)
-        new = theta.copy()
-        new[j] = delay
-        # within the bounds exactly (the step's bounds were relative to theta: rounding)
-        bounds = np.array([problem.bounds(n) for n in others]).reshape(-1, 2)
-        new[cols] = np.clip(theta[cols] + step, bounds[:, 0], bounds[:, 1])
-        out.update(theta=new, delay=delay, sse=sse_best)
-    return out
+    if not sse_best < sse_current:
+        return DelayProfile(None, current, sse_current, sse_current, delays, profile)
+    _, step = value(delay)
+    new = theta.copy()
+    new[j] = delay
+    # within the bounds exactly (the step's bounds were relative to theta: rounding)
+    bounds = np.array([problem.bounds(n) for n in others]).reshape(-1, 2)
+    new[cols] = np.clip(theta[cols] + step, bounds[:, 0], bounds[:, 1])
+    return DelayProfile(new, delay, sse_best, sse_current, delays, profile)
+
+
+def _refitted_sse(problem: Problem, theta: np.ndarray, others: list[str],
+                  whitener: st.Whitener):
+    """``value(d)``: the prewhitened sum of squares at delay ``d`` with the ``others``
+    refitted linearly within their bounds, and their step from ``theta``; the forces and
+    derivatives at zero delay are computed once, then shifted."""
+    model = problem.model
+    cols = [model.index[n] for n in others]
+    lo = np.array([problem.bounds(n)[0] for n in others]) - theta[cols]
+    hi = np.array([problem.bounds(n)[1] for n in others]) - theta[cols]
+    at_zero = theta.copy()
+    at_zero[model.index[DELAY]] = 0.0
+    F, J = model.jacobian(at_zero, others)
+    n, k = len(model.t), len(others)
+    FJ = np.concatenate([F[:, :, None], J], axis=2).reshape(n, -1)
+    del F, J
+    used, weight, t = problem.used, problem.weight, model.t
+
+    def value(d: float) -> tuple[float, np.ndarray]:
+        moved = shift(t, FJ, d)[used].reshape(-1, 6, k + 1)
+        r = problem.mask(problem.y - moved[:, :, 0])
+        X = moved[:, :, 1:] * weight[:, :, None]
+        A, b, c, _ = st.Blocks.whitened(whitener, X, r, 1).total()
+        step = st.solve(A, b, lo, hi)
+        return st.sse(A, b, c, step), step
+
+    return value
 
 
 # -- stability of a named effect across the halves of the record --------------------------------
