@@ -456,7 +456,8 @@ def test_workspace_states_follow_their_definition():
 
 def test_reachability_reports_the_first_unreachable_pose_of_any_block(monkeypatch):
     """Platform.leg_lengths checked block by block: the count of unreachable poses and the
-    first one (its leg and length) whatever the blocks; reachable poses pass."""
+    first one (its leg and length) whatever the blocks and the threads sharing them;
+    reachable poses pass."""
     _, poses = _flagging_workspace()
     platform = models.reference_platform()
     lengths = platform.leg_lengths(poses[:, :3], rotation_from_rpy(poses[:, 3:6]))
@@ -467,12 +468,13 @@ def test_reachability_reports_the_first_unreachable_pose_of_any_block(monkeypatc
     leg = int(np.flatnonzero(outside[k])[0])
     assert 0 < k and bad.sum() > 1
     messages = []
-    for size in (3, 8192):
+    for size, threads in ((3, 1), (3, 4), (8192, 4)):
         monkeypatch.setattr("gsfric.sweep.workspace._LENGTH_BLOCK", size)
+        monkeypatch.setattr("gsfric.sweep.workspace.CHECK_THREADS", threads)
         with pytest.raises(InputError) as info:
             check_reachable(platform, poses, "ws.toml")
         messages.append(str(info.value))
-    assert messages[0] == messages[1]
+    assert messages[0] == messages[1] == messages[2]
     assert messages[0].startswith(f"ws.toml: unreachable: {int(bad.sum())} of {len(poses)} ")
     assert f"first: pose {k} (" in messages[0]
     assert f"leg {leg + 1} length {lengths[k, leg]:.4g} m" in messages[0]

@@ -8,6 +8,7 @@ state input x (``gsfric.compiled.state.state_layout``, from the manifest).
 
 from __future__ import annotations
 
+import functools
 import os
 from collections.abc import Mapping
 from dataclasses import dataclass, field
@@ -17,6 +18,7 @@ import numpy as np
 from scipy.stats import qmc
 
 from gsfric._checks import as_float, short, suggest
+from gsfric._threads import in_parallel
 from gsfric.compiled.state import state_layout
 from gsfric.errors import InputError
 from gsfric.io.files import read_toml
@@ -210,22 +212,26 @@ _LENGTH_BLOCK = 8192
 """Poses whose leg lengths are computed at a time (a workspace of a million poses is checked
 in bounded memory before its sweep starts)."""
 
+CHECK_THREADS = 4
+"""Threads that share the check of the poses against the stroke, at most (and one per core,
+one per block): the check is the longest serial step before a sweep's first task, and its
+NumPy operations on blocks of poses release the interpreter lock."""
+
 
 def check_reachable(platform: Platform, poses: np.ndarray, source: str = "workspace") -> None:
     """``InputError`` (one line) when a pose (n, 6) (``POSE`` columns) puts a leg outside the
-    platform's stroke; leg lengths ``Platform.leg_lengths``, ``_LENGTH_BLOCK`` poses at a time."""
+    platform's stroke; leg lengths ``Platform.leg_lengths``, ``_LENGTH_BLOCK`` poses at a time,
+    the poses shared between up to ``CHECK_THREADS`` threads."""
     stroke = platform.geometry.stroke
     if stroke is None:
         return
-    count, first = 0, None
-    for s in range(0, len(poses), _LENGTH_BLOCK):
-        part = poses[s:s + _LENGTH_BLOCK]
-        D = platform.leg_lengths(part[:, :3], rotation_from_rpy(part[:, 3:6]))
-        bad = ((D < stroke[0]) | (D > stroke[1])).any(axis=1)
-        count += int(bad.sum())
-        if first is None and bad.any():
-            k = int(np.flatnonzero(bad)[0])
-            first = (s + k, D[k])
+    blocks = -(-len(poses) // _LENGTH_BLOCK)
+    parts = max(1, min(CHECK_THREADS, os.cpu_count() or 1, blocks))
+    edges = [_LENGTH_BLOCK * (blocks * p // parts) for p in range(parts)] + [len(poses)]
+    found = in_parallel(*(functools.partial(_outside, platform, poses, a, b)
+                          for a, b in zip(edges[:-1], edges[1:])))
+    count = sum(c for c, _ in found)
+    first = next((f for _, f in found if f is not None), None)
     if first is None:
         return
     k, lengths = first
@@ -234,3 +240,20 @@ def check_reachable(platform: Platform, poses: np.ndarray, source: str = "worksp
     raise InputError(f"{source}: unreachable: {count} of {len(poses)} poses put a "
                      f"leg outside the stroke [{stroke[0]:g}, {stroke[1]:g}] m; first: pose "
                      f"{k} ({pose}), leg {leg + 1} length {lengths[leg]:.4g} m")
+
+
+def _outside(platform: Platform, poses: np.ndarray, start: int, stop: int
+             ) -> tuple[int, tuple[int, np.ndarray] | None]:
+    """The poses ``start:stop`` outside the stroke: their count, and the first (its index and
+    leg lengths), or None."""
+    lo, hi = platform.geometry.stroke
+    count, first = 0, None
+    for s in range(start, stop, _LENGTH_BLOCK):
+        part = poses[s:min(stop, s + _LENGTH_BLOCK)]
+        D = platform.leg_lengths(part[:, :3], rotation_from_rpy(part[:, 3:6]))
+        bad = ((D < lo) | (D > hi)).any(axis=1)
+        count += int(bad.sum())
+        if first is None and bad.any():
+            k = int(np.flatnonzero(bad)[0])
+            first = (s + k, D[k])
+    return count, first
