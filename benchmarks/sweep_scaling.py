@@ -61,13 +61,13 @@ from gsfric.compiled import native  # noqa: E402
 from gsfric.compiled.state import state_layout  # noqa: E402
 from gsfric.evaluation.evaluator import Evaluator  # noqa: E402
 from gsfric.evaluation.parameters import model_function  # noqa: E402
-from gsfric.signal.rotations import rotation_from_rpy  # noqa: E402
 from gsfric.sweep import Workspace, sweep  # noqa: E402
 from gsfric.sweep.blocks import Block, Evaluation  # noqa: E402
 from gsfric.sweep.envelope import Envelope  # noqa: E402
 from gsfric.sweep.plan import CHUNK_STEPS  # noqa: E402
 from gsfric.sweep.run import local_cluster  # noqa: E402
 from gsfric.sweep.tasks import BLOCK_STEPS, Task, run_task  # noqa: E402
+from gsfric.sweep.workspace import SCRATCH  # noqa: E402
 from gsfric.trajectory import Motion  # noqa: E402
 
 PATHS = ("evaluate", "eval-only", "envelope-only", "direct", "serial", "dask-1", "dask-2")
@@ -84,12 +84,12 @@ def workspace(steps: int, states: int = 8) -> Workspace:
 
 def _blocks(ws, poses):
     """(first step, states, times) of the workspace, ``BLOCK_STEPS`` states at a time, built as
-    the sweep builds them (rotations once, states per block)."""
+    the sweep builds them (into one reused buffer)."""
     per = max(1, BLOCK_STEPS // ws.states)
-    rotation = rotation_from_rpy(poses[:, 3:6])
     zeros = np.zeros(per * ws.states)
+    buffer = np.empty(per * ws.states * (state_layout().size + SCRATCH))
     for p0 in range(0, len(poses), per):
-        x = ws.states_of(poses[p0:p0 + per], p0, rotation[p0:p0 + per])
+        x = ws.states_of(poses[p0:p0 + per], p0, out=buffer)
         yield p0 * ws.states, x, zeros[:len(x)]
 
 

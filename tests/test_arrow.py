@@ -17,6 +17,7 @@ from hypothesis.extra import numpy as hnp
 
 from gsfric import models
 from gsfric.io.arrow import arrow_array, numpy_view
+from gsfric.io.readers import read_trajectory
 from gsfric.io.tables import column_values, read_columns, read_table, write_table
 from gsfric.signal.rotations import quaternion_from_rotation
 from gsfric.simulate.run import simulate_file
@@ -82,14 +83,14 @@ def test_streamed_parquet_run_loads_no_pandas_and_matches_csv(tmp_path):
 
 def test_read_columns_gives_read_tables_columns(tmp_path):
     """Numbers as NumPy (without pandas), anything else (here a NaN, which pandas stores as
-    null) as pyarrow converts it, and a stored pandas index left out: the same numbers and
+    null) as pyarrow converts it, and an unnamed pandas index left out: the same numbers and
     the same first problem as the columns of ``read_table`` (pandas)."""
     frame = pd.DataFrame({"f": [0.5, 1.0, 2.0], "nan": [0.5, np.nan, 2.0], "i": [1, 2, 3],
                           "gap": pd.array([1, None, 3], dtype="Int64"), "s": ["a", "b", "c"],
                           "b": [True, False, True], "f32": np.float32([1, 2, 3])},
-                         index=pd.Index([7, 8, 9], name="sample"))
+                         index=pd.Index([7, 8, 9]))
     path = tmp_path / "t.parquet"
-    frame.to_parquet(path)      # the index is stored as a column
+    frame.to_parquet(path)      # the unnamed index is stored as __index_level_0__
     names, columns = read_columns(path)
     expected = read_table(path)
     assert names == list(expected.columns) == ["f", "nan", "i", "gap", "s", "b", "f32"]
@@ -106,3 +107,33 @@ def test_read_columns_of_a_csv_file_are_read_tables(tmp_path):
     names, columns = read_columns(path)
     assert names == ["t", "x"]
     np.testing.assert_array_equal(columns[1], [1.5, 2.5])
+
+
+@pytest.mark.parametrize("metadata", [b"not json", b"[]", b'{"index_columns": null}',
+                                      b'{"index_columns": [1, {"kind": "range"}]}'],
+                         ids=["not-json", "a-list", "null", "no-names"])
+def test_unreadable_pandas_metadata_leaves_every_column(tmp_path, metadata):
+    table = pa.table({"t": [0.0, 1.0], "x": [1.0, 2.0]})
+    pq.write_table(table.replace_schema_metadata({b"pandas": metadata}), tmp_path / "m.parquet")
+    names, columns = read_columns(tmp_path / "m.parquet")
+    assert names == ["t", "x"]
+    np.testing.assert_array_equal(columns[1], [1.0, 2.0])
+
+
+def test_a_named_index_is_a_trajectory_column_streamed_or_not(tmp_path):
+    """A trajectory whose time is the DataFrame's index (``set_index("t")``) reads, streamed
+    (simulate) or whole (read_trajectory), as the flat file."""
+    t = np.arange(300) / 200.0
+    motion = models.sinusoidal(t)
+    q = quaternion_from_rotation(motion.rotation)
+    frame = pd.DataFrame({"t": t, **dict(zip("xyz", motion.position.T)),
+                          **dict(zip(("qw", "qx", "qy", "qz"), q.T))})
+    frame.to_parquet(tmp_path / "flat.parquet", index=False)
+    frame.set_index("t").to_parquet(tmp_path / "indexed.parquet")
+    flat, indexed = (read_trajectory(tmp_path / f"{n}.parquet") for n in ("flat", "indexed"))
+    np.testing.assert_array_equal(flat.acceleration, indexed.acceleration)
+    for name in ("flat", "indexed"):
+        simulate_file(tmp_path / f"{name}.parquet", tmp_path / f"{name}-out.parquet",
+                      chunk=128, window=9, progress=False)
+    assert pq.read_table(tmp_path / "flat-out.parquet").equals(
+        pq.read_table(tmp_path / "indexed-out.parquet"))

@@ -9,10 +9,14 @@ sides, and are converted here; anything else is left to pyarrow and pandas.
 from __future__ import annotations
 
 import json
+import re
 
 import numpy as np
 
 from gsfric._optional import optional
+
+_UNNAMED_INDEX = re.compile(r"__index_level_[0-9]+__")
+"""How pandas names the column of an unnamed index it stores in a Parquet file."""
 
 
 def numpy_view(array) -> np.ndarray | None:
@@ -50,15 +54,13 @@ def column_from_arrow(array):
 
 
 def data_columns(schema) -> list[int]:
-    """The indices of the columns of an Arrow ``schema`` that hold data: all but the index a
-    pandas DataFrame stored with its columns (named in the schema's pandas metadata), as
-    ``pandas.read_parquet`` reads the file."""
-    stored = (schema.metadata or {}).get(b"pandas")
-    index = set()
-    if stored is not None:
-        try:
-            index = {c for c in json.loads(stored).get("index_columns", [])
-                     if isinstance(c, str)}
-        except (ValueError, AttributeError):
-            index = set()
-    return [k for k, name in enumerate(schema.names) if name not in index]
+    """The indices of the columns of an Arrow ``schema`` that hold data: all but an unnamed
+    index a pandas DataFrame stored beside its columns (``__index_level_0__``, named in the
+    schema's pandas metadata). A named index (``df.set_index("t")``) is a column like the
+    others; metadata that cannot be read is ignored."""
+    try:
+        index = json.loads((schema.metadata or {})[b"pandas"])["index_columns"]
+        unnamed = {c for c in index if isinstance(c, str) and _UNNAMED_INDEX.fullmatch(c)}
+    except (KeyError, TypeError, ValueError):
+        unnamed = set()
+    return [k for k, name in enumerate(schema.names) if name not in unnamed]

@@ -3,7 +3,9 @@
 The format follows the extension: ``.csv`` or ``.parquet`` / ``.pq`` (case-insensitive). Every
 problem with an input file raises an ``InputError`` with a one-line message naming the file and,
 where it applies, the row and the column, e.g. ``trajectory.csv: row 17: column 'x' is NaN``.
-Rows are data rows counted from 1 (the CSV header is not counted).
+Rows are data rows counted from 1 (the CSV header is not counted). Of an index that pandas
+stored in a Parquet file, a named one (``df.set_index("t")``) is read as a column, an unnamed
+one is ignored.
 
 Trajectory files hold ``t, x, y, z`` (s, m; platform frame origin in the base frame) and either
 the ZXZ angles ``alpha, beta, gamma`` (rad) or a unit quaternion ``qw, qx, qy, qz`` (platform

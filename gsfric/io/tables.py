@@ -191,7 +191,9 @@ def read_columns(path: str | os.PathLike[str]) -> tuple[list[str], list]:
     """The columns of a CSV or Parquet file, with the checks and messages of ``read_table``.
 
     Returns the column names and the columns: NumPy arrays for numbers without gaps, pandas
-    Series for anything else. A Parquet file of numbers is read without pandas.
+    Series for anything else. A Parquet file of numbers is read without pandas. Of an index
+    that pandas stored in the file, a named one (``df.set_index("t")``) is a column like the
+    others, an unnamed one is left out.
     """
     path = Path(path)
     if check_file(path) == "csv":

@@ -80,7 +80,7 @@ def _pieces(task: Task, block: Block) -> Iterator[tuple[int, np.ndarray, np.ndar
     per = max(1, block.size // ws.states)
     for p0 in range(0, len(task.poses), per):
         first = task.first_pose + p0
-        x = ws.states_of(task.poses[p0:p0 + per], first, block.states)
+        x = ws.states_of(task.poses[p0:p0 + per], first, out=block.states)
         yield first * ws.states, x, block.times[:len(x)]
 
 

@@ -174,7 +174,7 @@ class Workspace:
             out[:, varying] = lo[varying] + unit * (hi[varying] - lo[varying])
         return out
 
-    def states_of(self, poses: np.ndarray, first: int,
+    def states_of(self, poses: np.ndarray, first: int, *,
                   out: np.ndarray | None = None) -> np.ndarray:
         """The ``states`` dynamic states of poses ``first, first + 1, ...``, (n * states, 24).
 
