@@ -137,3 +137,11 @@ def test_a_named_index_is_a_trajectory_column_streamed_or_not(tmp_path):
                       chunk=128, window=9, progress=False)
     assert pq.read_table(tmp_path / "flat-out.parquet").equals(
         pq.read_table(tmp_path / "indexed-out.parquet"))
+
+
+def test_text_with_gaps_is_written_with_missing_values():
+    """A kept text column with gaps (pandas gives NaN or None there) becomes nulls."""
+    array = arrow_array(np.array(["a", np.nan, None, "b"], dtype=object))
+    assert array.to_pylist() == ["a", None, None, "b"]
+    floats = arrow_array(np.array([1.0, np.nan])[::-1])          # strided: NaN stays a value
+    assert floats.null_count == 0 and np.isnan(floats.to_numpy()[0])

@@ -33,11 +33,12 @@ def numpy_view(array) -> np.ndarray | None:
 
 def arrow_array(values: np.ndarray):
     """A ``pyarrow.Array`` of a 1-D NumPy array: over the same memory for contiguous integers
-    or floats, as ``pyarrow.array`` converts it otherwise."""
+    or floats, as ``pyarrow.array`` converts it otherwise; in an array of objects (text with
+    gaps, as pandas reads it), None and NaN are missing values."""
     pa = optional("pyarrow")
     if values.ndim != 1 or values.dtype.kind not in "iuf" or not values.flags.c_contiguous \
             or not values.dtype.isnative:
-        return pa.array(values)
+        return pa.array(values, from_pandas=values.dtype.kind == "O")
     return pa.Array.from_buffers(pa.from_numpy_dtype(values.dtype), len(values),
                                  [None, pa.py_buffer(values)])
 
