@@ -308,3 +308,13 @@ def test_gcv_window_is_the_window_filtering_gives(noise, shape):
 def test_gcv_window_needs_a_window():
     with pytest.raises(ValueError, match="fewer than the shortest window"):
         gcv_window(np.ones(4), 4)
+
+
+@pytest.mark.parametrize("outlier", [1.2e154, 1e300])
+def test_gcv_window_of_squares_beyond_the_float_range_is_the_filtering_one(outlier):
+    """A sample so large that its squares overflow: the window filtering with every candidate
+    gives, not an error."""
+    y = 0.7 + 0.01 * np.sin(np.arange(300) / 20.0)
+    y[0] = outlier
+    with np.errstate(over="ignore", invalid="ignore"):
+        assert gcv_window(y, 2) == _gcv_by_filtering(y, 2)

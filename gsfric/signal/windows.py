@@ -60,6 +60,8 @@ def gcv_window(y: np.ndarray, polyorder: int) -> int:
     record = _Record(y.reshape(len(y), -1), windows[-1])
     approx, error = zip(*(record.spectral(w, polyorder) for w in windows))
     lo, hi = np.subtract(approx, error), np.add(approx, error)
+    if not (np.isfinite(lo).all() and np.isfinite(hi).all()):
+        return _every_score(y, windows, polyorder)
     exact = np.zeros(len(windows), bool)
     transformed = np.zeros(len(windows), bool)
     while True:
@@ -76,7 +78,15 @@ def gcv_window(y: np.ndarray, polyorder: int) -> int:
                 lo[i], hi[i] = max(lo[i], a - e), min(hi[i], a + e)
                 transformed[i] = True
     left = np.flatnonzero(lo <= hi.min())
+    if not (len(left) and np.isfinite(lo).all() and np.isfinite(hi).all()):
+        return _every_score(y, windows, polyorder)
     return windows[left[int(np.argmin(lo[left]))]]
+
+
+def _every_score(y: np.ndarray, windows: list[int], polyorder: int) -> int:
+    """``gcv_window`` by its definition, filtering with every candidate: for squares beyond
+    the float range (absurd poses), where the bounds of the fast path say nothing."""
+    return windows[int(np.argmin([_gcv_score(y, w, polyorder) for w in windows]))]
 
 
 def _gcv_score(y: np.ndarray, window: int, polyorder: int) -> float:
