@@ -164,5 +164,3 @@ def fields_equal(a: object, b: object) -> bool:
         elif x != y:
             return False
     return True
-
-

@@ -415,4 +415,3 @@ class CasadiFunction:
             return out
 
         return call
-

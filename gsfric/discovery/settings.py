@@ -200,4 +200,3 @@ class Settings:
     """Smallest upper edge of the ``reversal`` band, m/s (``regimes.bands``)."""
     time_stretches: int = 5
     """Equal stretches of the record in the ``time`` regime (``regimes.bands``)."""
-

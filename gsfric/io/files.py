@@ -515,4 +515,3 @@ def _toml_problem(text: str, error: Exception) -> str:
         if key:
             return f"line {number}: key {key!r} given twice; give each key once"
     return f"invalid TOML: {message}"
-

@@ -648,8 +648,8 @@ class Platform:
         """Leg lengths ``|p + R e_i - c_i|`` (N, 6), m, of platform positions (N, 3), m, and
         orientations (N, 3, 3) in the base frame (e_i, c_i the platform's and the base's
         joints)."""
-        e, c = (np.asarray(j, float) for j in (self.geometry.platform_joints,
-                                               self.geometry.base_joints))
+        e = np.asarray(self.geometry.platform_joints, float)
+        c = np.asarray(self.geometry.base_joints, float)
         rotation = np.asarray(rotation, float)
         squares = np.zeros((len(rotation), len(e)))   # summed as np.linalg.norm sums them
         for k in range(3):                             # coordinate k, (N, 6), in place
@@ -663,12 +663,8 @@ class Platform:
         return np.sqrt(squares, out=squares)
 
 
-_SECTIONS: dict[str, type] = {
-    "geometry": Geometry,
-    "platform": Body,
-    "legs": Legs,
-    "friction": Friction,
-}
+_SECTIONS: dict[str, type] = {"geometry": Geometry, "platform": Body, "legs": Legs,
+                              "friction": Friction}
 _REQUIRED = {
     "geometry": ("base_joints", "platform_joints"),
     "platform": ("mass", "inertia"),

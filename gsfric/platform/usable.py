@@ -182,4 +182,3 @@ def check_gaps(t: np.ndarray, where: str = "") -> None:
         raise InputError(f"{text}: the record is mostly missing; cut it at the gaps")
     warnings.warn(f"{text}: the motion is differentiated across them; cut the record at the "
                   "gaps for forces there", DataWarning, stacklevel=2)
-

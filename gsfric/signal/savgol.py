@@ -143,5 +143,3 @@ def check_window(window: object, polyorder: int, n: int) -> None:
         raise InputError(f"window = {window} must exceed polyorder = {polyorder}")
     if window > n:
         raise InputError(f"window = {window} is longer than the {n} samples")
-
-
