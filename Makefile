@@ -1,15 +1,21 @@
-# Everything a fresh machine needs: Python 3.10+, a C compiler and make.
+# Everything a fresh machine needs: Python 3.11+, a C compiler and make.
 PYTHON ?= python3
 VENV   := .venv
 BIN    := $(VENV)/bin
 STAMP  := $(VENV)/.installed
+PYTEST := $(BIN)/python -m pytest
+# the build backend, installed into the environment for the editable install (meson-python
+# rebuilds the compiled model there when generated/ or the C sources change)
+BACKEND := "meson-python>=0.18" "meson>=1.3" "ninja>=1.11"
+# the environment's meson and ninja first, for the build and the editable install's rebuilds
+export PATH := $(abspath $(BIN)):$(PATH)
 
-.PHONY: install paper test test-slow bench derive docs clean
+.PHONY: install paper test check test-slow test-floors bench derive docs clean
 
-$(STAMP): pyproject.toml
+$(STAMP): pyproject.toml meson.build
 	$(PYTHON) -m venv $(VENV)
-	$(BIN)/pip install --quiet --upgrade pip
-	$(BIN)/pip install --quiet -e ".[test]"
+	$(BIN)/pip install --quiet --upgrade pip $(BACKEND)
+	$(BIN)/pip install --quiet --no-build-isolation -e ".[test]"
 	# derive/ is not an installed package (the wheel ships only its output): the checkout is
 	# put on this environment's path so that the notebooks and tests can import it
 	$(BIN)/python -c "import pathlib, sysconfig; pathlib.Path(sysconfig.get_paths()['purelib'], 'gsfric-checkout.pth').write_text(str(pathlib.Path.cwd().resolve()) + '\n')"
@@ -17,26 +23,46 @@ $(STAMP): pyproject.toml
 
 install: $(STAMP)
 
+# The editable install rebuilds the compiled model on import when its sources changed: once
+# here, before parallel test workers import it.
+.PHONY: built
+built: $(STAMP)
+	$(BIN)/python -c "import gsfric.compiled.native as n; n.library()"
+
 ## The main job: the paper's 40-step evaluation, its tables, report and plots, in out/paper.
-paper: $(STAMP)
+paper: built
 	$(BIN)/gsfric paper --out out/paper
 
-## The whole test suite (the slow statistical suites are left to `make test-slow`).
-test: $(STAMP)
-	$(BIN)/python -m pytest -n 2 --dist worksteal tests
+## Every test that guards behaviour: the docs build, the notebooks and the wheel included.
+test: built
+	$(PYTEST) -n 2 --dist worksteal tests
 
-test-slow: $(STAMP)
-	$(BIN)/python -m pytest -m slow tests
+## The inner loop: the tests that take under a few seconds each (no wheel, docs or notebooks).
+check: built
+	$(PYTEST) -n 2 --dist worksteal -m "not slow and not build" tests
 
-bench: $(STAMP)
+## The long statistical suites that `make test` leaves out.
+test-slow: built
+	$(PYTEST) -n 2 --dist worksteal -m slow tests
+
+## The suite on the lowest versions of the dependencies that pyproject.toml declares.
+test-floors:
+	$(PYTHON) -m venv .venv-floors
+	.venv-floors/bin/pip install --quiet --upgrade pip uv $(BACKEND)
+	.venv-floors/bin/uv pip install --quiet --python .venv-floors/bin/python \
+		--resolution lowest-direct --no-build-isolation -e ".[test]"
+	.venv-floors/bin/python -c "import pathlib, sysconfig; pathlib.Path(sysconfig.get_paths()['purelib'], 'gsfric-checkout.pth').write_text(str(pathlib.Path.cwd().resolve()) + '\n')"
+	.venv-floors/bin/python -m pytest -n 2 --dist worksteal tests
+
+bench: built
 	$(BIN)/gsfric bench
 
 ## The documentation site, tutorials executed, into docs/_build/html (warnings are errors).
-docs: $(STAMP)
+docs: built
 	$(BIN)/python -m sphinx -b html -W -n --keep-going docs docs/_build/html
 
-derive: $(STAMP)
+derive: built
 	$(BIN)/gsfric derive
 
 clean:
-	rm -rf $(VENV) out docs/_build docs/_generated
+	rm -rf $(VENV) .venv-floors build out docs/_build docs/_generated

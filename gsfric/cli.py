@@ -99,7 +99,7 @@ class _StopSignals:
 
 @contextlib.contextmanager
 def _one_line_warnings():
-    """Warnings (a rebuilt cache, implausible units, the CasADi fallback) as one line each."""
+    """Warnings (implausible units, flagged steps, a stale generated/) as one line each."""
 
     def show(message, category, filename, lineno, file=None, line=None):
         click.echo(f"gsfric: warning: {message}", err=True)

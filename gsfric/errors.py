@@ -39,6 +39,19 @@ class StepFlagError(GsfricError):
     """A trajectory step could not be evaluated soundly (see the ``flag`` column of results)."""
 
 
+class LibraryError(GsfricError):
+    """The compiled model installed with gsfric is missing or cannot be loaded (a broken
+    install): the message names the file and how to reinstall. One line."""
+
+    def __init__(self, message: str) -> None:
+        super().__init__(" ".join(str(message).split()))
+
+
+class BuildError(GsfricError):
+    """A C compiler that a command needs is missing or failed: only ``gsfric export --verify``
+    compiles anything (the exported library, with the user's compiler)."""
+
+
 class GsfricWarning(UserWarning):
     """Input that can be used but looks suspicious (angles in degrees, a gimbal-lock jump, ...)."""
 

@@ -9,6 +9,7 @@ import pandas as pd
 import gsfric
 from gsfric import models
 from gsfric.compiled.manifest import layout
+from gsfric.evaluation import flags
 from gsfric.evaluation.evaluator import state_array
 from gsfric.evaluation.parameters import effect_vector, parameter_vector
 
@@ -107,3 +108,41 @@ def trajectory_frame(n: int = 400, rate: float = 100.0) -> pd.DataFrame:
     frame[["x", "y", "z"]] = motion.position
     frame[["qw", "qx", "qy", "qz"]] = motion.quaternion()
     return frame
+
+
+def numpy_flags(x: np.ndarray, arrays: dict, stroke: tuple[float, float] | None) -> np.ndarray:
+    """The flags of ``compiled/batch.c`` computed again in NumPy from the outputs and the
+    limits of ``gsfric.evaluation.flags``: the independent reference of the tests.
+
+    Parameters
+    ----------
+    x : ndarray (N, 24)
+        The states evaluated.
+    arrays : dict of name -> ndarray (N, size)
+        Every output of the evaluation; a non-finite step's are set to NaN here.
+    stroke : (float, float) or None
+        As for ``flag_spec``.
+
+    Returns
+    -------
+    ndarray (N,) int64
+    """
+    n = x.shape[0]
+    flag = np.zeros(n, dtype=np.int64)
+    finite = np.isfinite(x).all(axis=1)
+    for v in arrays.values():
+        finite &= np.isfinite(v.reshape(n, -1)).all(axis=1)
+    D = arrays["D"]
+    if stroke is not None:
+        lo, hi = stroke
+        flag[((D < lo) | (D > hi)).any(axis=1)] |= flags.FLAG_STROKE
+    flag[(arrays["s2"] < flags.UNIVERSAL_LIMIT).any(axis=1)] |= flags.FLAG_UNIVERSAL
+    flag[arrays["h"][:, 0] < flags.SINGULAR_LIMIT] |= flags.FLAG_SINGULAR
+    if "coupling_change" in arrays:
+        limit = flags.COUPLING_TOLERANCE * (1.0 + np.abs(arrays["F0"]))
+        flag[(finite & (np.abs(arrays["coupling_change"]) > limit).any(axis=1))] |= \
+            flags.FLAG_COUPLING
+    flag[~finite] |= flags.FLAG_NONFINITE
+    for v in arrays.values():
+        v[~finite] = np.nan
+    return flag

@@ -431,8 +431,7 @@ def test_altered_generated_c_file_says_how_to_fix(tmp_path, good, generated_copy
     c_file = generated_copy / "gsfric_model.c"
     c_file.write_text(c_file.read_text() + "\n/* edited by hand */\n")
     result = gsfric("simulate", "--trajectory", good, "--out", tmp_path / "o.csv", cwd=tmp_path,
-                    env={"GSFRIC_GENERATED": str(generated_copy),
-                         "GSFRIC_CACHE": str(tmp_path / "cache")})
+                    env={"GSFRIC_GENERATED": str(generated_copy)})
     line = _one_error(result, 3)
     assert "gsfric_model.c" in line and "manifest" in line and "gsfric derive" in line
     assert not (tmp_path / "o.csv").exists()
@@ -447,8 +446,7 @@ def test_altered_manifest_says_how_to_fix(tmp_path, good, generated_copy):
     data["files"][name] = "0" * 64
     manifest.write_text(json.dumps(data))
     result = gsfric("simulate", "--trajectory", good, "--out", tmp_path / "o.csv", cwd=tmp_path,
-                    env={"GSFRIC_GENERATED": str(generated_copy),
-                         "GSFRIC_CACHE": str(tmp_path / "cache")})
+                    env={"GSFRIC_GENERATED": str(generated_copy)})
     line = _one_error(result, 3)
     assert name in line and "gsfric derive" in line
 
@@ -461,27 +459,9 @@ def test_broken_manifest_says_how_to_fix(tmp_path, good, generated_copy, damage)
     else:
         manifest.write_text("{ not json")
     result = gsfric("simulate", "--trajectory", good, "--out", tmp_path / "o.csv", cwd=tmp_path,
-                    env={"GSFRIC_GENERATED": str(generated_copy),
-                         "GSFRIC_CACHE": str(tmp_path / "cache")})
+                    env={"GSFRIC_GENERATED": str(generated_copy)})
     line = _one_error(result, 3)
     assert "manifest.json" in line and "gsfric derive" in line
-
-
-@pytest.mark.parametrize("compiler", ["/bin/false", "no-such-compiler-gsfric"])
-def test_failed_compilation_falls_back_to_casadi(tmp_path, good, generated_copy, compiler):
-    out = tmp_path / "o.csv"
-    result = gsfric("simulate", "--trajectory", good, "--out", out, cwd=tmp_path,
-                    env={"GSFRIC_GENERATED": str(generated_copy), "CC": compiler,
-                         "GSFRIC_CACHE": str(tmp_path / "cache")})
-    assert result.returncode == 0, result.stderr
-    warned = [line for line in result.stderr.splitlines() if line.startswith("gsfric: warning:")]
-    assert len(warned) == 1, result.stderr
-    assert "CC" in warned[0] and "falling back to CasADi" in warned[0]
-    # the fallback gives the same numbers as the compiled library
-    compiled = tmp_path / "compiled.csv"
-    assert run("simulate", "--trajectory", good, "--out", compiled).exit_code == 0
-    np.testing.assert_allclose(read_table(out).to_numpy(), read_table(compiled).to_numpy(),
-                               rtol=1e-10, atol=1e-10)
 
 
 # -- 7. the commands, loaded when they run ---------------------------------------------------

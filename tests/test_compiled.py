@@ -3,7 +3,6 @@
 from __future__ import annotations
 
 import json
-import os
 import subprocess
 import sys
 from pathlib import Path
@@ -11,10 +10,9 @@ from pathlib import Path
 import numpy as np
 import pytest
 from click.testing import CliRunner
-from helpers import chain_values, perturbed_platform, random_states, with_every_effect
+from helpers import chain_values, numpy_flags, perturbed_platform, random_states, with_every_effect
 from scipy.spatial.transform import Rotation
 
-import gsfric
 from derive import build as dbuild
 from derive import model as mdl
 from gsfric import models
@@ -24,7 +22,7 @@ from gsfric.compiled.functions import _tuples_readable
 from gsfric.compiled.state import state_of
 from gsfric.errors import GsfricError
 from gsfric.evaluation.evaluator import Evaluator, state_array
-from gsfric.evaluation.flags import FLAG_NONFINITE, numpy_flags
+from gsfric.evaluation.flags import FLAG_NONFINITE
 from gsfric.evaluation.paper_constants import paper_constants
 from gsfric.evaluation.parameters import _slots, effect_vector, jacobian_parameters
 from gsfric.evaluation.result import DETAILS
@@ -224,24 +222,23 @@ def test_cli_derive_check_exits_zero_when_fresh():
     assert result.exit_code == 0, result.output
 
 
-def test_without_a_compiler_casadi_evaluates_the_same_numbers(tmp_path):
-    code = ("import warnings, numpy as np, gsfric\n"
-            "from gsfric.compiled import native\n"
-            "with warnings.catch_warnings(record=True) as w:\n"
-            "    warnings.simplefilter('always')\n"
-            "    r = gsfric.evaluate(gsfric.reference_platform(), gsfric.models.paper_motion())\n"
-            "assert not native.is_compiled()\n"
-            "assert any('no C compiler' in str(x.message) for x in w), [str(x.message) for x in w]\n"
-            "np.save(r'%s', r.F)\n" % (tmp_path / "F.npy"))
-    env = dict(os.environ, CC="no-such-compiler-gsfric", GSFRIC_CACHE=str(tmp_path / "cache"))
-    run = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, env=env)
-    assert run.returncode == 0, run.stderr
-
-    expected = gsfric.evaluate(gsfric.reference_platform(), models.paper_motion()).F
-    # the vectorised C and CasADi's virtual machine order some sums differently: agreement to
-    # rounding, relative to the forces' size (about 30 N)
-    np.testing.assert_allclose(np.load(tmp_path / "F.npy"), expected, rtol=1e-12,
-                               atol=1e-12 * np.abs(expected).max())
+def test_the_compiled_model_equals_casadis_own_evaluation(rng):
+    """The compiled build and CasADi's virtual machine evaluating the serialized function
+    (generated/gsfric_model.casadi) at random states with every effect: the same numbers to
+    rounding (the SIMD code and CasADi order some sums differently), relative to each
+    output's size."""
+    platform = with_every_effect(rng, perturbed_platform(rng))
+    x = random_states(rng, 37)
+    ev = Evaluator(platform)
+    compiled = native.get("eval")([x, ev.P, ev.Q])
+    function = native.serialized("eval")
+    values = function.map(len(x))(x.T, np.tile(ev.P[:, None], len(x)),
+                                  np.tile(ev.Q[:, None], len(x)))
+    for (name, size, _), value in zip(native.get("eval").outputs, values):
+        expected = np.array(value).reshape(size, len(x)).T
+        scale = max(np.abs(expected).max(), 1e-300)
+        np.testing.assert_allclose(compiled[name], expected, rtol=0, atol=1e-12 * scale,
+                                   err_msg=name)
 
 
 def test_effect_vector_follows_the_catalog_order(platform):
@@ -381,9 +378,7 @@ def test_evaluate_keeps_c_contiguous_aligned_result_arrays(rng):
 def test_control_loop_calls_pass_their_arrays_as_one_tuple():
     """On CPython the bound calls hand C one tuple of arrays (fewest ctypes conversions):
     the library reads the tuple's items as Python does."""
-    lib = native._library()
-    if lib is None:
-        pytest.skip("no compiled library")
+    lib = native.library()
     assert _tuples_readable(lib)
     t = (np.zeros(2), np.ones((3, 4)), None)
     assert [lib.gsfric_tuple_item(t, k) for k in range(3)] == [id(v) for v in t]

@@ -1,16 +1,13 @@
-"""Fault injection: full disks, signals, a damaged compiled-library cache, broken compilers.
+"""Fault injection: full disks, signals, a broken or missing compiled model.
 
 Each test provokes one failure and checks what the user gets (one line, the documented exit
-code) and what is left on disk (nothing partial, earlier outputs unchanged, no temporary file,
-no compiler process). Faults that would disturb the session's own compiled library (its
-``functools.lru_cache``) run in fresh processes with their own ``GSFRIC_CACHE``.
+code) and what is left on disk (nothing partial, earlier outputs unchanged, no temporary file).
 See docs/explanation/robustness.md, section 8.
 """
 
 from __future__ import annotations
 
 import errno
-import json
 import os
 import signal
 import stat
@@ -26,8 +23,8 @@ from helpers import trajectory_frame
 
 from gsfric import models
 from gsfric.cli import _stop_in_chain, main
-from gsfric.compiled import build, native
-from gsfric.errors import InputError, Interrupted, OutputError
+from gsfric.compiled import native
+from gsfric.errors import InputError, Interrupted, LibraryError, OutputError
 from gsfric.io.files import output_folder, remove_stale_temporaries
 from gsfric.io.readers import read_trajectory
 from gsfric.io.tables import read_table, write_table
@@ -42,8 +39,7 @@ def run(*args):
 def one_error(stderr: str, code: int, result_code: int) -> str:
     assert result_code == code, (result_code, stderr)
     got = [line for line in stderr.splitlines()
-           if line and not line.startswith(("gsfric: warning: generated/ is stale",
-                                            "gsfric: compiling"))]
+           if line and not line.startswith("gsfric: warning: generated/ is stale")]
     assert len(got) == 1, stderr
     assert got[0].startswith("gsfric: error: "), got[0]
     return got[0][len("gsfric: error: "):]
@@ -326,131 +322,39 @@ def test_closed_stdout_exits_quietly(tmp_path):
     assert proc.returncode == 141 and stderr == ""
 
 
-# -- the compiled-library cache -----------------------------------------------------------------
+# -- the compiled model installed with the package -----------------------------------------------
+
+@pytest.fixture
+def fresh_library():
+    """The loaded builds forgotten before and after the test (``native`` caches them)."""
+    for cached in (native.library, native.get):
+        cached.cache_clear()
+    yield
+    for cached in (native.library, native.get):
+        cached.cache_clear()
 
 
-def _fake_compiler(tmp_path: Path, library: Path | None, body: str = "") -> Path:
-    """A 'compiler' that copies ``library`` to the link's -o target (and touches objects)."""
-    script = tmp_path / "fakecc"
-    script.write_text(textwrap.dedent(f"""\
-        #!/bin/sh
-        {body}
-        out=""; shared=0
-        while [ $# -gt 0 ]; do
-            case "$1" in -o) out="$2"; shift;; -shared) shared=1;; esac
-            shift
-        done
-        if [ $shared = 1 ] && [ -n "{library or ''}" ]; then cp "{library}" "$out"
-        else echo "not a library" > "$out"; fi
-    """))
-    script.chmod(0o755)
-    return script
-
-
-def _cache_folder(monkeypatch, cache: Path, cc: Path) -> Path:
-    monkeypatch.setenv("GSFRIC_CACHE", str(cache))
-    monkeypatch.setenv("CC", str(cc))
-    key = build._build_key(build._sources(), build._compiler() + list(build.CFLAGS))
-    return cache / f"build-{key}"
-
-
-@pytest.fixture(scope="module")
-def real_library() -> Path:
-    if not native.is_compiled():
-        pytest.skip("no compiled library (no C compiler)")
-    return build.build_library()
-
-
-CHECK = ("import numpy as np, gsfric; from gsfric import models; from gsfric.compiled import native; "
-         "r = gsfric.evaluate(gsfric.reference_platform(), "
-         "models.sinusoidal(np.linspace(0, 1, 11))); "
-         "print(native.is_compiled(), repr(float(r.F.sum())))")
-
-
-def test_verification_detects_same_size_changes(tmp_path, monkeypatch):
-    folder = tmp_path / "build"
-    folder.mkdir()
-    lib, record = folder / "libgsfric.so", folder / "libgsfric.json"
-    lib.write_bytes(b"\x7fELF" + bytes(100))
-    size, digest = build._digest(lib)
-    record.write_text(json.dumps({"size": size, "sha256": digest}))
-    assert build._damage(lib, record) is None
-    lib.write_bytes(b"\x7fELF" + bytes(99) + b"\x01")
-    assert build._damage(lib, record) == "its SHA-256 differs from the one recorded at build time"
-    record.unlink()
-    assert build._damage(lib, record) == "libgsfric.json is missing"
-    lib.unlink()
-    assert build._damage(lib, record) == "missing"
-
-
-def test_compiler_output_not_a_library_exit_3(tmp_path):
-    cc = _fake_compiler(tmp_path, None)
-    result = subprocess.run([sys.executable, "-m", "gsfric.cli", "paper", "--out",
-                             tmp_path / "pp", "--no-plots"], capture_output=True, text=True,
-                            env=env(GSFRIC_CACHE=tmp_path / "cache", CC=cc), cwd=tmp_path)
-    message = one_error(result.stderr, 3, result.returncode)
-    assert message.endswith(f"the compiler (CC={cc}) did not produce a shared library; check CC")
+@pytest.mark.parametrize("content", [b"", b"not a shared library", b"\x7fELF" + bytes(200)])
+def test_a_broken_compiled_model_is_one_line_naming_the_file(tmp_path, monkeypatch,
+                                                             fresh_library, content):
+    broken = tmp_path / "_model.abi3.so"
+    broken.write_bytes(content)
+    monkeypatch.setattr(native, "build_path", lambda isa: broken)
+    with pytest.raises(LibraryError) as caught:
+        native.library("baseline")
+    message = str(caught.value)
+    assert message.startswith(f"{broken}: the compiled model cannot be loaded (")
+    assert "\n" not in message and message.endswith("`make install` in a source checkout)")
+    result = run("paper", "--out", tmp_path / "pp", "--no-plots")
+    assert result.exit_code == 3 and str(broken) in result.output
     assert not (tmp_path / "pp").exists()
-    assert not list((tmp_path / "cache").rglob("libgsfric.so"))
 
 
-def test_read_only_cache_is_named(tmp_path, monkeypatch):
-    monkeypatch.setenv("GSFRIC_CACHE", str(tmp_path / "cache"))
-    monkeypatch.setenv("CC", "cc")
-    real_access = os.access
-    monkeypatch.setattr(build.os, "access",
-                        lambda p, mode: False if "cache" in str(p) else real_access(p, mode))
-    with pytest.raises(build.LibraryError, match=r"cache/build-[0-9a-f]+: the compiled-library "
-                                                  r"cache \(GSFRIC_CACHE\) is not writable"):
-        build.build_library()
-
-
-def test_cpu_features_are_part_of_the_key(monkeypatch):
-    sources = build._sources()
-    key = build._build_key(sources, ["cc"])
-    monkeypatch.setattr(build, "cpu_features", lambda: "x86_64 | sse2")
-    other = build._build_key(sources, ["cc"])
-    monkeypatch.setattr(build, "cpu_features", lambda: "x86_64 | sse2 avx2")
-    assert len({key, other, build._build_key(sources, ["cc"])}) == 3
-
-
-HANGING = 'echo $$ >> "{pids}"; sleep 300 & echo $! >> "{pids}"; wait'
-
-
-def test_hanging_compiler_times_out_and_leaves_no_process(tmp_path, monkeypatch):
-    pids = tmp_path / "pids"
-    cc = _fake_compiler(tmp_path, None, HANGING.format(pids=pids))
-    monkeypatch.setenv("GSFRIC_CACHE", str(tmp_path / "cache"))
-    monkeypatch.setenv("CC", str(cc))
-    monkeypatch.setenv("GSFRIC_CC_TIMEOUT", "1")
-    with pytest.raises(build.BuildError, match=r"did not finish within 1 s "
-                                                r"\(GSFRIC_CC_TIMEOUT\); it was stopped"):
-        build.build_library()
-    started = [int(p) for p in pids.read_text().split()]
-    assert len(started) == 6                       # three compilers, each with a child
-    assert all_gone(started)
-    assert not list((tmp_path / "cache").rglob("*.so")) and not list(
-        (tmp_path / "cache").rglob("*.o"))
-
-
-def test_sigterm_while_compiling_kills_the_compilers(tmp_path):
-    pids = tmp_path / "pids"
-    cc = _fake_compiler(tmp_path, None, HANGING.format(pids=pids))
-    proc = subprocess.Popen([sys.executable, "-m", "gsfric.cli", "paper", "--out",
-                             str(tmp_path / "pp"), "--no-plots"], stdout=subprocess.PIPE,
-                            stderr=subprocess.PIPE, text=True, cwd=tmp_path,
-                            env=env(GSFRIC_CACHE=tmp_path / "cache", CC=cc))
-    deadline = time.monotonic() + 120
-    while not pids.exists() or len(pids.read_text().split()) < 6:
-        assert proc.poll() is None, proc.communicate()
-        assert time.monotonic() < deadline
-        time.sleep(0.05)
-    proc.terminate()
-    _, stderr = proc.communicate(timeout=60)
-    assert one_error(stderr, 143, proc.returncode) == ("stopped by SIGTERM; no output was "
-                                                      "left half-written")
-    assert all_gone(pids.read_text().split())
-    assert not (tmp_path / "pp").exists()
+def test_a_missing_compiled_model_says_how_to_reinstall(monkeypatch, fresh_library):
+    monkeypatch.setattr(native, "build_path", lambda isa: None)
+    with pytest.raises(LibraryError, match=r"^the compiled model gsfric\.compiled\._model is "
+                                            r"missing from this install of gsfric; reinstall"):
+        native.library("baseline")
 
 
 def test_a_stop_inside_an_import_is_still_a_stop():

@@ -1,79 +1,66 @@
-"""The lane width and the target CPU chosen at build time change no result beyond rounding.
+"""The builds of the compiled model change no result beyond rounding.
 
-The SIMD-over-steps code (derive/simd.py) is printed once and compiled with a lane width
-chosen for the CPU (8 with AVX-512, 4 with AVX, 1 otherwise) or forced with ``GSFRIC_LANES``;
-a portable build targets ``GSFRIC_MARCH=x86-64-v3``. Each build is made in a subprocess (the
-flags are read at import) into the usual cache, so that it is compiled once per machine.
+The SIMD-over-steps code (derive/simd.py) is printed once and compiled when the package is
+built, on x86-64 for three instruction sets (meson.build): the baseline (1 step per lane),
+x86-64-v3 (AVX2: 4) and x86-64-v4 (AVX-512: 8). Each build is loaded in this process; the
+tests cover every build that this CPU runs.
 """
 
 from __future__ import annotations
 
 import ctypes
-import os
-import subprocess
-import sys
 
 import numpy as np
 import pytest
-from helpers import perturbed_platform, random_states, with_every_effect
+from helpers import numpy_flags, perturbed_platform, random_states, with_every_effect
 from scipy.spatial.transform import Rotation
 
 from gsfric import models
 from gsfric.compiled import native
 from gsfric.evaluation.evaluator import Evaluator, state_array
-from gsfric.evaluation.flags import numpy_flags
 from gsfric.trajectory import Motion
 
-SCRIPT = """
-import sys, numpy as np
-from gsfric.compiled import native
-from gsfric.evaluation.evaluator import Evaluator
-from gsfric.evaluation.parameters import parameter_vector
-x, P, Q = (np.load(sys.argv[1])[k] for k in ("x", "P", "Q"))
-lib = native._library()
-assert native.is_compiled()
-res = {f"{name}:{k}": v for name in FUNCTIONS
-       for k, v in native.get(name)([x, P, Q]).items()}
-np.savez(sys.argv[2], lanes=lib.gsfric_simd_lanes(), **res)
-"""
 FUNCTIONS = ("eval", "eval_coupled", "eval_posthoc", "actuator_coupled", "actuator_posthoc")
 """The SIMD-over-steps functions (derive/build.py): the generic map and the fixed models'."""
+BUILDS = native.cpu_builds()
+"""The builds installed that this CPU runs (on an AVX-512 machine: 8, 4 and 1 lanes)."""
+LANES = {"baseline": 1, "x86-64-v3": 4, "x86-64-v4": 8}
 
 
-def _variant(tmp_path, env_extra, x, P, Q):
-    np.savez(tmp_path / "in.npz", x=x, P=P, Q=Q)
-    env = dict(os.environ, **env_extra)
-    subprocess.run([sys.executable, "-c", f"FUNCTIONS = {FUNCTIONS!r}\n{SCRIPT}",
-                    str(tmp_path / "in.npz"),
-                    str(tmp_path / "out.npz")], env=env, check=True, timeout=600)
-    return dict(np.load(tmp_path / "out.npz"))
+def _evaluate(isa: str, x, P, Q) -> dict:
+    return {f"{name}:{k}": v for name in FUNCTIONS
+            for k, v in native.get(name, isa)([x, P, Q]).items()}
 
 
-@pytest.mark.skipif(not native.is_compiled(), reason="no C compiler")
-@pytest.mark.parametrize("env, lanes", [({"GSFRIC_LANES": "1"}, 1), ({"GSFRIC_LANES": "4"}, 4),
-                                        ({"GSFRIC_MARCH": "x86-64-v3"}, 4)])
-def test_lane_widths_and_portable_build_agree_with_the_native_build(tmp_path, env, lanes):
+@pytest.mark.parametrize("isa", BUILDS)
+def test_every_build_agrees_with_the_baseline(isa):
     rng = np.random.default_rng(8)
     platform = with_every_effect(rng, perturbed_platform(rng))
     x = random_states(rng, 203)  # not a multiple of any lane width: the last group is partial
     ev = Evaluator(platform)
-    native_res = {f"{name}:{k}": v for name in FUNCTIONS
-                  for k, v in native.get(name)([x, ev.P, ev.Q]).items()}
-    other = _variant(tmp_path, env, x, ev.P, ev.Q)
-    assert int(other.pop("lanes")) == lanes
-    for name, value in native_res.items():
+    if native.build_path("x86-64-v3") is not None:       # x86-64: the builds' own lane widths
+        assert native.library(isa).gsfric_simd_lanes() == LANES[isa]
+    baseline = _evaluate("baseline", x, ev.P, ev.Q)
+    other = _evaluate(isa, x, ev.P, ev.Q)
+    for name, value in baseline.items():
         function = name.split(":")[0]
         # the last change of a converged iteration is rounding: measured against F0
-        reference = native_res.get(f"{function}:F0", value) \
+        reference = baseline.get(f"{function}:F0", value) \
             if name.endswith(":coupling_change") else value
         scale = max(np.abs(reference).max(), 1e-300)
         np.testing.assert_allclose(other[name], value, rtol=0, atol=1e-12 * scale,
                                    err_msg=name)
 
 
-@pytest.mark.skipif(not native.is_compiled(), reason="no C compiler")
-def test_vector_exp_is_within_two_ulp_of_the_c_library():
-    lib = native._library()
+def test_the_widest_build_is_loaded_by_default():
+    assert native.chosen_build() == BUILDS[0]
+    assert native.library()._name == native.library(BUILDS[0])._name == \
+        str(native.build_path(BUILDS[0]))
+
+
+@pytest.mark.parametrize("isa", BUILDS)
+def test_vector_exp_is_within_two_ulp_of_the_c_library(isa):
+    lib = native.library(isa)
     x = np.concatenate([np.linspace(-745, 710, 200_001), np.random.default_rng(3).normal(
         0, 5, 100_000), [0.0, -0.0, 1e-300, -1e-300, 709.78, -708.39]])
     y = np.empty_like(x)
@@ -92,10 +79,9 @@ def test_vector_exp_is_within_two_ulp_of_the_c_library():
     assert out[0] == np.inf and out[1] == 0 and np.isnan(out[2])
 
 
-@pytest.mark.skipif(not native.is_compiled(), reason="no C compiler")
-def test_flags_in_c_equal_the_fallbacks_numpy_flags():
-    """The step flags computed in C (compiled/batch.c) and those of the no-compiler fallback
-    (``numpy_flags``, NumPy) on steps with every cause: stroke, singular pose, non-finite."""
+def test_flags_in_c_equal_the_numpy_flags():
+    """The step flags computed in C (compiled/batch.c) and in NumPy from the outputs
+    (``numpy_flags``) on steps with every cause: stroke, singular pose, non-finite."""
 
 
     n = 40
@@ -127,8 +113,8 @@ def _divider(lib, op, a, b):
     return y
 
 
-@pytest.mark.skipif(not native.is_compiled(), reason="no C compiler")
-def test_vector_division_and_square_roots_against_the_ieee_operations():
+@pytest.mark.parametrize("isa", BUILDS)
+def test_vector_division_and_square_roots_against_the_ieee_operations(isa):
     """a / b, 1 / b, sqrt(a) and 1 / sqrt(a) as the SIMD code computes them (off the divider on
     AVX-512: estimate, Newton steps, a final correction) on random operands of every magnitude,
     subnormal to huge, significands near 2 included, and on 0, inf, NaN, negative operands.
@@ -136,7 +122,7 @@ def test_vector_division_and_square_roots_against_the_ieee_operations():
     1 / sqrt(a) are within 1 ulp of the correctly rounded ones (the final Newton step of a
     reciprocal can miss by 1 ulp where the significand of its operand is within about 1000 ulp
     of 2: measured 0.1 % of such operands); results that are 0, inf or NaN are exact."""
-    lib = native._library()
+    lib = native.library(isa)
     rng = np.random.default_rng(13)
     n = 400_000
 

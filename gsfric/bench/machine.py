@@ -12,7 +12,7 @@ from pathlib import Path
 
 import numpy as np
 
-from gsfric.compiled import build, native
+from gsfric.compiled import native
 from gsfric.compiled.manifest import function, manifest
 from gsfric.evaluation.parameters import model_function
 
@@ -47,16 +47,11 @@ def describe_machine() -> dict:
     except OSError:
         pass
 
-    compiled = native.is_compiled()
-
     # the actuator map the reference platform runs (its friction model's, derive/build.py)
     simd = bool(function(model_function("actuator", "coupled")).get("simd", False))
     return {"cpu": model, "cores": os.cpu_count(), "python": _platform.python_version(),
             "numpy": np.__version__, "os": _platform.platform(),
-            "compiled": compiled,
-            "compiler": " ".join(build._compiler() + list(build.CFLAGS))
-                        + f" (SIMD source: {' '.join(build.SIMD_CFLAGS)})" if compiled
-            else "none (CasADi fallback)",
+            "build": native.chosen_build(),
             "actuator_entry": (f"SIMD over steps, {_lanes()} lanes" if simd
                                else "one step per call"),
             "source": _source_version(),
@@ -65,10 +60,8 @@ def describe_machine() -> dict:
             "load_average_start": load_average()}
 
 
-def _lanes():
-
-    lib = native._library()
-    return lib.gsfric_simd_lanes() if lib is not None else None
+def _lanes() -> int:
+    return native.library().gsfric_simd_lanes()
 
 
 def _source_version() -> str | None:

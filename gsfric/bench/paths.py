@@ -60,8 +60,7 @@ def measure_paths(budget: float, memory: bool, progress=print, simulate: bool = 
 
     platform = gsfric.reference_platform()
     out: dict = {"friction_model": platform.friction.model}
-    lib = native._library()
-    out["lanes"] = lib.gsfric_simd_lanes() if lib is not None else None
+    out["lanes"] = native.library().gsfric_simd_lanes()
     progress("  evaluate (kept outputs + flags) N=100,000")
     motion = bench_motion(100_000)
     out["evaluate_1e5"] = _evaluate_path(platform, motion, budget)

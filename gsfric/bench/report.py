@@ -153,7 +153,7 @@ def _header_lines(m: dict) -> list[str]:
     return ["gsfric bench: actuator forces with friction, reference platform "
             "(NumPy in, NumPy out)",
             f"machine: {m['cpu']}, {m['cores']} cores; Python {m['python']}, "
-            f"NumPy {m['numpy']}; compiled with: {m['compiler']}; actuator map: "
+            f"NumPy {m['numpy']}; build: {m['build']}; actuator map: "
             f"{m['actuator_entry']}",
             "CasADi instructions per step (generated/manifest.json): " + ", ".join(
                 f"{name} {n}" for name, n in m.get("instructions", {}).items()),

@@ -446,3 +446,34 @@ long long gsfric_bound_motion(const gsfric_bound *b, const void *arrays, long lo
                                  m[2], m[3], m[4], m[5], b->index,
                                  array_data(tuple_item(arrays, 6)), n, b->n_threads);
 }
+
+/* The widest instruction set of this CPU among the builds gsfric ships for x86-64 (4:
+ * x86-64-v4 with AVX-512, 3: x86-64-v3 with AVX2 and FMA, 1: the x86-64 baseline); 0 on other
+ * architectures. Called in the baseline build only, which runs on every CPU of its
+ * architecture; gsfric/compiled/native.py then loads the widest build the CPU can run. */
+int gsfric_cpu_level(void)
+{
+#if defined(__x86_64__) && (defined(__GNUC__) || defined(__clang__))
+    __builtin_cpu_init();
+#if defined(__GNUC__) && !defined(__clang__) && __GNUC__ >= 12
+    /* the levels as the compiler defines them (all of their features, OS support included) */
+    if (__builtin_cpu_supports("x86-64-v4"))
+        return 4;
+    if (__builtin_cpu_supports("x86-64-v3"))
+        return 3;
+    return 1;
+#else
+    if (__builtin_cpu_supports("avx512f") && __builtin_cpu_supports("avx512dq")
+        && __builtin_cpu_supports("avx512cd") && __builtin_cpu_supports("avx512bw")
+        && __builtin_cpu_supports("avx512vl") && __builtin_cpu_supports("avx2")
+        && __builtin_cpu_supports("fma") && __builtin_cpu_supports("bmi2"))
+        return 4;
+    if (__builtin_cpu_supports("avx2") && __builtin_cpu_supports("fma")
+        && __builtin_cpu_supports("bmi") && __builtin_cpu_supports("bmi2"))
+        return 3;
+    return 1;
+#endif
+#else
+    return 0;
+#endif
+}

@@ -1,11 +1,9 @@
-"""The generated functions evaluated over batches of steps: in C through ctypes, or by CasADi.
+"""The generated functions evaluated over batches of steps, in C through ctypes.
 
-``CompiledFunction`` calls the batch driver of the shared library (``batch.c``), which loops
+``CompiledFunction`` calls the batch driver of the compiled model (``batch.c``), which loops
 over steps in C, reading and writing NumPy buffers directly (no CasADi objects on the hot path),
-optionally on several POSIX threads, and computes the step flags in the same pass;
-``CasadiFunction`` has the same interface, evaluated by CasADi from the serialized functions
-(the fallback without a C compiler: the same numbers, much slower). ``declare`` gives a loaded
-library's entry points their C signatures.
+optionally on several POSIX threads, and computes the step flags in the same pass. ``declare``
+gives a loaded build's entry points their C signatures.
 """
 
 from __future__ import annotations
@@ -16,7 +14,7 @@ import functools
 import numpy as np
 
 from gsfric.compiled.manifest import BASENAME, function
-from gsfric.compiled.state import motion_arrays, state_layout, state_of
+from gsfric.compiled.state import motion_arrays, state_layout
 from gsfric.errors import GsfricError, InputError, InputTypeError
 
 
@@ -80,6 +78,7 @@ def declare(lib: ctypes.CDLL) -> ctypes.CDLL:
     lib.gsfric_array_data.restype = ctypes.c_longlong
     lib.gsfric_array_data.argtypes = [ctypes.py_object]
     lib.gsfric_simd_lanes.restype = ctypes.c_int
+    lib.gsfric_cpu_level.restype = ctypes.c_int
     return lib
 
 
@@ -361,57 +360,3 @@ def _objects_readable(lib) -> bool:
         return all(lib.gsfric_array_data(a) == a.ctypes.data for a in samples)
     except Exception:  # noqa: BLE001 - any failure: the pointers' way
         return False
-
-
-class CasadiFunction:
-    """The same interface, evaluated by CasADi from the serialized functions (no compiler)."""
-
-    def __init__(self, f, name: str) -> None:
-        meta = function(name)
-        self.name = name
-        self.inputs = [(i["name"], i["size"]) for i in meta["inputs"]]
-        self.outputs = [(o["name"], o["size"], tuple(o["shape"])) for o in meta["outputs"]]
-        self._f = f
-
-    def __call__(self, inputs, outputs=None, n_threads: int = 1, select=None,
-                 motion=None) -> dict:
-        if motion is not None:
-            inputs = [state_of(motion), *list(inputs)[1:]]
-        arrays = [np.asarray(a, dtype=np.float64) for a in inputs]
-        n = max([a.shape[0] for a in arrays if a.ndim == 2] or [1])
-        cols = [a.T if a.ndim == 2 else np.broadcast_to(a[:, None], (a.shape[0], n))
-                for a in arrays]
-        mapped = self._f.map(n, "thread", max(1, int(n_threads)))
-        res = mapped(*cols)
-        res = res if isinstance(res, tuple) else (res,)
-        out = {}
-        for (name, size, _), value in zip(self.outputs, res):
-            if select is not None and name not in select:
-                continue
-            arr = np.array(value).reshape(size, n).T.copy()
-            if outputs and name in outputs:
-                outputs[name][...] = arr
-                arr = outputs[name]
-            out[name] = arr
-        return out
-
-    def bound(self, constants: list[np.ndarray], output: str, n_threads: int = 1):
-        """``CompiledFunction.bound``'s interface, evaluated by CasADi."""
-        def call(x, out):
-            out[...] = self([x] + list(constants), n_threads=n_threads,
-                            select=(output,))[output]
-            return out
-
-        return call
-
-    def bound_motion(self, constants: list[np.ndarray], output: str, n_threads: int = 1):
-        """``CompiledFunction.bound_motion``'s interface, evaluated by CasADi."""
-        def call(position, rotation, velocity, omega, acceleration, alpha, out=None):
-            x = state_of((position, rotation, velocity, omega, acceleration, alpha))
-            value = self([x] + list(constants), n_threads=n_threads, select=(output,))[output]
-            if out is None:
-                return value
-            out[...] = value
-            return out
-
-        return call

@@ -1,16 +1,15 @@
 """The manifest of generated/: functions, their inputs and outputs, the effect catalog.
 
-Read once, on first use. The generated files are package data of ``gsfric._generated``: the
-build maps the repository's top-level generated/ folder there (pyproject.toml), so a wheel holds
-them in ``gsfric/_generated/`` and an editable install reads the checkout's generated/; both are
-found with ``importlib.resources``. ``GSFRIC_GENERATED`` points to another generated/ directory.
+Read once, on first use. The generated files are package data: the build (meson.build)
+installs the repository's top-level generated/ folder as ``gsfric/_generated/``, where an
+installed package finds them; a source checkout (and its editable install) reads the checkout's
+generated/ itself. ``GSFRIC_GENERATED`` points to another generated/ directory.
 """
 
 from __future__ import annotations
 
 import functools
 import hashlib
-import importlib.resources
 import importlib.util
 import json
 import os
@@ -19,38 +18,18 @@ from pathlib import Path
 from gsfric.errors import GsfricError
 
 BASENAME = "gsfric_model"
-
-
-PACKAGE = "gsfric._generated"
+PACKAGE_ROOT = Path(__file__).resolve().parents[1]
 
 
 def generated_dir() -> Path:
-    """The directory of the generated files.
-
-    ``$GSFRIC_GENERATED`` when set; else the resources of the ``gsfric._generated`` package
-    (``gsfric/_generated/`` of an installed wheel, found with ``importlib.resources``); else the
-    generated/ folder beside the package, which is where a source checkout and an editable
-    install keep it (setuptools' editable finder does not import a mapped folder without an
-    ``__init__.py``, so there the checkout's folder is read directly).
-    """
+    """The directory of the generated files: ``$GSFRIC_GENERATED`` when set, else
+    ``gsfric/_generated/`` of an installed package, else the checkout's generated/ beside the
+    package folder."""
     env = os.environ.get("GSFRIC_GENERATED")
     if env:
         return Path(env)
-    return _packaged_dir()
-
-
-@functools.lru_cache(maxsize=None)
-def _packaged_dir() -> Path:
-
-    try:
-        folder = importlib.resources.files(PACKAGE)
-    except ModuleNotFoundError:
-        folder = None
-    if folder is not None:
-        candidate = folder / "manifest.json"
-        if candidate.is_file():
-            return Path(str(candidate)).parent
-    return Path(__file__).resolve().parents[2] / "generated"
+    installed = PACKAGE_ROOT / "_generated"
+    return installed if installed.is_dir() else PACKAGE_ROOT.parent / "generated"
 
 
 @functools.lru_cache(maxsize=None)

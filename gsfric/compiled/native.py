@@ -1,31 +1,43 @@
-"""The generated functions by name, compiled on first use: ``get("eval")``, ``is_compiled()``.
+"""The compiled model: the generated functions by name, ``get("eval")``.
 
-The first ``get`` checks generated/ against derive/ (``check_generated``), then compiles, or
-finds in the cache, the shared library of the generated C code and the batch driver
-(``gsfric.compiled.build``) and loads it with ctypes (``gsfric.compiled.functions``).
+The generated C code is compiled when the package is built (meson.build), never at run time,
+into extension modules of this package, each holding the per-step CasADi functions, the
+SIMD-over-steps functions for one instruction set and the batch driver (``batch.c``):
 
-Without a working C compiler (not found, failing, timed out), the functions are evaluated by
-CasADi itself from the serialized copy in generated/, with a warning: the same numbers, much
-slower. ``GSFRIC_NO_COMPILE=1`` forces that fallback.
+- ``_model``: the architecture's baseline (on x86-64, any x86-64 CPU: one step per lane);
+- on x86-64, ``_model_x86_64_v3`` (AVX2 and FMA: 4 steps per vector) and ``_model_x86_64_v4``
+  (AVX-512: 8 steps per vector).
+
+The first ``get`` checks generated/ against derive/ (``check_generated``), asks the baseline
+build which of them the CPU runs, and loads the widest with ctypes (``GSFRIC_ISA`` names one
+instead: ``baseline``, ``x86-64-v3`` or ``x86-64-v4``). Every build gives the same results to
+rounding (tests/test_lanes.py).
 """
 
 from __future__ import annotations
 
 import ctypes
 import functools
+import importlib.util
 import os
 import warnings
+from pathlib import Path
 
 from gsfric._optional import optional
-from gsfric.compiled.build import BuildError, LibraryError, build_library
-from gsfric.compiled.functions import CasadiFunction, CompiledFunction, declare
+from gsfric.compiled.functions import CompiledFunction, declare
 from gsfric.compiled.manifest import BASENAME, generated_dir, manifest, staleness
-from gsfric.errors import GsfricError
+from gsfric.errors import GsfricError, InputError, LibraryError
+
+BUILDS = {"baseline": "_model", "x86-64-v3": "_model_x86_64_v3", "x86-64-v4": "_model_x86_64_v4"}
+"""Instruction set -> extension module of gsfric.compiled (meson.build's variants)."""
+LEVELS = {"baseline": 0, "x86-64-v3": 3, "x86-64-v4": 4}
+"""Instruction set -> the level ``gsfric_cpu_level`` (batch.c) reports for a CPU that runs it."""
+REINSTALL = ("reinstall gsfric (`pip install --force-reinstall gsfric`, or `make install` in a "
+             "source checkout)")
 
 
 def check_generated() -> None:
     """Warn when generated/ is stale against derive/; fail when its files were altered."""
-
     reason = staleness()
     if reason is None:
         return
@@ -37,23 +49,51 @@ def check_generated() -> None:
                           "(or restore it with `git checkout generated/`)")
 
 
+def build_path(isa: str) -> Path | None:
+    """The file of the build for instruction set ``isa`` (a key of ``BUILDS``), or None when
+    this install has none (another architecture)."""
+    spec = importlib.util.find_spec(f"{__package__}.{BUILDS[isa]}")
+    return None if spec is None or spec.origin is None else Path(spec.origin)
+
+
+def _load(isa: str) -> ctypes.CDLL:
+    path = build_path(isa)
+    if path is None:
+        raise LibraryError(f"the compiled model {__package__}.{BUILDS[isa]} is missing from "
+                           f"this install of gsfric; {REINSTALL}")
+    try:
+        return declare(ctypes.CDLL(str(path)))
+    except (OSError, AttributeError) as exc:
+        reason = str(exc).splitlines()[0] if str(exc) else type(exc).__name__
+        raise LibraryError(f"{path}: the compiled model cannot be loaded ({reason}); "
+                           f"{REINSTALL}") from None
+
+
+def cpu_builds() -> tuple[str, ...]:
+    """The builds this install has and this CPU runs, the widest first."""
+    level = _load("baseline").gsfric_cpu_level()
+    return tuple(isa for isa in sorted(BUILDS, key=LEVELS.get, reverse=True)
+                 if LEVELS[isa] <= level and build_path(isa) is not None)
+
+
+def chosen_build() -> str:
+    """The build loaded: ``$GSFRIC_ISA`` when set, else the widest this CPU runs."""
+    isa = os.environ.get("GSFRIC_ISA", "")
+    if not isa:
+        return cpu_builds()[0]
+    if isa not in BUILDS:
+        raise InputError(f"GSFRIC_ISA={isa!r}: expected one of {', '.join(BUILDS)}")
+    if isa not in cpu_builds():
+        raise InputError(f"GSFRIC_ISA={isa!r}: this CPU cannot run that build, or this "
+                          f"install has none (builds it can run: {', '.join(cpu_builds())})")
+    return isa
+
+
 @functools.lru_cache(maxsize=None)
-def _library():
+def library(isa: str | None = None) -> ctypes.CDLL:
+    """The loaded build for instruction set ``isa`` (default: ``chosen_build()``)."""
     check_generated()
-    if os.environ.get("GSFRIC_NO_COMPILE") == "1":
-        return None
-    try:
-        path = build_library()
-    except BuildError as exc:
-        warnings.warn(f"{exc}; falling back to CasADi's own evaluation (much slower)",
-                      stacklevel=3)
-        return None
-    try:
-        lib = ctypes.CDLL(str(path))
-    except OSError as exc:
-        raise LibraryError(f"{path}: cannot load the compiled library ({exc}); delete "
-                           f"{path.parent} to rebuild it, and check the compiler (CC)") from None
-    return declare(lib)
+    return _load(chosen_build() if isa is None else isa)
 
 
 @functools.lru_cache(maxsize=None)
@@ -81,14 +121,7 @@ def serialized(name: str):
 
 
 @functools.lru_cache(maxsize=None)
-def get(name: str):
-    """The evaluator of generated function ``name`` (e.g. "eval", "actuator", "jacobian")."""
-    lib = _library()
-    if lib is not None:
-        return CompiledFunction(lib, name)
-    return CasadiFunction(_serialized()[f"{BASENAME}_{name}"], name)
-
-
-def is_compiled() -> bool:
-    """True when the compiled library is in use (False: CasADi fallback)."""
-    return _library() is not None
+def get(name: str, isa: str | None = None) -> CompiledFunction:
+    """The evaluator of generated function ``name`` (e.g. "eval", "actuator", "jacobian") in
+    the build for ``isa`` (default: ``chosen_build()``)."""
+    return CompiledFunction(library(isa), name)

@@ -105,7 +105,7 @@ def first_nonfinite(x: np.ndarray) -> str | None:
 def state_of(motion) -> np.ndarray:
     """The (N, 24) state array of a motion's six arrays (p, T row-major, v, omega, a,
     alpha), laid out by ``state_layout()``: the one layout in Python
-    (``evaluation.state_array``, the CasADi fallback)."""
+    (``evaluation.state_array``)."""
     parts = motion_arrays("motion", motion)
     n = parts[0].shape[0]
     states = state_layout()

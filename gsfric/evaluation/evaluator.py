@@ -28,7 +28,7 @@ from gsfric.compiled import native
 from gsfric.compiled.functions import FlagSpec
 from gsfric.compiled.state import first_nonfinite, state_of
 from gsfric.errors import InputError, InputTypeError, StepFlagError
-from gsfric.evaluation.flags import FLAG_NONFINITE, flag_message, flag_spec, numpy_flags
+from gsfric.evaluation.flags import FLAG_NONFINITE, flag_message, flag_spec
 from gsfric.evaluation.memory import aligned_empty
 from gsfric.evaluation.paper_constants import paper_constants as pc
 from gsfric.evaluation.parameters import model_function, packed, uniform_model
@@ -296,18 +296,8 @@ class Evaluator:
         m = motion
         parts = (m.position[s:e], m.rotation[s:e], m.velocity[s:e], m.omega[s:e],
                  m.acceleration[s:e], m.alpha[s:e])
-        if native.is_compiled():
-            self._full([None] + self._inputs(), view, self.n_threads, select=view,
-                       flags=None if flag is None else self.flag_spec(), flag=flag,
-                       motion=parts)
-            return
-        xs = state_of(parts)
-        every = self._full([xs] + self._inputs(), None, self.n_threads,
-                           select=view if flag is None else None)
-        if flag is not None:
-            flag[:] = numpy_flags(xs, every, self._stroke)
-        for k, v in view.items():
-            v[...] = every[k]
+        self._full([None] + self._inputs(), view, self.n_threads, select=view,
+                   flags=None if flag is None else self.flag_spec(), flag=flag, motion=parts)
 
     def details(self, motion: Motion, names, flag: np.ndarray) -> dict[str, np.ndarray]:
         """The outputs ``names`` at every step of ``motion`` (flags as computed with the kept

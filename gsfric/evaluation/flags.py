@@ -1,4 +1,4 @@
-"""The step flags: their bits and limits, their settings for the compiled code, and NumPy's copy.
+"""The step flags: their bits and limits, and their settings for the compiled code.
 
 Step flags (bits of ``Result.flag``; 0 = sound step):
 
@@ -18,7 +18,7 @@ Step flags (bits of ``Result.flag``; 0 = sound step):
   iterations (joint friction so large that it nearly locks the mechanism; docs/explanation/friction.md).
 
 Every flag is computed in C in the same pass as the outputs (``compiled/batch.c``) with the
-settings of ``flag_spec``; ``numpy_flags`` computes the same in NumPy for the CasADi fallback.
+settings of ``flag_spec`` (tests/helpers.py has an independent NumPy version for the tests).
 """
 
 from __future__ import annotations
@@ -62,43 +62,6 @@ def flag_spec(outputs, stroke: tuple[float, float] | None) -> FlagSpec:
     return FlagSpec(index["D"], index["s2"], index["h"], stroke is not None, lo, hi,
                     UNIVERSAL_LIMIT, SINGULAR_LIMIT, state_layout().size,
                     index.get("coupling_change", -1), index.get("F0", -1), COUPLING_TOLERANCE)
-
-
-def numpy_flags(x: np.ndarray, arrays: dict, stroke: tuple[float, float] | None) -> np.ndarray:
-    """The flags of ``compiled/batch.c`` in NumPy, for the CasADi fallback (no compiler).
-
-    Parameters
-    ----------
-    x : ndarray (N, 24)
-        The states evaluated.
-    arrays : dict of name -> ndarray (N, size)
-        Every output of the evaluation; a non-finite step's are set to NaN here.
-    stroke : (float, float) or None
-        As for ``flag_spec``.
-
-    Returns
-    -------
-    ndarray (N,) int64
-    """
-    n = x.shape[0]
-    flag = np.zeros(n, dtype=np.int64)
-    finite = np.isfinite(x).all(axis=1)
-    for v in arrays.values():
-        finite &= np.isfinite(v.reshape(n, -1)).all(axis=1)
-    D = arrays["D"]
-    if stroke is not None:
-        lo, hi = stroke
-        flag[((D < lo) | (D > hi)).any(axis=1)] |= FLAG_STROKE
-    flag[(arrays["s2"] < UNIVERSAL_LIMIT).any(axis=1)] |= FLAG_UNIVERSAL
-    flag[arrays["h"][:, 0] < SINGULAR_LIMIT] |= FLAG_SINGULAR
-    if "coupling_change" in arrays:
-        limit = COUPLING_TOLERANCE * (1.0 + np.abs(arrays["F0"]))
-        flag[(finite & (np.abs(arrays["coupling_change"]) > limit).any(axis=1))] |= \
-            FLAG_COUPLING
-    flag[~finite] |= FLAG_NONFINITE
-    for v in arrays.values():
-        v[~finite] = np.nan
-    return flag
 
 
 def _index_list(idx: np.ndarray, limit: int = 10) -> str:

@@ -25,8 +25,7 @@ from pathlib import Path
 
 import numpy as np
 
-from gsfric.compiled.build import BuildError
-from gsfric.errors import InputError
+from gsfric.errors import BuildError, InputError
 from gsfric.evaluation.evaluator import Evaluator, state_array
 from gsfric.evaluation.parameters import model_function
 from gsfric.export.text import outputs

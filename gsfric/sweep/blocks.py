@@ -3,7 +3,7 @@ block after block of states, into buffers reused from block to block.
 
 The compiled code (generated function ``envelope``, derive/envelope.py) writes per step only
 the values the envelopes maximise, with the step flags, in one call per block. A platform with
-sensor effects (which change F after the compiled code) and the CasADi fallback go through
+sensor effects (which change F after the compiled code) goes through
 ``Evaluator.evaluate_quiet`` and ``gsfric.sweep.envelope.values`` instead.
 """
 
@@ -48,13 +48,10 @@ class Block:
         Zeros: the times of workspace states.
     pairs : ndarray (size * 18,)
         Scratch of the energies' trapezoid (sums of neighbouring steps).
-    compiled : bool
-        Whether the compiled library is there.
     """
 
     def __init__(self, size: int) -> None:
         rows = len(envelope_rows())
-        self.compiled = native.is_compiled()
         self.size = size
         self._values = np.empty(size * rows * 6)
         self.pairs = np.empty(size * 3 * 6)
@@ -91,7 +88,7 @@ class Evaluation:
 
     ``G`` is what the norms and products of ``Evaluator.evaluate_quiet``'s outputs give (to
     rounding: within 1e-12), with its step flags and coupled-friction flag; a platform with
-    sensor effects (which change F after the compiled code) and the CasADi fallback go through
+    sensor effects (which change F after the compiled code) goes through
     ``Evaluator.evaluate_quiet`` itself and ``values``.
     """
 
@@ -100,7 +97,7 @@ class Evaluation:
         gains, delay = sensor_parameters(platform.effects)
         self.sensor = delay != 0.0 or bool(np.any(gains != 0.0))
         self.spec = None
-        if native.is_compiled() and not self.sensor:
+        if not self.sensor:
             # the platform's own model (derived with its friction model fixed, as evaluate's)
             self.fn = native.get(model_function("envelope", platform.friction.model))
             self.spec = flag_spec(self.fn.outputs, platform.geometry.stroke)
@@ -112,7 +109,7 @@ class Evaluation:
     def blocks(self, block: Block, x: np.ndarray, t: np.ndarray) -> Iterator[tuple[int, int]]:
         """Fill ``block`` with the steps ``s:e`` of states x (n, 24) at times t (n,) block
         after block; yields ``(s, e)``."""
-        if self.spec is not None and block.compiled:
+        if self.spec is not None:
             return self._compiled(block, x)
         return self._evaluated(block, x, t)
 

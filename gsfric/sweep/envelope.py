@@ -124,8 +124,7 @@ def envelope_rows() -> tuple[str, ...]:
 def values(arrays: Mapping[str, np.ndarray], out: np.ndarray | None = None) -> np.ndarray:
     """The values ``G`` (N, 13, 6) (rows ``envelope_rows()``) of evaluated outputs ``arrays``
     (those of ``Evaluator.evaluate_quiet``, at least ``VALUE_INPUTS``): what the generated
-    function ``envelope`` computes, in NumPy (the path of platforms with sensor effects and of
-    the CasADi fallback)."""
+    function ``envelope`` computes, in NumPy (the path of platforms with sensor effects)."""
     rows = envelope_rows()
     n = len(arrays["F"])
     G = np.empty((n, len(rows), 6)) if out is None else out

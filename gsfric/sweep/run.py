@@ -32,7 +32,6 @@ from tqdm import tqdm
 
 from gsfric._checks import as_path
 from gsfric._optional import optional
-from gsfric.compiled import native
 from gsfric.errors import GsfricWarning, InputError
 from gsfric.io.files import atomic_write, check_outputs
 from gsfric.platform.description import Platform
@@ -191,7 +190,6 @@ def _run_tasks(todo: list[Task], scheduler, workers: int | None, progress: _Prog
     progress.bar = tqdm(total=p.steps, initial=p.steps - steps_todo, unit="step",
                         unit_scale=True, desc="sweep", disable=not show, file=sys.stderr)
     started = time.perf_counter()
-    native.is_compiled()       # compile (or load) once here, before workers need the cache
     try:
         if scheduler == "serial":
             for task in todo:

@@ -1,6 +1,6 @@
-"""Fault cases of the environment and the command line: compilers (CC), the compiled-library
-cache (GSFRIC_CACHE), threads, usage mistakes and interruptions (Ctrl-C, SIGTERM, SIGHUP
-arriving while the outputs are written)."""
+"""Fault cases of the environment and the command line: no compiler, the build chosen
+(GSFRIC_ISA), threads, usage mistakes and interruptions (Ctrl-C, SIGTERM, SIGHUP arriving while
+the outputs are written)."""
 
 from __future__ import annotations
 
@@ -11,17 +11,15 @@ import signal
 import subprocess
 import sys
 import tempfile
-import textwrap
 from pathlib import Path
 
 import numpy as np
 import pandas as pd
 from click.testing import CliRunner
-from makers import content, long_trajectory, old_output, platform, trajectory
-from runner import ERROR, OK, WARN, Case
+from makers import long_trajectory, old_output, platform, trajectory
+from runner import ERROR, OK, Case
 
 from gsfric.cli import main
-from gsfric.compiled import build
 from gsfric.errors import Interrupted
 
 SIMULATE = ("simulate", "--trajectory", "{data}", "--out", "{tmp}/o.csv", "--no-progress")
@@ -49,86 +47,23 @@ def same_as_reference(rtol: float, rows: int | None = None):
     return check
 
 
-# -- compilers and the cache (fresh processes: the library is loaded once per process) ----------
-
-
-@functools.cache
-def real_library() -> Path:
-    return build.build_library()
-
-
-def fake_compiler(base: Path) -> Path:
-    """A 'compiler' that copies the real library to the link's -o target."""
-    script = base / "fakecc"
-    script.write_text(textwrap.dedent(f"""\
-        #!/bin/sh
-        out=""; shared=0
-        while [ $# -gt 0 ]; do
-            case "$1" in -o) out="$2"; shift;; -shared) shared=1;; esac
-            shift
-        done
-        if [ $shared = 1 ]; then cp "{real_library()}" "$out"; else : > "$out"; fi
-    """))
-    script.chmod(0o755)
-    return script
-
-
-def damaged_cache(how: str):
-    """A cache filled by a first run with the fake compiler, then its library damaged."""
-    def make(base: Path) -> Path:
-        cc = fake_compiler(base)
-        cache = base / "cache"
-        data = trajectory("warm.csv")(base)
-        env = dict(os.environ, CC=str(cc), GSFRIC_CACHE=str(cache))
-        done = subprocess.run([sys.executable, "-m", "gsfric.cli", "simulate", "--trajectory",
-                               str(data), "--out", "/dev/null", "--no-progress"], env=env,
-                              capture_output=True, text=True, timeout=600)
-        assert done.returncode == 0, done.stderr
-        (library,) = cache.glob("build-*/libgsfric.so")
-        if how == "truncated":
-            with open(library, "r+b") as handle:     # a crash mid-copy, a bad sector
-                handle.truncate(4096)
-        else:
-            size = library.stat().st_size          # garbage of the recorded size
-            library.write_bytes(b"\x7fELF" + bytes(k * 7 % 256 for k in range(size - 4)))
-        return cache
-    return make
+# -- the compiled model and its build (fresh processes: a build is loaded once per process) -----
 
 
 def compiler_cases() -> list[Case]:
+    """Nothing is compiled at run time: no compiler is needed, and the build is chosen by the
+    CPU or by ``GSFRIC_ISA``."""
     base = {"data": trajectory()}
-    cases = [
-        Case(id="cc-simulate-false", argv=SIMULATE, expect=WARN, process=True,
-             env={"CC": "false", "GSFRIC_CACHE": "{tmp}/cache"}, files=dict(base),
-             message=r"compiling the generated model failed: false exited with status 1.*"
-                     r"falling back to CasADi", check=same_as_reference(1e-9)),
-        Case(id="cc-simulate-missing", argv=SIMULATE, expect=WARN, process=True,
-             env={"CC": "/nonexistent/cc", "GSFRIC_CACHE": "{tmp}/cache"}, files=dict(base),
-             message=r"no C compiler: '/nonexistent/cc' was not found",
-             check=same_as_reference(1e-9)),
-        Case(id="cc-simulate-empty", argv=SIMULATE, expect=ERROR, code=3, process=True,
-             env={"CC": "", "GSFRIC_CACHE": "{tmp}/cache"}, files=dict(base),
-             message=r"^CC is set but empty", absent=("o.csv",)),
-        Case(id="cc-paper-unparsable", argv=("paper", "--out", "{tmp}/o", "--no-plots"),
-             expect=ERROR, code=3, process=True,
-             env={"CC": "'unclosed", "GSFRIC_CACHE": "{tmp}/cache"},
-             message=r"cannot be parsed as a command", absent=("o",)),
-        Case(id="cache-simulate-is-a-file", argv=SIMULATE, expect=ERROR, code=3, process=True,
-             env={"GSFRIC_CACHE": "{cachefile}"},
-             files={**base, "cachefile": content("cachefile", "not a folder")},
-             message=r"cachefile: the compiled-library cache \(GSFRIC_CACHE\) is not a "
-                     r"directory", absent=("o.csv",)),
+    return [
+        Case(id="cc-simulate-missing", argv=SIMULATE, expect=OK, process=True,
+             env={"CC": "/nonexistent/cc"}, files=dict(base), check=same_as_reference(0)),
+        Case(id="isa-simulate-baseline", argv=SIMULATE, expect=OK, process=True,
+             env={"GSFRIC_ISA": "baseline"}, files=dict(base), check=same_as_reference(1e-9)),
+        Case(id="isa-simulate-unknown", argv=SIMULATE, expect=ERROR, code=2, process=True,
+             env={"GSFRIC_ISA": "avx9000"}, files=dict(base),
+             message=r"^GSFRIC_ISA='avx9000': expected one of baseline, x86-64-v3, x86-64-v4$",
+             absent=("o.csv",)),
     ]
-    for how in ("truncated", "garbage"):
-        cases.append(Case(
-            id=f"cache-simulate-{how}-library", argv=SIMULATE, expect=WARN, process=True,
-            env={"CC": "{tmp}/fakecc", "GSFRIC_CACHE": "{cache}"},
-            files={**base, "cache": damaged_cache(how)},
-            message=r"libgsfric\.so: the cached compiled library is damaged \(its "
-                    + (r"size is 4096 bytes" if how == "truncated" else r"SHA-256 differs"),
-            check=same_as_reference(0),
-            mutable=("cache",)))
-    return cases
 
 
 # -- threads ------------------------------------------------------------------------------------
