@@ -101,7 +101,10 @@ def _copy_notebooks(app) -> None:
     for name, text in wanted.items():
         copy = target / name
         if not copy.exists() or copy.read_text(encoding="utf-8") != text:
-            copy.write_text(text, encoding="utf-8")
+            # written whole, then renamed: two builds at once never read half a notebook
+            partial = target / f".{name}.{os.getpid()}.tmp"
+            partial.write_text(text, encoding="utf-8")
+            os.replace(partial, copy)
 
 
 def setup(app):
