@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import json
 import os
 import subprocess
 import sys
@@ -18,12 +19,15 @@ extensions = [
     "sphinx.ext.autosummary",
     "sphinx.ext.napoleon",
     "sphinx.ext.mathjax",
+    "sphinx-mathjax-offline",  # MathJax served from _static/mathjax: formulas render offline
     "sphinx_click",
     "sphinx_design",
 ]
 
 exclude_patterns = ["_build", "_generated", "incoming", "**.ipynb_checkpoints"]
 suppress_warnings = ["myst.header"]
+"""Only that one: MyST's cross-reference warnings (``myst.xref_missing``, ``myst.xref_ambiguous``)
+stay on, so that with ``-W`` a link to a page or file that does not exist fails the build."""
 nitpicky = True
 nitpick_ignore_regex = [("py:class", r"(?!gsfric\.).*")]
 """Type fields of docstrings hold shapes and units ("(N, 6) array, N"), not only class names:
@@ -38,6 +42,9 @@ nb_execution_mode = os.environ.get("GSFRIC_DOCS_EXECUTE", "cache")
 nb_execution_timeout = 600
 nb_execution_raise_on_error = True
 nb_execution_show_tb = True
+# The kernels inherit this environment: a matplotlib backend chosen in it (MPLBACKEND=Agg) would
+# keep every figure off the site; without one, the kernel draws inline.
+os.environ.pop("MPLBACKEND", None)
 
 autodoc_typehints = "none"
 autodoc_member_order = "bysource"
@@ -67,5 +74,39 @@ def _write_generated(app) -> None:
                    check=True, capture_output=True)
 
 
+NOTEBOOKS = Path(__file__).resolve().parents[1] / "notebooks"
+"""The tutorials' home: notebooks/ at the top of the repository, where they run in Jupyter."""
+
+
+def _copy_notebooks(app) -> None:
+    """Put the notebooks of notebooks/ into tutorials/, where the site shows them.
+
+    Their links are written for the repository (``../docs/howto/sizing.md`` from notebooks/);
+    in tutorials/ the same pages are ``../howto/sizing.md``. A copy is written only when it
+    would change (Sphinx then rebuilds that page alone), and copies whose notebook is gone are
+    removed. The copies are not tracked (.gitignore).
+    """
+    target = Path(app.srcdir, "tutorials")
+    wanted = {}
+    for source in sorted(NOTEBOOKS.glob("*.ipynb")):
+        notebook = json.loads(source.read_text(encoding="utf-8"))
+        for cell in notebook["cells"]:
+            if cell["cell_type"] == "markdown":
+                text = "".join(cell["source"]).replace("](../docs/", "](../")
+                cell["source"] = text.splitlines(keepends=True)
+        wanted[source.name] = json.dumps(notebook, indent=1, ensure_ascii=False) + "\n"
+    for stale in target.glob("*.ipynb"):
+        if stale.name not in wanted:
+            stale.unlink()
+    for name, text in wanted.items():
+        copy = target / name
+        if not copy.exists() or copy.read_text(encoding="utf-8") != text:
+            # written whole, then renamed: two builds at once never read half a notebook
+            partial = target / f".{name}.{os.getpid()}.tmp"
+            partial.write_text(text, encoding="utf-8")
+            os.replace(partial, copy)
+
+
 def setup(app):
+    app.connect("builder-inited", _copy_notebooks)
     app.connect("builder-inited", _write_generated)

@@ -3,7 +3,7 @@ controller's frame, jittered stamps, the log's own rates, and data that are not 
 
 The shipped controller log (tests/data/controller_log.csv, written by
 tests/data/make_controller_log.py) is read, simulated and discovered through the CLI as the
-tutorial docs/tutorials/real_log.ipynb does.
+tutorial notebooks/real_log.ipynb does.
 """
 
 from __future__ import annotations
