@@ -59,26 +59,6 @@ def env(**changes) -> dict:
     return out
 
 
-def gone(pid: int) -> bool:
-    """The process has exited (a zombie waiting for a parent that is not gsfric counts)."""
-    try:
-        status = Path(f"/proc/{pid}/status").read_text()
-    except FileNotFoundError:
-        return True
-    return "State:\tZ" in status or "State:\tX" in status
-
-
-def all_gone(pids, wait: float = 20.0) -> bool:
-    """Every process has exited, allowing a killed one ``wait`` s to be scheduled and exit (on
-    a loaded machine a SIGKILLed process needs CPU time to finish)."""
-    deadline = time.monotonic() + wait
-    while not all(gone(int(p)) for p in pids):
-        if time.monotonic() > deadline:
-            return False
-        time.sleep(0.05)
-    return True
-
-
 # -- a full disk: injected ENOSPC ---------------------------------------------------------------
 
 
@@ -279,10 +259,8 @@ def _start_slow_simulate(tmp_path: Path) -> tuple[subprocess.Popen, Path]:
                              str(path), "--out", str(out), "--chunk", "100", "--no-progress"],
                             stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
                             preexec_fn=_interruptible)
-    deadline = time.monotonic() + 120
-    while not leftovers(tmp_path):
+    while not leftovers(tmp_path):     # polled: a busy machine only makes this slower
         assert proc.poll() is None, proc.communicate()
-        assert time.monotonic() < deadline, "no temporary output appeared"
         time.sleep(0.05)
     return proc, out
 
@@ -293,7 +271,7 @@ def _start_slow_simulate(tmp_path: Path) -> tuple[subprocess.Popen, Path]:
 def test_signal_removes_the_temporary_and_keeps_the_old_output(tmp_path, sig, code, name):
     proc, out = _start_slow_simulate(tmp_path)
     proc.send_signal(sig)
-    _, stderr = proc.communicate(timeout=60)
+    _, stderr = proc.communicate()
     message = one_error(stderr, code, proc.returncode)
     if name:
         assert message == f"stopped by {name}; no output was left half-written"
@@ -304,7 +282,7 @@ def test_signal_removes_the_temporary_and_keeps_the_old_output(tmp_path, sig, co
 def test_sigkill_leaves_a_temporary_that_the_next_run_removes(tmp_path):
     proc, out = _start_slow_simulate(tmp_path)
     proc.kill()
-    proc.communicate(timeout=60)
+    proc.communicate()
     assert len(leftovers(tmp_path)) == 1          # unavoidable: nothing runs on SIGKILL
     result = run("simulate", "--trajectory", tmp_path / "t.csv", "--out", out)
     assert result.exit_code == 0, result.output
@@ -316,7 +294,7 @@ def test_closed_stdout_exits_quietly(tmp_path):
                             stdout=subprocess.PIPE, stderr=subprocess.PIPE, cwd=ROOT)
     proc.stdout.close()                            # the reader went away (`| head -c 0`)
     stderr = proc.stderr.read().decode()
-    proc.wait(timeout=120)
+    proc.wait()
     if proc.returncode == 1 and "generated/ is stale" in stderr:   # derive/ being edited
         pytest.skip("generated/ is stale in this checkout")
     assert proc.returncode == 141 and stderr == ""
@@ -402,7 +380,7 @@ def test_a_stop_that_an_import_turned_into_an_unchained_error_is_still_a_stop(tm
     proc = subprocess.run([sys.executable, "-c", STOP_INSIDE_AN_EXTENSION_IMPORT, name,
                            "simulate", "--trajectory", str(path), "--out", str(out),
                            "--no-progress"],
-                          capture_output=True, text=True, preexec_fn=_interruptible, timeout=120)
+                          capture_output=True, text=True, preexec_fn=_interruptible)
     message = one_error(proc.stderr, code, proc.returncode)
     assert message.startswith("stopped by SIGTERM" if name == "SIGTERM" else "interrupted")
     assert out.read_text() == "earlier output\n" and leftovers(tmp_path) == []
@@ -434,7 +412,7 @@ def test_a_stop_whose_exception_was_swallowed_still_keeps_the_old_output(tmp_pat
     out.write_text("earlier output\n")
     proc = subprocess.run([sys.executable, "-c", STOP_SWALLOWED, name, "simulate",
                            "--trajectory", str(path), "--out", str(out), "--no-progress"],
-                          capture_output=True, text=True, preexec_fn=_interruptible, timeout=120)
+                          capture_output=True, text=True, preexec_fn=_interruptible)
     message = one_error(proc.stderr, code, proc.returncode)
     assert message.startswith("stopped by SIGTERM" if name == "SIGTERM" else "interrupted")
     assert out.read_text() == "earlier output\n" and leftovers(tmp_path) == []

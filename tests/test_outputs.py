@@ -183,7 +183,7 @@ def test_a_fifo_is_written_into(files, tmp_path, name, command):
     thread, got = read_fifo(path)
     extra = ("--trajectory", files["trajectory"]) if command[0] == "simulate" else ()
     result = run(*command, *extra, "--out", path)
-    thread.join(timeout=60)
+    thread.join()
     assert stat.S_ISFIFO(os.lstat(path).st_mode)
     assert result.exit_code == 0, result.output
     assert len(got) == 1 and len(got[0]) > 100

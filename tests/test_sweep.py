@@ -220,7 +220,7 @@ def test_limits_list_exactly_the_exceeding_cases(serial, inputs, tmp_path):
 
 def _cli(*args):
     return subprocess.run([sys.executable, "-m", "gsfric.cli", *args], capture_output=True,
-                          text=True, timeout=300)
+                          text=True)
 
 
 def _one_line_error(proc, *words):

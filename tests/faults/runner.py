@@ -145,7 +145,7 @@ def run_cli(case: Case, paths: dict, monkeypatch) -> tuple[int, str]:
         env = dict(os.environ, **{k: v.format(**{n: str(p) for n, p in paths.items()})
                                   for k, v in case.env.items()})
         done = subprocess.run([sys.executable, "-m", "gsfric.cli", *argv], capture_output=True,
-                              text=True, env=env, cwd=paths["tmp"], timeout=600)
+                              text=True, env=env, cwd=paths["tmp"])
         return done.returncode, done.stderr
     if case.patch is not None:
         case.patch(monkeypatch, paths)
