@@ -173,8 +173,8 @@ def test_generic_structure_needs_a_held_out_gain_beyond_k_over_n(monkeypatch):
     X = np.stack([np.sin(7 * s), s ** 2, np.cos(3 * s)], axis=2)
     residual = rng.normal(size=(rows, 6)) + 0.8 * X[:, :, 0]
     w = st.Whitener.identity()
-    kw = dict(alpha=0.01, min_gap=0.3, n_blocks=40, n_folds=8, min_fold_share=0.75,
-              ridge=RIDGE, names=["a", "b", "c"])
+    kw = dict(alpha=0.01, min_gap=0.3, n_blocks=40, n_folds=8, ridge=RIDGE,
+              names=["a", "b", "c"])
     real = st.cross_validate
     kn = 3 / (6 * rows)
     for factor, expected in ((0.5, False), (2.0, True)):

@@ -167,8 +167,8 @@ def _test(residual: np.ndarray, X: np.ndarray, x: Features, s: Settings, level: 
     valid = x.weight > 0
     whitener = lackfit.whitener_beyond(residual, X, valid, s)
     return lackfit.test(residual, X, whitener, alpha=level, min_gap=s.dictionary_min_gap,
-                        n_blocks=s.n_blocks, n_folds=s.n_folds, min_fold_share=0.0,
-                        ridge=s.ridge, names=[kind] * X.shape[2],
+                        n_blocks=s.n_blocks, n_folds=s.n_folds, ridge=s.ridge,
+                        names=[kind] * X.shape[2],
                         low=whitener.low_band(x.t, valid, q=s.low_band), by="pairs")
 
 

@@ -81,8 +81,7 @@ def _basis(d: FinalResidual) -> Structure:
                                      derivatives=(d.dF, d.acceleration))
     whitener = lackfit.whitener_beyond(d.residual, X, sliding, s)
     return lackfit.test(d.residual, X, whitener, alpha=s.alpha, min_gap=s.min_gap,
-                        n_blocks=s.n_blocks, n_folds=s.n_folds,
-                        min_fold_share=s.min_fold_share, ridge=s.ridge, names=names,
+                        n_blocks=s.n_blocks, n_folds=s.n_folds, ridge=s.ridge, names=names,
                         low=low_band_of(d.problem, whitener))
 
 

@@ -137,7 +137,7 @@ TEST_KEYS = ("significant", "p_value", "p_bands", "gap", "cv_gain", "fold_share"
 
 
 def test(residual: np.ndarray, X: np.ndarray, whitener: st.Whitener, *, alpha: float,
-         min_gap: float, n_blocks: int, n_folds: int, min_fold_share: float, ridge: float,
+         min_gap: float, n_blocks: int, n_folds: int, ridge: float,
          names: list[str] | None = None, low: np.ndarray | None = None,
          nuisance: int = 0, by: str = "time") -> Structure:
     """The lack-of-fit test of the residual (M, 6) against the basis X (M, 6, k) whose
@@ -282,7 +282,7 @@ def parameter_drift(residual: np.ndarray, X: np.ndarray, valid: np.ndarray, t: n
     s = settings
     whitener = whitener_beyond(residual, X, valid, s)
     return test(residual, X, whitener, alpha=s.alpha, min_gap=s.min_gap, n_blocks=s.n_blocks,
-                n_folds=s.n_folds, min_fold_share=0.0, ridge=s.ridge,
+                n_folds=s.n_folds, ridge=s.ridge,
                 names=list(DRIFT_SIGNALS), low=whitener.low_band(t, valid, q=s.low_band),
                 nuisance=1, by="pairs")
 
