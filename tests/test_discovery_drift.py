@@ -10,7 +10,6 @@ import pytest
 from scipy.signal import lfilter
 
 from gsfric.discovery import discover, lackfit
-from gsfric.discovery.report import report
 from gsfric.discovery.rest import poses_from_columns
 from gsfric.discovery.settings import Settings
 from gsfric.models import reference_platform
@@ -154,4 +153,4 @@ def test_a_drifting_friction_is_not_explained(base, seed, phi):
     assert result.lack_of_fit.main_signal in ("drifts over the record", "sgn(v)")
     levels = [v for _, _, v in result.lack_of_fit.tests["drift"].details["levels"]]
     assert levels[0] < 0 < levels[-1]       # less friction than the mean first, more last
-    assert "changes over the record" in report(result)
+    assert "changes over the record" in result.report()

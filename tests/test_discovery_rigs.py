@@ -12,7 +12,6 @@ from click.testing import CliRunner
 
 from gsfric.cli import main
 from gsfric.discovery import discover
-from gsfric.discovery.report import report
 from gsfric.discovery.rest import data_problems, poses_from_columns, speed_uncertainty
 from gsfric.discovery.settings import Settings
 from gsfric.errors import InputError
@@ -581,7 +580,7 @@ def test_offsets_as_good_as_a_quadratic_load_cell_under_slow_noise_are_not_expla
     assert summary["unexplained"]["source"] == f"round {first.index}"
     assert summary["unexplained"]["main_signal"] == "F|F|"
     assert "square of the force" in summary["unexplained"]["message"]
-    assert f"in round {first.index}, a generic structure" in report(result)
+    assert f"in round {first.index}, a generic structure" in result.report()
 
 
 def _scaled_position(data, e: float) -> tuple[Motion, np.ndarray, tuple]:

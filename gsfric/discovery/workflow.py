@@ -26,6 +26,7 @@ Steps (docs/explanation/discovery.md explains each decision):
 from __future__ import annotations
 
 import dataclasses
+import os
 from collections.abc import Sequence
 from dataclasses import dataclass, field
 
@@ -168,6 +169,7 @@ def discover(motion: Motion, forces: np.ndarray, platform: Platform | None = Non
         raise InputTypeError(f"discover: unknown option {unknown[0]!r} (a Settings field "
                              "name)")
     settings = dataclasses.replace(settings or Settings(), **options)
+    platform_source = str(platform) if isinstance(platform, (str, os.PathLike)) else ""
     platform = platform_from(platform)
     forces = checked_forces(motion, forces, settings)
     recorded = poses if poses is not None else motion.recorded_poses()
@@ -195,6 +197,7 @@ def discover(motion: Motion, forces: np.ndarray, platform: Platform | None = Non
             break
     bar.step("bootstrap of the final fit")
     result = _final(state, motion, platform)
+    result.platform_source = platform_source
     bar.close()
     return result
 
