@@ -305,13 +305,18 @@ def test_ridge(record, linearised):
     assert abs(shrunk) < 0.9 * abs(step)
 
 
-def test_low_band(record, linearised):
-    """The slowest components on which the band tests measure the noise, per leg."""
+def test_low_band(record, linearised, discovered):
+    """The slowest components on which the band tests measure the noise, per leg, and what
+    the report says of them."""
     _, _, whitener = linearised
     assert low_band_of(problem(record), whitener).shape[2] == 3
     assert low_band_of(problem(record, low_band=5), whitener).shape[2] == 5
     assert screen(record, linearised).blocks.low_rows == 6 * 3
     assert screen(record, linearised, low_band=5).blocks.low_rows == 6 * 5
+    result = discovered()
+    assert "the record's three slowest components" in result.report()
+    changed = dataclasses.replace(result, settings=Settings(low_band=5))
+    assert "the record's five slowest components" in changed.report()
 
 
 def test_n_folds(record, linearised):

@@ -292,16 +292,22 @@ def _method(d: Discovery) -> list[str]:
           "linearisation of the compiled model. The residual is prewhitened with an AR model "
           "per leg; a candidate is accepted when (1) the nested F-test on the prewhitened data "
           "gives p below alpha / K (Bonferroni over the K candidates), and so does the same "
-          "test on the record's three slowest components per leg alone (the noise measured on "
-          "them: slow noise is not an offset) or on the rest alone, (2) block "
-          "cross-validation over contiguous stretches, each holding an equal share of the used "
-          "pairs, shows a lower held-out error in "
+          f"test on the record's {_count(d.settings.low_band)} slowest components per leg alone "
+          "(the noise measured on them: slow noise is not an offset) or on the rest alone, "
+          "(2) block cross-validation over contiguous stretches, each holding an equal share "
+          "of the used pairs, shows a lower held-out error in "
           f"total and in at least {d.settings.min_fold_share:.0%} of the folds, and (3) it "
           f"closes a gap of at least {d.settings.min_gap:g} x the noise level. The accepted "
           "candidate with the largest held-out gain is added, refined by Gauss-Newton on the "
           "compiled model, and the next round starts; the workflow stops when no candidate is "
           "accepted. See docs/explanation/discovery.md.", ""]
     return L
+
+
+def _count(n: int) -> str:
+    """A count in words up to ten, else in digits."""
+    words = ("no", "one", "two", "three", "four", "five", "six", "seven", "eight", "nine", "ten")
+    return words[n] if 0 <= n < len(words) else str(n)
 
 
 def _glossary(d: Discovery) -> list[str]:
