@@ -80,9 +80,16 @@ def test_written_back_platform_is_commented_compact_and_loads_as_the_final_model
     assert "# kg; the moving platform" in text
 
 
-def test_python_api_discover_returns_the_typed_result_with_a_short_repr(answered, tmp_path):
+@pytest.fixture(scope="module")
+def again(answered, tmp_path_factory):
+    """The same record through the Python API, its outputs written."""
+    out = tmp_path_factory.mktemp("again")
+    return gsfric.discover(answered[2], out=out, figures=False), out
+
+
+def test_python_api_discover_returns_the_typed_result_with_a_short_repr(answered, again):
     _, line, measured = answered
-    result = gsfric.discover(measured, out=tmp_path / "again", figures=False)
+    result, out = again
     assert isinstance(result, gsfric.Discovery)
     assert verdict_line(result) == line
     assert 0.0 <= gap_closed(result) <= 1.0
@@ -91,9 +98,23 @@ def test_python_api_discover_returns_the_typed_result_with_a_short_repr(answered
     assert all(len(repr(f)) < 200 for f in result.effects)
     assert all(len(repr(r)) < 200 for r in result.rounds)
     # the commented platform file reads back as exactly the final model
-    assert gsfric.Platform.from_toml(tmp_path / "again" / "platform.toml") == result.platform
+    assert gsfric.Platform.from_toml(out / "platform.toml") == result.platform
     with pytest.raises(gsfric.InputError, match="forces"):
         gsfric.discover(gsfric.models.paper_motion())
+
+
+def test_summary_and_report_are_what_the_files_hold(answered, again):
+    """``summary()`` is summary.json's content, the answer and the file included, and
+    ``report()`` is report.md, the same as the command line writes."""
+    cli, line, measured = answered
+    result, out = again
+    summary = result.summary()
+    assert summary == json.loads((out / "summary.json").read_text())
+    assert summary["answer"] == line == verdict_line(result)
+    assert summary["data"]["file"] == str(measured)
+    assert result.report() == (out / "report.md").read_text()
+    assert result.report().splitlines()[2] == (cli / "report.md").read_text().splitlines()[2]
+    assert f"`{measured}`" in result.report()
 
 
 def test_glossary_terms_are_explained_in_a_sentence():

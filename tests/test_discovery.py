@@ -33,11 +33,14 @@ from click.testing import CliRunner
 from gsfric.cli import main
 from gsfric.discovery import CANDIDATE_NAMES, discover, run_discover
 from gsfric.discovery import statistics as st
+from gsfric.discovery.settings import Settings
 from gsfric.errors import InputError
 from gsfric.evaluation.evaluator import Evaluator, evaluate, state_array
 from gsfric.models import random_motion, reference_platform
 from gsfric.synth import effect_contributions, excitation_motion, synthesize
 from gsfric.trajectory import Motion
+
+DEFAULTS = Settings()
 
 SAMPLES = 4000
 RATE = 200.0
@@ -301,7 +304,7 @@ def test_whitener_recovers_an_ar1_model():
     from gsfric.synth import ar1_noise
 
     e = ar1_noise(np.random.default_rng(1), (50_000, 6), 1.0, 0.8)
-    w = st.Whitener.fit(e)
+    w = st.Whitener.fit(e, DEFAULTS.max_order)
     np.testing.assert_allclose(w.phi1(), 0.8, atol=0.02)
     white = w.apply(e)
     lag1 = np.mean(white[1:] * white[:-1], axis=0) / np.mean(white ** 2, axis=0)
@@ -319,7 +322,7 @@ def test_bounded_solve_matches_scipy():
         lo = np.where(rng.random(k) < 0.5, -np.inf, rng.normal(size=k) * 0.1)
         hi = np.where(rng.random(k) < 0.5, np.inf,
                       np.where(np.isinf(lo), 0.0, lo) + rng.uniform(0.01, 1.0, k))
-        t = st.solve(X.T @ X, X.T @ y, lo, hi)
+        t = st.solve(X.T @ X, X.T @ y, lo, hi, ridge=DEFAULTS.ridge)
         ref = lsq_linear(X, y, bounds=(lo, hi), method="bvls", tol=1e-12).x
         assert np.sum((X @ t - y) ** 2) <= np.sum((X @ ref - y) ** 2) * (1 + 1e-6)
 
@@ -327,7 +330,7 @@ def test_bounded_solve_matches_scipy():
 def test_block_cross_products_add_up():
     rng = np.random.default_rng(3)
     X, z = rng.normal(size=(1003, 6, 4)), rng.normal(size=(1003, 6))
-    blocks = st.Blocks.build(X, z, 10)
+    blocks = st.Blocks.build(X, z, 10, ridge=DEFAULTS.ridge)
     A, b, c, rows = blocks.total()
     np.testing.assert_allclose(A, X.reshape(-1, 4).T @ X.reshape(-1, 4))
     np.testing.assert_allclose(b, X.reshape(-1, 4).T @ z.ravel())
@@ -347,8 +350,9 @@ def test_prewhitened_f_test_is_calibrated_under_ar_noise():
     trials = 200
     for _ in range(trials):
         z = ar1_noise(rng, (n, 6), 1.0, 0.95)
-        for w, count in ((st.Whitener.identity(), "naive"), (st.Whitener.fit(z), "pre")):
-            blocks = st.Blocks.build(w.apply(slow), w.apply(z), 10)
+        for w, count in ((st.Whitener.identity(), "naive"),
+                         (st.Whitener.fit(z, DEFAULTS.max_order), "pre")):
+            blocks = st.Blocks.build(w.apply(slow), w.apply(z), 10, ridge=DEFAULTS.ridge)
             lo, hi = np.array([-np.inf]), np.array([np.inf])
             alt = st.fit(blocks, [0], lo, hi)
             null = st.Fit([], np.zeros(0), float(blocks.ztz.sum()), alt.rows)

@@ -10,8 +10,8 @@ import pytest
 from scipy.signal import lfilter
 
 from gsfric.discovery import discover, lackfit
-from gsfric.discovery.report import report
 from gsfric.discovery.rest import poses_from_columns
+from gsfric.discovery.settings import Settings
 from gsfric.models import reference_platform
 from gsfric.synth import synthesize
 from gsfric.trajectory import Motion
@@ -61,8 +61,7 @@ def _noise(rng, kind, sigma=0.2):
 def _drift_test(r, t, D, v):
     sliding = np.abs(v) > 2e-4
     X = lackfit.drift_basis(t, v, sliding) * sliding[:, :, None]
-    return lackfit.parameter_drift(r * sliding, X, sliding, t, alpha=0.01, min_gap=0.3,
-                                   n_blocks=40, n_folds=8)
+    return lackfit.parameter_drift(r * sliding, X, sliding, t, Settings())
 
 
 @pytest.mark.parametrize("slow", [False, True])
@@ -154,4 +153,4 @@ def test_a_drifting_friction_is_not_explained(base, seed, phi):
     assert result.lack_of_fit.main_signal in ("drifts over the record", "sgn(v)")
     levels = [v for _, _, v in result.lack_of_fit.tests["drift"].details["levels"]]
     assert levels[0] < 0 < levels[-1]       # less friction than the mean first, more last
-    assert "changes over the record" in report(result)
+    assert "changes over the record" in result.report()

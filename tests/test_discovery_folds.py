@@ -5,9 +5,12 @@ import pytest
 
 from gsfric.discovery import discover
 from gsfric.discovery import statistics as st
+from gsfric.discovery.settings import Settings
 from gsfric.models import minimum_jerk_moves, reference_platform
 from gsfric.synth import synthesize
 from gsfric.trajectory import Motion
+
+RIDGE = Settings().ridge
 
 
 def moves_with_long_rests(rate=200.0, seconds=14.0, move=0.7, rest=3.0, seed=4):
@@ -36,7 +39,7 @@ def test_fold_share_counts_only_folds_with_observations():
     others."""
     XtX = np.ones((8, 1, 1))
     rows = np.array([100.0, 0, 0, 100, 0, 0, 0, 100])
-    blocks = st.Blocks(XtX, np.ones((8, 1)), np.ones(8), rows)
+    blocks = st.Blocks(XtX, np.ones((8, 1)), np.ones(8), rows, RIDGE)
     cv_null = np.array([5.0, 0, 0, 6, 0, 0, 0, 7])
     cv = np.array([4.0, 0, 0, 5, 0, 0, 0, 6])
     assert st.fold_share(blocks, cv, cv_null, 8) == 1.0
@@ -93,7 +96,7 @@ def test_a_column_without_data_gets_no_coefficient():
     cross-product with the target holds."""
     A = np.diag([2.0, 0.0])
     b = np.array([1.0, 3e-12])
-    t = st.solve(A, b, np.array([-np.inf, 0.0]), np.array([np.inf, np.inf]))
+    t = st.solve(A, b, np.array([-np.inf, 0.0]), np.array([np.inf, np.inf]), ridge=RIDGE)
     assert t[1] == 0.0
     assert t[0] == pytest.approx(0.5)
 
@@ -105,7 +108,7 @@ def test_fold_training_sums_are_the_blocks_left():
     X = rng.normal(size=(400, 6, 2))
     X[:100, :, 1] *= 1e8
     X[100:, :, 1] = 0.0
-    blocks = st.Blocks.build(X, rng.normal(size=(400, 6)), 8)
+    blocks = st.Blocks.build(X, rng.normal(size=(400, 6)), 8, ridge=RIDGE)
     A, b, c = blocks.without(np.array([0, 1]))
     assert A[1, 1] == 0.0 and b[1] == 0.0
     assert A[0, 0] == pytest.approx(np.sum(X[100:, :, 0] ** 2))
@@ -170,7 +173,7 @@ def test_generic_structure_needs_a_held_out_gain_beyond_k_over_n(monkeypatch):
     X = np.stack([np.sin(7 * s), s ** 2, np.cos(3 * s)], axis=2)
     residual = rng.normal(size=(rows, 6)) + 0.8 * X[:, :, 0]
     w = st.Whitener.identity()
-    kw = dict(alpha=0.01, min_gap=0.3, n_blocks=40, n_folds=8, min_fold_share=0.75,
+    kw = dict(alpha=0.01, min_gap=0.3, n_blocks=40, n_folds=8, ridge=RIDGE,
               names=["a", "b", "c"])
     real = st.cross_validate
     kn = 3 / (6 * rows)

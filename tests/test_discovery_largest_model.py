@@ -5,7 +5,10 @@ from types import SimpleNamespace
 import numpy as np
 
 from gsfric.discovery.residuals import Design
+from gsfric.discovery.settings import Settings
 from gsfric.discovery.workflow import _noise_whitener
+
+DEFAULTS = Settings()
 
 
 def hinge_design(residual, x, references, refit):
@@ -42,13 +45,13 @@ def test_noise_model_does_not_take_what_only_a_combination_of_variants_fits():
     references = np.linspace(x.min(), x.max(), 9)
     assert np.any(np.isclose(references, middle))
     design = hinge_design(residual, x, references, np.ones((m, 6)))
-    problem = SimpleNamespace(sliding=np.ones((m, 6), bool))
+    problem = SimpleNamespace(sliding=np.ones((m, 6), bool), settings=DEFAULTS)
     w = _noise_whitener(design, problem)
     # one hinge (and the constant) leave most of a V's other half: over twice the noise
     assert np.all(w.marginal_std > 2 * noise)
     # the largest model holds the refit and one column of the candidate
-    assert design.largest_model()[0] == 0
-    assert len(design.largest_model()) == 2
+    assert design.largest_model(DEFAULTS.ridge)[0] == 0
+    assert len(design.largest_model(DEFAULTS.ridge)) == 2
 
 
 def test_largest_model_picks_the_variant_that_fits():
@@ -62,5 +65,5 @@ def test_largest_model_picks_the_variant_that_fits():
     true = 3
     residual = 15.0 * np.maximum(x - references[true], 0.0) + rng.normal(0.0, 0.1, (m, 6))
     design = hinge_design(residual, x, references, np.ones((m, 6)))
-    cols = design.largest_model()
+    cols = design.largest_model(DEFAULTS.ridge)
     assert cols == [0, 1 + true]

@@ -12,8 +12,8 @@ from click.testing import CliRunner
 
 from gsfric.cli import main
 from gsfric.discovery import discover
-from gsfric.discovery.report import report
 from gsfric.discovery.rest import data_problems, poses_from_columns, speed_uncertainty
+from gsfric.discovery.settings import Settings
 from gsfric.errors import InputError
 from gsfric.models import reference_platform
 from gsfric.platform.catalog import apply_sensor, sensor_jacobian
@@ -23,6 +23,7 @@ from gsfric.trajectory import Motion
 FORCES = [f"F{i}" for i in range(1, 7)]
 PAPER = reference_platform(friction_model="paper")
 COUPLED = reference_platform(friction_model="coupled")
+DEFAULTS = Settings()
 """The base models, named explicitly (the library's default is not relied on)."""
 
 
@@ -108,7 +109,7 @@ BAD = [("constant", "F2: constant"), ("saturated", "F4: saturated"), ("dropout",
 def test_bad_channels_are_data_problems(problem, expected):
     data = synthesize(PAPER, samples=2000, noise=0.1, seed=1)
     t, F = spoil(data, problem)
-    found = data_problems(t, F)
+    found = data_problems(t, F, held_run=DEFAULTS.held_run)
     assert found[0].startswith(expected)
     assert len(found) == (6 if problem == "zeroed" else 1)
     if problem in ("constant", "saturated", "held", "zeroed"):
@@ -141,10 +142,11 @@ def test_bad_measured_data_through_the_cli(tmp_path, problem, expected):
 
 def test_clean_data_has_no_data_problem():
     data = synthesize(PAPER, samples=2000, noise=0.1, seed=2)
-    assert data_problems(data.frame.t.values, data.frame[FORCES].values) == []
+    assert data_problems(data.frame.t.values, data.frame[FORCES].values,
+                         held_run=DEFAULTS.held_run) == []
     # a coarsely quantised load cell repeats values everywhere: not a dropout
     coarse = np.round(data.frame[FORCES].values / 0.2) * 0.2
-    assert data_problems(data.frame.t.values, coarse) == []
+    assert data_problems(data.frame.t.values, coarse, held_run=DEFAULTS.held_run) == []
 
 
 def point_to_point(samples=6000, rate=200.0, seed=0) -> Motion:
@@ -259,7 +261,8 @@ def test_rests_are_left_out_as_far_as_the_differentiator_reaches():
     v = np.where(t >= 500, 0.01 * np.sin((t - 500) / 40.0), v)   # a sine: reversals
     v[400:405] = 0.005                                    # an excursion inside the rest
     speed = np.repeat(v[:, None], 6, axis=1)
-    sliding = sliding_mask(speed, np.full(6, 1e-4), 0.0, reach=reach)[:, 0]
+    sliding = sliding_mask(speed, np.full(6, 1e-4), 0.0, reach=reach,
+                           rest_band=DEFAULTS.rest_band)[:, 0]
     assert sliding[:300 - reach].all() and not sliding[300 - reach:500 + reach].any()
     crossings = np.flatnonzero(np.abs(v[500 + reach:]) <= 5e-4) + 500 + reach
     assert crossings.size and not sliding[crossings].any()
@@ -268,7 +271,7 @@ def test_rests_are_left_out_as_far_as_the_differentiator_reaches():
     away[:leaves + reach] = False
     assert sliding[away].all()
     # without the reach only the band itself is left out
-    plain = sliding_mask(speed, np.full(6, 1e-4), 0.0)[:, 0]
+    plain = sliding_mask(speed, np.full(6, 1e-4), 0.0, rest_band=DEFAULTS.rest_band)[:, 0]
     assert plain[300 - reach:300].all() and plain[400:405].all()
 
 
@@ -378,14 +381,14 @@ def test_whitened_blocks_equal_the_whitened_design():
     for i in range(1, len(e)):
         e[i] = 0.8 * e[i - 1] - 0.1 * e[max(i - 2, 0)] + rng.normal(size=6)
     X = rng.normal(size=(3001, 6, 5))
-    w = st.Whitener.fit(e)
+    w = st.Whitener.fit(e, DEFAULTS.max_order)
     assert w.order >= 1
-    a = st.Blocks.build(w.apply(X), w.apply(e), 40)
-    b = st.Blocks.whitened(w, X, e, 40)
+    a = st.Blocks.build(w.apply(X), w.apply(e), 40, ridge=DEFAULTS.ridge)
+    b = st.Blocks.whitened(w, X, e, 40, ridge=DEFAULTS.ridge)
     for name in ("XtX", "Xtz", "ztz", "rows"):
         assert np.allclose(getattr(a, name), getattr(b, name), rtol=1e-12, atol=1e-9)
     # the design given as columns side by side (not joined): the same numbers
-    c = st.Blocks.whitened(w, [X[:, :, :2], X[:, :, 2:]], e, 40)
+    c = st.Blocks.whitened(w, [X[:, :, :2], X[:, :, 2:]], e, 40, ridge=DEFAULTS.ridge)
     for name in ("XtX", "Xtz", "ztz", "rows"):
         assert np.allclose(getattr(a, name), getattr(c, name), rtol=1e-12, atol=1e-9)
 
@@ -486,9 +489,9 @@ def test_time_offset_columns_computed_when_asked_equal_the_held_ones():
     d = np.sqrt(np.diag(held.XtX))
     assert np.all(np.abs(lazy.XtX - held.XtX) <= 1e-12 * np.outer(d, d))
     assert np.all(np.abs(lazy.Xtr - held.Xtr) <= 1e-12 * d * np.sqrt(held.rtr))
-    w = st.Whitener.fit(held.r, valid=problem.sliding)
-    a = st.Blocks.whitened(w, lazy.X, lazy.r, 10)
-    b = st.Blocks.whitened(w, held.X, held.r, 10)
+    w = st.Whitener.fit(held.r, DEFAULTS.max_order, valid=problem.sliding)
+    a = st.Blocks.whitened(w, lazy.X, lazy.r, 10, ridge=DEFAULTS.ridge)
+    b = st.Blocks.whitened(w, held.X, held.r, 10, ridge=DEFAULTS.ridge)
     assert np.array_equal(a.XtX, b.XtX) and np.array_equal(a.Xtz, b.Xtz)
     sa = screen_candidates(problem, lazy, w, problem.candidates)
     sb = screen_candidates(problem, held, w, problem.candidates)
@@ -577,7 +580,7 @@ def test_offsets_as_good_as_a_quadratic_load_cell_under_slow_noise_are_not_expla
     assert summary["unexplained"]["source"] == f"round {first.index}"
     assert summary["unexplained"]["main_signal"] == "F|F|"
     assert "square of the force" in summary["unexplained"]["message"]
-    assert f"in round {first.index}, a generic structure" in report(result)
+    assert f"in round {first.index}, a generic structure" in result.report()
 
 
 def _scaled_position(data, e: float) -> tuple[Motion, np.ndarray, tuple]:

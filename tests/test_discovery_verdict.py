@@ -104,12 +104,13 @@ def test_the_pose_part_grows_with_the_pose_noise():
         rows = slice(100, len(frame) - 100)
         speed = Evaluator(data.model).evaluate(motion).D_dot[rows]
         part, how = pose_noise_forces(data.model, motion, poses_from_columns(frame), rows,
-                                      np.abs(speed) > 5e-3, draws=2)
+                                      np.abs(speed) > 5e-3, draws=2, n_threads=1)
         assert "draws" in how
         parts.append(part)
     assert np.all(parts[0] < 1e-3 * parts[1])
     assert np.all(parts[1] > 0) and np.all(parts[2] > 1.5 * parts[1])
-    none, how = pose_noise_forces(data.model, motion, None, rows, np.abs(speed) > 0, draws=1)
+    none, how = pose_noise_forces(data.model, motion, None, rows, np.abs(speed) > 0, draws=1,
+                                  n_threads=1)
     assert not none.any() and "not estimated" in how
 
 

@@ -13,6 +13,7 @@ from hypothesis.extra import numpy as hnp
 from scipy.signal import lfilter
 
 from gsfric.discovery import structure
+from gsfric.discovery.settings import Settings
 
 RATE = 250.0
 M = 6000
@@ -83,7 +84,7 @@ def _noisy(moves, seed, phi):
 def _test(residual, D, v, sliding):
     d, s = structure.travel_since_reversal(D, v, sliding)
     return structure.reversal_structure(residual, d, s, sliding, n_folds=8, alpha=0.01,
-                                      min_gap=0.3)
+                                      min_gap=0.3, edges=np.asarray(Settings().travel_edges))
 
 
 def _play(D, v, sliding, play):

@@ -8,6 +8,9 @@ import pytest
 from scipy.signal import lfilter
 
 from gsfric.discovery import structure, transients
+from gsfric.discovery.settings import Settings
+
+DEFAULTS = Settings()
 
 M = 6000
 RATE = 250.0
@@ -29,13 +32,15 @@ def _ar1(rng, phi, sigma=0.2):
 
 def _state(residual, D, v, F):
     return structure.state_structure(residual, structure.state_features(D, v, F),
-                                   np.ones(residual.shape, bool), n_folds=8, min_gap=0.3)
+                                   np.ones(residual.shape, bool), n_folds=8, min_gap=0.3,
+                                   n_bins=DEFAULTS.state_bins)
 
 
 def _dynamic(residual, t, v, F):
     inputs = {"dF/dt": np.gradient(F, t, axis=0), "acceleration": np.gradient(v, t, axis=0)}
     return structure.dynamic_structure(residual, inputs, np.ones(residual.shape, bool),
-                                     alpha=0.01, min_gap=0.3)
+                                     alpha=0.01, min_gap=0.3, order=DEFAULTS.dynamic_order,
+                                     lags=DEFAULTS.dynamic_lags)
 
 
 @pytest.mark.parametrize("phi", [0.0, 0.9, 0.995])
@@ -145,7 +150,7 @@ def test_pink_noise_over_a_few_moves_between_rests_has_no_state_structure():
         r -= (r * valid).sum(0) / valid.sum(0)
         F = 50 + 300 * np.gradient(v, t, axis=0)
         out = structure.state_structure(r, structure.state_features(D, v, F), valid, n_folds=8,
-                                      min_gap=0.3)
+                                      min_gap=0.3, n_bins=DEFAULTS.state_bins)
         assert not out.significant, (seed, out.details["variable"], out.gap)
 
 
@@ -159,7 +164,7 @@ def test_samples_left_out_are_not_used():
     r = ripple + _ar1(rng, 0.0)
     assert _state(r, D, v, F).significant
     out = structure.state_structure(r, structure.state_features(D, v, F), valid, n_folds=8,
-                                  min_gap=0.3)
+                                  min_gap=0.3, n_bins=DEFAULTS.state_bins)
     assert not out.significant
 
 
@@ -179,11 +184,14 @@ def _rests(rng, rests=16, rest=220, move=160):
         a = move + k * period
         sliding[a:a + rest] = False
         stops.append(a)
-    return sliding, transients.rest_runs(sliding, REACH), np.array(stops)
+    runs = transients.rest_runs(sliding, REACH, min_run=DEFAULTS.rest_min_run)
+    return sliding, runs, np.array(stops)
 
 
 def _transients(r, runs):
-    return transients.rest_transients(r, runs, alpha=0.01, min_gap=0.3)
+    return transients.rest_transients(r, runs, alpha=0.01, min_gap=0.3,
+                                      window=DEFAULTS.rest_window, lags=DEFAULTS.rest_lags,
+                                      min_rests=DEFAULTS.rest_min_rests)
 
 
 def test_rest_cores_leave_out_the_ends_of_the_moves():
@@ -193,8 +201,9 @@ def test_rest_cores_leave_out_the_ends_of_the_moves():
     assert len(runs) == 3 * 6
     assert {(a, b) for _, a, b in runs} == {(s + 2 * REACH, s + 220 - 2 * REACH) for s in stops}
     sliding[:50, 2] = False                      # standing at the start of the record
-    assert len(transients.rest_runs(sliding, REACH)) == 3 * 6
-    assert transients.rest_runs(sliding, 45) == []      # cores shorter than REST_MIN_RUN
+    assert len(transients.rest_runs(sliding, REACH, min_run=DEFAULTS.rest_min_run)) == 3 * 6
+    # cores shorter than rest_min_run
+    assert transients.rest_runs(sliding, 45, min_run=DEFAULTS.rest_min_run) == []
 
 
 @pytest.mark.parametrize("phi", [0.0, 0.9, 0.995])

@@ -4,6 +4,9 @@ import numpy as np
 from helpers import pink_noise as pink
 
 from gsfric.discovery import statistics as st
+from gsfric.discovery.settings import Settings
+
+DEFAULTS = Settings()
 
 
 def offset_tests(residual, rate=1000.0, valid=None):
@@ -11,9 +14,9 @@ def offset_tests(residual, rate=1000.0, valid=None):
     n = len(residual)
     X = np.zeros((n, 6, 6))
     X[:, np.arange(6), np.arange(6)] = 1.0
-    w = st.Whitener.fit(residual, valid=valid)
-    low = w.low_band(np.arange(n) / rate, valid)
-    blocks = st.Blocks.whitened(w, X, residual, 40, low=low)
+    w = st.Whitener.fit(residual, DEFAULTS.max_order, valid=valid)
+    low = w.low_band(np.arange(n) / rate, valid, q=DEFAULTS.low_band)
+    blocks = st.Blocks.whitened(w, X, residual, 40, ridge=DEFAULTS.ridge, low=low)
     lo, hi = np.full(6, -np.inf), np.full(6, np.inf)
     none, offsets = st.fit(blocks, [], lo, hi), st.fit(blocks, list(range(6)), lo, hi)
     return st.f_test(none, offsets)[1], st.band_tests(blocks, none, offsets, 6)
@@ -59,10 +62,10 @@ def test_slowest_components_are_orthonormal_on_the_kept_samples_of_each_leg():
     t = np.sort(rng.uniform(0, 6.0, n))
     valid = np.abs(np.sin(2 * np.pi * 0.4 * t[:, None] + rng.uniform(0, 6, 6))) > 0.7
     w = st.Whitener.fit(rng.standard_normal((n, 6)) + 0.5 * np.sin(40 * t)[:, None],
-                        valid=valid)
+                        DEFAULTS.max_order, valid=valid)
     kept = w.kept(valid)
     assert np.array_equal(kept, w.apply(np.ones((n, 6)) + rng.uniform(1, 2, (n, 6)), valid) != 0)
-    low = st.low_band(t[w.order:], kept)
+    low = st.low_band(t[w.order:], kept, DEFAULTS.low_band)
     for leg in range(6):
         Q = low[:, leg, :]
         assert np.allclose(Q[~kept[:, leg]], 0.0)
@@ -86,14 +89,14 @@ def test_an_offset_beside_many_fitted_columns_keeps_its_slowest_components():
     X[:, np.arange(6), 12 + np.arange(6)] = 1.0
     coef = np.r_[rng.uniform(0.5, 1, 12), 0.3 * rng.choice([-1.0, 1.0], 6)]
     noise = rng.standard_normal((n, 6))
-    w = st.Whitener.fit(noise)
-    low = w.low_band(t)
+    w = st.Whitener.fit(noise, DEFAULTS.max_order)
+    low = w.low_band(t, q=DEFAULTS.low_band)
     lo, hi = np.full(18, -np.inf), np.full(18, np.inf)
     null, alternative = list(range(12)), list(range(18))
     for size, found in ((1.0, True), (0.0, False)):
         coef_ = coef.copy()
         coef_[12:] *= size
-        blocks = st.Blocks.whitened(w, X, noise + X @ coef_, 40, low=low)
+        blocks = st.Blocks.whitened(w, X, noise + X @ coef_, 40, ridge=DEFAULTS.ridge, low=low)
         p_low, p_high = st.band_tests(blocks, st.fit(blocks, null, lo, hi),
                                       st.fit(blocks, alternative, lo, hi), 6)
         assert (p_low < 1e-6) == found, (size, p_low)

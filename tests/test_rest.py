@@ -14,6 +14,7 @@ from gsfric.discovery.rest import (
     speed_uncertainty,
     spline_differentiator,
 )
+from gsfric.discovery.settings import Settings
 from gsfric.evaluation.evaluator import evaluate
 from gsfric.models import minimum_jerk_moves, point_to_point, reference_platform
 from gsfric.signal.noise import divided_noise_std_every_window
@@ -21,13 +22,17 @@ from gsfric.signal.rotations import quaternion_from_rotation
 from gsfric.synth import synthesize
 from gsfric.trajectory import Motion
 
+DEFAULTS = Settings()
+MOVE = DEFAULTS.move_to_noise
+
 
 def test_each_sample_looks_as_far_as_its_own_window_reaches():
     n = 600
     speed = np.full((n, 6), 0.01)
     speed[300:400] = 0.0                                  # a rest of 100 samples
     reach = np.where(np.arange(n) < 300, 40, 5)           # long windows before, short after
-    sliding = sliding_mask(speed, np.full(6, 1e-4), 0.0, reach=reach)[:, 0]
+    sliding = sliding_mask(speed, np.full(6, 1e-4), 0.0, reach=reach,
+                           rest_band=DEFAULTS.rest_band)[:, 0]
     assert not sliding[260:300].any() and sliding[:259].all()     # 40 before the rest
     assert not sliding[400:405].any() and sliding[406:].all()     # 5 after it
 
@@ -43,7 +48,7 @@ def test_speed_band_matches_the_differentiated_speed_at_rest_and_in_motion():
     quaternion = fr[["qw", "qx", "qy", "qz"]].to_numpy()
     estimate = Motion.from_samples(fr.t.to_numpy(), position, quaternion=quaternion)
     _, rotation = poses_from_columns(fr)
-    gain, reach = differentiator(position, rotation)
+    gain, reach = differentiator(position, rotation, move_to_noise=MOVE)
     sigma = speed_uncertainty(platform, fr.t.to_numpy(), position, rotation, gain=gain)
     assert sigma.shape == (4000, 6) and reach.shape == (4000,)
     v_true = evaluate(platform, data.motion).D_dot
@@ -89,7 +94,7 @@ def test_jittered_time_base_gets_a_speed_band_of_its_own():
     rotation = Rotation.from_rotvec(rng.normal(0, 2e-5, (len(t), 3))).as_matrix()
     quaternion = quaternion_from_rotation(rotation)
     estimate = Motion.from_samples(t, position, quaternion=quaternion)
-    gain, reach = spline_differentiator(t, position, rotation)
+    gain, reach = spline_differentiator(t, position, rotation, DEFAULTS.spline_noise_draws)
     D = platform.leg_lengths(position, rotation)
     sigma_D = divided_noise_std_every_window(t, D)
     np.testing.assert_allclose(sigma_D, 2e-5, rtol=0.5)      # the leg lengths mix x, y, z
@@ -150,8 +155,8 @@ def test_differentiator_from_the_motions_own_filters():
     filters = estimate.sample_filters()
     assert filters is not None and estimate.slice(0, 100).sample_filters() is None
     assert estimate.sample_filters(polyorder=2) is None
-    again = differentiator(position, rotation)
-    once = differentiator(position, rotation, filters=filters)
+    again = differentiator(position, rotation, move_to_noise=MOVE)
+    once = differentiator(position, rotation, filters=filters, move_to_noise=MOVE)
     assert np.array_equal(again[0], once[0]) and np.array_equal(again[1], once[1])
     # a motion given its own window chose none
     fixed = Motion.from_samples(fr.t.to_numpy(), position, window=31,
@@ -175,11 +180,11 @@ def test_a_fixed_orientation_does_not_widen_the_rests():
         angles = rng.normal(0, rotation_noise, (len(t), 3))
         rotation = Rotation.from_rotvec(angles).as_matrix()
         q = quaternion_from_rotation(rotation)
-        assert not moves(q)
-        _, reach = differentiator(position, rotation)
+        assert not moves(q, MOVE)
+        _, reach = differentiator(position, rotation, move_to_noise=MOVE)
         np.testing.assert_array_equal(reach, motion_filters(position)[0][1] // 2)
     turning = Rotation.from_rotvec(np.c_[np.zeros((len(t), 2)), 0.2 * np.sin(t)]).as_matrix()
-    _, reach = differentiator(position, turning)
+    _, reach = differentiator(position, turning, move_to_noise=MOVE)
     q_reach = motion_filters(quaternion_from_rotation(turning))[0][1] // 2
     np.testing.assert_array_equal(reach, np.maximum(motion_filters(position)[0][1] // 2,
                                                     q_reach))

@@ -4,6 +4,9 @@ import numpy as np
 from scipy.signal import butter, lfilter
 
 from gsfric.discovery import statistics as st
+from gsfric.discovery.settings import Settings
+
+MAX_ORDER = Settings().max_order
 
 
 def test_band_passed_noise_with_gaps_gets_a_stationary_model():
@@ -21,7 +24,7 @@ def test_band_passed_noise_with_gaps_gets_a_stationary_model():
         x = lfilter(b, a, rng.normal(0.0, 1.0, (n + 500, 6)), axis=0)[500:]
         valid = np.abs(np.sin(2 * np.pi * 0.3 * t[:, None] + rng.uniform(0, 6, 6))) \
             > rng.uniform(0.2, 0.9)
-        w = st.Whitener.fit(x, valid=valid)
+        w = st.Whitener.fit(x, MAX_ORDER, valid=valid)
         assert np.all(w.innovation_std > 1e-4 * w.marginal_std), (seed, w.innovation_std)
         assert np.all(w.innovation_std <= w.marginal_std * (1 + 1e-12)), seed
         for phi in w.coefficients:
@@ -37,6 +40,6 @@ def test_white_noise_with_gaps_keeps_a_low_order():
     rng = np.random.default_rng(7)
     x = rng.normal(0.0, 0.3, (n, 6))
     valid = np.abs(np.sin(2 * np.pi * 0.3 * t[:, None] + rng.uniform(0, 6, 6))) > 0.5
-    w = st.Whitener.fit(x, valid=valid)
+    w = st.Whitener.fit(x, MAX_ORDER, valid=valid)
     assert w.order <= 2
     assert np.allclose(w.innovation_std, 0.3, rtol=0.05)

@@ -56,8 +56,7 @@ def discover(measured, platform_file, out_dir, seed, force_noise, noise_record, 
     result = discover_file(measured, platform_file, seed=seed, progress=show,
                            force_noise=_values(force_noise), noise_record=noise_record,
                            **({"log_format": log_format} if log_format else {}))
-    written = write(result, out_dir, source=str(measured),
-                    platform_source=str(platform_file) if platform_file else "")
+    written = write(result, out_dir)
     if not quiet:
         for path in written:
             click.echo(f"wrote {path}")

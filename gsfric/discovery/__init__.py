@@ -1,8 +1,8 @@
 """Discrepancy discovery: where model and measurement disagree, and which effect is missing.
 
 >>> from gsfric.discovery import discover, run_discover
->>> result = discover(motion, forces, platform)        # doctest: +SKIP
->>> result.names, result.rms_before, result.rms_after  # doctest: +SKIP
+>>> result = discover(motion, forces, platform)        # a record of yours  # doctest: +SKIP
+>>> result.names, result.rms_before, result.rms_after  # a record of yours  # doctest: +SKIP
 
 ``run_discover(measured, platform_file, out_dir, seed=0)`` is ``gsfric discover``: it reads a
 measured-data file, runs ``discover`` and writes ``summary.json``, ``report.md`` and plots.
@@ -10,7 +10,8 @@ Modules: ``model`` (the compiled model as a function of its parameters), ``candi
 may change), ``statistics`` (prewhitening, block cross-validation, block bootstrap),
 ``regimes`` (where the residuals concentrate), ``workflow`` (the rounds), ``floor`` (the
 noise floor of the verdict), ``dictionary`` (structure outside the catalog), ``verdict``
-(the decision and its reason), ``report``.
+(the decision and its reason), ``summary`` (summary.json), ``markdown`` (report.md),
+``report`` (the files written).
 """
 
 from gsfric.discovery.candidates import CANDIDATE_NAMES, CANDIDATES, REFIT

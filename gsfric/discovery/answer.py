@@ -1,15 +1,20 @@
 """Discovery's answer for a reader: the one-line verdict, the units of every parameter, the
 glossary of the report's statistics, and the commented platform file written back.
 
+>>> from gsfric.discovery.answer import GLOSSARY
 >>> GLOSSARY["held-out gain"][:40]
 'relative drop of the prewhitened squared'
 """
 
 from __future__ import annotations
 
-from gsfric.discovery.results import Discovery, Finding
+from typing import TYPE_CHECKING
+
 from gsfric.platform import catalog
 from gsfric.platform.text import commented_toml
+
+if TYPE_CHECKING:
+    from gsfric.discovery.results import Discovery, Finding
 
 GLOSSARY: dict[str, str] = {
     "verdict": "`explained`: the effects named (or the refit) close the gap and no structure "
@@ -139,9 +144,10 @@ def verdict_line(d: Discovery) -> str:
     return f"no_discrepancy: model and data agree within the noise; {tail}"
 
 
-def platform_text(d: Discovery, source: str = "", platform_source: str = "") -> str:
-    """The final model as a commented platform TOML: where it came from, what changed from
-    what, units in comments (reads back as ``d.platform``)."""
+def platform_text(d: Discovery) -> str:
+    """The final model as a commented platform TOML: where it came from (``d.source``,
+    ``d.platform_source``), what changed from what, units in comments (reads back as
+    ``d.platform``)."""
     before, after = _flat(d.model.to_dict()), _flat(d.platform.to_dict())
     notes, changed = {}, []
     for key, value in after.items():
@@ -157,8 +163,8 @@ def platform_text(d: Discovery, source: str = "", platform_source: str = "") -> 
                                       + (f", was {was}" if was else ""))
         changed.append(f"effect {f.name} switched on" if not was else f"effect {f.name} refitted")
     header = [f"Written by `gsfric discover` from the platform "
-              f"{platform_source or '(the reference platform)'} and the record "
-              f"{source or '(arrays)'}.",
+              f"{d.platform_source or '(the reference platform)'} and the record "
+              f"{d.source or '(arrays)'}.",
               f"Verdict: {verdict_line(d)}"]
     header += ["Changed: " + (changed[0] if changed else "nothing")]
     header += [f"         {c}" for c in changed[1:]]

@@ -165,11 +165,11 @@ def _test(residual: np.ndarray, X: np.ndarray, x: Features, s: Settings, level: 
     """``lackfit.test`` of the group's columns X (M, 6, k) on the residual, prewhitened with
     the noise model of what they leave, at ``level``."""
     valid = x.weight > 0
-    whitener = lackfit.whitener_beyond(residual, X, valid)
+    whitener = lackfit.whitener_beyond(residual, X, valid, s)
     return lackfit.test(residual, X, whitener, alpha=level, min_gap=s.dictionary_min_gap,
-                        n_blocks=s.n_blocks, n_folds=s.n_folds, min_fold_share=0.0,
-                        names=[kind] * X.shape[2], low=whitener.low_band(x.t, valid),
-                        by="pairs")
+                        n_blocks=s.n_blocks, n_folds=s.n_folds, ridge=s.ridge,
+                        names=[kind] * X.shape[2],
+                        low=whitener.low_band(x.t, valid, q=s.low_band), by="pairs")
 
 
 def _scale(X: np.ndarray) -> None:

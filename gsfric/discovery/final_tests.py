@@ -79,10 +79,9 @@ def _basis(d: FinalResidual) -> Structure:
     # is in it) is that effect's parameter, refitted already: not a structure outside the model
     X, names = lackfit.basis_outside(d.t, d.F, d.speed, sliding, d.problem.weight, d.in_model,
                                      derivatives=(d.dF, d.acceleration))
-    whitener = lackfit.whitener_beyond(d.residual, X, sliding)
+    whitener = lackfit.whitener_beyond(d.residual, X, sliding, s)
     return lackfit.test(d.residual, X, whitener, alpha=s.alpha, min_gap=s.min_gap,
-                        n_blocks=s.n_blocks, n_folds=s.n_folds,
-                        min_fold_share=s.min_fold_share, names=names,
+                        n_blocks=s.n_blocks, n_folds=s.n_folds, ridge=s.ridge, names=names,
                         low=low_band_of(d.problem, whitener))
 
 
@@ -90,8 +89,7 @@ def _drift(d: FinalResidual) -> Structure:
     """``lackfit.parameter_drift``, with the friction level per third of the record."""
     s, sliding = d.problem.settings, d.problem.sliding
     X = lackfit.drift_basis(d.t, d.speed, sliding) * d.problem.weight[:, :, None]
-    out = lackfit.parameter_drift(d.residual, X, sliding, d.t, alpha=s.alpha,
-                                  min_gap=s.min_gap, n_blocks=s.n_blocks, n_folds=s.n_folds)
+    out = lackfit.parameter_drift(d.residual, X, sliding, d.t, s)
     out.details["levels"] = lackfit.friction_levels(d.t, d.residual, d.speed, sliding)
     out.keys = out.keys + ("levels",)
     return out
@@ -133,10 +131,10 @@ def _rest(d: FinalResidual) -> Structure:
     s = problem.settings
     runs = transients.rest_runs(problem.sliding, problem.move_reach, min_run=s.rest_min_run)
     if len(runs) < 4:
-        return transients.rest_transients(np.zeros_like(problem.y), [], alpha=s.alpha,
-                                          min_gap=s.min_gap)
-    F0 = problem.model.evaluate(d.theta, keep=("F0",)).F0[problem.used]
-    return transients.rest_transients(problem.y - F0, runs, alpha=s.alpha, min_gap=s.min_gap,
+        runs, residual = [], np.zeros_like(problem.y)
+    else:
+        residual = problem.y - problem.model.evaluate(d.theta, keep=("F0",)).F0[problem.used]
+    return transients.rest_transients(residual, runs, alpha=s.alpha, min_gap=s.min_gap,
                                       window=s.rest_window, lags=s.rest_lags,
                                       min_rests=s.rest_min_rests)
 

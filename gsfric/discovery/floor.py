@@ -143,7 +143,7 @@ def estimated_force_noise(residual: np.ndarray, step: float, segment: int) -> np
 
 def pose_noise_forces(platform: Platform, motion: Motion,
                       poses: tuple[np.ndarray, np.ndarray] | None, rows: slice,
-                      valid: np.ndarray, draws: int, seed: int = 0
+                      valid: np.ndarray, draws: int, seed: int = 0, *, n_threads: int
                       ) -> tuple[np.ndarray, str]:
     """The pose noise's part of each leg's model force, (6,) N, and how it was obtained.
 
@@ -158,7 +158,11 @@ def pose_noise_forces(platform: Platform, motion: Motion,
     rows : slice
         The used samples; ``valid`` (M, 6) their sliding pairs.
     draws : int
-        Noise draws.
+        Noise draws (``Settings.floor_draws``).
+    seed : int
+        Seed of the draws.
+    n_threads : int
+        Threads of the compiled evaluation (at least 1).
     """
     if poses is None:
         return np.zeros(6), "not estimated (no recorded poses)"
@@ -171,7 +175,7 @@ def pose_noise_forces(platform: Platform, motion: Motion,
         filters = None
     if filters is None or len(position) != len(t):
         return np.zeros(6), "not estimated (the motion was not differentiated from these poses)"
-    evaluator = Evaluator(platform, n_threads=os.cpu_count() or 1)
+    evaluator = Evaluator(platform, n_threads=n_threads)
     clean = evaluator.actuator_forces(state_array(motion))[rows]
     rng = np.random.default_rng(seed)
     step = (t[-1] - t[0]) / (len(t) - 1)

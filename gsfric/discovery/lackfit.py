@@ -41,6 +41,7 @@ import numpy as np
 
 from gsfric.discovery import statistics as st
 from gsfric.discovery.evidence import Evidence, Rule, Structure, accept
+from gsfric.discovery.settings import Settings
 
 SIGNALS = ("dF/dt", "F|F|", "F^3", "F", "sgn(v)", "acceleration", "drift", "dF/dt between legs",
            "pose scale")
@@ -136,11 +137,12 @@ TEST_KEYS = ("significant", "p_value", "p_bands", "gap", "cv_gain", "fold_share"
 
 
 def test(residual: np.ndarray, X: np.ndarray, whitener: st.Whitener, *, alpha: float,
-         min_gap: float, n_blocks: int, n_folds: int, min_fold_share: float,
+         min_gap: float, n_blocks: int, n_folds: int, ridge: float,
          names: list[str] | None = None, low: np.ndarray | None = None,
          nuisance: int = 0, by: str = "time") -> Structure:
     """The lack-of-fit test of the residual (M, 6) against the basis X (M, 6, k) whose
-    columns carry the signals ``names`` (default ``column_names()``); with ``low``, the
+    columns carry the signals ``names`` (default ``column_names()``), its fits solved with
+    ``ridge`` (``statistics.solve``); with ``low``, the
     record's slowest components (``statistics.low_band``), the F-test must also hold on them
     alone or on the rest alone (``statistics.band_tests``: a drift that slow noise makes as
     large is not a structure).
@@ -159,7 +161,7 @@ def test(residual: np.ndarray, X: np.ndarray, whitener: st.Whitener, *, alpha: f
     """
     columns = X.shape[2]
     k = columns - nuisance
-    blocks = st.Blocks.whitened(whitener, X, residual, n_blocks, by=by, low=low)
+    blocks = st.Blocks.whitened(whitener, X, residual, n_blocks, ridge=ridge, by=by, low=low)
     lo, hi = np.full(columns, -np.inf), np.full(columns, np.inf)
     null = list(range(nuisance))
     empty = st.fit(blocks, null, lo, hi)
@@ -236,8 +238,8 @@ def drift_basis(t: np.ndarray, speed: np.ndarray, sliding: np.ndarray) -> np.nda
     return X
 
 
-def parameter_drift(residual: np.ndarray, X: np.ndarray, valid: np.ndarray, t: np.ndarray, *,
-                    alpha: float, min_gap: float, n_blocks: int, n_folds: int) -> Structure:
+def parameter_drift(residual: np.ndarray, X: np.ndarray, valid: np.ndarray, t: np.ndarray,
+                    settings: Settings) -> Structure:
     """Is the friction level the same over the whole record? (a Chow-type test)
 
     Every catalog effect and every refitted parameter is a constant of the record. An error
@@ -268,23 +270,30 @@ def parameter_drift(residual: np.ndarray, X: np.ndarray, valid: np.ndarray, t: n
         The pairs of the noise model (sliding pairs).
     t : ndarray, shape (M,)
         Sample times, s.
+    settings : Settings
+        ``alpha``, ``min_gap``, ``n_blocks``, ``n_folds``, and the noise model's and the
+        fits' ``max_order``, ``ridge`` and ``low_band``.
 
     Returns
     -------
     Structure
         As ``test``; ``fitted`` (M, 6): the change alone, the level left out.
     """
-    whitener = whitener_beyond(residual, X, valid)
-    return test(residual, X, whitener, alpha=alpha, min_gap=min_gap, n_blocks=n_blocks,
-                n_folds=n_folds, min_fold_share=0.0, names=list(DRIFT_SIGNALS),
-                low=whitener.low_band(t, valid), nuisance=1, by="pairs")
+    s = settings
+    whitener = whitener_beyond(residual, X, valid, s)
+    return test(residual, X, whitener, alpha=s.alpha, min_gap=s.min_gap, n_blocks=s.n_blocks,
+                n_folds=s.n_folds, ridge=s.ridge,
+                names=list(DRIFT_SIGNALS), low=whitener.low_band(t, valid, q=s.low_band),
+                nuisance=1, by="pairs")
 
 
-def whitener_beyond(residual: np.ndarray, X, valid: np.ndarray, cols=None,
-                    cross: tuple[np.ndarray, np.ndarray] | None = None) -> st.Whitener:
+def whitener_beyond(residual: np.ndarray, X, valid: np.ndarray, settings: Settings,
+                    cols=None, cross: tuple[np.ndarray, np.ndarray] | None = None
+                    ) -> st.Whitener:
     """The AR noise model of the residual (M, 6) left by its least-squares fit by the columns
     X (M, 6, k), on the ``valid`` pairs (M, 6): the largest model's, so that the structure
-    the columns test is not whitened away before it is tested.
+    the columns test is not whitened away before it is tested. The fit is solved with
+    ``settings.ridge``, the AR model's order is at most ``settings.max_order``.
 
     ``cols``: only these columns of X, read one at a time (X may then be a round's design,
     ``residuals.Columns``: no copy of it); ``cross``: their cross-products (X'X (k, k),
@@ -293,13 +302,13 @@ def whitener_beyond(residual: np.ndarray, X, valid: np.ndarray, cols=None,
         flat = (X if cols is None else X[:, :, list(cols)])
         flat = flat.reshape(-1, flat.shape[2])
         cross = (flat.T @ flat, flat.T @ residual.reshape(-1))
-    coef = st.solve(*cross)
+    coef = st.solve(*cross, ridge=settings.ridge)
     if cols is None:
-        return st.Whitener.fit(residual - X @ coef, valid=valid)
+        return st.Whitener.fit(residual - X @ coef, settings.max_order, valid=valid)
     left = residual.copy()
     for c, value in zip(cols, coef):
         left -= X[:, :, c] * value
-    return st.Whitener.fit(left, valid=valid)
+    return st.Whitener.fit(left, settings.max_order, valid=valid)
 
 
 def friction_levels(t: np.ndarray, residual: np.ndarray, speed: np.ndarray,

@@ -48,9 +48,10 @@ def refine(problem: Problem, theta: np.ndarray, names: list[str], whitener: st.W
         current = float(np.sum(whitener.apply(r) ** 2))
     else:
         r, J, current = at(theta)
-    for _ in range(problem.settings.gauss_newton):
-        A, b, _, _ = st.Blocks.whitened(whitener, J, r, problem.settings.n_blocks).total()
-        step = st.solve(A, b, lo - theta[cols], hi - theta[cols])
+    s = problem.settings
+    for _ in range(s.gauss_newton):
+        A, b, _, _ = st.Blocks.whitened(whitener, J, r, s.n_blocks, ridge=s.ridge).total()
+        step = st.solve(A, b, lo - theta[cols], hi - theta[cols], ridge=s.ridge)
         for scale in (1.0, 0.5, 0.25):
             trial = theta.copy()
             trial[cols] = np.clip(theta[cols] + scale * step, lo, hi)
@@ -155,13 +156,14 @@ def _refitted_sse(problem: Problem, theta: np.ndarray, others: list[str],
     FJ = np.concatenate([F[:, :, None], J], axis=2).reshape(n, -1)
     del F, J
     used, weight, t = problem.used, problem.weight, model.t
+    ridge = problem.settings.ridge
 
     def value(d: float) -> tuple[float, np.ndarray]:
         moved = shift(t, FJ, d)[used].reshape(-1, 6, k + 1)
         r = problem.mask(problem.y - moved[:, :, 0])
         X = moved[:, :, 1:] * weight[:, :, None]
-        A, b, c, _ = st.Blocks.whitened(whitener, X, r, 1).total()
-        step = st.solve(A, b, lo, hi)
+        A, b, c, _ = st.Blocks.whitened(whitener, X, r, 1, ridge=ridge).total()
+        step = st.solve(A, b, lo, hi, ridge=ridge)
         return st.sse(A, b, c, step), step
 
     return value
@@ -214,7 +216,7 @@ def half_stability(problem: Problem, J: np.ndarray, r: np.ndarray, names: list[s
     cols = [k for k, n in enumerate(names) if n.startswith(effect + ".")]
     if not cols or J.shape[2] == 0:
         return Stability(1.0, 0.0, [], True)
-    blocks = st.Blocks.whitened(whitener, J, r, s.n_blocks)
+    blocks = st.Blocks.whitened(whitener, J, r, s.n_blocks, ridge=s.ridge)
     half = len(blocks.ztz) // 2
     k = J.shape[2]
     est = []

@@ -2,14 +2,15 @@
 
 Every (sample, leg) pair is put in one band of each regime:
 
-* ``speed``: the leg's sliding speed |dD/dt|: ``reversal`` (below the 5% quantile of all legs'
-  speeds, at least 1 mm/s: the neighbourhood of each velocity reversal), then ``slow``,
-  ``medium``, ``fast`` (terciles of the rest);
+* ``speed``: the leg's sliding speed |dD/dt|: ``reversal`` (below the
+  ``Settings.reversal_quantile`` quantile of all legs' speeds, 5 %, at least
+  ``Settings.reversal_min_speed``, 1 mm/s: the neighbourhood of each velocity reversal), then
+  ``slow``, ``medium``, ``fast`` (terciles of the rest);
 * ``load``: the model's actuator force |F|: ``low``, ``medium``, ``high`` (terciles);
 * ``stroke``: the leg length D: ``short``, ``middle``, ``long`` (terciles);
 * ``pose``: the platform's tilt (angle between its z axis and the base's): ``level``,
   ``tilted``, ``most tilted`` (terciles);
-* ``time``: five equal stretches of the record.
+* ``time``: ``Settings.time_stretches`` (five) equal stretches of the record.
 
 For each band: its share of the pairs, the RMS of the residual before and after, the
 concentration (band RMS over overall RMS: above 1, the gap gathers there) and the
@@ -67,8 +68,35 @@ def _tilt(rotation: np.ndarray) -> np.ndarray:
     return np.arccos(np.clip(rotation[:, 2, 2], -1.0, 1.0))
 
 
+def _speed_regime(v: np.ndarray, quantile: float, min_speed: float
+                  ) -> tuple[np.ndarray, list[str], list]:
+    """The ``speed`` regime of the leg speeds v (M, 6), m/s: labels (M, 6), band names and
+    limits (m/s); the ``reversal`` band below the ``quantile`` of v, at least ``min_speed``."""
+    threshold = max(float(np.quantile(v, quantile)), min_speed)
+    labels = np.zeros(v.shape, int)
+    moving = v >= threshold
+    if moving.sum() >= 3:
+        inner, limits = _terciles(v[moving], ("slow", "medium", "fast"))
+        labels[moving] = inner + 1
+    else:
+        limits = [(threshold, float(v.max()))] * 3
+    return labels, ["reversal", "slow", "medium", "fast"], [(0.0, threshold)] + limits
+
+
+def _time_regime(t: np.ndarray, stretches: int) -> tuple[np.ndarray, list[str], list]:
+    """The ``time`` regime of the sample times t (M,), s: labels (M, 6), band names and
+    limits (s) of ``stretches`` equal stretches."""
+    m = len(t)
+    stretch = np.minimum((np.arange(m) * stretches) // m, stretches - 1)
+    edges = [(float(t[stretch == k][0]), float(t[stretch == k][-1]))
+             for k in range(stretches)]
+    return (np.repeat(stretch[:, None], 6, axis=1), [f"{a:.4g}-{b:.4g} s" for a, b in edges],
+            edges)
+
+
 def bands(t: np.ndarray, speed: np.ndarray, length: np.ndarray, force: np.ndarray,
-          rotation: np.ndarray, before: np.ndarray, after: np.ndarray) -> list[Band]:
+          rotation: np.ndarray, before: np.ndarray, after: np.ndarray, settings: Settings
+          ) -> list[Band]:
     """Residual statistics per band of every regime.
 
     Parameters
@@ -85,6 +113,8 @@ def bands(t: np.ndarray, speed: np.ndarray, length: np.ndarray, force: np.ndarra
         Platform orientation.
     before, after : ndarray, shape (M, 6)
         Residuals of the model as given and of the final model, N.
+    settings : Settings
+        ``reversal_quantile``, ``reversal_min_speed`` and ``time_stretches``.
 
     Returns
     -------
@@ -94,18 +124,7 @@ def bands(t: np.ndarray, speed: np.ndarray, length: np.ndarray, force: np.ndarra
     s = np.sign(speed)
     v = np.abs(speed)
     regimes: dict[str, tuple[np.ndarray, list[str], list]] = {}
-
-    threshold = max(float(np.quantile(v, Settings.reversal_quantile)),
-                    Settings.reversal_min_speed)
-    labels = np.zeros(v.shape, int)
-    moving = v >= threshold
-    if moving.sum() >= 3:
-        inner, limits = _terciles(v[moving], ("slow", "medium", "fast"))
-        labels[moving] = inner + 1
-    else:
-        limits = [(threshold, float(v.max()))] * 3
-    regimes["speed"] = (labels, ["reversal", "slow", "medium", "fast"],
-                        [(0.0, threshold)] + limits)
+    regimes["speed"] = _speed_regime(v, settings.reversal_quantile, settings.reversal_min_speed)
     lab, lim = _terciles(np.abs(force).ravel(), ("low", "medium", "high"))
     regimes["load"] = (lab.reshape(m, 6), ["low", "medium", "high"], lim)
     lab, lim = _terciles(length.ravel(), ("short", "middle", "long"))
@@ -113,12 +132,7 @@ def bands(t: np.ndarray, speed: np.ndarray, length: np.ndarray, force: np.ndarra
     lab, lim = _terciles(_tilt(rotation), ("level", "tilted", "most tilted"))
     regimes["pose"] = (np.repeat(lab[:, None], 6, axis=1), ["level", "tilted", "most tilted"],
                        lim)
-    stretches = Settings.time_stretches
-    stretch = np.minimum((np.arange(m) * stretches) // m, stretches - 1)
-    edges = [(float(t[stretch == k][0]), float(t[stretch == k][-1]))
-             for k in range(stretches)]
-    regimes["time"] = (np.repeat(stretch[:, None], 6, axis=1),
-                       [f"{a:.4g}-{b:.4g} s" for a, b in edges], edges)
+    regimes["time"] = _time_regime(np.asarray(t), settings.time_stretches)
 
     overall_b = np.sqrt(np.mean(before ** 2))
     overall_a = np.sqrt(np.mean(after ** 2))

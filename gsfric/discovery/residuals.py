@@ -119,10 +119,10 @@ class Columns:
             yield slice(a, min(m, a + size))
 
 
-def secant(stepped: np.ndarray, F: np.ndarray, size: float,
-           rounding: float = Settings.secant_rounding) -> np.ndarray:
+def secant(stepped: np.ndarray, F: np.ndarray, size: float, rounding: float) -> np.ndarray:
     """The secant column ``(stepped - F) / size`` (forces (M, 6), N; size in the amplitude's
-    unit), zero where the difference is rounding: at most ``rounding`` times the force (the
+    unit), zero where the difference is rounding: at most ``rounding``
+    (``Settings.secant_rounding``) times the force (the
     stepped and the unstepped forces come from two evaluations of the compiled model, and
     where a step changes nothing, a clamped Coulomb sum, they still differ by a few units of
     the last place). A column made of rounding noise on a stretch of the record would
@@ -175,10 +175,10 @@ class Design:
         r = self.r.reshape(-1)
         self.rtr = float(r @ r)
 
-    def largest_model(self) -> list[int]:
+    def largest_model(self, ridge: float) -> list[int]:
         """Columns of the largest model: the refitted parameters' and each candidate's once,
         with the variant (grid value, sign, secant step) that fits the residual best together
-        with the refit (plain least squares, unbounded).
+        with the refit (plain least squares, unbounded, solved with ``ridge``).
 
         A candidate is one effect with one value of its grid parameters: its variants side by
         side are no model of the catalog (the stroke references' hinges, both signs, add up to
@@ -193,22 +193,23 @@ class Design:
             for v in sets:
                 c = self.refit + v
                 A, b = self.XtX[np.ix_(c, c)], self.Xtr[c]
-                sse = st.sse(A, b, self.rtr, st.solve(A, b))
+                sse = st.sse(A, b, self.rtr, st.solve(A, b, ridge=ridge))
                 if sse < best:
                     best, chosen = sse, v
             cols += [c for c in chosen if c not in cols]
         return cols
 
 
-def checked_forces(motion: Motion, forces: np.ndarray) -> np.ndarray:
+def checked_forces(motion: Motion, forces: np.ndarray, settings: Settings) -> np.ndarray:
     """The measured forces (N, 6), N, as floats; an ``InputError`` for a wrong shape, a
-    problem of the data that no model effect explains (``rest.data_problems``) or a row that
-    is not finite."""
+    problem of the data that no model effect explains (``rest.data_problems``, runs of
+    ``settings.held_run`` equal values) or a row that is not finite."""
     n = len(motion)
     forces = np.asarray(forces, float)
     if forces.shape != (n, 6):
         raise InputError(f"forces: expected shape ({n}, 6), got {forces.shape}")
-    problems = rest.data_problems(np.asarray(motion.t, float), forces)
+    problems = rest.data_problems(np.asarray(motion.t, float), forces,
+                                  held_run=settings.held_run)
     if problems:
         more = f" (and {len(problems) - 1} more)" if len(problems) > 1 else ""
         raise InputError(f"measured data: {problems[0]}{more}; not a model effect, "
@@ -252,7 +253,7 @@ class Problem:
                  settings: Settings, poses: tuple[np.ndarray, np.ndarray] | None = None
                  ) -> None:
         n = len(motion)
-        forces = checked_forces(motion, forces)
+        forces = checked_forces(motion, forces, settings)
         trim, needed = _trim(n, settings)
         self.settings = settings
         self.lazy = True
@@ -310,11 +311,12 @@ class Problem:
             filters = motion.sample_filters() if recorded else None
             if filters is not None and len(filters[0][0][0]) != n:
                 filters = None
-            gain, self.reach = rest.differentiator(*poses, filters=filters)
+            gain, self.reach = rest.differentiator(
+                *poses, filters=filters, move_to_noise=self.settings.move_to_noise)
             sigma_v = rest.speed_uncertainty(platform, t, *poses, gain=gain)
         else:
             # jittered times: the smoothing splines' own noise gain, on divided differences
-            spline = rest.spline_differentiator(t, *poses)
+            spline = rest.spline_differentiator(t, *poses, self.settings.spline_noise_draws)
             if spline is not None:
                 gain, self.reach = spline
                 D = platform.leg_lengths(*poses)

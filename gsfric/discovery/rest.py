@@ -26,7 +26,6 @@ from __future__ import annotations
 import numpy as np
 from scipy.ndimage import binary_closing, binary_opening, uniform_filter1d
 
-from gsfric.discovery.settings import Settings
 from gsfric.signal.noise import white_noise_std
 from gsfric.signal.rotations import (
     continuous_quaternions,
@@ -40,11 +39,12 @@ from gsfric.signal.windows import candidate_windows, filter_pairs, motion_filter
 
 
 def differentiator(position: np.ndarray, rotation: np.ndarray, polyorder: int | None = None,
-                   filters=None) -> tuple[np.ndarray, np.ndarray]:
+                   filters=None, *, move_to_noise: float) -> tuple[np.ndarray, np.ndarray]:
     """The velocity filters ``Motion.from_samples`` chooses at each sample for the recorded
     positions (N, 3) and orientations (N, 3, 3) (``trajectory.motion_filters``), or their
     gains and reaches from the ``filters`` it chose (``Motion.sample_filters``: the motion
-    made from these poses), without choosing them again.
+    made from these poses), without choosing them again; a signal that does not move beyond
+    ``move_to_noise`` times its noise (``moves``) reaches nowhere.
 
     Returns
     -------
@@ -57,25 +57,39 @@ def differentiator(position: np.ndarray, rotation: np.ndarray, polyorder: int | 
         orientation does not move (``moves``).
     """
     polyorder = DEFAULT_POLYORDER if polyorder is None else int(polyorder)
-    signals = (np.asarray(position, float),
-               continuous_quaternions(quaternion_from_rotation(np.asarray(rotation, float))))
+    signals = _pose_signals(position, rotation)
     if filters is None:
         filters = [motion_filters(signal, polyorder) for signal in signals]
     gains, reaches = [], []
     for chosen, signal in zip(filters, signals):
         orders, windows = chosen[0]
-        gain = np.empty(len(windows))
-        for p, w in filter_pairs(orders, windows):
-            rows = (orders == p) & (windows == w)
-            gain[rows] = np.linalg.norm(savgol_weights(int(w), int(p), 1))
-        gains.append(gain)
-        reaches.append(windows // 2 if moves(signal) else np.zeros_like(windows))
+        gains.append(_noise_gain(orders, windows))
+        reaches.append(windows // 2 if moves(signal, move_to_noise)
+                       else np.zeros_like(windows))
     return np.maximum(*gains), np.maximum(*reaches)
 
 
-def moves(signal: np.ndarray) -> bool:
+def _pose_signals(position: np.ndarray, rotation: np.ndarray
+                  ) -> tuple[np.ndarray, np.ndarray]:
+    """The signals the motion's filters differentiate: positions (N, 3), m, and continuous
+    unit quaternions (N, 4) of the rotations (N, 3, 3)."""
+    return (np.asarray(position, float),
+            continuous_quaternions(quaternion_from_rotation(np.asarray(rotation, float))))
+
+
+def _noise_gain(orders: np.ndarray, windows: np.ndarray) -> np.ndarray:
+    """The noise gain ``||h||`` (N,) of each sample's first-derivative Savitzky-Golay filter
+    (polynomial order and window (N,) each), per sample step."""
+    gain = np.empty(len(windows))
+    for p, w in filter_pairs(orders, windows):
+        rows = (orders == p) & (windows == w)
+        gain[rows] = np.linalg.norm(savgol_weights(int(w), int(p), 1))
+    return gain
+
+
+def moves(signal: np.ndarray, ratio: float) -> bool:
     """Whether a recorded signal (N, k) moves beyond its noise: the range of a component
-    exceeds ``Settings.move_to_noise`` times its white noise
+    exceeds ``ratio`` (``Settings.move_to_noise``) times its white noise
     (``gsfric.signal.noise.white_noise_std``).
 
     The reach of a differentiator matters where its window mixes a rest with a move; a channel
@@ -84,14 +98,12 @@ def moves(signal: np.ndarray) -> bool:
     be resolved, and counting its reach would widen every rest by it: 0.3 s moves at 500 Hz
     with a fixed orientation were left without a sliding pair."""
     signal = np.asarray(signal, float)
-    ratio = Settings.move_to_noise
     return bool(np.any(np.ptp(signal, axis=0) > ratio * white_noise_std(signal)
                        + 1e-12 * np.max(np.abs(signal), initial=1.0)))
 
 
 def spline_differentiator(t: np.ndarray, position: np.ndarray, rotation: np.ndarray,
-                          draws: int = Settings.spline_noise_draws
-                          ) -> tuple[np.ndarray, np.ndarray] | None:
+                          draws: int) -> tuple[np.ndarray, np.ndarray] | None:
     """``differentiator`` for a non-uniform time base, where ``Motion.from_samples`` fits
     smoothing splines: the velocity noise gain (N,), 1/s, of unit white noise through the same
     splines (same penalties; the larger of position and orientation; measured on
@@ -144,7 +156,7 @@ def speed_uncertainty(platform, t: np.ndarray, position: np.ndarray, rotation: n
         One fixed differentiator for every sample (``Motion.from_samples(window=...)``).
     gain : ndarray, shape (N,), optional
         The per-sample gain of ``differentiator`` (computed when neither it nor ``window`` is
-        given: the filters ``Motion.from_samples`` chooses).
+        given: of the filters ``Motion.from_samples`` chooses).
 
     Returns
     -------
@@ -158,7 +170,8 @@ def speed_uncertainty(platform, t: np.ndarray, position: np.ndarray, rotation: n
     if window is not None:
         return sigma_D * float(np.linalg.norm(savgol_weights(int(window), polyorder, 1))) / step
     if gain is None:
-        gain = differentiator(position, rotation, polyorder)[0]
+        gain = np.maximum(*(_noise_gain(*motion_filters(signal, polyorder)[0])
+                            for signal in _pose_signals(position, rotation)))
     return np.asarray(gain, float)[:, None] * sigma_D[None, :] / step
 
 
@@ -176,8 +189,7 @@ def move_reach(reach: np.ndarray, moving: np.ndarray) -> int:
 
 
 def sliding_mask(speed: np.ndarray, sigma_v: np.ndarray, floor: float,
-                 reach: int | np.ndarray = 0, rest_band: float = Settings.rest_band
-                 ) -> np.ndarray:
+                 reach: int | np.ndarray = 0, *, rest_band: float) -> np.ndarray:
     """(N, 6) True where a leg is known to slide.
 
     A pair (sample, leg) slides where ``|speed|`` exceeds ``rest_band`` sigma_v (and
@@ -208,7 +220,8 @@ def sliding_mask(speed: np.ndarray, sigma_v: np.ndarray, floor: float,
     reach : int or ndarray of int, shape (N,)
         Half-width of the differentiator's window, samples (0: no rest widening).
     rest_band : float
-        Half-width of the band, in standard deviations of the speed estimate.
+        Half-width of the band, in standard deviations of the speed estimate
+        (``Settings.rest_band``).
     """
     speed = np.asarray(speed, float)
     band = np.maximum(rest_band * np.asarray(sigma_v, float), floor)
@@ -244,8 +257,8 @@ def poses_from_columns(columns) -> tuple[np.ndarray, np.ndarray]:
     return position, rotation
 
 
-def _held_run(f: np.ndarray) -> tuple[int, int] | None:
-    """The longest run (first index, length) of at least ``Settings.held_run`` equal
+def _held_run(f: np.ndarray, held_run: int) -> tuple[int, int] | None:
+    """The longest run (first index, length) of at least ``held_run`` equal
     consecutive values of a channel whose neighbouring samples otherwise differ (a noisy load
     cell: fewer than 1% equal neighbours; a coarsely quantised channel repeats values and is
     not judged)."""
@@ -255,20 +268,21 @@ def _held_run(f: np.ndarray) -> tuple[int, int] | None:
     if starts.size == 0:
         return None
     runs = stops - starts + 1                     # samples in each run of equal values
-    short = runs < Settings.held_run
+    short = runs < held_run
     if np.sum(runs[short] - 1) > 0.01 * same.size or short.all():
         return None                               # quantised, or nothing held
     k = int(np.argmax(runs))
     return int(starts[k]), int(runs[k])
 
 
-def data_problems(t: np.ndarray, forces: np.ndarray) -> list[str]:
+def data_problems(t: np.ndarray, forces: np.ndarray, *, held_run: int) -> list[str]:
     """Problems of measured force data that no model effect can explain, one line each.
 
     A channel that is constant, or that sits at its extreme value on a run of samples
-    (saturation), or that repeats one value on a run of samples where it otherwise never
-    does (a dropout recorded as held or zeroed samples), or a gap in the sample times
-    (dropout: a step above 1.5 times the median).
+    (saturation), or that repeats one value on a run of at least ``held_run`` samples
+    (``Settings.held_run``) where it otherwise never does (a dropout recorded as held or
+    zeroed samples), or a gap in the sample times (dropout: a step above 1.5 times the
+    median). t (N,) s; forces (N, k) N.
     """
     out = []
     forces = np.asarray(forces, float)
@@ -293,7 +307,7 @@ def data_problems(t: np.ndarray, forces: np.ndarray) -> list[str]:
                                f"first row {row})")
                     saturated = True
                     break
-        held = None if saturated else _held_run(f)
+        held = None if saturated else _held_run(f, held_run)
         if held is not None:
             row, length = held
             out.append(f"{name}: the same value ({f[row]:.6g} N) in {length} rows from row "

@@ -118,7 +118,7 @@ def profile_cv(blocks: st.Blocks, null: list[int], variants: list[list[int]],
         for v in variants:
             cols = null + v
             idx = np.ix_(cols, cols)
-            t = st.solve(At[idx], bt[cols], lower[cols], upper[cols])
+            t = st.solve(At[idx], bt[cols], lower[cols], upper[cols], ridge=blocks.ridge)
             train = st.sse(At[idx], bt[cols], ct, t)
             if best is None or train < best[0]:
                 best = (train, st.sse(Af[idx], bf[cols], cf, t))
@@ -156,7 +156,7 @@ def screen_candidates(problem: Problem, design: Design, whitener: st.Whitener,
     model; an explanation of the gap must also shrink the gap as measured).
     """
     s = problem.settings
-    blocks = st.Blocks.whitened(whitener, design.X, design.r, s.n_blocks,
+    blocks = st.Blocks.whitened(whitener, design.X, design.r, s.n_blocks, ridge=s.ridge,
                                 low=low_band_of(problem, whitener))
     null_cols = design.refit
     null = st.fit(blocks, null_cols, design.lower, design.upper)
@@ -217,8 +217,9 @@ def _reason(test: CandidateTest, failed: list[str], plain: bool, rule: Rule) -> 
 
 def low_band_of(problem: Problem, whitener: st.Whitener) -> np.ndarray:
     """The record's slowest components (``statistics.low_band``) on the samples that
-    ``whitener`` filters and keeps, (M - order, 6, ``Settings.low_band``)."""
-    return whitener.low_band(problem.model.t[problem.used], problem.sliding)
+    ``whitener`` filters and keeps, (M - order, 6, ``problem.settings.low_band``)."""
+    return whitener.low_band(problem.model.t[problem.used], problem.sliding,
+                             q=problem.settings.low_band)
 
 
 def plain_sse(design: Design, f: st.Fit) -> float:
@@ -518,7 +519,8 @@ class _BesideBasis:
         # copy was the largest temporary of a round)
         nb = B.shape[2]
         Xc = design.X[:, :, cols]
-        blocks = st.Blocks.whitened(whitener, [Xc, B], design.r, problem.settings.n_blocks,
+        s = problem.settings
+        blocks = st.Blocks.whitened(whitener, [Xc, B], design.r, s.n_blocks, ridge=s.ridge,
                                     by="time", low=low_band_of(problem, whitener))
         fc, fb, z = Xc.reshape(-1, len(cols)), B.reshape(-1, nb), design.r.reshape(-1)
         cross = fc.T @ fb

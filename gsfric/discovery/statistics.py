@@ -34,7 +34,6 @@ from dataclasses import dataclass
 import numpy as np
 from scipy.special import fdtrc
 
-from gsfric.discovery.settings import Settings
 from gsfric.signal.filters import fir
 
 # -- AR noise model ---------------------------------------------------------------------------
@@ -109,7 +108,7 @@ class Whitener:
         return max(len(c) for c in self.coefficients)
 
     @classmethod
-    def fit(cls, residual: np.ndarray, max_order: int = Settings.max_order,
+    def fit(cls, residual: np.ndarray, max_order: int,
             valid: np.ndarray | None = None) -> Whitener:
         """AR models of each leg's residual (N, 6), orders by BIC.
 
@@ -117,6 +116,7 @@ class Whitener:
         ----------
         residual : ndarray, shape (N, 6)
         max_order : int
+            Largest AR order tried (``Settings.max_order``; at most a tenth of N).
         valid : ndarray (N, 6) of bool, optional
             The samples that count (the others are gaps: the model is fitted on the valid
             ones, and a filtered sample whose filter window touches a gap is set to zero by
@@ -174,12 +174,13 @@ class Whitener:
             window &= ok[p - lag:len(ok) - lag]
         return window
 
-    def low_band(self, t: np.ndarray, valid: np.ndarray | None = None) -> np.ndarray:
-        """The record's slowest components (``low_band``) on the filtered samples that
-        ``apply`` keeps (``kept``): t (N,) s, the times of the unfiltered samples; valid as
-        ``kept``. Shape (N - order, 6, ``Settings.low_band``)."""
+    def low_band(self, t: np.ndarray, valid: np.ndarray | None = None, *, q: int
+                 ) -> np.ndarray:
+        """The record's ``q`` slowest components (``low_band``; ``Settings.low_band``) on
+        the filtered samples that ``apply`` keeps (``kept``): t (N,) s, the times of the
+        unfiltered samples; valid as ``kept``. Shape (N - order, 6, q)."""
         t = np.asarray(t, float)
-        return low_band(t[self.order:], self.kept(valid, len(t)))
+        return low_band(t[self.order:], self.kept(valid, len(t)), q)
 
     def phi1(self) -> np.ndarray:
         """Lag-one autocorrelation implied by each leg's model, (6,)."""
@@ -215,20 +216,23 @@ class Blocks:
     ztz : ndarray, shape (B,)
     rows : ndarray, shape (B,)
         Number of scalar observations (samples x legs) in each block.
+    ridge : float
+        Ridge of every solve on these cross-products (``solve``, ``Settings.ridge``).
     """
 
     XtX: np.ndarray
     Xtz: np.ndarray
     ztz: np.ndarray
     rows: np.ndarray
+    ridge: float
     low_X: np.ndarray | None = None
     low_z: np.ndarray | None = None
     low_rows: float = 0.0
 
     @classmethod
-    def build(cls, X: np.ndarray, z: np.ndarray, n_blocks: int) -> Blocks:
+    def build(cls, X: np.ndarray, z: np.ndarray, n_blocks: int, *, ridge: float) -> Blocks:
         """Blocks of a design X (M, 6, k) and target z (M, 6), cut into ``n_blocks`` stretches
-        of equal length (the last one takes the remainder)."""
+        of equal length (the last one takes the remainder), solved with ``ridge``."""
         m, legs, k = X.shape
         length = m // n_blocks
         cut = length * n_blocks
@@ -245,12 +249,14 @@ class Blocks:
             Xtz[-1] += np.einsum("ik,i->k", Xr, zr)
             ztz[-1] += zr @ zr
             rows[-1] += zr.size
-        return cls(XtX, Xtz, ztz, rows)
+        return cls(XtX, Xtz, ztz, rows, ridge)
 
     @classmethod
     def whitened(cls, whitener: "Whitener", X: np.ndarray | Sequence[np.ndarray], z: np.ndarray,
-                 n_blocks: int, by: str = "pairs", low: np.ndarray | None = None) -> Blocks:
-        """The blocks of ``whitener.apply(X)`` and ``whitener.apply(z)``, computed block by
+                 n_blocks: int, *, ridge: float, by: str = "pairs",
+                 low: np.ndarray | None = None) -> Blocks:
+        """The blocks of ``whitener.apply(X)`` and ``whitener.apply(z)``, solved with
+        ``ridge`` (``solve``), computed block by
         block without holding a whitened copy of X (the filter is a short FIR filter, so each
         block needs only ``order`` samples before it). X may be a sequence of arrays
         (M, 6, k_i), the design's columns side by side, without joining them.
@@ -294,7 +300,7 @@ class Blocks:
                 low_X += np.einsum("ilq,ilk->lqk", low[start:stop], Xw)
                 low_z += np.einsum("ilq,il->lq", low[start:stop], zw)
         low_rows = 0.0 if low is None else float(np.count_nonzero(np.any(low != 0, axis=0)))
-        return cls(XtX, Xtz, ztz, rows, low_X, low_z, low_rows)
+        return cls(XtX, Xtz, ztz, rows, ridge, low_X, low_z, low_rows)
 
     def total(self, weights: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray, float,
                                                                float]:
@@ -362,10 +368,11 @@ def block_edges(valid: np.ndarray | None, rows: int, n_blocks: int) -> np.ndarra
 
 
 def solve(A: np.ndarray, b: np.ndarray, lower: np.ndarray | None = None,
-          upper: np.ndarray | None = None) -> np.ndarray:
+          upper: np.ndarray | None = None, *, ridge: float) -> np.ndarray:
     """argmin ``t' A t - 2 b' t`` within bounds (A symmetric positive semi-definite).
 
-    Columns are scaled to unit diagonal and a tiny ridge keeps confounded columns solvable.
+    Columns are scaled to unit diagonal and ``ridge`` (``Settings.ridge``), added to the
+    scaled diagonal, keeps confounded columns solvable.
     The bounds are handled by a primal active-set method (exact for this convex problem; a
     few small solves, as the problems have at most a few dozen parameters).
     """
@@ -373,7 +380,7 @@ def solve(A: np.ndarray, b: np.ndarray, lower: np.ndarray | None = None,
     if k == 0:
         return np.zeros(0)
     d = np.sqrt(np.maximum(np.diag(A), 1e-300))
-    As = A / np.outer(d, d) + Settings.ridge * np.eye(k)
+    As = A / np.outer(d, d) + ridge * np.eye(k)
     # a column without data (zero diagonal) carries no information: its coefficient is 0
     bs = np.where(np.diag(A) > 0, b, 0.0) / d
     lo = np.full(k, -np.inf) if lower is None else np.asarray(lower, float) * d
@@ -451,7 +458,7 @@ def fit(blocks: Blocks, columns: Sequence[int], lower: np.ndarray, upper: np.nda
     A, b, c, rows = blocks.total(weights)
     cols = list(columns)
     idx = np.ix_(cols, cols)
-    t = solve(A[idx], b[cols], lower[cols], upper[cols])
+    t = solve(A[idx], b[cols], lower[cols], upper[cols], ridge=blocks.ridge)
     return Fit(cols, t, sse(A[idx], b[cols], c, t), rows)
 
 
@@ -479,7 +486,7 @@ def cross_validate(blocks: Blocks, columns: Sequence[int], lower: np.ndarray,
     for f, g in enumerate(groups):
         Af, bf, cf = blocks.held(g)
         At, bt, _ = blocks.without(g)
-        t = solve(At[idx], bt[cols], lower[cols], upper[cols])
+        t = solve(At[idx], bt[cols], lower[cols], upper[cols], ridge=blocks.ridge)
         out[f] = sse(Af[idx], bf[cols], cf, t)
     return out
 
@@ -495,13 +502,14 @@ def fold_share(blocks: Blocks, cv: np.ndarray, cv_null: np.ndarray, n_folds: int
     return float(np.mean((np.asarray(cv) < np.asarray(cv_null))[held]))
 
 
-def low_band(t: np.ndarray, kept: np.ndarray, q: int = Settings.low_band) -> np.ndarray:
+def low_band(t: np.ndarray, kept: np.ndarray, q: int) -> np.ndarray:
     """The record's slowest components, per leg: the cosines ``cos(pi j tau)``, j = 0..q-1,
     of the time scaled to tau in [0, 1] (the mean and periods down to 2 T / (q - 1)),
     orthonormal over each leg's kept samples and zero on the others; shape (M, 6, q).
 
     t : ndarray (M,), s, the time of the filtered samples; kept : ndarray (M, 6) of bool,
-    the samples the filter keeps (``Whitener.kept``). A cosine that the kept samples cannot
+    the samples the filter keeps (``Whitener.kept``); q : int, the number of components
+    (``Settings.low_band``). A cosine that the kept samples cannot
     tell from the slower ones (a record that moves only in short stretches) is left out
     (zero)."""
     t = np.asarray(t, float)
@@ -537,7 +545,7 @@ def band_tests(blocks: Blocks, null: Fit, alternative: Fit, k: int) -> tuple[flo
     less the alternative's parameters spent on it (the trace of the hat matrix over the
     band). Fitted on the slowest components alone, the refitted parameters and the effects
     already named (a dozen columns and more, mostly determined by the rest) would use up
-    their 6 x ``Settings.low_band`` observations."""
+    their 6 q observations (``low_band``)."""
     A, b, c, rows = blocks.total()
     PX, pz = blocks.low_X, blocks.low_z
     AL = np.einsum("lqk,lqm->km", PX, PX)
@@ -551,7 +559,7 @@ def band_tests(blocks: Blocks, null: Fit, alternative: Fit, k: int) -> tuple[flo
     cols = list(alternative.columns)
     idx = np.ix_(cols, cols)
     d = np.sqrt(np.maximum(np.diag(A[idx]), 1e-300))
-    scaled = A[idx] / np.outer(d, d) + Settings.ridge * np.eye(len(cols))
+    scaled = A[idx] / np.outer(d, d) + blocks.ridge * np.eye(len(cols))
     spent = float(np.trace(np.linalg.solve(scaled, AL[idx] / np.outer(d, d)))) if cols else 0.0
     out = []
     for band, (n, used) in enumerate(((blocks.low_rows, spent),

@@ -33,7 +33,6 @@ import numpy as np
 
 from gsfric.discovery.evidence import Evidence, Rule, Structure, accept
 from gsfric.discovery.pvalues import alexander_govern, f_sf
-from gsfric.discovery.settings import Settings
 from gsfric.signal.filters import all_pole, fir
 
 STATE_MEANING = {
@@ -77,7 +76,7 @@ STATE_KEYS = ("significant", "variable", "gap", "cv_gain", "structure_rms", "per
 
 def state_structure(residual: np.ndarray, features: dict[str, np.ndarray],
                     valid: np.ndarray, *, n_folds: int, min_gap: float,
-                    n_bins: int = Settings.state_bins) -> Structure:
+                    n_bins: int) -> Structure:
     """Does the residual repeat as a function of one state variable? (see the module docstring)
 
     Parameters
@@ -93,6 +92,8 @@ def state_structure(residual: np.ndarray, features: dict[str, np.ndarray],
         Contiguous folds of the cross-validation.
     min_gap : float
         Smallest held-out structure, relative to the RMS left, that counts.
+    n_bins : int
+        Bins per state variable and leg (``Settings.state_bins``).
 
     Returns
     -------
@@ -158,8 +159,7 @@ def _binned_gain(r: np.ndarray, z: np.ndarray, valid: np.ndarray, fold: np.ndarr
 
 
 def dynamic_structure(residual: np.ndarray, inputs: dict[str, np.ndarray], valid: np.ndarray,
-                      *, alpha: float, min_gap: float, order: int = Settings.dynamic_order,
-                      lags: int = Settings.dynamic_lags) -> Structure:
+                      *, alpha: float, min_gap: float, order: int, lags: int) -> Structure:
     """Is the residual driven by the motion beyond its own past? (see the module docstring)
 
     An ARX model per leg, ``r_t = sum_k a_k r_{t-k} + sum_u sum_j b_uj u_{t-j} + e_t``, with AR
@@ -180,6 +180,10 @@ def dynamic_structure(residual: np.ndarray, inputs: dict[str, np.ndarray], valid
         Level of the F-test.
     min_gap : float
         Smallest input-driven part, relative to the RMS left, that counts.
+    order : int
+        Lagged residuals per leg (``Settings.dynamic_order``).
+    lags : int
+        Lags 0..lags of each input, samples (``Settings.dynamic_lags``).
 
     Returns
     -------
@@ -362,7 +366,7 @@ REVERSAL_KEYS = ("significant", "p_value", "gap", "cv_gain", "structure_rms", "p
 
 def reversal_structure(residual: np.ndarray, direction: np.ndarray, travel: np.ndarray,
                        valid: np.ndarray, *, n_folds: int, alpha: float, min_gap: float,
-                       edges: np.ndarray | None = None) -> Structure:
+                       edges: np.ndarray) -> Structure:
     """Does the friction-like residual depend on the travel since the last reversal?
 
     A friction that the speed describes, whatever its law, is the same at the same speed early
@@ -372,7 +376,7 @@ def reversal_structure(residual: np.ndarray, direction: np.ndarray, travel: np.n
     after each reversal and each start in the other direction, where the speed is small and
     the tests binned by speed see few samples. This test needs no model of either: the
     residual signed by the direction of travel, ``r d``, is averaged in bins of the travel
-    since the reversal (``edges``, default ``Settings.travel_edges``), and the bin means of the
+    since the reversal (``edges``, ``Settings.travel_edges``), and the bin means of the
     other contiguous folds predict the held-out fold (as ``state_structure``), against a single
     level per fold; where every reversal lies in one fold, the other legs predict a held-out
     leg. Noise, white or slow, does not repeat after every reversal in another stretch of time;
@@ -399,6 +403,8 @@ def reversal_structure(residual: np.ndarray, direction: np.ndarray, travel: np.n
     min_gap : float
         Smallest held-out structure near the reversals, relative to the RMS left there, that
         counts.
+    edges : ndarray, shape (E,)
+        Upper travel edges of the bins, m, increasing (``Settings.travel_edges``).
 
     Returns
     -------
@@ -407,7 +413,7 @@ def reversal_structure(residual: np.ndarray, direction: np.ndarray, travel: np.n
         ``profile`` (the mean ``r d`` per bin, N, with the bins' upper travel edges, m),
         ``reversals`` (reversals seen).
     """
-    edges = np.asarray(Settings.travel_edges if edges is None else edges, float)
+    edges = np.asarray(edges, float)
     r = np.asarray(residual, float)
     m, legs = r.shape
     empty = Structure(False, 0.0, 0.0, [0.0] * legs, p_value=1.0,

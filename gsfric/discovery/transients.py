@@ -15,10 +15,9 @@ import numpy as np
 
 from gsfric.discovery.evidence import Evidence, Rule, Structure, accept
 from gsfric.discovery.pvalues import t_greater
-from gsfric.discovery.settings import Settings
 
 
-def rest_runs(sliding: np.ndarray, reach: int, min_run: int = Settings.rest_min_run
+def rest_runs(sliding: np.ndarray, reach: int, *, min_run: int
               ) -> list[tuple[int, int, int]]:
     """The rest cores of each leg: runs of not-sliding pairs with ``2 reach`` samples cut from
     each end, at least ``min_run`` samples long.
@@ -37,7 +36,7 @@ def rest_runs(sliding: np.ndarray, reach: int, min_run: int = Settings.rest_min_
     reach : int
         Half-width of the differentiator's window, samples.
     min_run : int
-        Shortest core kept.
+        Shortest core kept, samples (``Settings.rest_min_run``).
 
     Returns
     -------
@@ -61,9 +60,8 @@ def rest_runs(sliding: np.ndarray, reach: int, min_run: int = Settings.rest_min_
 
 
 def rest_transients(residual: np.ndarray, runs: list[tuple[int, int, int]], *, alpha: float,
-                    min_gap: float, window: float = Settings.rest_window,
-                    lags: tuple[int, ...] = Settings.rest_lags,
-                    min_rests: int = Settings.rest_min_rests) -> Structure:
+                    min_gap: float, window: float, lags: tuple[int, ...],
+                    min_rests: int) -> Structure:
     """Does something happen after each stop that the noise does not do? A model-free test on
     the rests, where friction is not given by the speed's sign.
 
@@ -92,6 +90,12 @@ def rest_transients(residual: np.ndarray, runs: list[tuple[int, int, int]], *, a
         Level of the test.
     min_gap : float
         Smallest excess RMS, relative to the level at the end of the rests, that counts.
+    window : float
+        Share of each core compared at its start and at its end (``Settings.rest_window``).
+    lags : tuple of int
+        Lags of the differences, samples (``Settings.rest_lags``).
+    min_rests : int
+        Fewest rests tested (``Settings.rest_min_rests``).
 
     Returns
     -------

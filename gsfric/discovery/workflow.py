@@ -26,6 +26,7 @@ Steps (docs/explanation/discovery.md explains each decision):
 from __future__ import annotations
 
 import dataclasses
+import os
 from collections.abc import Sequence
 from dataclasses import dataclass, field
 
@@ -168,8 +169,9 @@ def discover(motion: Motion, forces: np.ndarray, platform: Platform | None = Non
         raise InputTypeError(f"discover: unknown option {unknown[0]!r} (a Settings field "
                              "name)")
     settings = dataclasses.replace(settings or Settings(), **options)
+    platform_source = str(platform) if isinstance(platform, (str, os.PathLike)) else ""
     platform = platform_from(platform)
-    forces = checked_forces(motion, forces)
+    forces = checked_forces(motion, forces, settings)
     recorded = poses if poses is not None else motion.recorded_poses()
     check_poses(platform, *(recorded if recorded is not None else (motion.position,
                                                                    motion.rotation)), motion.t)
@@ -195,6 +197,7 @@ def discover(motion: Motion, forces: np.ndarray, platform: Platform | None = Non
             break
     bar.step("bootstrap of the final fit")
     result = _final(state, motion, platform)
+    result.platform_source = platform_source
     bar.close()
     return result
 
@@ -211,7 +214,8 @@ def _refit_own_parameters(state: _State) -> None:
     J0 *= problem.weight[:, :, None]
     whitener = _largest_model_whitener(problem, residual_before, J0)
     # the refit's columns prewhitened once, for its unbounded values and for its test
-    refit_blocks = st.Blocks.whitened(whitener, J0, residual_before, problem.settings.n_blocks,
+    s = problem.settings
+    refit_blocks = st.Blocks.whitened(whitener, J0, residual_before, s.n_blocks, ridge=s.ridge,
                                       low=low_band_of(problem, whitener))
     refit, notes = _refit_report(problem, theta0, refit_blocks)
     refit.test = _refit_test(problem, refit_blocks)
@@ -285,7 +289,7 @@ def _screen_round(state: _State, candidates: list):
             break
         fit = screen.fits[winner]
         r_alt = design.r - design.X[:, :, fit.columns] @ fit.coef
-        whitener = st.Whitener.fit(r_alt, valid=problem.sliding)
+        whitener = st.Whitener.fit(r_alt, problem.settings.max_order, valid=problem.sliding)
         screen = screen_candidates(problem, design, whitener, candidates)
         new = winner_of(screen)
         if new == winner:
@@ -369,7 +373,7 @@ def _final(state: _State, motion: Motion, platform: Platform) -> Discovery:
     problem, settings = state.problem, state.problem.settings
     model, used, sliding = problem.model, problem.used, problem.sliding
     residual_after = state.r
-    whitener = st.Whitener.fit(residual_after, valid=sliding)
+    whitener = st.Whitener.fit(residual_after, settings.max_order, valid=sliding)
     findings, final, noise = _findings(state, whitener)
     _final_notes(state)
     full_after = problem.y - model.forces(state.theta)[used]
@@ -386,7 +390,8 @@ def _final(state: _State, motion: Motion, platform: Platform) -> Discovery:
     verdict = decision.verdict
     table = regime_bands(np.asarray(motion.t[used]), problem.result.D_dot[used],
                          problem.result.D[used], problem.result.F[used],
-                         motion.rotation[used], state.residual_before, residual_after)
+                         motion.rotation[used], state.residual_before, residual_after,
+                         settings)
     return Discovery(
         effects=findings, refit=state.refit, rounds=state.rounds,
         rms_before=_rms(state.residual_before[sliding]), rms_refit=state.rms_refit,
@@ -470,7 +475,8 @@ def _floor(state: _State, motion: Motion, final: Platform, full_after: np.ndarra
     step = (t[-1] - t[0]) / max(len(t) - 1, 1)
     estimate = estimated_force_noise(full_after, step, s.floor_segment)
     pose, how = pose_noise_forces(final, motion, problem.poses, problem.used,
-                                  problem.sliding, s.floor_draws, seed=state.seed)
+                                  problem.sliding, s.floor_draws, seed=state.seed,
+                                  n_threads=problem.model.n_threads)
     return noise_floor(state.force_noise, estimate, pose, how, rms_after)
 
 
@@ -560,7 +566,8 @@ def _largest_model_whitener(problem: Problem, residual: np.ndarray, J: np.ndarra
     refit then weighs the differences of the residual over its level: it stopped at 2.07
     times the noise where the refitted parameters reach 1.04 times."""
     flat = J.reshape(-1, J.shape[2])
-    return lackfit.whitener_beyond(residual, J, problem.sliding, range(J.shape[2]),
+    return lackfit.whitener_beyond(residual, J, problem.sliding, problem.settings,
+                                   range(J.shape[2]),
                                    (flat.T @ flat, flat.T @ residual.reshape(-1)))
 
 
@@ -570,9 +577,9 @@ def _noise_whitener(design, problem: Problem) -> st.Whitener:
     squares): what the candidates could explain does not inflate the noise model, so a
     step-like effect (Coulomb friction) is not whitened away before it is tested, and the
     noise is not under-modelled either."""
-    cols = design.largest_model()
-    return lackfit.whitener_beyond(design.r, design.X, problem.sliding, cols,
-                                   (design.XtX[np.ix_(cols, cols)], design.Xtr[cols]))
+    cols = design.largest_model(problem.settings.ridge)
+    return lackfit.whitener_beyond(design.r, design.X, problem.sliding, problem.settings,
+                                   cols, (design.XtX[np.ix_(cols, cols)], design.Xtr[cols]))
 
 
 def _contributions(problem: Problem, theta: np.ndarray, active: Sequence[str]
@@ -602,7 +609,7 @@ def _intervals(problem: Problem, J: np.ndarray, names: list[str], whitener: st.W
         return {}
     model = problem.model
     s = problem.settings
-    blocks = st.Blocks.whitened(whitener, J, residual, s.n_blocks)
+    blocks = st.Blocks.whitened(whitener, J, residual, s.n_blocks, ridge=s.ridge)
     cols = [model.index[n] for n in names]
     lo = np.array([problem.bounds(n)[0] for n in names]) - theta[cols]
     hi = np.array([problem.bounds(n)[1] for n in names]) - theta[cols]
@@ -647,7 +654,7 @@ def _refit_report(problem: Problem, theta0: np.ndarray, blocks: st.Blocks
         return out, notes
     A, b, _, _ = blocks.total()
     n = len(names)
-    free = st.solve(A[:n, :n], b[:n])
+    free = st.solve(A[:n, :n], b[:n], ridge=blocks.ridge)
     free += theta0[[model.index[n] for n in names]]
     for k, name in enumerate(names):
         lo, hi = problem.plausible[name]

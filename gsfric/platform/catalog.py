@@ -155,6 +155,7 @@ def unit(name: str) -> str:
 
     Examples
     --------
+    >>> from gsfric.platform.catalog import unit
     >>> unit("stribeck.velocity"), unit("payload_mass")
     ('m/s', 'kg')
     """

@@ -26,6 +26,7 @@ A rig TOML holds the ``Rig`` fields as top-level keys (SI units, angles in rad):
     upper_mass = 25.0            # kg
     # optional: home_height (m), payload_mass (kg), friction_model ("coupled" or "paper")
 
+>>> from gsfric.platform.rig import Rig
 >>> rig = Rig(base_radius=0.5, base_half_angle=0.26, platform_radius=0.3,
 ...           platform_half_angle=0.26, stroke=(0.5, 1.1), platform_mass=10.0,
 ...           lower_mass=2.6, upper_mass=0.7)

@@ -6,6 +6,7 @@ matrix row per line, the unit and meaning of each key in a comment, an optional 
 the file came from) and an optional note per key (e.g. what a value was changed from).
 
 >>> from gsfric.models import reference_platform
+>>> from gsfric.platform.text import commented_toml
 >>> text = commented_toml(reference_platform(), header=["the reference platform"])
 >>> text.splitlines()[0]
 '# the reference platform'

@@ -18,7 +18,8 @@ Threads: every task builds its own evaluators and buffers and evaluates in one t
 sets ``OMP_NUM_THREADS=1`` and the like in the processes it starts), one per core.
 
 >>> import gsfric.sweep
->>> result = gsfric.sweep.sweep("sizing", trajectories="runs/*.csv")   # doctest: +SKIP
+>>> result = gsfric.sweep.sweep("sizing",
+...                             trajectories="runs/*.csv")  # files of yours  # doctest: +SKIP
 """
 
 from gsfric.sweep.result import SweepResult, load
