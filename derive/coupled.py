@@ -142,17 +142,6 @@ def joint_friction_moments(t, R_E, R_C):
     return joint_friction_from_loads(t, joint_friction_loads(t, R_E, R_C))
 
 
-def universal_joint_friction(w_L, R_C, a1, a2, c_s, mu, r, eps):
-    """Per-bearing-axis friction moment of a universal joint on the leg, base frame, N m
-    (the formula of ``joint_friction_terms`` written out, for reading and tests)."""
-    out = sp.zeros(3, 1)
-    for a in (a1, a2):
-        w = dot(w_L, a)
-        load = norm(cross(a, R_C))
-        out -= (c_s * w + mu * r * load * smooth_sign(w, eps)) * a
-    return out
-
-
 def coupling_weight(P, Q, mode):
     """The weight of the joint friction moments in the equilibrium.
 

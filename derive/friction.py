@@ -20,7 +20,6 @@ NaN. The paper's tables give scalars, negative = opposing: ``-(c_s |w| + mu r |R
 
 import sympy as sp
 
-from .chain import inline
 from .vectors import dot, norm
 
 
@@ -44,12 +43,8 @@ def smooth_sign(w, eps):
     return w / sp.sqrt(w**2 + eps**2)
 
 
-def joint_friction_moment(w, R, c_s, mu, r, eps, let=inline, name="Mfr"):
-    """Eqs. (33)/(34): friction moment opposing the relative angular velocity w.
-
-    ``-(c_s w + mu r |R| sgn(w))`` with the regularised ``sgn(w) = w / sqrt(w.w + eps^2)`` of
-    ``smooth_sign``; both terms are along w, so the moment is ``-k w`` with the scalar
-    ``k = c_s + mu r |R| / sqrt(w.w + eps^2)``.
+def joint_friction_scalar(w, R, c_s, mu, r, eps):
+    """The paper's signed scalar of (33)/(34): ``-(c_s |w| + mu r |R| |w| / sqrt(|w|^2 + eps^2))``.
 
     Parameters
     ----------
@@ -65,24 +60,11 @@ def joint_friction_moment(w, R, c_s, mu, r, eps, let=inline, name="Mfr"):
         Joint radius, m.
     eps : sympy.Expr
         Regularisation speed, rad/s.
-    let : callable
-        The chain's ``let``; defines ``<name>_k`` (= -k, N m s/rad).
 
     Returns
     -------
-    sympy.Matrix, shape (3, 1)
-        N m, base frame.
-    """
-    k = let(f"{name}_k", -(c_s + mu * r * norm(R) / sp.sqrt(dot(w, w) + eps**2)),
-            rf"-k_{{{name}}}")
-    return k * w
-
-
-def joint_friction_scalar(w, R, c_s, mu, r, eps):
-    """The paper's signed scalar of (33)/(34): ``-(c_s |w| + mu r |R| |w| / sqrt(|w|^2 + eps^2))``.
-
-    Parameters are those of ``joint_friction_moment``. Returns a sympy.Expr, N m (negative =
-    opposing).
+    sympy.Expr
+        N m (negative = opposing).
     """
     speed2 = dot(w, w)
     return -(c_s * sp.sqrt(speed2) + mu * r * norm(R) * sp.sqrt(speed2 / (speed2 + eps**2)))

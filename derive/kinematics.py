@@ -225,11 +225,6 @@ class UniversalJoint(NamedTuple):
         """``u x a2``, the leg's second body axis, (3, 1), 1."""
         return self.frame[:, 1]
 
-    @property
-    def n_dot_u(self):
-        """``n . u = s``, the divisor of the torsion moment."""
-        return self.sin2 * self.inv_sin
-
 
 def universal_joint_axes(u, a1, let=inline) -> UniversalJoint:
     """The universal joint's second axis, torsion direction and the leg's body axes.

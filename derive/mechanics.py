@@ -36,11 +36,6 @@ class Wrench:
     moment: sp.Matrix
     point: sp.Matrix
 
-    @classmethod
-    def force_at(cls, force, point) -> "Wrench":
-        """A pure force: ``force`` (3, 1) N at ``point`` (3, 1) m, base frame; zero moment."""
-        return cls(force, sp.zeros(3, 1), point)
-
     def about(self, point) -> "Wrench":
         """The same wrench with its moment about ``point``: ``M_q = M + (point_self - q) x F``.
 

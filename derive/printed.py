@@ -181,24 +181,6 @@ EQUATION_ERRATA: dict[str, tuple[str, ...]] = {
 """The errata that each equation function knows how to correct (its ``fix`` ids)."""
 
 
-def erratum(eid: str) -> Erratum:
-    """The erratum with id ``eid``.
-
-    Parameters
-    ----------
-    eid : str
-        ``"E01"`` .. ``"E34"``.
-
-    Returns
-    -------
-    Erratum
-    """
-    for e in ERRATA:
-        if e.id == eid:
-            return e
-    raise KeyError(eid)
-
-
 # ----------------------------------------------------------------------------- helpers
 
 

@@ -23,12 +23,6 @@ RATE = 1000.0
 """Sampling rate of the benchmark's motions, Hz."""
 DT = 1 / RATE
 SEED = 20261122
-IMPLEMENTATIONS = {
-    "compiled": "compiled C (Evaluator.actuator_forces), coupled friction model",
-    "compiled_paper": "compiled C, the paper's post-hoc friction model",
-    "numpy": "vectorised NumPy (numpy_model.actuator_forces_numpy)",
-    "loop": "per-step loop, 42x42 solve (numpy_model.actuator_forces_loop)",
-}
 
 
 def ratio(a: float | None, b: float | None) -> float:

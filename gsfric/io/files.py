@@ -20,7 +20,7 @@ from typing import IO, Any
 
 import tomllib
 
-from gsfric.errors import GsfricError, InputError, OutputError
+from gsfric.errors import InputError, OutputError
 
 _COMMIT_CHECK: contextvars.ContextVar = contextvars.ContextVar("gsfric_commit_check",
                                                                default=None)
@@ -30,8 +30,6 @@ _TEMP_TAG = ".gsfric-"
 """Temporary outputs are named ``.{name}.gsfric-{pid}-{random}.tmp`` beside the output, so that a
 later run can recognise (and remove) those of its own that a killed process (SIGKILL, a power
 cut) left behind."""
-
-_WRITE_ERRNOS = {errno.ENOSPC, errno.EDQUOT, errno.EFBIG, errno.EIO}
 
 PathArg = str | os.PathLike[str]
 Inputs = Mapping[str, PathArg | None] | Iterable[PathArg | tuple[str, PathArg | None] | None]
@@ -327,7 +325,7 @@ def _write_replacing(given: Path, path: Path, mode: str,
             _before_commit()
             _replace_file(tmp_name, path)
         except OSError as error:
-            if isinstance(error, (GsfricError, BrokenPipeError)):
+            if isinstance(error, BrokenPipeError):
                 raise
             raise _write_failure(given, error) from None
     except BaseException:
@@ -426,7 +424,7 @@ def output_folder(path: PathArg, *, inputs: Inputs = ()) -> Iterator[Path]:
             _move_folder(given, path, tmp, names)
             _sync_directory(path.parent)
         except OSError as error:
-            if isinstance(error, (GsfricError, BrokenPipeError)):
+            if isinstance(error, BrokenPipeError):
                 raise
             raise _write_failure(given, error, "output") from None
         except OutputError as error:   # name the final path, not the temporary folder

@@ -138,10 +138,6 @@ def quaternion_multiply(p: np.ndarray, q: np.ndarray) -> np.ndarray:
     return np.concatenate([w, v], axis=-1)
 
 
-def quaternion_conjugate(q: np.ndarray) -> np.ndarray:
-    return q * np.array([1.0, -1.0, -1.0, -1.0])
-
-
 def continuous_quaternions(q: np.ndarray) -> np.ndarray:
     """Flip signs so that consecutive quaternions have a non-negative dot product."""
     dots = np.sum(q[1:] * q[:-1], axis=1)
