@@ -176,6 +176,9 @@ class FrameCollector:
         one chunk from step ``start``. Returns self."""
         motion = result.source[1]
         arrays = {name: result.arrays[name] for name in OUTPUTS}
+        t = np.asarray(result.t, float)
+        if self.t0 is None and len(t) > 1 and t[-1] > t[0]:   # the whole record: cap the rate
+            self.fps = min(self.fps, (self.max_frames - 1) / float(t[-1] - t[0]))
         return self.add(start, result.t, motion.position, motion.rotation, arrays, result.flag)
 
     def finish(self) -> Frames:

@@ -78,7 +78,7 @@ def notebook_html(text: str, height: int = 760) -> str:
     """An ``<iframe>`` whose ``srcdoc`` is the page ``text``: for a Jupyter output cell (the
     page keeps its own scripts and styles away from the notebook's)."""
     return (f'<iframe srcdoc="{html.escape(text, quote=True)}" style="width: 100%; '
-            f'height: {int(height)}px; border: 0" sandbox="allow-scripts" '
+            f'height: {int(height)}px; border: 0" '
             f'title="gsfric view"></iframe>')
 
 
