@@ -131,7 +131,7 @@ class FrameCollector:
     >>> motion = gsfric.models.sinusoidal(np.linspace(0, 2, 1001))
     >>> result = gsfric.evaluate(gsfric.reference_platform(), motion)
     >>> frames = FrameCollector(fps=30).add_result(result).finish()
-    >>> len(frames), frames.t[-1]
+    >>> len(frames), float(frames.t[-1])
     (61, 2.0)
     """
 

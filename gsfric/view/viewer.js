@@ -152,7 +152,9 @@ function seekToHash() {
   const time = hashTime();
   if (time === null) return;
   play(false);
-  setFrame(frameAt(time + 1e-9));
+  const before = frameAt(time);
+  const after = Math.min(before + 1, M - 1);
+  setFrame(Math.abs(T[after] - time) < Math.abs(time - T[before]) ? after : before);
 }
 
 function setUpControls() {
@@ -162,7 +164,7 @@ function setUpControls() {
   $('slider').addEventListener('input', (e) => { play(false); setFrame(Number(e.target.value)); });
   window.addEventListener('hashchange', seekToHash);
   window.addEventListener('keydown', (e) => {
-    if (e.target.tagName === 'SELECT' || e.target.tagName === 'INPUT' && e.key === ' ') return;
+    if (['INPUT', 'SELECT', 'BUTTON'].includes(e.target.tagName)) return;   // their own keys
     if (e.key === ' ') { e.preventDefault(); play(!state.playing); }
     if (e.key === 'ArrowRight') { play(false); setFrame(state.frame + 1); }
     if (e.key === 'ArrowLeft') { play(false); setFrame(state.frame - 1); }
