@@ -19,7 +19,7 @@ PUBLIC = sorted(name for name in gsfric.__all__ if name[0].isupper() or callable
 DOCTEST_MODULES = ("gsfric", "gsfric.evaluation.evaluator", "gsfric.evaluation.result",
                    "gsfric.trajectory", "gsfric.models", "gsfric.platform.description",
                    "gsfric.io.readers", "gsfric.io.logs", "gsfric.errors",
-                   "gsfric.signal.filters", "gsfric.discovery.pvalues")
+                   "gsfric.signal.filters", "gsfric.discovery.pvalues", "gsfric.view.frames")
 """Modules whose examples run as doctests."""
 
 

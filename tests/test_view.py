@@ -148,6 +148,16 @@ def test_the_notebook_frame_holds_the_page(tmp_path):
     assert found and html.unescape(found.group(1)) == page
 
 
+def test_show_displays_the_frame_in_jupyter(monkeypatch, recwarn):
+    display = pytest.importorskip("IPython.display")
+    shown = []
+    monkeypatch.setattr(display, "display", shown.append)
+    result = evaluate(200, 2.0)
+    result.show(height=500)
+    assert len(shown) == 1 and shown[0].data.startswith("<iframe srcdoc=")
+    assert "height: 500px" in shown[0].data and not recwarn.list
+
+
 # -- the command -----------------------------------------------------------------------------
 
 

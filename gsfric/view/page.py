@@ -16,6 +16,7 @@ import importlib.resources
 import json
 import os
 import re
+import warnings
 from collections.abc import Mapping
 from pathlib import Path
 
@@ -85,4 +86,7 @@ def notebook_html(text: str, height: int = 760) -> str:
 def show(text: str, height: int = 760) -> None:
     """Display the page ``text`` in the running Jupyter front end (``IPython.display``)."""
     display = optional("IPython.display")
-    display.display(display.HTML(notebook_html(text, height)))
+    with warnings.catch_warnings():     # IPython suggests its IFrame, which takes a URL only
+        warnings.filterwarnings("ignore", "Consider using IPython.display.IFrame")
+        shown = display.HTML(notebook_html(text, height))
+    display.display(shown)
