@@ -1,4 +1,4 @@
-"""Heavy dependencies loaded on first use (tables, SciPy, plots, Parquet, Dask):
+"""Heavy dependencies loaded on first use (tables, SciPy, plots, Parquet, Dask, Jupyter display):
 ``optional("pyarrow.parquet")``.
 
 They are installed with gsfric, but loading them costs time that most calls never need: the
@@ -16,7 +16,8 @@ from types import ModuleType
 
 from gsfric.errors import GsfricError
 
-HEAVY = ("pandas", "scipy", "matplotlib", "pyarrow", "dask", "distributed", "casadi")
+HEAVY = ("pandas", "scipy", "matplotlib", "pyarrow", "dask", "distributed", "casadi",
+         "IPython")
 """The packages loaded through ``optional``."""
 
 

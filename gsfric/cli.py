@@ -43,6 +43,7 @@ COMMANDS = {
     "sweep": "Load envelopes per joint over motions, a workspace and platform variants.",
     "synth": "Write synthetic measured data with hidden effects and noise (reproducible by "
              "seed).",
+    "view": "Write a 3-D view of a motion and its joint loads: one HTML page, opened offline.",
 }
 """The commands: name -> the first paragraph of its help, listed by ``gsfric --help`` without
 importing the command; the command itself is ``gsfric.commands.<name>.<name>``."""

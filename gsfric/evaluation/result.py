@@ -20,7 +20,7 @@ from gsfric.errors import GsfricError
 from gsfric.evaluation.breakdown import frame as breakdown_frame
 from gsfric.evaluation.breakdown import parts as breakdown_parts
 from gsfric.evaluation.columns import annotate, plan
-from gsfric.evaluation.flags import flag_message
+from gsfric.evaluation.flags import FLAG_NAMES, flag_message
 
 DETAILS = ("R_3_leg", "M_3_leg", "coupling_change", "Ffr_viscous", "Ffr_coulomb",
            "Ffr_bushing", "Ffr_seal", "Ffr_effects", "N_bushing")
@@ -242,6 +242,66 @@ class Result:
         for name, unit in frame.attrs["units"].items():
             data[name].attrs["units"] = unit
         return data
+
+    def _view_page(self, fps: float, title: str | None) -> str:
+        """The HTML text of ``to_html`` and ``show``."""
+        from gsfric.view import FrameCollector, page
+
+        if self.source is None:
+            raise GsfricError("to_html: needs a Result of Evaluator.evaluate or gsfric.evaluate "
+                              "(it draws the platform and motion that were evaluated)")
+        if not len(self.t):
+            raise GsfricError("to_html: the result has no steps")
+        platform = self.source[0]
+        frames = FrameCollector(fps=fps).add_result(self).finish()
+        return page(frames, platform.geometry.base_joints, platform.geometry.platform_joints,
+                    title=title if title is not None else f"gsfric: {len(self.t)} steps, "
+                    f"{self.mode} mode", flag_names=FLAG_NAMES, steps=len(self.t))
+
+    def to_html(self, path, *, fps: float = 60.0, title: str | None = None):
+        """Write a 3-D view of the evaluation to one self-contained HTML page.
+
+        The page (no network, no other file) draws the base and the platform, the legs
+        coloured by ``F``, the reactions ``R_E`` and ``R_C`` as arrows, the joint friction
+        (``|MfrE|``, ``|MfrC|``, ``|Ffr|``) as colours and the flagged steps, with plots of
+        ``F`` and ``Ffr`` per leg, playback controls, and each leg's values on hover or click.
+        ``#t=SECONDS`` at the end of its address opens it paused at that time.
+
+        Parameters
+        ----------
+        path : path-like
+            The ``.html`` file; written to a temporary name and renamed when complete.
+        fps : float
+            Frames per second of motion time kept for playback (at most
+            ``gsfric.view.MAX_FRAMES`` frames in all); values are quantised to int16
+            (``gsfric.view.data``: error at most 1.5e-5 of each array's largest magnitude).
+        title : str, optional
+            The page's title.
+
+        Returns
+        -------
+        pathlib.Path
+            ``path``.
+
+        Examples
+        --------
+        >>> import numpy as np, gsfric, tempfile, pathlib
+        >>> result = gsfric.evaluate(gsfric.reference_platform(),
+        ...                          gsfric.models.sinusoidal(np.linspace(0, 2, 401)))
+        >>> out = result.to_html(pathlib.Path(tempfile.mkdtemp()) / "view.html")
+        >>> out.read_text().startswith("<!DOCTYPE html>")
+        True
+        """
+        from gsfric.view import write_page
+
+        return write_page(path, self._view_page(fps, title))
+
+    def show(self, *, fps: float = 60.0, title: str | None = None, height: int = 760) -> None:
+        """Show the 3-D view of ``to_html`` in a Jupyter output cell (an iframe holding the
+        page; needs IPython). ``height`` is the cell's, in CSS pixels."""
+        from gsfric.view import show
+
+        show(self._view_page(fps, title), height)
 
     def to_frame(self):
         """A pandas DataFrame with the columns of ``gsfric simulate``, one row per step.

@@ -1,0 +1,72 @@
+"""``gsfric view``: a trajectory evaluated as by ``simulate`` and written as a 3-D view."""
+
+from __future__ import annotations
+
+import warnings
+from pathlib import Path
+
+import click
+
+from gsfric.commands.common import log_options
+from gsfric.io.logs import LogFormat
+from gsfric.simulate import view_file
+from gsfric.view import DEFAULT_FPS, MAX_FRAMES
+
+
+def _options(command):
+    """The options of ``view`` besides those of a log's format."""
+    path = click.Path(path_type=Path)
+    options = [
+        click.option("--trajectory", type=path, required=True,
+                     help="Trajectory or measured-data file (CSV or Parquet), as for "
+                          "`gsfric simulate`."),
+        click.option("--platform", "platform_file", type=path,
+                     help="Platform TOML (default: the reference platform)."),
+        click.option("--out", type=path, required=True,
+                     help="The page, .html; written to a temporary file and renamed when "
+                          "complete."),
+        click.option("--mode", type=click.Choice(["kinematic", "paper"]), default="kinematic",
+                     show_default=True, help="As for `gsfric simulate`."),
+        click.option("--fps", type=click.FloatRange(min=0, min_open=True), default=DEFAULT_FPS,
+                     show_default=True,
+                     help=f"Frames per second of motion time kept for playback (at most "
+                          f"{MAX_FRAMES:,} frames in all: a longer record gets fewer a "
+                          "second)."),
+        click.option("--title", default=None,
+                     help="The page's title [default: the trajectory's name and the mode]."),
+        click.option("--threads", type=click.IntRange(1, 64), default=1, show_default=True,
+                     help="Threads of the compiled evaluation."),
+        click.option("--chunk", type=int, default=100_000, show_default=True,
+                     help="Steps read and differentiated at a time, as for `gsfric simulate`."),
+        click.option("--window", type=int, default=None,
+                     help="Savitzky-Golay window, odd, samples, as for `gsfric simulate`."),
+        click.option("--quiet", is_flag=True, help="No summary line."),
+    ]
+    for option in reversed(options):
+        command = option(command)
+    return command
+
+
+@click.command()
+@_options
+@log_options
+def view(trajectory, platform_file, out, mode, fps, title, threads, chunk, window, quiet,
+         column_map, units_map, angles, keep_columns):
+    """Write a 3-D view of a motion and its joint loads: one HTML page, opened offline.
+
+    The trajectory is read and evaluated as by `gsfric simulate`. The page draws the base, the
+    platform and the legs coloured by actuator force, the joint reactions as arrows, each
+    joint's friction as a colour and the flagged steps, with plots of the force and the
+    prismatic friction per leg, play, pause, speed and a time slider; hovering or clicking a
+    leg shows its values. It needs no network and no server: three.js is inside it. Open it
+    at a time with #t=SECONDS after its address (file:///.../view.html#t=2.5).
+    """
+    with warnings.catch_warnings():                    # shown one line each by the group
+        warnings.simplefilter("always", UserWarning)
+        log_format = LogFormat.from_options(column_map, units_map, angles, keep_columns)
+        summary = view_file(trajectory, out, platform_file, mode=mode, chunk=chunk,
+                            window=window, n_threads=threads, log_format=log_format, fps=fps,
+                            title=title)
+    if not quiet:
+        click.echo(f"wrote {out} ({summary.steps} steps as {summary.frames} frames, "
+                   f"{summary.size / 1e6:.1f} MB, {summary.flagged} flagged)")

@@ -1,0 +1,145 @@
+"""``view_file``: a trajectory file evaluated as ``simulate_file`` evaluates it, and written as a
+3-D view (``gsfric view``).
+
+The file is read and differentiated chunk by chunk (``iter_motions``, the same reading,
+checks and differentiation as ``gsfric simulate``), each chunk is evaluated and only the frames
+of the view are kept (``gsfric.view.FrameCollector``), so that memory stays bounded however
+long the file is. The page is written to a temporary file and renamed when complete.
+"""
+
+from __future__ import annotations
+
+import os
+import warnings
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+
+from gsfric._checks import as_count, as_path
+from gsfric._threads import one_blas_thread
+from gsfric.errors import GsfricWarning, InputError
+from gsfric.evaluation.evaluator import MAX_THREADS, Evaluator
+from gsfric.evaluation.flags import FLAG_NAMES
+from gsfric.io.files import check_outputs, is_stream
+from gsfric.io.tables import check_file
+from gsfric.models import platform_from
+from gsfric.platform.usable import check_gaps, check_poses
+from gsfric.signal.savgol import DEFAULT_POLYORDER
+from gsfric.simulate.differentiate import DEFAULT_CHUNK, iter_motions
+from gsfric.simulate.run import Summary, _Flags, describe_differentiation
+from gsfric.view import DEFAULT_FPS, FrameCollector, Frames, page, write_page
+
+HTML_SUFFIXES = (".html", ".htm")
+
+
+@dataclass
+class ViewSummary(Summary):
+    """What ``view_file`` did: ``simulate_file``'s ``Summary`` (``out`` is the page) and
+
+    Attributes
+    ----------
+    frames : int
+        Frames in the page (``gsfric.view.frames``).
+    size : int
+        The page's size, bytes.
+    """
+
+    frames: int = 0
+    size: int = 0
+
+
+def check_view_paths(trajectory: Path, out: Path, platform) -> None:
+    """``InputError`` before any work: ``out`` not an .html file in an existing directory (a
+    character device or FIFO is written into), or one of the inputs; ``trajectory`` missing,
+    empty or of an unknown kind."""
+    check_outputs([out], {"trajectory": trajectory, "platform": platform})
+    stream = is_stream(out)
+    if not stream and out.suffix.lower() not in HTML_SUFFIXES:
+        raise InputError(f"{out}: unknown extension {out.suffix or '(none)'!r}; use .html")
+    if out.is_dir():
+        raise InputError(f"{out}: is a directory; give a file name")
+    check_file(trajectory)
+    if not stream and not out.parent.is_dir():
+        raise InputError(f"{out}: directory {str(out.parent)!r} does not exist")
+
+
+@one_blas_thread
+def view_file(trajectory: str | os.PathLike[str], out: str | os.PathLike[str], platform=None,
+              *, mode: str = "kinematic", chunk: int = DEFAULT_CHUNK, window: int | None = None,
+              polyorder: int = DEFAULT_POLYORDER, n_threads: int = 1, log_format=None,
+              fps: float = DEFAULT_FPS, title: str | None = None) -> ViewSummary:
+    """Evaluate a trajectory file and write its 3-D view (``gsfric.view``) to ``out``.
+
+    Parameters
+    ----------
+    trajectory : path-like
+        CSV or Parquet trajectory or measured-data file (``gsfric.io.read_trajectory``).
+    out : path-like
+        The ``.html`` page.
+    platform : Platform or path-like, optional
+        As ``gsfric.models.platform_from``; default: the reference platform.
+    mode, chunk, window, polyorder, n_threads, log_format :
+        As for ``gsfric.simulate.simulate_file``.
+    fps : float
+        Frames per second of motion time in the page (at most ``gsfric.view.MAX_FRAMES``).
+    title : str, optional
+        The page's title (default: the trajectory's file name).
+
+    Returns
+    -------
+    ViewSummary
+        Flagged steps are also reported as one warning (``GsfricWarning``).
+
+    Raises
+    ------
+    InputError
+        Bad trajectory (naming the row and column), platform or output path, as
+        ``simulate_file``; ``fps`` not a positive number.
+    OutputError
+        The page could not be written; an earlier file of that name is unchanged.
+    """
+    trajectory, out = as_path(trajectory, "trajectory"), as_path(out, "out")
+    n_threads = as_count(n_threads, "n_threads", minimum=1, maximum=MAX_THREADS)
+    if isinstance(fps, bool) or not isinstance(fps, (int, float)) or not np.isfinite(fps) \
+            or fps <= 0:
+        raise InputError(f"fps: must be a positive number, got {fps!r}")
+    check_view_paths(trajectory, out, platform)
+    platform = platform_from(platform)
+    summary = ViewSummary(out=out)
+    motions = iter_motions(trajectory, chunk=chunk, window=window, polyorder=polyorder,
+                           log_format=log_format)
+    frames = _frames(trajectory, motions, Evaluator(platform, mode=mode, n_threads=n_threads),
+                     FrameCollector(fps=fps), summary)
+    text = page(frames, platform.geometry.base_joints, platform.geometry.platform_joints,
+                title=title if title is not None else f"{trajectory.name}: {mode} mode",
+                flag_names=FLAG_NAMES, steps=summary.steps)
+    write_page(out, text, inputs={"trajectory": trajectory, "platform": platform})
+    summary.frames, summary.size = len(frames), len(text.encode("utf-8"))
+    if summary.flagged:
+        warnings.warn(summary.flag_message(trajectory) + f"; they are marked in {out}",
+                      GsfricWarning, stacklevel=2)
+    return summary
+
+
+def _frames(trajectory: Path, motions, evaluator: Evaluator, collector: FrameCollector,
+            summary: ViewSummary) -> Frames:
+    """Evaluate each chunk of ``motions`` (checked as ``simulate_file`` checks them) and keep
+    its frames; the steps, chunks, differentiation and flags counted into ``summary``."""
+    flags = _Flags()
+    for part in motions:
+        motion = part.motion
+        recorded = motion.recorded_poses()
+        position, rotation = recorded if recorded is not None else (motion.position,
+                                                                    motion.rotation)
+        check_poses(evaluator.platform, position, rotation, motion.t, str(trajectory))
+        check_gaps(motion.t, str(trajectory))
+        result = evaluator.evaluate_quiet(motion)
+        collector.add_result(result, part.start)
+        flags.add(np.asarray(result.flag, np.int64), part.start)
+        summary.steps = part.start + len(motion)
+        summary.chunks += 1
+        summary.windows = part.windows
+        summary.differentiation = summary.differentiation or describe_differentiation(part)
+    flags.fill(summary)
+    return collector.finish()

@@ -1,0 +1,274 @@
+"""The 3-D view (gsfric.view, ``gsfric view``, ``Result.to_html``): one self-contained page,
+bounded in size, whose embedded data are the Result's within the stated quantisation error;
+the command writes atomically and fails in one line; in a browser the page draws, and draws
+another picture at another time."""
+
+from __future__ import annotations
+
+import dataclasses
+import hashlib
+import html
+import re
+import shutil
+import subprocess
+import tempfile
+from pathlib import Path
+
+import numpy as np
+import pytest
+from click.testing import CliRunner
+
+import gsfric
+from gsfric import models
+from gsfric.cli import main
+from gsfric.evaluation.flags import FLAG_STROKE
+from gsfric.io.tables import write_table
+from gsfric.signal.rotations import rotation_from_quaternion
+from gsfric.view import FrameCollector, decode, embedded, notebook_html
+from gsfric.view.data import decode_entry, quantise
+from gsfric.view.frames import OUTPUTS
+
+VENDOR = Path(gsfric.view.__file__).parent / "vendor"
+MB = 1_000_000
+
+
+def evaluate(n: int, span: float, platform=None):
+    motion = models.sinusoidal(np.linspace(0.0, span, n))
+    return gsfric.evaluate(platform or gsfric.reference_platform(), motion)
+
+
+@pytest.fixture(scope="module")
+def flagged():
+    """A result with some steps flagged: the legs' stroke ends below their longest length."""
+    platform = gsfric.reference_platform()
+    longest = float(evaluate(400, 4.0).D.max())          # leg lengths (N, 6), m
+    short = dataclasses.replace(platform, geometry=dataclasses.replace(
+        platform.geometry, stroke=(0.3, longest - 0.01)))
+    with pytest.warns(UserWarning):
+        result = evaluate(400, 4.0, short)
+    assert result.flag.any() and not result.flag.all()
+    return result
+
+
+def page_of(result, tmp_path, **options) -> str:
+    path = result.to_html(tmp_path / "view.html", **options)
+    return path.read_text(encoding="utf-8")
+
+
+def own_text(page: str) -> str:
+    """The page without the two vendored three.js scripts."""
+    return re.sub(r'(<script type="text/plain" id="three-(core|module)">).*?(</script>)',
+                  r"\1\3", page, flags=re.S)
+
+
+# -- self-contained and small ----------------------------------------------------------------
+
+
+def test_the_page_loads_nothing_from_outside(flagged, tmp_path):
+    page = page_of(flagged, tmp_path)
+    assert not re.search(r"""\b(src|href)\s*=\s*["']?\s*(https?:)?//""", page, re.I)
+    own = own_text(page)
+    for word in ("http://", "https://", "fetch(", "XMLHttpRequest", "WebSocket", "EventSource",
+                 "sendBeacon", "<link", "<iframe", "@import"):
+        assert word not in own, word
+    # three.js is inlined unchanged: the vendored files, whose hashes vendor/README.md records
+    readme = (VENDOR / "README.md").read_text()
+    for name in ("three.core.min.js", "three.module.min.js"):
+        text = (VENDOR / name).read_text(encoding="utf-8")
+        assert text in page
+        assert hashlib.sha256(text.encode()).hexdigest() in readme
+    assert (VENDOR / "LICENSE").read_text().startswith("The MIT License")
+
+
+def test_ten_thousand_steps_fit_in_three_megabytes(tmp_path):
+    result = evaluate(10_000, 10_000 / 50.0)        # 50 steps a second: every step a frame
+    page = page_of(result, tmp_path)
+    data = embedded(page)
+    assert data["frames"] == 10_000
+    assert len(page.encode()) <= 3 * MB
+
+
+def test_a_long_record_is_thinned_to_the_most_frames(tmp_path):
+    result = evaluate(30_000, 600.0)
+    data = embedded(page_of(result, tmp_path))
+    assert data["frames"] <= gsfric.view.MAX_FRAMES and data["steps"] == 30_000
+
+
+# -- the data round-trip ---------------------------------------------------------------------
+
+
+def test_the_embedded_data_are_the_result_within_the_quantisation(flagged, tmp_path):
+    data = embedded(page_of(flagged, tmp_path, fps=25))
+    got = decode(data)
+    step = got["step"]
+    assert step[0] == 0 and step[-1] == len(flagged) - 1 and np.all(np.diff(step) > 0)
+    assert np.allclose(np.diff(got["t"]), 1 / 25, atol=0.011)   # 100 steps a second
+    motion = flagged.source[1]
+    expected = {"F": flagged.F, "R_E": flagged.R_E, "R_C": flagged.R_C, "Ffr": flagged.Ffr,
+                "MfrE": np.linalg.norm(flagged.MfrE, axis=2),
+                "MfrC": np.linalg.norm(flagged.MfrC, axis=2), "position": motion.position}
+    for name, values in expected.items():
+        scale = data["arrays"][name]["scale"]
+        assert scale == pytest.approx(np.abs(values[step]).max() / 32767)
+        assert np.abs(got[name] - values[step]).max() <= 0.5 * scale * (1 + 1e-9), name
+    assert np.abs(got["t"] - flagged.t[step]).max() <= 2**-24 * flagged.t[-1]
+    rotation = rotation_from_quaternion(got["quaternion"] / np.linalg.norm(
+        got["quaternion"], axis=1, keepdims=True))
+    assert np.abs(rotation - motion.rotation[step]).max() < 1e-4
+    # a frame's flag is the OR of its steps since the previous frame
+    starts = np.concatenate([[0], step[:-1] + 1])
+    assert np.array_equal(got["flag"], np.bitwise_or.reduceat(flagged.flag, starts))
+    assert got["flag"].any() and data["flag_names"][str(FLAG_STROKE)]
+
+
+def test_chunks_give_the_frames_of_the_whole(flagged):
+    motion = flagged.source[1]
+    whole = FrameCollector(fps=30).add_result(flagged).finish()
+    pieces = FrameCollector(fps=30)
+    for s, e in ((0, 7), (7, 150), (150, 151), (151, 400)):
+        arrays = {name: flagged.arrays[name][s:e] for name in OUTPUTS}
+        pieces.add(s, flagged.t[s:e], motion.position[s:e], motion.rotation[s:e], arrays,
+                   flagged.flag[s:e])
+    chunked = pieces.finish()
+    for field in dataclasses.fields(whole):
+        assert np.array_equal(getattr(whole, field.name), getattr(chunked, field.name),
+                              equal_nan=True), field.name
+
+
+def test_non_finite_values_are_kept_as_nan():
+    values = np.array([[1.0, np.nan, -2.0]])
+    back = decode_entry(quantise(values))
+    assert np.isnan(back[0, 1]) and back[0, 0] == pytest.approx(1.0, abs=1e-4)
+
+
+def test_the_notebook_frame_holds_the_page(tmp_path):
+    page = page_of(evaluate(200, 2.0), tmp_path)
+    frame = notebook_html(page)
+    found = re.fullmatch(r'<iframe srcdoc="([^"]*)".*></iframe>', frame, flags=re.S)
+    assert found and html.unescape(found.group(1)) == page
+
+
+def test_show_displays_the_frame_in_jupyter(monkeypatch, recwarn):
+    display = pytest.importorskip("IPython.display")
+    shown = []
+    monkeypatch.setattr(display, "display", shown.append)
+    result = evaluate(200, 2.0)
+    result.show(height=500)
+    assert len(shown) == 1 and shown[0].data.startswith("<iframe srcdoc=")
+    assert "height: 500px" in shown[0].data and not recwarn.list
+
+
+# -- the command -----------------------------------------------------------------------------
+
+
+def run(*args):
+    return CliRunner().invoke(main, [str(a) for a in args], catch_exceptions=False)
+
+
+def one_error(result) -> str:
+    assert result.exit_code == 2, (result.exit_code, result.output)
+    lines = [line for line in result.stderr.splitlines()
+             if line and "generated/ is stale" not in line]
+    assert len(lines) == 1 and lines[0].startswith("gsfric: error: "), result.stderr
+    return lines[0][len("gsfric: error: "):]
+
+
+@pytest.fixture
+def trajectory(tmp_path) -> Path:
+    path = tmp_path / "motion.csv"
+    write_table(models.sinusoidal(np.linspace(0.0, 3.0, 301)).to_frame(), path)
+    return path
+
+
+def leftovers(folder: Path) -> list[str]:
+    return [p.name for p in folder.iterdir() if p.name.startswith(".")]
+
+
+def test_the_command_writes_the_page(trajectory, tmp_path):
+    out = tmp_path / "view.html"
+    result = run("view", "--trajectory", trajectory, "--out", out, "--fps", 20)
+    assert result.exit_code == 0, result.output
+    assert "301 steps as 61 frames" in result.stdout
+    data = embedded(out.read_text())
+    assert data["steps"] == 301 and data["frames"] == 61 and not leftovers(tmp_path)
+
+
+@pytest.mark.parametrize(("name", "text", "expected"), [
+    ("missing.csv", None, "file not found"),
+    ("empty.csv", "", "file is empty"),
+    ("nan.csv", "nan", "row 17: column 'x' is empty or NaN"),
+])
+def test_bad_trajectory_one_line_and_the_old_page_kept(tmp_path, trajectory, name, text,
+                                                         expected):
+    path = tmp_path / name
+    if text == "nan":
+        frame = models.sinusoidal(np.linspace(0.0, 3.0, 301)).to_frame()
+        frame.loc[16, "x"] = np.nan                       # data row 17
+        write_table(frame, path)
+    elif text is not None:
+        path.write_text(text)
+    out = tmp_path / "view.html"
+    out.write_text("old")
+    message = one_error(run("view", "--trajectory", path, "--out", out))
+    assert message.startswith(f"{path}: ") and expected in message
+    assert out.read_text() == "old" and not leftovers(tmp_path)
+
+
+@pytest.mark.parametrize(("out", "expected"), [
+    ("view.png", "unknown extension '.png'; use .html"),
+    ("missing/view.html", "does not exist"),
+])
+def test_bad_output_one_line(tmp_path, trajectory, out, expected):
+    message = one_error(run("view", "--trajectory", trajectory, "--out", tmp_path / out))
+    assert message.startswith(f"{tmp_path / out}: ") and expected in message
+
+
+def test_bad_platform_one_line(tmp_path, trajectory):
+    platform = tmp_path / "p.toml"
+    platform.write_text("[geometry\n")
+    message = one_error(run("view", "--trajectory", trajectory, "--platform", platform,
+                            "--out", tmp_path / "v.html"))
+    assert message.startswith(f"{platform}: ")
+
+
+def test_the_page_is_not_written_onto_the_trajectory(tmp_path):
+    path = tmp_path / "motion.html"
+    path.write_text("t,x\n")
+    message = one_error(run("view", "--trajectory", path, "--out", path))
+    assert message == f"{path}: is the trajectory file itself; choose another output"
+
+
+# -- in a browser ----------------------------------------------------------------------------
+
+
+def screenshot(page: Path, time: float, out: Path) -> np.ndarray:
+    """A 1000 x 800 picture of the page opened at ``#t=time`` by headless Chromium with
+    software WebGL, as (800, 1000, 3) uint8."""
+    image = pytest.importorskip("PIL.Image")
+    profile = tempfile.mkdtemp()
+    try:
+        subprocess.run(["chromium", "--headless", "--no-sandbox", "--use-gl=angle",
+                        "--use-angle=swiftshader", "--no-first-run",
+                        "--disable-background-networking", "--disable-component-update",
+                        "--disable-sync", f"--user-data-dir={profile}",
+                        "--virtual-time-budget=10000", f"--screenshot={out}",
+                        "--window-size=1000,800", f"{page.as_uri()}#t={time}"],
+                       capture_output=True, timeout=180, check=False)
+    finally:
+        shutil.rmtree(profile, ignore_errors=True)
+    assert out.exists(), "chromium wrote no screenshot"
+    return np.asarray(image.open(out).convert("RGB"))
+
+
+@pytest.mark.skipif(shutil.which("chromium") is None, reason="needs chromium (apt-get install "
+                    "chromium)")
+def test_the_page_draws_in_a_browser_and_moves_with_time(tmp_path):
+    page = evaluate(1001, 5.0).to_html(tmp_path / "view.html")
+    first = screenshot(page, 1.0, tmp_path / "a.png")
+    second = screenshot(page, 3.0, tmp_path / "b.png")
+    stage = first[60:560, 260:1000]              # the 3-D view, right of the legend
+    background = np.array([0xF4, 0xF5, 0xF7])
+    drawn = np.abs(stage.astype(int) - background).sum(axis=2) > 30
+    assert drawn.mean() > 0.05, "the 3-D view is empty"
+    moved = np.abs(first[60:560].astype(int) - second[60:560]).sum(axis=2) > 30
+    assert moved.mean() > 0.002, "the pictures at t = 1 s and t = 3 s are the same"
