@@ -15,10 +15,13 @@ from gsfric.sweep.plan import CHUNK_STEPS
 
 
 def _pairs(values, option, ranged):
-    """``NAME=MIN:MAX`` (ranged) or ``NAME=VALUE`` options as a dict; one-line errors."""
+    """``NAME=MIN:MAX`` (ranged) or ``NAME=VALUE`` options as a dict; one-line errors, also
+    for a name given twice (the later value would silently replace the first)."""
     out = {}
     for text in values:
         name, sep, rest = text.partition("=")
+        if sep and name.strip() in out:
+            fail(f"{option}: {name.strip()!r} given twice; give each parameter once")
         try:
             if not sep:
                 raise ValueError
