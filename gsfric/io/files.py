@@ -531,7 +531,8 @@ def _move_folder(given: Path, path: Path, tmp: Path, names: list[str]) -> None:
 def read_toml(path: str | os.PathLike[str]) -> dict[str, Any]:
     """The tables of a TOML file; ``InputError`` in one line naming the file for a missing or
     unreadable file, a folder, text that is not UTF-8, invalid TOML (naming a repeated key and
-    its line) or nesting too deep."""
+    its line) or nesting too deep. A UTF-8 byte order mark at the start (which Windows
+    editors write; TOML does not allow it) is accepted and skipped."""
     path = Path(path)
     try:
         raw = path.read_bytes()
@@ -546,7 +547,7 @@ def read_toml(path: str | os.PathLike[str]) -> dict[str, Any]:
     except UnicodeDecodeError as error:
         raise InputError(f"{path}: not UTF-8 text (byte {error.start})") from None
     try:
-        return tomllib.loads(text)
+        return tomllib.loads(text.removeprefix("\ufeff"))
     except tomllib.TOMLDecodeError as error:
         raise InputError(f"{path}: {_toml_problem(text, error)}") from None
     except RecursionError:
