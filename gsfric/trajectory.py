@@ -56,7 +56,25 @@ GIMBAL_JUMP = 0.5
 """A ZXZ sample with |sin(beta)| < GIMBAL_SIN_BETA whose alpha or gamma jumps by more than
 GIMBAL_JUMP rad from its neighbour triggers a warning."""
 
-_ROTATION_TOL = 1e-6
+ROTATION_TOL = 1e-6
+"""The largest entry of |R^T R - I| of a matrix taken as a rotation (``Motion.rotation``, the
+rotation block of the states given to ``Evaluator``): a rotation rounded to 7 significant
+digits passes, a scaled (2 R), sheared or mirrored (determinant < 0) matrix does not. Forces
+from such a matrix would look plausible while no pose has them."""
+
+
+def first_non_rotation(rotation: np.ndarray) -> tuple[int, str] | None:
+    """The first of the (N, 3, 3) matrices that is not a rotation (to ``ROTATION_TOL``, or a
+    determinant < 0), as (index, "(|R^T R - I| = 3, det = 8)"); None when all are (NaN
+    entries pass: the finite checks name them)."""
+    error = np.abs(np.matmul(rotation.transpose(0, 2, 1), rotation) - np.eye(3)).max(axis=(1, 2))
+    det = np.linalg.det(rotation)
+    bad = np.flatnonzero((error > ROTATION_TOL) | (det < 0))
+    if not len(bad):
+        return None
+    k = int(bad[0])
+    return k, f"(|R^T R - I| = {error[k]:.3g}, det = {det[k]:.3g})"
+
 
 SAMPLING_RATE_RANGE = (1.0, 1e6)
 """Plausible sampling rates, Hz, of a motion log: outside them t is in another unit than the one
@@ -299,12 +317,9 @@ class Motion:
         for name in ("position", "velocity", "omega", "acceleration", "alpha"):
             object.__setattr__(self, name, as_array(getattr(self, name), (n, 3), f"Motion.{name}"))
         rotation = as_array(self.rotation, (n, 3, 3), "Motion.rotation")
-        error = np.abs(np.einsum("nji,njk->nik", rotation, rotation) - np.eye(3)).max(axis=(1, 2))
-        bad = np.flatnonzero((error > _ROTATION_TOL) | (np.linalg.det(rotation) < 0))
-        if len(bad):
-            raise InputError(f"Motion.rotation[{bad[0]}]: not a rotation matrix "
-                             f"(|R^T R - I| = {error[bad[0]]:.3g}, det = "
-                             f"{np.linalg.det(rotation[bad[0]]):.3g})")
+        bad = first_non_rotation(rotation)
+        if bad is not None:
+            raise InputError(f"Motion.rotation[{bad[0]}]: not a rotation matrix {bad[1]}")
         object.__setattr__(self, "rotation", rotation)
 
     __eq__ = fields_equal

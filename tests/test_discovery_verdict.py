@@ -83,6 +83,40 @@ def test_a_noise_record_gives_each_channels_std_in_newtons(tmp_path):
         read_noise_record(path)
 
 
+def test_a_noise_record_with_poses_must_be_at_rest(tmp_path):
+    """Pose columns still to within their noise (10 um) pass; a drift of 2 mm or a turn of
+    2 mrad is a move, not a rest (``Settings.record_travel``, ``record_turn``)."""
+    rng = np.random.default_rng(1)
+    n = 400
+    frame = pd.DataFrame({"t": np.arange(n) / 200.0, "x": rng.normal(0, 1e-5, n),
+                          "y": 0.0, "z": 0.7 + rng.normal(0, 1e-5, n), "qw": 1.0, "qx": 0.0,
+                          "qy": 0.0, "qz": 0.0})
+    for i in range(1, 7):
+        frame[f"F{i}"] = 40.0 + rng.normal(0, 0.1, n)
+    path = tmp_path / "rest.csv"
+    frame.to_csv(path, index=False)
+    assert np.array(read_noise_record(path).std) == pytest.approx(0.1, rel=0.2)
+    moved = frame.assign(x=np.linspace(0, 2e-3, n))
+    moved.to_csv(path, index=False)
+    with pytest.raises(InputError, match=r"rest.csv: not at rest: the platform moves 0.002 m"):
+        read_noise_record(path)
+    half = 1e-3 * np.arange(n) / n           # a turn about z of up to 2 mrad
+    frame.assign(qw=np.cos(half), qz=np.sin(half)).to_csv(path, index=False)
+    with pytest.raises(InputError, match=r"turns 0.002 rad"):
+        read_noise_record(path)
+
+
+def test_a_force_noise_must_be_plausible_against_the_forces_spread():
+    forces = np.random.default_rng(2).normal(40.0, 3.0, (500, 6))
+    limits = Settings().noise_spread
+    ForceNoise.specified(0.1).check_plausible(forces, limits)
+    ForceNoise.specified(25.0).check_plausible(forces, limits)     # within 10 x the spread
+    for value in (1e9, 1e-300):
+        with pytest.raises(InputError, match=r"^--force-noise: F1: a force noise of .* N is "
+                                             r"implausible .* spread \d\.\d+ N"):
+            ForceNoise.specified(value).check_plausible(forces, limits)
+
+
 def test_the_floor_adds_the_pose_part_in_quadrature():
     floor = noise_floor(ForceNoise.specified(0.3), np.zeros(6), np.full(6, 0.4), "drawn", 1.0)
     assert floor.rms == pytest.approx(0.5)

@@ -236,3 +236,50 @@ def test_bad_arguments(tmp_path):
     assert "C identifier" in error_of(run("export", "--out", tmp_path / "o", "--prefix",
                                           "a-b"))
     assert "no library" in error_of(run("export", "--verify", tmp_path))
+
+
+@pytest.mark.parametrize("prefix, why", [
+    ("math", "C standard header <math.h>"), ("stdio", "C standard header <stdio.h>"),
+    ("Stdlib", "C standard header <stdlib.h>"), ("all", "make or CMake target"),
+    ("clean", "make or CMake target"), ("help", "make or CMake target"),
+    ("ALL_BUILD", "make or CMake target"), ("m", "system library"),
+    ("_Bool", "not a C identifier"), ("__hidden", "reserved in C"), ("_Hidden", "reserved in C"),
+])
+def test_prefixes_that_the_build_or_the_compiler_reserve(tmp_path, prefix, why):
+    message = error_of(run("export", "--out", tmp_path / "o", "--prefix", prefix))
+    assert message.strip().startswith(f"gsfric: error: --prefix: {prefix!r} is ")
+    assert why in message and len(message.strip().splitlines()) == 1, message
+    assert not (tmp_path / "o").exists()
+
+
+def test_pose_state_normalises_any_finite_quaternion(exports, tmp_path):
+    """A quaternion of norm 1e200 (its squared norm overflows) or 1e-200 (underflows) is the
+    same rotation as the unit one: the components are scaled by the largest first."""
+    main_c = tmp_path / "pose.c"
+    main_c.write_text("""#include <stdio.h>
+#include "hexa.h"
+int main(void)
+{
+    const double p[3] = {0, 0, 0.7}, z[3] = {0, 0, 0};
+    const double scales[3] = {1.0, 1e200, 1e-200};
+    double x[HEXA_STATE_SIZE];
+    for (int k = 0; k < 3; k++) {
+        double q[4] = {0.5 * scales[k], 0.5 * scales[k], -0.5 * scales[k], 0.5 * scales[k]};
+        hexa_pose_state(p, q, z, z, z, z, x);
+        for (int i = 0; i < 9; i++)
+            printf("%.17g ", x[HEXA_STATE_ROTATION + i]);
+        printf("\\n");
+    }
+    return 0;
+}
+""")
+    target = tmp_path / "pose"
+    built = subprocess.run(["cc", *STRICT, "-I", str(exports["coupled"]), "-o", str(target),
+                            str(main_c), str(exports["coupled"] / "hexa.c"), "-lm"],
+                           capture_output=True, text=True)
+    assert built.returncode == 0, built.stderr[-3000:]
+    rows = [[float(v) for v in line.split()] for line in subprocess.run(
+        [str(target)], capture_output=True, text=True).stdout.splitlines()]
+    assert len(rows) == 3 and rows[0] != [1, 0, 0, 0, 1, 0, 0, 0, 1]
+    np.testing.assert_allclose(rows[1], rows[0], atol=1e-15)
+    np.testing.assert_allclose(rows[2], rows[0], atol=1e-15)

@@ -171,7 +171,7 @@ def test_paper_refuses_to_overwrite_its_platform_input(tmp_path):
     source.write_text(text)
     result = run("paper", "--out", out, "--platform", source, "--no-plots")
     message = one_error(result.stderr, 2, result.exit_code)
-    assert message == (f"{out}: writing platform.toml would replace the input file {source}; "
+    assert message == (f"{out}: holds the platform file {source}, an input of the run; "
                        "choose another output directory")
     assert source.read_text() == text
     assert sorted(p.name for p in out.iterdir()) == ["platform.toml"]

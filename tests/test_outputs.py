@@ -130,8 +130,8 @@ def test_folder_functions_name_both_paths(files, how):
 @pytest.mark.parametrize("how", ["symlink", "hardlink"])
 @pytest.mark.parametrize("command", ["paper", "export"])
 def test_a_file_in_the_output_folder_that_is_an_input(files, tmp_path, how, command):
-    """An input in the output folder is fine under another name; as a name written there (a
-    link to the input), it is refused."""
+    """An input inside the output folder is refused, under any name: as a name written
+    there (a link to the input) and as a file of its own."""
     folder = tmp_path / "folder"
     folder.mkdir()
     link = folder / "platform.toml"
@@ -150,9 +150,10 @@ def test_a_file_in_the_output_folder_that_is_an_input(files, tmp_path, how, comm
     inside = folder / "mine.toml"
     models.reference_platform().to_toml(inside)
     before = state(inside)
-    result = run(command, "--out", folder, "--platform", inside, *args)
-    assert result.exit_code == 0, result.output
-    assert state(inside) == before and (folder / "platform.toml").is_file()
+    message = one_error(run(command, "--out", folder, "--platform", inside, *args))
+    assert message == (f"{folder}: holds the platform file {inside}, an input of the run; "
+                       "choose another output directory")
+    assert state(inside) == before and not (folder / "platform.toml").exists()
 
 
 # -- devices and FIFOs ---------------------------------------------------------------------------

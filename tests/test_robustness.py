@@ -132,9 +132,10 @@ def test_pose_beyond_the_stroke_is_flagged_with_its_indices(evaluator):
     z = np.full(8, models.HOME_HEIGHT)
     z[[3, 4, 5]] = 1.4                      # legs longer than the stroke's 1.1 m
     motion = poses(np.column_stack([np.zeros(8), np.zeros(8), z]))
-    with pytest.warns(UserWarning, match=r"^3 of 8 steps flagged \(leg length outside the "
-                                         r"stroke\): steps 3, 4, 5$"):
+    with pytest.warns(GsfricWarning, match=r"^3 of 8 steps flagged \(leg length outside the "
+                                           r"stroke\): steps 3, 4, 5$") as caught:
         result = evaluator.evaluate(motion)
+    assert {type(w.message) for w in caught} == {GsfricWarning}     # the documented class
     np.testing.assert_array_equal(result.flagged(), [3, 4, 5])
     assert (result.flag[[3, 4, 5]] & FLAG_STROKE).all()
     assert (result.D[[3, 4, 5]] > 1.1).any(axis=1).all()

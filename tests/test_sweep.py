@@ -495,3 +495,20 @@ def test_workspace_tasks_with_many_variants_carry_few_poses():
     assert (counts == 1).all()
     sizes = [len(pickle.dumps(task)) for task in p.tasks[:5]]
     assert max(sizes) < 0.1 * 125_000 * 48           # all the poses: 6 MB
+
+
+def test_the_local_clusters_processes_leave_ctrl_c_to_the_command():
+    """Ctrl-C reaches the whole foreground process group: the local cluster's worker
+    processes ignore SIGINT (inherited from their start), so that only the command handles
+    it, closing the cluster and printing one line, without a traceback per worker."""
+    distributed = pytest.importorskip("distributed")
+    from gsfric.sweep.run import local_cluster
+    before = signal.getsignal(signal.SIGINT)
+    cluster = local_cluster(1)
+    try:
+        assert signal.getsignal(signal.SIGINT) is before        # restored in this process
+        with distributed.Client(cluster) as client:
+            handlers = client.run(lambda: signal.getsignal(signal.SIGINT))
+        assert list(handlers.values()) == [signal.SIG_IGN]
+    finally:
+        cluster.close()

@@ -7,7 +7,10 @@ went away. See ``gsfric.cli`` and docs/explanation/robustness.md.
 
 from __future__ import annotations
 
+import functools
 import sys
+from collections.abc import Callable, Mapping
+from pathlib import Path
 
 import click
 
@@ -49,3 +52,48 @@ def log_options(command=None, *, keep=True):
     for option in reversed(options):
         command = option(command)
     return command
+
+
+def checked_paths(reads: Mapping[str, str], files: tuple[str, ...] = (),
+                  folders: tuple[str | Callable[[dict], object], ...] = ()):
+    """Decorate a command's callback with the one check of its paths
+    (``gsfric.io.files.check_run_paths``), run before the command reads anything: no input
+    is an output or lies inside an output folder.
+
+    ``reads`` maps each option (callback argument) the command reads files from to what the
+    messages call it ("trajectory", "column-map"...): a path, several (``--trajectories``
+    globs, expanded as ``sweep`` does) or a ``--column-map`` (a path when it names a .toml
+    file). ``files`` and ``folders`` name the output options; a folder may also be given as
+    a function of the arguments (``sweep``'s ``OUT.partial``).
+    """
+    def decorate(callback):
+        @functools.wraps(callback)
+        def run(**kwargs):
+            from gsfric.io.files import check_run_paths
+            inputs = [(what, path) for name, what in reads.items()
+                      for path in _read_paths(name, kwargs.get(name))]
+            dirs = [f(kwargs) if callable(f) else kwargs.get(f) for f in folders]
+            check_run_paths(inputs, [kwargs.get(f) for f in files], dirs)
+            return callback(**kwargs)
+        return run
+    return decorate
+
+
+def _read_paths(name: str, value) -> list:
+    """The files an input option's value names (none for an inline ``--column-map``)."""
+    if value is None or value == ():
+        return []
+    if name == "column_map":
+        return [value] if str(value).lower().endswith(".toml") else []
+    if name == "trajectories":
+        from gsfric.sweep.plan import trajectory_files
+        return trajectory_files(list(value))
+    return [value]
+
+
+def partial_of(name: str) -> Callable[[dict], Path | None]:
+    """The ``OUT.partial`` folder of the output folder option ``name`` (``sweep``)."""
+    def partial(kwargs: dict) -> Path | None:
+        out = kwargs.get(name)
+        return None if out is None else Path(out).with_name(Path(out).name + ".partial")
+    return partial

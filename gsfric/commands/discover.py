@@ -7,11 +7,11 @@ from pathlib import Path
 
 import click
 
-from gsfric.commands.common import log_options
+from gsfric.commands.common import checked_paths, log_options
 from gsfric.discovery.answer import verdict_line
 from gsfric.discovery.report import discover_file, write
 from gsfric.errors import InputError
-from gsfric.io.files import check_output_folder, check_outputs
+from gsfric.io.files import check_output_folder
 from gsfric.io.logs import LogFormat
 
 
@@ -40,6 +40,9 @@ from gsfric.io.logs import LogFormat
               help="No progress bar and no list of written files (warnings and errors still "
                    "go to stderr).")
 @log_options(keep=False)
+@checked_paths({"measured": "measured-data", "platform_file": "platform",
+                "noise_record": "noise-record", "column_map": "column-map"},
+               folders=("out_dir",))
 def discover(measured, platform_file, out_dir, seed, force_noise, noise_record, progress, quiet,
              column_map, units_map, angles):
     """Find which physical effect the model is missing, fit it, and show the gap shrink.
@@ -50,8 +53,6 @@ def discover(measured, platform_file, out_dir, seed, force_noise, noise_record, 
     """
     show = False if quiet else sys.stderr.isatty() if progress is None else progress
     log_format = LogFormat.from_options(column_map, units_map, angles, None)
-    check_outputs([out_dir], {"measured-data": measured, "platform": platform_file,
-                              "noise-record": noise_record})
     check_output_folder(out_dir)
     result = discover_file(measured, platform_file, seed=seed, progress=show,
                            force_noise=_values(force_noise), noise_record=noise_record,

@@ -7,7 +7,7 @@ from pathlib import Path
 
 import click
 
-from gsfric.commands.common import EXIT_CHECK
+from gsfric.commands.common import EXIT_CHECK, checked_paths
 from gsfric.errors import InputError
 from gsfric.export.verify import verify_library
 from gsfric.export.writer import CODES, MODELS, export_library
@@ -31,6 +31,8 @@ from gsfric.models import platform_from
 @click.option("--verify", "verify_dir", type=click.Path(path_type=Path), metavar="DIR",
               help="Instead of exporting, build the export in DIR with the system compiler "
                    "(CC) and compare it with the Python evaluation; exit 1 if it differs.")
+@checked_paths({"platform_file": "platform", "verify_dir": "export-folder"},
+               folders=("out",))
 def export(platform_file, out, model, prefix, code, verify_dir):
     """Write a self-contained C99 library of a platform for a real-time controller.
 

@@ -8,7 +8,7 @@ from pathlib import Path
 
 import click
 
-from gsfric.commands.common import fail
+from gsfric.commands.common import checked_paths, fail
 from gsfric.errors import InputError
 from gsfric.io.files import atomic_write
 from gsfric.models import reference_platform
@@ -63,6 +63,7 @@ def _size_options(command):
 @_size_options
 @click.option("--out", type=click.Path(dir_okay=False, path_type=Path),
               help="File to write [default: standard output].")
+@checked_paths({"rig_file": "rig"}, files=("out",))
 def platform(template, rig_file, rig_template, out, **sizes):
     """Write a platform file to start from: `gsfric platform --template --out my.toml`.
 

@@ -10,13 +10,12 @@ from pathlib import Path
 
 import click
 
-from gsfric.commands.common import log_options
+from gsfric.commands.common import checked_paths, log_options
 from gsfric.errors import InputError
 from gsfric.evaluation.breakdown import flat
 from gsfric.evaluation.columns import DEFAULT_GROUPS as DEFAULT_COLUMN_GROUPS
 from gsfric.evaluation.columns import GROUPS as COLUMN_GROUPS
 from gsfric.evaluation.evaluator import breakdown
-from gsfric.io.files import check_outputs
 from gsfric.io.logs import LogFormat
 from gsfric.io.readers import read_trajectory
 from gsfric.io.tables import write_table
@@ -102,6 +101,8 @@ def _options(command):
 @_options
 @log_options
 @_no_cycle_collection()
+@checked_paths({"trajectory": "trajectory", "platform_file": "platform",
+                "column_map": "column-map"}, files=("out", "breakdown_file"))
 def simulate(trajectory, platform_file, out, mode, strict, threads, chunk, window, progress,
              quiet, columns, float32, breakdown_file, column_map, units_map, angles, keep_columns):
     """Evaluate a motion: actuator forces, reactions and friction at every step.
@@ -116,7 +117,6 @@ def simulate(trajectory, platform_file, out, mode, strict, threads, chunk, windo
     """
     if breakdown_file is not None and mode != "kinematic":
         raise InputError("--breakdown: only in the kinematic mode")
-    check_outputs([out, breakdown_file], {"trajectory": trajectory, "platform": platform_file})
     with warnings.catch_warnings():                    # shown one line each by the group
         warnings.simplefilter("always", UserWarning)   # GsfricWarning, flags, build, staleness
         log_format = LogFormat.from_options(column_map, units_map, angles, keep_columns)

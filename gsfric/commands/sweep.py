@@ -8,17 +8,20 @@ from pathlib import Path
 
 import click
 
-from gsfric.commands.common import EXIT_CHECK, fail
+from gsfric.commands.common import EXIT_CHECK, checked_paths, fail, partial_of
 from gsfric.errors import GsfricWarning
 from gsfric.sweep import sweep as run_sweep
 from gsfric.sweep.plan import CHUNK_STEPS
 
 
 def _pairs(values, option, ranged):
-    """``NAME=MIN:MAX`` (ranged) or ``NAME=VALUE`` options as a dict; one-line errors."""
+    """``NAME=MIN:MAX`` (ranged) or ``NAME=VALUE`` options as a dict; one-line errors, also
+    for a name given twice (the later value would silently replace the first)."""
     out = {}
     for text in values:
         name, sep, rest = text.partition("=")
+        if sep and name.strip() in out:
+            fail(f"{option}: {name.strip()!r} given twice; give each parameter once")
         try:
             if not sep:
                 raise ValueError
@@ -70,6 +73,8 @@ def _pairs(values, option, ranged):
               help="Progress bar with total and ETA [default: when stderr is a terminal].")
 @click.option("--no-plots", is_flag=True, help="Skip the plots.")
 @click.option("--strict", is_flag=True, help="Exit 1 when a case exceeds the [limits].")
+@checked_paths({"trajectories": "trajectory", "workspace": "workspace",
+                "platform_file": "platform"}, folders=("out_dir", partial_of("out_dir")))
 def sweep(out_dir, trajectories, workspace, platform_file, vary, tolerance, variants, grid, seed,
           scheduler, workers, chunk_steps, progress, no_plots, strict):
     """Load envelopes per joint over motions, a workspace and platform variants.

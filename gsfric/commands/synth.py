@@ -6,6 +6,7 @@ from pathlib import Path
 
 import click
 
+from gsfric.commands.common import checked_paths
 from gsfric.synth import run_synth
 
 
@@ -28,6 +29,7 @@ from gsfric.synth import run_synth
               help="Position noise standard deviation, m (angles: the same number in rad).")
 @click.option("--seed", type=int, default=0, show_default=True,
               help="Seed of the noise (the same seed gives the same file).")
+@checked_paths({"platform_file": "platform"}, files=("out",))
 def synth(out, platform_file, effects, samples, rate, noise, noise_correlation, pose_noise,
           seed):
     """Write synthetic measured data with hidden effects and noise (reproducible by seed)."""

@@ -158,6 +158,8 @@ class CompiledFunction:
                     not flag.flags.c_contiguous:
                 raise InputError(f"{self.name}: flag must be a C-contiguous int64 array of "
                                   f"shape ({n},)")
+            if not flag.flags.writeable:
+                raise InputError(read_only(self.name, "flag"))
             flag_ptr = flag.ctypes.data
         failed = self._lib.gsfric_run(ctypes.byref(self._fn), in_ptrs, in_strides, out_ptrs,
                                       self._out_strides, n, int(n_threads),
@@ -212,6 +214,8 @@ class CompiledFunction:
                     not buf.flags.c_contiguous:
                 raise InputError(f"{self.name}: output buffer {name} must be a C-contiguous "
                                   f"float64 array of shape ({n}, {size})")
+            elif not buf.flags.writeable:
+                raise InputError(read_only(self.name, f"output buffer {name}"))
             out_ptrs[k] = buf.ctypes.data
             result[name] = buf
         return result
@@ -243,11 +247,14 @@ class CompiledFunction:
             try:
                 wrong = (x.dtype != np.float64 or x.ndim != 2 or x.shape[1] != size_x
                          or not x.flags.c_contiguous or out.dtype != np.float64
-                         or out.shape != (x.shape[0], size_out) or not out.flags.c_contiguous)
+                         or out.shape != (x.shape[0], size_out) or not out.flags.c_contiguous
+                         or not out.flags.writeable)
             except AttributeError:
                 raise InputTypeError(f"{name}: x and out must be NumPy arrays, got "
                                      f"{type(x).__name__} and {type(out).__name__}") from None
             if wrong:
+                if not out.flags.writeable:
+                    raise InputError(read_only(name, "out"))
                 raise InputError(f"{name}: x must be C-contiguous float64 (N, {size_x}) "
                                   f"and out (N, {size_out})")
             if tuples:
@@ -322,6 +329,8 @@ class CompiledFunction:
             elif not isinstance(out, np.ndarray) or out.dtype != f64 or \
                     out.shape != (n, size_out) or not out.flags.c_contiguous:
                 raise InputError(f"{name}: out must be C-contiguous float64 ({n}, {size_out})")
+            elif not out.flags.writeable:
+                raise InputError(read_only(name, "out"))
             if tuples:
                 run_tuple(bound_ref, (p, T, v, w, a, al, out), n)
             elif by_object:
@@ -335,6 +344,12 @@ class CompiledFunction:
 
         call.keep = (fixed, fixed_ptrs, in_strides, bound, self)  # alive with the callable
         return call
+
+
+def read_only(name: str, argument: str) -> str:
+    """The message for an output array that cannot be written (``out.flags.writeable`` is
+    False, a view of immutable memory), worded as NumPy's."""
+    return f"{name}: {argument}: output array is read-only; give a writeable array"
 
 
 @functools.lru_cache(maxsize=None)

@@ -33,6 +33,7 @@ import numpy as np
 from gsfric.errors import InputError
 from gsfric.evaluation.evaluator import Evaluator, state_array
 from gsfric.io.logs import FORCES, UNITS, LogFormat
+from gsfric.io.readers import read_trajectory
 from gsfric.io.tables import numeric_columns, read_columns
 from gsfric.platform.description import Platform
 from gsfric.signal.noise import spectral_noise_std, white_noise_std
@@ -43,6 +44,7 @@ from gsfric.signal.rotations import (
     rotation_from_quaternion,
 )
 from gsfric.signal.windows import savgol_adaptive
+from gsfric.discovery.settings import Settings
 from gsfric.trajectory import Motion, is_uniform
 
 FORCE_SOURCES = ("specified", "noise record", "estimated")
@@ -94,6 +96,18 @@ class ForceNoise:
             raise InputError(f"{detail}: F{leg} does not change over the record: no noise to "
                              "measure")
         return cls(tuple(float(v) for v in std), "noise record", detail)
+
+    def check_plausible(self, forces: np.ndarray, limits: tuple[float, float]) -> None:
+        """``InputError`` when a leg's noise lies outside ``limits`` (``Settings.noise_spread``)
+        times the standard deviation of its measured channel ``forces`` (N, 6), N."""
+        spread = np.asarray(forces, float).std(axis=0)
+        std = np.asarray(self.std)
+        for leg in np.flatnonzero((spread > 0) & ((std > limits[1] * spread)
+                                                  | (std < limits[0] * spread))):
+            raise InputError(f"{self.detail}: F{leg + 1}: a force noise of {std[leg]:.3g} N is "
+                             f"implausible against the measured channel's spread "
+                             f"{spread[leg]:.3g} N (standard deviation); the noise must lie "
+                             f"within {limits[0]:g} to {limits[1]:g} times it (is it in N?)")
 
 
 @dataclass
@@ -194,6 +208,23 @@ def pose_noise_forces(platform: Platform, motion: Motion,
     return np.sqrt(total / draws), how
 
 
+def check_at_rest(path: str | os.PathLike[str], fmt: LogFormat, settings: Settings) -> None:
+    """``InputError`` when the poses of a noise record move: the platform frame's origin
+    travels more than ``settings.record_travel`` or turns more than ``settings.record_turn``
+    from its first sample."""
+    motion = read_trajectory(path, log_format=fmt)
+    travel = np.linalg.norm(motion.position - motion.position[0], axis=1)
+    cos = (np.einsum("ij,nij->n", motion.rotation[0], motion.rotation) - 1.0) / 2.0
+    turn = np.arccos(np.clip(cos, -1.0, 1.0))
+    k, j = int(np.argmax(travel)), int(np.argmax(turn))
+    if travel[k] > settings.record_travel or turn[j] > settings.record_turn:
+        raise InputError(f"{path}: not at rest: the platform moves {travel[k]:.3g} m and "
+                         f"turns {turn[j]:.3g} rad from its first sample (a noise record must "
+                         f"stay within {settings.record_travel:g} m and "
+                         f"{settings.record_turn:g} rad); record the load cells with the "
+                         "platform still")
+
+
 def noise_floor(force: ForceNoise | None, estimate: np.ndarray, pose: np.ndarray,
                 pose_source: str, residual_rms: float) -> NoiseFloor:
     """The floor from the user's force noise (or, without it, the ``estimate`` (6,), N) and the
@@ -212,13 +243,16 @@ def noise_floor(force: ForceNoise | None, estimate: np.ndarray, pose: np.ndarray
                       residual_rms / rms if rms > 0 else float("inf"))
 
 
-def read_noise_record(path: str | os.PathLike[str], log_format: LogFormat | None = None
-                      ) -> ForceNoise:
+def read_noise_record(path: str | os.PathLike[str], log_format: LogFormat | None = None,
+                      settings: Settings | None = None) -> ForceNoise:
     """The load cells' noise from a recording at rest: a CSV or Parquet file with F1..F6 (or
     the columns and units a log's format maps to them); InputError naming the file and the
-    column for a missing or bad one."""
+    column for a missing or bad one, or for a record with pose columns that moves
+    (``check_at_rest``)."""
     fmt = log_format or LogFormat()
     found = dict(zip(*read_columns(path)))
+    if all(fmt.columns.get(name, name) in found for name in ("t", "x", "y", "z")):
+        check_at_rest(path, fmt, settings or Settings())
     names = [fmt.columns.get(name, name) for name in FORCES]
     missing = [n for n in names if n not in found]
     if missing:

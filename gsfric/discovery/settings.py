@@ -79,6 +79,23 @@ class Settings:
     (``gsfric.signal.noise.high_frequency_std``): long enough for a robust scale, short beside
     the moves."""
 
+    # -- the load cells' noise as the user gives it ----------------------------------------
+    record_travel: float = 1e-3
+    """Largest travel (m) of the platform frame's origin, from its first sample, in a noise
+    record (``--noise-record``) with pose columns: a record at rest. A rig's encoders and a
+    motion-capture system are noisy to micrometres, at most a tenth of a millimetre; a move
+    beyond a millimetre changes the forces (inertia, friction, the weight's share per leg)
+    and its spread is no longer the load cells' noise (``floor.check_at_rest``)."""
+    record_turn: float = 1e-3
+    """Largest rotation (rad) of the platform from its first sample in a noise record: the
+    angular ``record_travel`` (1 mm at a 1 m lever)."""
+    noise_spread: tuple[float, float] = (1e-9, 10.0)
+    """A given force noise (``--force-noise``, a noise record's, a column map's) must lie
+    within these multiples of each measured force channel's standard deviation
+    (``ForceNoise.check_plausible``): a channel's spread holds its noise, so a noise ten times
+    larger is a unit error (kN given as N, a wrong channel); a billionth of it no load cell's
+    converter resolves (24 bits are 6e-8)."""
+
     # -- rests and the speed band ------------------------------------------------------------
     rest_band: float = 5.0
     """Half-width of the not-sliding band, in standard deviations of the speed estimate: a

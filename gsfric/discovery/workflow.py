@@ -176,6 +176,8 @@ def discover(motion: Motion, forces: np.ndarray, platform: Platform | None = Non
     check_poses(platform, *(recorded if recorded is not None else (motion.position,
                                                                    motion.rotation)), motion.t)
     check_forces(platform, forces)
+    if force_noise is not None:
+        force_noise.check_plausible(forces, settings.noise_spread)
     bar = _Progress(progress, settings.max_effects + 3)
     bar.step("simulating the model along the measured motion")
     problem = Problem(motion, forces, platform, settings, poses=poses)

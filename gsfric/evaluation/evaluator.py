@@ -26,8 +26,8 @@ from tqdm import tqdm
 from gsfric._checks import as_count, as_flag, short
 from gsfric.compiled import native
 from gsfric.compiled.functions import FlagSpec
-from gsfric.compiled.state import first_nonfinite, state_of
-from gsfric.errors import InputError, InputTypeError, StepFlagError
+from gsfric.compiled.state import first_nonfinite, state_layout, state_of
+from gsfric.errors import GsfricWarning, InputError, InputTypeError, StepFlagError
 from gsfric.evaluation.flags import FLAG_NONFINITE, flag_message, flag_spec
 from gsfric.evaluation.memory import aligned_empty
 from gsfric.evaluation.paper_constants import paper_constants as pc
@@ -36,7 +36,7 @@ from gsfric.evaluation.result import DETAILS, Outputs, Pending, Result
 from gsfric.io.readers import motion_from_frame
 from gsfric.platform.catalog import apply_sensor, sensor_parameters
 from gsfric.platform.description import Platform
-from gsfric.trajectory import Motion
+from gsfric.trajectory import ROTATION_TOL, Motion, first_non_rotation
 
 MODES = ("kinematic", "paper")
 CHUNK = 200_000
@@ -127,7 +127,9 @@ class Evaluator:
         InputTypeError
             ``x`` or ``out`` is not an array (with ``out``, ``x`` must be a NumPy array).
         InputError
-            A wrong shape or dtype, a NaN or infinite state (naming its row), paper mode.
+            A wrong shape or dtype, ``P`` or ``Q`` of another shape than (size,) or (N, size),
+            a read-only ``out``, a NaN or infinite state (naming its row), a rotation block
+            that is not a rotation (``gsfric.trajectory.ROTATION_TOL``), paper mode.
         """
         if self.mode != "kinematic":
             raise InputError("actuator_forces: the kinematic mode's hot path; this Evaluator "
@@ -138,12 +140,13 @@ class Evaluator:
             if actuator is None:  # two threads may both build one: either is right
                 actuator = self._calls[key] = native.get(self._actuator).bound(
                     [self.P, self.Q], "F", self.n_threads)
-            return _finite_states(actuator(x, out), "actuator_forces", x)
-        f = native.get(self._actuator if P is None
+            return _checked_states(actuator(x, out), "actuator_forces", x)
+        P = self.P if P is None else _parameters(P, "actuator_forces", "P", self.P.size)
+        Q = self.Q if Q is None else _parameters(Q, "actuator_forces", "Q", self.Q.size)
+        f = native.get(self._actuator if P is self.P
                        else model_function("actuator", uniform_model(P)))
-        res = f([x, self.P if P is None else P, self.Q if Q is None else Q],
-                None if out is None else {"F": out}, self.n_threads)
-        return _finite_states(res["F"], "actuator_forces", x)
+        res = f([x, P, Q], None if out is None else {"F": out}, self.n_threads)
+        return _checked_states(res["F"], "actuator_forces", x)
 
     def forces(self, position, rotation, velocity, omega, acceleration, alpha,
                out: np.ndarray | None = None) -> np.ndarray:
@@ -178,6 +181,7 @@ class Evaluator:
             call = self._calls[key] = native.get(self._actuator).bound_motion(
                 [self.P, self.Q], "F", self.n_threads)
         F = call(position, rotation, velocity, omega, acceleration, alpha, out)
+        _rotations(np.asarray(rotation, dtype=float), "forces", "rotation row")
         if not math.isfinite(_total(F, None)):
             motion = (position, rotation, velocity, omega, acceleration, alpha)
             for name, value in zip(("position", "rotation", "velocity", "omega",
@@ -197,12 +201,13 @@ class Evaluator:
         InputTypeError, InputError
             As ``actuator_forces``: not an array, a wrong shape, a NaN or infinite state.
         """
-        res = native.get("jacobian")([x, self.P, self.Q if Q is None else Q], None,
-                                     self.n_threads)
+        Q = self.Q if Q is None else _parameters(Q, "jacobian", "Q", self.Q.size)
+        res = native.get("jacobian")([x, self.P, Q], None, self.n_threads)
         x = np.asarray(x, dtype=float)
         where = first_nonfinite(x.reshape(-1, x.shape[-1]))
         if where is not None:
             raise InputError(f"jacobian: state {where} is not finite; give finite states")
+        _state_rotations(x, "jacobian")
         n = res["F"].shape[0]
         # CasADi stores the (6, n_theta) Jacobian column-major
         return res["F"], res["dF"].reshape(n, -1, 6).transpose(0, 2, 1)
@@ -238,7 +243,7 @@ class Evaluator:
         if msg is not None:
             if strict:
                 raise StepFlagError(msg)
-            warnings.warn(msg, stacklevel=2)
+            warnings.warn(msg, GsfricWarning, stacklevel=2)
         return result
 
     def evaluate_quiet(self, motion: Motion, progress: bool = False, chunk: int = CHUNK,
@@ -427,6 +432,45 @@ def _finite_states(F: np.ndarray, name: str, x) -> np.ndarray:
     if where is not None:
         raise InputError(f"{name}: state {where} is not finite; give finite states")
     return F
+
+
+def _checked_states(F: np.ndarray, name: str, x) -> np.ndarray:
+    """``F`` of the states ``x`` once they are known finite (``_finite_states``) and their
+    rotation blocks rotations (``_state_rotations``)."""
+    _finite_states(F, name, x)
+    _state_rotations(np.asarray(x, dtype=float), name)
+    return F
+
+
+def _state_rotations(x: np.ndarray, name: str) -> None:
+    """``InputError`` when the rotation block of a state (N, size) or (size,) is not a
+    rotation."""
+    states = state_layout()
+    rows = x.reshape(-1, states.size)
+    _rotations(rows[:, states.rotation].reshape(-1, 3, 3), name, "state row")
+
+
+def _rotations(rotation: np.ndarray, name: str, where: str) -> None:
+    """``InputError`` naming the first of the (N, 3, 3) matrices that is not a rotation
+    (``gsfric.trajectory.first_non_rotation``, the check of ``Motion``)."""
+    bad = first_non_rotation(rotation.reshape(-1, 3, 3))
+    if bad is not None:
+        raise InputError(f"{name}: {where} {bad[0]} is not a rotation matrix {bad[1]}; "
+                         f"|R^T R - I| must be at most {ROTATION_TOL:g} and det > 0")
+
+
+def _parameters(value, name: str, argument: str, size: int) -> np.ndarray:
+    """A parameter input (``P`` or ``Q``) as float64 of shape (size,) or (N, size), else a
+    one-line ``InputError`` naming it and the expected shape."""
+    try:
+        array = np.asarray(value, dtype=np.float64)
+    except (TypeError, ValueError):
+        raise InputTypeError(f"{name}: {argument} must be an array of numbers, got "
+                             f"{_kind(value)}") from None
+    if array.shape != (size,) and not (array.ndim == 2 and array.shape[1] == size):
+        raise InputError(f"{name}: {argument} has shape {array.shape}; expected ({size},) or "
+                         f"(N, {size})")
+    return array
 
 
 def _kind(value: object) -> str:

@@ -56,7 +56,28 @@ _C_RESERVED = {"auto", "break", "case", "char", "const", "continue", "default", 
                "else", "enum", "extern", "float", "for", "goto", "if", "inline", "int", "long",
                "register", "restrict", "return", "short", "signed", "sizeof", "static",
                "struct", "switch", "typedef", "union", "unsigned", "void", "volatile", "while",
-               "example", "main"}
+               "example", "main", "_Bool", "_Complex", "_Imaginary", "_Alignas", "_Alignof",
+               "_Atomic", "_Generic", "_Noreturn", "_Static_assert", "_Thread_local", "bool",
+               "true", "false", "alignas", "alignof", "constexpr", "nullptr", "static_assert",
+               "thread_local", "typeof", "typeof_unqual"}
+"""C keywords (C99 to C23) and the export's own names (example.c, main)."""
+
+_C_HEADERS = {"assert", "complex", "ctype", "errno", "fenv", "float", "inttypes", "iso646",
+              "limits", "locale", "math", "setjmp", "signal", "stdalign", "stdarg",
+              "stdatomic", "stdbit", "stdbool", "stdckdint", "stddef", "stdint", "stdio",
+              "stdlib", "stdnoreturn", "string", "tgmath", "threads", "time", "uchar", "wchar",
+              "wctype"}
+"""The C standard's headers (C99 to C23): ``<prefix>.h`` of one of these names, beside the
+code, would be included instead of the system's (``#include <math.h>`` searches the
+including file's folder first with many compilers' -I.)."""
+
+_BUILD_NAMES = {"all", "clean", "help", "install", "test", "package", "package_source",
+                "depend", "edit_cache", "rebuild_cache", "list_install_components",
+                "install_strip", "install_local", "preinstall", "all_build", "zero_check",
+                "run_tests", "m", "c"}
+"""Names the build files cannot give the library: make's and CMake's reserved targets
+(compared case-insensitively: ALL_BUILD, ZERO_CHECK on Visual Studio) and the C and maths
+libraries that ``lib<prefix>.a`` would shadow (libc, libm)."""
 
 
 @dataclass(frozen=True)
@@ -92,8 +113,13 @@ def check_prefix(prefix: str) -> str:
     if not re.fullmatch(r"[A-Za-z_][A-Za-z0-9_]*", prefix or "") or prefix in _C_RESERVED:
         raise InputError(f"--prefix: {prefix!r} is not a C identifier (letters, digits and _, "
                          "not starting with a digit, not a C keyword)")
-    if prefix.startswith("__") or prefix.lower() == "gsfric_model":
-        raise InputError(f"--prefix: {prefix!r} is reserved; choose another C identifier")
+    why = ("the C standard header <{0}.h>, which {0}.h would hide" if prefix.lower() in
+           _C_HEADERS else "a make or CMake target or system library name" if prefix.lower()
+           in _BUILD_NAMES else "reserved in C" if re.match(r"__|_[A-Z]", prefix) else
+           "gsfric's own" if prefix.lower() == "gsfric_model" else "")
+    if why:
+        raise InputError(f"--prefix: {prefix!r} is reserved ({why.format(prefix.lower())}); "
+                         "choose another C identifier")
     return prefix
 
 

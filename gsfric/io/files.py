@@ -175,6 +175,55 @@ def _check_named(outputs: Iterable[PathArg | None], named: list[tuple[str, Path]
         earlier.append(out)
 
 
+def check_run_paths(reads: Inputs, files: Iterable[PathArg | None] = (),
+                    folders: Iterable[PathArg | None] = ()) -> None:
+    """The one check of a run's paths, before anything is read or written: no path the run
+    reads (``reads``: a trajectory, measured data, a platform, rig, column map, noise record,
+    workspace, an export folder) is one of its outputs (``files`` and ``folders``:
+    ``check_outputs``), nor lies inside an output folder (``inside_folder``: links resolved,
+    folders compared by device and inode), where a write could replace it.
+
+    Raises
+    ------
+    InputError
+        One line naming the output and the input, e.g. ``out: holds the column-map file
+        out/map.toml, an input of the run; choose another output directory``.
+    """
+    named = _named_inputs(reads)
+    folders = [Path(f) for f in folders if f is not None and str(f) != ""]
+    check_outputs([*files, *folders], named)
+    _check_inside(folders, named)
+
+
+def _check_inside(folders: Iterable[Path], named: list[tuple[str, Path]]) -> None:
+    """``InputError`` if one of the inputs ``named`` lies inside one of ``folders``."""
+    for folder in folders:
+        for what, source in named:
+            if inside_folder(source, folder):
+                raise InputError(f"{folder}: holds the {what} file {source}, an input of the "
+                                 "run; choose another output directory")
+
+
+def inside_folder(path: PathArg, folder: PathArg) -> bool:
+    """Whether ``path`` lies (at any depth) in the existing directory ``folder``: an ancestor
+    of ``path`` as given (made absolute) or with its symbolic links resolved is ``folder``
+    by device and inode (``os.stat``: links, bind mounts and ``..`` all compare equal)."""
+    try:
+        home = os.stat(folder)
+        given = Path(os.path.abspath(path))
+        real = Path(os.path.realpath(path))
+    except (OSError, ValueError):
+        return False
+    if not stat.S_ISDIR(home.st_mode):
+        return False
+    for parent in {*given.parents, *real.parents}:
+        with contextlib.suppress(OSError, ValueError):
+            st = os.stat(parent)
+            if (st.st_dev, st.st_ino) == (home.st_dev, home.st_ino):
+                return True
+    return False
+
+
 def is_stream(path: PathArg) -> bool:
     """Whether ``path`` (a symbolic link followed) is a character device or a FIFO: an output
     that ``atomic_write`` writes into, as a shell redirection does, instead of replacing it."""
@@ -407,6 +456,7 @@ def output_folder(path: PathArg, *, inputs: Inputs = ()) -> Iterator[Path]:
     given = Path(path)
     protected = _named_inputs(inputs)
     _check_named([given], protected)
+    _check_inside([given], protected)
     path = _output_directory(given)
     with contextlib.suppress(OSError):
         remove_stale_temporaries(path)
@@ -479,7 +529,8 @@ def _move_folder(given: Path, path: Path, tmp: Path, names: list[str]) -> None:
 def read_toml(path: str | os.PathLike[str]) -> dict[str, Any]:
     """The tables of a TOML file; ``InputError`` in one line naming the file for a missing or
     unreadable file, a folder, text that is not UTF-8, invalid TOML (naming a repeated key and
-    its line) or nesting too deep."""
+    its line) or nesting too deep. A UTF-8 byte order mark at the start (which Windows
+    editors write; TOML does not allow it) is accepted and skipped."""
     path = Path(path)
     try:
         raw = path.read_bytes()
@@ -494,7 +545,7 @@ def read_toml(path: str | os.PathLike[str]) -> dict[str, Any]:
     except UnicodeDecodeError as error:
         raise InputError(f"{path}: not UTF-8 text (byte {error.start})") from None
     try:
-        return tomllib.loads(text)
+        return tomllib.loads(text.removeprefix("\ufeff"))
     except tomllib.TOMLDecodeError as error:
         raise InputError(f"{path}: {_toml_problem(text, error)}") from None
     except RecursionError:

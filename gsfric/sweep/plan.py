@@ -75,7 +75,7 @@ def _file_rows(path: Path) -> int:
         return max(0, sum(1 for _ in handle) - 1)
 
 
-def _trajectory_files(trajectories) -> list[Path]:
+def trajectory_files(trajectories) -> list[Path]:
     """The files the glob pattern(s) match, each pattern sorted; their names must differ."""
     if trajectories is None:
         return []
@@ -152,7 +152,7 @@ def _checked_inputs(trajectories, workspace, chunk_steps
     if isinstance(chunk_steps, bool) or not isinstance(chunk_steps, (int, np.integer)) \
             or chunk_steps < 1:
         raise InputError(f"chunk_steps: expected an integer >= 1, got {short(chunk_steps)}")
-    files = _trajectory_files(trajectories)
+    files = trajectory_files(trajectories)
     source = "workspace"
     if workspace is not None and not isinstance(workspace, Workspace):
         source = str(workspace)

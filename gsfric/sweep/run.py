@@ -16,11 +16,13 @@ inputs and output folder computes only the missing tasks.
 
 from __future__ import annotations
 
+import contextlib
 import itertools
 import json
 import logging
 import os
 import shutil
+import signal
 import sys
 import time
 import warnings
@@ -67,10 +69,27 @@ def local_cluster(workers: int):
     each, one per core (nothing shared between cores), with ``LOCAL_CLUSTER_CONFIG``."""
     dask = optional("dask")
     distributed = optional("distributed")
-    with dask.config.set(LOCAL_CLUSTER_CONFIG):
+    with dask.config.set(LOCAL_CLUSTER_CONFIG), _children_ignore_sigint():
         return distributed.LocalCluster(n_workers=workers, threads_per_worker=1,
                                         processes=True, dashboard_address=":0",
                                         silence_logs=logging.ERROR)
+
+
+@contextlib.contextmanager
+def _children_ignore_sigint():
+    """SIGINT ignored while the cluster's processes start, which inherit it (Python leaves an
+    ignored SIGINT ignored): Ctrl-C reaches the whole foreground process group, and only
+    this process should handle it (close the cluster, print one line), not every worker with
+    a traceback. A Ctrl-C during those seconds of start-up is lost; press it again."""
+    try:
+        previous = signal.signal(signal.SIGINT, signal.SIG_IGN)
+    except (ValueError, OSError):          # not the main thread: nothing to change
+        yield
+        return
+    try:
+        yield
+    finally:
+        signal.signal(signal.SIGINT, previous)
 
 
 def _client(scheduler, workers: int | None = None):

@@ -275,7 +275,76 @@ IO_API = [
      r"^t\[1\]: must be finite", ValueError),
 ]
 
-GROUPS = {"evaluator": EVALUATOR, "evaluate": EVALUATE, "motion": MOTION,
+def _read_only() -> np.ndarray:
+    out = np.empty((11, 6))
+    out.flags.writeable = False
+    return out
+
+
+def _bytes_view() -> np.ndarray:
+    return np.frombuffer(bytes(11 * 6 * 8)).reshape(11, 6)
+
+
+def _scaled_rotation(k: int = 4) -> np.ndarray:
+    x = X()
+    x[k, 3:12] *= 2.0
+    return x
+
+
+OUTPUTS = {
+    "actuator": lambda out: Evaluator(P()).actuator_forces(X(), out),
+    "actuator-per-step-p": lambda out: Evaluator(P()).actuator_forces(
+        X(), out, P=np.tile(Evaluator(P()).P, (11, 1))),
+    "forces": lambda out: Evaluator(P()).forces(M().position, M().rotation, M().velocity,
+                                                M().omega, M().acceleration, M().alpha, out),
+}
+"""Every call of the API that writes into a caller's array ``out``."""
+
+PARAMETERS = {
+    "actuator-p": lambda v: Evaluator(P()).actuator_forces(X(), P=v),
+    "actuator-q": lambda v: Evaluator(P()).actuator_forces(X(), Q=v),
+    "jacobian-q": lambda v: Evaluator(P()).jacobian(X(), Q=v),
+}
+"""Every call that takes a parameter vector (P, Q) given per call."""
+
+ROTATIONS = {
+    "actuator": lambda: Evaluator(P()).actuator_forces(_scaled_rotation()),
+    "actuator-out": lambda: Evaluator(P()).actuator_forces(_scaled_rotation(),
+                                                           np.empty((11, 6))),
+    "actuator-one-state": lambda: Evaluator(P()).actuator_forces(_scaled_rotation(0)[0]),
+    "jacobian": lambda: Evaluator(P()).jacobian(_scaled_rotation()),
+    "forces": lambda: _forces(None, np.array(M().rotation) * 2.0),
+    "forces-mirrored": lambda: _forces(None, -np.array(M().rotation)),
+    "motion": lambda: _motion(rotation=np.array(M().rotation) * 2.0),
+}
+"""Every call that takes rotation matrices (a state's rotation block): one check, ``Motion``'s."""
+
+
+def _array_rows() -> list:
+    rows = []
+    for name, call in OUTPUTS.items():
+        rows += [(f"{name}-read-only-out", lambda f, c=call: c(_read_only()), V,
+                  r": out(put buffer F)?: output array is read-only", ValueError),
+                 (f"{name}-bytes-out", lambda f, c=call: c(_bytes_view()), V,
+                  r"output array is read-only", ValueError)]
+    for name, call in PARAMETERS.items():
+        argument = name[-1].upper()
+        rows += [(f"{name}-shape", lambda f, c=call: c(np.zeros((3, 7))), V,
+                  rf": {argument} has shape \(3, 7\); expected \(\d+,\) or \(N, \d+\)$",
+                  ValueError),
+                 (f"{name}-text", lambda f, c=call: c("abc"), T, rf": {argument} must be an "
+                  "array of numbers", TypeError)]
+    for name, call in ROTATIONS.items():
+        rows.append((f"{name}-not-a-rotation", lambda f, c=call: c(), V,
+                     r"not a rotation matrix \(\|R\^T R - I\| = \d", ValueError))
+    return rows
+
+
+ARRAYS = _array_rows()
+"""Arrays given to the hot paths, by class: outputs that cannot be written, parameter vectors
+of a wrong shape, rotation blocks that are no rotation."""
+
+GROUPS = {"evaluator": EVALUATOR, "arrays": ARRAYS, "evaluate": EVALUATE, "motion": MOTION,
           "platform": PLATFORM, "simulate": SIMULATE_API, "sweep": SWEEP_API,
           "discover": DISCOVER_API, "io": IO_API}
 

@@ -99,6 +99,11 @@ USAGE = {
 }
 """A valid command line of each command (the usage cases add one mistake to it)."""
 
+REPEATABLE = {"--vary": ("platform.payload_mass=0:8", "platform.payload_mass=1:2"),
+              "--tolerance": ("platform.payload_mass=0.1", "platform.payload_mass=0.2")}
+"""Every option that names a parameter and may be repeated: a name given twice is an error
+(the later value would silently replace the first)."""
+
 MISSING = {"simulate": ("--trajectory", "{data}"), "discover": ("--measured", "{data}"),
            "paper": ("--out", "{tmp}/o"), "sweep": ("--out", "{tmp}/o"),
            "synth": ("--out", "{tmp}/o.csv")}
@@ -160,6 +165,11 @@ def usage_cases() -> list[Case]:
         del argv[k:k + 2]
         cases.append(Case(id=f"usage-{command}-missing-option", argv=tuple(argv), expect=ERROR,
                           code=2, message=rf"Missing option '{option[0]}'", files=files))
+    for option, values in REPEATABLE.items():
+        cases.append(Case(id=f"usage-sweep-repeated{option}", expect=ERROR, code=2,
+                          argv=(*USAGE["sweep"], option, values[0], option, values[1]),
+                          message=rf"^{option}: 'platform\.payload_mass' given twice; give each "
+                          "parameter once$", files=files, absent=("o",)))
     for name, argv, message in BAD_VALUES:
         cases.append(Case(id=f"usage-{name}", argv=argv, expect=ERROR, code=2,
                           message=message, files=files, absent=("o", "o.csv")))

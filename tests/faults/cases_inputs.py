@@ -8,12 +8,14 @@ import pandas as pd
 from makers import (
     base_csv,
     base_frame,
+    column_map,
     content,
     csv_edit,
     folder,
     frame_edit,
     missing,
     platform,
+    rig,
     set_key,
     symlink,
     trajectory,
@@ -227,11 +229,34 @@ def platform_cases() -> list[Case]:
     return cases
 
 
+def _bom(maker):
+    """``maker``'s file with a UTF-8 byte order mark in front (as Windows editors write)."""
+    def make(folder):
+        path = maker(folder)
+        path.write_bytes(b"\xef\xbb\xbf" + path.read_bytes())
+        return path
+    return make
+
+
+BOM_TOML = {
+    "rig": (("platform", "--template", "--rig", "{f}", "--out", "{tmp}/o.toml"), rig()),
+    "column-map": (("simulate", "--trajectory", "{data}", "--column-map", "{f}", "--out",
+                    "{tmp}/o.csv", "--no-progress"), column_map()),
+}
+"""The TOML inputs besides the platform file (its commands: ``PLATFORM_COMMANDS``)."""
+
+
 def good_platform_cases() -> list[Case]:
-    """A valid platform file with each command: a correct result."""
-    return [Case(id=f"platform-{command}-valid", argv=argv, expect=OK,
-                 files={"data": trajectory(), "p": platform()})
-            for command, argv in PLATFORM_COMMANDS.items() if command != "discover"]
+    """A valid platform file with each command: a correct result; also with a UTF-8 byte
+    order mark, as every other TOML input (accepted and skipped)."""
+    cases = [Case(id=f"platform-{command}-{how}", argv=argv, expect=OK,
+                  files={"data": trajectory(), "p": make(platform())})
+             for command, argv in PLATFORM_COMMANDS.items() if command != "discover"
+             for how, make in (("valid", lambda m: m), ("bom", _bom))]
+    cases += [Case(id=f"toml-{kind}-bom", argv=argv, expect=OK,
+                   files={"data": trajectory(), "f": _bom(maker)})
+              for kind, (argv, maker) in BOM_TOML.items()]
+    return cases
 
 
 def base_rows() -> int:

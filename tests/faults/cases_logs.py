@@ -8,7 +8,8 @@ This is the place for those cases: add them to ``log_cases`` as ``Case`` rows (t
 
 from __future__ import annotations
 
-from makers import csv_edit
+import numpy as np
+from makers import content, csv_edit, frame_edit
 from runner import ERROR, Case
 
 
@@ -25,8 +26,54 @@ def _gap(lines):
 
 
 
+def _at_rest(frame, travel: float = 0.0):
+    """The base frame held at its first pose (plus a drift of ``travel`` m along x)."""
+    for name in ("x", "y", "z", "qw", "qx", "qy", "qz"):
+        frame[name] = frame[name].iloc[0]
+    frame["x"] = frame["x"] + np.linspace(0.0, travel, len(frame))
+    return frame
+
+
+def _noise_cases() -> list[Case]:
+    """The load cells' noise, by class: a value implausible against the measured forces'
+    spread from every source (the option, the column map, a noise record in other units),
+    and noise records that move."""
+    argv = ("discover", "--measured", "{data}", "--out", "{tmp}/dd", "--quiet")
+    spread = r"implausible against the measured channel's spread"
+    scaled = frame_edit("n.csv", lambda f: _at_rest(f).assign(
+        **{f"F{i}": f[f"F{i}"] * 1e3 for i in range(1, 7)}))
+    cases = [Case(id=f"log-discover-force-noise-{value}", expect=ERROR, code=2,
+                  argv=(*argv, "--force-noise", value),
+                  message=rf"^--force-noise: F\d: .*{spread}",
+                  files={"data": csv_edit("t.csv", lambda lines: lines)}, absent=("dd",))
+             for value in ("1e9", "1e-300", "0.1,0.1,0.1,0.1,0.1,1e12")]
+    cases += [
+        Case(id="log-discover-force-noise-column-map", expect=ERROR, code=2,
+             argv=(*argv, "--column-map", "{map}"), message=rf"force_noise .*{spread}",
+             files={"data": csv_edit("t.csv", lambda lines: lines),
+                    "map": content("map.toml", 'force_noise = 1e9\n[columns]\nt = "t"\n')},
+             absent=("dd",)),
+        Case(id="log-discover-noise-record-in-mn", expect=ERROR, code=2,
+             argv=(*argv, "--noise-record", "{noise}"), message=rf"n\.csv: F\d: .*{spread}",
+             files={"data": csv_edit("t.csv", lambda lines: lines), "noise": scaled},
+             absent=("dd",)),
+        Case(id="log-discover-noise-record-moves", expect=ERROR, code=2,
+             argv=(*argv, "--noise-record", "{noise}"),
+             message=r"n\.csv: not at rest: the platform moves 0\.0\d+ m and turns .* rad "
+                     r"from its first sample \(a noise record must stay within 0\.001 m",
+             files={"data": csv_edit("t.csv", lambda lines: lines),
+                    "noise": frame_edit("n.csv", lambda f: f)}, absent=("dd",)),
+        Case(id="log-discover-noise-record-drifts", expect=ERROR, code=2,
+             argv=(*argv, "--noise-record", "{noise}"), message=r"n\.csv: not at rest",
+             files={"data": csv_edit("t.csv", lambda lines: lines),
+                    "noise": frame_edit("n.csv", lambda f: _at_rest(f, 0.01))},
+             absent=("dd",)),
+    ]
+    return cases
+
+
 def log_cases() -> list[Case]:
-    return [
+    return [*_noise_cases(),
         Case(id="log-discover-t-gap", expect=ERROR, code=2,
              argv=("discover", "--measured", "{data}", "--out", "{tmp}/dd", "--quiet"),
              message=r"t: dropout of about 500 samples .* first after row 50",

@@ -8,18 +8,30 @@ import os
 import stat
 from pathlib import Path
 
-from makers import content, folder, old_output, platform, trajectory
+from makers import (
+    column_map,
+    content,
+    folder,
+    inside,
+    old_output,
+    platform,
+    rig,
+    trajectory,
+    workspace,
+)
 from runner import ERROR, OK, Case
 
 FILE_COMMANDS = {
-    "simulate": (("simulate", "--trajectory", "{data}", "--platform", "{p}", "--no-progress"),
-                 ("data", "p")),
+    "simulate": (("simulate", "--trajectory", "{data}", "--platform", "{p}", "--no-progress",
+                  "--column-map", "{map}"), ("data", "p", "map")),
     "synth": (("synth", "--samples", "40", "--platform", "{p}"), ("p",)),
-    "template": (("platform", "--template"), ()),
+    "template": (("platform", "--template", "--rig", "{rig}"), ("rig",)),
 }
 """Commands writing one file: argv before ``--out``, the inputs an output may alias."""
 
-KINDS = {"data": ("trajectory", "t.csv"), "p": ("platform", "p.toml")}
+KINDS = {"data": ("trajectory", "t.csv"), "p": ("platform", "p.toml"),
+         "map": ("column-map", "map.toml"), "rig": ("rig", "r.toml"),
+         "noise": ("noise-record", "n.csv"), "ws": ("workspace", "ws.toml")}
 """What each input placeholder is (as the messages name it) and its file name."""
 
 FOLDER_COMMANDS = {
@@ -31,7 +43,21 @@ FOLDER_COMMANDS = {
 }
 """Commands writing a folder, as ``FILE_COMMANDS``."""
 
-INPUTS = {"data": trajectory(), "p": platform()}
+INPUTS = {"data": trajectory(), "p": platform(), "map": column_map(), "rig": rig()}
+
+MAKERS = {"data": trajectory, "p": platform, "map": column_map, "rig": rig,
+          "noise": lambda: trajectory("n.csv"), "ws": workspace}
+
+FOLDER_READS = {
+    "paper": {"p": ()},
+    "sweep": {"data": (), "p": ("--platform", "{p}"), "ws": ("--workspace", "{ws}")},
+    "export": {"p": ()},
+    "discover": {"data": (), "p": ("--platform", "{p}"), "noise": ("--noise-record", "{noise}"),
+                 "map": ("--column-map", "{map}")},
+}
+"""What each folder command reads (placeholders, as ``KINDS``) and the options adding those
+that its ``FOLDER_COMMANDS`` command line leaves out: every one must lie outside the output
+folder."""
 
 
 def _hardlink(name: str, target: str):
@@ -158,10 +184,33 @@ def _nonempty_folder(path: Path) -> None:
     assert path.is_dir() and any(path.iterdir())
 
 
+def _inside_cases(command: str, argv, data_kind: str) -> list[Case]:
+    """Each input of a folder command inside the output folder (named directly, or through a
+    symbolic link to the folder) is refused before anything is read or written."""
+    reads = FOLDER_READS[command]
+    extra = tuple(a for option in reads.values() for a in option)
+    cases = []
+    for alias in reads:
+        kind, source = KINDS[alias]
+        kind = data_kind if alias == "data" else kind
+        files = {**INPUTS, **{a: MAKERS[a]() for a in reads}, alias: inside("o", MAKERS[alias]())}
+        message = rf"o: holds the {kind} file .*/o/{source}, an input of the run; choose "
+        cases += [
+            Case(id=f"out-{command}-holds-{kind}", argv=(*argv, *extra, "--out", "{tmp}/o"),
+                 expect=ERROR, code=2, message=message, files=files),
+            Case(id=f"out-{command}-link-holds-{kind}",
+                 argv=(*argv, *extra, "--out", "{tmp}/lo"), expect=ERROR, code=2,
+                 message=message.replace("o: holds", "lo: holds"),
+                 files={**files, "lo": _symlink("lo", "o")}),
+        ]
+    return cases
+
+
 def output_cases() -> list[Case]:
     cases = []
     for command, (argv, aliases) in FILE_COMMANDS.items():
         cases += _file_cases(command, argv, aliases)
     for command, (argv, alias, kind) in FOLDER_COMMANDS.items():
         cases += _folder_cases(command, argv, alias, kind)
+        cases += _inside_cases(command, argv, kind)
     return cases

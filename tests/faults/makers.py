@@ -130,3 +130,28 @@ def fifo(name: str) -> Maker:
 def old_output(name: str, text: str = "earlier output\n") -> Maker:
     """An earlier output of the same name (a file the run may replace on success only)."""
     return content(name, text)
+
+
+def rig(name: str = "r.toml") -> Maker:
+    """A rig TOML (``gsfric platform --template --rig``): the reference platform's sizes."""
+    from gsfric.platform.rig import Rig, rig_toml
+    return content(name, lambda: rig_toml(Rig.from_platform(models.reference_platform())))
+
+
+def column_map(name: str = "map.toml") -> Maker:
+    """A column-map TOML that maps the base file's columns to themselves."""
+    return content(name, '[columns]\nt = "t"\nx = "x"\n')
+
+
+def workspace(name: str = "ws.toml") -> Maker:
+    """A workspace TOML (its content is not read by the cases that use it)."""
+    return content(name, "[pose]\n")
+
+
+def inside(folder_name: str, maker: Maker) -> Maker:
+    """``maker``'s file made inside the folder ``folder_name`` (created) of the case's
+    folder."""
+    def make(base: Path) -> Path:
+        (base / folder_name).mkdir(exist_ok=True)
+        return maker(base / folder_name)
+    return make
