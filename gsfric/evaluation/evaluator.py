@@ -120,7 +120,10 @@ class Evaluator:
 
         ``P`` and ``Q`` may be given per step, (N, size), to vary parameters along the batch.
         No flags: the control loop's call. A finite state whose forces are not finite (a
-        singular pose) gives its NaN or infinite row; ``evaluate`` flags such steps.
+        singular pose) gives its NaN or infinite row; ``evaluate`` flags such steps. With
+        ``out`` and the Evaluator's own parameters (the control loop's call) the rotation
+        blocks are trusted, not checked (a check costs more than the evaluation of a few
+        steps): ``Motion`` and ``evaluate`` check them.
 
         Raises
         ------
@@ -129,7 +132,8 @@ class Evaluator:
         InputError
             A wrong shape or dtype, ``P`` or ``Q`` of another shape than (size,) or (N, size),
             a read-only ``out``, a NaN or infinite state (naming its row), a rotation block
-            that is not a rotation (``gsfric.trajectory.ROTATION_TOL``), paper mode.
+            that is not a rotation (``gsfric.trajectory.ROTATION_TOL``; without ``out``, or
+            with ``P`` or ``Q``), paper mode.
         """
         if self.mode != "kinematic":
             raise InputError("actuator_forces: the kinematic mode's hot path; this Evaluator "
@@ -140,7 +144,7 @@ class Evaluator:
             if actuator is None:  # two threads may both build one: either is right
                 actuator = self._calls[key] = native.get(self._actuator).bound(
                     [self.P, self.Q], "F", self.n_threads)
-            return _checked_states(actuator(x, out), "actuator_forces", x)
+            return _finite_states(actuator(x, out), "actuator_forces", x)
         P = self.P if P is None else _parameters(P, "actuator_forces", "P", self.P.size)
         Q = self.Q if Q is None else _parameters(Q, "actuator_forces", "Q", self.Q.size)
         f = native.get(self._actuator if P is self.P
@@ -163,7 +167,9 @@ class Evaluator:
         out : ndarray (N, 6), optional
             C-contiguous float64 buffer for the result.
 
-        The states are laid out in C, block by block (no ``state_array``); no flags.
+        The states are laid out in C, block by block (no ``state_array``); no flags. The
+        rotation matrices are trusted, not checked (the control loop's call; ``Motion`` checks
+        them).
 
         Raises
         ------
@@ -181,7 +187,6 @@ class Evaluator:
             call = self._calls[key] = native.get(self._actuator).bound_motion(
                 [self.P, self.Q], "F", self.n_threads)
         F = call(position, rotation, velocity, omega, acceleration, alpha, out)
-        _rotations(np.asarray(rotation, dtype=float), "forces", "rotation row")
         if not math.isfinite(_total(F, None)):
             motion = (position, rotation, velocity, omega, acceleration, alpha)
             for name, value in zip(("position", "rotation", "velocity", "omega",

@@ -309,15 +309,13 @@ PARAMETERS = {
 
 ROTATIONS = {
     "actuator": lambda: Evaluator(P()).actuator_forces(_scaled_rotation()),
-    "actuator-out": lambda: Evaluator(P()).actuator_forces(_scaled_rotation(),
-                                                           np.empty((11, 6))),
     "actuator-one-state": lambda: Evaluator(P()).actuator_forces(_scaled_rotation(0)[0]),
     "jacobian": lambda: Evaluator(P()).jacobian(_scaled_rotation()),
-    "forces": lambda: _forces(None, np.array(M().rotation) * 2.0),
-    "forces-mirrored": lambda: _forces(None, -np.array(M().rotation)),
+    "motion-mirrored": lambda: _motion(rotation=-np.array(M().rotation)),
     "motion": lambda: _motion(rotation=np.array(M().rotation) * 2.0),
 }
-"""Every call that takes rotation matrices (a state's rotation block): one check, ``Motion``'s."""
+"""Every call that checks rotation matrices (a state's rotation block): one check, ``Motion``'s.
+The control loop's calls (``actuator_forces`` into ``out``, ``forces``) trust them."""
 
 
 def _array_rows() -> list:
