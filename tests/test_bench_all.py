@@ -25,6 +25,7 @@ def _check_table(report, measured_keys):
         assert cells == [row.path, row.goal, row.measured, "-"]
 
 
+@pytest.mark.slow
 def test_quick_run_measures_every_row_but_dask():
     report = measure_all(quick=True, progress=lambda s: None)
     _check_table(report, set(ROWS) - {"dask"})

@@ -1,6 +1,7 @@
 """The record's slowest components tested on their own noise (``statistics.band_tests``)."""
 
 import numpy as np
+import pytest
 from helpers import pink_noise as pink
 
 from gsfric.discovery import statistics as st
@@ -103,6 +104,7 @@ def test_an_offset_beside_many_fitted_columns_keeps_its_slowest_components():
         assert p_high > 1e-3, (size, p_high)
 
 
+@pytest.mark.slow
 def test_1_over_f_noise_on_moves_between_rests_is_no_discrepancy():
     """``discover`` on moves of 0.7 s between rests of 3 s at 1 kHz, with 1/f force noise and
     no missing effect: the slow wander of the moves' mean is not named as a sensor bias (nor
