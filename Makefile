@@ -37,9 +37,10 @@ paper: built
 test: built
 	$(PYTEST) -n 2 --dist worksteal tests
 
-## The inner loop: the tests that take under a few seconds each (no wheel, docs or notebooks).
+## The inner loop: every test but the end-to-end runs (wheel, docs, notebooks, derivation,
+## whole discoveries) and the slow suites.
 check: built
-	$(PYTEST) -n 2 --dist worksteal -m "not slow and not build" tests
+	$(PYTEST) -n 2 --dist worksteal -m "not slow and not integration" tests
 
 ## The long statistical suites that `make test` leaves out.
 test-slow: built

@@ -209,6 +209,7 @@ def test_check_detects_a_changed_derive_source(tmp_path, monkeypatch):
     assert "gsfric_model.c" in dbuild.is_stale(tmp_path)
 
 
+@pytest.mark.integration
 def test_regeneration_is_byte_identical():
     fresh = dbuild.generate()
     for name, data in fresh.items():

@@ -21,6 +21,8 @@ from derive.vectors import cross
 from gsfric import models
 from gsfric.evaluation.paper_constants import paper_constants
 
+pytestmark = pytest.mark.integration  # end to end: `make check` leaves it out
+
 
 @pytest.fixture(scope="module")
 def kinematic_model():

@@ -15,6 +15,8 @@ from gsfric.discovery.answer import GLOSSARY, gap_closed, verdict_line
 from gsfric.platform import catalog
 from gsfric.synth import synthesize
 
+pytestmark = pytest.mark.integration  # end to end: `make check` leaves it out
+
 
 @pytest.fixture(scope="module")
 def answered(tmp_path_factory):

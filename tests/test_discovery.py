@@ -40,6 +40,8 @@ from gsfric.models import random_motion, reference_platform
 from gsfric.synth import effect_contributions, excitation_motion, synthesize
 from gsfric.trajectory import Motion
 
+pytestmark = pytest.mark.integration  # end to end: `make check` leaves it out
+
 DEFAULTS = Settings()
 
 SAMPLES = 4000

@@ -10,6 +10,8 @@ from gsfric.models import minimum_jerk_moves, reference_platform
 from gsfric.synth import synthesize
 from gsfric.trajectory import Motion
 
+pytestmark = pytest.mark.integration  # end to end: `make check` leaves it out
+
 RIDGE = Settings().ridge
 
 

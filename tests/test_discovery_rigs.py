@@ -20,6 +20,8 @@ from gsfric.platform.catalog import apply_sensor, sensor_jacobian
 from gsfric.synth import synthesize
 from gsfric.trajectory import Motion
 
+pytestmark = pytest.mark.integration  # end to end: `make check` leaves it out
+
 FORCES = [f"F{i}" for i in range(1, 7)]
 PAPER = reference_platform(friction_model="paper")
 COUPLED = reference_platform(friction_model="coupled")

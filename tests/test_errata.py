@@ -41,6 +41,8 @@ from gsfric.evaluation.parameters import parameter_values
 from gsfric.paper import tables as paper
 from gsfric.trajectory import Motion
 
+pytestmark = pytest.mark.integration  # end to end: `make check` leaves it out
+
 PAPER = Path(__file__).resolve().parents[2] / "shared" / "paper"
 DOC = Path(__file__).resolve().parents[1] / "docs" / "reference" / "errata.md"
 HOLDS = 1e-9

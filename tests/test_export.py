@@ -18,6 +18,8 @@ from gsfric.export.verify import TOLERANCE, check_motions, verify_library
 from gsfric.export.writer import export_library
 from gsfric.models import reference_platform
 
+pytestmark = pytest.mark.integration  # end to end: `make check` leaves it out
+
 STRICT = ["-std=c99", "-Wall", "-Wextra", "-Werror", "-pedantic", "-O1"]
 STALE = "gsfric: warning: generated/ is stale"
 

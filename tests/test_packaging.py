@@ -26,6 +26,8 @@ import pytest
 
 from gsfric.compiled import native
 
+pytestmark = pytest.mark.integration  # end to end: `make check` leaves it out
+
 ROOT = Path(__file__).resolve().parent.parent
 
 # lines that builds print on this kind of machine and that say nothing about the package

@@ -29,6 +29,8 @@ from gsfric.signal.savgol import savgol_derivatives
 from gsfric.simulate.run import simulate_file
 from gsfric.trajectory import Motion
 
+pytestmark = pytest.mark.integration  # end to end: `make check` leaves it out
+
 DATA = Path(__file__).resolve().parent / "data"
 LOG, LOG_FORMAT = DATA / "controller_log.csv", DATA / "controller_log.toml"
 

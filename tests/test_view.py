@@ -28,6 +28,8 @@ from gsfric.view import FrameCollector, decode, embedded, notebook_html
 from gsfric.view.data import decode_entry, quantise
 from gsfric.view.frames import OUTPUTS
 
+pytestmark = pytest.mark.integration  # end to end: `make check` leaves it out
+
 VENDOR = Path(gsfric.view.__file__).parent / "vendor"
 MB = 1_000_000
 
