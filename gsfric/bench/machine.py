@@ -61,7 +61,7 @@ def describe_machine() -> dict:
 
 
 def _lanes() -> int:
-    return native.library().gsfric_simd_lanes()
+    return native.lanes(native.library())
 
 
 def _source_version() -> str | None:

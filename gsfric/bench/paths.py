@@ -60,7 +60,7 @@ def measure_paths(budget: float, memory: bool, progress=print, simulate: bool = 
 
     platform = gsfric.reference_platform()
     out: dict = {"friction_model": platform.friction.model}
-    out["lanes"] = native.library().gsfric_simd_lanes()
+    out["lanes"] = native.lanes(native.library())
     progress("  evaluate (kept outputs + flags) N=100,000")
     motion = bench_motion(100_000)
     out["evaluate_1e5"] = _evaluate_path(platform, motion, budget)

@@ -4,7 +4,8 @@ The generated C code is compiled when the package is built (meson.build), never 
 into extension modules of this package, each holding the per-step CasADi functions, the
 SIMD-over-steps functions for one instruction set and the batch driver (``batch.c``):
 
-- ``_model``: the architecture's baseline (on x86-64, any x86-64 CPU: one step per lane);
+- ``_model``: the architecture's baseline (on x86-64, any x86-64 CPU: the per-step functions
+  only; elsewhere with the SIMD-over-steps code, one step at a time);
 - on x86-64, ``_model_x86_64_v3`` (AVX2 and FMA: 4 steps per vector) and ``_model_x86_64_v4``
   (AVX-512: 8 steps per vector).
 
@@ -67,6 +68,17 @@ def _load(isa: str) -> ctypes.CDLL:
         reason = str(exc).splitlines()[0] if str(exc) else type(exc).__name__
         raise LibraryError(f"{path}: the compiled model cannot be loaded ({reason}); "
                            f"{REINSTALL}") from None
+
+
+def lanes(lib: ctypes.CDLL) -> int:
+    """Steps per vector of a loaded build's SIMD-over-steps code; 0 when it has none (the
+    per-step functions only)."""
+    try:
+        count = lib.gsfric_simd_lanes
+    except AttributeError:
+        return 0
+    count.restype = ctypes.c_int
+    return count()
 
 
 def cpu_builds() -> tuple[str, ...]:
