@@ -447,6 +447,11 @@ long long gsfric_bound_motion(const gsfric_bound *b, const void *arrays, long lo
                                  array_data(tuple_item(arrays, 6)), n, b->n_threads);
 }
 
+#ifdef GSFRIC_PER_STEP_ONLY
+/* A build without the SIMD-over-steps source (meson.build) has no vectors over steps */
+int gsfric_simd_lanes(void) { return 0; }
+#endif
+
 /* The widest instruction set of this CPU among the builds gsfric ships for x86-64 (4:
  * x86-64-v4 with AVX-512, 3: x86-64-v3 with AVX2 and FMA, 1: the x86-64 baseline); 0 on other
  * architectures. Called in the baseline build only, which runs on every CPU of its

@@ -77,6 +77,7 @@ def declare(lib: ctypes.CDLL) -> ctypes.CDLL:
     lib.gsfric_tuple_item.argtypes = [ctypes.py_object, ctypes.c_int]
     lib.gsfric_array_data.restype = ctypes.c_longlong
     lib.gsfric_array_data.argtypes = [ctypes.py_object]
+    lib.gsfric_simd_lanes.restype = ctypes.c_int
     lib.gsfric_cpu_level.restype = ctypes.c_int
     return lib
 

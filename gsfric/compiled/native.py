@@ -73,12 +73,7 @@ def _load(isa: str) -> ctypes.CDLL:
 def lanes(lib: ctypes.CDLL) -> int:
     """Steps per vector of a loaded build's SIMD-over-steps code; 0 when it has none (the
     per-step functions only)."""
-    try:
-        count = lib.gsfric_simd_lanes
-    except AttributeError:
-        return 0
-    count.restype = ctypes.c_int
-    return count()
+    return lib.gsfric_simd_lanes()
 
 
 def cpu_builds() -> tuple[str, ...]:
