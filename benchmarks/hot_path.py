@@ -1,5 +1,6 @@
 """The hot path's rate: ``Evaluator.actuator_forces`` of the reference platform (coupled
-friction) over 100,000 steps into a preallocated array, on one thread.
+friction) over 100,000 steps into a preallocated array (64-byte aligned, as ``evaluate``'s
+outputs: the rate of an unaligned one depends on where it starts), on one thread.
 
 Prints the best of several calls as steps per CPU second of the calling thread (what other load
 on the machine disturbs least) and per wall second, with the build loaded. Run it with the
@@ -22,6 +23,7 @@ import numpy as np
 import gsfric
 from gsfric.bench.cases import bench_motion
 from gsfric.evaluation.evaluator import Evaluator, state_array
+from gsfric.evaluation.memory import aligned_empty
 
 STEPS = 100_000
 CALLS = 30
@@ -30,7 +32,7 @@ CALLS = 30
 def main() -> None:
     x = np.ascontiguousarray(state_array(bench_motion(STEPS)))
     evaluator = Evaluator(gsfric.reference_platform(), n_threads=1)
-    out = np.empty((STEPS, 6))
+    out = aligned_empty(STEPS, 6)     # whole cache lines: the vector stores' fast path
     evaluator.actuator_forces(x, out)                  # warm-up: load, first touch
     cpu, wall = [], []
     for _ in range(CALLS):
