@@ -7,7 +7,7 @@ from pathlib import Path
 
 import click
 
-from gsfric.commands.common import log_options
+from gsfric.commands.common import checked_paths, log_options
 from gsfric.io.logs import LogFormat
 from gsfric.simulate import view_file
 from gsfric.view import DEFAULT_FPS, MAX_FRAMES
@@ -50,6 +50,8 @@ def _options(command):
 @click.command()
 @_options
 @log_options
+@checked_paths({"trajectory": "trajectory", "platform_file": "platform",
+                "column_map": "column-map"}, files=("out",))
 def view(trajectory, platform_file, out, mode, fps, title, threads, chunk, window, quiet,
          column_map, units_map, angles, keep_columns):
     """Write a 3-D view of a motion and its joint loads: one HTML page, opened offline.
