@@ -1,5 +1,8 @@
-"""The discovery's filters and p-values against SciPy's own (scipy.signal, scipy.stats), which
-the runtime does not import."""
+"""The discovery's filters and p-values against SciPy's own (scipy.signal, scipy.stats).
+
+The comparisons allow a relative 1e-12: the same quantities computed in another order differ by
+a few units in the last place, amplified at most by the recursion's or the distribution's
+condition (about 1e3 here); a wrong coefficient, lag or degree of freedom is off by far more."""
 
 import numpy as np
 import pytest
@@ -9,22 +12,6 @@ from scipy import signal, stats
 
 from gsfric.discovery import pvalues
 from gsfric.signal.filters import all_pole, fir
-
-
-@given(order=st.integers(1, 12), seed=st.integers(0, 2**32 - 1), extra=st.integers(0, 5))
-@settings(max_examples=40, deadline=None)
-def test_fir_is_lfilter_bit_for_bit(order, seed, extra):
-    rng = np.random.default_rng(seed)
-    b = np.concatenate([[1.0], -rng.normal(scale=0.3, size=order)])
-    x = rng.normal(size=(300, 3, 2)) * 10 ** rng.uniform(-3, 3)
-    start = order + extra
-    expected = signal.lfilter(b, [1.0], x, axis=0)[start:]
-    assert np.array_equal(fir(b, x, start=start), expected)
-
-
-def test_fir_needs_whole_windows():
-    with pytest.raises(ValueError, match="start 1 is before the first whole window"):
-        fir(np.ones(3), np.ones(10), start=1)
 
 
 @pytest.mark.parametrize("seed", range(4))
