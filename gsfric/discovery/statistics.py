@@ -32,8 +32,8 @@ from collections.abc import Sequence
 from dataclasses import dataclass
 
 import numpy as np
-from scipy.special import fdtrc
 
+from gsfric.discovery.pvalues import f_sf
 from gsfric.discovery.settings import Settings
 from gsfric.signal.filters import fir
 
@@ -466,7 +466,7 @@ def f_test(null: Fit, alternative: Fit, k: int | None = None) -> tuple[float, fl
     if k <= 0 or alternative.sse <= 0 or dof <= 0:
         return 0.0, 1.0, max(k, 0)
     F = max(null.sse - alternative.sse, 0.0) / k / (alternative.sse / dof)
-    return float(F), float(fdtrc(k, dof, F)), k
+    return float(F), f_sf(F, k, dof), k
 
 
 def cross_validate(blocks: Blocks, columns: Sequence[int], lower: np.ndarray,
@@ -562,7 +562,7 @@ def band_tests(blocks: Blocks, null: Fit, alternative: Fit, k: int) -> tuple[flo
             out.append(1.0)
             continue
         F = max(fits[0][band] - left, 0.0) / k / (left / dof)
-        out.append(float(fdtrc(k, dof, F)))
+        out.append(f_sf(F, k, dof))
     return out[0], out[1]
 
 
