@@ -33,6 +33,7 @@ from click.testing import CliRunner
 from gsfric.cli import main
 from gsfric.discovery import CANDIDATE_NAMES, discover, run_discover
 from gsfric.discovery import statistics as st
+from gsfric.discovery.settings import Settings
 from gsfric.errors import InputError
 from gsfric.evaluation.evaluator import Evaluator, evaluate, state_array
 from gsfric.models import random_motion, reference_platform
@@ -306,6 +307,42 @@ def test_whitener_recovers_an_ar1_model():
     white = w.apply(e)
     lag1 = np.mean(white[1:] * white[:-1], axis=0) / np.mean(white ** 2, axis=0)
     np.testing.assert_allclose(lag1, 0.0, atol=0.02)
+
+
+@pytest.mark.filterwarnings("ignore::FutureWarning")   # statsmodels' yule_walker return type
+def test_whitener_is_statsmodels_yule_walker():
+    """Each leg's AR model is statsmodels' Yule-Walker fit (biased autocovariances of the
+    demeaned residual, ``method="mle"``) at the order that BIC, ``n log(sigma^2) + p log(n)``,
+    picks from statsmodels' innovation variances. To a relative 1e-12: the same equations
+    solved by another recursion differ by rounding (1e-15 here); a wrong lag, sign or
+    normalisation is off by percents."""
+    from statsmodels.regression.linear_model import yule_walker
+
+    rng = np.random.default_rng(7)
+    n, burn = 4000, 200
+    models = [[0.8], [0.5, 0.3], [1.2, -0.5], [], [0.3, 0.2, 0.1, -0.1], [-0.6]]
+    e = np.empty((n, 6))
+    for leg, phi in enumerate(models):
+        x, w = np.zeros(n + burn), rng.normal(size=n + burn)
+        for t in range(len(phi), n + burn):
+            x[t] = w[t] + sum(c * x[t - j - 1] for j, c in enumerate(phi))
+        e[:, leg] = 3.0 + (leg + 1) * x[burn:]
+    w = st.Whitener.fit(e)
+
+    def variance(x, p):
+        return yule_walker(x, order=p, method="mle")[1] ** 2 if p else np.var(x)
+
+    for leg in range(6):
+        x = e[:, leg]
+        bic = [n * np.log(variance(x, p)) + p * np.log(n) for p in range(Settings.max_order + 1)]
+        p = len(w.coefficients[leg])
+        assert p == int(np.argmin(bic))
+        if p:
+            np.testing.assert_allclose(w.coefficients[leg], yule_walker(x, order=p,
+                                                                        method="mle")[0],
+                                       rtol=1e-12, atol=1e-12)
+        assert w.innovation_std[leg] == pytest.approx(np.sqrt(variance(x, p)), rel=1e-12)
+        assert w.marginal_std[leg] == pytest.approx(np.std(x), rel=1e-12)
 
 
 def test_bounded_solve_matches_scipy():
