@@ -318,7 +318,48 @@ def test_whitener_recovers_an_ar1_model():
     np.testing.assert_allclose(lag1, 0.0, atol=0.02)
 
 
+@pytest.mark.filterwarnings("ignore::FutureWarning")   # statsmodels' yule_walker return type
+def test_whitener_is_statsmodels_yule_walker():
+    """Each leg's AR model is statsmodels' Yule-Walker fit (biased autocovariances of the
+    demeaned residual, ``method="mle"``) at the order that BIC, ``n log(sigma^2) + p log(n)``,
+    picks from statsmodels' innovation variances. To a relative 1e-12: the same equations
+    solved by another recursion differ by rounding (1e-15 here); a wrong lag, sign or
+    normalisation is off by percents."""
+    from statsmodels.regression.linear_model import yule_walker
+
+    rng = np.random.default_rng(7)
+    n, burn = 4000, 200
+    models = [[0.8], [0.5, 0.3], [1.2, -0.5], [], [0.3, 0.2, 0.1, -0.1], [-0.6]]
+    e = np.empty((n, 6))
+    for leg, phi in enumerate(models):
+        x, w = np.zeros(n + burn), rng.normal(size=n + burn)
+        for t in range(len(phi), n + burn):
+            x[t] = w[t] + sum(c * x[t - j - 1] for j, c in enumerate(phi))
+        e[:, leg] = 3.0 + (leg + 1) * x[burn:]
+    w = st.Whitener.fit(e)
+
+    def variance(x, p):
+        return yule_walker(x, order=p, method="mle")[1] ** 2 if p else np.var(x)
+
+    for leg in range(6):
+        x = e[:, leg]
+        bic = [n * np.log(variance(x, p)) + p * np.log(n) for p in range(Settings.max_order + 1)]
+        p = len(w.coefficients[leg])
+        assert p == int(np.argmin(bic))
+        if p:
+            np.testing.assert_allclose(w.coefficients[leg], yule_walker(x, order=p,
+                                                                        method="mle")[0],
+                                       rtol=1e-12, atol=1e-12)
+        assert w.innovation_std[leg] == pytest.approx(np.sqrt(variance(x, p)), rel=1e-12)
+        assert w.marginal_std[leg] == pytest.approx(np.std(x), rel=1e-12)
+
+
 def test_bounded_solve_matches_scipy():
+    """``solve`` on the cross-products, with its scaling and ridge, finds the least squares
+    within bounds that ``lsq_linear`` finds on the design itself, also with pinned columns
+    (equal bounds: a parameter held at a value, as ``selection`` holds refitted ones). The sums
+    of squares agree to a relative 1e-6: the ridge (1e-10 on the scaled normal equations)
+    moves them by far less, a wrong active set by percents."""
     from scipy.optimize import lsq_linear
 
     rng = np.random.default_rng(2)
@@ -329,8 +370,13 @@ def test_bounded_solve_matches_scipy():
         lo = np.where(rng.random(k) < 0.5, -np.inf, rng.normal(size=k) * 0.1)
         hi = np.where(rng.random(k) < 0.5, np.inf,
                       np.where(np.isinf(lo), 0.0, lo) + rng.uniform(0.01, 1.0, k))
+        pin = (rng.random(k) < 0.3) & (np.arange(k) > 0)
+        lo[pin] = hi[pin] = rng.normal(size=np.count_nonzero(pin)) * 0.1
         t = st.solve(X.T @ X, X.T @ y, lo, hi, ridge=DEFAULTS.ridge)
-        ref = lsq_linear(X, y, bounds=(lo, hi), method="bvls", tol=1e-12).x
+        np.testing.assert_allclose(t[pin], lo[pin], rtol=1e-15)   # scaled and back: rounding
+        ref = lo.copy()
+        ref[~pin] = lsq_linear(X[:, ~pin], y - X[:, pin] @ lo[pin],
+                               bounds=(lo[~pin], hi[~pin]), method="bvls", tol=1e-12).x
         assert np.sum((X @ t - y) ** 2) <= np.sum((X @ ref - y) ** 2) * (1 + 1e-6)
 
 

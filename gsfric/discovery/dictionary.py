@@ -205,22 +205,20 @@ def line_frequencies(t: np.ndarray, residual: np.ndarray, most: int, prominence:
     if n < 64:
         return []
     step = (t[-1] - t[0]) / (n - 1)
-    r = residual - residual.mean(axis=0)
-    power = np.sum(np.abs(np.fft.rfft(r * np.hanning(n)[:, None], 8 * n, axis=0)) ** 2, axis=1)
-    freqs = np.fft.rfftfreq(8 * n, step)
+    signal = optional("scipy.signal")
+    freqs, density = signal.periodogram(residual, 1.0 / step, np.hanning(n), 8 * n, axis=0)
+    density[[0, -1]] *= 2      # the one-sided density doubles all other frequencies
+    power = np.sum(density, axis=1)
     median_filter = optional("scipy.ndimage").median_filter
     baseline = np.repeat(median_filter(power[::8], size=81, mode="reflect"), 8)[:len(power)]
-    peak = (power > prominence * baseline) & (power >= np.roll(power, 1)) & (
-        power >= np.roll(power, -1))
-    peak[:24] = False          # the record's slowest components are the drift's
-    peak[-2:] = False
-    found: list[float] = []
-    for k in np.argsort(power * peak)[::-1]:
-        if not peak[k] or len(found) == most:
-            break
-        if all(abs(freqs[k] - f) > 4.0 / (n * step) for f in found):
-            found.append(float(freqs[k]))
-    return found
+    # the first 24 frequencies are the drift's (the record's slowest components), and none of
+    # the last two is a line; peaks above ``prominence`` times the baseline (a height of the
+    # next float up: strictly above), more than 4 / T apart (32 of the padded frequencies)
+    # with the larger one kept, the ``most`` largest
+    peaks, found = signal.find_peaks(power[23:-1], np.nextafter(prominence * baseline[23:-1],
+                                                                 np.inf), distance=33)
+    peaks = peaks[np.argsort(found["peak_heights"], kind="stable")[::-1][:most]] + 23
+    return [float(freqs[k]) for k in peaks]
 
 
 def _lines(residual: np.ndarray, x: Features, s: Settings):

@@ -32,8 +32,9 @@ from collections.abc import Sequence
 from dataclasses import dataclass
 
 import numpy as np
-from scipy.special import fdtrc
 
+from gsfric._optional import optional
+from gsfric.discovery.pvalues import f_sf
 from gsfric.signal.filters import fir
 
 # -- AR noise model ---------------------------------------------------------------------------
@@ -373,8 +374,7 @@ def solve(A: np.ndarray, b: np.ndarray, lower: np.ndarray | None = None,
 
     Columns are scaled to unit diagonal and ``ridge`` (``Settings.ridge``), added to the
     scaled diagonal, keeps confounded columns solvable.
-    The bounds are handled by a primal active-set method (exact for this convex problem; a
-    few small solves, as the problems have at most a few dozen parameters).
+    Within the bounds when the unconstrained solution is not: ``_bounded``.
     """
     k = len(b)
     if k == 0:
@@ -388,41 +388,32 @@ def solve(A: np.ndarray, b: np.ndarray, lower: np.ndarray | None = None,
     t = np.linalg.solve(As, bs)
     if np.all(t >= lo) and np.all(t <= hi):
         return t / d
-    return _active_set(As, bs, lo, hi, np.clip(t, lo, hi)) / d
+    return _bounded(As, bs, lo, hi) / d
 
 
-def _active_set(A: np.ndarray, b: np.ndarray, lo: np.ndarray, hi: np.ndarray,
-                x: np.ndarray) -> np.ndarray:
-    """Box-constrained convex QP ``min t'At - 2b't``, ``lo <= t <= hi``, by active sets,
-    from the feasible point x (its entries on a bound start in the working set)."""
-    k = len(b)
-    at_bound = (x == lo) | (x == hi)
-    for _ in range(10 * k + 10):
-        free = ~at_bound
-        target = x.copy()
-        if free.any():
-            rhs = b[free] - A[np.ix_(free, ~free)] @ x[~free]
-            target[free] = np.linalg.solve(A[np.ix_(free, free)], rhs)
-        if np.all(target >= lo - 1e-12) and np.all(target <= hi + 1e-12):
-            x = np.clip(target, lo, hi)
-            g = A @ x - b
-            wrong = at_bound & (((x <= lo) & (g < 0)) | ((x >= hi) & (g > 0)))
-            if not wrong.any():
-                return x
-            j = int(np.argmax(np.where(wrong, np.abs(g), -1.0)))
-            at_bound[j] = False
-            continue
-        step = target - x
-        with np.errstate(divide="ignore", invalid="ignore"):
-            reach = np.where(step < 0, (lo - x) / step, np.where(step > 0, (hi - x) / step,
-                                                                  np.inf))
-        reach = np.where(free, reach, np.inf)
-        j = int(np.argmin(reach))
-        alpha = float(np.clip(reach[j], 0.0, 1.0))
-        x = np.clip(x + alpha * step, lo, hi)
-        x[j] = lo[j] if step[j] < 0 else hi[j]
-        at_bound[j] = True
-    return x
+def _bounded(A: np.ndarray, b: np.ndarray, lo: np.ndarray, hi: np.ndarray) -> np.ndarray:
+    """Box-constrained convex QP ``min t'At - 2b't``, ``lo <= t <= hi`` (A positive definite).
+
+    The coefficients held on a bound are those of the bounded least squares
+    ``min |L't - L^-1 b|^2``, ``A = L L'``, by BVLS (``scipy.optimize.lsq_linear``; a
+    coefficient whose bounds are equal is held there, a pinned parameter); the others are
+    solved from their normal equations, as an unbounded fit solves them: a column held at zero
+    then leaves the others' fit exactly as it is without that column, and the F-tests and
+    cross-validations that compare the two fits find no difference, not a rounding one."""
+    held = lo >= hi
+    t = np.where(held, lo, 0.0)
+    if not held.all():
+        L = np.linalg.cholesky(A[np.ix_(~held, ~held)])
+        c = np.linalg.solve(L, b[~held] - A[np.ix_(~held, held)] @ t[held])
+        side = optional("scipy.optimize").lsq_linear(L.T, c, (lo[~held], hi[~held]),
+                                                     method="bvls").active_mask
+        t[~held] = np.select([side < 0, side > 0], [lo[~held], hi[~held]], 0.0)
+        held[~held] = side != 0
+    free = ~held
+    if free.any():
+        rhs = b[free] - A[np.ix_(free, held)] @ t[held]
+        t[free] = np.clip(np.linalg.solve(A[np.ix_(free, free)], rhs), lo[free], hi[free])
+    return t
 
 
 def sse(A: np.ndarray, b: np.ndarray, c: float, t: np.ndarray) -> float:
@@ -473,7 +464,7 @@ def f_test(null: Fit, alternative: Fit, k: int | None = None) -> tuple[float, fl
     if k <= 0 or alternative.sse <= 0 or dof <= 0:
         return 0.0, 1.0, max(k, 0)
     F = max(null.sse - alternative.sse, 0.0) / k / (alternative.sse / dof)
-    return float(F), float(fdtrc(k, dof, F)), k
+    return float(F), f_sf(F, k, dof), k
 
 
 def cross_validate(blocks: Blocks, columns: Sequence[int], lower: np.ndarray,
@@ -570,7 +561,7 @@ def band_tests(blocks: Blocks, null: Fit, alternative: Fit, k: int) -> tuple[flo
             out.append(1.0)
             continue
         F = max(fits[0][band] - left, 0.0) / k / (left / dof)
-        out.append(float(fdtrc(k, dof, F)))
+        out.append(f_sf(F, k, dof))
     return out[0], out[1]
 
 

@@ -45,6 +45,7 @@ from pathlib import Path
 from typing import Any
 
 import numpy as np
+import tomlkit
 
 from gsfric._checks import as_float, short, suggest
 from gsfric.errors import InputError
@@ -302,28 +303,30 @@ RIG_KEYS = {
 """Unit and meaning of each key of a rig TOML."""
 
 
-def _text(value) -> str:
-    if isinstance(value, str):
-        return f'"{value}"'
-    if isinstance(value, tuple):
-        return "[" + ", ".join(repr(float(v)) for v in value) + "]"
-    return repr(float(value))
-
-
 def rig_toml(rig: Rig) -> str:
     """The rig as a commented rig TOML (``Rig.from_toml`` reads back an equal rig)."""
-    lines = ["# A gsfric rig: the sizes of a hexapod (SI units, angles in rad).",
-             "# Expand it into a full platform with",
-             "#   gsfric platform --template --rig rig.toml --out platform.toml", ""]
+    doc = tomlkit.document()
+    for line in ("A gsfric rig: the sizes of a hexapod (SI units, angles in rad).",
+                 "Expand it into a full platform with",
+                 "  gsfric platform --template --rig rig.toml --out platform.toml"):
+        doc.add(tomlkit.comment(line))
+    doc.add(tomlkit.nl())
     for f in dataclasses.fields(rig):
         unit, meaning = RIG_KEYS[f.name]
         value = getattr(rig, f.name)
         note = f"{unit}, {meaning}" if unit else meaning
         if unit == "rad":
             note += f" ({math.degrees(value):.4g} deg)"
-        line = f"{f.name} = {_text(value)}" if value is not None else f"# {f.name} = "
-        lines.append(f"{line}   # {note}")
-    return "\n".join(lines) + "\n"
+        if value is None:
+            doc.add(tomlkit.comment(f"{f.name} =    # {note}"))
+            continue
+        item = tomlkit.item(value if isinstance(value, str) else
+                            [float(v) for v in value] if isinstance(value, tuple) else
+                            float(value))
+        item.comment(note)
+        item.trivia.comment_ws = "   "
+        doc.add(f.name, item)
+    return tomlkit.dumps(doc)
 
 
 def _sizes(rig: Rig) -> list[str]:

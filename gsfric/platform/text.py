@@ -17,6 +17,7 @@ from __future__ import annotations
 from collections.abc import Iterable, Mapping
 
 import numpy as np
+import tomlkit
 
 from gsfric.platform import catalog
 from gsfric.platform.description import Platform, default_universal_axes
@@ -58,24 +59,6 @@ MEANINGS: dict[str, str] = {
 _ROWS = ("geometry.base_joints", "geometry.platform_joints", "geometry.universal_axes")
 
 
-def _number(x: float) -> str:
-    """The shortest text that reads back as exactly ``x``."""
-    return repr(float(x))
-
-
-def _value(v) -> str:
-    """A TOML value on one line."""
-    if isinstance(v, bool):
-        return "true" if v else "false"
-    if isinstance(v, str):
-        return f'"{v}"'
-    if isinstance(v, Mapping):
-        return "{ " + ", ".join(f"{k} = {_value(x)}" for k, x in v.items()) + " }"
-    if isinstance(v, (list, tuple, np.ndarray)):
-        return "[" + ", ".join(_value(x) for x in v) + "]"
-    return _number(v)
-
-
 def _comment(key: str, notes: Mapping[str, str]) -> str:
     """Unit, meaning and note of a key, ``; ``-separated."""
     unit = catalog.PLATFORM_UNITS.get(key, "")
@@ -83,19 +66,39 @@ def _comment(key: str, notes: Mapping[str, str]) -> str:
                                  notes.get(key, "")) if p)
 
 
-def _line(key: str, value, notes: Mapping[str, str]) -> list[str]:
+def _commented(item, comment: str):
+    """The item with ``comment`` after it on its line (none if empty)."""
+    if comment:
+        item.comment(comment)
+        item.trivia.comment_ws = "   "
+    return item
+
+
+def _add(table, key: str, value, notes: Mapping[str, str]) -> None:
+    """The key's value into ``table``, a matrix a row per line under its comment."""
     name, comment = key.rpartition(".")[2], _comment(key, notes)
     if key in _ROWS:
-        return ([f"# {comment}", f"{name} = ["]
-                + [f"    {_value(row)}," for row in value] + ["]"])
-    return [f"{name} = {_value(value)}" + (f"   # {comment}" if comment else "")]
+        rows = tomlkit.array()
+        rows.extend(value)
+        table.add(tomlkit.comment(comment))
+        table.add(name, rows.multiline(True))
+    else:
+        table.add(name, _commented(tomlkit.item(value), comment))
 
 
-def _effect_comment(name: str, params: Mapping[str, float], notes: Mapping[str, str]) -> str:
+def _effect(name: str, params: Mapping[str, float], notes: Mapping[str, str]):
+    """An effect's parameters as an inline table ``{ a = 1.0, b = 2.0 }``, their units and
+    the note in the comment."""
+    inline = tomlkit.inline_table()
+    for k, (p, v) in enumerate(params.items()):
+        value = tomlkit.item(v)
+        value.trivia.indent = " " if k == 0 else ""
+        inline.add(p, value)
+    inline.add(tomlkit.ws(" "))
     units = ", ".join(f"{p} {u}" for p in params
                       if (u := catalog.unit(f"{name}.{p}")) not in ("", "1"))
-    parts = [p for p in (units, notes.get(f"effects.{name}", "")) if p]
-    return "   # " + "; ".join(parts) if parts else ""
+    return _commented(inline, "; ".join(p for p in (units, notes.get(f"effects.{name}", ""))
+                                        if p))
 
 
 def commented_toml(platform: Platform, header: Iterable[str] = (),
@@ -121,18 +124,26 @@ def commented_toml(platform: Platform, header: Iterable[str] = (),
     g = platform.geometry
     if np.array_equal(g.universal_axes, default_universal_axes(g.base_joints)):
         del data["geometry"]["universal_axes"]
-    lines = [f"# {h}" if h else "#" for h in header]
-    lines += ["" if lines else None, *_line("gravity", data["gravity"], notes)]
-    lines = [x for x in lines if x is not None]
+    doc = tomlkit.document()
+    _add(doc, "gravity", data["gravity"], notes)
     for section in ("geometry", "platform", "legs", "friction"):
-        lines += ["", f"[{section}]"]
+        table = tomlkit.table()
         for key, value in data[section].items():
-            lines += _line(f"{section}.{key}", value, notes)
-    lines += ["", "[effects]" + ("" if data["effects"] else
-                                 "   # none; `gsfric effects` lists the catalog")]
+            _add(table, f"{section}.{key}", value, notes)
+        doc.add(tomlkit.nl())
+        doc.add(section, table)
+    effects = _commented(tomlkit.table(), "" if data["effects"] else
+                         "none; `gsfric effects` lists the catalog")
     for name, params in data["effects"].items():
-        lines.append(f"{name} = {_value(params)}{_effect_comment(name, params, notes)}")
+        effects.add(name, _effect(name, params, notes))
+    doc.add(tomlkit.nl())
+    doc.add("effects", effects)
     if data.get("limits"):
-        lines += ["", "[limits]   # ratings `gsfric sweep` checks the loads against"]
-        lines += [f"{k} = {_value(v)}" for k, v in data["limits"].items()]
-    return "\n".join(lines) + "\n"
+        limits = _commented(tomlkit.table(), "ratings `gsfric sweep` checks the loads against")
+        for k, v in data["limits"].items():
+            limits.add(k, v)
+        doc.add(tomlkit.nl())
+        doc.add("limits", limits)
+    # the header's lines as they are (tomlkit before 0.15 writes an empty comment as "# ")
+    lines = [f"# {h}" if h else "#" for h in header]
+    return ("\n".join(lines) + "\n\n" if lines else "") + tomlkit.dumps(doc)

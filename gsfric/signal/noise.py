@@ -7,6 +7,7 @@ import math
 import numpy as np
 from numpy.lib.stride_tricks import sliding_window_view
 
+from gsfric._optional import optional
 from gsfric.signal.savgol import savgol_filter, savgol_weights
 
 NOISE_DIFFERENCE_ORDER = 6
@@ -189,16 +190,15 @@ def spectral_noise_std(y: np.ndarray, step: float, low: float, segment: int = 32
     """
     y = np.asarray(y, float)
     n, segment = len(y), int(segment)
-    count = n // segment
-    freqs = np.fft.rfftfreq(segment, step)
-    above = (freqs > low) & (freqs < freqs[-1])
-    if count < 3 or not above.any():
+    if n // segment < 3:
         return np.zeros(y.shape[1:])
-    parts = y[:count * segment].reshape(count, segment, -1)
-    x = np.arange(segment) - (segment - 1) / 2
-    slope = np.einsum("j,ijk->ik", x, parts) / np.sum(x ** 2)
-    e = parts - parts.mean(axis=1, keepdims=True) - slope[:, None, :] * x[None, :, None]
-    taper = np.hanning(segment + 2)[1:-1]
-    power = np.abs(np.fft.rfft(e * taper[None, :, None], axis=1)) ** 2 / np.sum(taper ** 2)
-    level = np.median(power[:, above], axis=0) / EXPONENTIAL_MEDIAN     # (frequencies, k)
+    # Welch's segments (scipy.signal.spectrogram: each segment's own periodogram), one-sided
+    # density 2 |X|^2 step / sum(taper^2) between 0 and the Nyquist frequency; their median
+    # here, not welch's mean or its median over SciPy's small-sample bias
+    freqs, _, density = optional("scipy.signal").spectrogram(
+        y, 1.0 / step, np.hanning(segment + 2)[1:-1], segment, 0, detrend="linear", axis=0)
+    above = (freqs > low) & (freqs < freqs[-1])
+    if not above.any():
+        return np.zeros(y.shape[1:])
+    level = np.median(density[above], axis=-1) / (2 * step) / EXPONENTIAL_MEDIAN
     return np.sqrt(np.quantile(level, 0.25, axis=0))
