@@ -631,3 +631,31 @@ def test_every_field_has_a_test():
     missing = [f for f in sorted(FIELDS)
                if f not in tested and not any(f in name.split("_and_") for name in tested)]
     assert missing == []
+
+
+def _record(travel: float, turn: float) -> ForceNoise:
+    return ForceNoise((0.1,) * 6, "noise record", "noise record r.csv", motion=(travel, turn))
+
+
+def test_record_travel():
+    record = _record(2e-3, 0.0)
+    with pytest.raises(InputError, match="moves 0.002 m"):
+        record.check_at_rest(Settings().record_travel, Settings().record_turn)
+    wide = Settings(record_travel=5e-3)
+    record.check_at_rest(wide.record_travel, wide.record_turn)
+
+
+def test_record_turn():
+    record = _record(0.0, 2e-3)
+    with pytest.raises(InputError, match="turns 0.002 rad"):
+        record.check_at_rest(Settings().record_travel, Settings().record_turn)
+    wide = Settings(record_turn=5e-3)
+    record.check_at_rest(wide.record_travel, wide.record_turn)
+
+
+def test_noise_spread():
+    forces = np.random.default_rng(4).normal(40.0, 1.0, (500, 6))
+    noise = _record(0.0, 0.0)                         # 0.1 N against a spread of 1 N
+    noise.check_plausible(forces, Settings().noise_spread)
+    with pytest.raises(InputError, match="implausible"):
+        noise.check_plausible(forces, Settings(noise_spread=(0.5, 10.0)).noise_spread)

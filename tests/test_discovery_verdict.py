@@ -99,11 +99,11 @@ def test_a_noise_record_with_poses_must_be_at_rest(tmp_path):
     moved = frame.assign(x=np.linspace(0, 2e-3, n))
     moved.to_csv(path, index=False)
     with pytest.raises(InputError, match=r"rest.csv: not at rest: the platform moves 0.002 m"):
-        read_noise_record(path)
+        read_noise_record(path).check_at_rest(Settings().record_travel, Settings().record_turn)
     half = 1e-3 * np.arange(n) / n           # a turn about z of up to 2 mrad
     frame.assign(qw=np.cos(half), qz=np.sin(half)).to_csv(path, index=False)
     with pytest.raises(InputError, match=r"turns 0.002 rad"):
-        read_noise_record(path)
+        read_noise_record(path).check_at_rest(Settings().record_travel, Settings().record_turn)
 
 
 def test_a_force_noise_must_be_plausible_against_the_forces_spread():

@@ -25,7 +25,7 @@ from __future__ import annotations
 
 import os
 from collections.abc import Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from pathlib import Path
 
 import numpy as np
@@ -44,7 +44,6 @@ from gsfric.signal.rotations import (
     rotation_from_quaternion,
 )
 from gsfric.signal.windows import savgol_adaptive
-from gsfric.discovery.settings import Settings
 from gsfric.trajectory import Motion, is_uniform
 
 FORCE_SOURCES = ("specified", "noise record", "estimated")
@@ -63,11 +62,15 @@ class ForceNoise:
         ``specified`` or ``noise record``.
     detail : str
         Where it comes from (the option, the file).
+    motion : (float, float) or None
+        A noise record's poses: the largest travel of the platform frame's origin from its
+        first sample, m, and the largest turn, rad; None without poses.
     """
 
     std: tuple[float, ...]
     source: str
     detail: str = ""
+    motion: tuple[float, float] | None = None
 
     @classmethod
     def specified(cls, values: float | Sequence[float], detail: str = "--force-noise"
@@ -96,6 +99,18 @@ class ForceNoise:
             raise InputError(f"{detail}: F{leg} does not change over the record: no noise to "
                              "measure")
         return cls(tuple(float(v) for v in std), "noise record", detail)
+
+    def check_at_rest(self, travel: float, turn: float) -> None:
+        """``InputError`` when the record's poses (``motion``) travel more than ``travel`` m
+        or turn more than ``turn`` rad (``Settings.record_travel``, ``record_turn``)."""
+        if self.motion is None:
+            return
+        moved, turned = self.motion
+        if moved > travel or turned > turn:
+            raise InputError(f"{self.detail}: not at rest: the platform moves {moved:.3g} m "
+                             f"and turns {turned:.3g} rad from its first sample (a noise "
+                             f"record must stay within {travel:g} m and {turn:g} rad); record "
+                             "the load cells with the platform still")
 
     def check_plausible(self, forces: np.ndarray, limits: tuple[float, float]) -> None:
         """``InputError`` when a leg's noise lies outside ``limits`` (``Settings.noise_spread``)
@@ -208,21 +223,13 @@ def pose_noise_forces(platform: Platform, motion: Motion,
     return np.sqrt(total / draws), how
 
 
-def check_at_rest(path: str | os.PathLike[str], fmt: LogFormat, settings: Settings) -> None:
-    """``InputError`` when the poses of a noise record move: the platform frame's origin
-    travels more than ``settings.record_travel`` or turns more than ``settings.record_turn``
-    from its first sample."""
+def record_motion(path: str | os.PathLike[str], fmt: LogFormat) -> tuple[float, float]:
+    """The largest travel (m) and turn (rad) of a noise record's poses from its first sample."""
     motion = read_trajectory(path, log_format=fmt)
     travel = np.linalg.norm(motion.position - motion.position[0], axis=1)
     cos = (np.einsum("ij,nij->n", motion.rotation[0], motion.rotation) - 1.0) / 2.0
     turn = np.arccos(np.clip(cos, -1.0, 1.0))
-    k, j = int(np.argmax(travel)), int(np.argmax(turn))
-    if travel[k] > settings.record_travel or turn[j] > settings.record_turn:
-        raise InputError(f"{path}: not at rest: the platform moves {travel[k]:.3g} m and "
-                         f"turns {turn[j]:.3g} rad from its first sample (a noise record must "
-                         f"stay within {settings.record_travel:g} m and "
-                         f"{settings.record_turn:g} rad); record the load cells with the "
-                         "platform still")
+    return float(travel.max()), float(turn.max())
 
 
 def noise_floor(force: ForceNoise | None, estimate: np.ndarray, pose: np.ndarray,
@@ -243,16 +250,17 @@ def noise_floor(force: ForceNoise | None, estimate: np.ndarray, pose: np.ndarray
                       residual_rms / rms if rms > 0 else float("inf"))
 
 
-def read_noise_record(path: str | os.PathLike[str], log_format: LogFormat | None = None,
-                      settings: Settings | None = None) -> ForceNoise:
+def read_noise_record(path: str | os.PathLike[str], log_format: LogFormat | None = None
+                      ) -> ForceNoise:
     """The load cells' noise from a recording at rest: a CSV or Parquet file with F1..F6 (or
     the columns and units a log's format maps to them); InputError naming the file and the
-    column for a missing or bad one, or for a record with pose columns that moves
-    (``check_at_rest``)."""
+    column for a missing or bad one. A record with pose columns carries how far they move
+    (``ForceNoise.motion``, checked by ``ForceNoise.check_at_rest``)."""
     fmt = log_format or LogFormat()
     found = dict(zip(*read_columns(path)))
+    motion = None
     if all(fmt.columns.get(name, name) in found for name in ("t", "x", "y", "z")):
-        check_at_rest(path, fmt, settings or Settings())
+        motion = record_motion(path, fmt)
     names = [fmt.columns.get(name, name) for name in FORCES]
     missing = [n for n in names if n not in found]
     if missing:
@@ -261,4 +269,4 @@ def read_noise_record(path: str | os.PathLike[str], log_format: LogFormat | None
     columns = numeric_columns(Path(path), [found[n] for n in names], list(FORCES))
     scale = np.array([UNITS["force"][fmt.units.get(name, "N")] for name in FORCES])
     forces = np.stack([columns[name] for name in FORCES], axis=1) * scale
-    return ForceNoise.from_record(forces, f"noise record {path}")
+    return replace(ForceNoise.from_record(forces, f"noise record {path}"), motion=motion)

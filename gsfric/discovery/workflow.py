@@ -177,6 +177,7 @@ def discover(motion: Motion, forces: np.ndarray, platform: Platform | None = Non
                                                                    motion.rotation)), motion.t)
     check_forces(platform, forces)
     if force_noise is not None:
+        force_noise.check_at_rest(settings.record_travel, settings.record_turn)
         force_noise.check_plausible(forces, settings.noise_spread)
     bar = _Progress(progress, settings.max_effects + 3)
     bar.step("simulating the model along the measured motion")
