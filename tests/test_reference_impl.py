@@ -1,4 +1,4 @@
-"""The NumPy implementations of gsfric.numpy_model against the compiled map, at random states.
+"""The NumPy implementations of gsfric.bench.numpy_engine against the compiled map, at random states.
 
 The vectorised implementation reduces (2)-(16) to a 6x6 system per step; the per-step loop
 solves the dense 42x42 system. Their agreement with each other and with the compiled

@@ -2,7 +2,7 @@
 
 The compiled map ``Evaluator.actuator_forces`` (actuator forces with friction, NumPy in to NumPy
 out, preallocated output) is timed on one and on two threads against the same physics written
-in NumPy (``gsfric.numpy_model``): vectorised over steps, and a per-step loop that solves the
+in NumPy (``gsfric.bench.numpy_engine``): vectorised over steps, and a per-step loop that solves the
 dense 42x42 system of (2)-(16) at every step. Every case runs on the reference platform over a
 smooth random motion.
 

@@ -259,7 +259,7 @@ class Evaluator:
         evaluates chunk after chunk passes the same dict and reuses the memory; the Result's
         arrays are then views into it, valid until the next call with it. ``sensor=False``
         leaves F as the mechanism's (no sensor effects): for a caller that applies them
-        over a longer record than this motion (``gsfric.stream``).
+        over a longer record than this motion (``gsfric.simulate``, chunk by chunk).
         """
         if not isinstance(motion, Motion):
             raise InputTypeError(f"motion: expected a gsfric.Motion, got {_kind(motion)} "
@@ -533,7 +533,7 @@ def evaluate_outputs(evaluator: Evaluator, motion: Motion, names, buffers: dict 
     """Only the outputs ``names`` of ``motion`` and its step flags, as
     ``Evaluator.evaluate_quiet`` computes them, without a Result.
 
-    For a caller that writes a few outputs at every step (``gsfric.stream``): the compiled
+    For a caller that writes a few outputs at every step (``gsfric.simulate``): the compiled
     code stores only those (the ones the flags read are computed all the same), about an
     eighth less time than every output for the 7 of ``simulate``'s default columns.
 
