@@ -1,4 +1,4 @@
-"""The equations notebook's LaTeX (derive/display.py): every quantity of every equation group
+"""The equations notebook's LaTeX (derive/display/): every quantity of every equation group
 has a proper LaTeX name, and every vector definition is one equation between vectors."""
 
 from __future__ import annotations

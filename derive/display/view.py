@@ -1,26 +1,9 @@
-"""The model's equations in LaTeX, as derive/ builds them (for the equations notebook).
+"""The chain's definitions written back as equations between vectors (``equations``).
 
-A chain (derive/chain.py) holds every named quantity of the derivation as components: the
-vector ``u_1`` is three symbols defined by three expressions in other components. This module
-writes each definition back as one equation between vectors. It knows which symbols are the
-components of which vector or matrix (the chain's input blocks and its steps of several
-entries) and recognises, in the component expressions, the operations the derivation is made
-of; every form it writes equals the components it stands for, term by term:
-
-* sums of vectors times scalars, ``M v`` and ``M^T v`` (M an input matrix, a sum of them, or a
-  matrix whose columns are vectors), ``a x b``, ``a . b``, ``|a|``;
-* a stacked pair of vectors for the six-entry columns of the 6x6 system (2)-(7);
-* what is left, such as the weight along z, along the unit vectors ``e_x``, ``e_y``, ``e_z``.
-
-A definition in which no such form is found is written by components. With ``expand=True``
-every vector definition is followed by its components, the way the generated C computes them.
-
-Names follow the paper where it has them: vectors bold (``\\mathbf{u}_{1}``), components with
-the axis last (``u_{1,x}``), matrix entries with the body as superscript (``I^{L}_{11}``).
-``printed(group)`` gives the paper's printed equations of a group (derive/printed.py and
-derive/printed_legs.py, exactly as printed) and ``errata(group)`` the errata that concern it.
-
-Display only: nothing here generates code (derive/sources.py does not hash this module).
+``_View`` names every component of the chain (names.py) and knows which components make up
+which vector or matrix (a ``_Family``: an input block or a step of several entries); its vector
+and scalar forms recognise, in the component expressions, the operations the derivation is
+made of.
 """
 
 from __future__ import annotations
@@ -30,202 +13,15 @@ from dataclasses import dataclass
 
 import sympy as sp
 
-from sympy.printing.latex import LatexPrinter
-
-from . import printed as pp
-from . import printed_legs as pl
-from .effects import CATALOG, parameter_names
-from .model import (CONSTANT_LATEX, PAPER_CONSTANTS, PARAMETER_LATEX, PARAMETERS, STATE,
-                    STATE_LATEX, Model)
-
-AXES = "xyz"
+from ..effects import parameter_names
+from ..model import Model
+from .names import (AXES, EFFECT_NAMES, INPUT_LATEX, RAW_NAMES, Name, _effect_name, _name,
+                    _unsuffix)
+from .printer import _Printer, _Scalar, _Vector
 
 GROUPS = ("1", "kinematics", "2-7", "8-10", "11-17", "17", "28-32", "33-35", "coupled",
           "conditioning")
 """The chain's equation groups (``Step.equation``), in the order of the paper."""
-
-RAW_NAMES = {
-    "M_rot_alpha": r"\alpha^{b}",
-    "M_rot_omega": r"\omega^{b}",
-    "leg_body_alpha": r"\alpha^{b}_{L}",
-    "leg_body_omega": r"\omega^{b}_{L}",
-    "a2_u_dot": r"\dot{u}^{a}",
-    "b_u_dot": r"\dot{u}^{b}",
-}
-"""LaTeX of the quantities whose name in the chain is no LaTeX name: the platform's and the
-legs' rates in their own axes (superscript b, for body) and the components of u' along the
-leg's axes a2 and b."""
-
-EFFECT_NAMES = {
-    "stribeck.static": "F_{S}",
-    "stribeck.velocity": "v_{S}",
-    "seal_friction.force": "F_{s}",
-    "quadratic_drag.coefficient": "c_{d}",
-    "stroke_friction.slope": "k_{D}",
-    "stroke_friction.reference": "D_{0}",
-    "payload_offset": r"\Delta c_{L}",
-    "joint_friction_coupling.scale": "k_{jf}",
-    "leg_weight.lower_mass": r"\Delta m_{4}",
-    "leg_weight.upper_mass": r"\Delta m_{2}",
-    "bushing_friction.coefficient": r"\mu_{b}",
-    "bushing_friction.spacing": "b_{b}",
-}
-"""Names of the effect parameters (the input Q, derive/effects.py): the payload offset is a
-vector, the sensor biases are ``b_{F,i}``; a parameter not listed is ``q_{\\text{name}}``."""
-
-
-# ----------------------------------------------------------------------------- names
-
-
-def _script(text: str) -> tuple[str, str]:
-    """Split ``"{ab}rest"`` into ``("ab", "rest")`` and ``"arest"`` into ``("a", "rest")``."""
-    if not text.startswith("{"):
-        return text[0], text[1:]
-    depth = 0
-    for i, ch in enumerate(text):
-        depth += {"{": 1, "}": -1}.get(ch, 0)
-        if depth == 0:
-            return text[1:i], text[i + 1:]
-    raise ValueError(f"unbalanced braces in {text!r}")
-
-
-_KERNEL = re.compile(r"(?:\\Delta\s*)?(?:\\[A-Za-z]+\{[^{}]*\}|\\[A-Za-z]+|[A-Za-z])")
-_ITERATE = re.compile(r"^(.*[A-Za-z])_(\d+)$")
-_ACCENT = re.compile(r"^\\(dot|ddot|hat|tilde|bar)\{(.+)\}$")
-
-
-@dataclass(frozen=True)
-class Name:
-    """A symbol's LaTeX in parts, ``kernel_{sub}^{sup}`` with comma-joined scripts."""
-
-    kernel: str
-    sub: tuple[str, ...] = ()
-    sup: tuple[str, ...] = ()
-
-    @classmethod
-    def parse(cls, latex: str) -> "Name | None":
-        """``latex`` in parts, or None when it is not a kernel with sub- and superscripts.
-
-        An iterate's index written inside a subscript (``M_{frE_0}``) becomes a superscript
-        (``M^{(0)}_{frE}``).
-        """
-        match = _KERNEL.match(latex)
-        if match is None:
-            return None
-        rest, sub, sup = latex[match.end():], [], []
-        while rest:
-            if rest[0] not in "_^" or len(rest) < 2:
-                return None
-            script, tail = _script(rest[1:])
-            (sub if rest[0] == "_" else sup).append(script)
-            rest = tail
-        for k, part in enumerate(sub):
-            iterate = _ITERATE.match(part)
-            if iterate and "\\" not in part:
-                sub[k] = iterate.group(1)
-                sup.append(f"({iterate.group(2)})")
-        return cls(match.group(0), tuple(sub), tuple(sup))
-
-    def with_sub(self, *extra: str) -> "Name":
-        return Name(self.kernel, self.sub + tuple(extra), self.sup)
-
-    def _scripts(self, kernel: str, sub=None, sup=None) -> str:
-        sub = self.sub if sub is None else sub
-        sup = self.sup if sup is None else sup
-        out = kernel
-        if sub:
-            out += "_{" + ",".join(sub) + "}"
-        if sup:
-            out += "^{" + ",".join(sup) + "}"
-        return out
-
-    @property
-    def scalar(self) -> str:
-        """The name of a scalar: ``D_{1}``."""
-        return self._scripts(self.kernel)
-
-    @property
-    def vector(self) -> str:
-        """The name of a vector, bold: ``\\mathbf{u}_{1}``, ``\\dot{\\mathbf{u}}_{1}``."""
-        return self._scripts(_bold(self.kernel))
-
-    def component(self, axis: str) -> str:
-        """The name of one component: ``u_{1,x}``."""
-        return self.with_sub(axis).scalar
-
-    @property
-    def matrix(self) -> str:
-        """The name of a matrix: its labels as superscripts, ``I^{L}``."""
-        return self._scripts(self.kernel, (), self.sub + self.sup)
-
-    def entry(self, i: int, j: int) -> str:
-        """The name of a matrix entry (from 0): ``I^{L}_{11}``."""
-        return self._scripts(self.kernel, (f"{i + 1}{j + 1}",), self.sub + self.sup)
-
-
-def _bold(kernel: str) -> str:
-    if kernel.startswith(r"\Delta"):
-        return r"\Delta" + _bold(kernel[len(r"\Delta"):].strip())
-    accent = _ACCENT.match(kernel)
-    if accent:
-        return rf"\{accent.group(1)}{{{_bold(accent.group(2))}}}"
-    if kernel.startswith("\\"):
-        return rf"\boldsymbol{{{kernel}}}"
-    return rf"\mathbf{{{kernel}}}"
-
-
-def _name(latex: str) -> Name:
-    """``Name.parse``, or the text itself as an upright name."""
-    parsed = Name.parse(latex)
-    if parsed is None:
-        escaped = latex.replace("_", r"\_")
-        return Name(rf"\mathrm{{{escaped}}}")
-    return parsed
-
-
-def _unsuffix(name: str, suffix: str) -> str | None:
-    """Undo ``Scope`` and ``_entry_name`` (derive/chain.py): the base ``suffix`` was added to."""
-    if name.endswith(f",{suffix}}}"):
-        return name[:-len(f",{suffix}}}")] + "}"
-    if name.endswith(f"_{{{suffix}}}"):
-        return name[:-len(f"_{{{suffix}}}")]
-    return None
-
-
-# ----------------------------------------------------------------------------- placeholders
-
-
-class _Vector(sp.Symbol):
-    """A vector (or matrix) expression written as one symbol; its LaTeX is in ``_View.names``."""
-
-
-class _Scalar(sp.Symbol):
-    """A scalar made of vectors (a dot product, a length), written as one symbol."""
-
-
-class _Printer(LatexPrinter):
-    """SymPy's LaTeX printer with the vectors of a product written last (``c_{s} \\omega``)
-    and the terms of a sum that carry no minus sign first (``E - C``)."""
-
-    def _as_ordered_terms(self, expr, order=None):
-        terms = super()._as_ordered_terms(expr, order=order)
-        return ([t for t in terms if not t.could_extract_minus_sign()]
-                + [t for t in terms if t.could_extract_minus_sign()])
-
-    def _print_Mul(self, expr):
-        vectors = [a for a in expr.args if isinstance(a, _Vector)]
-        if not vectors:
-            return super()._print_Mul(expr)
-        scalar = sp.Mul(*[a for a in expr.args if not isinstance(a, _Vector)])
-        text = " ".join(self._print(v) for v in vectors)
-        if scalar == 1:
-            return text
-        if scalar == -1:
-            return f"- {text}"
-        coefficient = self._print(scalar)
-        if scalar.is_Add:
-            coefficient = rf"\left({coefficient}\right)"
-        return f"{coefficient} {text}"
 
 
 @dataclass
@@ -292,12 +88,11 @@ class _View:
         return family
 
     def _name_inputs(self) -> None:
-        latex = {**STATE_LATEX, **PARAMETER_LATEX, **CONSTANT_LATEX}
         for block, matrix in self.model.chain.inputs.items():
             if block == "effects":
                 self._name_effects(matrix)
                 continue
-            name = _name(latex.get(block, block))
+            name = _name(INPUT_LATEX.get(block, block))
             rows, cols = matrix.shape
             if rows * cols == 1:
                 self.names[matrix[0, 0]] = name.scalar
@@ -317,13 +112,7 @@ class _View:
         offset = [entries.pop(f"payload_offset.{a}") for a in AXES]
         self._vector_family(_name(EFFECT_NAMES["payload_offset"]), offset)
         for full, s in entries.items():
-            effect, parameter = full.split(".")
-            if effect == "sensor_bias":
-                self.names[s] = f"b_{{F,{parameter[1:]}}}"
-            elif full in EFFECT_NAMES:
-                self.names[s] = EFFECT_NAMES[full]
-            else:
-                self.names[s] = rf"q_{{\text{{{full.replace('_', ' ')}}}}}"
+            self.names[s] = _effect_name(full)
 
     def _name_steps(self) -> None:
         steps = self.model.chain.steps
@@ -784,172 +573,3 @@ def equations(model: Model, group: str, leg: int = 1, expand: bool = False,
         ``name = definition`` in LaTeX, in the chain's order.
     """
     return _view(model).equations(group, leg, expand, iterates)
-
-
-# ----------------------------------------------------------------------------- the paper
-
-
-GROUP_RANGES = {"1": (1, 1), "2-7": (2, 7), "8-10": (8, 10), "11-17": (11, 16), "17": (17, 17),
-                "18-27": (18, 27), "28-32": (28, 32), "33-35": (33, 35)}
-"""The paper's equation numbers of each group (``"11-17"`` holds (11)-(16), (17) is its own)."""
-
-
-def errata(group: str) -> list[pp.Erratum]:
-    """The errata (``derive.printed.ERRATA``) whose equation numbers fall in a group.
-
-    Parameters
-    ----------
-    group : str
-        A key of ``GROUP_RANGES``; other groups have none.
-
-    Returns
-    -------
-    list of Erratum
-    """
-    if group not in GROUP_RANGES:
-        return []
-    lo, hi = GROUP_RANGES[group]
-    found = []
-    for e in pp.ERRATA:
-        for first, last in re.findall(r"\((\d+)\)(?:-\((\d+)\))?", e.where):
-            if int(first) <= hi and int(last or first) >= lo:
-                found.append(e)
-                break
-    return found
-
-
-def _paper_vector(kernel: str, label: str, axes: str = "XYZ") -> sp.Matrix:
-    """The paper's components of a leg quantity: ``R^O_{XEi}`` ... (``kernel``, ``label``)."""
-    return sp.Matrix([sp.Symbol(f"{kernel}_{{{a}{label}}}", real=True) for a in axes])
-
-
-def _latex(expr) -> str:
-    return _Printer().doprint(expr)
-
-
-def _equation(terms: dict) -> str:
-    return _latex(sp.Eq(pp.residual(terms), 0, evaluate=False))
-
-
-def printed(group: str) -> list[tuple[str, str]]:
-    """The paper's printed equations of a group, exactly as printed, in LaTeX.
-
-    Each comes from the equation functions of derive/printed.py and derive/printed_legs.py
-    with no erratum fixed, on symbols named as in the paper (leg i).
-
-    Parameters
-    ----------
-    group : str
-        ``"1"``, ``"2-7"``, ``"11-17"``, ``"17"``, ``"18-27"``, ``"28-32"`` or ``"33-35"``;
-        other groups print nothing.
-
-    Returns
-    -------
-    list of (str, str)
-        The equation number as printed, ``"(5)"``, and the equation.
-    """
-    i = "i"
-    R_E, R_C = _paper_vector("R^O", f"E{i}"), _paper_vector("R^O", f"C{i}")
-    F2, F4 = _paper_vector("F", f"2{i}"), _paper_vector("F", f"4{i}")
-    M2, M4 = _paper_vector("M", f"2{i}"), _paper_vector("M", f"4{i}")
-    M_C = _paper_vector("M^O", f"C{i}")
-    E = sp.Matrix([sp.Symbol(f"{a}_{{E{i}}}", real=True) for a in "XYZ"])
-    C = sp.Matrix([sp.Symbol(f"{a}_{{C{i}}}", real=True) for a in "XYZ"])
-    D = sp.Symbol(f"D_{i}", positive=True)
-    if group == "1":
-        T = sp.Matrix(3, 3, lambda r, c: sp.Symbol(f"b_{{{r + 1}{c + 1}}}", real=True))
-        e = sp.Matrix([sp.Symbol(f"{a}^{{l}}_{{E{i}}}", real=True) for a in "XYZ"])
-        point = sp.Matrix(pp.eq1_point(T, e))
-        lhs = sp.Matrix([sp.Symbol(f"{a}^{{O}}_{{E{i}}}", real=True) for a in "XYZ"])
-        return [("(1)", _latex(sp.Eq(lhs, point, evaluate=False)))]
-    if group == "2-7":
-        out = []
-        for number in ("2-4", "5", "6", "7"):
-            forms = pp.printed_equation(number)
-            forms = forms if isinstance(forms, list) else [forms]
-            out += [(f"({number})", _latex(f)) for f in forms]
-        return out
-    if group == "11-17":
-        out = [("(11)-(13)", _equation(t)) for t in pl.eq11_13_terms(R_C, R_E, F2, F4)]
-        out += [(f"({n})", _equation(t))
-                for n, t in zip((14, 15, 16), pl.eq14_16_terms(R_E, E, C, D, F2, F4, M2, M4,
-                                                               M_C))]
-        return out
-    if group == "17":
-        m, a = sp.Symbol("m", positive=True), _paper_vector("a", "")
-        I, alpha = _paper_vector("I", ""), _paper_vector(r"\alpha", "")
-        F, M = pl.eq17(m, a, I, alpha)
-        return [("(17)", _latex(sp.Eq(_paper_vector("F", ""), sp.Matrix(F), evaluate=False))),
-                ("(17)", _latex(sp.Eq(_paper_vector("M", ""), sp.Matrix(M), evaluate=False)))]
-    if group == "18-27":
-        E_next = sp.Matrix([sp.Symbol(f"{a}_{{E{i}+1}}", real=True) for a in "XYZ"])
-        U = pl.leg_frame(E, C, E_next)
-        out = [(f"({n})", _latex(sp.Eq(sp.Symbol(f"U_{axis}"), sp.Matrix(u), evaluate=False)))
-               for n, axis, u in zip((21, 22, 24), "XYZ", U)]
-        R = _paper_vector("R^O", "")
-        theta = sp.Matrix([sp.Symbol(rf"R^{{\theta}}_{{{a}}}") for a in "XYZ"])
-        U_symbols = [sp.Matrix([sp.Symbol(f"U_{{{axis}{a}}}") for a in "xyz"]) for axis in "XYZ"]
-        out.append(("(25)-(27)", _latex(sp.Eq(theta, sp.Matrix(pl.eq25_27(R, U_symbols)),
-                                                evaluate=False))))
-        return out
-    if group == "28-32":
-        R3, RE = _paper_vector(r"R^{\theta}", f"3{i}"), _paper_vector(r"R^{\theta}", f"E{i}")
-        F2t, M2t = _paper_vector(r"F^{\theta}", f"2{i}"), _paper_vector(r"M^{\theta}", f"2{i}")
-        M3 = _paper_vector(r"M^{\theta}", f"3{i}")
-        numbers = ("(28)", "(29)", "(30)", "(31)", "(32)")
-        return [(n, _equation(t))
-                for n, t in zip(numbers, pl.eq28_32_terms(R3, RE, F2t, M2t, M3, D))]
-    if group == "33-35":
-        c_s, mu, r = sp.symbols("c_s mu r", positive=True)
-        out = []
-        for n, joint, R in (("(33)", "1", R_E), ("(34)", "0", R_C)):
-            omega = _paper_vector(r"\omega", f"{joint}{i}", "xyz")
-            moment = _paper_vector("M^{fr}", f"{'E' if joint == '1' else 'C'}{i}", "xyz")
-            friction = sp.Matrix(pl.eq33_34(c_s, omega, mu, r, R))
-            out.append((n, _latex(sp.Eq(moment, friction, evaluate=False))))
-        v, R3 = sp.Symbol("v_i", real=True), _paper_vector("R", f"3{i}")
-        out.append(("(35)", _latex(sp.Eq(sp.Symbol("F^{fr}_{i}"), pl.eq35(c_s, v, mu, R3),
-                                           evaluate=False))))
-        return out
-    return []
-
-
-def legend(model: Model) -> list[tuple[str, str, str, str]]:
-    """What the symbols of the model's inputs stand for.
-
-    Parameters
-    ----------
-    model : Model
-        ``derive.model.build(mode)``.
-
-    Returns
-    -------
-    list of (str, str, str, str)
-        Input name, its LaTeX (``i`` for a leg's), unit and description: the state, the
-        platform's parameters, in paper mode the constants, and the effect parameters.
-    """
-    latex = {**STATE_LATEX, **PARAMETER_LATEX, **CONSTANT_LATEX}
-    specs = STATE + PARAMETERS + (PAPER_CONSTANTS if model.mode == "paper" else ())
-    rows = []
-    for name, shape, unit, description in specs:
-        symbol = _name(latex.get(name, name))
-        if shape == (3, 3):
-            tex = symbol.matrix
-        elif shape == (3,):
-            tex = symbol.vector
-        elif shape == (6, 3):
-            tex = symbol.with_sub("i").vector
-        else:
-            tex = symbol.scalar
-        rows.append((name, tex, unit, description))
-    for effect in CATALOG:
-        for parameter in effect.parameters:
-            full = f"{effect.name}.{parameter.name}"
-            if effect.name == "payload_offset":
-                tex = _name(EFFECT_NAMES["payload_offset"]).component(parameter.name)
-            elif effect.name == "sensor_bias":
-                tex = f"b_{{F,{parameter.name[1:]}}}"
-            else:
-                tex = EFFECT_NAMES.get(full, rf"q_{{\text{{{full.replace('_', ' ')}}}}}")
-            rows.append((full, tex, parameter.unit, parameter.description))
-    return rows
