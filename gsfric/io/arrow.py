@@ -26,7 +26,9 @@ def numpy_view(array) -> np.ndarray | None:
     kind = array.type
     if array.null_count or not (pa.types.is_integer(kind) or pa.types.is_floating(kind)):
         return None
-    dtype = np.dtype(kind.to_pandas_dtype())
+    # not kind.to_pandas_dtype(), which imports pandas (before pyarrow 26)
+    code = "f" if pa.types.is_floating(kind) else "iu"[pa.types.is_unsigned_integer(kind)]
+    dtype = np.dtype(f"{code}{kind.byte_width}")
     return np.frombuffer(array.buffers()[1], dtype=dtype, count=len(array),
                          offset=array.offset * dtype.itemsize)
 
