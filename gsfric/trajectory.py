@@ -103,12 +103,14 @@ def time_unit_hint(step: float, unit: str = "s") -> str | None:
     low, high = SAMPLING_RATE_RANGE
     if not np.isfinite(step) or step <= 0:
         return None
-    if low <= 1.0 / (step * TIME_UNITS[unit]) <= high:
+    with np.errstate(divide="ignore", over="ignore"):          # a step that underflows: inf
+        rates = {u: float(np.divide(1.0, np.float64(step) * f)) for u, f in TIME_UNITS.items()}
+    if low <= rates[unit] <= high:
         return None
-    fits = [u for u, f in TIME_UNITS.items() if low <= 1.0 / (step * f) <= high]
+    fits = [u for u, rate in rates.items() if low <= rate <= high]
     if not fits:
         return None
-    return min(fits, key=lambda u: abs(np.log(1.0 / (step * TIME_UNITS[u]) / TYPICAL_RATE)))
+    return min(fits, key=lambda u: abs(np.log(rates[u] / TYPICAL_RATE)))
 
 
 def check_sampling_rate(t: np.ndarray, what: str = "t", unit: str = "s",
