@@ -18,6 +18,8 @@ from gsfric import models
 from gsfric.evaluation.evaluator import Evaluator, state_array
 from gsfric.evaluation.memory import POOL_MIN_BYTES
 
+pytestmark = pytest.mark.integration  # end to end: `make check` leaves it out
+
 CALLS = 10_000
 THREADS = 8
 

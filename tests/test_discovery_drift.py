@@ -16,6 +16,8 @@ from gsfric.models import reference_platform
 from gsfric.synth import synthesize
 from gsfric.trajectory import Motion
 
+pytestmark = pytest.mark.integration  # end to end: `make check` leaves it out
+
 M = 6000
 RATE = 250.0
 FORCES = [f"F{i}" for i in range(1, 7)]

@@ -15,6 +15,8 @@ from scipy.signal import lfilter
 from gsfric.discovery import structure
 from gsfric.discovery.settings import Settings
 
+pytestmark = pytest.mark.integration  # end to end: `make check` leaves it out
+
 RATE = 250.0
 M = 6000
 BAND = 2e-3     # m/s: the not-sliding band of these tests

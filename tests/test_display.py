@@ -12,6 +12,8 @@ sp = pytest.importorskip("sympy")
 from derive import display  # noqa: E402
 from derive.model import build  # noqa: E402
 
+pytestmark = pytest.mark.integration  # end to end: `make check` leaves it out
+
 GARBAGE = [
     (re.compile(r"[A-Za-z]+_[A-Za-z]+_[A-Za-z]"), "a Python name (M_rot_alpha)"),
     (re.compile(r"_rot_"), "a Python name"),

@@ -33,6 +33,8 @@ from gsfric.sweep.variants import make_variants
 from gsfric.sweep.workspace import check_reachable
 from gsfric.trajectory import Motion
 
+pytestmark = pytest.mark.integration  # end to end: `make check` leaves it out
+
 WORKSPACE = {
     "sampling": "lhs", "samples": 60, "states": 4, "seed": 3,
     "pose": {"x": [-0.04, 0.04], "y": [-0.04, 0.04], "z": [0.66, 0.74],

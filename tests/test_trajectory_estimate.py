@@ -19,6 +19,8 @@ from gsfric.signal.windows import adaptive_filters, gcv_window, motion_filters, 
 from gsfric.synth import read_forces
 from gsfric.trajectory import Motion
 
+pytestmark = pytest.mark.integration  # end to end: `make check` leaves it out
+
 AXIS = np.array([2.0, -1.0, 2.0]) / 3
 R0 = Rotation.from_euler("zxz", [0.3, 0.2, -0.4]).as_matrix()
 FORCE_NOISE = 0.2
