@@ -29,6 +29,8 @@ from gsfric.signal.noise import spectral_noise_std
 from gsfric.synth import synthesize
 from gsfric.trajectory import Motion
 
+pytestmark = pytest.mark.integration  # end to end: `make check` leaves it out
+
 RATE = 200.0
 
 # -- the floor -----------------------------------------------------------------------------------

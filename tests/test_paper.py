@@ -18,6 +18,8 @@ from gsfric.paper import tables as paper
 from gsfric.paper.report import run_paper
 from gsfric.platform.description import Platform
 
+pytestmark = pytest.mark.integration  # end to end: `make check` leaves it out
+
 SHARED_PAPER = Path(__file__).resolve().parents[1].parent / "shared" / "paper"
 SHARED_CSV = {1: "table1_friction_moments_moving_platform_joints.csv",
               2: "table2_friction_moments_fixed_platform_joints.csv",
