@@ -53,7 +53,7 @@ test-floors:
 	.venv-floors/bin/uv pip install --quiet --python .venv-floors/bin/python \
 		--resolution lowest-direct --no-build-isolation -e ".[test]"
 	.venv-floors/bin/python -c "import pathlib, sysconfig; pathlib.Path(sysconfig.get_paths()['purelib'], 'gsfric-checkout.pth').write_text(str(pathlib.Path.cwd().resolve()) + '\n')"
-	.venv-floors/bin/python -m pytest -n 2 --dist worksteal tests
+	PATH="$(abspath .venv-floors/bin):$$PATH" .venv-floors/bin/python -m pytest -n 2 --dist worksteal tests
 
 bench: built
 	$(BIN)/gsfric bench

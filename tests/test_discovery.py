@@ -336,7 +336,7 @@ def test_whitener_is_statsmodels_yule_walker():
         for t in range(len(phi), n + burn):
             x[t] = w[t] + sum(c * x[t - j - 1] for j, c in enumerate(phi))
         e[:, leg] = 3.0 + (leg + 1) * x[burn:]
-    w = st.Whitener.fit(e)
+    w = st.Whitener.fit(e, max_order=DEFAULTS.max_order)
 
     def variance(x, p):
         return yule_walker(x, order=p, method="mle")[1] ** 2 if p else np.var(x)
