@@ -14,6 +14,8 @@ from pathlib import Path
 
 import click
 
+from gsfric.io.files import check_run_paths, trajectory_files
+
 EXIT_CHECK = 1
 EXIT_INPUT = 2
 EXIT_INTERNAL = 3
@@ -69,7 +71,6 @@ def checked_paths(reads: Mapping[str, str], files: tuple[str, ...] = (),
     def decorate(callback):
         @functools.wraps(callback)
         def run(**kwargs):
-            from gsfric.io.files import check_run_paths
             inputs = [(what, path) for name, what in reads.items()
                       for path in _read_paths(name, kwargs.get(name))]
             dirs = [f(kwargs) if callable(f) else kwargs.get(f) for f in folders]
@@ -86,7 +87,6 @@ def _read_paths(name: str, value) -> list:
     if name == "column_map":
         return [value] if str(value).lower().endswith(".toml") else []
     if name == "trajectories":
-        from gsfric.sweep.plan import trajectory_files
         return trajectory_files(list(value))
     return [value]
 

@@ -21,6 +21,8 @@ from gsfric.evaluation.breakdown import frame as breakdown_frame
 from gsfric.evaluation.breakdown import parts as breakdown_parts
 from gsfric.evaluation.columns import annotate, plan
 from gsfric.evaluation.flags import FLAG_NAMES, flag_message
+from gsfric.view import FrameCollector, page, write_page
+from gsfric.view import show as show_page
 
 DETAILS = ("R_3_leg", "M_3_leg", "coupling_change", "Ffr_viscous", "Ffr_coulomb",
            "Ffr_bushing", "Ffr_seal", "Ffr_effects", "N_bushing")
@@ -245,8 +247,6 @@ class Result:
 
     def _view_page(self, fps: float, title: str | None) -> str:
         """The HTML text of ``to_html`` and ``show``."""
-        from gsfric.view import FrameCollector, page
-
         if self.source is None:
             raise GsfricError("to_html: needs a Result of Evaluator.evaluate or gsfric.evaluate "
                               "(it draws the platform and motion that were evaluated)")
@@ -292,16 +292,12 @@ class Result:
         >>> out.read_text().startswith("<!DOCTYPE html>")
         True
         """
-        from gsfric.view import write_page
-
         return write_page(path, self._view_page(fps, title))
 
     def show(self, *, fps: float = 60.0, title: str | None = None, height: int = 760) -> None:
         """Show the 3-D view of ``to_html`` in a Jupyter output cell (an iframe holding the
         page; needs IPython). ``height`` is the cell's, in CSS pixels."""
-        from gsfric.view import show
-
-        show(self._view_page(fps, title), height)
+        show_page(self._view_page(fps, title), height)
 
     def to_frame(self):
         """A pandas DataFrame with the columns of ``gsfric simulate``, one row per step.

@@ -564,3 +564,24 @@ def _toml_problem(text: str, error: Exception) -> str:
         if key:
             return f"line {number}: key {key!r} given twice; give each key once"
     return f"invalid TOML: {message}"
+
+
+def trajectory_files(trajectories) -> list[Path]:
+    """The files the glob pattern(s) match, each pattern sorted; their names must differ."""
+    if trajectories is None:
+        return []
+    patterns = [trajectories] if isinstance(trajectories, (str, os.PathLike)) else \
+        list(trajectories)
+    files: list[Path] = []
+    for pattern in patterns:
+        matched = sorted(glob.glob(os.fspath(pattern), recursive=True))
+        matched = [m for m in matched if Path(m).is_file()]
+        if not matched:
+            raise InputError(f"trajectories: {os.fspath(pattern)!r} matches no file")
+        files += [Path(m) for m in matched]
+    names = [f.name for f in files]
+    for name in names:
+        if names.count(name) > 1:
+            raise InputError(f"trajectories: two files are named {name!r}; motions are "
+                             "named by file name")
+    return files

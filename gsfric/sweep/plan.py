@@ -4,7 +4,6 @@ with the fingerprint of the inputs that a resumed sweep must match."""
 
 from __future__ import annotations
 
-import glob
 import hashlib
 import json
 import math
@@ -17,6 +16,7 @@ import numpy as np
 from gsfric import __version__
 from gsfric._checks import short
 from gsfric.errors import InputError
+from gsfric.io.files import trajectory_files
 from gsfric.io.tables import count_rows
 from gsfric.models import platform_from
 from gsfric.platform.description import Platform
@@ -73,27 +73,6 @@ def _file_rows(path: Path) -> int:
         return rows
     with open(path, "rb") as handle:
         return max(0, sum(1 for _ in handle) - 1)
-
-
-def trajectory_files(trajectories) -> list[Path]:
-    """The files the glob pattern(s) match, each pattern sorted; their names must differ."""
-    if trajectories is None:
-        return []
-    patterns = [trajectories] if isinstance(trajectories, (str, os.PathLike)) else \
-        list(trajectories)
-    files: list[Path] = []
-    for pattern in patterns:
-        matched = sorted(glob.glob(os.fspath(pattern), recursive=True))
-        matched = [m for m in matched if Path(m).is_file()]
-        if not matched:
-            raise InputError(f"trajectories: {os.fspath(pattern)!r} matches no file")
-        files += [Path(m) for m in matched]
-    names = [f.name for f in files]
-    for name in names:
-        if names.count(name) > 1:
-            raise InputError(f"trajectories: two files are named {name!r}; motions are "
-                             "named by file name")
-    return files
 
 
 def _pose_block(n_poses: int, states: int, variants: int, chunk_steps: int) -> int:
