@@ -145,8 +145,9 @@ def rest_then_moves(rate=200.0, seconds=16.0, seed=4):
     return minimum_jerk_moves(t, targets, 1.0, 0.7)
 
 
-@pytest.mark.parametrize("effect", ["sensor_bias:b1=1.0,b4=-1.0",
-                                    "force_scale:g1=0.03,g3=-0.03"])
+@pytest.mark.parametrize("effect", [
+    "sensor_bias:b1=1.0,b4=-1.0",
+    pytest.param("force_scale:g1=0.03,g3=-0.03", marks=pytest.mark.slow)])
 def test_effect_of_moves_after_a_long_rest_is_named(effect):
     """Every sliding pair in the last eighth of the record: cut by time, each fold's training
     blocks held no pair where the held-out one did, nothing passed, and the verdict was

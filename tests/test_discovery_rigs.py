@@ -159,7 +159,8 @@ def point_to_point(samples=6000, rate=200.0, seed=0) -> Motion:
 
 
 @pytest.mark.parametrize("base, effect", [
-    ("paper", "seal_friction:force=1.5"), ("paper", "stribeck:static=2,velocity=0.01"),
+    pytest.param("paper", "seal_friction:force=1.5", marks=pytest.mark.slow),
+    pytest.param("paper", "stribeck:static=2,velocity=0.01", marks=pytest.mark.slow),
     ("coupled", "stribeck:static=2,velocity=0.01")])
 def test_coulomb_effects_hold_through_rests(base, effect):
     """Point-to-point moves with rests and pose noise: the friction flips with the noise at
@@ -437,8 +438,10 @@ def _smooth_motion(family: str, seed: int, samples: int = 3000, rate: float = 20
 
 @pytest.mark.parametrize("family, delay, platform, noise, phi", [
     ("sines", 0.0625, COUPLED, 0.2, 0.95),      # 12.5 samples
-    ("sines", -0.0013, PAPER, 0.02, 0.0),       # a quarter of a sample, force ahead
-    ("chirps", -0.0375, PAPER, 0.2, 0.0),       # 7.5 samples, force ahead
+    # a quarter of a sample, force ahead
+    pytest.param("sines", -0.0013, PAPER, 0.02, 0.0, marks=pytest.mark.slow),
+    # 7.5 samples, force ahead
+    pytest.param("chirps", -0.0375, PAPER, 0.2, 0.0, marks=pytest.mark.slow),
     ("chirps", 0.0023, COUPLED, 0.05, 0.9),     # half a sample
 ])
 def test_large_and_small_delays_are_recovered(family, delay, platform, noise, phi):
@@ -460,16 +463,14 @@ def test_large_and_small_delays_are_recovered(family, delay, platform, noise, ph
 
 def test_time_offset_columns_computed_when_asked_equal_the_held_ones():
     """The time_offset secant columns computed from the shifted forces when asked for
-    (``Columns``) give the design, the prewhitened blocks, the screening and the whole
-    discovery of the reference path that holds them in the array."""
+    (``Columns``) give the design, the prewhitened blocks and the screening of the reference
+    path that holds them in the array."""
     from gsfric.discovery import statistics as st
     from gsfric.discovery.residuals import Columns, Problem
     from gsfric.discovery.selection import screen_candidates
     from gsfric.discovery.settings import Settings
 
-    data = synthesize(PAPER, ["time_offset:delay=0.02", "seal_friction:force=1.5"],
-                      motion=_smooth_motion("chirps", 3, samples=2000), noise=0.1,
-                      noise_correlation=0.6, pose_noise=1e-5, seed=4)
+    data = _delayed_seal_record()
     motion, forces, poses = recorded(data)
     problem = Problem(motion, forces, data.model, Settings(n_threads=1), poses=poses)
     theta = problem.model.theta0
@@ -501,6 +502,20 @@ def test_time_offset_columns_computed_when_asked_equal_the_held_ones():
         assert sa.tests[name].significant == test.significant
         assert sa.variant[name] == sb.variant[name]
         assert sa.tests[name].F == pytest.approx(test.F, rel=1e-9, abs=1e-9)
+
+
+def _delayed_seal_record():
+    return synthesize(PAPER, ["time_offset:delay=0.02", "seal_friction:force=1.5"],
+                      motion=_smooth_motion("chirps", 3, samples=2000), noise=0.1,
+                      noise_correlation=0.6, pose_noise=1e-5, seed=4)
+
+
+@pytest.mark.slow
+def test_a_discovery_on_computed_time_offset_columns_equals_one_on_held_ones():
+    """The whole discovery of the record above, with the time_offset columns computed when
+    asked for and with them held in the array: the same effects and residual."""
+    data = _delayed_seal_record()
+    motion, forces, poses = recorded(data)
     results = []
     for lazy_path in (False, True):
         import gsfric.discovery.residuals as residuals
@@ -531,6 +546,7 @@ def long_rests(samples, rate, rng) -> Motion:
                                  height=0.95, tilt=0.25, move=(0.6, 1.2), rest=(0.8, 1.5))
 
 
+@pytest.mark.slow
 def test_a_mode_ringing_after_the_stops_is_not_explained():
     """A 7 Hz mode of the structure, excited by the force's rate, rings on into the long rests
     that the fit leaves out; on the moves a delay imitates part of it (before the rest test:
@@ -561,6 +577,7 @@ def test_a_mode_ringing_after_the_stops_is_not_explained():
     assert rest.significant and rest.p_value < 1e-4 and rest.details["rests"] >= 5
 
 
+@pytest.mark.slow
 def test_offsets_as_good_as_a_quadratic_load_cell_under_slow_noise_are_not_explained():
     """The quadratic load cell of the test above on the heavy platform under AR(1) noise with
     phi = 0.9: six offsets and the generic basis explain the same, neither adds to the other
