@@ -31,7 +31,7 @@ import pytest
 from click.testing import CliRunner
 
 from gsfric.cli import main
-from gsfric.discovery import CANDIDATE_NAMES, discover, run_discover
+from gsfric.discovery import CANDIDATE_NAMES, discover
 from gsfric.discovery import statistics as st
 from gsfric.discovery.settings import Settings
 from gsfric.errors import InputError
@@ -288,14 +288,17 @@ def test_discover_end_to_end(tmp_path):
         assert (out / name).stat().st_size > 1000
 
 
-def test_run_discover_returns_the_written_files(tmp_path):
+def test_discover_on_a_file_returns_the_written_files(tmp_path):
     data = synthesize(effects=["sensor_bias:b1=1,b4=-1"], samples=2000, noise=0.2, seed=2)
     path = tmp_path / "m.parquet"
     data.frame.to_parquet(path)
-    written = run_discover(path, None, tmp_path / "out", progress=False, figures=False)
+    result = discover(path, out=tmp_path / "out", figures=False)
+    written = result.written
     assert [p.name for p in written] == ["summary.json", "platform.toml", "report.md"]
     summary = json.loads(written[0].read_text())
-    assert [e["name"] for e in summary["effects"]] == ["sensor_bias"]
+    assert [e["name"] for e in summary["effects"]] == ["sensor_bias"] == result.names
+    assert summary == json.loads(json.dumps(result.summary()))
+    assert result.source == str(path)
 
 
 def test_discover_rejects_forces_of_the_wrong_shape():
@@ -575,7 +578,7 @@ def test_effects_the_model_already_has_are_refitted(tmp_path):
     model.to_toml(platform_file)
     measured = tmp_path / "measured.csv"
     data.frame.to_csv(measured, index=False)
-    run_discover(measured, platform_file, tmp_path / "out", progress=False, figures=False)
+    discover(measured, platform=platform_file, out=tmp_path / "out", figures=False)
     summary = json.loads((tmp_path / "out" / "summary.json").read_text())
     assert summary["effects"] == []
     assert all(t["name"] != "stribeck" for r in summary["rounds"] for t in r["tests"])

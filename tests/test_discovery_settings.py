@@ -37,7 +37,7 @@ ROUND = {"candidates": ("seal_friction", "sensor_bias")}
 # -- no class defaults --------------------------------------------------------------------------
 
 PACKAGE = Path(gsfric.__file__).parent
-ENTRY = (Path("discovery", "workflow.py"), "discover")
+ENTRY = (Path("discovery", "workflow.py"), "discover_motion")
 """The one function that makes the default settings (``Settings()``) for a user who gave none."""
 
 
@@ -97,7 +97,7 @@ def test_the_scan_finds_each_kind_of_default_read():
     source = ("from gsfric.discovery import settings\n"
               "def fit(order=Settings.max_order):\n"
               "    return settings.Settings.ridge + getattr(Settings, 'alpha') + Settings().trim\n"
-              "def discover(settings=None):\n"
+              "def discover_motion(settings=None):\n"
               "    return settings or Settings()\n")
     found = _default_reads(source, Path("discovery", "other.py"))
     assert [text for _, text in found] == ["Settings.max_order", "Settings.ridge",

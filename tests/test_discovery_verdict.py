@@ -305,7 +305,7 @@ def test_discover_takes_the_force_noise_from_the_command_line(tmp_path, mains_re
 
 
 def test_the_command_line_wins_over_the_record_and_the_column_map(tmp_path):
-    from gsfric.discovery.report import _force_noise
+    from gsfric.discovery.api import _force_noise
 
     path = tmp_path / "rest.csv"
     rng = np.random.default_rng(1)

@@ -20,7 +20,7 @@ from helpers import trajectory_frame
 
 from gsfric import models
 from gsfric.cli import main
-from gsfric.discovery import run_discover
+from gsfric.discovery import discover
 from gsfric.errors import InputError
 from gsfric.io.files import atomic_write, check_outputs, output_folder, same_file
 from gsfric.io.tables import write_table
@@ -123,7 +123,7 @@ def test_folder_functions_name_both_paths(files, how):
     with pytest.raises(InputError, match=expected):
         sweep(out, trajectories=str(files["trajectory"]))
     with pytest.raises(InputError, match="the measured-data file"):
-        run_discover(files["trajectory"], out_dir=out)
+        discover(files["trajectory"], out=out)
     assert state(files["trajectory"])[0] == files["trajectory"].read_bytes()
 
 

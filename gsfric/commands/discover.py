@@ -9,9 +9,8 @@ import click
 
 from gsfric.commands.common import checked_paths, log_options
 from gsfric.discovery.answer import verdict_line
-from gsfric.discovery.report import discover_file, write
+from gsfric.discovery.api import discover as discover_data
 from gsfric.errors import InputError
-from gsfric.io.files import check_output_folder
 from gsfric.io.logs import LogFormat
 
 
@@ -53,13 +52,11 @@ def discover(measured, platform_file, out_dir, seed, force_noise, noise_record, 
     """
     show = False if quiet else sys.stderr.isatty() if progress is None else progress
     log_format = LogFormat.from_options(column_map, units_map, angles, None)
-    check_output_folder(out_dir)
-    result = discover_file(measured, platform_file, seed=seed, progress=show,
-                           force_noise=_values(force_noise), noise_record=noise_record,
-                           **({"log_format": log_format} if log_format else {}))
-    written = write(result, out_dir)
+    result = discover_data(measured, platform=platform_file, out=out_dir, seed=seed,
+                           progress=show, force_noise=_values(force_noise),
+                           noise_record=noise_record, log_format=log_format)
     if not quiet:
-        for path in written:
+        for path in result.written:
             click.echo(f"wrote {path}")
     click.echo(verdict_line(result))
 

@@ -1,12 +1,14 @@
 """Discrepancy discovery: where model and measurement disagree, and which effect is missing.
 
->>> from gsfric.discovery import discover, run_discover
+>>> from gsfric.discovery import discover
 >>> result = discover(motion, forces, platform)        # a record of yours  # doctest: +SKIP
 >>> result.names, result.rms_before, result.rms_after  # a record of yours  # doctest: +SKIP
+>>> discover("measured.csv", out="out")                # a file of yours    # doctest: +SKIP
 
-``run_discover(measured, platform_file, out_dir, seed=0)`` is ``gsfric discover``: it reads a
-measured-data file, runs ``discover`` and writes ``summary.json``, ``report.md`` and plots.
-Modules: ``model`` (the compiled model as a function of its parameters), ``candidates`` (what
+``discover`` (``api``, also ``gsfric.discover``) is ``gsfric discover``: it reads a
+measured-data file, a DataFrame or a Motion with its forces, runs the workflow and, given
+``out``, writes ``summary.json``, ``report.md`` and plots. Modules: ``api`` (the inputs),
+``model`` (the compiled model as a function of its parameters), ``candidates`` (what
 may change), ``statistics`` (prewhitening, block cross-validation, block bootstrap),
 ``regimes`` (where the residuals concentrate), ``workflow`` (the rounds), ``floor`` (the
 noise floor of the verdict), ``dictionary`` (structure outside the catalog), ``verdict``
@@ -14,11 +16,10 @@ noise floor of the verdict), ``dictionary`` (structure outside the catalog), ``v
 ``report`` (the files written).
 """
 
+from gsfric.discovery.api import discover
 from gsfric.discovery.candidates import CANDIDATE_NAMES, CANDIDATES, REFIT
-from gsfric.discovery.report import run_discover
 from gsfric.discovery.results import Discovery, Finding
 from gsfric.discovery.settings import Settings
-from gsfric.discovery.workflow import discover
 
 __all__ = ["CANDIDATES", "CANDIDATE_NAMES", "REFIT", "Discovery", "Finding", "Settings",
-           "discover", "run_discover"]
+           "discover"]

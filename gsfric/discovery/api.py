@@ -1,4 +1,8 @@
-"""``gsfric.discover``: discovery on a measured-data file, a DataFrame or arrays, in one call.
+"""``gsfric.discover``: the one way into discovery, for the command line and for Python.
+
+It takes a measured-data file, a DataFrame or a Motion with its forces, reads and checks the
+inputs once, runs the workflow (``workflow.discover_motion``) and, given ``out``, writes the
+outputs (``report.write``). ``gsfric discover`` calls it.
 
 >>> import gsfric
 >>> result = gsfric.discover("measured.csv", out="out")  # a file of yours  # doctest: +SKIP
@@ -9,24 +13,37 @@
 from __future__ import annotations
 
 import os
+from collections.abc import Sequence
 
 import numpy as np
 
-from gsfric.discovery.report import discover_file, write
+from gsfric._checks import short
+from gsfric.discovery.floor import ForceNoise, read_noise_record
+from gsfric.discovery.report import write
+from gsfric.discovery.rest import poses_from_columns
 from gsfric.discovery.results import Discovery
-from gsfric.discovery.workflow import discover as discover_motion
-from gsfric.errors import InputError
-from gsfric.io.files import check_outputs
-from gsfric.io.logs import FORCES
-from gsfric.io.readers import motion_from_frame
+from gsfric.discovery.workflow import discover_motion
+from gsfric.errors import InputError, InputTypeError
+from gsfric.io.files import check_output_folder, check_outputs
+from gsfric.io.logs import FORCES, LogFormat
+from gsfric.io.readers import motion_from_frame, read_measured_columns
+from gsfric.models import platform_from
 from gsfric.platform.description import Platform
+from gsfric.platform.usable import check_forces, check_poses
+from gsfric.signal.savgol import DEFAULT_POLYORDER
 from gsfric.trajectory import Motion
+
+LENGTH_GAP = 1e-3
+"""m RMS: leg lengths D1..D6 of a file further than this from those of its recorded poses
+are noted (a geometry that is not the rig's; a millimetre is above any pose noise)."""
 
 
 def discover(data, forces: np.ndarray | None = None,
              platform: Platform | str | os.PathLike[str] | None = None, *,
              out: str | os.PathLike[str] | None = None, seed: int = 0, progress: bool = False,
-             figures: bool = True, **options) -> Discovery:
+             figures: bool = True, force_noise: float | Sequence[float] | None = None,
+             noise_record: str | os.PathLike[str] | None = None,
+             log_format: LogFormat | None = None, **options) -> Discovery:
     """Find which effects the model misses in measured data, fit them, measure the gap closed.
 
     Parameters
@@ -41,27 +58,42 @@ def discover(data, forces: np.ndarray | None = None,
         The current model (default: the reference platform).
     out : path-like, optional
         Also write summary.json, report.md, platform.toml and the plots there (as
-        ``gsfric discover --out``).
+        ``gsfric discover --out``). Checked before the work starts: it must not be, or
+        hold, an input.
     seed : int
         Seed of the block bootstrap.
     progress : bool
         Progress on stderr.
     figures : bool
         With ``out``: write the plots.
+    force_noise : float, sequence of 6 floats or ForceNoise, optional
+        The load cells' noise, N (a sensor specification; ``--force-noise``), one value or
+        one per leg. Default: ``noise_record``'s, else the ``force_noise`` of ``log_format``,
+        else estimated from the force channels.
+    noise_record : path-like, optional
+        A recording at rest (CSV or Parquet with F1..F6): each force channel's standard
+        deviation about its mean is the load cells' noise.
+    log_format : LogFormat, optional
+        The column map and units of a file written by another program.
     **options
-        ``gsfric.discovery.Settings`` fields; ``log_format`` (a ``LogFormat``) for a file
-        written by another program.
+        ``gsfric.discovery.Settings`` fields; ``poses`` (the recorded positions and
+        rotations, see ``workflow.discover_motion``) with a Motion.
 
     Returns
     -------
     Discovery
         ``repr`` gives the answer in a line; ``summary()`` the content of summary.json;
-        ``report()`` the Markdown report.
+        ``report()`` the Markdown report; ``written`` the files written to ``out``.
 
     Raises
     ------
+    InputTypeError
+        ``data`` of another type, an unknown option.
     InputError
-        Unreadable data, or a Motion without forces of shape (N, 6).
+        Unreadable data (naming the row and column), a Motion without forces of shape
+        (N, 6), mostly unusable data, an output that is an input, a bad setting.
+    OutputError
+        An output could not be written (a full disk); nothing partial is left.
 
     Examples
     --------
@@ -77,28 +109,69 @@ def discover(data, forces: np.ndarray | None = None,
     >>> print(result.report().splitlines()[0])        # takes seconds  # doctest: +SKIP
     # Discrepancy discovery
     """
+    is_file = isinstance(data, (str, os.PathLike))
     platform_file = platform if isinstance(platform, (str, os.PathLike)) else None
     if out is not None:
-        check_outputs([out], {"platform": platform_file,
-                              **({"measured-data": data}
-                                 if isinstance(data, (str, os.PathLike)) else {})})
-    if isinstance(data, (str, os.PathLike)):
-        result = discover_file(data, platform, seed=seed, progress=progress, **options)
+        check_outputs([out], {"platform": platform_file, "noise-record": noise_record,
+                              "measured-data": data if is_file else None})
+        check_output_folder(out)
+    sensor = _force_noise(force_noise, noise_record, log_format)
+    run = dict(seed=seed, progress=progress, force_noise=sensor, **options)
+    if is_file:
+        result = _discover_file(data, platform, log_format, run)
     elif isinstance(data, Motion):
         if forces is None:
             raise InputError("forces: required with a Motion (shape (N, 6), N)")
-        result = discover_motion(data, forces, platform, seed=seed, progress=progress,
-                                 **options)
+        result = discover_motion(data, forces, platform, **run)
     elif hasattr(data, "columns"):
         missing = [c for c in FORCES if c not in data.columns]
         if missing:
             raise InputError(f"DataFrame: missing force columns {', '.join(missing)}")
-        motion = motion_from_frame(data)
-        result = discover_motion(motion, data[list(FORCES)].to_numpy(float), platform,
-                                 seed=seed, progress=progress, **options)
+        result = discover_motion(motion_from_frame(data), data[list(FORCES)].to_numpy(float),
+                                 platform, **run)
     else:
-        raise InputError(f"data: expected a file path, a DataFrame or a Motion, got "
-                         f"{type(data).__name__}")
+        raise InputTypeError(f"data: expected a file path, a DataFrame or a Motion, got "
+                             f"{short(data)}")
     if out is not None:
-        write(result, out, figures=figures)
+        result.written = write(result, out, figures=figures)
     return result
+
+
+def _discover_file(measured: str | os.PathLike[str], platform, log_format: LogFormat | None,
+                   run: dict) -> Discovery:
+    """The workflow on a measured-data file: its columns read with ``log_format``, the poses
+    and forces checked against the platform."""
+    model = platform_from(platform)
+    motion, forces, lengths, columns = read_measured_columns(measured, None, DEFAULT_POLYORDER,
+                                                          log_format)
+    poses = poses_from_columns(columns)
+    check_poses(model, *poses, motion.t, str(measured))
+    check_forces(model, forces, str(measured))
+    result = discover_motion(motion, forces, model, poses=poses, **run)
+    result.source = str(measured)
+    if isinstance(platform, (str, os.PathLike)):
+        result.platform_source = str(platform)
+    how = motion.differentiation()
+    if how is not None:
+        result.notes.append(f"differentiation: {how.describe()}")
+    if lengths is not None:
+        gap = float(np.sqrt(np.mean((lengths - result.result_before.D) ** 2)))
+        if gap > LENGTH_GAP:
+            result.notes.append(
+                f"the leg lengths D1..D6 in the file differ from those of the recorded pose by "
+                f"{gap * 1e3:.3g} mm RMS: check the platform's geometry")
+    return result
+
+
+def _force_noise(force_noise, noise_record, log_format) -> ForceNoise | None:
+    """The load cells' noise the user gives, by precedence: ``force_noise``,
+    ``noise_record``, the log format's ``force_noise``; None: estimated."""
+    if isinstance(force_noise, ForceNoise):
+        return force_noise
+    if force_noise is not None:
+        return ForceNoise.specified(force_noise)
+    if noise_record is not None:
+        return read_noise_record(noise_record, log_format)
+    if log_format is not None and log_format.force_noise is not None:
+        return ForceNoise.specified(log_format.force_noise, "force_noise of the column map")
+    return None

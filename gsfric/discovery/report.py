@@ -16,24 +16,15 @@ from __future__ import annotations
 
 import json
 import os
-from collections.abc import Sequence
 from pathlib import Path
 
 import numpy as np
 
-from gsfric._checks import as_path
 from gsfric._optional import optional
 from gsfric.discovery.answer import platform_text
-from gsfric.discovery.floor import ForceNoise, read_noise_record
 from gsfric.discovery.markdown import stribeck_scale
-from gsfric.discovery.rest import poses_from_columns
 from gsfric.discovery.results import Discovery
-from gsfric.discovery.workflow import discover
-from gsfric.io.files import atomic_write, check_output_folder, check_outputs, output_folder
-from gsfric.io.readers import read_measured_columns
-from gsfric.models import platform_from
-from gsfric.platform.usable import check_forces, check_poses
-from gsfric.signal.savgol import DEFAULT_POLYORDER
+from gsfric.io.files import atomic_write, output_folder
 
 PLOTS = ("residuals_time.png", "residuals_speed.png", "regimes.png")
 
@@ -145,7 +136,7 @@ def plots(d: Discovery, out_dir: Path) -> list[Path]:
     return written
 
 
-# -- gsfric discover --------------------------------------------------------------------------
+# -- the output folder --------------------------------------------------------------------------
 
 
 def write(d: Discovery, out_dir: str | os.PathLike[str], *, figures: bool = True
@@ -172,108 +163,3 @@ def write(d: Discovery, out_dir: str | os.PathLike[str], *, figures: bool = True
         if figures:
             written += plots(d, out)
     return [Path(out_dir) / p.name for p in written]
-
-
-def discover_file(measured: str | os.PathLike[str],
-                  platform_file: str | os.PathLike[str] | None = None, *, seed: int = 0,
-                  progress: bool = False,
-                  force_noise: float | Sequence[float] | None = None,
-                  noise_record: str | os.PathLike[str] | None = None, **options) -> Discovery:
-    """Read a measured-data file and run the workflow on it (``run_discover`` without the
-    outputs); parameters as ``run_discover``'s."""
-    platform = platform_from(platform_file)
-    log_format = options.pop("log_format", None)   # column map and units of a log
-    sensor = _force_noise(force_noise, noise_record, log_format)
-    motion, forces, lengths, columns = read_measured_columns(measured, None, DEFAULT_POLYORDER,
-                                                          log_format)
-    poses = poses_from_columns(columns)
-    check_poses(platform, *poses, motion.t, str(measured))
-    check_forces(platform, forces, str(measured))
-    result = discover(motion, forces, platform, seed=seed, progress=progress, poses=poses,
-                      force_noise=sensor, **options)
-    result.source = str(measured)
-    if isinstance(platform_file, (str, os.PathLike)):
-        result.platform_source = str(platform_file)
-    how = motion.differentiation()
-    if how is not None:
-        result.notes.append(f"differentiation: {how.describe()}")
-    if lengths is not None:
-        model_lengths = result.result_before.D
-        gap = float(np.sqrt(np.mean((lengths - model_lengths) ** 2)))
-        if gap > 1e-3:
-            result.notes.append(
-                f"the leg lengths D1..D6 in the file differ from those of the recorded pose by "
-                f"{gap * 1e3:.3g} mm RMS: check the platform's geometry")
-    return result
-
-
-def run_discover(measured: str | os.PathLike[str],
-                 platform_file: str | os.PathLike[str] | None = None,
-                 out_dir: str | os.PathLike[str] = ".", *, seed: int = 0,
-                 progress: bool = True, figures: bool = True,
-                 force_noise: float | Sequence[float] | None = None,
-                 noise_record: str | os.PathLike[str] | None = None, **options) -> list[Path]:
-    """``gsfric discover``: read measured data, run the workflow, write its outputs.
-
-    Parameters
-    ----------
-    measured : path-like
-        Measured-data file (CSV or Parquet; SPEC's columns, read by
-        ``gsfric.io.read_measured``: bad files raise a one-line ``InputError``).
-    platform_file : path-like, optional
-        Platform TOML of the current model (default: the reference platform).
-    out_dir : path-like
-        Output directory (created if needed).
-    seed : int
-        Seed of the block bootstrap.
-    progress : bool
-        Progress on stderr.
-    figures : bool
-        Write the plots.
-    force_noise : float or sequence of 6 floats, optional
-        The load cells' noise, N (a sensor specification; ``--force-noise``), one value or one
-        per leg. Default: ``noise_record``'s, else the ``force_noise`` of the log's format
-        (``log_format`` in ``options``), else estimated from the force channels.
-    noise_record : path-like, optional
-        A recording at rest (CSV or Parquet with F1..F6): each force channel's standard
-        deviation about its mean is the load cells' noise.
-    **options
-        ``Settings`` fields; ``log_format`` (a ``LogFormat``) for a log's columns and units.
-
-    Returns
-    -------
-    list of Path
-        The files written (``verdict_line`` of the result is summary.json's ``answer``).
-
-    Raises
-    ------
-    InputTypeError
-        A path that is not a str or os.PathLike.
-    InputError
-        A bad file (naming the row and column), mostly unusable data, an output that is an
-        input, a bad setting.
-    OutputError
-        An output could not be written (a full disk); nothing partial is left.
-    """
-    measured = as_path(measured, "measured")
-    out_dir = as_path(out_dir, "out_dir")
-    if platform_file is not None:
-        platform_file = as_path(platform_file, "platform_file")
-    check_outputs([out_dir], {"measured-data": measured, "platform": platform_file,
-                              "noise-record": noise_record})
-    check_output_folder(out_dir)
-    result = discover_file(measured, platform_file, seed=seed, progress=progress,
-                           force_noise=force_noise, noise_record=noise_record, **options)
-    return write(result, out_dir, figures=figures)
-
-
-def _force_noise(force_noise, noise_record, log_format) -> ForceNoise | None:
-    """The load cells' noise the user gives, by precedence: ``--force-noise``,
-    ``--noise-record``, the log format's ``force_noise``; None: estimated."""
-    if force_noise is not None:
-        return ForceNoise.specified(force_noise)
-    if noise_record is not None:
-        return read_noise_record(noise_record, log_format)
-    if log_format is not None and log_format.force_noise is not None:
-        return ForceNoise.specified(log_format.force_noise, "force_noise of the column map")
-    return None

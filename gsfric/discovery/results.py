@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import dataclasses
 from dataclasses import dataclass, field
+from pathlib import Path
 
 import numpy as np
 
@@ -366,6 +367,8 @@ class Discovery:
         The measured-data file ("" for data given as arrays or a DataFrame).
     platform_source : str
         The platform file of the model as given ("": a Platform or the reference platform).
+    written : list of Path
+        The files ``gsfric.discover(..., out=...)`` wrote (empty without ``out``).
 
     Examples
     --------
@@ -412,6 +415,7 @@ class Discovery:
     verdict_decided_by: str = ""
     source: str = ""
     platform_source: str = ""
+    written: list[Path] = field(default_factory=list)
 
     @property
     def names(self) -> list[str]:

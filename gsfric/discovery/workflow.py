@@ -118,7 +118,7 @@ class _State:
 
 
 @one_blas_thread
-def discover(motion: Motion, forces: np.ndarray, platform: Platform | None = None, *,
+def discover_motion(motion: Motion, forces: np.ndarray, platform: Platform | None = None, *,
              settings: Settings | None = None, seed: int = 0, progress: bool = False,
              poses: tuple[np.ndarray, np.ndarray] | None = None,
              force_noise: ForceNoise | None = None, **options) -> Discovery:

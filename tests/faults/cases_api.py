@@ -12,7 +12,7 @@ from runner import ApiCase
 
 import gsfric
 from gsfric import models
-from gsfric.discovery import discover, run_discover
+from gsfric.discovery import discover
 from gsfric.errors import InputError, InputTypeError
 from gsfric.evaluation.evaluator import Evaluator, state_array
 from gsfric.platform.description import Platform
@@ -252,9 +252,9 @@ DISCOVER_API = [
      r"no finite value", ValueError),
     ("unknown-option", lambda f: discover(M(), np.zeros((11, 6)), not_a_setting=1), T,
      r"^discover: unknown option 'not_a_setting'", TypeError),
-    ("run-measured-none", lambda f: run_discover(None), T, r"^measured: expected a file path",
+    ("data-none", lambda f: discover(None), T, r"^data: expected a file path",
      TypeError),
-    ("run-out-is-input", lambda f: run_discover(f["t"], out_dir=f["t"]), V,
+    ("out-is-input", lambda f: discover(f["t"], out=f["t"]), V,
      r"is the measured-data file itself", ValueError),
 ]
 
