@@ -40,6 +40,15 @@ FLAG_NAMES = {FLAG_NONFINITE: "non-finite value", FLAG_STROKE: "leg length outsi
 FLAG_BITS = {"NONFINITE": FLAG_NONFINITE, "STROKE": FLAG_STROKE, "SINGULAR": FLAG_SINGULAR,
              "UNIVERSAL": FLAG_UNIVERSAL, "COUPLING": FLAG_COUPLING}
 """Each flag's name (``FLAG_<name>`` here and in compiled/batch.c) and bit."""
+FLAG_ROTATION = 32
+EXPORT_FLAG_NAMES = {**FLAG_NAMES,
+                     FLAG_ROTATION: "rotation block of the state not a rotation matrix"}
+EXPORT_FLAG_BITS = {**FLAG_BITS, "ROTATION": FLAG_ROTATION}
+"""The flags of the library ``gsfric export`` writes: the ones above and ``ROTATION``, a state
+whose rotation block is not a rotation (``gsfric.trajectory.ROTATION_TOL``, the test of
+``first_non_rotation``; its outputs are NaN). gsfric raises ``InputError`` for such a state
+before evaluating it (``Motion``, ``Evaluator``); a controller's call cannot raise, so the
+library flags it."""
 COUPLING_TOLERANCE = 1e-6
 COND_LIMIT = 1e6
 SINGULAR_LIMIT = 2.0 / COND_LIMIT
