@@ -19,6 +19,10 @@ Step flags (bits of ``Result.flag``; 0 = sound step):
 
 Every flag is computed in C in the same pass as the outputs (``compiled/batch.c``) with the
 settings of ``flag_spec`` (tests/helpers.py has an independent NumPy version for the tests).
+The library of ``gsfric export`` adds 32 ``FLAG_ROTATION`` (``EXPORT_FLAG_BITS``).
+
+``check_flagged`` refuses a record whose steps are mostly flagged, naming the flag and its
+cause in the platform (``flag_cause``).
 """
 
 from __future__ import annotations
