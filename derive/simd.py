@@ -9,7 +9,9 @@ of the C library's, see ``v_exp``), and divisions: a square root used only as a 
 printed as its reciprocal (``v_rsqrt``) and the divisions by it as products, a divisor of
 several divisions of the loop, or one that is loop invariant, as one reciprocal and products
 (the rewriting ``-freciprocal-math`` allows the compiler), and a division on its own as
-``v_div`` (see ``_DIVIDER``: on AVX-512 these do not use the divider).
+``v_div`` (see ``_DIVIDER``: on AVX-512 these do not use the divider). The operations'
+text, the reading of the instruction list and the reciprocal rule are those of
+``gsfric.compiled.instructions``, which the export's printer (gsfric/export/folded.py) reads too.
 
 The lane width is chosen when the C is compiled, for the CPU it is compiled for: 8 with
 AVX-512F, 4 with AVX, otherwise 1 (scalar vectors; ``-DGSFRIC_LANES=n`` overrides). The
@@ -47,26 +49,17 @@ from __future__ import annotations
 
 import casadi as ca
 
+from gsfric.compiled.instructions import (
+    OPERATIONS,
+    Instruction,
+    divisors,
+    opcode_names,
+    read,
+    reciprocal,
+)
+
 # recorded in the manifest: the printed code is the same for every lane width
 LANES = "chosen when compiled: 8 (AVX-512F), 4 (AVX), 1"
-
-_BINARY = {
-    "OP_ADD": "{a} + {b}", "OP_SUB": "{a} - {b}", "OP_MUL": "{a} * {b}",
-    "OP_DIV": "{a} / {b}", "OP_POW": "v_pow({a}, {b})", "OP_CONSTPOW": "v_pow({a}, {b})",
-    "OP_FMIN": "v_fmin({a}, {b})", "OP_FMAX": "v_fmax({a}, {b})",
-    "OP_ATAN2": "v_atan2({a}, {b})", "OP_LT": "v_lt({a}, {b})", "OP_LE": "v_le({a}, {b})",
-    "OP_EQ": "v_eq({a}, {b})", "OP_NE": "v_ne({a}, {b})", "OP_AND": "v_and({a}, {b})",
-    "OP_OR": "v_or({a}, {b})", "OP_IF_ELSE_ZERO": "v_if_else_zero({a}, {b})",
-    "OP_COPYSIGN": "v_copysign({a}, {b})",
-}
-_UNARY = {
-    "OP_ASSIGN": "{a}", "OP_NEG": "-{a}", "OP_EXP": "v_exp({a})", "OP_LOG": "v_log({a})",
-    "OP_SQRT": "v_sqrt({a})", "OP_SQ": "{a} * {a}", "OP_TWICE": "{a} + {a}",
-    "OP_SIN": "v_sin({a})", "OP_COS": "v_cos({a})", "OP_TAN": "v_tan({a})",
-    "OP_FABS": "v_fabs({a})", "OP_INV": "v_inv({a})", "OP_TANH": "v_tanh({a})",
-    "OP_SIGN": "v_sign({a})", "OP_NOT": "v_not({a})", "OP_FLOOR": "v_floor({a})",
-    "OP_CEIL": "v_ceil({a})",
-}
 
 # lane by lane through the C library (rare operations)
 _LANEWISE = {
@@ -322,11 +315,6 @@ def _header() -> str:
     return "\n".join(lines) + "\n"
 
 
-def _opnames():
-    return {getattr(ca, n): n for n in dir(ca) if n.startswith("OP_")
-            and isinstance(getattr(ca, n), int)}
-
-
 def _gather_tables(sizes: list[int]) -> list[str]:
     """C lines of ``gidx`` (the index tables of ``v_store_rows``, one per distinct output
     size, 8 entries per value) and ``goff`` (each output's table in it)."""
@@ -342,140 +330,102 @@ def _gather_tables(sizes: list[int]) -> list[str]:
             f"{{{', '.join(str(start[k]) for k in sizes)}}};"]
 
 
-def _divisor_uses(f, names) -> dict[int, tuple[int, int, int]]:
-    """For each instruction k's value: (its uses, its uses as the divisor of a division, those of
-    them in divisions that are not loop invariant), read from the instruction list (CasADi
-    reuses work slots: a slot's value is the one its last writer gave it)."""
-    writer: dict[int, int] = {}          # work slot -> the instruction that wrote it last
-    invariant: dict[int, bool] = {}
-    count: dict[int, list[int]] = {}
-    for k in range(f.n_instructions()):
-        op = names[f.instruction_id(k)]
-        i = f.instruction_input(k)
-        if op == "OP_OUTPUT":
-            count[writer[i[0]]][0] += 1
-            continue
-        args = [] if op in ("OP_INPUT", "OP_CONST") else \
-            [writer[i[0]], writer[i[1]]] if op in _BINARY else [writer[i[0]]]
-        invariant[k] = i[0] != 0 if op == "OP_INPUT" else all(invariant[a] for a in args)
-        for pos, a in enumerate(args):
-            count[a][0] += 1
-            if op == "OP_DIV" and pos == 1:
-                count[a][1] += 1
-                count[a][2] += not invariant[k]
-        count[k] = [0, 0, 0]
-        writer[f.instruction_output(k)[0]] = k
-    return {k: tuple(c) for k, c in count.items()}
-
-
-def _on_request_only(f, names, lazy: set[int]) -> set[int]:
-    """The instructions whose values only the outputs ``lazy`` need (read from the
-    instruction list: a work slot's value is the one its last writer gave it)."""
-    writer: dict[int, int] = {}
+def _on_request_only(program: list[Instruction], lazy: set[int]) -> set[int]:
+    """The instructions whose values only the outputs ``lazy`` need."""
     consumers: dict[int, list[int]] = {}
     core: set[int] = set()
     values: set[int] = set()
-    for k in range(f.n_instructions()):
-        op = names[f.instruction_id(k)]
-        i = f.instruction_input(k)
-        if op == "OP_OUTPUT":
-            if f.instruction_output(k)[0] not in lazy:
-                core.add(writer[i[0]])
+    for item in program:
+        if item.op == "OP_OUTPUT":
+            if item.slot not in lazy:
+                core.add(item.args[0])
             continue
-        values.add(k)
-        args = [] if op in ("OP_INPUT", "OP_CONST") else \
-            [writer[i[0]], writer[i[1]]] if op in _BINARY else [writer[i[0]]]
-        for a in args:
-            consumers.setdefault(a, []).append(k)
-        writer[f.instruction_output(k)[0]] = k
-    for k in range(f.n_instructions() - 1, -1, -1):
+        values.add(item.index)
+        for a in item.args:
+            consumers.setdefault(a, []).append(item.index)
+    for k in range(len(program) - 1, -1, -1):
         if k not in core and any(c in core for c in consumers.get(k, ())):
             core.add(k)
     return values - core
 
 
+def _vector_text(f, item: Instruction, args: list[str]) -> str:
+    """The vector C text of the operation ``item`` on the operands ``args``."""
+    text = OPERATIONS[item.op].vector
+    if text is None:
+        raise NotImplementedError(f"{f.name()}: no SIMD translation for {item.op}")
+    return text.format(*args)
+
+
 def batch_source(f, prefix: str, on_request=()) -> str:
     """C source of ``<prefix>_batch`` for the CasADi SX function ``f``; the outputs named in
     ``on_request`` are computed only in a call that asks for one of them."""
-    names = _opnames()
+    program = read(f, opcode_names(ca))
     n_x = f.numel_in(0)
     sizes = [f.numel_out(j) for j in range(f.n_out())]
     lazy_out = {j for j in range(f.n_out()) if f.name_out(j) in on_request}
-    lazy = _on_request_only(f, names, lazy_out)
+    lazy = _on_request_only(program, lazy_out)
     order = [j for j in range(f.n_out()) if j not in lazy_out] + sorted(lazy_out)
     base = {j: sum(sizes[q] for q in order[:order.index(j)]) for j in order}
     n_core = sum(sizes[j] for j in range(f.n_out()) if j not in lazy_out)
-    uses = _divisor_uses(f, names)
+    uses = divisors(program)
     hoisted, body, later = [], [], []
-    current: dict[int, tuple[str, bool, int]] = {}  # work slot -> (C name, invariant, defined by)
+    names: dict[int, str] = {}     # instruction -> the C name of its value
     rsqrt: set[int] = set()        # square roots held as their reciprocals
     recip: dict[int, str] = {}     # divisors -> the name of their reciprocal
     line_of: dict[int, int] = {}   # instruction -> its line in body
     copied: dict[int, int] = {}    # instruction -> its work slot, for a copy read by `later`
 
-    def value(slot: int, deferred: bool) -> tuple[str, bool, int]:
-        """The value in ``slot``; in the deferred part a copy of a loop-body value, which
-        later instructions of the body may overwrite."""
-        name, invariant, d = current[slot]
-        if deferred and name.startswith("w"):
-            copied[d] = slot
-            return f"c{d}", invariant, d
-        return name, invariant, d
+    def value(a: int, deferred: bool) -> str:
+        """The value of instruction ``a``; in the deferred part a copy of a loop-body value,
+        which later instructions of the body may overwrite."""
+        if deferred and names[a].startswith("w"):
+            copied[a] = program[a].slot
+            return f"c{a}"
+        return names[a]
 
-    for k in range(f.n_instructions()):
-        op = names[f.instruction_id(k)]
-        i = f.instruction_input(k)
-        o = f.instruction_output(k)
+    for item in program:
+        k, op = item.index, item.op
         if op == "OP_OUTPUT":
-            deferred = o[0] in lazy_out
-            src, _, _ = value(i[0], deferred)
+            deferred = item.slot in lazy_out
             (later if deferred else body).append(
-                f"        *(vd *)yt[{base[o[0]] + o[1]}] = {src};")
+                f"        *(vd *)yt[{base[item.slot] + item.entry}] = "
+                f"{value(item.args[0], deferred)};")
             continue
         deferred = k in lazy
-        current_k = {s: value(s, deferred) for s in
-                     ([] if op in ("OP_INPUT", "OP_CONST") else
-                      [i[0], i[1]] if op in _BINARY else [i[0]])}
+        args = [value(a, deferred) for a in item.args]
         if op == "OP_INPUT":
-            if i[0] == 0:
-                expr, invariant = f"*(const vd *)xt[{i[1]}]", False
-            else:
-                expr, invariant = f"v_splat(in[{i[0]}][{i[1]}])", True
+            expr = (f"*(const vd *)xt[{item.entry}]" if item.source == 0
+                    else f"v_splat(in[{item.source}][{item.entry}])")
         elif op == "OP_CONST":
-            expr, invariant = f"v_splat({float(f.instruction_constant(k))!r})", True
-        elif op == "OP_DIV" and not (current_k[i[0]][1] and current_k[i[1]][1]):
-            (a, _, _), (b, _, d) = current_k[i[0]], current_k[i[1]]
-            expr, invariant = (f"{a} * {b}" if d in rsqrt else f"{a} * {recip[d]}"
-                               if d in recip else f"v_div({a}, {b})"), False
-        elif op in _BINARY:
-            (a, ia, _), (b, ib, _) = current_k[i[0]], current_k[i[1]]
-            expr, invariant = _BINARY[op].format(a=a, b=b), ia and ib
-        elif op == "OP_SQRT" and not current_k[i[0]][1] and uses[k][1] == uses[k][0] > 0:
-            expr, invariant = f"v_rsqrt({current_k[i[0]][0]})", False
+            expr = f"v_splat({item.constant!r})"
+        elif op == "OP_DIV" and not item.invariant:
+            d = item.args[1]
+            expr = (f"{args[0]} * {args[1]}" if d in rsqrt else f"{args[0]} * {recip[d]}"
+                    if d in recip else f"v_div({args[0]}, {args[1]})")
+        elif op == "OP_SQRT" and not item.invariant and uses[k].divisions == uses[k].uses > 0:
+            expr = f"v_rsqrt({args[0]})"
             rsqrt.add(k)
-        elif op in _UNARY:
-            a, ia, _ = current_k[i[0]]
-            expr, invariant = _UNARY[op].format(a=a), ia
         else:
-            raise NotImplementedError(f"{f.name()}: no SIMD translation for {op}")
-        if invariant:
+            expr = _vector_text(f, item, args)
+        if item.invariant:
             hoisted.append(f"    const vd h{k} = {expr};")
-            current[o[0]] = (f"h{k}", True, k)
-            if uses[k][2]:      # a divisor of the loop body's divisions: its reciprocal, once
+            names[k] = f"h{k}"
+            if reciprocal(item, uses[k]):  # a divisor of the loop body's divisions: once
                 hoisted.append(f"    const vd r{k} = 1.0 / h{k};")
                 recip[k] = f"r{k}"
         elif deferred:
             later.append(f"        const vd l{k} = {expr};")
-            current[o[0]] = (f"l{k}", False, k)
-            if k not in rsqrt and uses[k][1] >= 2:
+            names[k] = f"l{k}"
+            if k not in rsqrt and reciprocal(item, uses[k]):
                 later.append(f"        const vd r{k} = v_rcp(l{k});")
                 recip[k] = f"r{k}"
         else:
             line_of[k] = len(body)
-            body.append(f"        w{o[0]} = {expr};")
-            current[o[0]] = (f"w{o[0]}", False, k)
-            if k not in rsqrt and uses[k][1] >= 2:
-                body.append(f"        const vd r{k} = v_rcp(w{o[0]});")
+            body.append(f"        w{item.slot} = {expr};")
+            names[k] = f"w{item.slot}"
+            if k not in rsqrt and reciprocal(item, uses[k]):
+                body.append(f"        const vd r{k} = v_rcp(w{item.slot});")
                 recip[k] = f"r{k}"
     for d in sorted(copied, key=line_of.get, reverse=True):
         body.insert(line_of[d] + 1, f"        const vd c{d} = w{copied[d]};")

@@ -16,14 +16,19 @@ GENERATING = ("build.py", "bushing.py", "chain.py", "conditioning.py", "coupled.
               "sources.py", "vectors.py")
 """The derive/ modules whose content determines generated/ (``derive.build`` and its imports)."""
 
+RUNTIME_GENERATING = ("gsfric/compiled/instructions.py",)
+"""The runtime modules that derive/ prints code with (paths from the repository's root): the
+C text of CasADi's operations, shared with ``gsfric export``."""
+
 
 def source_hash(directory: Path = DERIVE) -> str:
-    """SHA-256 over the code-generating derive/ sources (names and contents, in name order).
+    """SHA-256 over the code-generating sources (names and contents, in name order): derive/'s
+    ``GENERATING`` and the ``RUNTIME_GENERATING`` modules beside it.
 
     Parameters
     ----------
     directory : Path
-        The derive/ directory.
+        The derive/ directory (the runtime modules are read from its parent).
 
     Returns
     -------
@@ -33,6 +38,12 @@ def source_hash(directory: Path = DERIVE) -> str:
     h = hashlib.sha256()
     for name in sorted(GENERATING):
         path = Path(directory) / name
+        h.update(name.encode())
+        h.update(b"\0")
+        h.update(path.read_bytes().replace(b"\r\n", b"\n") if path.exists() else b"")
+        h.update(b"\0")
+    for name in RUNTIME_GENERATING:
+        path = Path(directory).parent / name
         h.update(name.encode())
         h.update(b"\0")
         h.update(path.read_bytes().replace(b"\r\n", b"\n") if path.exists() else b"")

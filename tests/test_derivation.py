@@ -186,8 +186,16 @@ def test_staleness_hash_covers_exactly_the_modules_that_generate_code(tmp_path):
     assert sorted(imported) == sorted(sources.GENERATING)
     copy = tmp_path / "derive"
     shutil.copytree(root, copy, ignore=shutil.ignore_patterns("__pycache__"))
+    assert sources.source_hash(copy) != sources.source_hash(root)   # the runtime's printer
+    for name in sources.RUNTIME_GENERATING:
+        (tmp_path / name).parent.mkdir(parents=True, exist_ok=True)
+        shutil.copyfile(root.parent / name, tmp_path / name)
     assert sources.source_hash(copy) == sources.source_hash(root)
     (copy / "printed.py").write_text((copy / "printed.py").read_text() + "\n# edited\n")
     assert sources.source_hash(copy) == sources.source_hash(root)
     (copy / "legs.py").write_text((copy / "legs.py").read_text() + "\n# edited\n")
+    assert sources.source_hash(copy) != sources.source_hash(root)
+    (copy / "legs.py").write_text((root / "legs.py").read_text())
+    printer = tmp_path / sources.RUNTIME_GENERATING[0]
+    printer.write_text(printer.read_text() + "\n# edited\n")
     assert sources.source_hash(copy) != sources.source_hash(root)

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import json
 import shutil
 import subprocess
 from pathlib import Path
@@ -12,11 +13,14 @@ import pytest
 from click.testing import CliRunner
 
 from gsfric.cli import main
+from gsfric.compiled.state import state_layout
 from gsfric.evaluation.evaluator import Evaluator, state_array
+from gsfric.evaluation.flags import FLAG_ROTATION
 from gsfric.export import folded, source
 from gsfric.export.verify import TOLERANCE, check_motions, verify_library
 from gsfric.export.writer import export_library
 from gsfric.models import reference_platform
+from gsfric.trajectory import ROTATION_TOL
 
 pytestmark = pytest.mark.integration  # end to end: `make check` leaves it out
 
@@ -285,3 +289,56 @@ int main(void)
     assert len(rows) == 3 and rows[0] != [1, 0, 0, 0, 1, 0, 0, 0, 1]
     np.testing.assert_allclose(rows[1], rows[0], atol=1e-15)
     np.testing.assert_allclose(rows[2], rows[0], atol=1e-15)
+
+
+def test_a_rotation_block_that_is_not_a_rotation_is_flagged(exports, tmp_path):
+    """The library flags what ``Motion`` refuses: T scaled by 2, mirrored, or off by more than
+    ROTATION_TOL, with F NaN; a rotation rounded within the tolerance is a sound step."""
+    x = _states(5)
+    rotation = state_layout().rotation
+    changes = [np.diag([2.0, 2.0, 2.0]), np.diag([1.0, -1.0, 1.0]),
+               np.diag([1.0 + 3 * ROTATION_TOL] * 3), np.eye(3) + 3 * ROTATION_TOL * np.eye(3, k=1),
+               np.diag([1.0 + ROTATION_TOL / 4] * 3)]
+    for row, change in zip(x, changes):
+        row[rotation] = (row[rotation].reshape(3, 3) @ change).ravel()
+    for name in ("coupled", "paper", "generic"):
+        (tmp_path / name).mkdir()
+        got = _numbers(_example(_build(exports[name], "cc", STRICT, tmp_path / name), x))
+        assert list(got[:, 6]) == [FLAG_ROTATION] * 4 + [0], name
+        assert np.isnan(got[:4, :6]).all() and np.isfinite(got[4, :6]).all()
+    header = (exports["coupled"] / "hexa.h").read_text()
+    assert f"#define HEXA_FLAG_ROTATION {FLAG_ROTATION}" in header
+
+
+def test_verify_checks_the_library_its_manifest_names(exports, tmp_path):
+    folder = tmp_path / "two"
+    export_library(reference_platform(), folder, model="paper", prefix="first")
+    manifest = json.loads((folder / "manifest.json").read_text())
+    assert (manifest["prefix"], manifest["model"], manifest["code"]) == \
+        ("first", "paper", "specialised")
+    assert sorted(p.name for p in folder.iterdir()) == manifest["files"]
+    export_library(reference_platform(), folder, model="paper", prefix="second")
+    message = error_of(run("export", "--verify", folder))
+    assert "holds two libraries, second.h" in message and "first.h" in message
+    (folder / "first.h").unlink()
+    assert verify_library(folder, n_random=50, rounds=10).prefix == "second"
+    (folder / "manifest.json").unlink()
+    assert "no manifest.json" in error_of(run("export", "--verify", folder))
+    (folder / "manifest.json").write_text("{}")
+    assert "manifest.json is not the manifest" in error_of(run("export", "--verify", folder))
+
+
+def test_verify_fails_a_library_with_a_wrong_stroke(exports, tmp_path):
+    """States beyond the stroke are among the checked ones: a library whose stroke limit is
+    wrong fails --verify, with its flags differing."""
+    folder = tmp_path / "wrong"
+    shutil.copytree(exports["paper"], folder)
+    hi = reference_platform().geometry.stroke[1]
+    code = (folder / "hexp.c").read_text()
+    line = next(k for k in code.splitlines() if k.startswith("static const gsfric_flags FLAGS"))
+    assert f", {hi!r}, " in line
+    wrong = code.replace(line, line.replace(f", {hi!r}, ", f", {2 * hi!r}, "))
+    (folder / "hexp.c").write_text(wrong)
+    report = verify_library(folder, n_random=50, rounds=10)
+    assert report.flag_mismatches > 0 and not report.ok
+    assert report.worst_error <= TOLERANCE and report.flagged_states > 0

@@ -9,6 +9,7 @@ tutorial notebooks/real_log.ipynb does.
 from __future__ import annotations
 
 import json
+import re
 import warnings
 from pathlib import Path
 
@@ -321,11 +322,14 @@ def test_discover_names_no_effect_from_poses_outside_the_stroke(tmp_path):
 
 
 def test_mostly_flagged_steps_and_implausible_speeds_are_data_errors():
-    from gsfric.platform.usable import check_flagged, check_poses
-    check_flagged(50, 100)
-    with pytest.raises(InputError, match=r"log.csv: 51 of 100 steps are flagged by the model"):
-        check_flagged(51, 100, "log.csv")
+    from gsfric.evaluation.flags import FLAG_STROKE, check_flagged
+    from gsfric.platform.usable import check_poses
     platform = models.reference_platform()
+    counts = {FLAG_STROKE: 51}
+    check_flagged(platform, counts, 50, 100)
+    with pytest.raises(InputError, match=r"log.csv: 51 of 100 steps are flagged by the model, "
+                                         r"51 of them FLAG_STROKE .*geometry.stroke = \[0.5"):
+        check_flagged(platform, counts, 51, 100, "log.csv")
     t = np.arange(300) / 100.0
     motion = models.sinusoidal(t)
     check_poses(platform, motion.position, motion.rotation, t)
@@ -350,3 +354,45 @@ def test_a_gap_in_the_times_is_named_and_a_mostly_missing_record_refused(tmp_pat
     assert result.exit_code == 2
     assert "record is mostly missing" in result.output and "\n" not in result.output.strip()
     assert not (tmp_path / "gone_out.csv").exists()
+
+
+def _platform_file(path: Path, platform) -> Path:
+    platform.to_toml(path)
+    return path
+
+
+@pytest.mark.parametrize("case, named", [
+    ("joint_coulomb", r"FLAG_COUPLING \(coupled friction solve not converged\): "
+                      r"friction.joint_coulomb = 5 "),
+    ("mass", r"FLAG_NONFINITE \(non-finite value\): platform key platform.mass = 1e\+200"),
+    ("axes", r"FLAG_COUPLING .*geometry.universal_axes: the first axis of the universal joints "
+             r"of legs 1, 2, 3, 4, 5, 6 is within 13 degrees"),
+])
+def test_a_platform_that_flags_every_step_names_the_flag_and_its_key(tmp_path, case, named):
+    """The poses are this platform's; its own numbers make every step flagged: the message
+    names the flag and the platform key, not the poses."""
+    import dataclasses
+
+    from gsfric.platform.usable import home_height
+    reference = models.reference_platform()
+    g = reference.geometry
+    if case == "joint_coulomb":
+        platform = reference.with_friction(joint_coulomb=5.0)
+    elif case == "mass":
+        platform = dataclasses.replace(reference, platform=dataclasses.replace(
+            reference.platform, mass=1e200))
+    else:
+        legs = np.asarray(g.platform_joints) + [0.0, 0.0, home_height(reference)] \
+            - np.asarray(g.base_joints)
+        platform = dataclasses.replace(reference, geometry=dataclasses.replace(
+            g, universal_axes=legs / np.linalg.norm(legs, axis=1, keepdims=True)))
+    write_table(_frame(), tmp_path / "traj.csv")
+    result = _cli("simulate", "--trajectory", tmp_path / "traj.csv", "--platform",
+                  _platform_file(tmp_path / "p.toml", platform), "--out", tmp_path / "o.csv")
+    assert result.exit_code == 2, result.output
+    lines = [k for k in result.stderr.splitlines() if k.startswith("gsfric: error:")]
+    assert len(lines) == 1
+    assert re.search(r"traj.csv: \d+ of 300 steps are flagged by the model, \d+ of them", lines[0])
+    assert re.search(named, lines[0]), lines[0]
+    assert "pose offset" not in lines[0]
+    assert not (tmp_path / "o.csv").exists()

@@ -74,10 +74,11 @@ from gsfric.discovery.selection import (
 from gsfric.discovery.settings import Settings
 from gsfric.discovery.verdict import Verdict, decide
 from gsfric.errors import InputTypeError
+from gsfric.evaluation.flags import check_flagged, flag_counts
 from gsfric.models import platform_from
 from gsfric.platform.catalog import EFFECTS
 from gsfric.platform.description import Platform
-from gsfric.platform.usable import check_flagged, check_forces, check_poses
+from gsfric.platform.usable import check_forces, check_poses
 from gsfric.trajectory import Motion
 
 # -- the workflow -------------------------------------------------------------------------------
@@ -183,7 +184,8 @@ def discover_motion(motion: Motion, forces: np.ndarray, platform: Platform | Non
     bar.step("simulating the model along the measured motion")
     problem = Problem(motion, forces, platform, settings, poses=poses)
     used_flags = problem.result.flag[problem.used]
-    check_flagged(int(np.count_nonzero(used_flags)), len(used_flags))
+    check_flagged(platform, flag_counts(used_flags), int(np.count_nonzero(used_flags)),
+                  len(used_flags))
     state = _State(problem, np.random.default_rng(seed), problem.model.theta0.copy(),
                    notes=[f"candidate {n} not tested: {why}"
                           for n, why in problem.skipped.items()], force_noise=force_noise,

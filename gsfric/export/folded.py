@@ -13,47 +13,36 @@ CasADi's order of operations, with CasADi's own C text for each operation (its h
 makes a C function of the statements some of the outputs need, so that the one-step function
 of ``<prefix>_actuator_forces`` computes its outputs with exactly the statements of the full
 evaluation. Divisions are the costly operations of the model (a division takes the time of
-several products); as in the batch code of ``gsfric simulate`` (derive/simd.py) a divisor of
-several divisions is printed as one reciprocal and products, and a constant divisor as a
-product with its reciprocal: the rewriting ``-freciprocal-math`` allows a compiler, which
-changes a quotient by about an ulp. Nothing else differs from CasADi's code: no reassociation,
+several products); by the rule of the batch code of ``gsfric simulate`` (derive/simd.py), the
+same reading of the instruction list (``gsfric.compiled.instructions``), a divisor of several
+divisions is printed as one reciprocal and products, and a constant divisor as a product with
+its reciprocal: the rewriting ``-freciprocal-math`` allows a compiler, which changes a quotient
+by about an ulp. Nothing else differs from CasADi's code: no reassociation,
 no contraction into fused multiply-adds.
 """
 
 from __future__ import annotations
 
 import math
-from collections import Counter
 from dataclasses import dataclass
 
 import numpy as np
 
 from gsfric._optional import optional
+from gsfric.compiled.instructions import (
+    OPERATIONS,
+    Instruction,
+    Uses,
+    divisors,
+    opcode_names,
+    read,
+    reciprocal,
+)
 from gsfric.compiled.native import serialized
 from gsfric.errors import GsfricError
 from gsfric.evaluation.parameters import effect_vector, parameter_vector
 from gsfric.export.text import number
 from gsfric.platform.description import Platform
-
-_UNARY = {"OP_ASSIGN": "{0}", "OP_NEG": "(-{0})", "OP_EXP": "exp({0})", "OP_LOG": "log({0})",
-          "OP_SQRT": "sqrt({0})", "OP_SQ": "casadi_sq({0})", "OP_TWICE": "(2.*{0})",
-          "OP_SIN": "sin({0})", "OP_COS": "cos({0})", "OP_TAN": "tan({0})",
-          "OP_ASIN": "asin({0})", "OP_ACOS": "acos({0})", "OP_ATAN": "atan({0})",
-          "OP_NOT": "(!{0})", "OP_FLOOR": "floor({0})", "OP_CEIL": "ceil({0})",
-          "OP_FABS": "casadi_fabs({0})", "OP_SIGN": "casadi_sign({0})", "OP_ERF": "erf({0})",
-          "OP_INV": "(1./{0})", "OP_SINH": "sinh({0})", "OP_COSH": "cosh({0})",
-          "OP_TANH": "tanh({0})", "OP_ASINH": "asinh({0})", "OP_ACOSH": "acosh({0})",
-          "OP_ATANH": "atanh({0})", "OP_LOG1P": "casadi_log1p({0})",
-          "OP_EXPM1": "casadi_expm1({0})"}
-_BINARY = {"OP_ADD": "({0}+{1})", "OP_SUB": "({0}-{1})", "OP_MUL": "({0}*{1})",
-           "OP_DIV": "({0}/{1})", "OP_POW": "pow({0},{1})", "OP_CONSTPOW": "pow({0},{1})",
-           "OP_LT": "({0}<{1})", "OP_LE": "({0}<={1})", "OP_EQ": "({0}=={1})",
-           "OP_NE": "({0}!={1})", "OP_AND": "({0}&&{1})", "OP_OR": "({0}||{1})",
-           "OP_FMOD": "fmod({0},{1})", "OP_COPYSIGN": "copysign({0},{1})",
-           "OP_IF_ELSE_ZERO": "({0}?{1}:0)", "OP_FMIN": "casadi_fmin({0},{1})",
-           "OP_FMAX": "casadi_fmax({0},{1})", "OP_ATAN2": "atan2({0},{1})",
-           "OP_HYPOT": "casadi_hypot({0},{1})", "OP_REMAINDER": "remainder({0},{1})"}
-"""CasADi's C text of each operation (its code generator's), by the name of its opcode."""
 
 
 def folded_function(name: str, platform: Platform, outputs: list[str]):
@@ -124,11 +113,6 @@ class _Value:
     name: tuple[str, ...] = ()
 
 
-def _opnames() -> dict[int, str]:
-    casadi = optional("casadi")
-    return {getattr(casadi, k): k for k in dir(casadi) if k.startswith("OP_")}
-
-
 def _constant(value: float) -> str:
     if math.isnan(value):
         return "NAN"
@@ -138,30 +122,21 @@ def _constant(value: float) -> str:
     return f"({text})" if text.startswith("-") else text
 
 
-def _divisor_uses(fn, names: dict[int, str]) -> Counter:
-    """How many divisions divide by each value (instruction index of the divisor)."""
-    made, uses = {}, Counter()
-    for i in range(fn.n_instructions()):
-        op, inputs = names[fn.instruction_id(i)], fn.instruction_input(i)
-        if op == "OP_DIV":
-            uses[made[inputs[1]]] += 1
-        if op != "OP_OUTPUT":
-            made[fn.instruction_output(i)[0]] = i
-    return uses
-
-
-def _division(a: _Value, b: _Value, divisions: Counter, reciprocals: dict,
+def _division(a: _Value, b: _Value, item: Instruction, uses: Uses, reciprocals: dict,
               statements: list[Statement]) -> tuple[str, tuple[str, ...]]:
-    """(C text, values read) of a / b: a product by a reciprocal where it pays."""
+    """(C text, values read) of a / b: a product by a reciprocal where
+    ``instructions.reciprocal`` says so (a constant's computed here, when finite)."""
     if b.index not in reciprocals:
-        if b.constant is not None and b.constant != 0 and math.isfinite(1.0 / b.constant):
+        if not reciprocal(item, uses):
+            return f"({a.text}/{b.text})", a.name + b.name
+        if b.constant is not None:
+            if b.constant == 0 or not math.isfinite(1.0 / b.constant):
+                return f"({a.text}/{b.text})", a.name + b.name
             reciprocals[b.index] = _Value(_constant(1.0 / b.constant), b.index)
-        elif b.constant is None and divisions[b.index] > 1:
+        else:
             name = f"r{b.index}"
             statements.append(Statement(name, b.name, -1, f"const double {name} = 1./{b.text};"))
             reciprocals[b.index] = _Value(name, b.index, None, (name,))
-        else:
-            return f"({a.text}/{b.text})", a.name + b.name
     r = reciprocals[b.index]
     return f"({a.text}*{r.text})", a.name + r.name
 
@@ -179,34 +154,35 @@ def statements(fn, output_index: list[str], arg: str = "x") -> list[Statement]:
     arg : str
         The C name of the input (a ``const double *``).
     """
-    names = _opnames()
-    divisions, reciprocals = _divisor_uses(fn, names), {}
-    slots: dict[int, _Value] = {}
+    try:
+        program = read(fn, opcode_names(optional("casadi")))
+    except GsfricError as exc:
+        raise GsfricError(f"{exc} in the specialised build; export with --code generic") from None
+    uses, reciprocals = divisors(program), {}
+    values: dict[int, _Value] = {}
     out: list[Statement] = []
-    for i in range(fn.n_instructions()):
-        op, inputs = names[fn.instruction_id(i)], fn.instruction_input(i)
-        slot = fn.instruction_output(i)
-        if op == "OP_OUTPUT":
-            value = slots[inputs[0]]
-            out.append(Statement("", value.name, slot[0],
-                                 f"res[{output_index[slot[0]]}][{slot[1]}] = {value.text};"))
-        elif op == "OP_INPUT":
-            slots[slot[0]] = _Value(f"{arg}[{inputs[1]}]", i)
-        elif op == "OP_CONST":
-            value = float(fn.instruction_constant(i))
-            slots[slot[0]] = _Value(_constant(value), i, value)
+    for item in program:
+        i = item.index
+        if item.op == "OP_OUTPUT":
+            value = values[item.args[0]]
+            out.append(Statement("", value.name, item.slot,
+                                 f"res[{output_index[item.slot]}][{item.entry}] = {value.text};"))
+            continue
+        if item.op == "OP_INPUT":
+            values[i] = _Value(f"{arg}[{item.entry}]", i)
+            continue
+        if item.op == "OP_CONST":
+            values[i] = _Value(_constant(item.constant), i, item.constant)
+            continue
+        a = [values[k] for k in item.args]
+        if item.op == "OP_DIV":
+            expr, read_ = _division(a[0], a[1], program[item.args[1]], uses[item.args[1]],
+                                    reciprocals, out)
         else:
-            a = [slots[w] for w in inputs]
-            if op == "OP_DIV":
-                expr, uses = _division(a[0], a[1], divisions, reciprocals, out)
-            elif op in _BINARY or op in _UNARY:
-                expr = (_BINARY.get(op) or _UNARY[op]).format(*(v.text for v in a))
-                uses = tuple(n for v in a for n in v.name)
-            else:
-                raise GsfricError(f"{fn.name()}: operation {op} has no C text in the export; "
-                                  "export with --code generic")
-            out.append(Statement(f"v{i}", uses, -1, f"const double v{i} = {expr};"))
-            slots[slot[0]] = _Value(f"v{i}", i, None, (f"v{i}",))
+            expr = OPERATIONS[item.op].scalar.format(*(v.text for v in a))
+            read_ = tuple(n for v in a for n in v.name)
+        out.append(Statement(f"v{i}", read_, -1, f"const double v{i} = {expr};"))
+        values[i] = _Value(f"v{i}", i, None, (f"v{i}",))
     return out
 
 

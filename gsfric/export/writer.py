@@ -11,6 +11,7 @@ export is reproducible.
 from __future__ import annotations
 
 import importlib.resources
+import json
 import re
 import textwrap
 from dataclasses import dataclass
@@ -26,6 +27,7 @@ from gsfric.export import folded, source, text
 from gsfric.io.files import output_folder
 from gsfric.platform.catalog import GENERATED_EFFECTS, SENSOR_EFFECTS, sensor_parameters
 from gsfric.platform.description import Platform
+from gsfric.trajectory import ROTATION_TOL
 
 MODELS = ("coupled", "paper")
 CODES = ("specialised", "generic")
@@ -47,6 +49,8 @@ CFLAGS = ("-O2", "-std=c99", "-Wall", "-Wextra", "-pedantic")
 """The Makefile's default flags (``--verify`` builds with them too)."""
 PLATFORM_FILE = "platform.toml"
 """The platform as exported (its friction model set), for ``--verify`` and for the record."""
+MANIFEST_FILE = "manifest.json"
+"""What the folder holds (``Export.manifest``): the library ``--verify`` checks."""
 FILES = {"library.h.in": "{prefix}.h", "library.c.in": "{prefix}.c",
          "example.c.in": "example.c", "Makefile.in": "Makefile",
          "CMakeLists.txt.in": "CMakeLists.txt", "README.md.in": "README.md"}
@@ -106,6 +110,15 @@ class Export:
     code: str
     function: str
     iterations: int
+
+    def manifest(self) -> dict:
+        """The folder's ``manifest.json``: the library's prefix, model, build, generated
+        function, fixed-point iterations, and the files written."""
+        files = sorted([*(t.format(prefix=self.prefix) for t in FILES.values()), PLATFORM_FILE,
+                        MANIFEST_FILE])
+        return {"generator": "gsfric export", "prefix": self.prefix, "model": self.model,
+                "code": self.code, "function": self.function,
+                "coupled_iterations": self.iterations, "files": files}
 
 
 def check_prefix(prefix: str) -> str:
@@ -233,8 +246,10 @@ def _values(platform: Platform, platform_file, model: str, prefix: str,
                                                       platform.geometry.stroke)),
         "state_table": "\n".join(f"| {o} | {'x'.join(map(str, s))} | {u} | {n}: {d} |"
                                  for o, s, u, n, d in state),
-        "flag_table": "\n".join(f"| {bit} `{prefix.upper()}_FLAG_{key}` | {flags.FLAG_NAMES[bit]} |"
-                                for key, bit in flags.FLAG_BITS.items()),
+        "flag_table": "\n".join(f"| {bit} `{prefix.upper()}_FLAG_{key}` | "
+                                f"{flags.EXPORT_FLAG_NAMES[bit]} |"
+                                for key, bit in flags.EXPORT_FLAG_BITS.items()),
+        "rotation_tol": text.number(ROTATION_TOL, "ROTATION_TOL"),
     }
 
 
@@ -272,11 +287,13 @@ def export_library(platform: Platform, out, model: str | None = None, prefix: st
         platform = platform.with_friction(model=model)
     check_effects(platform)
     values = _values(platform, platform_file, model, prefix, code)
+    written = Export(Path(out), prefix, model, code, model_function("eval", model),
+                     coupled_iterations(model))
     templates = importlib.resources.files("gsfric.export").joinpath("templates")
     with output_folder(out, inputs={"platform": platform_file}) as tmp:
         for template, target in FILES.items():
             content = _fill(templates.joinpath(template).read_text(), values)
             (tmp / target.format(prefix=prefix)).write_text(content)
         platform.to_toml(tmp / PLATFORM_FILE)
-    return Export(Path(out), prefix, model, code, model_function("eval", model),
-                  coupled_iterations(model))
+        (tmp / MANIFEST_FILE).write_text(json.dumps(written.manifest(), indent=2) + "\n")
+    return written

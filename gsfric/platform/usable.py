@@ -146,19 +146,6 @@ def check_forces(platform: Platform, forces: np.ndarray, where: str = "") -> Non
                          f"({weight:.4g} N): {advice}or give the rig's masses (--platform)")
 
 
-def check_flagged(flagged: int, steps: int, where: str = "") -> None:
-    """Raise ``InputError`` when more than ``MOSTLY`` of the ``steps`` are flagged by the model
-    (``flagged`` of them, flags of ``gsfric.evaluation``: a leg outside the stroke, a
-    near-singular pose, a non-finite value): no statistic of the rest can stand for the
-    record."""
-    if steps and flagged > MOSTLY * steps:
-        prefix = f"{where}: " if where else ""
-        raise InputError(f"{prefix}{flagged} of {steps} steps are flagged by the model (a "
-                         "leg outside the stroke, a near-singular pose, a non-finite value; "
-                         "see the flag column of `gsfric simulate`): the data are mostly "
-                         f"unusable for this platform; fix with {FIXES}")
-
-
 def check_gaps(t: np.ndarray, where: str = "") -> None:
     """Warn (``DataWarning``) of gaps in the sample times (N,), s: steps above ``GAP_STEPS``
     times the median, across which the motion is differentiated as if it went on smoothly;

@@ -41,12 +41,12 @@ from gsfric._threads import one_blas_thread
 from gsfric.errors import GsfricWarning, InputError, StepFlagError
 from gsfric.evaluation.columns import plan as column_plan
 from gsfric.evaluation.evaluator import MAX_THREADS, Evaluator, evaluate_outputs
-from gsfric.evaluation.flags import FLAG_NAMES, FLAG_NONFINITE
+from gsfric.evaluation.flags import FLAG_NAMES, FLAG_NONFINITE, check_flagged, flag_counts
 from gsfric.io.files import atomic_write, check_outputs, is_stream
 from gsfric.io.tables import check_file, count_rows, table_kind
 from gsfric.models import platform_from
 from gsfric.platform.catalog import sensor_parameters
-from gsfric.platform.usable import check_flagged, check_forces, check_gaps, check_poses
+from gsfric.platform.usable import check_forces, check_gaps, check_poses
 from gsfric.signal.savgol import DEFAULT_POLYORDER
 from gsfric.simulate.delay import SensorDelay
 from gsfric.simulate.differentiate import DEFAULT_CHUNK, MotionChunk, iter_motions
@@ -251,8 +251,8 @@ class _Flags:
         if not bad.size:
             return False
         self.flagged += int(bad.size)
-        for bit in FLAG_NAMES:
-            self.counts[bit] += int(np.count_nonzero(flag & bit))
+        for bit, n in flag_counts(flag).items():
+            self.counts[bit] += n
         room = MAX_REPORTED - sum(len(k) for k in self.kept)
         if room > 0:
             self.kept.append(bad[:room] + start)
@@ -341,7 +341,8 @@ class _Run:
                     pending.append(evaluation.submit(self._evaluate, part, k % 2, writes))
                     del part
                 self._drain(pending, writes)
-                check_flagged(self.flags.flagged, self.summary.steps, str(self.trajectory))
+                check_flagged(self.platform, self.flags.counts, self.flags.flagged,
+                              self.summary.steps, str(self.trajectory))
             except BaseException:
                 self.stopped = True         # the evaluations queued return at once
                 for future in [*pending, *list(writes.futures)]:
