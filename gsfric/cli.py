@@ -36,8 +36,8 @@ COMMANDS = {
     "effects": "List the catalog of optional effects, with their parameters, defaults and "
                "units.",
     "export": "Write a self-contained C99 library of a platform for a real-time controller.",
-    "log": "Read a controller's log: `gsfric log inspect LOG --out DIR` proposes its log "
-           "format and a rig.",
+    "log": "Read a controller's log: `gsfric log inspect LOG` proposes its log format and a "
+           "rig.",
     "paper": "Run the paper's 40-step motion and write Tables 1-3, a report and plots.",
     "platform": "Write a platform file to start from: `gsfric platform --template --out "
                 "my.toml`.",

@@ -18,7 +18,7 @@ FILES = {"log_format": "log_format.toml", "rig": "rig.toml"}
 
 @click.group()
 def log():
-    """Read a controller's log: `gsfric log inspect LOG --out DIR`."""
+    """Read a controller's log: `gsfric log inspect LOG` proposes its log format and a rig."""
 
 
 @log.command()
