@@ -20,6 +20,7 @@ from gsfric.cli import main
 from gsfric.io.logs import LogFormat
 from gsfric.io.tables import read_table
 from gsfric.loginspect import inspect_log
+from gsfric.loginspect.names import role
 from gsfric.platform.rig import Rig
 from gsfric.platform.usable import home_height
 from gsfric.signal.rotations import rpy_from_rotation
@@ -239,3 +240,18 @@ def test_bad_input_gets_one_line_naming_the_column_or_row_and_writes_nothing(
     assert result.exit_code == 2
     assert message in result.stderr and len(result.stderr.strip().splitlines()) == 1
     assert not (tmp_path / "found").exists()
+
+
+@pytest.mark.parametrize("name, kind, axis, unit", [
+    ("Timestamp [us]", "time", "", "us"), ("t", "time", "", None),
+    ("Surge [mm]", "position", "x", "mm"), ("pos_z_mm", "position", "z", "mm"),
+    ("Sway vel [mm/s]", "velocity", "y", "mm/s"), ("vx", "velocity", "x", None),
+    ("Heave acc [mm/s^2]", "acceleration", "z", "mm/s^2"), ("Roll [deg]", "angle", "roll", "deg"),
+    ("Yaw rate [deg/s]", "omega", "z", "deg/s"), ("omega_y", "omega", "y", None),
+    ("alpha_x", "alpha", "x", None), ("alpha", "euler", "alpha", None),
+    ("Act3 [N]", "force", "3", "N"), ("F6", "force", "6", None), ("Mode", "", "", None),
+    ("Oil temp [C]", "", "", None),
+])
+def test_a_column_name_says_its_quantity_axis_and_unit(name, kind, axis, unit):
+    found = role(name)
+    assert (found.kind, found.axis, found.unit) == (kind, axis, unit)

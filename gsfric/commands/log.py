@@ -66,3 +66,9 @@ def inspect(log_file, out, platform_file, rig_file, time_column, axes):
         (folder / FILES["log_format"]).write_text(found.log_format_toml(), encoding="utf-8")
         (folder / FILES["rig"]).write_text(found.rig_toml(), encoding="utf-8")
     click.echo(f"wrote {out / FILES['log_format']} and {out / FILES['rig']}")
+    platform_arg = platform_file or "platform.toml"
+    if platform_file is None:
+        click.echo(f"next: edit {out / FILES['rig']}, then gsfric platform --template --rig "
+                   f"{out / FILES['rig']} --out platform.toml")
+    click.echo(f"then: gsfric simulate --trajectory {log_file} --column-map "
+               f"{out / FILES['log_format']} --platform {platform_arg} --out forces.csv")

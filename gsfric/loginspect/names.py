@@ -141,11 +141,7 @@ def _kind(words: tuple[str, ...], unit: str | None) -> tuple[str, str]:
     for word in words:
         if word in SHORT_RATES:
             return SHORT_RATES[word]
-    rate = RATE_QUANTITY.get(quantity or "")
-    if rate is None and VELOCITY_WORDS & found:
-        rate = "velocity"
-    if rate is None and ACCELERATION_WORDS & found:
-        rate = "acceleration"
+    rate = RATE_QUANTITY.get(quantity or "") or _rate_words(found)
     for kind in ("position", "angle", "euler", "quaternion"):
         for axis, names in AXIS_WORDS[kind].items():
             if found & set(names):
@@ -153,12 +149,25 @@ def _kind(words: tuple[str, ...], unit: str | None) -> tuple[str, str]:
     return "", ""
 
 
+def _rate_words(found: set[str]) -> str | None:
+    """The rate a name's words say: velocity, acceleration, omega, alpha (angular
+    acceleration, "alpha" with an axis: ``alpha_x``), or None."""
+    angular = "angular" in found or "omega" in found
+    if "alpha" in found and found & {"x", "y", "z"}:
+        return "alpha"
+    if VELOCITY_WORDS & found or "omega" in found:
+        return "omega" if angular else "velocity"
+    if ACCELERATION_WORDS & found:
+        return "alpha" if angular else "acceleration"
+    return None
+
+
 def _rate_kind(kind: str, axis: str, rate: str | None) -> tuple[str, str]:
     """The kind of a column named after a pose axis, with the rate its words or unit say."""
     if rate is None:
         return kind, axis
     if kind == "position":
-        return ("velocity" if rate in ("velocity", "omega") else "acceleration"), axis
+        return rate, axis
     if kind == "angle":
         angular = "omega" if rate in ("velocity", "omega") else "alpha"
         return angular, OMEGA_AXES[axis]

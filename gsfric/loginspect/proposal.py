@@ -33,6 +33,7 @@ from gsfric.signal.rotations import (
     quaternion_from_euler,
     quaternion_from_rpy,
     rotation_from_quaternion,
+    rpy_from_rotation,
 )
 
 STROKE_MARGIN = 0.1
@@ -87,8 +88,8 @@ class LogInspection:
     rest : Rest or None
         The longest still stretch (None when the log never rests ``REST_SECONDS``).
     extent : ndarray, shape (2, 6)
-        Smallest and largest x, y, z (m) and ZXZ-free rotation vector components (rad) of the
-        poses in the platform's frame: rows min, max.
+        Smallest (row 0) and largest (row 1) x, y, z (m) and roll, pitch, yaw (rad, "xyz":
+        R = Rz(yaw) Ry(pitch) Rx(roll)) of the poses in the platform's frame.
     legs : (float, float)
         Shortest and longest leg over the log, m, on the rig.
     ignored : tuple of str
@@ -330,10 +331,7 @@ def _platform_poses(fmt: LogFormat, position, angles, kind):
 def _extent(p, rotation, cmap: C.ColumnMap) -> np.ndarray:
     """Smallest and largest position (m) and roll, pitch, yaw (rad, xyz) in the platform's
     frame, (2, 6)."""
-    from_rotation = np.stack([np.arctan2(rotation[:, 2, 1], rotation[:, 2, 2]),
-                              np.arcsin(np.clip(-rotation[:, 2, 0], -1, 1)),
-                              np.arctan2(rotation[:, 1, 0], rotation[:, 0, 0])], axis=1)
-    poses = np.concatenate([p, from_rotation], axis=1)
+    poses = np.concatenate([p, rpy_from_rotation(rotation)], axis=1)
     extent = np.stack([poses.min(axis=0), poses.max(axis=0)])
     shown = ", ".join(f"{n} {extent[0, k]:.4g}..{extent[1, k]:.4g} m"
                       for k, n in enumerate("xyz"))
