@@ -147,8 +147,8 @@ def time_column(path: Path, data: dict[str, np.ndarray], roles: Mapping[str, Rol
     cmap.add("t", name, clock.unit)
     cmap.assume("time", f"{name!r} in {clock.unit}", f"{how}; unit from {clock.unit_evidence}")
     cmap.assume("rate", f"{1.0 / clock.step:.4g} Hz",
-                f"median step {clock.step * 1e3:.4g} ms; the stamps jitter by "
-                f"{100 * clock.jitter:.2g} % of it (largest deviation)")
+                f"median step {clock.step * 1e3:.4g} ms; the stamps jitter by up to "
+                f"{100 * clock.jitter:.2g} % of it")
     if clock.wrap is not None:
         cmap.assume("wrap", f"the counter wraps at {clock.wrap}", clock.wrap_evidence)
     if clock.resets:
@@ -252,13 +252,13 @@ def _rate_group(data, roles, kind, keys, found, reference, cmap: ColumnMap) -> N
     what = {"velocity": "the differentiated position", "acceleration": "the position's "
             "second derivative", "omega": "the angular velocity of the angles",
             "alpha": "the derivative of that angular velocity"}[kind]
-    evidence = "; ".join(f"{found[a]!r}: {m.correlation:.3f}, ratio {m.ratio:.4g}"
+    evidence = "; ".join(f"{found[a]!r} correlation {m.correlation:.3f}, ratio {m.ratio:.4g}"
                          for a, m in matches.items())
     units = {m.unit for m in matches.values()}
     if None in units or len(units) > 1:
         cmap.assume(kind, "not mapped: " + ", ".join(map(repr, found.values())),
-                    f"they do not match {what} (correlation, ratio: {evidence}); gsfric "
-                    "differentiates the poses")
+                    f"they do not match {what}: {evidence}; gsfric differentiates the "
+                    "poses")
         return
     unit = units.pop()
     named = {roles[c].unit for c in found.values()} - {None}
@@ -267,7 +267,7 @@ def _rate_group(data, roles, kind, keys, found, reference, cmap: ColumnMap) -> N
         cmap.add(key, found[axis], unit)
     shown = ", ".join(f"{k} = {found[a]!r}" for k, a in zip(keys, "xyz"))
     cmap.assume(kind, f"{shown} in {unit}, the log's own, used instead of differentiating",
-                f"against {what}: correlation, ratio {evidence}{note}")
+                f"against {what} in SI units: {evidence}{note}")
 
 
 def force_columns(data, roles, cmap: ColumnMap) -> None:

@@ -271,11 +271,13 @@ def _model(platform, rig, position, cmap: C.ColumnMap
     """The rig's sizes, platform and home height (m): given, or the reference platform's
     scaled to the log."""
     if rig is not None:
-        cmap.assume("rig", "the sizes given with --rig", "the rig file")
+        cmap.assume("rig", "the rig given (--rig)", "its sizes give the legs; its "
+                    "home_height, or else mid-stroke, the home height")
         return rig, rig.platform(), rig.home
     if platform is not None:
         sizes = Rig.from_platform(platform) if platform.geometry.stroke is not None else None
-        cmap.assume("rig", "the platform given with --platform", "the platform file")
+        cmap.assume("rig", "the platform given (--platform)", "its joints give the legs, "
+                    "its mid-stroke the home height")
         return sizes, platform, home_height(platform)
     reach = float(np.max(np.ptp(position, axis=0)) / 2)
     scale = max(1.0, reach / REFERENCE_REACH)

@@ -129,8 +129,8 @@ def _wrap(raw: np.ndarray, typical: float) -> tuple[int | None, str, list[int]]:
         if np.all((across > 0) & (across <= WRAP_STEPS * typical)):
             shown = ", ".join(f"row {int(i) + 2}: {int(raw[i])} -> {int(raw[i + 1])}, a step of "
                               f"{int(a)} counts" for i, a in zip(drops[:3], across[:3]))
-            return modulus, (f"{shown} across 2**{int(np.log2(modulus))} (typical step "
-                             f"{typical:g})"), []
+            return modulus, (f"{shown} across 2**{int(np.log2(modulus))}, against a "
+                             f"typical {typical:g}"), []
         if modulus > raw.max() * 4:
             break
     return None, "", [int(i) + 1 for i in drops]
