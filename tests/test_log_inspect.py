@@ -227,6 +227,13 @@ def test_units_without_names_come_from_the_values(tmp_path, scale, unit, angle_s
     ("x,y,z,roll,pitch,yaw\n" + "1,2,3,0.1,0.2,0.3\n" * 30, "no time-like column"),
     ("t,x,y,z,roll,pitch,yaw\n" + "".join(f"{k},1,2,3,0,0,0\n" for k in range(5)),
      "5 data rows; at least 20"),
+    ("t,x,y,z,roll,pitch,yaw\n" + "".join(f"{3_000_000_000 + 10_000 * k},1,2,3,0,0,0\n"
+                                           for k in range(30))
+     + "".join(f"{40 + 10_000 * k},1,2,3,0,0,0\n" for k in range(30)),
+     "row 31: column 't' goes from 3000290000 to 40"),
+    ("time,x,y,z,roll,pitch,yaw\n" + "".join(f"{'' if k == 4 else k / 100},1,2,3,0,0,0\n"
+                                              for k in range(30)),
+     "row 5: column 'time' is empty or NaN"),
     ("time,x,y,z,roll,pitch,yaw\n0,1,2,oops,0.1,0.2,0.3\n"
      + "".join(f"{k / 100},1,2,3,0.1,0.2,0.3\n" for k in range(1, 60)),
      "row 1: column 'z' holds 'oops', not a number"),

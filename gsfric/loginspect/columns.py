@@ -128,7 +128,7 @@ def time_column(path: Path, data: dict[str, np.ndarray], roles: Mapping[str, Rol
         name, how = given, "given with --time"
     else:
         named = [n for n in data if roles[n].kind == "time"]
-        clocks = [n for n in named if V.looks_like_clock(data[n])]
+        clocks = [n for n in named if V.looks_like_clock(data[n])] or named[:1]
         if not clocks:
             clocks = [n for n in data if roles[n].kind == "" and V.looks_like_clock(data[n])
                       and data[n].dtype.kind in "iu"]
@@ -141,9 +141,18 @@ def time_column(path: Path, data: dict[str, np.ndarray], roles: Mapping[str, Rol
             raise InputError(f"{path}: no time-like column: {what}; name it with --time COLUMN")
         name = clocks[0]
     _drop(data, name, cmap)
-    if not V.looks_like_clock(data[name]):
+    empty = np.flatnonzero(~np.isfinite(data[name].astype(float)))
+    if len(empty):
+        raise InputError(f"{path}: row {int(empty[0]) + 1}: column {name!r} is empty or NaN")
+    if not np.median(np.diff(data[name].astype(float))) > 0:
         raise InputError(f"{path}: column {name!r}: does not count up, not a time")
     clock = V.read_clock(data[name], roles[name].unit)
+    if clock.resets:
+        row = clock.resets[0]
+        before, after = data[name][row - 1], data[name][row]
+        raise InputError(f"{path}: row {row + 1}: column {name!r} goes from {before} to {after}, "
+                         "back or not at all and not the wrap of a counter (a reset? rows out "
+                         "of order?); split the log there")
     cmap.add("t", name, clock.unit)
     cmap.assume("time", f"{name!r} in {clock.unit}", f"{how}; unit from {clock.unit_evidence}")
     cmap.assume("rate", f"{1.0 / clock.step:.4g} Hz",
@@ -151,10 +160,6 @@ def time_column(path: Path, data: dict[str, np.ndarray], roles: Mapping[str, Rol
                 f"{100 * clock.jitter:.2g} % of it")
     if clock.wrap is not None:
         cmap.assume("wrap", f"the counter wraps at {clock.wrap}", clock.wrap_evidence)
-    if clock.resets:
-        rows = ", ".join(str(r + 1) for r in clock.resets[:5])
-        cmap.assume("reset", f"the counter drops at row {rows}, not a wrap",
-                    "split the log there: gsfric refuses a counter that resets")
     return clock
 
 

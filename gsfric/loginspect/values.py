@@ -69,7 +69,8 @@ class Clock:
     jitter : float
         Largest deviation of a step from the median step, as a share of it.
     resets : tuple of int
-        0-based rows where the counter drops without wrapping.
+        0-based rows whose time does not advance from the row before (after unwrapping): a
+        counter that resets, or rows out of order.
     """
 
     t: np.ndarray
@@ -101,9 +102,9 @@ def read_clock(values: np.ndarray, named_unit: str | None) -> Clock:
     raw = values.astype(float)
     steps = np.diff(raw)
     typical = float(np.median(steps[steps > 0]))
-    wrap, wrap_evidence, resets, counts = None, "", [], raw
+    wrap, wrap_evidence, counts = None, "", raw
     if np.any(steps <= 0) and np.all(raw == np.round(raw)):
-        wrap, wrap_evidence, resets = _wrap(raw, typical)
+        wrap, wrap_evidence = _wrap(raw, typical)
         counts = raw + np.concatenate([[0.0], np.cumsum((steps <= 0) * float(wrap or 0))])
     if named_unit is not None:
         unit, evidence = named_unit, "the column's name"
@@ -114,14 +115,15 @@ def read_clock(values: np.ndarray, named_unit: str | None) -> Clock:
                     "closest to a motion log's rate")
     t = (counts - counts[0]) * UNITS["time"][unit]
     dt = np.diff(t)
+    resets = tuple(int(i) + 1 for i in np.flatnonzero(dt <= 0))
     median = float(np.median(dt))
     spread = float(np.max(np.abs(dt[dt > 0] - median)) / median) if median > 0 else 0.0
-    return Clock(t, unit, evidence, wrap, wrap_evidence, spread, tuple(resets))
+    return Clock(t, unit, evidence, wrap, wrap_evidence, spread, resets)
 
 
-def _wrap(raw: np.ndarray, typical: float) -> tuple[int | None, str, list[int]]:
+def _wrap(raw: np.ndarray, typical: float) -> tuple[int | None, str]:
     """The modulus (a power of 2 above the largest count) across which every drop is a step of
-    at most ``WRAP_STEPS`` typical steps; the evidence; the rows of drops that are resets."""
+    at most ``WRAP_STEPS`` typical steps, and the evidence; (None, "") when there is none."""
     drops = np.flatnonzero(np.diff(raw) <= 0)
     bits = max(8, int(np.ceil(np.log2(raw.max() + 1))))
     for modulus in (2**b for b in range(bits, 65)):
@@ -130,10 +132,10 @@ def _wrap(raw: np.ndarray, typical: float) -> tuple[int | None, str, list[int]]:
             shown = ", ".join(f"row {int(i) + 2}: {int(raw[i])} -> {int(raw[i + 1])}, a step of "
                               f"{int(a)} counts" for i, a in zip(drops[:3], across[:3]))
             return modulus, (f"{shown} across 2**{int(np.log2(modulus))}, against a "
-                             f"typical {typical:g}"), []
+                             f"typical {typical:g}")
         if modulus > raw.max() * 4:
             break
-    return None, "", [int(i) + 1 for i in drops]
+    return None, ""
 
 
 def length_unit(values: np.ndarray) -> tuple[str, str]:
