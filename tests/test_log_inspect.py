@@ -262,3 +262,13 @@ def test_bad_input_gets_one_line_naming_the_column_or_row_and_writes_nothing(
 def test_a_column_name_says_its_quantity_axis_and_unit(name, kind, axis, unit):
     found = role(name)
     assert (found.kind, found.axis, found.unit) == (kind, axis, unit)
+
+
+def test_a_file_in_gsfrics_own_columns_is_read_as_it_is(tmp_path):
+    _, si = real_like_log()
+    si[["t", "x", "y", "z", "qw", "qx", "qy", "qz"]].to_csv(tmp_path / "log.csv", index=False)
+    found = inspect_log(tmp_path / "log.csv")
+    fmt = found.log_format
+    assert fmt.columns == {k: k for k in ("t", "x", "y", "z", "qw", "qx", "qy", "qz")}
+    assert not fmt.units and not fmt.offset and fmt.frame.identity and fmt.wrap is None
+    assert not found.ignored

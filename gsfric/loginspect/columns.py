@@ -17,21 +17,17 @@ import pandas as pd
 
 from gsfric._checks import suggest
 from gsfric.errors import InputError
-from gsfric.io.logs import UNITS
+from gsfric.io.logs import RATES, UNITS
 from gsfric.loginspect import values as V
 from gsfric.loginspect.names import AXIS_WORDS, Role, role
+from gsfric.loginspect.names import RATE_QUANTITY as QUANTITY_RATE
 
 NUMERIC_SHARE = 0.9
 """A text column is read as numbers with a bad row (and that row named) when at least this
 share of its values are numbers: one corrupt line in a numeric column, not a text column."""
 
-RATE_GROUPS = {"velocity": ("vx", "vy", "vz"), "acceleration": ("ax", "ay", "az"),
-               "omega": ("omega_x", "omega_y", "omega_z"),
-               "alpha": ("alpha_x", "alpha_y", "alpha_z")}
-"""The log format's names of each kind of rate, by axis x, y, z."""
-
-RATE_QUANTITY = {"velocity": "speed", "acceleration": "acceleration", "omega": "angular speed",
-                 "alpha": "angular acceleration"}
+RATE_QUANTITY = {kind: quantity for quantity, kind in QUANTITY_RATE.items()}
+"""The quantity (``gsfric.io.logs.UNITS``) of each kind of rate."""
 
 
 @dataclass(frozen=True)
@@ -121,7 +117,7 @@ def numeric_frame(path: Path, frame: pd.DataFrame) -> dict[str, np.ndarray]:
 def time_column(path: Path, data: dict[str, np.ndarray], roles: Mapping[str, Role],
                 given: str | None, cmap: ColumnMap) -> V.Clock:
     """The time column, read as a ``Clock``, mapped to ``t`` with its assumptions. Dropout
-    rows (``dropouts``) are taken out of ``data``."""
+    rows (``_drop``) are taken out of ``data``."""
     if given is not None:
         if given not in data:
             raise InputError(f"--time: no numeric column {given!r}{suggest(given, list(data))}")
@@ -156,8 +152,9 @@ def time_column(path: Path, data: dict[str, np.ndarray], roles: Mapping[str, Rol
     cmap.add("t", name, clock.unit)
     cmap.assume("time", f"{name!r} in {clock.unit}", f"{how}; unit from {clock.unit_evidence}")
     cmap.assume("rate", f"{1.0 / clock.step:.4g} Hz",
-                f"median step {clock.step * 1e3:.4g} ms; the stamps jitter by up to "
-                f"{100 * clock.jitter:.2g} % of it")
+                f"median step {clock.step * 1e3:.4g} ms; " + (
+                    f"the stamps jitter by up to {100 * clock.jitter:.2g} % of it"
+                    if clock.jitter > V.EVEN_STAMPS else "evenly spaced stamps"))
     if clock.wrap is not None:
         cmap.assume("wrap", f"the counter wraps at {clock.wrap}", clock.wrap_evidence)
     return clock
@@ -205,7 +202,11 @@ def pose_units(path: Path, data, roles, columns: dict[str, str], kind: str,
         raise InputError(f"{path}: row {row + 1}: column {list(columns.values())[k]!r} is "
                          "empty or NaN")
     named = {roles[c].unit for c in columns.values()}
+    shown = ", ".join(f"{k} = {c!r}" for k, c in columns.items())
     if kind == "quaternion":
+        for key, column in columns.items():
+            cmap.add(key, column, None)
+        cmap.assume("orientation", f"{shown}, a quaternion (w first)", "the columns' names")
         return raw, "1"
     if len(named) == 1 and None not in named:
         unit = named.pop()
@@ -220,7 +221,6 @@ def pose_units(path: Path, data, roles, columns: dict[str, str], kind: str,
     else:
         unit, evidence = V.angle_unit(raw)
     factor = UNITS["length" if kind == "position" else "angle"][unit]
-    shown = ", ".join(f"{k} = {c!r}" for k, c in columns.items())
     cmap.assume(kind if kind != "angle" else "orientation", f"{shown} in {unit}", evidence)
     for key, column in columns.items():
         cmap.add(key, column, unit)
@@ -237,7 +237,7 @@ def rate_columns(data, roles, t: np.ndarray, position: np.ndarray, omega, cmap: 
     if omega is not None:
         reference["omega"] = omega
         reference["alpha"] = V.derivatives(t, omega)[1]
-    for kind, keys in RATE_GROUPS.items():
+    for kind, keys in RATES.items():
         found = {r.axis: c for c, r in roles.items() if r.kind == kind and c in data}
         if not found:
             continue

@@ -43,6 +43,10 @@ REST_SHARE = 0.01
 and its angular speed below the same share of the log's: a still platform's differentiated pose
 noise stays below it, any motion worth logging above."""
 
+EVEN_STAMPS = 1e-6
+"""Jitter (share of the step) below which stamps are reported as evenly spaced: the rounding of
+times written in decimal seconds."""
+
 MIN_ROWS = 20
 """Fewest rows a log needs: the checks differentiate with local cubics of at least 7 rows,
 and a record shorter than a few of them shows no motion to tell units and rates by."""
@@ -110,7 +114,7 @@ def read_clock(values: np.ndarray, named_unit: str | None) -> Clock:
         unit, evidence = named_unit, "the column's name"
     else:
         unit = time_unit_hint(typical, "s") or "s"
-        evidence = (f"the median step of {typical:.6g} counts gives "
+        evidence = (f"the median step of {typical:.6g} gives "
                     f"{1.0 / (typical * UNITS['time'][unit]):.4g} Hz in {unit}, the unit "
                     "closest to a motion log's rate")
     t = (counts - counts[0]) * UNITS["time"][unit]
