@@ -272,3 +272,12 @@ def test_a_file_in_gsfrics_own_columns_is_read_as_it_is(tmp_path):
     assert fmt.columns == {k: k for k in ("t", "x", "y", "z", "qw", "qx", "qy", "qz")}
     assert not fmt.units and not fmt.offset and fmt.frame.identity and fmt.wrap is None
     assert not found.ignored
+
+
+def test_a_usage_error_points_to_the_subcommands_help(tmp_path):
+    log, _ = real_like_log()
+    log.to_csv(tmp_path / "log.csv", index=False)
+    result = _cli("log", "inspect", tmp_path / "log.csv", "--rig", tmp_path / "a.toml",
+                  "--platform", tmp_path / "b.toml")
+    assert result.exit_code == 2
+    assert result.stderr.strip().endswith("(see `gsfric log inspect --help`)")
