@@ -227,25 +227,18 @@ def pose_units(path: Path, data, roles, columns: dict[str, str], kind: str,
     return raw * factor, unit
 
 
-def rate_columns(data, roles, t: np.ndarray, position: np.ndarray, omega, cmap: ColumnMap
-                 ) -> None:
+def rate_columns(data, roles, reference: Mapping[str, np.ndarray], cmap: ColumnMap) -> None:
     """Map each complete group of the log's own rates whose every column matches the
-    derivative of the poses (``values.match_rate``): position (N, 3), m, in the log's frame,
-    ``omega`` the log frame's angular velocity (N, 3), rad/s, from the poses (or None)."""
-    _, d1, d2 = V.derivatives(t, position)
-    reference = {"velocity": d1, "acceleration": d2}
-    if omega is not None:
-        reference["omega"] = omega
-        reference["alpha"] = V.derivatives(t, omega)[1]
+    derivative of the poses (``values.match_rate``). ``reference``: the poses' velocity,
+    acceleration, omega and alpha (N, 3 each, SI units, the log's frame), by ``RATES`` kind."""
     for kind, keys in RATES.items():
         found = {r.axis: c for c, r in roles.items() if r.kind == kind and c in data}
         if not found:
             continue
-        if set(found) != {"x", "y", "z"} or kind not in reference:
-            why = ("the angles' rates cannot be checked" if kind not in reference
-                   else f"only {', '.join(sorted(found))} found")
+        if set(found) != {"x", "y", "z"}:
             cmap.assume(kind, "not mapped: " + ", ".join(map(repr, found.values())),
-                        f"{why}; gsfric differentiates the poses")
+                        f"only {', '.join(sorted(found))} found; gsfric differentiates the "
+                        "poses")
             continue
         _rate_group(data, roles, kind, keys, found, reference[kind], cmap)
 

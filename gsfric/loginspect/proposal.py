@@ -155,10 +155,11 @@ def inspect_log(path: str | os.PathLike[str], *, platform: Platform | None = Non
     roles = C.roles_of(data)
     cmap = C.ColumnMap()
     clock = C.time_column(path, data, roles, time, cmap)
-    position, kind, angles, convention = _poses(path, data, roles, clock.t, cmap)
+    position, kind, angles, convention, velocity, omega = _poses(path, data, roles, clock.t,
+                                                                 cmap)
     C.force_columns(data, roles, cmap)
     frame_axes = _frame(roles, cmap, axes)
-    rest = _rest(clock.t, position, angles, kind, cmap)
+    rest = _rest(clock.t, position, angles, kind, V.still_samples(velocity, omega), cmap)
     sizes, model, home = _model(platform, rig, position, cmap)
     offset = _home(position, frame_axes, rest, home, cmap)
     fmt = LogFormat(columns=cmap.columns, units=cmap.units, angles=convention or "xyz",
@@ -177,7 +178,8 @@ def inspect_log(path: str | os.PathLike[str], *, platform: Platform | None = Non
 
 def _poses(path, data, roles, t, cmap: C.ColumnMap):
     """Position (N, 3), m, and orientation angles (N, 3 or 4) in SI in the log's frame; the
-    orientation kind; the roll/pitch/yaw convention (None for others). Also maps the rates."""
+    orientation kind; the roll/pitch/yaw convention (None for others); the velocity and the
+    angular velocity (N, 3 each, SI, the log's frame). Also maps the log's own rates."""
     columns = C.group(data, roles, "position")
     if columns is None:
         missing = [a for a in "xyz" if not any(roles[c].kind == "position" and roles[c].axis == a
@@ -193,29 +195,34 @@ def _poses(path, data, roles, t, cmap: C.ColumnMap):
         raise InputError(f"{path}: no orientation columns (roll, pitch, yaw; alpha, beta, "
                          "gamma; or qw, qx, qy, qz by name)")
     angles, _ = C.pose_units(path, data, roles, group, kind, cmap)
-    convention, omega = None, None
+    convention = None
     if kind == "angle":
-        convention, omega = _convention(data, roles, t, angles, cmap)
-    C.rate_columns(data, roles, t, position, omega, cmap)
-    return position, kind, angles, convention
+        convention, (omega, alpha) = _convention(data, roles, t, angles, cmap)
+    else:
+        omega, alpha = V.turning(t, _quaternions(angles, kind, "xyz"))
+    _, velocity, acceleration = V.derivatives(t, position)
+    C.rate_columns(data, roles, {"velocity": velocity, "acceleration": acceleration,
+                                 "omega": omega, "alpha": alpha}, cmap)
+    return position, kind, angles, convention, velocity, omega
 
 
 def _convention(data, roles, t, angles, cmap: C.ColumnMap):
-    """The roll/pitch/yaw convention, and the log frame's angular velocity (N, 3) under it:
-    the one whose angular velocity matches the log's own angular rates best, if it has them."""
+    """The roll/pitch/yaw convention, and the log frame's angular velocity and acceleration
+    under it: the one whose angular velocity matches the log's own angular rates best, if it
+    has them, else xyz."""
     rates = {r.axis: c for c, r in roles.items() if r.kind == "omega"}
     gap = math.degrees(V.convention_gap(angles))
     if set(rates) != {"x", "y", "z"}:
         cmap.assume("angles", f"xyz ({RPY_CONVENTIONS['xyz']})",
                     "the usual convention of roll, pitch, yaw; no angular rate columns to "
                     f"tell it from XYZ, which differs by at most {gap:.3g} deg on this log")
-        return "xyz", V.log_omega(t, angles, "xyz")
+        return "xyz", V.turning(t, quaternion_from_rpy(angles, "xyz"))
     scores = {}
     for convention in RPY_CONVENTIONS:
-        omega = V.log_omega(t, angles, convention)
-        scores[convention] = (min(V.match_rate(data[rates[a]].astype(float), omega[:, k],
+        rates_of = V.turning(t, quaternion_from_rpy(angles, convention))
+        scores[convention] = (min(V.match_rate(data[rates[a]].astype(float), rates_of[0][:, k],
                                                "angular speed").correlation
-                                  for k, a in enumerate("xyz")), omega)
+                                  for k, a in enumerate("xyz")), rates_of)
     best = max(scores, key=lambda c: scores[c][0])
     other = next(c for c in scores if c != best)
     cmap.assume("angles", f"{best} ({RPY_CONVENTIONS[best]})",
@@ -247,10 +254,10 @@ def _frame(roles, cmap: C.ColumnMap, given: str | None) -> tuple[str, str, str]:
     return ("x", "y", "z")
 
 
-def _rest(t, position, angles, kind, cmap: C.ColumnMap) -> Rest | None:
-    """The longest still stretch (``values.REST_SHARE``), at least ``REST_SECONDS`` long."""
+def _rest(t, position, angles, kind, still, cmap: C.ColumnMap) -> Rest | None:
+    """The longest stretch of ``still`` samples (N,), at least ``REST_SECONDS`` long."""
     turn = angles if kind != "quaternion" else angles[:, 1:]
-    start, stop = V.longest_run(V.still_samples(t, position, turn))
+    start, stop = V.longest_run(still)
     seconds = float(t[stop - 1] - t[start]) if stop > start else 0.0
     if seconds < V.REST_SECONDS:
         cmap.assume("rest", "none", f"no still stretch of {V.REST_SECONDS:g} s")
@@ -317,14 +324,18 @@ def _home(position, axes, rest, home, cmap: C.ColumnMap) -> dict[str, float]:
     return {"z": home}
 
 
+def _quaternions(angles, kind: str, convention: str) -> np.ndarray:
+    """Unit quaternions (N, 4) of the orientation columns (N, 3 or 4) of ``kind``."""
+    if kind == "angle":
+        return quaternion_from_rpy(angles, convention)
+    if kind == "euler":
+        return quaternion_from_euler(*angles.T)
+    return angles / np.linalg.norm(angles, axis=1, keepdims=True)
+
+
 def _platform_poses(fmt: LogFormat, position, angles, kind):
     """Positions (N, 3), m, and rotations (N, 3, 3) in the platform's frame."""
-    if kind == "angle":
-        q = quaternion_from_rpy(angles, fmt.angles)
-    elif kind == "euler":
-        q = quaternion_from_euler(*angles.T)
-    else:
-        q = angles / np.linalg.norm(angles, axis=1, keepdims=True)
+    q = _quaternions(angles, kind, fmt.angles)
     frame = fmt.frame
     return (frame.position(position, fmt.angles),
             rotation_from_quaternion(frame.quaternion(q, fmt.angles)))

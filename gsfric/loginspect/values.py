@@ -205,12 +205,11 @@ def match_rate(column: np.ndarray, derivative: np.ndarray, quantity: str) -> Rat
     return RateMatch(correlation, ratio, unit)
 
 
-def log_omega(t: np.ndarray, angles: np.ndarray, convention: str) -> np.ndarray:
-    """Angular velocity (N, 3), rad/s, in the log's frame, of roll, pitch, yaw (N, 3), rad, in
-    ``convention`` ("xyz" or "XYZ")."""
-    q = continuous_quaternions(quaternion_from_rpy(angles, convention))
-    q0, q1, q2 = derivatives(t, q)
-    return angular_rates(q0, q1, q2)[0]
+def turning(t: np.ndarray, q: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Angular velocity and acceleration (N, 3 each), rad/s and rad/s^2, in the frame of the
+    quaternions q (N, 4) at times t (N,), s."""
+    q0, q1, q2 = derivatives(t, continuous_quaternions(q))
+    return angular_rates(q0, q1, q2)
 
 
 def convention_gap(angles: np.ndarray) -> float:
@@ -222,12 +221,11 @@ def convention_gap(angles: np.ndarray) -> float:
     return float(2.0 * np.arccos(dots).max())
 
 
-def still_samples(t: np.ndarray, position: np.ndarray, angles: np.ndarray) -> np.ndarray:
-    """Which samples (N,) are still (``REST_SHARE``): positions (N, 3), m; angles (N, 3), rad."""
-    speed = np.linalg.norm(derivatives(t, position)[1], axis=1)
-    turn = np.linalg.norm(derivatives(t, angles)[1], axis=1)
-    still = np.ones(len(t), bool)
-    for rate in (speed, turn):
+def still_samples(velocity: np.ndarray, omega: np.ndarray) -> np.ndarray:
+    """Which samples (N,) are still (``REST_SHARE``): velocity (N, 3), m/s; angular velocity
+    (N, 3), rad/s."""
+    still = np.ones(len(velocity), bool)
+    for rate in (np.linalg.norm(velocity, axis=1), np.linalg.norm(omega, axis=1)):
         top = float(np.percentile(rate, 99))
         if top > 0:
             still &= rate < REST_SHARE * top
