@@ -26,6 +26,10 @@ NUMERIC_SHARE = 0.9
 """A text column is read as numbers with a bad row (and that row named) when at least this
 share of its values are numbers: one corrupt line in a numeric column, not a text column."""
 
+SI = frozenset(unit for units in UNITS.values() for unit, factor in units.items()
+               if factor == 1.0)
+"""The units a log format need not list (``gsfric.io.logs.UNITS``' factor 1)."""
+
 RATE_QUANTITY = {kind: quantity for quantity, kind in QUANTITY_RATE.items()}
 """The quantity (``gsfric.io.logs.UNITS``) of each kind of rate."""
 
@@ -74,13 +78,14 @@ class ColumnMap:
     used: set[str] = field(default_factory=set)
 
     def add(self, key: str, column: str, unit: str | None) -> None:
+        """Map gsfric's ``key`` to the log's ``column`` in ``unit`` (listed unless SI)."""
         self.columns[key] = column
         self.used.add(column)
-        if unit is not None and unit not in ("s", "m", "rad", "N", "m/s", "rad/s", "m/s^2",
-                                             "rad/s^2", "1"):
+        if unit is not None and unit not in SI:
             self.units[key] = unit
 
     def assume(self, topic: str, value: str, evidence: str) -> None:
+        """Record an ``Assumption``."""
         self.assumptions.append(Assumption(topic, value, evidence))
 
 
