@@ -36,6 +36,8 @@ COMMANDS = {
     "effects": "List the catalog of optional effects, with their parameters, defaults and "
                "units.",
     "export": "Write a self-contained C99 library of a platform for a real-time controller.",
+    "log": "Read a controller's log: `gsfric log inspect LOG` proposes its log format and a "
+           "rig.",
     "paper": "Run the paper's 40-step motion and write Tables 1-3, a report and plots.",
     "platform": "Write a platform file to start from: `gsfric platform --template --out "
                 "my.toml`.",
@@ -192,15 +194,22 @@ class _Group(click.Group):
             click.echo(exc.ctx.get_help(), err=True)
             sys.exit(EXIT_INPUT)
         except click.UsageError as exc:
-            hint = f" (see `gsfric {exc.ctx.info_name} --help`)" if exc.ctx and \
-                exc.ctx.parent else " (see `gsfric --help`)"
-            fail(exc.format_message().replace("\n", " ") + hint, EXIT_INPUT)
+            fail(exc.format_message().replace("\n", " ") + _help_hint(exc.ctx), EXIT_INPUT)
         except click.exceptions.Exit as exc:
             sys.exit(exc.exit_code)
         except click.Abort:
             fail("aborted", EXIT_CHECK)
         except click.ClickException as exc:
             fail(exc.format_message(), EXIT_INPUT)
+
+
+def _help_hint(ctx: click.Context | None) -> str:
+    """`` (see `gsfric COMMAND [SUBCOMMAND] --help`)`` for the command that was given."""
+    names = []
+    while ctx is not None and ctx.parent is not None:
+        names.insert(0, ctx.info_name)
+        ctx = ctx.parent
+    return f" (see `{' '.join(['gsfric', *names])} --help`)"
 
 
 def _stop_in_chain(exc: BaseException) -> BaseException | None:
