@@ -53,7 +53,7 @@ from scipy.spatial.transform import Rotation
 
 from gsfric import models
 from gsfric.discovery import CANDIDATE_NAMES
-from gsfric.evaluation.evaluator import evaluate
+from gsfric.simulate.api import evaluate
 from gsfric.platform.description import Body, Friction, Geometry, Legs, Platform
 from gsfric.synth import read_forces
 from gsfric.trajectory import Motion

@@ -22,7 +22,7 @@ from scipy.signal import lfilter
 
 from gsfric.discovery import discover
 from gsfric.discovery.rest import poses_from_columns
-from gsfric.evaluation.evaluator import evaluate
+from gsfric.simulate.api import evaluate
 from gsfric.models import reference_platform
 from gsfric.signal.rotations import quaternion_from_rotation, rotation_from_euler
 from gsfric.synth import effect_contributions, synthesize

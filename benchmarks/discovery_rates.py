@@ -173,7 +173,7 @@ def scaled(name, platform, motion, size, sigma):
 
     params = dict(UNIT[name])
     if name == "stroke_friction":
-        from gsfric.evaluation.evaluator import evaluate
+        from gsfric.simulate.api import evaluate
 
         params["reference"] = float(evaluate(platform, motion).D.min())
     c = effect_contributions(platform.with_effect(name, **params), motion, [name])[name]

@@ -26,7 +26,7 @@ _LAZY = {
     "Motion": ("gsfric.trajectory", "Motion"),
     "Evaluator": ("gsfric.evaluation.evaluator", "Evaluator"),
     "Result": ("gsfric.evaluation.result", "Result"),
-    "evaluate": ("gsfric.evaluation.evaluator", "evaluate"),
+    "evaluate": ("gsfric.simulate.api", "evaluate"),
     "discover": ("gsfric.discovery.api", "discover"),
     "Discovery": ("gsfric.discovery.results", "Discovery"),
     "reference_platform": ("gsfric.models", "reference_platform"),

@@ -35,7 +35,8 @@ from gsfric.discovery import CANDIDATE_NAMES, discover
 from gsfric.discovery import statistics as st
 from gsfric.discovery.settings import Settings
 from gsfric.errors import InputError
-from gsfric.evaluation.evaluator import Evaluator, evaluate, state_array
+from gsfric.evaluation.evaluator import Evaluator, state_array
+from gsfric.simulate.api import evaluate
 from gsfric.models import random_motion, reference_platform
 from gsfric.synth import effect_contributions, excitation_motion, synthesize
 from gsfric.trajectory import Motion

@@ -64,7 +64,7 @@ def test_speed_uncertainty_follows_the_pose_noise():
     """sigma_v from the recorded poses scales with the pose noise and is of the size of the
     spread of the differentiated leg speed where the legs are truly at rest (within a factor:
     docs/explanation/discovery.md gives the measured ratio)."""
-    from gsfric.evaluation.evaluator import evaluate
+    from gsfric.simulate.api import evaluate
 
     out = []
     for pose in (1e-5, 4e-5):
@@ -554,7 +554,7 @@ def test_a_mode_ringing_after_the_stops_is_not_explained():
     each stop."""
     from scipy.signal import lfilter
 
-    from gsfric.evaluation.evaluator import evaluate
+    from gsfric.simulate.api import evaluate
 
     rng = np.random.default_rng(1070)
     g = COUPLED.geometry
@@ -615,7 +615,7 @@ def test_pose_scale_columns_are_the_forces_of_a_scaled_motion():
     motions whose position, velocity and acceleration along one axis are scaled (the state's
     layout, the sign and the size)."""
     from gsfric.discovery.model import ParametricModel
-    from gsfric.evaluation.evaluator import evaluate
+    from gsfric.simulate.api import evaluate
 
     motion = _smooth_motion("sines", 4, samples=200)
     platform = COUPLED.with_effect("seal_friction", force=3.0)

@@ -172,7 +172,7 @@ def _rest_trial(base: str, name: str | None, seed: int, size: float = 3.0) -> di
     from gsfric import models
     from gsfric.discovery import discover
     from gsfric.discovery.rest import poses_from_columns
-    from gsfric.evaluation.evaluator import evaluate
+    from gsfric.simulate.api import evaluate
     from gsfric.synth import effect_contributions, synthesize
     from gsfric.trajectory import Motion
 

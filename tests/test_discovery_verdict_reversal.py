@@ -173,7 +173,7 @@ def test_play_in_a_joint_is_not_explained(base):
     from gsfric import models
     from gsfric.discovery import discover
     from gsfric.discovery.rest import poses_from_columns
-    from gsfric.evaluation.evaluator import evaluate
+    from gsfric.simulate.api import evaluate
     from gsfric.synth import synthesize
     from gsfric.trajectory import Motion
 

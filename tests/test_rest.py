@@ -15,7 +15,7 @@ from gsfric.discovery.rest import (
     spline_differentiator,
 )
 from gsfric.discovery.settings import Settings
-from gsfric.evaluation.evaluator import evaluate
+from gsfric.simulate.api import evaluate
 from gsfric.models import minimum_jerk_moves, point_to_point, reference_platform
 from gsfric.signal.noise import divided_noise_std_every_window
 from gsfric.signal.rotations import quaternion_from_rotation

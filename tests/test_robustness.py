@@ -24,7 +24,8 @@ from gsfric.bench.cases import Case
 from gsfric.bench.cases import ratio as _ratio
 from gsfric.cli import main
 from gsfric.errors import GsfricWarning, InputError, StepFlagError
-from gsfric.evaluation.evaluator import Evaluator, evaluate
+from gsfric.evaluation.evaluator import Evaluator
+from gsfric.simulate.api import evaluate
 from gsfric.evaluation.flags import (
     COND_LIMIT,
     FLAG_NONFINITE,

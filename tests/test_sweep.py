@@ -22,7 +22,8 @@ import gsfric
 from gsfric import io, models
 from gsfric.compiled.state import state_layout
 from gsfric.errors import GsfricWarning, InputError
-from gsfric.evaluation.evaluator import Evaluator, evaluate
+from gsfric.evaluation.evaluator import Evaluator
+from gsfric.simulate.api import evaluate
 from gsfric.evaluation.flags import FLAG_COUPLING, FLAG_STROKE
 from gsfric.platform.description import Platform
 from gsfric.signal.rotations import rotation_from_rpy

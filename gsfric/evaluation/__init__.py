@@ -4,7 +4,7 @@ step flags, the breakdown of the forces into their parts, and the output columns
 >>> from gsfric.evaluation import Evaluator, state_array
 """
 
-from gsfric.evaluation.evaluator import Evaluator, evaluate, state_array
+from gsfric.evaluation.evaluator import Evaluator, evaluate_motion, state_array
 from gsfric.evaluation.result import Result
 
-__all__ = ["Evaluator", "Result", "evaluate", "state_array"]
+__all__ = ["Evaluator", "Result", "evaluate_motion", "state_array"]

@@ -17,7 +17,6 @@ from __future__ import annotations
 
 import functools
 import math
-import sys
 import warnings
 
 import numpy as np
@@ -33,7 +32,6 @@ from gsfric.evaluation.memory import aligned_empty
 from gsfric.evaluation.paper_constants import paper_constants as pc
 from gsfric.evaluation.parameters import model_function, packed, uniform_model
 from gsfric.evaluation.result import DETAILS, Outputs, Pending, Result
-from gsfric.io.readers import motion_from_frame
 from gsfric.platform.catalog import apply_sensor, sensor_parameters
 from gsfric.platform.description import Platform
 from gsfric.trajectory import ROTATION_TOL, Motion, first_non_rotation
@@ -356,69 +354,43 @@ def _details(platform: Platform, mode: str, constants, threads: int, motion: Mot
     return evaluator.details(motion, names, flag)
 
 
-def _is_frame(value: object) -> bool:
-    """Whether ``value`` is a pandas DataFrame, without importing pandas: none can exist before
-    pandas is imported."""
-    pandas = sys.modules.get("pandas")
-    return pandas is not None and isinstance(value, pandas.DataFrame)
+_EVALUATE_OPTIONS = ("strict", "progress", "chunk")
+"""The keyword arguments of ``evaluate_motion`` besides ``mode``."""
 
 
-_EVALUATE_OPTIONS = ("strict", "progress", "chunk", "window", "polyorder", "log_format")
-"""The keyword arguments of ``evaluate`` besides ``mode``."""
-
-
-def evaluate(platform: Platform, motion, mode: str = "kinematic", **kwargs) -> Result:
-    """Reaction forces and friction in every joint of ``platform`` over a motion.
+def evaluate_motion(platform: Platform, motion: Motion, mode: str = "kinematic",
+                    **kwargs) -> Result:
+    """Reaction forces and friction in every joint of ``platform`` over a ``Motion``: the
+    core of ``gsfric.evaluate`` (which also takes a DataFrame of samples).
 
     Parameters
     ----------
     platform : Platform
-        E.g. ``gsfric.reference_platform()`` or ``Platform.from_toml(path)``.
-    motion : Motion or pandas.DataFrame
-        N steps. A DataFrame holds samples with the columns of a trajectory file (``t, x, y,
-        z`` in s and m with ``alpha, beta, gamma`` in rad, ``qw, qx, qy, qz`` or ``roll,
-        pitch, yaw``); it is differentiated as ``gsfric.io.read_trajectory`` does.
+    motion : Motion
+        N steps.
     mode : {"kinematic", "paper"}
         "kinematic": accelerations from the motion; "paper": the paper's constants.
     **kwargs
-        ``strict``, ``progress``, ``chunk`` of ``Evaluator.evaluate``; for a DataFrame also
-        ``window``, ``polyorder`` and ``log_format`` (``gsfric.io.motion_from_frame``).
+        ``strict``, ``progress``, ``chunk`` of ``Evaluator.evaluate``.
 
     Returns
     -------
     Result
-        Arrays with the step as the leading axis, SI units, base frame: ``F`` (N, 6) N,
-        ``R_E`` (N, 6, 3) N, ... (see ``Result``); ``result.to_frame()`` for a table with units.
 
     Raises
     ------
     InputError
-        A DataFrame with missing or bad columns (one line naming the row and column);
         ``chunk`` not an integer >= 1.
     InputTypeError
-        ``platform`` is not a Platform or ``motion`` not a Motion or DataFrame (swapped
-        arguments, None, a NumPy array), in one line saying what to give; an unknown keyword
+        ``platform`` is not a Platform or ``motion`` not a Motion, an unknown keyword
         argument; ``strict`` not a bool.
     StepFlagError
         ``strict=True`` and a flagged step.
-
-    Examples
-    --------
-    >>> import numpy as np, gsfric
-    >>> result = gsfric.evaluate(gsfric.reference_platform(),
-    ...                          gsfric.models.sinusoidal(np.linspace(0, 1, 101)))
-    >>> result.F.shape, result.R_E.shape
-    ((101, 6), (101, 6, 3))
     """
     unknown = sorted(set(kwargs) - set(_EVALUATE_OPTIONS))
     if unknown:
         raise InputTypeError(f"evaluate: unknown argument {unknown[0]!r}; expected "
-                             f"{', '.join(_EVALUATE_OPTIONS)}")
-    if _is_frame(motion):
-        reading = {k: kwargs.pop(k) for k in ("window", "polyorder", "log_format")
-                   if k in kwargs}
-        motion = motion_from_frame(motion, **reading)
-
+                             f"{', '.join(_EVALUATE_OPTIONS + ('window', 'polyorder', 'log_format'))}")
     evaluation_arguments(platform, motion, kwargs.get("chunk", 1))
     return Evaluator(platform, mode=mode).evaluate(motion, **kwargs)
 
