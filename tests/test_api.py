@@ -91,17 +91,17 @@ def test_units_travel_with_frames_and_parquet(tmp_path, platform):
     result = gsfric.evaluate(platform, models.sinusoidal(np.linspace(0.0, 1.0, 30)))
     frame = result.to_frame()
     assert set(frame.attrs["units"]) == set(frame.columns)
-    assert frame.attrs["units"]["REz3"] == "N" and frame.attrs["units"]["MfrC2"] == "N m"
+    assert frame.attrs["units"]["REz3"] == "N" and frame.attrs["units"]["MfrC_s2"] == "N m"
     assert frame.attrs["units"]["t"] == "s" and frame.attrs["units"]["D6"] == "m"
     # the paper's friction scalars are never positive, as their description says
-    assert "<= 0" in frame.attrs["descriptions"]["Ffr1"]
-    assert (frame[[f"Ffr{i}" for i in range(1, 7)]].to_numpy() <= 0).all()
+    assert "<= 0" in frame.attrs["descriptions"]["Ffr_s1"]
+    assert (frame[[f"Ffr_s{i}" for i in range(1, 7)]].to_numpy() <= 0).all()
     gsfric.io.write_table(models.sinusoidal(np.linspace(0, 1, 60)).to_frame(), tmp_path / "m.csv")
     out = tmp_path / "o.parquet"
     assert CliRunner().invoke(main, ["simulate", "--trajectory", str(tmp_path / "m.csv"),
                                      "--out", str(out), "--quiet"]).exit_code == 0
     schema = pq.read_schema(out)
-    for name in ("F1", "REx2", "MfrE6", "flag"):
+    for name in ("F1", "REx2", "MfrE_s6", "flag"):
         meta = schema.field(name).metadata
         assert meta[b"unit"].decode() == columns.units()[name]
         assert meta[b"description"]

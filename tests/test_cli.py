@@ -100,7 +100,7 @@ def test_simulate_writes_every_column(tmp_path, good, suffix):
     frame = read_table(out)
     assert len(frame) == 60
     for name in (["t", "flag"] + [f"F{i}" for i in range(1, 7)]
-                 + [f"{k}{i}" for k in ("MfrE", "MfrC", "Ffr", "MC") for i in range(1, 7)]
+                 + [f"{k}{i}" for k in ("Ffr", "MfrE_s", "MfrC_s", "Ffr_s", "MC") for i in range(1, 7)]
                  + [f"{k}{a}{i}" for k in ("RE", "RC") for a in "xyz" for i in range(1, 7)]):
         assert name in frame.columns, name
     assert np.isfinite(frame.drop(columns="flag").to_numpy()).all()
