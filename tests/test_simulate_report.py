@@ -103,8 +103,9 @@ def test_trace_bins_keep_every_extreme_in_bounded_memory(rng):
     trace = Trace()
     for s in range(0, n, 997):              # pieces that do not line up with the bins
         trace.add(t[s:s + 997], {"F": F[s:s + 997], "Ffr": -F[s:s + 997]}, flag[s:s + 997])
-    assert len(trace.t) <= MAX_BINS + 1 and trace.stride > 1
-    high, low = np.array(trace.high), np.array(trace.low)
+    assert MAX_BINS // 2 <= len(trace.t) <= MAX_BINS and trace.stride > 1
+    np.testing.assert_allclose(np.diff(trace.t), trace.stride * 0.01)   # consecutive bins
+    high, low = trace.high, trace.low
     np.testing.assert_array_equal(high[:, 0].max(axis=0), F.max(axis=0))
     np.testing.assert_array_equal(low[:, 0].min(axis=0), F.min(axis=0))
     np.testing.assert_array_equal(high[:, 1].max(axis=0), (-F).max(axis=0))

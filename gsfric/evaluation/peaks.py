@@ -64,14 +64,20 @@ class Peaks:
             self.t0 = float(t[0])
         self.steps += len(t)
         good = np.asarray(flag) == 0
-        self.sound += int(np.count_nonzero(good))
+        sound = int(np.count_nonzero(good))
+        self.sound += sound
         for _, _, key in PEAK_ROWS:
             if key not in arrays:
                 continue
-            size = np.linalg.norm(np.reshape(arrays[key], (len(t), 6, -1)), axis=2)
-            size = np.where(good[:, None] & np.isfinite(size), size, -np.inf)
+            values = np.reshape(arrays[key], (len(t), 6, -1))
+            # squared magnitudes (no root per step); flagged steps never peak, and only they
+            # can be NaN (a non-finite output flags its step)
+            size = np.square(values[:, :, 0]) if values.shape[2] == 1 else \
+                np.einsum("nlk,nlk->nl", values, values)
+            if sound < len(t):
+                size[~good] = -np.inf
             at = np.argmax(size, axis=0)
-            peak = size[at, np.arange(6)]
+            peak = np.sqrt(size[at, np.arange(6)])          # -inf: no sound finite step
             best = self.values.setdefault(key, np.full(6, np.nan))
             when = self.times.setdefault(key, np.full(6, np.nan))
             better = np.isfinite(peak) & ~(peak <= best)      # NaN best: any finite peak

@@ -175,9 +175,10 @@ class Result:
 
     def summary(self) -> str:
         """The long form of the repr: the table of peaks per leg (``gsfric.evaluation.peaks``:
-        the largest |F|, |Ffr| (the friction that loads the actuators, the file's Ffr1..Ffr6),
-        |R_E|, |R_C| (N) and |M_C| (N m) over the sound steps, each with its time from the
-        first step, s), and what the flags say. ``gsfric simulate`` prints the same table."""
+        the largest magnitudes of ``F``, ``Ffr`` (the friction that loads the actuators, the
+        file's ``Ffr1..Ffr6``), ``R_E``, ``R_C`` (N) and ``M_C`` (N m) over the sound steps,
+        each with its time from the first step, s), and what the flags say. ``gsfric simulate``
+        prints the same table."""
         peaks = Peaks()
         peaks.add(self.t, self.arrays, self.flag)
         message = flag_message(self.flag)

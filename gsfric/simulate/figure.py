@@ -32,67 +32,79 @@ class Trace:
     ----------
     stride : int
         Steps per bin (a power of two).
-    t : list of float
+    t : ndarray, shape (B,)
         First time of each bin, s.
-    low, high : list of ndarray (len(SERIES), 6)
+    low, high : ndarray, shape (B, len(SERIES), 6)
         Smallest and largest value of each series per leg over each bin's steps (NaN: no
         finite value).
-    flagged : list of bool
+    flagged : ndarray of bool, shape (B,)
         Whether a bin holds a flagged step.
+    fill : int
+        Steps in the last bin (``stride`` when it is full).
     """
 
     stride: int = 1
-    t: list = field(default_factory=list)
-    low: list = field(default_factory=list)
-    high: list = field(default_factory=list)
-    flagged: list = field(default_factory=list)
-    _fill: int = 0                  # steps in the last bin
+    t: np.ndarray = field(default_factory=lambda: np.zeros(0))
+    low: np.ndarray = field(default_factory=lambda: np.zeros((0, len(SERIES), 6)))
+    high: np.ndarray = field(default_factory=lambda: np.zeros((0, len(SERIES), 6)))
+    flagged: np.ndarray = field(default_factory=lambda: np.zeros(0, dtype=bool))
+    fill: int = 0
 
     def add(self, t: np.ndarray, arrays, flag: np.ndarray) -> None:
         """Add a piece: times (N,) s, ``arrays`` holding ``SERIES``' arrays (N, 6), flags
         (N,)."""
         n = len(t)
         values = np.stack([np.reshape(arrays[key], (n, 6)) for key, _ in SERIES], axis=1)
+        bad = np.asarray(flag) != 0
         s = 0
         while s < n:
-            if self._fill == 0 or self._fill >= self.stride:
-                self._open(float(t[s]))
-            e = min(n, s + self.stride - self._fill)
-            self._merge_into(-1, values[s:e], bool(np.any(flag[s:e])))
-            self._fill += e - s
-            s = e
-            if len(self.t) > MAX_BINS and self._fill >= self.stride:
+            if self.fill and self.fill < self.stride:      # the last bin first
+                e = min(n, s + self.stride - self.fill)
+                self._extend_last(values[s:e], bool(bad[s:e].any()))
+                s = e
+                continue
+            whole = (n - s) // self.stride * self.stride
+            if whole:
+                self._append(t[s:s + whole:self.stride], values[s:s + whole], bad[s:s + whole],
+                             self.stride)
+                s += whole
+            else:
+                self._append(t[s:s + 1], values[s:], bad[s:], n - s)
+                s = n
+            while len(self.t) > MAX_BINS:
                 self._widen()
 
-    def _open(self, t0: float) -> None:
-        self.t.append(t0)
-        self.low.append(np.full((len(SERIES), 6), np.nan))
-        self.high.append(np.full((len(SERIES), 6), np.nan))
-        self.flagged.append(False)
-        self._fill = 0
-
-    def _merge_into(self, k: int, values: np.ndarray, flagged: bool) -> None:
+    def _append(self, starts: np.ndarray, values: np.ndarray, bad: np.ndarray,
+                size: int) -> None:
+        """Append bins of ``size`` steps (the last of them possibly fewer: ``len(values)``)."""
+        k = len(starts)
+        shape = (k, -1) + values.shape[1:]
+        blocks = values.reshape(shape) if len(values) == k * size else values[None]
         with np.errstate(invalid="ignore"):
-            low = np.fmin.reduce(values, axis=0) if len(values) else self.low[k]
-            high = np.fmax.reduce(values, axis=0) if len(values) else self.high[k]
-        self.low[k] = np.fmin(self.low[k], low)
-        self.high[k] = np.fmax(self.high[k], high)
-        self.flagged[k] = self.flagged[k] or flagged
+            self.low = np.concatenate([self.low, np.fmin.reduce(blocks, axis=1)])
+            self.high = np.concatenate([self.high, np.fmax.reduce(blocks, axis=1)])
+        self.flagged = np.concatenate([self.flagged, bad.reshape(k, -1).any(axis=1)])
+        self.t = np.concatenate([self.t, starts])
+        self.fill = len(values) - (k - 1) * size
+
+    def _extend_last(self, values: np.ndarray, bad: bool) -> None:
+        self.low[-1] = np.fmin(self.low[-1], np.fmin.reduce(values, axis=0))
+        self.high[-1] = np.fmax(self.high[-1], np.fmax.reduce(values, axis=0))
+        self.flagged[-1] |= bad
+        self.fill += len(values)
 
     def _widen(self) -> None:
-        """Merge the full bins in pairs: twice the steps a bin (an odd last bin stays, half
-        full)."""
+        """Merge the bins in pairs: twice the steps a bin (an odd last bin stays alone)."""
         odd = len(self.t) % 2
         n = len(self.t) - odd
-        rest = slice(n, None)
-        self.t = self.t[0:n:2] + self.t[rest]
-        self.low = [np.fmin(a, b) for a, b in zip(self.low[0:n:2], self.low[1:n:2])] \
-            + self.low[rest]
-        self.high = [np.fmax(a, b) for a, b in zip(self.high[0:n:2], self.high[1:n:2])] \
-            + self.high[rest]
-        self.flagged = [a or b for a, b in zip(self.flagged[0:n:2], self.flagged[1:n:2])] \
-            + self.flagged[rest]
-        self._fill = self.stride if odd else 2 * self.stride
+
+        def pairs(a, merge):
+            return np.concatenate([merge(a[0:n:2], a[1:n:2]), a[n:]])
+
+        self.t = np.concatenate([self.t[0:n:2], self.t[n:]])
+        self.low, self.high = pairs(self.low, np.fmin), pairs(self.high, np.fmax)
+        self.flagged = pairs(self.flagged, np.logical_or)
+        self.fill = self.fill if odd else self.fill + self.stride
         self.stride *= 2
 
 
@@ -104,9 +116,7 @@ def write_figure(path, trace: Trace, t0: float, title: str = "") -> None:
     fig = figure_module.Figure(figsize=(12, 7), layout="constrained")
     backend.FigureCanvasAgg(fig)
     axes = fig.subplots(len(SERIES), 1, sharex=True)
-    t = np.asarray(trace.t) - t0
-    low, high = np.asarray(trace.low), np.asarray(trace.high)
-    flagged = np.asarray(trace.flagged, dtype=bool)
+    t, low, high, flagged = trace.t - t0, trace.low, trace.high, trace.flagged
     for j, (ax, (_, label)) in enumerate(zip(axes, SERIES)):
         for leg in range(6):
             colour = f"C{leg}"
