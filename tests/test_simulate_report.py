@@ -181,3 +181,14 @@ def test_a_few_flagged_steps_warn_with_their_time_ranges(tmp_path):
     frame = read_table(tmp_path / "o.csv")
     sound = np.abs(frame.loc[frame["flag"] == 0, [f"F{i}" for i in range(1, 7)]].to_numpy())
     np.testing.assert_allclose(_table(result.stdout)[:, 1], sound.max(axis=0), rtol=1e-3)
+
+
+def test_an_unknown_figure_format_is_refused_before_any_work(tmp_path):
+    path = _lifted(tmp_path / "t.csv", [])
+    result = _cli("simulate", "--trajectory", path, "--out", tmp_path / "o.csv", "--plot",
+                  tmp_path / "f.jpeg")
+    assert result.exit_code == 2
+    assert result.stderr.strip() == (f"gsfric: error: {tmp_path / 'f.jpeg'}: --plot: unknown "
+                                     "figure format 'jpeg'; give a file ending in .png, .svg, "
+                                     ".pdf")
+    assert not (tmp_path / "o.csv").exists()

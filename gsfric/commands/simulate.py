@@ -20,6 +20,7 @@ from gsfric.io.logs import LogFormat
 from gsfric.io.readers import read_trajectory
 from gsfric.io.tables import write_table
 from gsfric.models import platform_from
+from gsfric.platform.usable import FLAGGED_LIMIT
 from gsfric.simulate import parse_columns, simulate_file
 
 
@@ -96,9 +97,10 @@ def _options(command):
                           "friction Ffr of every leg over the record (PNG, SVG or PDF by the "
                           "extension; needs matplotlib)."),
         click.option("--keep-flagged", is_flag=True,
-                     help="Write the output even when more than 10 % of the steps are "
-                          "flagged (the limit, FLAGGED_LIMIT; above it the run fails, exit 1, "
-                          "no output); up to half of them."),
+                     help=f"Write the output even when more than {100 * FLAGGED_LIMIT:g} % of "
+                          "the steps are flagged (above it the run fails, exit 1, no output: "
+                          "the platform or the log's frame is likely not the rig's); up to "
+                          "half of them."),
         click.option("--verbose", "-v", is_flag=True,
                      help="Name the log's ignored columns (counted in one warning otherwise)."),
     ]

@@ -11,14 +11,19 @@ flagged steps marked.
 from __future__ import annotations
 
 from dataclasses import dataclass, field
+from pathlib import Path
 
 import numpy as np
 
 from gsfric._optional import optional
+from gsfric.errors import InputError
 from gsfric.io.files import atomic_write
 
 MAX_BINS = 4000
 """Bins kept of a record: about two per pixel across a figure 12 inches wide at 150 dpi."""
+
+FORMATS = ("png", "svg", "pdf")
+"""The figure's formats, by the file's extension."""
 
 SERIES = (("F", "actuator force F (N)"), ("Ffr", "prismatic friction Ffr (N)"))
 """(Result array, axis label) of each panel of the figure: the file's F1..F6 and Ffr1..Ffr6."""
@@ -108,6 +113,18 @@ class Trace:
         self.stride *= 2
 
 
+def check_figure(path) -> str:
+    """The figure's format from the extension of ``path`` (``FORMATS``), before any work:
+    ``InputError`` naming the path for another one; matplotlib imported (an error naming it
+    when it is missing)."""
+    suffix = Path(path).suffix.lower().lstrip(".")
+    if suffix not in FORMATS:
+        raise InputError(f"{path}: --plot: unknown figure format {suffix or '(none)'!r}; give "
+                         f"a file ending in {', '.join('.' + f for f in FORMATS)}")
+    optional("matplotlib.figure")
+    return suffix
+
+
 def write_figure(path, trace: Trace, t0: float, title: str = "") -> None:
     """Write the figure of ``trace`` to ``path`` (PNG, SVG or PDF by the extension, through a
     temporary file): a panel per series of ``SERIES``, legs 1..6, time from ``t0``, s."""
@@ -137,6 +154,6 @@ def write_figure(path, trace: Trace, t0: float, title: str = "") -> None:
         title += f" (band: smallest to largest over every {trace.stride} steps)"
     if title:
         fig.suptitle(title.strip())
-    suffix = str(path).rsplit(".", 1)[-1].lower() if "." in str(path) else "png"
+    suffix = check_figure(path)
     with atomic_write(path, "wb") as handle:
         fig.savefig(handle, format=suffix, dpi=150)

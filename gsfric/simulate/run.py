@@ -57,7 +57,7 @@ from gsfric.platform.usable import (
 from gsfric.signal.savgol import DEFAULT_POLYORDER
 from gsfric.simulate.delay import SensorDelay
 from gsfric.simulate.differentiate import DEFAULT_CHUNK, MotionChunk, iter_motions
-from gsfric.simulate.figure import SERIES, Trace, write_figure
+from gsfric.simulate.figure import SERIES, Trace, check_figure, write_figure
 from gsfric.simulate.outputs import (
     ChunkOutputs,
     delayed_columns,
@@ -262,6 +262,7 @@ def simulate_file(trajectory: str | os.PathLike[str], out: str | os.PathLike[str
     if plot is not None:
         plot = as_path(plot, "plot")
         check_outputs([plot], {"trajectory": trajectory, "platform": platform, "out": out})
+        check_figure(plot)
     run = _Run(trajectory, out, platform, plan, mode=mode, strict=strict, n_threads=n_threads,
                float32=float32, progress=progress, keep_flagged=as_flag(keep_flagged,
                                                                         "keep_flagged"),
