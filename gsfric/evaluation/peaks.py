@@ -91,8 +91,8 @@ class Peaks:
         if not rows or not self.sound:
             return "peaks: no sound step (every step flagged)" if self.steps else "peaks: no step"
         heads = [f"{label} ({unit})" for label, unit, _ in rows]
-        lines = [f"peaks per leg over the {self.sound} sound steps; t: s from the record's "
-                 f"start (t0 = {self.t0:.6g} s)",
+        lines = [(f"peaks per leg over the {self.sound} sound steps; t: s from the record's "
+                  f"start (t0 = {self.t0:.6g} s)"),
                  "leg" + "".join(f"{h:>12s}{'t':>9s}" for h in heads)]
         for leg in range(6):
             cells = "".join(f"{self.values[key][leg]:12.4g}{self.times[key][leg]:9.3f}"

@@ -349,15 +349,14 @@ class RigValues:
 
         a, b = self.bushing_offset, self.bushing_offset + self.bushing_spacing
         return [
-            f"home_height {self.home_height:.6g} m, legs {self.home_legs:.6g} m long at home "
-            f"({source('home_height')})",
-            f"bushings at {a:.6g} m and {b:.6g} m from C_i: bushing_offset {a:.6g} m "
-            f"({source('bushing_offset')}), bushing_spacing {self.bushing_spacing:.6g} m "
-            f"({source('bushing_spacing')})",
-            f"platform_inertia {moments(self.platform_inertia)} "
-            f"({source('platform_inertia')})",
-            f"lower_com {self.lower_com:.6g} m from C_i ({source('lower_com')}), "
-            f"upper_com {self.upper_com:.6g} m from E_i ({source('upper_com')})",
+            (f"home_height {self.home_height:.6g} m, legs {self.home_legs:.6g} m long at home "
+             f"({source('home_height')})"),
+            (f"bushings at {a:.6g} m and {b:.6g} m from C_i: bushing_offset {a:.6g} m "
+             f"({source('bushing_offset')}), bushing_spacing {self.bushing_spacing:.6g} m "
+             f"({source('bushing_spacing')})"),
+            f"platform_inertia {moments(self.platform_inertia)} ({source('platform_inertia')})",
+            (f"lower_com {self.lower_com:.6g} m from C_i ({source('lower_com')}), "
+             f"upper_com {self.upper_com:.6g} m from E_i ({source('upper_com')})"),
             f"lower_inertia {moments(self.lower_inertia)} ({source('lower_inertia')})",
             f"upper_inertia {moments(self.upper_inertia)} ({source('upper_inertia')})",
         ]
@@ -437,11 +436,9 @@ RIG_KEYS = {
     "home_height": ("m", "platform frame above base frame at home; leave out for mid-stroke"),
     "payload_mass": ("kg", "at the platform frame's origin"),
     "friction_model": ("", '"coupled" (friction loads the actuators) or "paper"'),
-    "platform_inertia": ("kg m^2", "principal moments about the centre of mass; leave out "
-                                   "to derive"),
+    "platform_inertia": ("kg m^2", "platform's principal moments; leave out to derive"),
     "lower_com": ("m", "lower part's centre of mass from C_i; leave out to derive"),
-    "lower_inertia": ("kg m^2", "lower part's principal moments, z along the leg; leave out "
-                                "to derive"),
+    "lower_inertia": ("kg m^2", "lower part's principal moments (z along); leave out to derive"),
     "upper_com": ("m", "upper part's centre of mass from E_i; leave out to derive"),
     "upper_inertia": ("kg m^2", "upper part's principal moments; leave out to derive"),
     "bushing_offset": ("m", "first bushing from C_i; leave out to derive"),
@@ -501,11 +498,12 @@ def rig_platform_toml(rig: Rig, source: str = "") -> str:
     """The rig's full platform as a commented TOML: the sizes it came from in the header,
     how each derived value was derived in the comments."""
     d = rig.home_legs()
-    header = [f"A gsfric platform expanded from the sizes of a rig{f' ({source})' if source else ''}"
-              " by `gsfric platform --template`; SI units, angles in rad.",
+    where = f" ({source})" if source else ""
+    header = [(f"A gsfric platform expanded from the sizes of a rig{where} by "
+               "`gsfric platform --template`; SI units, angles in rad."),
               *_sizes(rig),
-              f"Home pose: level platform at z = {rig.home:.6g} m, legs {d.mean():.6g} m long "
-              f"(stroke {rig.stroke[0]:g}..{rig.stroke[1]:g} m).",
+              (f"Home pose: level platform at z = {rig.home:.6g} m, legs {d.mean():.6g} m long "
+               f"(stroke {rig.stroke[0]:g}..{rig.stroke[1]:g} m)."),
               "Read with `gsfric simulate --platform FILE` or gsfric.Platform.from_toml(FILE)."]
     values = rig.derived()
     header += ["Values the sizes do not state (give them in the rig file to override):",
