@@ -139,7 +139,7 @@ class Summary:
         """Where the flagged steps lie: the number of runs of consecutive flagged steps and
         the longest ``SHOWN_RANGES`` of them, as times from the record's start."""
         longest = sorted(self.flagged_ranges, key=lambda r: (-r[2], r[0]))[:SHOWN_RANGES]
-        spans = ", ".join(f"{a:.6g}-{b:.6g} s ({n} steps)" if n > 1 else f"{a:.6g} s"
+        spans = ", ".join(f"{a:.3f}-{b:.3f} s ({n} steps)" if n > 1 else f"{a:.3f} s"
                           for a, b, n in sorted(longest))
         word = "run" if self.runs == 1 else "runs"
         which = "" if self.runs <= len(longest) else f", the {len(longest)} longest"
