@@ -175,8 +175,8 @@ def test_a_few_flagged_steps_warn_with_their_time_ranges(tmp_path):
     result = _cli("simulate", "--trajectory", path, "--out", tmp_path / "o.csv")
     assert result.exit_code == 0, result.output
     assert "70 of 1000 steps flagged (leg length outside the stroke: 70; 7 % of" in result.stderr
-    assert "2 runs (t from the record's start: 1.000-1.490 s (50 steps), 7.000-7.190 s (20 steps))" \
-        in result.stderr
+    assert ("2 runs (t from the record's start: 1.000-1.490 s (50 steps), 7.000-7.190 s "
+            "(20 steps))") in result.stderr
     # the peaks leave the flagged steps out
     frame = read_table(tmp_path / "o.csv")
     sound = np.abs(frame.loc[frame["flag"] == 0, [f"F{i}" for i in range(1, 7)]].to_numpy())
