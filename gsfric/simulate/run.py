@@ -403,6 +403,8 @@ class _Run:
         gains, delay = sensor_parameters(platform.effects)
         # a delay reaches across chunks: applied here, over the record, not per chunk
         self.shift = SensorDelay(gains, delay) if delay != 0.0 else None
+        # the columns' arrays, those of the table of peaks and the figure (F among them, which
+        # a sensor delay shifts)
         self.names = list(dict.fromkeys([*(key for _, key, _, _ in plan), *PEAK_ARRAYS,
                                          *(key for key, _ in SERIES)]))
 
