@@ -102,10 +102,16 @@ class _StopSignals:
 
 @contextlib.contextmanager
 def _one_line_warnings():
-    """Warnings (implausible units, flagged steps, a stale generated/) as one line each."""
+    """Warnings (implausible units, flagged steps, a stale generated/) as one line each, each
+    text once in a run (an input read twice, as ``simulate --breakdown`` does, warns once)."""
+    shown: set[str] = set()
 
     def show(message, category, filename, lineno, file=None, line=None):
-        click.echo(f"gsfric: warning: {message}", err=True)
+        text = str(message)
+        if text in shown:
+            return
+        shown.add(text)
+        click.echo(f"gsfric: warning: {text}", err=True)
 
     with warnings.catch_warnings():
         warnings.showwarning = show

@@ -56,6 +56,15 @@ class GsfricWarning(UserWarning):
     """Input that can be used but looks suspicious (angles in degrees, a gimbal-lock jump, ...)."""
 
 
+class IgnoredColumnsWarning(GsfricWarning):
+    """Columns of a log that are not gsfric inputs and were not kept: the message counts them,
+    ``names`` lists them (``gsfric simulate --verbose`` prints them)."""
+
+    def __init__(self, message: str, names: tuple[str, ...] = ()) -> None:
+        super().__init__(message)
+        self.names = tuple(names)
+
+
 class DataWarning(GsfricWarning):
     """Rows of an input that were left out so that the others can be used (a dropout row of a
     controller log: every value zero); the message names the file and the rows."""

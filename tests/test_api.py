@@ -91,17 +91,17 @@ def test_units_travel_with_frames_and_parquet(tmp_path, platform):
     result = gsfric.evaluate(platform, models.sinusoidal(np.linspace(0.0, 1.0, 30)))
     frame = result.to_frame()
     assert set(frame.attrs["units"]) == set(frame.columns)
-    assert frame.attrs["units"]["REz3"] == "N" and frame.attrs["units"]["MfrC2"] == "N m"
+    assert frame.attrs["units"]["REz3"] == "N" and frame.attrs["units"]["MfrC_s2"] == "N m"
     assert frame.attrs["units"]["t"] == "s" and frame.attrs["units"]["D6"] == "m"
     # the paper's friction scalars are never positive, as their description says
-    assert "<= 0" in frame.attrs["descriptions"]["Ffr1"]
-    assert (frame[[f"Ffr{i}" for i in range(1, 7)]].to_numpy() <= 0).all()
+    assert "<= 0" in frame.attrs["descriptions"]["Ffr_s1"]
+    assert (frame[[f"Ffr_s{i}" for i in range(1, 7)]].to_numpy() <= 0).all()
     gsfric.io.write_table(models.sinusoidal(np.linspace(0, 1, 60)).to_frame(), tmp_path / "m.csv")
     out = tmp_path / "o.parquet"
     assert CliRunner().invoke(main, ["simulate", "--trajectory", str(tmp_path / "m.csv"),
                                      "--out", str(out), "--quiet"]).exit_code == 0
     schema = pq.read_schema(out)
-    for name in ("F1", "REx2", "MfrE6", "flag"):
+    for name in ("F1", "REx2", "MfrE_s6", "flag"):
         meta = schema.field(name).metadata
         assert meta[b"unit"].decode() == columns.units()[name]
         assert meta[b"description"]
@@ -226,6 +226,15 @@ def test_result_summary_is_the_long_form_with_the_peaks_per_leg(platform):
     result = gsfric.evaluate(platform, models.sinusoidal(np.linspace(0.0, 1.0, 201)))
     lines = result.summary().splitlines()
     assert lines[0] == repr(result) and lines[-1] == "flags: none"
-    row = next(line for line in lines if line.strip().startswith("|F| (N)"))
-    peaks = [float(v) for v in row.split()[2:]]
-    assert peaks == pytest.approx(np.abs(result.F).max(axis=0), rel=1e-3)
+    head = lines.index(next(line for line in lines if line.startswith("leg ")))
+    assert "|F| (N)" in lines[head] and "|Ffr| (N)" in lines[head]
+    table = np.array([[float(v) for v in line.split()] for line in lines[head + 1:head + 7]])
+    assert table[:, 0].tolist() == [1, 2, 3, 4, 5, 6]
+    assert table[:, 1] == pytest.approx(np.abs(result.F).max(axis=0), rel=1e-3)
+    # each peak's time is the step where it is reached, from the first step
+    at = np.abs(result.F).argmax(axis=0)
+    assert table[:, 2] == pytest.approx(result.t[at] - result.t[0], abs=1e-3)
+    # the friction is the one of the file's Ffr1..Ffr6 (to_frame)
+    frame = result.to_frame()
+    ffr = np.abs(frame[[f"Ffr{i}" for i in range(1, 7)]].to_numpy()).max(axis=0)
+    assert table[:, 3] == pytest.approx(ffr, rel=1e-3)

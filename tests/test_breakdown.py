@@ -87,9 +87,9 @@ def test_signed_friction_columns(case):
     _, _, result, _ = case
     frame = result.to_frame()
     for i in range(1, 7):
-        assert np.array_equal(frame[f"FfrS{i}"], result.Ffr[:, i - 1])
-        assert np.all(frame[f"FfrS{i}"] * result.D_dot[:, i - 1] <= 1e-12)
-        assert np.all(frame[f"Ffr{i}"] <= 0.0)   # the paper's negative magnitudes stay
+        assert np.array_equal(frame[f"Ffr{i}"], result.Ffr[:, i - 1])
+        assert np.all(frame[f"Ffr{i}"] * result.D_dot[:, i - 1] <= 1e-12)
+        assert np.all(frame[f"Ffr_s{i}"] <= 0.0)   # the paper's negative magnitudes stay
         for j, ax in enumerate("xyz"):
             assert np.array_equal(frame[f"MfrE{ax}{i}"], result.MfrE[:, i - 1, j])
             assert np.array_equal(frame[f"MfrC{ax}{i}"], result.MfrC[:, i - 1, j])

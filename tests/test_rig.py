@@ -49,7 +49,8 @@ def test_sizes_round_trip_through_the_platform_file(tmp_path):
     assert platform == LARGE_RIG.platform()
     back = Rig.from_platform(platform)
     for f in dataclasses.fields(Rig):
-        if f.name not in ("home_height", "friction_model"):
+        if f.name not in ("home_height", "friction_model") and getattr(LARGE_RIG, f.name) \
+                is not None:
             assert getattr(back, f.name) == pytest.approx(getattr(LARGE_RIG, f.name),
                                                           rel=1e-12), f.name
     assert back.friction_model == LARGE_RIG.friction_model
@@ -121,3 +122,73 @@ def test_commented_toml_reads_back_with_effects_and_limits():
     assert gsfric.Platform.from_dict(tomllib.loads(text)) == platform
     line = next(x for x in text.splitlines() if x.startswith("stribeck"))
     assert "static N" in line and "velocity m/s" in line
+
+
+def test_derived_values_follow_the_stroke_and_are_shown():
+    values = LARGE_RIG.derived()
+    d_min = LARGE_RIG.stroke[0]
+    assert (values.bushing_offset, values.bushing_spacing) == pytest.approx((0.5 * d_min,
+                                                                             0.2 * d_min))
+    longer = dataclasses.replace(LARGE_RIG, stroke=(3.5, 4.6)).derived()
+    assert longer.bushing_offset == pytest.approx(0.5 * 3.5)
+    # a solid cylinder of length d_min: m (3 a^2 + l^2) / 12 across, m a^2 / 2 along
+    a = d_min / 20
+    assert values.lower_inertia == pytest.approx(
+        (60.0 * (3 * a * a + d_min**2) / 12,) * 2 + (60.0 * a * a / 2,))
+    platform = LARGE_RIG.platform()
+    assert platform.friction.bushing_offset == values.bushing_offset
+    assert np.array_equal(np.diag(platform.legs.upper_inertia), values.upper_inertia)
+    lines = values.lines()
+    assert "bushings at 1.5 m and 2.1 m from C_i" in lines[1] and "derived: 0.5 d_min" in lines[1]
+    assert not values.given
+
+
+def test_explicit_values_override_the_derived_ones(tmp_path):
+    rig = dataclasses.replace(LARGE_RIG, bushing_offset=1.2, bushing_spacing=0.4,
+                              lower_inertia=(30.0, 30.0, 0.5), upper_com=1.0,
+                              platform_inertia=(500.0, 500.0, 900.0))
+    platform = rig.platform()
+    assert (platform.friction.bushing_offset, platform.friction.bushing_spacing) == (1.2, 0.4)
+    assert np.array_equal(platform.legs.lower_inertia, np.diag([30.0, 30.0, 0.5]))
+    assert np.array_equal(platform.platform.inertia, np.diag([500.0, 500.0, 900.0]))
+    assert platform.legs.upper_com == 1.0
+    assert platform.legs.lower_com == LARGE_RIG.platform().legs.lower_com     # still derived
+    given = rig.derived().given
+    assert set(given) == {"bushing_offset", "bushing_spacing", "lower_inertia", "upper_com",
+                          "platform_inertia"}
+    # a rig file with them reads back equal, and the CLI expands it with them
+    rig_file, out = tmp_path / "rig.toml", tmp_path / "platform.toml"
+    rig_file.write_text(rig_toml(rig))
+    assert Rig.from_toml(rig_file) == rig
+    result = CliRunner().invoke(main, ["platform", "--template", "--rig", str(rig_file),
+                                       "--out", str(out)])
+    assert result.exit_code == 0, result.output
+    assert gsfric.Platform.from_toml(out) == platform
+    assert "bushing_offset 1.2 m (given)" in result.output
+    assert "upper_inertia" in result.output and "derived: a solid cylinder" in result.output
+    shown = CliRunner().invoke(main, ["platform", "--show", "--rig", str(rig_file),
+                                      "--stroke", "3.2", "4.6"])
+    assert shown.exit_code == 0, shown.output
+    assert "bushings at 1.2 m and 1.6 m from C_i" in shown.output       # given: not moved
+    assert f"lower_com {3.2 / 2:.6g} m from C_i (derived" in shown.output
+
+
+@pytest.mark.parametrize("change, key", [
+    ({"lower_inertia": [1.0, 2.0]}, "lower_inertia"),
+    ({"platform_inertia": [1.0, -2.0, 3.0]}, "platform_inertia[1]"),
+    ({"bushing_offset": 9.0}, "bushing_offset"),
+    ({"upper_com": 0.0}, "upper_com"),
+])
+def test_a_bad_explicit_value_names_its_key(change, key):
+    data = {k: list(v) if isinstance(v, tuple) else v
+            for k, v in dataclasses.asdict(LARGE_RIG).items() if v is not None}
+    data.update(change)
+    with pytest.raises(InputError) as error:
+        Rig.from_dict(data, source="rig.toml")
+    message = str(error.value)
+    assert message.startswith(f"rig.toml: {key}: ") and "\n" not in message
+
+
+def test_show_needs_a_rig():
+    result = CliRunner().invoke(main, ["platform", "--show"])
+    assert result.exit_code == 2 and "--show: give the rig" in result.output

@@ -646,7 +646,8 @@ def test_streamed_simulation_equals_the_whole_evaluation(tmp_path):
     shown = ", ".join(str(i) for i in flagged[:10])
     rows = ", ".join(str(i + 1) for i in flagged[:10])
     assert message.startswith(f"{path}: {len(flagged)} of 700 steps flagged (leg length outside "
-                              f"the stroke: {len(flagged)}): steps {shown}")
+                              f"the stroke: {len(flagged)}; ")
+    assert f"): steps {shown}" in message
     assert f"(data rows {rows})" in message and "see the flag column of" in message
     assert (summary.steps, summary.chunks, summary.flagged) == (700, 7, len(flagged))
     np.testing.assert_array_equal(summary.flagged_steps, flagged)

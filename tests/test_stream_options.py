@@ -72,10 +72,10 @@ def test_all_columns_are_every_group_in_the_result_frame_order(full):
 
 
 CONTRACT = (["t"] + [f"F{i}" for i in range(1, 7)]
-            + [f"{name}{i}" for name in ("MfrE", "MfrC", "Ffr") for i in range(1, 7)]
+            + [f"{name}{i}" for name in ("Ffr", "MfrE_s", "MfrC_s", "Ffr_s") for i in range(1, 7)]
             + [f"{name}{a}{i}" for name in ("RE", "RC") for i in range(1, 7) for a in "xyz"]
             + [f"MC{i}" for i in range(1, 7)] + ["flag"])
-"""The columns a default simulate output promises: 68 values a step."""
+"""The columns a default simulate output promises: 74 values a step."""
 
 
 def test_default_columns_hold_the_documented_set_with_the_same_values(full, tmp_path):
@@ -85,7 +85,7 @@ def test_default_columns_hold_the_documented_set_with_the_same_values(full, tmp_
                   "--quiet")
     assert result.exit_code == 0, result.output
     default = pd.read_parquet(out)
-    assert len(CONTRACT) == 68 and sorted(default.columns) == sorted(CONTRACT)
+    assert len(CONTRACT) == 74 and sorted(default.columns) == sorted(CONTRACT)
     assert list(default.columns) == [c for c in every.columns if c in CONTRACT]
     pd.testing.assert_frame_equal(default, every[list(default.columns)])
 

@@ -60,22 +60,34 @@ def _size_options(command):
 @click.option("--rig-template", is_flag=True,
               help="Write a commented rig TOML (the reference platform's sizes) to edit and "
                    "expand with --template --rig.")
+@click.option("--show", is_flag=True,
+              help="Print the values of the rig's platform that its sizes do not state "
+                   "(home height, bushing positions, centres of mass and inertias of the "
+                   "platform and the leg parts), each given in the rig or how it is derived.")
 @_size_options
 @click.option("--out", type=click.Path(dir_okay=False, path_type=Path),
               help="File to write [default: standard output].")
 @checked_paths({"rig_file": "rig"}, files=("out",))
-def platform(template, rig_file, rig_template, out, **sizes):
+def platform(template, rig_file, rig_template, show, out, **sizes):
     """Write a platform file to start from: `gsfric platform --template --out my.toml`.
 
     With sizes (options or --rig FILE) the platform is built from them: joint pairs at 0, 120,
     240 deg (base) and 60, 180, 300 deg (platform); inertias, leg parts and bushings derived
     from the masses and sizes (stated in the file's comments); sizes not given are the
     reference platform's. Values drawn from the rig are checked: the home pose must lie
-    within the stroke.
+    within the stroke. A rig file may give any derived value explicitly (platform_inertia,
+    lower_com, lower_inertia, upper_com, upper_inertia, bushing_offset, bushing_spacing);
+    --show prints them all, given or derived, and so does writing a rig's platform to --out.
     """
     given = {k: v for k, v in sizes.items() if v is not None}
+    if show and not (template or rig_template):
+        if not (rig_file or given):
+            fail("--show: give the rig (--rig FILE or size options)")
+        click.echo("\n".join(_rig(rig_file, given).derived().lines()))
+        return
     if template == rig_template:
         fail("give one of --template and --rig-template")
+    rig = None
     if not (rig_file or given):
         text = rig_toml(_reference_rig()) if rig_template else platform_template()
     else:
@@ -87,6 +99,9 @@ def platform(template, rig_file, rig_template, out, **sizes):
     with atomic_write(out, "w") as handle:
         handle.write(text)
     click.echo(f"wrote {out}")
+    if rig is not None and template:
+        click.echo("values the sizes do not state (give them in the rig file to override):\n"
+                   + "\n".join(f"  {line}" for line in rig.derived().lines()))
 
 
 def _reference_rig() -> Rig:

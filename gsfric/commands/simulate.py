@@ -11,7 +11,7 @@ from pathlib import Path
 import click
 
 from gsfric.commands.common import checked_paths, log_options
-from gsfric.errors import InputError
+from gsfric.errors import IgnoredColumnsWarning, InputError
 from gsfric.evaluation.breakdown import flat
 from gsfric.evaluation.columns import DEFAULT_GROUPS as DEFAULT_COLUMN_GROUPS
 from gsfric.evaluation.columns import GROUPS as COLUMN_GROUPS
@@ -20,6 +20,7 @@ from gsfric.io.logs import LogFormat
 from gsfric.io.readers import read_trajectory
 from gsfric.io.tables import write_table
 from gsfric.models import platform_from
+from gsfric.platform.usable import FLAGGED_LIMIT
 from gsfric.simulate import parse_columns, simulate_file
 
 
@@ -91,6 +92,17 @@ def _options(command):
                           "payload, joint friction, prismatic friction by kind, effects) to "
                           "this CSV or Parquet file (kinematic mode; the trajectory is read "
                           "whole)."),
+        click.option("--plot", type=path, default=None, metavar="FILE",
+                     help="Also write a figure of the actuator forces F and the prismatic "
+                          "friction Ffr of every leg over the record (PNG, SVG or PDF by the "
+                          "extension; needs matplotlib)."),
+        click.option("--keep-flagged", is_flag=True,
+                     help=f"Write the output even when more than {100 * FLAGGED_LIMIT:g} % of "
+                          "the steps are flagged (above it the run fails, exit 1, no output: "
+                          "the platform or the log's frame is likely not the rig's); up to "
+                          "half of them."),
+        click.option("--verbose", "-v", is_flag=True,
+                     help="Name the log's ignored columns (counted in one warning otherwise)."),
     ]
     for option in reversed(options):
         command = option(command)
@@ -102,9 +114,10 @@ def _options(command):
 @log_options
 @_no_cycle_collection()
 @checked_paths({"trajectory": "trajectory", "platform_file": "platform",
-                "column_map": "column-map"}, files=("out", "breakdown_file"))
+                "column_map": "column-map"}, files=("out", "breakdown_file", "plot"))
 def simulate(trajectory, platform_file, out, mode, strict, threads, chunk, window, progress,
-             quiet, columns, float32, breakdown_file, column_map, units_map, angles, keep_columns):
+             quiet, columns, float32, breakdown_file, plot, keep_flagged, verbose, column_map,
+             units_map, angles, keep_columns):
     """Evaluate a motion: actuator forces, reactions and friction at every step.
 
     The trajectory may be a measured-data file: with F1..F6 the output also has
@@ -112,25 +125,49 @@ def simulate(trajectory, platform_file, out, mode, strict, threads, chunk, windo
     `gsfric columns` lists every output column with its unit.
 
     Long files are streamed: read, differentiated and evaluated chunk by chunk in bounded
-    memory. Flagged steps (see the flag column) are reported with their indices in one
-    warning at the end, or make the run fail with --strict.
+    memory. Flagged steps (see the flag column) are reported with their share, time ranges
+    and indices in one warning at the end; more than 10 % of them flagged fails the run
+    unless --keep-flagged, any flagged step with --strict.
+
+    The run ends with a table of the peaks of every leg (|F|, |Ffr|, |R_E|, |R_C|, |M_C|
+    over the sound steps, with their times from the record's start), as Result.summary().
     """
     if breakdown_file is not None and mode != "kinematic":
         raise InputError("--breakdown: only in the kinematic mode")
     with warnings.catch_warnings():                    # shown one line each by the group
         warnings.simplefilter("always", UserWarning)   # GsfricWarning, flags, build, staleness
+        if verbose:
+            _name_ignored_columns()
         log_format = LogFormat.from_options(column_map, units_map, angles, keep_columns)
         platform = platform_from(platform_file)
         summary = simulate_file(trajectory, out, platform, mode=mode, strict=strict,
                                 chunk=chunk, window=window, n_threads=threads,
                                 progress=False if quiet else progress,
                                 log_format=log_format, columns=parse_columns(columns),
-                                float32=float32)
+                                float32=float32, keep_flagged=keep_flagged, plot=plot)
         if breakdown_file is not None:
             _write_breakdown(trajectory, log_format, platform, breakdown_file, quiet)
     if not quiet:
         click.echo(f"wrote {out} ({summary.steps} steps, {summary.flagged} flagged; "
                    f"differentiated by {summary.differentiation})")
+        if plot is not None:
+            click.echo(f"wrote {plot}")
+        click.echo(summary.peaks.table())
+
+
+def _name_ignored_columns() -> None:
+    """``--verbose``: after the warning that counts a log's ignored columns, a line naming
+    them (once)."""
+    show, named = warnings.showwarning, set()
+
+    def show_names(message, category, *args, **kwargs):
+        show(message, category, *args, **kwargs)
+        if isinstance(message, IgnoredColumnsWarning) and message.names not in named:
+            named.add(message.names)
+            click.echo("gsfric: ignored columns: " + ", ".join(map(repr, message.names)),
+                       err=True)
+
+    warnings.showwarning = show_names
 
 
 def _write_breakdown(trajectory, log_format, platform, breakdown_file, quiet) -> None:

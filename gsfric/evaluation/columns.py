@@ -7,10 +7,13 @@ their columns from it (``plan``); it gives the units that travel with the data
 ``gsfric columns`` and the README's output table.
 
 Legs are numbered 1..6 in column names (index 0..5 in arrays). Frames: "base" is the fixed
-base frame. Sign conventions are stated per column; note that ``Ffr1..Ffr6``, ``MfrE1..``
-and ``MfrC1..`` are the paper's scalars (never positive: negative = opposing the motion),
-``Result.Ffr_s``, ``Result.MfrE_s`` and ``Result.MfrC_s``, while ``Result.Ffr`` is the signed
-friction force along the leg and ``Result.MfrE`` / ``Result.MfrC`` are vectors.
+base frame. One name means one quantity: a column ``X1..X6`` (``X_1..X_6`` when X ends in a
+digit, ``Xx1..Xz6`` for a vector) holds ``Result.X``; the reactions keep the contract's names
+``REx1..``, ``RCx1..`` and ``MC1..`` (``Result.R_E``, ``R_C``, ``M_C``). The suffix ``_s``
+marks the paper's post-hoc scalars (never positive: negative = opposing the motion):
+``MfrE_s1..``, ``MfrC_s1..``, ``Ffr_s1..`` hold ``Result.MfrE_s``, ``MfrC_s``, ``Ffr_s``,
+while ``Ffr1..Ffr6`` is the signed prismatic friction that loads the actuators
+(``Result.Ffr``) and ``MfrEx1..``, ``MfrCx1..`` the friction moment vectors.
 """
 
 from __future__ import annotations
@@ -61,15 +64,19 @@ COLUMNS: tuple[Column, ...] = (
     Column("t", "s", "time of the step (as read from the input, converted to s)", "time"),
     Column("F{i}", "N", "actuator force of leg i with friction and effects; + pushes the "
            "platform away from the base (Result.F)", "forces", "F"),
-    Column("MfrE{i}", "N m", "friction moment of spherical joint E_i, the paper's scalar of "
-           "(33): <= 0, negative = opposing (Result.MfrE_s; the vector is Result.MfrE)",
-           "friction", "MfrE_s"),
-    Column("MfrC{i}", "N m", "friction moment of universal joint C_i, the paper's scalar of "
-           "(34): <= 0, negative = opposing (Result.MfrC_s; the vector is Result.MfrC)",
-           "friction", "MfrC_s"),
-    Column("Ffr{i}", "N", "friction force of prismatic joint i, the paper's scalar of (35): "
-           "<= 0, negative = opposing (Result.Ffr_s; the signed force along the leg is "
-           "Result.Ffr)", "friction", "Ffr_s"),
+    Column("Ffr{i}", "N", "friction force of prismatic joint i on the rod along the leg "
+           "direction u_i (C_i to E_i), the friction that loads actuator i: negative while "
+           "the leg extends, positive while it retracts (Result.Ffr)", "friction", "Ffr"),
+    Column("MfrE_s{i}", "N m", "the paper's post-hoc scalar (33) of the friction moment of "
+           "spherical joint E_i: <= 0, negative = opposing (Result.MfrE_s; the vector is "
+           "MfrEx1..MfrEz6, Result.MfrE)", "friction", "MfrE_s"),
+    Column("MfrC_s{i}", "N m", "the paper's post-hoc scalar (34) of the friction moment of "
+           "universal joint C_i: <= 0, negative = opposing (Result.MfrC_s; the vector is "
+           "MfrCx1..MfrCz6, Result.MfrC)", "friction", "MfrC_s"),
+    Column("Ffr_s{i}", "N", "the paper's post-hoc scalar (35) of the friction force of "
+           "prismatic joint i, from the leg's reaction R_3 as (35) has it: <= 0, negative = "
+           "opposing (Result.Ffr_s; the friction that loads actuator i is Ffr1..Ffr6)",
+           "friction", "Ffr_s"),
     Column("RE{a}{i}", "N", "force of leg i on the platform at E_i, base frame "
            "components x, y, z (Result.R_E)", "reactions", "R_E"),
     Column("RC{a}{i}", "N", "force of the base on leg i at C_i, base frame "
@@ -79,12 +86,9 @@ COLUMNS: tuple[Column, ...] = (
     Column("F0_{i}", "N", "actuator force of leg i with frictionless joints; + pushes the "
            "platform away (Result.F0)", "frictionless", "F0"),
     Column("D{i}", "m", "length of leg i, C_i to E_i (Result.D)", "lengths", "D"),
-    Column("FfrS{i}", "N", "signed friction force of prismatic joint i on the rod along the "
-           "leg direction u_i (C_i to E_i): negative while the leg extends, positive while it "
-           "retracts (Result.Ffr)", "friction_detail", "Ffr"),
-    Column("Fjoint{i}", "N", "part of F_i that carries the spherical and universal joints' "
-           "friction moments (coupled model; zero in the paper's post-hoc model)",
-           "friction_detail", "F_joint"),
+    Column("F_joint{i}", "N", "part of F_i that carries the spherical and universal joints' "
+           "friction moments (coupled model; zero in the paper's post-hoc model; "
+           "Result.F_joint)", "friction_detail", "F_joint"),
     Column("MfrE{a}{i}", "N m", "friction moment vector of spherical joint E_i on the platform, "
            "opposing the platform's rotation relative to the leg; base frame components x, y, z "
            "(Result.MfrE)", "friction_detail", "MfrE"),
@@ -106,22 +110,33 @@ MEASURED: tuple[Column, ...] = (
 """The columns ``simulate`` adds for an input with measured forces F1..F6."""
 
 
-GROUPS = {
-    "forces": "F1..F6: actuator forces with friction, N",
-    "friction": "MfrE1..6, MfrC1..6 (N m), Ffr1..6 (N): the paper's friction scalars "
-                "(<= 0, negative = opposing)",
-    "reactions": "REx1..REz6, RCx1..RCz6 (N), MC1..MC6 (N m): joint reactions",
-    "friction_detail": "FfrS1..6, Fjoint1..6 (N), MfrEx1..MfrEz6, MfrCx1..MfrCz6 (N m): signed "
-                       "prismatic friction, the joints' share of F, friction moment vectors",
-    "frictionless": "F0_1..F0_6: actuator forces of frictionless joints, N",
-    "lengths": "D1..D6: leg lengths, m",
+GROUP_MEANINGS = {
+    "forces": "actuator forces with friction and effects",
+    "friction": "the prismatic friction that loads the actuators (Ffr) and the paper's "
+                "post-hoc friction scalars (_s: <= 0, negative = opposing)",
+    "reactions": "joint reactions (base frame) and the universal joints' constraint moments",
+    "friction_detail": "the joints' share of F and the friction moment vectors",
+    "frictionless": "actuator forces with frictionless joints",
+    "lengths": "leg lengths",
 }
-"""Output groups of ``simulate --columns``; ``t`` and ``flag`` are always written."""
+"""What each output group of ``simulate --columns`` is for."""
+
+
+def _group_text(group: str) -> str:
+    """``Ffr1..Ffr6 (N), MfrE_s1..MfrE_s6 (N m), ...: meaning``, from ``COLUMNS``."""
+    labels = ", ".join(f"{c.label} ({c.unit})" for c in COLUMNS if c.group == group)
+    return f"{labels}: {GROUP_MEANINGS[group]}"
+
+
+GROUPS = {group: _group_text(group) for group in GROUP_MEANINGS}
+"""Output groups of ``simulate --columns`` (their columns and meaning); ``t`` and ``flag`` are
+always written."""
 
 DEFAULT_GROUPS = ("forces", "friction", "reactions")
 """The groups ``simulate`` writes unless ``--columns`` says otherwise: with ``t`` and ``flag``
-(``t``, F, the paper's friction scalars, the joint reactions, the flag: ``len(plan(DEFAULT_GROUPS)) + 2``
-values a step); every other group is one ``--columns`` away (``all``: every group)."""
+(``t``, F, the prismatic friction that loads the actuators, the paper's post-hoc friction
+scalars, the joint reactions, the flag: ``len(plan(DEFAULT_GROUPS)) + 2`` values a step);
+every other group is one ``--columns`` away (``all``: every group)."""
 
 
 def plan(groups=tuple(GROUPS)) -> list[tuple[str, str, int, str]]:

@@ -21,6 +21,7 @@ from gsfric.evaluation.breakdown import frame as breakdown_frame
 from gsfric.evaluation.breakdown import parts as breakdown_parts
 from gsfric.evaluation.columns import annotate, plan
 from gsfric.evaluation.flags import FLAG_NAMES, flag_message
+from gsfric.evaluation.peaks import Peaks
 from gsfric.view import FrameCollector, page, write_page
 from gsfric.view import show as show_page
 
@@ -173,25 +174,16 @@ class Result:
                 f"arrays {names}>")
 
     def summary(self) -> str:
-        """The long form of the repr: per leg, the largest magnitudes of ``F`` (N), ``R_E``,
-        ``R_C`` (N), ``M_C`` (N m) and the friction ``Ffr`` (N) over the steps, and what the
-        flags say."""
-        n = len(self.t)
-        lines = [repr(self)]
-        rows = (("|F| (N)", "F", None), ("|R_E| (N)", "R_E", 2), ("|R_C| (N)", "R_C", 2),
-                ("|M_C| (N m)", "M_C", None), ("|Ffr| (N)", "Ffr", None))
-        if n:
-            lines.append("largest over the steps, legs 1..6:")
-            for label, key, axis in rows:
-                values = self.arrays.get(key)
-                if values is None:
-                    continue
-                size = np.abs(values) if axis is None else np.linalg.norm(values, axis=axis)
-                peak = np.nanmax(size, axis=0) if np.isfinite(size).any() else size[0]
-                lines.append(f"  {label:12s}" + "".join(f"{v:11.4g}" for v in peak))
+        """The long form of the repr: the table of peaks per leg (``gsfric.evaluation.peaks``:
+        the largest magnitudes of ``F``, ``Ffr`` (the friction that loads the actuators, the
+        file's ``Ffr1..Ffr6``), ``R_E``, ``R_C`` (N) and ``M_C`` (N m) over the sound steps,
+        each with its time from the first step, s), and what the flags say. ``gsfric simulate``
+        prints the same table."""
+        peaks = Peaks()
+        peaks.add(self.t, self.arrays, self.flag)
         message = flag_message(self.flag)
-        lines.append(f"flags: {message}" if message else "flags: none")
-        return "\n".join(lines)
+        return "\n".join([repr(self), peaks.table(),
+                          f"flags: {message}" if message else "flags: none"])
 
     def flagged(self) -> np.ndarray:
         """Indices of the steps with a non-zero flag."""

@@ -15,7 +15,7 @@ from typing import Any
 import numpy as np
 
 from gsfric._checks import short, suggest
-from gsfric.errors import DataWarning, GsfricWarning, InputError
+from gsfric.errors import DataWarning, GsfricWarning, IgnoredColumnsWarning, InputError
 from gsfric.io.files import read_toml
 from gsfric.io.frames import LogFrame
 from gsfric.io.tables import numeric_columns
@@ -387,12 +387,12 @@ class ColumnReader:
             if key not in source:
                 raise InputError(f"{path}: units given for {key!r}, which the file does not have")
         if ignored:
-            shown = ", ".join(repr(n) for n in ignored[:8])
-            more = f" and {len(ignored) - 8} more" if len(ignored) > 8 else ""
-            warnings.warn(f"{path}: ignored columns {shown}{more} (not gsfric inputs; map them "
-                          "with --column-map or carry them to the output with --keep-columns; "
-                          "in Python: LogFormat columns, keep)",
-                          GsfricWarning, stacklevel=3)
+            count = f"{len(ignored)} column{'s' if len(ignored) > 1 else ''}"
+            warnings.warn(IgnoredColumnsWarning(
+                f"{path}: {count} ignored (not gsfric inputs; --verbose names them; map them "
+                "with --column-map or carry them to the output with --keep-columns; in Python: "
+                "the warning's names, LogFormat columns, keep)", tuple(ignored)),
+                stacklevel=3)
         self.source = source
         self.forces = len(forces) == 6
         self.keep = fmt.keep

@@ -10,9 +10,17 @@ values, each stated in ``DERIVED`` (and in the comments of ``rig_platform_toml``
 * home height: when not given, the height at which every leg is at mid-stroke (level platform);
 * platform inertia: a uniform disc of the platform radius;
 * leg parts: each a uniform solid cylinder of length d_min (the shortest leg) and diameter
-  d_min / 10, its centre half-way along it from its joint;
+  d_min / 10, its centre half-way along it from its joint: m (3 a^2 + l^2)/12 across,
+  m a^2/2 along (a the radius, l the length);
 * bushings (coupled friction): at 0.5 d_min and 0.7 d_min from C_i; the other friction
   coefficients are the reference platform's.
+
+The derived values move with the sizes they come from (a longer stroke moves the bushings and
+changes the leg parts' inertias): ``Rig.derived()`` gives them (``RigValues``), ``gsfric
+platform --show`` prints them, and a rig TOML may give any of them explicitly
+(``platform_inertia``, ``lower_com``, ``lower_inertia``, ``upper_com``, ``upper_inertia``,
+``bushing_offset``, ``bushing_spacing``): a value given is used as it is, in place of the
+derived one.
 
 A rig TOML holds the ``Rig`` fields as top-level keys (SI units, angles in rad)::
 
@@ -25,6 +33,13 @@ A rig TOML holds the ``Rig`` fields as top-level keys (SI units, angles in rad):
     lower_mass = 60.0            # kg
     upper_mass = 25.0            # kg
     # optional: home_height (m), payload_mass (kg), friction_model ("coupled" or "paper")
+    # optional, each in place of its derived value:
+    # platform_inertia = [Ixx, Iyy, Izz]  kg m^2, principal moments about the centre of mass
+    # lower_com = 0.8, upper_com = 0.6    m, each part's centre of mass from its joint
+    # lower_inertia = [Ix, Iy, Iz]        kg m^2, about its centre of mass, z along the leg
+    # upper_inertia = [Ix, Iy, Iz]        kg m^2
+    # bushing_offset = 1.5                m, first bushing from C_i
+    # bushing_spacing = 0.6               m, between the two bushings
 
 >>> from gsfric.platform.rig import Rig
 >>> rig = Rig(base_radius=0.5, base_half_angle=0.26, platform_radius=0.3,
@@ -54,15 +69,17 @@ from gsfric.platform.description import FRICTION_MODELS, Body, Friction, Geometr
 from gsfric.platform.text import commented_toml
 
 DERIVED = {
-    "home_height": "the height of the platform frame above the base frame at which every "
-                   "leg is at mid-stroke (level platform), when not given",
-    "platform.inertia": "a uniform disc of radius platform_radius: m r^2/4, m r^2/4, m r^2/2",
-    "legs": "each part a uniform solid cylinder of length d_min and diameter d_min/10, its "
-            "centre half-way along it from its joint: m (3 a^2 + l^2)/12 across, m a^2/2 along",
-    "friction": "bushings at 0.5 d_min and 0.7 d_min from C_i; the reference platform's "
-                "coefficients",
+    "home_height": "legs at mid-stroke, platform level",
+    "platform_inertia": "a uniform disc of radius platform_radius: m r^2/4, m r^2/4, m r^2/2",
+    "lower_com": "half of d_min from C_i",
+    "upper_com": "half of d_min from E_i",
+    "lower_inertia": "a solid cylinder of length d_min, diameter d_min/10",
+    "upper_inertia": "a solid cylinder of length d_min, diameter d_min/10",
+    "bushing_offset": "0.5 d_min",
+    "bushing_spacing": "0.2 d_min",
 }
-"""How ``Rig.platform`` derives what a rig does not give, by the key it fills."""
+"""How ``Rig.derived`` derives each value a rig may leave out, by its key; the friction
+coefficients are the reference platform's."""
 
 PAIR_CENTRES = {"base": 0.0, "platform": 60.0}
 """Angle (degrees) of the first pair's centre on each circle; the others at +120 and +240."""
@@ -104,6 +121,18 @@ class Rig:
         kg, at the platform frame's origin. Default 0.
     friction_model : {"coupled", "paper"}
         Default "coupled".
+    platform_inertia : (float, float, float) or None
+        Principal moments of inertia of the platform about its centre of mass, platform
+        frame axes, kg m^2; None: derived (``DERIVED``).
+    lower_com, upper_com : float or None
+        Centre of mass of each leg's lower part from C_i and of its upper part from E_i,
+        along the leg, m; None: derived.
+    lower_inertia, upper_inertia : (float, float, float) or None
+        Principal moments of inertia of each leg part about its centre of mass, in the leg's
+        body frame (z along the leg), kg m^2; None: derived.
+    bushing_offset, bushing_spacing : float or None
+        Distance of the first bushing from C_i and between the two bushings (coupled
+        friction), m; None: derived.
     """
 
     base_radius: float
@@ -117,6 +146,13 @@ class Rig:
     home_height: float | None = None
     payload_mass: float = 0.0
     friction_model: str = "coupled"
+    platform_inertia: tuple[float, float, float] | None = None
+    lower_com: float | None = None
+    lower_inertia: tuple[float, float, float] | None = None
+    upper_com: float | None = None
+    upper_inertia: tuple[float, float, float] | None = None
+    bushing_offset: float | None = None
+    bushing_spacing: float | None = None
 
     def __post_init__(self) -> None:
         for name in ("base_radius", "platform_radius"):
@@ -142,6 +178,13 @@ class Rig:
         if self.home_height is not None:
             object.__setattr__(self, "home_height",
                                as_float(self.home_height, "home_height", minimum=0.0))
+        for name in ("platform_inertia", "lower_inertia", "upper_inertia"):
+            if getattr(self, name) is not None:
+                object.__setattr__(self, name, _moments(getattr(self, name), name))
+        for name in ("lower_com", "upper_com", "bushing_offset", "bushing_spacing"):
+            if getattr(self, name) is not None:
+                object.__setattr__(self, name, _distance(getattr(self, name), name,
+                                                         self.stroke[1]))
         self._check_home()
 
     # -- reading --------------------------------------------------------------------------
@@ -220,26 +263,103 @@ class Rig:
                              f"{bad:.4g} m, outside the stroke [{lo:g}, {hi:g}] m; "
                              f"leave it out for mid-stroke ({_mid_stroke_height(self):.4g} m)")
 
-    def platform(self) -> Platform:
-        """The full platform (``DERIVED`` says how each value is derived)."""
-        base, top = self.joints()
+    def derived(self) -> RigValues:
+        """The values of the expanded platform that the sizes do not state: the ones given
+        in the rig as they are, the others derived from the sizes (``DERIVED``)."""
         m, r = self.platform_mass, self.platform_radius
         d_min = self.stroke[0]
         offset, spacing = BUSHINGS
+        derived = {
+            "platform_inertia": (m * r * r / 4, m * r * r / 4, m * r * r / 2),
+            "lower_com": d_min / 2, "upper_com": d_min / 2,
+            "lower_inertia": _rod(self.lower_mass, d_min),
+            "upper_inertia": _rod(self.upper_mass, d_min),
+            "bushing_offset": offset * d_min, "bushing_spacing": spacing * d_min,
+        }
+        given = tuple(k for k in derived if getattr(self, k) is not None)
+        values = {k: getattr(self, k) if k in given else v for k, v in derived.items()}
+        return RigValues(home_height=self.home, home_legs=float(self.home_legs().mean()),
+                         given=given + (("home_height",) if self.home_height is not None
+                                        else ()),
+                         **{k: tuple(float(x) for x in v) if isinstance(v, tuple) else float(v)
+                            for k, v in values.items()})
+
+    def platform(self) -> Platform:
+        """The full platform: the sizes with the values of ``derived()``."""
+        base, top = self.joints()
+        v = self.derived()
         return Platform(
             geometry=Geometry(base_joints=base, platform_joints=top, stroke=self.stroke),
-            platform=Body(mass=m, inertia=np.diag([m * r * r / 4, m * r * r / 4, m * r * r / 2]),
+            platform=Body(mass=self.platform_mass, inertia=np.diag(v.platform_inertia),
                           payload_mass=self.payload_mass),
             legs=Legs(model="rigid", weight=True,
-                      lower_mass=self.lower_mass, lower_com=d_min / 2,
-                      lower_inertia=_rod(self.lower_mass, d_min),
-                      upper_mass=self.upper_mass, upper_com=d_min / 2,
-                      upper_inertia=_rod(self.upper_mass, d_min)),
-            friction=Friction(model=self.friction_model, bushing_offset=offset * d_min,
-                              bushing_spacing=spacing * d_min,
+                      lower_mass=self.lower_mass, lower_com=v.lower_com,
+                      lower_inertia=np.diag(v.lower_inertia),
+                      upper_mass=self.upper_mass, upper_com=v.upper_com,
+                      upper_inertia=np.diag(v.upper_inertia)),
+            friction=Friction(model=self.friction_model, bushing_offset=v.bushing_offset,
+                              bushing_spacing=v.bushing_spacing,
                               **{**REFERENCE_FRICTION,
                                  **({"prismatic_seal": 0.0}
                                     if self.friction_model == "paper" else {})}))
+
+
+@dataclass(frozen=True)
+class RigValues:
+    """The values of a rig's platform that its sizes do not state (``Rig.derived``).
+
+    Attributes
+    ----------
+    home_height : float
+        Platform frame above the base frame at the home pose, m.
+    home_legs : float
+        Mean leg length at the home pose, m.
+    platform_inertia : (float, float, float)
+        Principal moments of the platform about its centre of mass, kg m^2.
+    lower_com, upper_com : float
+        Centre of mass of the lower part from C_i, of the upper part from E_i, m.
+    lower_inertia, upper_inertia : (float, float, float)
+        Principal moments of the leg parts about their centres of mass, leg body frame (z
+        along the leg), kg m^2.
+    bushing_offset, bushing_spacing : float
+        First bushing's distance from C_i and the distance between the two, m.
+    given : tuple of str
+        The keys given in the rig (the others are derived, ``DERIVED``).
+    """
+
+    home_height: float
+    home_legs: float
+    platform_inertia: tuple[float, float, float]
+    lower_com: float
+    upper_com: float
+    lower_inertia: tuple[float, float, float]
+    upper_inertia: tuple[float, float, float]
+    bushing_offset: float
+    bushing_spacing: float
+    given: tuple[str, ...] = ()
+
+    def lines(self) -> list[str]:
+        """One line per value with its unit and where it comes from (given, or how it is
+        derived)."""
+        def source(key: str) -> str:
+            return "given" if key in self.given else f"derived: {DERIVED[key]}"
+
+        def moments(v) -> str:
+            return ", ".join(f"{x:.6g}" for x in v) + " kg m^2"
+
+        a, b = self.bushing_offset, self.bushing_offset + self.bushing_spacing
+        return [
+            (f"home_height {self.home_height:.6g} m, legs {self.home_legs:.6g} m long at home "
+             f"({source('home_height')})"),
+            (f"bushings at {a:.6g} m and {b:.6g} m from C_i: bushing_offset {a:.6g} m "
+             f"({source('bushing_offset')}), bushing_spacing {self.bushing_spacing:.6g} m "
+             f"({source('bushing_spacing')})"),
+            f"platform_inertia {moments(self.platform_inertia)} ({source('platform_inertia')})",
+            (f"lower_com {self.lower_com:.6g} m from C_i ({source('lower_com')}), "
+             f"upper_com {self.upper_com:.6g} m from E_i ({source('upper_com')})"),
+            f"lower_inertia {moments(self.lower_inertia)} ({source('lower_inertia')})",
+            f"upper_inertia {moments(self.upper_inertia)} ({source('upper_inertia')})",
+        ]
 
 
 def _mid_stroke_height(rig: Rig) -> float:
@@ -268,12 +388,29 @@ def _circle(radius: float, centre_deg: float, half_angle: float) -> np.ndarray:
     return np.column_stack([radius * np.cos(a), radius * np.sin(a), np.zeros(6)])
 
 
-def _rod(mass: float, length: float) -> np.ndarray:
-    """Inertia (3, 3), kg m^2, of a solid cylinder of ``length`` and diameter length/10 about
-    its centre, z along its axis."""
+def _rod(mass: float, length: float) -> tuple[float, float, float]:
+    """Principal moments, kg m^2, of a solid cylinder of ``length`` and diameter length/10
+    about its centre: across, across, along its axis (z)."""
     a = length / LEG_SLENDERNESS / 2
     across = mass * (3 * a * a + length * length) / 12
-    return np.diag([across, across, mass * a * a / 2])
+    return (across, across, mass * a * a / 2)
+
+
+def _moments(value: object, name: str) -> tuple[float, float, float]:
+    """Three principal moments of inertia, kg m^2, each >= 0."""
+    if not isinstance(value, (list, tuple, np.ndarray)) or len(value) != 3:
+        raise InputError(f"{name}: expected the three principal moments [x, y, z] in kg m^2, "
+                         f"got {short(value)}")
+    return tuple(as_float(v, f"{name}[{k}]", minimum=0.0) for k, v in enumerate(value))
+
+
+def _distance(value: object, name: str, longest: float) -> float:
+    """A positive distance along a leg, m, at most the longest leg."""
+    value = as_float(value, name)
+    if not 0.0 < value <= longest:
+        raise InputError(f"{name}: expected a distance along the leg in (0, {longest:g}] m "
+                         f"(the longest leg), got {value:g}")
+    return value
 
 
 def _radius(joints: np.ndarray) -> float:
@@ -299,6 +436,13 @@ RIG_KEYS = {
     "home_height": ("m", "platform frame above base frame at home; leave out for mid-stroke"),
     "payload_mass": ("kg", "at the platform frame's origin"),
     "friction_model": ("", '"coupled" (friction loads the actuators) or "paper"'),
+    "platform_inertia": ("kg m^2", "platform's principal moments; leave out to derive"),
+    "lower_com": ("m", "lower part's centre of mass from C_i; leave out to derive"),
+    "lower_inertia": ("kg m^2", "lower part's principal moments (z along); leave out to derive"),
+    "upper_com": ("m", "upper part's centre of mass from E_i; leave out to derive"),
+    "upper_inertia": ("kg m^2", "upper part's principal moments; leave out to derive"),
+    "bushing_offset": ("m", "first bushing from C_i; leave out to derive"),
+    "bushing_spacing": ("m", "between the two bushings; leave out to derive"),
 }
 """Unit and meaning of each key of a rig TOML."""
 
@@ -311,6 +455,7 @@ def rig_toml(rig: Rig) -> str:
                  "  gsfric platform --template --rig rig.toml --out platform.toml"):
         doc.add(tomlkit.comment(line))
     doc.add(tomlkit.nl())
+    derived = dataclasses.asdict(rig.derived())
     for f in dataclasses.fields(rig):
         unit, meaning = RIG_KEYS[f.name]
         value = getattr(rig, f.name)
@@ -318,7 +463,9 @@ def rig_toml(rig: Rig) -> str:
         if unit == "rad":
             note += f" ({math.degrees(value):.4g} deg)"
         if value is None:
-            doc.add(tomlkit.comment(f"{f.name} =    # {note}"))
+            now = derived[f.name]
+            now = ", ".join(f"{v:.6g}" for v in now) if isinstance(now, tuple) else f"{now:.6g}"
+            doc.add(tomlkit.comment(f"{f.name} =    # {note} (derived: {now})"))
             continue
         item = tomlkit.item(value if isinstance(value, str) else
                             [float(v) for v in value] if isinstance(value, tuple) else
@@ -334,7 +481,7 @@ def _sizes(rig: Rig) -> list[str]:
     items = []
     for f in dataclasses.fields(rig):
         value, unit = getattr(rig, f.name), RIG_KEYS[f.name][0]
-        if value is None or f.name == "friction_model":
+        if value is None or f.name == "friction_model" or f.name in DERIVED:
             continue
         text = (f"[{value[0]:.6g}, {value[1]:.6g}]" if isinstance(value, tuple)
                 else f"{value:.6g}")
@@ -351,15 +498,20 @@ def rig_platform_toml(rig: Rig, source: str = "") -> str:
     """The rig's full platform as a commented TOML: the sizes it came from in the header,
     how each derived value was derived in the comments."""
     d = rig.home_legs()
-    header = [f"A gsfric platform expanded from the sizes of a rig{f' ({source})' if source else ''}"
-              " by `gsfric platform --template`; SI units, angles in rad.",
+    where = f" ({source})" if source else ""
+    header = [(f"A gsfric platform expanded from the sizes of a rig{where} by "
+               "`gsfric platform --template`; SI units, angles in rad."),
               *_sizes(rig),
-              f"Home pose: level platform at z = {rig.home:.6g} m, legs {d.mean():.6g} m long "
-              f"(stroke {rig.stroke[0]:g}..{rig.stroke[1]:g} m).",
+              (f"Home pose: level platform at z = {rig.home:.6g} m, legs {d.mean():.6g} m long "
+               f"(stroke {rig.stroke[0]:g}..{rig.stroke[1]:g} m)."),
               "Read with `gsfric simulate --platform FILE` or gsfric.Platform.from_toml(FILE)."]
-    notes = {"platform.inertia": f"derived: {DERIVED['platform.inertia']}"}
-    for key in ("lower_com", "lower_inertia", "upper_com", "upper_inertia"):
-        notes[f"legs.{key}"] = "derived: cylinder of length d_min, diameter d_min/10"
-    for key in ("bushing_offset", "bushing_spacing"):
-        notes[f"friction.{key}"] = "derived: bushings at 0.5 and 0.7 d_min from C_i"
+    values = rig.derived()
+    header += ["Values the sizes do not state (give them in the rig file to override):",
+               *(f"  {line}" for line in values.lines())]
+    places = {"platform_inertia": "platform.inertia", "lower_com": "legs.lower_com",
+              "lower_inertia": "legs.lower_inertia", "upper_com": "legs.upper_com",
+              "upper_inertia": "legs.upper_inertia", "bushing_offset": "friction.bushing_offset",
+              "bushing_spacing": "friction.bushing_spacing"}
+    notes = {place: "given in the rig" if key in values.given else f"derived: {DERIVED[key]}"
+             for key, place in places.items()}
     return commented_toml(rig.platform(), header=header, notes=notes)

@@ -16,12 +16,20 @@ import warnings
 
 import numpy as np
 
-from gsfric.errors import DataWarning, InputError
+from gsfric.errors import DataWarning, InputError, StepFlagError
 from gsfric.platform.description import Platform
 
 MOSTLY = 0.5
 """Fraction of the steps outside the stroke above which the record is unusable: the model
 flags those steps and every statistic of the rest would stand on fewer than half."""
+
+FLAGGED_LIMIT = 0.10
+"""Fraction of the steps flagged by the model above which ``simulate`` fails unless told to
+keep them (``--keep-flagged``): a rig's own log flags a step only where the motion leaves the
+platform's stroke or nears a singularity, which a sound record of a real rig does for a few
+moments at most; a tenth of the record flagged says that the platform or the log's frame is
+not the rig's (its sizes, the offset of its poses), and the forces of the rest belong to
+another machine."""
 
 UNIT_RATIO = 30.0
 """Factor between the static load (mean over the steps of the summed magnitudes of F1..F6) and
@@ -144,6 +152,21 @@ def check_forces(platform: Platform, forces: np.ndarray, where: str = "") -> Non
         raise InputError(f"{prefix}forces: the static load (mean of the summed |F1..F6|, "
                          f"{load:.4g} N) is only {ratio:.3g} times the weight the legs carry "
                          f"({weight:.4g} N): {advice}or give the rig's masses (--platform)")
+
+
+def check_flagged_share(flagged: int, steps: int, where: str = "", ranges: str = "") -> None:
+    """Raise ``StepFlagError`` when more than ``FLAGGED_LIMIT`` of the ``steps`` are flagged
+    (``flagged`` of them); ``ranges`` says where they lie (time ranges)."""
+    if not steps or flagged <= FLAGGED_LIMIT * steps:
+        return
+    prefix = f"{where}: " if where else ""
+    lie = f" in {ranges}" if ranges else ""
+    raise StepFlagError(
+        f"{prefix}{flagged} of {steps} steps ({100.0 * flagged / steps:.3g} %) are flagged by "
+        f"the model{lie}: more than the limit of {100.0 * FLAGGED_LIMIT:.3g} % (the forces of "
+        "a record flagged this much are likely another platform's: a leg outside the stroke "
+        f"says the platform or the poses' frame is not the rig's); fix with {FIXES}, or keep "
+        "them with --keep-flagged; no output written")
 
 
 def check_gaps(t: np.ndarray, where: str = "") -> None:

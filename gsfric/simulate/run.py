@@ -42,14 +42,16 @@ from gsfric.errors import GsfricWarning, InputError, StepFlagError
 from gsfric.evaluation.columns import plan as column_plan
 from gsfric.evaluation.evaluator import MAX_THREADS, Evaluator, evaluate_outputs
 from gsfric.evaluation.flags import FLAG_NAMES, FLAG_NONFINITE, check_flagged, flag_counts
+from gsfric.evaluation.peaks import PEAK_ARRAYS, Peaks
 from gsfric.io.files import atomic_write, check_outputs, is_stream
 from gsfric.io.tables import check_file, count_rows, table_kind
 from gsfric.models import platform_from
 from gsfric.platform.catalog import sensor_parameters
-from gsfric.platform.usable import check_forces, check_gaps, check_poses
+from gsfric.platform.usable import check_flagged_share, check_forces, check_gaps, check_poses
 from gsfric.signal.savgol import DEFAULT_POLYORDER
 from gsfric.simulate.delay import SensorDelay
 from gsfric.simulate.differentiate import DEFAULT_CHUNK, MotionChunk, iter_motions
+from gsfric.simulate.figure import SERIES, Trace, check_figure, write_figure
 from gsfric.simulate.outputs import (
     ChunkOutputs,
     delayed_columns,
@@ -61,6 +63,12 @@ from gsfric.simulate.writer import Writer
 
 MAX_REPORTED = 10_000
 """Flagged step indices kept for the summary (the count is always exact)."""
+
+MAX_RANGES = 10_000
+"""Time ranges of consecutive flagged steps kept for the summary (their count is exact)."""
+
+SHOWN_RANGES = 5
+"""Time ranges of flagged steps named in a message: the longest ones."""
 
 EVALUATE_STEPS = 50_000
 """Steps evaluated and written at a time (a Parquet row group): a chunk read and
@@ -89,6 +97,15 @@ class Summary:
         0-based indices of flagged steps (the first ``MAX_REPORTED``).
     differentiation : str
         How velocities and accelerations were obtained (``describe_differentiation``).
+    flagged_ranges : list of (float, float, int)
+        Runs of consecutive flagged steps: first and last time from the record's start, s,
+        and the steps in the run (the first ``MAX_RANGES`` runs).
+    runs : int
+        Number of runs of consecutive flagged steps.
+    peaks : Peaks
+        The per-leg peaks over the sound steps (``gsfric.evaluation.peaks``).
+    trace : Trace or None
+        The forces and friction over the record for ``plot`` (``gsfric.simulate.figure``).
     """
 
     out: Path
@@ -99,12 +116,28 @@ class Summary:
     flag_counts: dict[str, int] = field(default_factory=dict)
     flagged_steps: np.ndarray = field(default_factory=lambda: np.zeros(0, dtype=np.int64))
     differentiation: str = ""
+    flagged_ranges: list = field(default_factory=list)
+    runs: int = 0
+    peaks: Peaks = field(default_factory=Peaks)
+    trace: Trace | None = None
 
     def flag_message(self, trajectory: Path) -> str:
         kinds = "; ".join(f"{name}: {count}" for name, count in self.flag_counts.items()
                           if count)
-        return (f"{trajectory}: {self.flagged} of {self.steps} steps flagged ({kinds}): "
+        share = 100.0 * self.flagged / max(self.steps, 1)
+        return (f"{trajectory}: {self.flagged} of {self.steps} steps flagged ({kinds}; "
+                f"{share:.3g} % of the steps) in {self.ranges_text()}: "
                 f"{_steps_text(self.flagged_steps, self.flagged)}")
+
+    def ranges_text(self) -> str:
+        """Where the flagged steps lie: the number of runs of consecutive flagged steps and
+        the longest ``SHOWN_RANGES`` of them, as times from the record's start."""
+        longest = sorted(self.flagged_ranges, key=lambda r: (-r[2], r[0]))[:SHOWN_RANGES]
+        spans = ", ".join(f"{a:.3f}-{b:.3f} s ({n} steps)" if n > 1 else f"{a:.3f} s"
+                          for a, b, n in sorted(longest))
+        word = "run" if self.runs == 1 else "runs"
+        which = "" if self.runs <= len(longest) else f", the {len(longest)} longest"
+        return f"{self.runs} {word} (t from the record's start{which}: {spans})"
 
 
 def describe_differentiation(part: MotionChunk) -> str:
@@ -146,7 +179,8 @@ def simulate_file(trajectory: str | os.PathLike[str], out: str | os.PathLike[str
                   chunk: int = DEFAULT_CHUNK, window: int | None = None,
                   polyorder: int = DEFAULT_POLYORDER, n_threads: int = 1,
                   progress: bool | None = None, log_format=None, columns=None,
-                  float32: bool = False) -> Summary:
+                  float32: bool = False, keep_flagged: bool = False,
+                  plot: str | os.PathLike[str] | None = None) -> Summary:
     """Evaluate a trajectory file chunk by chunk and write every step's outputs.
 
     Parameters
@@ -160,6 +194,9 @@ def simulate_file(trajectory: str | os.PathLike[str], out: str | os.PathLike[str
     mode : {"kinematic", "paper"}
     strict : bool
         Raise ``StepFlagError`` at the first chunk with a flagged step (no output is written).
+        Without it, a record with more than ``FLAGGED_LIMIT`` (``gsfric.platform.usable``) of
+        its steps flagged raises ``StepFlagError`` at the end (no output is written) unless
+        ``keep_flagged``.
     chunk : int
         Steps read and differentiated at a time; memory grows with it (about 1.3 kB per
         step). They are evaluated and written ``EVALUATE_STEPS`` at a time.
@@ -175,10 +212,18 @@ def simulate_file(trajectory: str | os.PathLike[str], out: str | os.PathLike[str
         ``F1_residual..F6_residual`` (measured minus model) in the output.
     columns : iterable of str, optional
         Output groups (``COLUMN_GROUPS``); default ``DEFAULT_COLUMN_GROUPS`` (forces, the
-        paper's friction scalars, reactions: 68 values a step). ``t`` and ``flag`` always.
+        prismatic friction with the paper's post-hoc friction scalars, reactions: 74 values a
+        step). ``t`` and ``flag`` always.
     float32 : bool
         Write the outputs (not ``t``) as float32: relative error up to ``FLOAT32_RTOL``
         (6e-8) of each value, half the file.
+    keep_flagged : bool
+        Write the output whatever share of the steps is flagged (up to half of them: more is
+        an ``InputError``), with a warning.
+    plot : path-like, optional
+        Also write a figure (PNG, SVG or PDF by the extension; needs matplotlib) of the
+        actuator forces and the prismatic friction of every leg over the record
+        (``gsfric.simulate.figure``).
 
     Returns
     -------
@@ -196,7 +241,8 @@ def simulate_file(trajectory: str | os.PathLike[str], out: str | os.PathLike[str
     OutputError
         The output could not be written (a full disk); an earlier file is unchanged.
     StepFlagError
-        ``strict`` and a flagged step.
+        ``strict`` and a flagged step; more than ``FLAGGED_LIMIT`` of the steps flagged and
+        not ``keep_flagged``.
     """
     trajectory, out = as_path(trajectory, "trajectory"), as_path(out, "out")
     n_threads = as_count(n_threads, "n_threads", minimum=1, maximum=MAX_THREADS)
@@ -207,8 +253,14 @@ def simulate_file(trajectory: str | os.PathLike[str], out: str | os.PathLike[str
                        parse_columns(",".join(columns)))
     motions = iter_motions(trajectory, chunk=chunk, window=window, polyorder=polyorder,
                            log_format=log_format)
+    if plot is not None:
+        plot = as_path(plot, "plot")
+        check_outputs([plot], {"trajectory": trajectory, "platform": platform, "out": out})
+        check_figure(plot)
     run = _Run(trajectory, out, platform, plan, mode=mode, strict=strict, n_threads=n_threads,
-               float32=float32, progress=progress)
+               float32=float32, progress=progress, keep_flagged=as_flag(keep_flagged,
+                                                                        "keep_flagged"),
+               trace=plot is not None)
     Writer.load(kind)
     try:
         run.write(motions, kind)
@@ -218,6 +270,9 @@ def simulate_file(trajectory: str | os.PathLike[str], out: str | os.PathLike[str
     if summary.flagged:
         warnings.warn(summary.flag_message(trajectory) + f"; see the flag column of {out}",
                       GsfricWarning, stacklevel=2)
+    if plot is not None and summary.trace is not None and summary.steps:
+        write_figure(plot, summary.trace, summary.peaks.t0,
+                     title=f"{trajectory.name}: {summary.steps} steps, {summary.flagged} flagged")
     return summary
 
 
@@ -237,16 +292,23 @@ def _check_paths(trajectory: Path, out: Path, platform) -> str:
 
 @dataclass
 class _Flags:
-    """The flagged steps counted so far: their number, the count per kind (bit -> n), and the
-    first ``MAX_REPORTED`` global indices, in arrays of chunk after chunk."""
+    """The flagged steps counted so far: their number, the count per kind (bit -> n), the
+    first ``MAX_REPORTED`` global indices, in arrays of chunk after chunk, and the runs of
+    consecutive flagged steps ([first time, last time, steps, last global index], times from
+    ``t0``; the first ``MAX_RANGES`` of ``runs``)."""
 
     flagged: int = 0
     counts: dict[int, int] = field(default_factory=lambda: dict.fromkeys(FLAG_NAMES, 0))
     kept: list[np.ndarray] = field(default_factory=list)
+    ranges: list[list] = field(default_factory=list)
+    runs: int = 0
+    t0: float | None = None
 
-    def add(self, flag: np.ndarray, start: int) -> bool:
-        """Count a chunk's flags (N,) (its first step at global index ``start``); whether
-        any step is flagged."""
+    def add(self, flag: np.ndarray, start: int, t: np.ndarray) -> bool:
+        """Count a chunk's flags (N,) (its first step at global index ``start``, its times
+        ``t`` (N,), s); whether any step is flagged."""
+        if self.t0 is None and len(t):
+            self.t0 = float(t[0])
         bad = np.flatnonzero(flag)
         if not bad.size:
             return False
@@ -256,13 +318,30 @@ class _Flags:
         room = MAX_REPORTED - sum(len(k) for k in self.kept)
         if room > 0:
             self.kept.append(bad[:room] + start)
+        self._add_runs(bad, start, np.asarray(t, dtype=np.float64) - self.t0)
         return True
+
+    def _add_runs(self, bad: np.ndarray, start: int, t: np.ndarray) -> None:
+        breaks = np.flatnonzero(np.diff(bad) > 1)
+        firsts, lasts = np.r_[bad[0], bad[breaks + 1]], np.r_[bad[breaks], bad[-1]]
+        for first, last in zip(firsts, lasts):
+            if self.ranges and self.ranges[-1][3] == start + first - 1:   # across pieces
+                run = self.ranges[-1]
+                run[1], run[2], run[3] = float(t[last]), run[2] + int(last - first) + 1, \
+                    start + int(last)
+                continue
+            self.runs += 1
+            if len(self.ranges) < MAX_RANGES:
+                self.ranges.append([float(t[first]), float(t[last]), int(last - first) + 1,
+                                    start + int(last)])
 
     def fill(self, summary: Summary) -> None:
         summary.flagged = self.flagged
         summary.flagged_steps = np.concatenate(self.kept) if self.kept \
             else np.zeros(0, dtype=np.int64)
         summary.flag_counts = {FLAG_NAMES[bit]: n for bit, n in self.counts.items()}
+        summary.flagged_ranges = [(a, b, n) for a, b, n, _ in self.ranges]
+        summary.runs = self.runs
 
 
 class _Writes:
@@ -300,10 +379,12 @@ class _Run:
     within the call (two sets of each, one being written while the other is filled)."""
 
     def __init__(self, trajectory: Path, out: Path, platform, plan, *, mode: str,
-                 strict: bool, n_threads: int, float32: bool, progress: bool | None) -> None:
+                 strict: bool, n_threads: int, float32: bool, progress: bool | None,
+                 keep_flagged: bool = False, trace: bool = False) -> None:
         self.trajectory, self.platform, self.plan = trajectory, platform, plan
         self.mode, self.strict, self.n_threads, self.float32 = mode, strict, n_threads, float32
-        self.summary = Summary(out=out)
+        self.keep_flagged = keep_flagged
+        self.summary = Summary(out=out, trace=Trace() if trace else None)
         self.flags = _Flags()
         self.evaluator: Evaluator | None = None
         show = sys.stderr.isatty() if progress is None else bool(progress)
@@ -316,9 +397,10 @@ class _Run:
         gains, delay = sensor_parameters(platform.effects)
         # a delay reaches across chunks: applied here, over the record, not per chunk
         self.shift = SensorDelay(gains, delay) if delay != 0.0 else None
-        self.names = list(dict.fromkeys(key for _, key, _, _ in plan))
-        if self.shift is not None and "F" not in self.names:
-            self.names.append("F")
+        # the columns' arrays, those of the table of peaks and the figure (F among them, which
+        # a sensor delay shifts)
+        self.names = list(dict.fromkeys([*(key for _, key, _, _ in plan), *PEAK_ARRAYS,
+                                         *(key for key, _ in SERIES)]))
 
     def write(self, motions: Iterable[MotionChunk], kind: str) -> None:
         """Evaluate every chunk and write it to the output, atomically."""
@@ -343,6 +425,10 @@ class _Run:
                 self._drain(pending, writes)
                 check_flagged(self.platform, self.flags.counts, self.flags.flagged,
                               self.summary.steps, str(self.trajectory))
+                if not self.keep_flagged:
+                    self.flags.fill(self.summary)
+                    check_flagged_share(self.flags.flagged, self.summary.steps,
+                                        str(self.trajectory), self.summary.ranges_text())
             except BaseException:
                 self.stopped = True         # the evaluations queued return at once
                 for future in [*pending, *list(writes.futures)]:
@@ -408,7 +494,10 @@ class _Run:
         start, motion = part.start, part.motion
         arrays, flag = evaluate_outputs(self.evaluator, motion, self.names,
                                         buffers=self.sets[which], sensor=self.shift is None)
-        if self.flags.add(flag, start) and self.strict:
+        self.summary.peaks.add(motion.t, arrays, flag)
+        if self.summary.trace is not None:
+            self.summary.trace.add(motion.t, arrays, flag)
+        if self.flags.add(flag, start, motion.t) and self.strict:
             self.summary.steps = start + len(motion)
             self.flags.fill(self.summary)
             raise StepFlagError(

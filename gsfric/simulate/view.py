@@ -136,7 +136,7 @@ def _frames(trajectory: Path, motions, evaluator: Evaluator, collector: FrameCol
         check_gaps(motion.t, str(trajectory))
         result = evaluator.evaluate_quiet(motion)
         collector.add_result(result, part.start)
-        flags.add(np.asarray(result.flag, np.int64), part.start)
+        flags.add(np.asarray(result.flag, np.int64), part.start, motion.t)
         summary.steps = part.start + len(motion)
         summary.chunks += 1
         summary.windows = part.windows
