@@ -5,13 +5,14 @@
 >>> result.names, result.rms_before, result.rms_after  # a record of yours  # doctest: +SKIP
 
 ``run_discover(measured, platform_file, out_dir, seed=0)`` is ``gsfric discover``: it reads a
-measured-data file, runs ``discover`` and writes ``summary.json``, ``report.md`` and plots.
+measured-data file, runs ``discover`` and writes ``summary.json``, ``report.md``, plots and
+``report.html``.
 Modules: ``model`` (the compiled model as a function of its parameters), ``candidates`` (what
 may change), ``statistics`` (prewhitening, block cross-validation, block bootstrap),
 ``regimes`` (where the residuals concentrate), ``workflow`` (the rounds), ``floor`` (the
 noise floor of the verdict), ``dictionary`` (structure outside the catalog), ``verdict``
 (the decision and its reason), ``summary`` (summary.json), ``markdown`` (report.md),
-``report`` (the files written).
+``report`` (the files written), ``view`` (report.html, the 3-D view).
 """
 
 from gsfric.discovery.candidates import CANDIDATE_NAMES, CANDIDATES, REFIT

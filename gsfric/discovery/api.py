@@ -47,7 +47,7 @@ def discover(data, forces: np.ndarray | None = None,
     progress : bool
         Progress on stderr.
     figures : bool
-        With ``out``: write the plots.
+        With ``out``: write the plots and report.html (the 3-D view).
     **options
         ``gsfric.discovery.Settings`` fields; ``log_format`` (a ``LogFormat``) for a file
         written by another program.

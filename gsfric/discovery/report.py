@@ -9,7 +9,10 @@ Files written in the output directory, each atomically:
   ``markdown.report``);
 * ``platform.toml``: the final model, commented (``answer.platform_text``);
 * ``residuals_time.png``, ``residuals_speed.png``, ``regimes.png``: residuals before and after
-  over time, against the leg speed, and per regime.
+  over time, against the leg speed, and per regime;
+* ``report.html``: the 3-D view of the final model along the measured motion, with the
+  measured and model forces, the residuals and the named effects' contributions per leg
+  (``gsfric.discovery.view``).
 """
 
 from __future__ import annotations
@@ -28,6 +31,7 @@ from gsfric.discovery.floor import ForceNoise, read_noise_record
 from gsfric.discovery.markdown import stribeck_scale
 from gsfric.discovery.rest import poses_from_columns
 from gsfric.discovery.results import Discovery
+from gsfric.discovery.view import write_view
 from gsfric.discovery.workflow import discover
 from gsfric.io.files import atomic_write, check_output_folder, check_outputs, output_folder
 from gsfric.io.readers import read_measured_columns
@@ -151,8 +155,8 @@ def plots(d: Discovery, out_dir: Path) -> list[Path]:
 def write(d: Discovery, out_dir: str | os.PathLike[str], *, figures: bool = True
           ) -> list[Path]:
     """Write summary.json (``d.summary()``), platform.toml, report.md (``d.report()``) and
-    (with ``figures``) the plots; returns their paths. ``d.source`` and ``d.platform_source``
-    are the inputs the outputs must not overwrite."""
+    (with ``figures``) the plots and report.html; returns their paths. ``d.source`` and
+    ``d.platform_source`` are the inputs the outputs must not overwrite."""
     written = []
     with output_folder(out_dir, inputs={"measured-data": d.source or None,
                                         "platform": d.platform_source or None}) as out:
@@ -171,6 +175,7 @@ def write(d: Discovery, out_dir: str | os.PathLike[str], *, figures: bool = True
         written.append(path)
         if figures:
             written += plots(d, out)
+            written.append(write_view(d, out / "report.html"))
     return [Path(out_dir) / p.name for p in written]
 
 
@@ -229,7 +234,7 @@ def run_discover(measured: str | os.PathLike[str],
     progress : bool
         Progress on stderr.
     figures : bool
-        Write the plots.
+        Write the plots and report.html (the 3-D view).
     force_noise : float or sequence of 6 floats, optional
         The load cells' noise, N (a sensor specification; ``--force-noise``), one value or one
         per leg. Default: ``noise_record``'s, else the ``force_noise`` of the log's format

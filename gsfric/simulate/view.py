@@ -111,9 +111,8 @@ def view_file(trajectory: str | os.PathLike[str], out: str | os.PathLike[str], p
                            log_format=log_format)
     frames = _frames(trajectory, motions, Evaluator(platform, mode=mode, n_threads=n_threads),
                      FrameCollector(fps=fps), summary)
-    text = page(frames, platform.geometry.base_joints, platform.geometry.platform_joints,
-                title=title if title is not None else f"{trajectory.name}: {mode} mode",
-                flag_names=FLAG_NAMES, steps=summary.steps)
+    text = page(frames, platform, title=title if title is not None else
+                f"{trajectory.name}: {mode} mode", flag_names=FLAG_NAMES, steps=summary.steps)
     write_page(out, text, inputs={"trajectory": trajectory, "platform": platform})
     summary.frames, summary.size = len(frames), len(text.encode("utf-8"))
     if summary.flagged:
