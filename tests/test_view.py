@@ -66,13 +66,18 @@ def own_text(page: str) -> str:
 # -- self-contained and small ----------------------------------------------------------------
 
 
-def test_the_page_loads_nothing_from_outside(flagged, tmp_path):
-    page = page_of(flagged, tmp_path)
+def assert_self_contained(page: str) -> None:
+    """No address outside the page: no src or href to a network, no request in its own code."""
     assert not re.search(r"""\b(src|href)\s*=\s*["']?\s*(https?:)?//""", page, re.I)
     own = own_text(page)
     for word in ("http://", "https://", "fetch(", "XMLHttpRequest", "WebSocket", "EventSource",
                  "sendBeacon", "<link", "<iframe", "@import"):
         assert word not in own, word
+
+
+def test_the_page_loads_nothing_from_outside(flagged, tmp_path):
+    page = page_of(flagged, tmp_path)
+    assert_self_contained(page)
     # three.js is inlined unchanged: the vendored files, whose hashes vendor/README.md records
     readme = (VENDOR / "README.md").read_text()
     for name in ("three.core.min.js", "three.module.min.js"):
@@ -274,3 +279,98 @@ def test_the_page_draws_in_a_browser_and_moves_with_time(tmp_path):
     assert drawn.mean() > 0.05, "the 3-D view is empty"
     moved = np.abs(first[60:560].astype(int) - second[60:560]).sum(axis=2) > 30
     assert moved.mean() > 0.002, "the pictures at t = 1 s and t = 3 s are the same"
+
+
+# -- the views of discover and sweep ---------------------------------------------------------
+
+
+def curves(data: dict, arrays: dict, title_start: str) -> dict[str, np.ndarray]:
+    """The curves (label -> (M, 6)) of the plot whose title starts with ``title_start``."""
+    plot = next(p for p in data["plots"] if p["title"].startswith(title_start))
+    return {c["label"]: arrays[c["array"]] for c in plot["curves"]}
+
+
+def within_quantisation(got: np.ndarray, expected: np.ndarray) -> bool:
+    """Equal to within int16 quantisation of an array whose largest magnitude is that of
+    ``expected``'s (its stored scale)."""
+    return np.abs(got - expected).max() <= 0.5 * np.abs(expected).max() / 32767 * (1 + 1e-6)
+
+
+@pytest.fixture(scope="module")
+def discovered(tmp_path_factory):
+    """A discovery of a hidden seal friction of 2 N, written with its report.html."""
+    from gsfric.synth import synthesize
+    out = tmp_path_factory.mktemp("discover") / "out"
+    record = synthesize(effects=["seal_friction:force=2"], samples=1200, seed=1)
+    d = gsfric.discover(record.frame, candidates=["seal_friction", "sensor_bias"],
+                        n_bootstrap=20, out=out)
+    return d, out / "report.html"
+
+
+def test_discover_writes_the_view_of_model_and_measurement(discovered):
+    d, path = discovered
+    page = path.read_text(encoding="utf-8")
+    assert_self_contained(page)
+    data = embedded(page)
+    got = decode(data)
+    rows = got["step"] - d.used.start                # the frames' samples among those used
+    assert got["step"][0] == d.used.start and got["step"][-1] == d.used.stop - 1
+    force = curves(data, got, "actuator force")
+    assert within_quantisation(force["measured"], d.forces[rows])
+    assert within_quantisation(force["as given"], d.result_before.F[d.used][rows])
+    assert within_quantisation(force["final"], d.forces_after[rows])
+    # the legs are drawn with the final model's forces: the fitted model's own evaluation
+    assert within_quantisation(got["F"], d.forces_after[rows])
+    residual = curves(data, got, "residual")
+    assert within_quantisation(residual["final"], (d.forces - d.forces_after)[rows])
+    # where the legs slide, the final residual is the workflow's
+    sliding = d.sliding[rows]
+    assert np.abs(residual["final"][sliding] - d.residual_after[rows][sliding]).max() < 1e-3
+    # a seal friction adds its force against each leg's sliding: +-force, nothing else
+    contribution = curves(data, got, "contribution")["seal_friction"]
+    force_fitted = d.effects[0].parameters["force"]
+    assert np.nanmax(np.abs(contribution)) == pytest.approx(force_fitted, rel=1e-3)
+    assert force_fitted == pytest.approx(2.0, rel=0.05)
+
+
+def sweep_inputs(folder: Path, workspace: bool) -> dict:
+    """Two trajectory files, or a workspace of 20 poses: a small sweep's inputs."""
+    from gsfric.sweep.workspace import Workspace
+    if workspace:
+        return {"workspace": Workspace.from_dict({
+            "sampling": "lhs", "samples": 20, "states": 4, "seed": 3,
+            "pose": {"x": [-0.04, 0.04], "y": [-0.04, 0.04], "z": [0.66, 0.74],
+                     "roll": [-0.08, 0.08], "pitch": [-0.08, 0.08], "yaw": [-0.1, 0.1]},
+            "bounds": {"velocity": 0.2, "omega": 0.4, "acceleration": 2.0, "alpha": 4.0}})}
+    for k in range(2):
+        motion = models.random_motion(np.random.default_rng(k), np.linspace(0, 4, 801))
+        write_table(motion.to_frame(), folder / f"motion{k}.csv")
+    return {"trajectories": [str(folder / "motion*.csv")]}
+
+
+@pytest.mark.parametrize("workspace", [False, True], ids=["motions", "workspace"])
+def test_sweep_writes_the_view_of_each_joints_worst_case(tmp_path, workspace):
+    from gsfric.sweep import sweep
+    result = sweep(tmp_path / "out", scheduler="serial", plots=True,
+                   vary={"platform.payload_mass": (0.0, 8.0)}, variants=2, seed=1,
+                   **sweep_inputs(tmp_path, workspace))
+    page = (tmp_path / "out" / "worst_cases.html").read_text(encoding="utf-8")
+    assert_self_contained(page)
+    data = embedded(page)
+    got = decode(data)
+    assert data["frames"] == 12 and len(data["captions"]) == 12
+    # frame k: the largest |R_E| of leg k + 1, then the largest |R_C| of each leg; the
+    # state rebuilt and evaluated again gives the load the sweep found
+    summary = result.summary.set_index(["quantity", "leg"])
+    for k in range(12):
+        quantity, leg = ("R_E", "R_C")[k // 6], k % 6 + 1
+        row = summary.loc[(quantity, leg)]
+        load = np.linalg.norm(got[quantity][k, leg - 1])
+        scale = data["arrays"][quantity]["scale"]
+        assert abs(load - row.value) <= np.sqrt(3) * 0.5 * scale * (1 + 1e-6), (quantity, leg)
+        assert f"{row.value:.4g} N" in data["captions"][k]
+        where = f"state {row.step}" if workspace else f"{row.motion}, step {row.step}"
+        assert where in data["captions"][k]
+    loads = curves(data, got, "joint loads")       # the plot's curves: the same loads
+    largest = [summary.loc[("R_C", leg)].value for leg in range(1, 7)]
+    assert np.allclose(np.diag(loads["|R_C|"][6:]), largest, rtol=1e-4)

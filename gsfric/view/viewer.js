@@ -229,6 +229,7 @@ class Plot {
     }
     const pad = 0.06 * ((hi - lo) || 1);
     this.lo = lo - pad; this.hi = hi + pad;
+    this.ticks = [...new Set([lo, 0, hi])];
     this.drawBack();
     this.draw(state.frame);
   }
@@ -243,7 +244,7 @@ class Plot {
     g.lineWidth = r;
     g.strokeRect(this.left, this.top, this.right - this.left, this.bottom - this.top);
     g.textAlign = 'right';
-    for (const v of [this.lo + 0.06 / 1.12 * (this.hi - this.lo), 0, this.hi - 0.06 / 1.12 * (this.hi - this.lo)]) {
+    for (const v of this.ticks) {
       g.fillText(fmt(v, 3), this.left - 4 * r, this.yOf(v) + 4 * r);
     }
     g.beginPath(); g.moveTo(this.left, this.yOf(0)); g.lineTo(this.right, this.yOf(0)); g.stroke();
