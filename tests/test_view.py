@@ -24,6 +24,9 @@ from gsfric.cli import main
 from gsfric.evaluation.flags import FLAG_STROKE
 from gsfric.io.tables import write_table
 from gsfric.signal.rotations import rotation_from_quaternion
+from gsfric.sweep import sweep
+from gsfric.sweep.workspace import Workspace
+from gsfric.synth import synthesize
 from gsfric.view import FrameCollector, decode, embedded, notebook_html
 from gsfric.view.data import decode_entry, quantise
 from gsfric.view.frames import OUTPUTS
@@ -299,7 +302,6 @@ def within_quantisation(got: np.ndarray, expected: np.ndarray) -> bool:
 @pytest.fixture(scope="module")
 def discovered(tmp_path_factory):
     """A discovery of a hidden seal friction of 2 N, written with its report.html."""
-    from gsfric.synth import synthesize
     out = tmp_path_factory.mktemp("discover") / "out"
     record = synthesize(effects=["seal_friction:force=2"], samples=1200, seed=1)
     d = gsfric.discover(record.frame, candidates=["seal_friction", "sensor_bias"],
@@ -335,7 +337,6 @@ def test_discover_writes_the_view_of_model_and_measurement(discovered):
 
 def sweep_inputs(folder: Path, workspace: bool) -> dict:
     """Two trajectory files, or a workspace of 20 poses: a small sweep's inputs."""
-    from gsfric.sweep.workspace import Workspace
     if workspace:
         return {"workspace": Workspace.from_dict({
             "sampling": "lhs", "samples": 20, "states": 4, "seed": 3,
@@ -350,7 +351,6 @@ def sweep_inputs(folder: Path, workspace: bool) -> dict:
 
 @pytest.mark.parametrize("workspace", [False, True], ids=["motions", "workspace"])
 def test_sweep_writes_the_view_of_each_joints_worst_case(tmp_path, workspace):
-    from gsfric.sweep import sweep
     result = sweep(tmp_path / "out", scheduler="serial", plots=True,
                    vary={"platform.payload_mass": (0.0, 8.0)}, variants=2, seed=1,
                    **sweep_inputs(tmp_path, workspace))

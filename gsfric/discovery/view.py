@@ -15,6 +15,10 @@ from gsfric.view.comparison import discovery_plots
 CHUNK = 20_000
 """Samples evaluated at a time for the view: only its frames are kept (bounded memory)."""
 
+MAX_FRAMES = 6_000
+"""The most frames of the view: its plots add 16 bytes a frame per curve (six curves and one per
+further named effect) to the 190 of a frame, and 6,000 frames keep the page under 3 MB."""
+
 
 def write_view(d, path: str | os.PathLike[str], *, fps: float = DEFAULT_FPS,
                inputs=()) -> Path:
@@ -27,7 +31,7 @@ def write_view(d, path: str | os.PathLike[str], *, fps: float = DEFAULT_FPS,
     """
     motion = d.motion.slice(d.used.start, d.used.stop)
     evaluator = Evaluator(d.platform)
-    collector = FrameCollector(fps=fps)
+    collector = FrameCollector(fps=fps, max_frames=MAX_FRAMES)
     n = len(motion)
     if n > 1:
         collector.fps = min(fps, (collector.max_frames - 1) / float(motion.t[-1] - motion.t[0]))
