@@ -5,13 +5,17 @@ another picture at another time."""
 
 from __future__ import annotations
 
+import contextlib
 import dataclasses
 import hashlib
 import html
 import re
 import shutil
+import socket
 import subprocess
 import tempfile
+import threading
+import urllib.parse
 from pathlib import Path
 
 import numpy as np
@@ -282,6 +286,80 @@ def test_the_page_draws_in_a_browser_and_moves_with_time(tmp_path):
     assert drawn.mean() > 0.05, "the 3-D view is empty"
     moved = np.abs(first[60:560].astype(int) - second[60:560]).sum(axis=2) > 30
     assert moved.mean() > 0.002, "the pictures at t = 1 s and t = 3 s are the same"
+
+
+BROWSER_OWN = re.compile(r"(^|\.)(google\.com|googleapis\.com|gstatic\.com|gvt1\.com)"
+                         r"(:\d+)?$")
+"""Hosts Chromium itself calls (its clock, updates and accounts), whatever the page."""
+
+
+def requested_hosts(page: str) -> list[str]:
+    """The hosts headless Chromium asks for while it shows ``page`` (a URI) for 10 s of virtual
+    time: every http(s) request goes through a proxy that records it and answers nothing."""
+    seen: list[str] = []
+    server = socket.socket()
+    server.bind(("127.0.0.1", 0))
+    server.listen(16)
+
+    def record():
+        while True:
+            try:
+                connection, _ = server.accept()
+            except OSError:
+                return
+            with connection:
+                connection.settimeout(2)
+                with contextlib.suppress(OSError):
+                    target = connection.recv(4096).split(b" ")[1].decode("latin-1")
+                    seen.append(urllib.parse.urlsplit(target).netloc or target)
+
+    threading.Thread(target=record, daemon=True).start()
+    profile = tempfile.mkdtemp()
+    try:
+        subprocess.run(["chromium", "--headless", "--no-sandbox", "--use-gl=angle",
+                        "--use-angle=swiftshader", "--no-first-run",
+                        "--disable-background-networking", "--disable-component-update",
+                        "--disable-sync", f"--user-data-dir={profile}",
+                        "--virtual-time-budget=10000",
+                        f"--proxy-server=http://127.0.0.1:{server.getsockname()[1]}",
+                        "--proxy-bypass-list=<-loopback>", "--dump-dom", page],
+                       capture_output=True, timeout=180, check=False)
+    finally:
+        server.close()
+        shutil.rmtree(profile, ignore_errors=True)
+    return [host for host in seen if not BROWSER_OWN.search(host)]
+
+
+@pytest.mark.skipif(shutil.which("chromium") is None, reason="needs chromium (apt-get install "
+                    "chromium)")
+def test_no_request_leaves_the_page_in_a_browser(tmp_path):
+    page = evaluate(401, 2.0).to_html(tmp_path / "view.html")
+    assert requested_hosts(f"{page.as_uri()}#t=1") == []
+    # the proxy sees what a page asks for: one that loads a script from elsewhere is caught
+    leaky = tmp_path / "leaky.html"
+    leaky.write_text('<script src="https://cdn.example.org/three.js"></script>')
+    assert requested_hosts(leaky.as_uri()) == ["cdn.example.org:443"]
+
+
+def deep_red(picture: np.ndarray) -> int:
+    """Pixels of the 3-D view (right of the legend) near the pushing end of the force scale
+    (a leg at the record's largest push), shaded by the light: red well above green and blue."""
+    stage = picture[60:560, 260:1000].astype(int)
+    r, g, b = stage[..., 0], stage[..., 1], stage[..., 2]
+    return int(np.count_nonzero((r > 100) & (r > 1.6 * b) & (b > 1.2 * g) & (r - g > 60)))
+
+
+@pytest.mark.skipif(shutil.which("chromium") is None, reason="needs chromium (apt-get install "
+                    "chromium)")
+def test_leg_colours_follow_the_force_in_a_browser(tmp_path):
+    result = evaluate(1001, 5.0)
+    page = result.to_html(tmp_path / "view.html")
+    largest = np.abs(result.F).max(axis=1)               # the most loaded leg's |F|, N
+    assert largest.min() < 0.6 * largest.max()
+    at_peak = screenshot(page, result.t[np.argmax(largest)], tmp_path / "peak.png")
+    quiet = screenshot(page, result.t[np.argmin(largest)], tmp_path / "quiet.png")
+    assert deep_red(at_peak) > 300, "the leg at the largest push is not drawn in deep red"
+    assert deep_red(quiet) < 30, "deep red drawn while no leg pushes near the largest force"
 
 
 # -- the views of discover and sweep ---------------------------------------------------------
