@@ -1,6 +1,7 @@
 """``worst_cases.html`` of a sweep: the 3-D view (``gsfric.view``) of the worst-case pose of
-each joint, one frame each: the step of the largest ``|R_E|`` (spherical joint E_i) and of the
-largest ``|R_C|`` (universal joint C_i) of each leg over all cases (``summary.csv``).
+each joint, one frame each, the joint's leg and its values shown: the step of the largest
+``|R_E|`` (spherical joint E_i) and of the largest ``|R_C|`` (universal joint C_i) of each leg
+over all cases (``summary.csv``).
 
 Each worst case's state (pose, velocities, accelerations) is rebuilt from where the sweep
 found it: the step of its trajectory file, read again as the sweep read it, or the state of
@@ -95,6 +96,7 @@ def write_worst_cases(plan: Plan, summary: pd.DataFrame, path: str | os.PathLike
                   Curve("|R_C|", np.linalg.norm(frames.R_C, axis=2), "dashed")))
     plots = (Plot("actuator force F (+ push, \u2212 pull)", "N", (Curve("F", "F"),)), loads)
     text = page(frames, plan.platform, title="sweep: the worst-case pose of each joint",
-                flag_names=FLAG_NAMES, plots=plots, captions=[_caption(r) for r in
-                                                               rows.itertuples()])
+                flag_names=FLAG_NAMES, plots=plots,
+                captions=[_caption(r) for r in rows.itertuples()],
+                focus=[int(leg) - 1 for leg in rows.leg])
     return write_page(path, text)

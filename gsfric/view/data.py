@@ -15,7 +15,8 @@ Each array is stored as little-endian bytes in base64, with its dtype and shape:
 The plots under the 3-D view are listed in ``plots`` (``Plot``: a title, a unit and curves,
 each a quantity per leg drawn as six lines of one dash); by default those of ``F`` and
 ``Ffr`` (``DEFAULT_PLOTS``). ``captions`` (optional) names each frame: a page of separate
-poses (a sweep's worst cases) rather than a motion.
+poses (a sweep's worst cases) rather than a motion; ``focus`` (optional) is the leg whose
+values each frame shows at once.
 
 ``decode`` reads the arrays back (the tests compare them with the Result); the page's script
 (``viewer.js``) does the same with typed arrays.
@@ -141,7 +142,8 @@ def decode_entry(entry: Mapping) -> np.ndarray:
 
 def encode(frames: Frames, platform, *, title: str = "",
            flag_names: Mapping[int, str] | None = None, steps: int | None = None,
-           plots: Sequence[Plot] | None = None, captions: Sequence[str] | None = None) -> dict:
+           plots: Sequence[Plot] | None = None, captions: Sequence[str] | None = None,
+           focus: Sequence[int] | None = None) -> dict:
     """The JSON-ready object a page embeds (see the module for the arrays).
 
     Parameters
@@ -162,10 +164,15 @@ def encode(frames: Frames, platform, *, title: str = "",
         The plots under the 3-D view (default: ``DEFAULT_PLOTS``), curves (M, 6).
     captions : sequence of str, optional
         M names, one per frame, shown instead of its time.
+    focus : sequence of int, optional
+        M legs (0-5), one per frame: the leg whose values the frame shows (as a click on it
+        would).
     """
     plots = DEFAULT_PLOTS if plots is None else tuple(plots)
     if captions is not None and len(captions) != len(frames):
         raise ValueError(f"captions: {len(captions)} for {len(frames)} frames")
+    if focus is not None and (len(focus) != len(frames) or not all(0 <= k < 6 for k in focus)):
+        raise ValueError(f"focus: one leg 0-5 for each of the {len(frames)} frames")
     base_joints = np.asarray(platform.geometry.base_joints, float)
     platform_joints = np.asarray(platform.geometry.platform_joints, float)
     t0 = float(frames.t[0])
@@ -196,6 +203,7 @@ def encode(frames: Frames, platform, *, title: str = "",
                         "com": np.asarray(body.payload_com, float).tolist()},
             "flag_names": {str(k): v for k, v in (flag_names or {}).items()},
             "plots": listed, "captions": list(captions) if captions is not None else None,
+            "focus": [int(k) for k in focus] if focus is not None else None,
             "units": _UNITS, "arrays": arrays}
 
 

@@ -49,7 +49,8 @@ def _script_text(text: str, what: str) -> str:
 
 def page(frames: Frames, platform, *, title: str = "",
          flag_names: Mapping[int, str] | None = None, steps: int | None = None,
-         plots: Sequence[Plot] | None = None, captions: Sequence[str] | None = None) -> str:
+         plots: Sequence[Plot] | None = None, captions: Sequence[str] | None = None,
+         focus: Sequence[int] | None = None) -> str:
     """The HTML text of a view of ``frames`` on ``platform`` (parameters as
     ``gsfric.view.data.encode``).
 
@@ -59,7 +60,7 @@ def page(frames: Frames, platform, *, title: str = "",
         One self-contained page: about 0.8 MB of three.js and viewer plus 190 bytes a frame.
     """
     data = encode(frames, platform, title=title, flag_names=flag_names, steps=steps,
-                  plots=plots, captions=captions)
+                  plots=plots, captions=captions, focus=focus)
     text = json.dumps(data, separators=(",", ":")).replace("</", "<\\/")
     values = {"title": html.escape(title or "gsfric view"), "three_version": THREE_VERSION,
               "three_core": _script_text(resource("vendor/three.core.min.js"), "three.core"),

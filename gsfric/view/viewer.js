@@ -277,7 +277,11 @@ class Plot {
     g.globalAlpha = 1;
   }
 
-  select(leg) { if (leg !== this.selected) { this.selected = leg; this.drawBack(); this.draw(state.frame); } }
+  select(leg) {
+    if (leg === this.selected) return;
+    this.selected = leg;
+    if (this.ratio) { this.drawBack(); this.draw(state.frame); }   // else at its first layout
+  }
 
   draw(frame) {
     if (!this.ratio) return;
@@ -498,7 +502,8 @@ function legText(leg, frame, d) {
   const F = A.F[frame * 6 + leg];
   const sense = F > 0 ? ' (push)' : F < 0 ? ' (pull)' : '';
   const bits = A.flag[frame];
-  return `leg ${leg + 1}   t = ${T[frame].toFixed(3)} s, step ${A.step[frame]}\n` +
+  const when = CAPTIONS ? `pose ${frame + 1} of ${M}` : `t = ${T[frame].toFixed(3)} s, step ${A.step[frame]}`;
+  return `leg ${leg + 1}   ${when}\n` +
     `F      ${fmt(F)} N${sense}\n` +
     `|R_E|  ${fmt(norm(vec(A.R_E, frame, leg)))} N   at E${leg + 1}, leg on platform\n` +
     `|R_C|  ${fmt(norm(vec(A.R_C, frame, leg)))} N   at C${leg + 1}, base on leg\n` +
@@ -670,7 +675,9 @@ async function main() {
     THREE = await loadThree();
     const view = new View(THREE, $('stage'), plots);
     listeners.push((frame) => view.update(frame));
+    if (DATA.focus) listeners.push((frame) => view.select(DATA.focus[frame]));
     view.update(state.frame);
+    if (DATA.focus) view.select(DATA.focus[state.frame]);
   } catch (error) {
     $('nogl').style.display = 'block';
     $('nogl').textContent += ` (${error && error.message ? error.message : error})`;
