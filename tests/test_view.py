@@ -437,6 +437,7 @@ def test_sweep_writes_the_view_of_each_joints_worst_case(tmp_path, workspace):
     data = embedded(page)
     got = decode(data)
     assert data["frames"] == 12 and len(data["captions"]) == 12
+    assert data["focus"] == [0, 1, 2, 3, 4, 5] * 2           # each frame shows its joint's leg
     # frame k: the largest |R_E| of leg k + 1, then the largest |R_C| of each leg; the
     # state rebuilt and evaluated again gives the load the sweep found
     summary = result.summary.set_index(["quantity", "leg"])

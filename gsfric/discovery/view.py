@@ -20,14 +20,14 @@ MAX_FRAMES = 6_000
 further named effect) to the 190 of a frame, and 6,000 frames keep the page under 3 MB."""
 
 
-def write_view(d, path: str | os.PathLike[str], *, fps: float = DEFAULT_FPS,
-               inputs=()) -> Path:
+def write_view(d, path: str | os.PathLike[str], *, fps: float = DEFAULT_FPS) -> Path:
     """Write the 3-D view of discovery ``d`` (a ``Discovery`` with its ``motion``) to ``path``.
 
     The final model (``d.platform``) is evaluated along the used samples of the measured
     motion, chunk by chunk, keeping the frames of the view (``FrameCollector``; a frame's step
     is its sample's index in the data); the page draws its loads and plots
-    ``discovery_plots``. ``inputs`` as ``write_page``'s. Returns ``path``.
+    ``discovery_plots``; written as ``write_page`` writes (a temporary file renamed).
+    Returns ``path``.
     """
     motion = d.motion.slice(d.used.start, d.used.stop)
     evaluator = Evaluator(d.platform)
@@ -47,4 +47,4 @@ def write_view(d, path: str | os.PathLike[str], *, fps: float = DEFAULT_FPS,
     title = f"{name}: the final model ({effects}) against the measurement"
     text = page(frames, d.platform, title=title, flag_names=FLAG_NAMES, steps=n,
                 plots=discovery_plots(d, frames))
-    return write_page(path, text, inputs=inputs)
+    return write_page(path, text)
