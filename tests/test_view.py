@@ -31,7 +31,7 @@ from gsfric.signal.rotations import rotation_from_quaternion
 from gsfric.sweep import sweep
 from gsfric.sweep.workspace import Workspace
 from gsfric.synth import synthesize
-from gsfric.view import FrameCollector, decode, embedded, notebook_html
+from gsfric.view import Curve, FrameCollector, Plot, decode, embedded, notebook_html, page
 from gsfric.view.data import decode_entry, quantise
 from gsfric.view.frames import OUTPUTS
 
@@ -153,6 +153,21 @@ def test_non_finite_values_are_kept_as_nan():
     values = np.array([[1.0, np.nan, -2.0]])
     back = decode_entry(quantise(values))
     assert np.isnan(back[0, 1]) and back[0, 0] == pytest.approx(1.0, abs=1e-4)
+
+
+def test_a_plot_of_the_wrong_shape_is_refused_by_name():
+    result = evaluate(200, 2.0)
+    frames = FrameCollector(fps=30).add_result(result).finish()
+    with pytest.raises(ValueError, match=r"^measured: values must be \(frames, 6\)"):
+        Curve("measured", np.zeros((len(frames), 5)))
+    short = Plot("force", "N", (Curve("measured", np.zeros((len(frames) - 1, 6))),))
+    with pytest.raises(ValueError, match=rf"^force: measured has {len(frames) - 1} rows for "
+                                         rf"{len(frames)} frames$"):
+        page(frames, gsfric.reference_platform(), plots=[short])
+    # a curve naming one of the frames' arrays is drawn from it, not stored twice
+    both = Plot("force", "N", (Curve("F", "F"), Curve("twice", np.asarray(frames.F))))
+    data = embedded(page(frames, gsfric.reference_platform(), plots=[both]))
+    assert [c["array"] for c in data["plots"][0]["curves"]] == ["F", "curve1"]
 
 
 def test_the_notebook_frame_holds_the_page(tmp_path):

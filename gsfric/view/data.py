@@ -181,17 +181,7 @@ def encode(frames: Frames, platform, *, title: str = "",
               "quaternion": quantise(frames.quaternion, 1.0 / INT16_MAX)}
     for name in _SCALED:
         arrays[name] = quantise(getattr(frames, name))
-    listed = [{"title": plot.title, "unit": plot.unit, "curves": []} for plot in plots]
-    for entry, plot in zip(listed, plots):
-        for curve in plot.curves:
-            name = curve.values if isinstance(curve.values, str) else \
-                f"curve{sum(len(e['curves']) for e in listed)}"
-            if name not in arrays:
-                if len(curve.values) != len(frames):
-                    raise ValueError(f"{plot.title}: {curve.label} has {len(curve.values)} "
-                                     f"rows for {len(frames)} frames")
-                arrays[name] = quantise(curve.values)
-            entry["curves"].append({"label": curve.label, "array": name, "dash": curve.dash})
+    listed = _listed(plots, len(frames), arrays)
     body = platform.platform
     return {"format": FORMAT, "title": title, "t0": t0, "frames": len(frames),
             "steps": int(steps if steps is not None else frames.step[-1] + 1),
@@ -205,6 +195,24 @@ def encode(frames: Frames, platform, *, title: str = "",
             "plots": listed, "captions": list(captions) if captions is not None else None,
             "focus": [int(k) for k in focus] if focus is not None else None,
             "units": _UNITS, "arrays": arrays}
+
+
+def _listed(plots: Sequence[Plot], frames: int, arrays: dict) -> list[dict]:
+    """The JSON entries of ``plots``; the values of their curves (``frames`` rows each) are
+    added to ``arrays`` as ``curve0``, ``curve1``, ... (a curve naming a frames' array reads
+    that one)."""
+    listed = [{"title": plot.title, "unit": plot.unit, "curves": []} for plot in plots]
+    for entry, plot in zip(listed, plots):
+        for curve in plot.curves:
+            name = curve.values if isinstance(curve.values, str) else \
+                f"curve{sum(len(e['curves']) for e in listed)}"
+            if name not in arrays:
+                if len(curve.values) != frames:
+                    raise ValueError(f"{plot.title}: {curve.label} has {len(curve.values)} "
+                                     f"rows for {frames} frames")
+                arrays[name] = quantise(curve.values)
+            entry["curves"].append({"label": curve.label, "array": name, "dash": curve.dash})
+    return listed
 
 
 def leg_lengths(frames: Frames, base_joints, platform_joints) -> np.ndarray:
