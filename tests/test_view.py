@@ -222,6 +222,27 @@ def test_the_command_writes_the_page(trajectory, tmp_path):
     assert data["steps"] == 301 and data["frames"] == 61 and not leftovers(tmp_path)
 
 
+def test_a_measured_data_file_is_viewed_against_its_forces(tmp_path, trajectory):
+    record = synthesize(effects=["seal_friction:force=2"], samples=600, seed=2)
+    measured = tmp_path / "measured.csv"
+    write_table(record.frame, measured)
+    out = tmp_path / "measured.html"
+    assert run("view", "--trajectory", measured, "--out", out).exit_code == 0
+    data = embedded(out.read_text())
+    got = decode(data)
+    F = record.frame[[f"F{i}" for i in range(1, 7)]].to_numpy()[got["step"]]
+    force = curves(data, got, "actuator force")
+    assert within_quantisation(force["measured"], F)
+    assert force["model"] is got["F"]                   # the legs' own array, not a copy
+    residual = curves(data, got, "residual")["residual"]
+    assert np.abs(residual - (F - got["F"])).max() < 1e-3 * np.abs(F).max()
+    # a trajectory without forces gets the plots of F and of the prismatic friction
+    plain = tmp_path / "plain.html"
+    assert run("view", "--trajectory", trajectory, "--out", plain).exit_code == 0
+    titles = [p["title"] for p in embedded(plain.read_text())["plots"]]
+    assert titles == ["actuator force F (+ push, \u2212 pull)", "prismatic friction Ffr"]
+
+
 @pytest.mark.parametrize(("name", "text", "expected"), [
     ("missing.csv", None, "file not found"),
     ("empty.csv", "", "file is empty"),

@@ -1,6 +1,8 @@
-"""The 3-D view of a discovery (``gsfric discover``'s report.html): the final model evaluated
-along the measured motion, with plots of the measured and the model forces per leg, the
-residual before and after, and each named effect's contribution.
+"""Model against measurement in a 3-D view: the plots of a measured-data file's view
+(``gsfric view``: measured and model forces, the residual) and of a discovery's
+(``gsfric discover``'s report.html: the final model evaluated along the measured motion, with
+the measured and model forces per leg, the residual before and after, and each named effect's
+contribution).
 
 ``discovery_plots`` reads a ``gsfric.discovery.Discovery`` by its attributes (``forces``,
 ``forces_after``, ``residual_*``, ``result_before``, ``used``, ``effects``), so that this
@@ -11,7 +13,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from gsfric.view.data import DASHES, Curve, Plot
+from gsfric.view.data import DASHES, DEFAULT_PLOTS, Curve, Plot
 from gsfric.view.frames import Frames
 
 
@@ -20,6 +22,20 @@ def _at(values, steps: np.ndarray) -> np.ndarray:
     if values is None:
         return np.full((len(steps), 6), np.nan)
     return np.asarray(values, float)[steps]
+
+
+def measured_plots(frames: Frames) -> tuple[Plot, ...]:
+    """The plots of a view with measured forces: ``F`` measured (solid) and of the model
+    (dashed), the residual ``F_measured - F``, and the prismatic friction ``Ffr``, per leg, N;
+    ``DEFAULT_PLOTS`` when no frame has a measured force (``frames.F_measured`` all NaN)."""
+    measured = np.asarray(frames.F_measured, float)
+    if not np.isfinite(measured).any():
+        return DEFAULT_PLOTS
+    return (Plot("actuator force F: measured, model", "N",
+                 (Curve("measured", measured), Curve("model", "F", "dashed"))),
+            Plot("residual F measured \u2212 F model", "N",
+                 (Curve("residual", measured - frames.F),)),
+            DEFAULT_PLOTS[1])
 
 
 def discovery_plots(discovery, frames: Frames) -> tuple[Plot, ...]:
