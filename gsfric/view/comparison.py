@@ -32,9 +32,9 @@ def measured_plots(frames: Frames) -> tuple[Plot, ...]:
     if not np.isfinite(measured).any():
         return DEFAULT_PLOTS
     return (Plot("actuator force F: measured, model", "N",
-                 (Curve("measured", measured), Curve("model", "F", "dashed"))),
+                 (Curve("measured", "F_measured"), Curve("model", "F", "dashed"))),
             Plot("residual F measured \u2212 F model", "N",
-                 (Curve("residual", measured - frames.F),)),
+                 (Curve("residual", "F_measured", minus="F"),)),
             DEFAULT_PLOTS[1])
 
 

@@ -42,7 +42,7 @@ NAN_CODE = -32768
 """The int16 code of a NaN value."""
 
 _SCALED = ("position", "F", "R_E", "R_C", "MfrE", "MfrC", "Ffr")
-_PER_LEG = ("F", "Ffr", "MfrE", "MfrC")
+_PER_LEG = ("F", "Ffr", "MfrE", "MfrC", "F_measured")
 """The frames' arrays (M, 6) a plot's curve may name."""
 _UNITS = {"t": "s", "position": "m", "quaternion": "", "F": "N", "R_E": "N", "R_C": "N",
           "MfrE": "N m", "MfrC": "N m", "Ffr": "N", "step": "", "flag": ""}
@@ -63,21 +63,32 @@ class Curve:
     values : ndarray, shape (M, 6), or str
         Its value for each frame and leg, in the plot's unit; NaN where it has none (not
         drawn). Or the name of one of the frames' own arrays of that shape (``"F"``,
-        ``"Ffr"``, ``"MfrE"``, ``"MfrC"``): drawn from the page's copy, not stored twice.
+        ``"Ffr"``, ``"MfrE"``, ``"MfrC"``, ``"F_measured"``): drawn from the page's copy,
+        not stored twice.
     dash : str
         One of ``DASHES``.
+    minus : str, optional
+        The name of another of the frames' arrays, subtracted from ``values`` (a name too) by
+        the page: a difference drawn without being stored.
     """
 
     label: str
     values: np.ndarray | str
     dash: str = "solid"
+    minus: str | None = None
 
     def __post_init__(self) -> None:
         if self.dash not in DASHES:
             raise ValueError(f"dash: one of {', '.join(DASHES)}, got {self.dash!r}")
-        if isinstance(self.values, str):
-            if self.values not in _PER_LEG:
-                raise ValueError(f"{self.label}: values names none of {', '.join(_PER_LEG)}")
+        names = [self.values] if isinstance(self.values, str) else []
+        if self.minus is not None:
+            if not names:
+                raise ValueError(f"{self.label}: minus needs values that name an array too")
+            names.append(self.minus)
+        if names:
+            if not set(names) <= set(_PER_LEG):
+                raise ValueError(f"{self.label}: {', '.join(names)} must each name one of "
+                                 f"{', '.join(_PER_LEG)}")
         elif np.ndim(self.values) != 2 or np.shape(self.values)[1] != 6:
             raise ValueError(f"{self.label}: values must be (frames, 6), got "
                              f"{np.shape(self.values)}")
@@ -181,7 +192,7 @@ def encode(frames: Frames, platform, *, title: str = "",
               "quaternion": quantise(frames.quaternion, 1.0 / INT16_MAX)}
     for name in _SCALED:
         arrays[name] = quantise(getattr(frames, name))
-    listed = _listed(plots, len(frames), arrays)
+    listed = _listed(plots, frames, arrays)
     body = platform.platform
     return {"format": FORMAT, "title": title, "t0": t0, "frames": len(frames),
             "steps": int(steps if steps is not None else frames.step[-1] + 1),
@@ -197,21 +208,23 @@ def encode(frames: Frames, platform, *, title: str = "",
             "units": _UNITS, "arrays": arrays}
 
 
-def _listed(plots: Sequence[Plot], frames: int, arrays: dict) -> list[dict]:
-    """The JSON entries of ``plots``; the values of their curves (``frames`` rows each) are
-    added to ``arrays`` as ``curve0``, ``curve1``, ... (a curve naming a frames' array reads
-    that one)."""
+def _listed(plots: Sequence[Plot], frames: Frames, arrays: dict) -> list[dict]:
+    """The JSON entries of ``plots``; the values of their curves are added to ``arrays`` as
+    ``curve0``, ``curve1``, ... (a curve naming a frames' array reads that one, added once)."""
     listed = [{"title": plot.title, "unit": plot.unit, "curves": []} for plot in plots]
     for entry, plot in zip(listed, plots):
         for curve in plot.curves:
-            name = curve.values if isinstance(curve.values, str) else \
-                f"curve{sum(len(e['curves']) for e in listed)}"
-            if name not in arrays:
-                if len(curve.values) != frames:
-                    raise ValueError(f"{plot.title}: {curve.label} has {len(curve.values)} "
-                                     f"rows for {frames} frames")
-                arrays[name] = quantise(curve.values)
-            entry["curves"].append({"label": curve.label, "array": name, "dash": curve.dash})
+            named = isinstance(curve.values, str)
+            name = curve.values if named else f"curve{sum(len(e['curves']) for e in listed)}"
+            if not named and len(curve.values) != len(frames):
+                raise ValueError(f"{plot.title}: {curve.label} has {len(curve.values)} "
+                                 f"rows for {len(frames)} frames")
+            for key, values in ((name, curve.values), (curve.minus, curve.minus)):
+                if key is not None and key not in arrays:
+                    arrays[key] = quantise(getattr(frames, key) if isinstance(values, str)
+                                           else values)
+            entry["curves"].append({"label": curve.label, "array": name, "dash": curve.dash,
+                                    "minus": curve.minus})
     return listed
 
 

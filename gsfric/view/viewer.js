@@ -329,7 +329,8 @@ function setUpPlots() {
     head.append(title, keys);
     box.append(head, canvas);
     $('plots').append(box);
-    const curves = spec.curves.map((c) => ({ values: A[c.array], dash: c.dash }));
+    const curves = spec.curves.map((c) => ({
+      values: c.minus ? A[c.array].map((v, k) => v - A[c.minus][k]) : A[c.array], dash: c.dash }));
     return new Plot(canvas, curves, spec.unit);
   });
   listeners.push((frame) => plots.forEach((p) => p.draw(frame)));
