@@ -74,6 +74,29 @@ def _write_generated(app) -> None:
                    check=True, capture_output=True)
 
 
+REFERENCE_VIEW = "reference-motion.html"
+"""The 3-D view of the reference motion, written into the built site's _static/ (the page
+explanation/reference-platform.md shows it in a frame)."""
+
+_VIEW_SCRIPT = """
+import sys
+import gsfric
+result = gsfric.evaluate(gsfric.reference_platform(), gsfric.models.paper_motion())
+result.to_html(sys.argv[1], title="The reference platform on the reference motion (40 steps)")
+"""
+
+
+def _write_reference_view(app, exception) -> None:
+    """Write the 3-D view of the reference motion (``Result.to_html``: one page holding
+    three.js, it opens offline) into the built site's _static/, after an HTML build."""
+    if exception is not None or app.builder.format != "html":
+        return
+    static = Path(app.outdir, "_static")
+    static.mkdir(parents=True, exist_ok=True)
+    subprocess.run([sys.executable, "-c", _VIEW_SCRIPT, str(static / REFERENCE_VIEW)],
+                   check=True, capture_output=True)
+
+
 NOTEBOOKS = Path(__file__).resolve().parents[1] / "notebooks"
 """The tutorials' home: notebooks/ at the top of the repository, where they run in Jupyter."""
 
@@ -110,3 +133,4 @@ def _copy_notebooks(app) -> None:
 def setup(app):
     app.connect("builder-inited", _copy_notebooks)
     app.connect("builder-inited", _write_generated)
+    app.connect("build-finished", _write_reference_view)

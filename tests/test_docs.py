@@ -13,6 +13,8 @@ from pathlib import Path
 
 import pytest
 
+from gsfric.view import embedded
+
 pytestmark = pytest.mark.integration  # end to end: `make check` leaves it out
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -151,3 +153,19 @@ def test_notebook_speaks_of_the_product(notebook):
     text = "\n".join(c.source for c in cells if c.cell_type == "markdown")
     history = HISTORY.findall(text)
     assert not history, f"{notebook.name}: run records belong in benchmarks/results/: {history}"
+
+
+def test_the_reference_motion_is_shown_in_3d_from_the_site(site):
+    """The page that describes the reference motion shows its 3-D view, a page of the site's
+    own _static/ written at build time (self-contained: tests/test_view.py)."""
+    run, html = site
+    assert run.returncode == 0, run.stderr[-4000:]
+    page = html / "explanation" / "reference-platform.html"
+    parser = _Resources()
+    parser.feed(page.read_text(encoding="utf-8"))
+    frames = [u for u in parser.urls if u.endswith("reference-motion.html")]
+    assert len(frames) == 1
+    view = (page.parent / frames[0]).resolve()
+    assert view.is_file() and view.parent == (html / "_static").resolve()
+    data = embedded(view.read_text(encoding="utf-8"))
+    assert data["steps"] == data["frames"] == 40

@@ -5,13 +5,17 @@ another picture at another time."""
 
 from __future__ import annotations
 
+import contextlib
 import dataclasses
 import hashlib
 import html
 import re
 import shutil
+import socket
 import subprocess
 import tempfile
+import threading
+import urllib.parse
 from pathlib import Path
 
 import numpy as np
@@ -24,7 +28,10 @@ from gsfric.cli import main
 from gsfric.evaluation.flags import FLAG_STROKE
 from gsfric.io.tables import write_table
 from gsfric.signal.rotations import rotation_from_quaternion
-from gsfric.view import FrameCollector, decode, embedded, notebook_html
+from gsfric.sweep import sweep
+from gsfric.sweep.workspace import Workspace
+from gsfric.synth import synthesize
+from gsfric.view import Curve, FrameCollector, Plot, decode, embedded, notebook_html, page
 from gsfric.view.data import decode_entry, quantise
 from gsfric.view.frames import OUTPUTS
 
@@ -66,13 +73,18 @@ def own_text(page: str) -> str:
 # -- self-contained and small ----------------------------------------------------------------
 
 
-def test_the_page_loads_nothing_from_outside(flagged, tmp_path):
-    page = page_of(flagged, tmp_path)
+def assert_self_contained(page: str) -> None:
+    """No address outside the page: no src or href to a network, no request in its own code."""
     assert not re.search(r"""\b(src|href)\s*=\s*["']?\s*(https?:)?//""", page, re.I)
     own = own_text(page)
     for word in ("http://", "https://", "fetch(", "XMLHttpRequest", "WebSocket", "EventSource",
                  "sendBeacon", "<link", "<iframe", "@import"):
         assert word not in own, word
+
+
+def test_the_page_loads_nothing_from_outside(flagged, tmp_path):
+    page = page_of(flagged, tmp_path)
+    assert_self_contained(page)
     # three.js is inlined unchanged: the vendored files, whose hashes vendor/README.md records
     readme = (VENDOR / "README.md").read_text()
     for name in ("three.core.min.js", "three.module.min.js"):
@@ -88,6 +100,17 @@ def test_ten_thousand_steps_fit_in_three_megabytes(tmp_path):
     data = embedded(page)
     assert data["frames"] == 10_000
     assert len(page.encode()) <= 3 * MB
+
+
+def test_ten_thousand_steps_of_measured_data_fit_in_three_megabytes(tmp_path):
+    frame = models.sinusoidal(np.arange(10_000) / 50.0).to_frame()
+    for i in range(1, 7):                                # load cells: any values will do
+        frame[f"F{i}"] = np.random.default_rng(i).normal(50.0, 20.0, len(frame))
+    write_table(frame, tmp_path / "measured.csv")
+    out = tmp_path / "view.html"
+    assert run("view", "--trajectory", tmp_path / "measured.csv", "--out", out).exit_code == 0
+    assert embedded(out.read_text())["frames"] == 10_000
+    assert out.stat().st_size <= 3 * MB
 
 
 def test_a_long_record_is_thinned_to_the_most_frames(tmp_path):
@@ -143,6 +166,21 @@ def test_non_finite_values_are_kept_as_nan():
     assert np.isnan(back[0, 1]) and back[0, 0] == pytest.approx(1.0, abs=1e-4)
 
 
+def test_a_plot_of_the_wrong_shape_is_refused_by_name():
+    result = evaluate(200, 2.0)
+    frames = FrameCollector(fps=30).add_result(result).finish()
+    with pytest.raises(ValueError, match=r"^measured: values must be \(frames, 6\)"):
+        Curve("measured", np.zeros((len(frames), 5)))
+    short = Plot("force", "N", (Curve("measured", np.zeros((len(frames) - 1, 6))),))
+    with pytest.raises(ValueError, match=rf"^force: measured has {len(frames) - 1} rows for "
+                                         rf"{len(frames)} frames$"):
+        page(frames, gsfric.reference_platform(), plots=[short])
+    # a curve naming one of the frames' arrays is drawn from it, not stored twice
+    both = Plot("force", "N", (Curve("F", "F"), Curve("twice", np.asarray(frames.F))))
+    data = embedded(page(frames, gsfric.reference_platform(), plots=[both]))
+    assert [c["array"] for c in data["plots"][0]["curves"]] == ["F", "curve1"]
+
+
 def test_the_notebook_frame_holds_the_page(tmp_path):
     page = page_of(evaluate(200, 2.0), tmp_path)
     frame = notebook_html(page)
@@ -193,6 +231,31 @@ def test_the_command_writes_the_page(trajectory, tmp_path):
     assert "301 steps as 61 frames" in result.stdout
     data = embedded(out.read_text())
     assert data["steps"] == 301 and data["frames"] == 61 and not leftovers(tmp_path)
+
+
+def test_a_measured_data_file_is_viewed_against_its_forces(tmp_path, trajectory):
+    record = synthesize(effects=["seal_friction:force=2"], samples=600, seed=2)
+    measured = tmp_path / "measured.csv"
+    write_table(record.frame, measured)
+    out = tmp_path / "measured.html"
+    assert run("view", "--trajectory", measured, "--out", out).exit_code == 0
+    data = embedded(out.read_text())
+    got = decode(data)
+    F = record.frame[[f"F{i}" for i in range(1, 7)]].to_numpy()[got["step"]]
+    force = curves(data, got, "actuator force")
+    assert within_quantisation(force["measured"], F)
+    # the model's curve and the residual are drawn from the page's arrays, not stored again
+    entries = [c for p in data["plots"] for c in p["curves"]]
+    assert [(c["array"], c["minus"]) for c in entries] == [
+        ("F_measured", None), ("F", None), ("F_measured", "F"), ("Ffr", None)]
+    assert np.array_equal(force["model"], got["F"])
+    residual = curves(data, got, "residual")["residual"]
+    assert np.abs(residual - (F - got["F"])).max() < 1e-3 * np.abs(F).max()
+    # a trajectory without forces gets the plots of F and of the prismatic friction
+    plain = tmp_path / "plain.html"
+    assert run("view", "--trajectory", trajectory, "--out", plain).exit_code == 0
+    titles = [p["title"] for p in embedded(plain.read_text())["plots"]]
+    assert titles == ["actuator force F (+ push, \u2212 pull)", "prismatic friction Ffr"]
 
 
 @pytest.mark.parametrize(("name", "text", "expected"), [
@@ -274,3 +337,171 @@ def test_the_page_draws_in_a_browser_and_moves_with_time(tmp_path):
     assert drawn.mean() > 0.05, "the 3-D view is empty"
     moved = np.abs(first[60:560].astype(int) - second[60:560]).sum(axis=2) > 30
     assert moved.mean() > 0.002, "the pictures at t = 1 s and t = 3 s are the same"
+
+
+BROWSER_OWN = re.compile(r"(^|\.)(google\.com|googleapis\.com|gstatic\.com|gvt1\.com)"
+                         r"(:\d+)?$")
+"""Hosts Chromium itself calls (its clock, updates and accounts), whatever the page."""
+
+
+def requested_hosts(page: str) -> list[str]:
+    """The hosts headless Chromium asks for while it shows ``page`` (a URI) for 10 s of virtual
+    time: every http(s) request goes through a proxy that records it and answers nothing."""
+    seen: list[str] = []
+    server = socket.socket()
+    server.bind(("127.0.0.1", 0))
+    server.listen(16)
+
+    def record():
+        while True:
+            try:
+                connection, _ = server.accept()
+            except OSError:
+                return
+            with connection:
+                connection.settimeout(2)
+                with contextlib.suppress(OSError):
+                    target = connection.recv(4096).split(b" ")[1].decode("latin-1")
+                    seen.append(urllib.parse.urlsplit(target).netloc or target)
+
+    threading.Thread(target=record, daemon=True).start()
+    profile = tempfile.mkdtemp()
+    try:
+        subprocess.run(["chromium", "--headless", "--no-sandbox", "--use-gl=angle",
+                        "--use-angle=swiftshader", "--no-first-run",
+                        "--disable-background-networking", "--disable-component-update",
+                        "--disable-sync", f"--user-data-dir={profile}",
+                        "--virtual-time-budget=10000",
+                        f"--proxy-server=http://127.0.0.1:{server.getsockname()[1]}",
+                        "--proxy-bypass-list=<-loopback>", "--dump-dom", page],
+                       capture_output=True, timeout=180, check=False)
+    finally:
+        server.close()
+        shutil.rmtree(profile, ignore_errors=True)
+    return [host for host in seen if not BROWSER_OWN.search(host)]
+
+
+@pytest.mark.skipif(shutil.which("chromium") is None, reason="needs chromium (apt-get install "
+                    "chromium)")
+def test_no_request_leaves_the_page_in_a_browser(tmp_path):
+    page = evaluate(401, 2.0).to_html(tmp_path / "view.html")
+    assert requested_hosts(f"{page.as_uri()}#t=1") == []
+    # the proxy sees what a page asks for: one that loads a script from elsewhere is caught
+    leaky = tmp_path / "leaky.html"
+    leaky.write_text('<script src="https://cdn.example.org/three.js"></script>')
+    assert requested_hosts(leaky.as_uri()) == ["cdn.example.org:443"]
+
+
+def deep_red(picture: np.ndarray) -> int:
+    """Pixels of the 3-D view (right of the legend) near the pushing end of the force scale
+    (a leg at the record's largest push), shaded by the light: red well above green and blue."""
+    stage = picture[60:560, 260:1000].astype(int)
+    r, g, b = stage[..., 0], stage[..., 1], stage[..., 2]
+    return int(np.count_nonzero((r > 100) & (r > 1.6 * b) & (b > 1.2 * g) & (r - g > 60)))
+
+
+@pytest.mark.skipif(shutil.which("chromium") is None, reason="needs chromium (apt-get install "
+                    "chromium)")
+def test_leg_colours_follow_the_force_in_a_browser(tmp_path):
+    result = evaluate(1001, 5.0)
+    page = result.to_html(tmp_path / "view.html")
+    largest = np.abs(result.F).max(axis=1)               # the most loaded leg's |F|, N
+    assert largest.min() < 0.6 * largest.max()
+    at_peak = screenshot(page, result.t[np.argmax(largest)], tmp_path / "peak.png")
+    quiet = screenshot(page, result.t[np.argmin(largest)], tmp_path / "quiet.png")
+    assert deep_red(at_peak) > 300, "the leg at the largest push is not drawn in deep red"
+    assert deep_red(quiet) < 30, "deep red drawn while no leg pushes near the largest force"
+
+
+# -- the views of discover and sweep ---------------------------------------------------------
+
+
+def curves(data: dict, arrays: dict, title_start: str) -> dict[str, np.ndarray]:
+    """The curves (label -> (M, 6)) of the plot whose title starts with ``title_start``."""
+    plot = next(p for p in data["plots"] if p["title"].startswith(title_start))
+    return {c["label"]: arrays[c["array"]] - (arrays[c["minus"]] if c["minus"] else 0)
+            for c in plot["curves"]}
+
+
+def within_quantisation(got: np.ndarray, expected: np.ndarray) -> bool:
+    """Equal to within int16 quantisation of an array whose largest magnitude is that of
+    ``expected``'s (its stored scale)."""
+    return np.abs(got - expected).max() <= 0.5 * np.abs(expected).max() / 32767 * (1 + 1e-6)
+
+
+@pytest.fixture(scope="module")
+def discovered(tmp_path_factory):
+    """A discovery of a hidden seal friction of 2 N, written with its report.html."""
+    out = tmp_path_factory.mktemp("discover") / "out"
+    record = synthesize(effects=["seal_friction:force=2"], samples=1200, seed=1)
+    d = gsfric.discover(record.frame, candidates=["seal_friction", "sensor_bias"],
+                        n_bootstrap=20, out=out)
+    return d, out / "report.html"
+
+
+def test_discover_writes_the_view_of_model_and_measurement(discovered):
+    d, path = discovered
+    page = path.read_text(encoding="utf-8")
+    assert_self_contained(page)
+    data = embedded(page)
+    got = decode(data)
+    rows = got["step"] - d.used.start                # the frames' samples among those used
+    assert got["step"][0] == d.used.start and got["step"][-1] == d.used.stop - 1
+    force = curves(data, got, "actuator force")
+    assert within_quantisation(force["measured"], d.forces[rows])
+    assert within_quantisation(force["as given"], d.result_before.F[d.used][rows])
+    assert within_quantisation(force["final"], d.forces_after[rows])
+    # the legs are drawn with the final model's forces: the fitted model's own evaluation
+    assert within_quantisation(got["F"], d.forces_after[rows])
+    residual = curves(data, got, "residual")
+    assert within_quantisation(residual["final"], (d.forces - d.forces_after)[rows])
+    # where the legs slide, the final residual is the workflow's
+    sliding = d.sliding[rows]
+    assert np.abs(residual["final"][sliding] - d.residual_after[rows][sliding]).max() < 1e-3
+    # a seal friction adds its force against each leg's sliding: +-force, nothing else
+    contribution = curves(data, got, "contribution")["seal_friction"]
+    force_fitted = d.effects[0].parameters["force"]
+    assert np.nanmax(np.abs(contribution)) == pytest.approx(force_fitted, rel=1e-3)
+    assert force_fitted == pytest.approx(2.0, rel=0.05)
+
+
+def sweep_inputs(folder: Path, workspace: bool) -> dict:
+    """Two trajectory files, or a workspace of 20 poses: a small sweep's inputs."""
+    if workspace:
+        return {"workspace": Workspace.from_dict({
+            "sampling": "lhs", "samples": 20, "states": 4, "seed": 3,
+            "pose": {"x": [-0.04, 0.04], "y": [-0.04, 0.04], "z": [0.66, 0.74],
+                     "roll": [-0.08, 0.08], "pitch": [-0.08, 0.08], "yaw": [-0.1, 0.1]},
+            "bounds": {"velocity": 0.2, "omega": 0.4, "acceleration": 2.0, "alpha": 4.0}})}
+    for k in range(2):
+        motion = models.random_motion(np.random.default_rng(k), np.linspace(0, 4, 801))
+        write_table(motion.to_frame(), folder / f"motion{k}.csv")
+    return {"trajectories": [str(folder / "motion*.csv")]}
+
+
+@pytest.mark.parametrize("workspace", [False, True], ids=["motions", "workspace"])
+def test_sweep_writes_the_view_of_each_joints_worst_case(tmp_path, workspace):
+    result = sweep(tmp_path / "out", scheduler="serial", plots=True,
+                   vary={"platform.payload_mass": (0.0, 8.0)}, variants=2, seed=1,
+                   **sweep_inputs(tmp_path, workspace))
+    page = (tmp_path / "out" / "worst_cases.html").read_text(encoding="utf-8")
+    assert_self_contained(page)
+    data = embedded(page)
+    got = decode(data)
+    assert data["frames"] == 12 and len(data["captions"]) == 12
+    assert data["focus"] == [0, 1, 2, 3, 4, 5] * 2           # each frame shows its joint's leg
+    # frame k: the largest |R_E| of leg k + 1, then the largest |R_C| of each leg; the
+    # state rebuilt and evaluated again gives the load the sweep found
+    summary = result.summary.set_index(["quantity", "leg"])
+    for k in range(12):
+        quantity, leg = ("R_E", "R_C")[k // 6], k % 6 + 1
+        row = summary.loc[(quantity, leg)]
+        load = np.linalg.norm(got[quantity][k, leg - 1])
+        scale = data["arrays"][quantity]["scale"]
+        assert abs(load - row.value) <= np.sqrt(3) * 0.5 * scale * (1 + 1e-6), (quantity, leg)
+        assert f"{row.value:.4g} N" in data["captions"][k]
+        where = f"state {row.step}" if workspace else f"{row.motion}, step {row.step}"
+        assert where in data["captions"][k]
+    loads = curves(data, got, "joint loads")       # the plot's curves: the same loads
+    largest = [summary.loc[("R_C", leg)].value for leg in range(1, 7)]
+    assert np.allclose(np.diag(loads["|R_C|"][6:]), largest, rtol=1e-4)

@@ -71,7 +71,7 @@ def _pairs(values, option, ranged):
               help="Evaluated steps per task [default: 1000000, a second or more].")
 @click.option("--progress/--no-progress", default=None,
               help="Progress bar with total and ETA [default: when stderr is a terminal].")
-@click.option("--no-plots", is_flag=True, help="Skip the plots.")
+@click.option("--no-plots", is_flag=True, help="Skip the plots and worst_cases.html.")
 @click.option("--strict", is_flag=True, help="Exit 1 when a case exceeds the [limits].")
 @checked_paths({"trajectories": "trajectory", "workspace": "workspace",
                 "platform_file": "platform"}, folders=("out_dir", partial_of("out_dir")))
@@ -83,7 +83,8 @@ def sweep(out_dir, trajectories, workspace, platform_file, vary, tolerance, vari
     --tolerance as normal errors, --variants of them, reproducible by --seed); --grid N lays
     N evenly spaced values over each range instead. Writes envelopes.parquet (per case,
     quantity and leg, with where each extreme occurs), summary.csv, variants.csv, limits.csv
-    (cases beyond the platform's [limits]), sweep.json and plots. See docs/howto/sizing.md.
+    (cases beyond the platform's [limits]), sweep.json, plots and worst_cases.html (the 3-D
+    view of each joint's worst-case pose). See docs/howto/sizing.md.
     """
     if grid is not None and variants is not None:
         fail("--grid: gives the number of values per parameter; leave out --variants")

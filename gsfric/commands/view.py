@@ -60,7 +60,8 @@ def view(trajectory, platform_file, out, mode, fps, title, threads, chunk, windo
     platform and the legs coloured by actuator force, the joint reactions as arrows, each
     joint's friction as a colour and the flagged steps, with plots of the force and the
     prismatic friction per leg, play, pause, speed and a time slider; hovering or clicking a
-    leg shows its values. It needs no network and no server: three.js is inside it. Open it
+    leg shows its values. A measured-data file's forces F1..F6 are plotted against the model's,
+    with the residual. It needs no network and no server: three.js is inside it. Open it
     at a time with #t=SECONDS after its address (file:///.../view.html#t=2.5).
     """
     with warnings.catch_warnings():                    # shown one line each by the group

@@ -7,13 +7,13 @@
 
 ``discover`` (``api``, also ``gsfric.discover``) is ``gsfric discover``: it reads a
 measured-data file, a DataFrame or a Motion with its forces, runs the workflow and, given
-``out``, writes ``summary.json``, ``report.md`` and plots. Modules: ``api`` (the inputs),
+``out``, writes ``summary.json``, ``report.md``, plots and ``report.html``. Modules: ``api`` (the inputs),
 ``model`` (the compiled model as a function of its parameters), ``candidates`` (what
 may change), ``statistics`` (prewhitening, block cross-validation, block bootstrap),
 ``regimes`` (where the residuals concentrate), ``workflow`` (the rounds), ``floor`` (the
 noise floor of the verdict), ``dictionary`` (structure outside the catalog), ``verdict``
 (the decision and its reason), ``summary`` (summary.json), ``markdown`` (report.md),
-``report`` (the files written).
+``report`` (the files written), ``view`` (report.html, the 3-D view).
 """
 
 from gsfric.discovery.api import discover

@@ -65,7 +65,7 @@ def discover(data, forces: np.ndarray | None = None,
     progress : bool
         Progress on stderr.
     figures : bool
-        With ``out``: write the plots.
+        With ``out``: write the plots and report.html (the 3-D view).
     force_noise : float, sequence of 6 floats or ForceNoise, optional
         The load cells' noise, N (a sensor specification; ``--force-noise``), one value or
         one per leg. Default: ``noise_record``'s, else the ``force_noise`` of ``log_format``,

@@ -9,7 +9,10 @@ Files written in the output directory, each atomically:
   ``markdown.report``);
 * ``platform.toml``: the final model, commented (``answer.platform_text``);
 * ``residuals_time.png``, ``residuals_speed.png``, ``regimes.png``: residuals before and after
-  over time, against the leg speed, and per regime.
+  over time, against the leg speed, and per regime;
+* ``report.html``: the 3-D view of the final model along the measured motion, with the
+  measured and model forces, the residuals and the named effects' contributions per leg
+  (``gsfric.discovery.view``).
 """
 
 from __future__ import annotations
@@ -24,6 +27,7 @@ from gsfric._optional import optional
 from gsfric.discovery.answer import platform_text
 from gsfric.discovery.markdown import stribeck_scale
 from gsfric.discovery.results import Discovery
+from gsfric.discovery.view import write_view
 from gsfric.io.files import atomic_write, output_folder
 
 PLOTS = ("residuals_time.png", "residuals_speed.png", "regimes.png")
@@ -142,8 +146,8 @@ def plots(d: Discovery, out_dir: Path) -> list[Path]:
 def write(d: Discovery, out_dir: str | os.PathLike[str], *, figures: bool = True
           ) -> list[Path]:
     """Write summary.json (``d.summary()``), platform.toml, report.md (``d.report()``) and
-    (with ``figures``) the plots; returns their paths. ``d.source`` and ``d.platform_source``
-    are the inputs the outputs must not overwrite."""
+    (with ``figures``) the plots and report.html; returns their paths. ``d.source`` and
+    ``d.platform_source`` are the inputs the outputs must not overwrite."""
     written = []
     with output_folder(out_dir, inputs={"measured-data": d.source or None,
                                         "platform": d.platform_source or None}) as out:
@@ -162,4 +166,5 @@ def write(d: Discovery, out_dir: str | os.PathLike[str], *, figures: bool = True
         written.append(path)
         if figures:
             written += plots(d, out)
+            written.append(write_view(d, out / "report.html"))
     return [Path(out_dir) / p.name for p in written]

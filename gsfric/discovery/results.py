@@ -19,6 +19,7 @@ from gsfric.discovery.settings import Settings
 from gsfric.discovery.summary import summary
 from gsfric.platform import catalog
 from gsfric.platform.description import Platform
+from gsfric.trajectory import Motion
 
 
 @dataclass
@@ -293,12 +294,16 @@ class Finding:
     evidence : FindingEvidence
         Test statistics, cross-validation, bootstrap share, effect size, the round it was found
         in, the candidates it cannot be told apart from, where it shows.
+    contribution : ndarray, shape (M, 6), or None
+        Its contribution to each leg's F at the used samples, N: F of the final model minus
+        F of the final model with this effect switched off.
     """
 
     name: str
     parameters: dict[str, float]
     interval: dict[str, tuple[float, float]]
     evidence: FindingEvidence
+    contribution: np.ndarray | None = field(default=None, repr=False)
 
     def __repr__(self) -> str:
         values = ", ".join(f"{k} = {catalog.with_unit(v, catalog.unit(f'{self.name}.{k}'))}"
@@ -367,6 +372,14 @@ class Discovery:
         The measured-data file ("" for data given as arrays or a DataFrame).
     platform_source : str
         The platform file of the model as given ("": a Platform or the reference platform).
+    forces : ndarray, shape (M, 6), or None
+        The measured forces F1..F6 at the used samples, N.
+    forces_after : ndarray, shape (M, 6), or None
+        F of the final model at the used samples, N (``forces - forces_after`` is the final
+        residual at every sample, sliding or not; ``result_before.F[used]`` is the model's as
+        given).
+    motion : Motion or None
+        The measured motion, all N samples (``used`` selects those fitted).
     written : list of Path
         The files ``gsfric.discover(..., out=...)`` wrote (empty without ``out``).
 
@@ -415,6 +428,9 @@ class Discovery:
     verdict_decided_by: str = ""
     source: str = ""
     platform_source: str = ""
+    forces: np.ndarray | None = field(default=None, repr=False)
+    forces_after: np.ndarray | None = field(default=None, repr=False)
+    motion: Motion | None = field(default=None, repr=False)
     written: list[Path] = field(default_factory=list)
 
     @property

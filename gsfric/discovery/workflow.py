@@ -407,7 +407,8 @@ def _final(state: _State, motion: Motion, platform: Platform) -> Discovery:
         settings=settings, evaluations=model.evaluations, notes=state.notes, verdict=verdict,
         lack_of_fit=lof, noise=noise_info, rms_after_all=_rms(full_after), sliding=sliding,
         structures=structures, verdict_reason=decision.reason,
-        verdict_decided_by=decision.decided_by)
+        verdict_decided_by=decision.decided_by, forces=problem.y,
+        forces_after=problem.y - full_after, motion=motion)
 
 
 def _findings(state: _State, whitener: st.Whitener) -> tuple[list[Finding], Platform, float]:
@@ -434,7 +435,7 @@ def _findings(state: _State, whitener: st.Whitener) -> tuple[list[Finding], Plat
         ev.contribution_rms = _rms(contributions[name])
         findings.append(Finding(name, params,
                                 {p: intervals[f"{name}.{p}"] for p in c.fitted + c.refined},
-                                ev))
+                                ev, contribution=contributions[name]))
     for name, entry in state.refit.parameters.items():
         entry.final = float(theta[model.index[name]])
         entry.interval = intervals.get(name)

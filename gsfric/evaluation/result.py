@@ -246,9 +246,9 @@ class Result:
             raise GsfricError("to_html: the result has no steps")
         platform = self.source[0]
         frames = FrameCollector(fps=fps).add_result(self).finish()
-        return page(frames, platform.geometry.base_joints, platform.geometry.platform_joints,
-                    title=title if title is not None else f"gsfric: {len(self.t)} steps, "
-                    f"{self.mode} mode", flag_names=FLAG_NAMES, steps=len(self.t))
+        return page(frames, platform, title=title if title is not None else
+                    f"gsfric: {len(self.t)} steps, {self.mode} mode", flag_names=FLAG_NAMES,
+                    steps=len(self.t))
 
     def to_html(self, path, *, fps: float = 60.0, title: str | None = None):
         """Write a 3-D view of the evaluation to one self-contained HTML page.

@@ -2,9 +2,10 @@
 3-D view (``gsfric view``).
 
 The file is read and differentiated chunk by chunk (``iter_motions``, the same reading,
-checks and differentiation as ``gsfric simulate``), each chunk is evaluated and only the frames
-of the view are kept (``gsfric.view.FrameCollector``), so that memory stays bounded however
-long the file is. The page is written to a temporary file and renamed when complete.
+checks and differentiation as ``gsfric simulate``), each chunk is evaluated and only the
+frames of the view are kept (``gsfric.view.FrameCollector``, with a measured-data file's
+forces), so that memory stays bounded however long the file is. The page is written to a
+temporary file and renamed when complete.
 """
 
 from __future__ import annotations
@@ -29,6 +30,7 @@ from gsfric.signal.savgol import DEFAULT_POLYORDER
 from gsfric.simulate.differentiate import DEFAULT_CHUNK, iter_motions
 from gsfric.simulate.run import Summary, _Flags, describe_differentiation
 from gsfric.view import DEFAULT_FPS, FrameCollector, Frames, page, write_page
+from gsfric.view.comparison import measured_plots
 
 HTML_SUFFIXES = (".html", ".htm")
 
@@ -74,7 +76,9 @@ def view_file(trajectory: str | os.PathLike[str], out: str | os.PathLike[str], p
     Parameters
     ----------
     trajectory : path-like
-        CSV or Parquet trajectory or measured-data file (``gsfric.io.read_trajectory``).
+        CSV or Parquet trajectory or measured-data file (``gsfric.io.read_trajectory``); the
+        page of a measured-data file plots its forces F1..F6 against the model's and the
+        residual (``gsfric.view.comparison.measured_plots``).
     out : path-like
         The ``.html`` page.
     platform : Platform or path-like, optional
@@ -111,9 +115,9 @@ def view_file(trajectory: str | os.PathLike[str], out: str | os.PathLike[str], p
                            log_format=log_format)
     frames = _frames(trajectory, motions, Evaluator(platform, mode=mode, n_threads=n_threads),
                      FrameCollector(fps=fps), summary)
-    text = page(frames, platform.geometry.base_joints, platform.geometry.platform_joints,
-                title=title if title is not None else f"{trajectory.name}: {mode} mode",
-                flag_names=FLAG_NAMES, steps=summary.steps)
+    text = page(frames, platform, title=title if title is not None else
+                f"{trajectory.name}: {mode} mode", flag_names=FLAG_NAMES, steps=summary.steps,
+                plots=measured_plots(frames))
     write_page(out, text, inputs={"trajectory": trajectory, "platform": platform})
     summary.frames, summary.size = len(frames), len(text.encode("utf-8"))
     if summary.flagged:
@@ -135,7 +139,9 @@ def _frames(trajectory: Path, motions, evaluator: Evaluator, collector: FrameCol
         check_poses(evaluator.platform, position, rotation, motion.t, str(trajectory))
         check_gaps(motion.t, str(trajectory))
         result = evaluator.evaluate_quiet(motion)
-        collector.add_result(result, part.start)
+        measured = (np.column_stack([part.carried[f"F{i}"] for i in range(1, 7)])
+                    if "F1" in part.carried else None)       # a measured-data file's
+        collector.add_result(result, part.start, measured)
         flags.add(np.asarray(result.flag, np.int64), part.start, motion.t)
         summary.steps = part.start + len(motion)
         summary.chunks += 1

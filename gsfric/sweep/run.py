@@ -9,7 +9,8 @@ envelopes are merged in task order.
 
 Output folder ``OUT`` (built in ``OUT.partial`` and renamed when complete): ``envelopes.parquet``,
 ``summary.csv``, ``variants.csv``, ``limits.csv`` (when the platform has ``[limits]``),
-``sweep.json``, ``envelope.png``, ``locations.png``. Finished tasks are kept in
+``sweep.json``, ``envelope.png``, ``locations.png``, ``worst_cases.html`` (the 3-D view of
+each joint's worst-case pose, ``gsfric.sweep.view``). Finished tasks are kept in
 ``OUT.partial/chunks/`` as they arrive; a sweep interrupted and started again with the same
 inputs and output folder computes only the missing tasks.
 """
@@ -41,6 +42,7 @@ from gsfric.sweep.plan import CHUNK_STEPS, Plan, plan
 from gsfric.sweep.plot import plot
 from gsfric.sweep.result import SweepResult, check_limits, fold, load, merge, summarize
 from gsfric.sweep.tasks import Task, run_task
+from gsfric.sweep.view import write_worst_cases
 from gsfric.sweep.workspace import Workspace
 
 SERIAL_BELOW = 2_000_000
@@ -277,6 +279,7 @@ def _write(out: Path, progress: _Progress, computed: int, scheduler, seconds: fl
     if plots:
         plot(envelopes, summary, partial, p.platform.limits, p.inputs.get("workspace"),
              variants_table)
+        write_worst_cases(p, summary, partial / "worst_cases.html")
     shutil.rmtree(partial / "chunks")
     (partial / "plan.json").unlink()
     (partial / "sweep.json").write_text(json.dumps(info, indent=1, default=str))
@@ -349,6 +352,7 @@ def sweep(out: str | os.PathLike, trajectories=None,
     progress : bool, optional
         Progress bar on stderr (default: when stderr is a terminal).
     plots : bool
+        Write envelope.png, locations.png and worst_cases.html.
     on_chunk : callable (done, total), optional
         Called after each finished task is stored.
     grid : int, optional

@@ -26,10 +26,15 @@ DEFAULT_FPS = 60.0
 
 MAX_FRAMES = 10_000
 """The most frames a view keeps (a long record is shown at fewer frames per second); it bounds
-the page's size (about 2.7 MB at most, 143 bytes a frame before base64)."""
+the page's size (about 2.7 MB at most, 143 bytes a frame before base64; 2.9 MB with measured
+forces, 12 bytes a frame more)."""
 
 OUTPUTS = ("F", "R_E", "R_C", "MfrE", "MfrC", "Ffr")
 """The evaluation outputs a view reads (``Result`` names)."""
+
+MEASURED = "F_measured"
+"""The key of the measured forces (n, 6), N, in the arrays of ``FrameCollector.add``
+(optional: a measured-data file's F1..F6)."""
 
 
 @dataclass(frozen=True)
@@ -57,6 +62,9 @@ class Frames:
         N m.
     Ffr : ndarray, shape (M, 6)
         Friction force of each prismatic joint along its leg, N (signed as ``Result.Ffr``).
+    F_measured : ndarray, shape (M, 6)
+        The measured actuator force of each leg (a measured-data file's F1..F6), N; NaN
+        where none was given.
     flag : ndarray of int64, shape (M,)
         Bitwise OR of the flags of the steps after the previous frame up to this one.
     """
@@ -71,6 +79,7 @@ class Frames:
     MfrE: np.ndarray
     MfrC: np.ndarray
     Ffr: np.ndarray
+    F_measured: np.ndarray
     flag: np.ndarray
 
     def __len__(self) -> int:
@@ -105,13 +114,14 @@ def _values(start: int, t, position, rotation, arrays: Mapping[str, np.ndarray],
         values = np.asarray(arrays[name])[rows]
         return values.reshape(n, 6, 3) if vector else values.reshape(n, 6)
 
+    measured = legs(MEASURED, False) if MEASURED in arrays else np.full((n, 6), np.nan)
     return Frames(step=rows.astype(np.int64) + start, t=np.asarray(t, float)[rows],
                   position=np.asarray(position, float)[rows],
                   quaternion=quaternion_from_rotation(np.asarray(rotation, float)[rows]),
                   F=legs("F", False), R_E=legs("R_E", True), R_C=legs("R_C", True),
                   MfrE=np.linalg.norm(legs("MfrE", True), axis=2),
                   MfrC=np.linalg.norm(legs("MfrC", True), axis=2),
-                  Ffr=legs("Ffr", False), flag=np.asarray(flag, np.int64))
+                  Ffr=legs("Ffr", False), F_measured=measured, flag=np.asarray(flag, np.int64))
 
 
 class FrameCollector:
@@ -149,7 +159,8 @@ class FrameCollector:
             arrays: Mapping[str, np.ndarray], flag: np.ndarray) -> FrameCollector:
         """One chunk of the record: n steps from global index ``start``; ``t`` (n,) s,
         ``position`` (n, 3) m, ``rotation`` (n, 3, 3) platform to base, the outputs
-        ``OUTPUTS`` of ``arrays`` as a Result holds them, ``flag`` (n,). Returns self."""
+        ``OUTPUTS`` of ``arrays`` as a Result holds them (and optionally ``MEASURED``),
+        ``flag`` (n,). Returns self."""
         t = np.asarray(t, float)
         flag = np.asarray(flag, np.int64)
         if not len(t):
@@ -171,11 +182,15 @@ class FrameCollector:
         self.last = _values(start, t, position, rotation, arrays, end, np.array([self.pending]))
         return self
 
-    def add_result(self, result, start: int = 0) -> FrameCollector:
+    def add_result(self, result, start: int = 0,
+                   measured: np.ndarray | None = None) -> FrameCollector:
         """A whole ``Result`` of ``Evaluator.evaluate`` (its motion from ``result.source``) as
-        one chunk from step ``start``. Returns self."""
+        one chunk from step ``start``, with the measured forces of its steps (n, 6), N, if
+        any. Returns self."""
         motion = result.source[1]
         arrays = {name: result.arrays[name] for name in OUTPUTS}
+        if measured is not None:
+            arrays[MEASURED] = measured
         t = np.asarray(result.t, float)
         if self.t0 is None and len(t) > 1 and t[-1] > t[0]:   # the whole record: cap the rate
             self.fps = min(self.fps, (self.max_frames - 1) / float(t[-1] - t[0]))

@@ -17,12 +17,12 @@ import json
 import os
 import re
 import warnings
-from collections.abc import Mapping
+from collections.abc import Mapping, Sequence
 from pathlib import Path
 
 from gsfric._optional import optional
 from gsfric.io.files import Inputs, atomic_write
-from gsfric.view.data import encode
+from gsfric.view.data import Plot, encode
 from gsfric.view.frames import Frames
 
 THREE_VERSION = "0.185.1"
@@ -47,17 +47,20 @@ def _script_text(text: str, what: str) -> str:
     return text
 
 
-def page(frames: Frames, base_joints, platform_joints, *, title: str = "",
-         flag_names: Mapping[int, str] | None = None, steps: int | None = None) -> str:
-    """The HTML text of a view of ``frames`` (parameters as ``gsfric.view.data.encode``).
+def page(frames: Frames, platform, *, title: str = "",
+         flag_names: Mapping[int, str] | None = None, steps: int | None = None,
+         plots: Sequence[Plot] | None = None, captions: Sequence[str] | None = None,
+         focus: Sequence[int] | None = None) -> str:
+    """The HTML text of a view of ``frames`` on ``platform`` (parameters as
+    ``gsfric.view.data.encode``).
 
     Returns
     -------
     str
         One self-contained page: about 0.8 MB of three.js and viewer plus 190 bytes a frame.
     """
-    data = encode(frames, base_joints, platform_joints, title=title, flag_names=flag_names,
-                  steps=steps)
+    data = encode(frames, platform, title=title, flag_names=flag_names, steps=steps,
+                  plots=plots, captions=captions, focus=focus)
     text = json.dumps(data, separators=(",", ":")).replace("</", "<\\/")
     values = {"title": html.escape(title or "gsfric view"), "three_version": THREE_VERSION,
               "three_core": _script_text(resource("vendor/three.core.min.js"), "three.core"),

@@ -13,6 +13,9 @@ const SEQUENTIAL = [[0.98, 0.95, 0.78], [0.996, 0.769, 0.31], [0.851, 0.373, 0.0
   [0.4, 0.145, 0.024]];                                // no friction .. most friction
 const REACTION_COLOURS = { E: '#1a9850', C: '#5e3c99' };
 const FLAG_COLOUR = '#d62728';
+const PAYLOAD_COLOUR = '#c9a227';
+const DASH = { solid: [], dashed: [6, 4], dotted: [1.5, 3] };
+const CAPTIONS = DATA.captions || null;   // a page of separate poses: each frame's name
 
 // -- the data -------------------------------------------------------------------------------
 
@@ -108,12 +111,17 @@ function frameAt(time) {
   return lo;
 }
 
+function frameName(frame) {
+  if (CAPTIONS) return `${frame + 1} of ${M}: ${CAPTIONS[frame]}`;
+  return `t = ${T[frame].toFixed(3)} s  (step ${A.step[frame]})`;
+}
+
 function setFrame(frame) {
   state.frame = Math.min(Math.max(frame | 0, 0), M - 1);
   if (!state.playing) state.clock = T[state.frame];
   $('slider').value = state.frame;
   const bits = A.flag[state.frame];
-  $('time').textContent = `t = ${T[state.frame].toFixed(3)} s  (step ${A.step[state.frame]})`;
+  $('time').textContent = frameName(state.frame);
   $('flagged').style.display = bits ? 'inline' : 'none';
   $('flagged').textContent = bits ? `flagged: ${flagText(bits)}` : '';
   for (const listener of listeners) listener(state.frame);
@@ -172,19 +180,20 @@ function setUpControls() {
   const span = `t = ${fmt(T[0])} .. ${fmt(T[M - 1])} s`;
   let flagged = 0;
   for (let f = 0; f < M; f++) if (A.flag[f]) flagged++;
-  $('info').textContent = `${DATA.steps} steps, ${span}; shown as ${M} frames` +
-    (DATA.fps ? ` (${fmt(DATA.fps, 3)} a second)` : '') +
+  $('info').textContent = (CAPTIONS ? `${M} poses, one a frame`
+    : `${DATA.steps} steps, ${span}; shown as ${M} frames` +
+      (DATA.fps ? ` (${fmt(DATA.fps, 3)} a second)` : '')) +
     (flagged ? `; ${flagged} frames with flagged steps (red marks)` : '');
 }
 
 // -- the plots ------------------------------------------------------------------------------
 
 class Plot {
-  // A plot of one quantity per leg (values (M * 6)) over time, drawn once into a backing
-  // canvas; the cursor is drawn over it at every frame.
-  constructor(canvas, values, unit) {
+  // A plot of quantities per leg over time (curves: each { values (M * 6), dash }), drawn once
+  // into a backing canvas; the cursor is drawn over it at every frame.
+  constructor(canvas, curves, unit) {
     this.canvas = canvas;
-    this.values = values;
+    this.curves = curves;
     this.unit = unit;
     this.back = document.createElement('canvas');
     this.selected = null;
@@ -215,9 +224,12 @@ class Plot {
     this.left = 52 * ratio; this.right = width - 8 * ratio;
     this.top = 6 * ratio; this.bottom = height - 18 * ratio;
     let lo = 0; let hi = 0;
-    for (const v of this.values) if (Number.isFinite(v)) { lo = Math.min(lo, v); hi = Math.max(hi, v); }
+    for (const { values } of this.curves) {
+      for (const v of values) if (Number.isFinite(v)) { lo = Math.min(lo, v); hi = Math.max(hi, v); }
+    }
     const pad = 0.06 * ((hi - lo) || 1);
     this.lo = lo - pad; this.hi = hi + pad;
+    this.ticks = [...new Set([lo, 0, hi])];
     this.drawBack();
     this.draw(state.frame);
   }
@@ -232,37 +244,44 @@ class Plot {
     g.lineWidth = r;
     g.strokeRect(this.left, this.top, this.right - this.left, this.bottom - this.top);
     g.textAlign = 'right';
-    for (const v of [this.lo + 0.06 / 1.12 * (this.hi - this.lo), 0, this.hi - 0.06 / 1.12 * (this.hi - this.lo)]) {
+    for (const v of this.ticks) {
       g.fillText(fmt(v, 3), this.left - 4 * r, this.yOf(v) + 4 * r);
     }
     g.beginPath(); g.moveTo(this.left, this.yOf(0)); g.lineTo(this.right, this.yOf(0)); g.stroke();
-    g.textAlign = 'left'; g.fillText(`${fmt(T[0])} s`, this.left, this.back.height - 4 * r);
-    g.textAlign = 'right'; g.fillText(`${fmt(T[M - 1])} s`, this.right, this.back.height - 4 * r);
+    const ends = CAPTIONS ? ['1', String(M)] : [`${fmt(T[0])} s`, `${fmt(T[M - 1])} s`];
+    g.textAlign = 'left'; g.fillText(ends[0], this.left, this.back.height - 4 * r);
+    g.textAlign = 'right'; g.fillText(ends[1], this.right, this.back.height - 4 * r);
     g.fillStyle = FLAG_COLOUR;
     for (let f = 0; f < M; f++) {
       if (A.flag[f]) g.fillRect(this.xOf(T[f]) - r, this.bottom - 5 * r, 2 * r, 5 * r);
     }
-    for (const leg of LEGS) this.drawLeg(g, leg);
+    for (const curve of this.curves) for (const leg of LEGS) this.drawLeg(g, curve, leg);
   }
 
-  drawLeg(g, leg) {
+  drawLeg(g, curve, leg) {
     g.strokeStyle = LEG_COLOURS[leg];
     g.lineWidth = (this.selected === leg ? 2.5 : 1.1) * this.ratio;
+    g.setLineDash((DASH[curve.dash] || []).map((d) => d * this.ratio));
     g.globalAlpha = this.selected === null || this.selected === leg ? 1 : 0.35;
     g.beginPath();
     let open = false;
     for (let f = 0; f < M; f++) {
-      const v = this.values[f * 6 + leg];
+      const v = curve.values[f * 6 + leg];
       if (!Number.isFinite(v)) { open = false; continue; }
       const x = this.xOf(T[f]); const y = this.yOf(v);
       if (open) g.lineTo(x, y); else g.moveTo(x, y);
       open = true;
     }
     g.stroke();
+    g.setLineDash([]);
     g.globalAlpha = 1;
   }
 
-  select(leg) { if (leg !== this.selected) { this.selected = leg; this.drawBack(); this.draw(state.frame); } }
+  select(leg) {
+    if (leg === this.selected) return;
+    this.selected = leg;
+    if (this.ratio) { this.drawBack(); this.draw(state.frame); }   // else at its first layout
+  }
 
   draw(frame) {
     if (!this.ratio) return;
@@ -272,20 +291,48 @@ class Plot {
     const x = this.xOf(T[frame]);
     g.strokeStyle = '#1d2430'; g.lineWidth = this.ratio;
     g.beginPath(); g.moveTo(x, this.top); g.lineTo(x, this.bottom); g.stroke();
-    for (const leg of LEGS) {
-      const v = this.values[frame * 6 + leg];
-      if (!Number.isFinite(v)) continue;
-      g.fillStyle = LEG_COLOURS[leg];
-      g.beginPath(); g.arc(x, this.yOf(v), 2.5 * this.ratio, 0, 2 * Math.PI); g.fill();
+    for (const { values } of this.curves) {
+      for (const leg of LEGS) {
+        const v = values[frame * 6 + leg];
+        if (!Number.isFinite(v)) continue;
+        g.fillStyle = LEG_COLOURS[leg];
+        g.beginPath(); g.arc(x, this.yOf(v), 2.5 * this.ratio, 0, 2 * Math.PI); g.fill();
+      }
     }
   }
 }
 
+function dashSample(dash) {
+  // A short line in the curve's dash, for the plot's key.
+  const gaps = (DASH[dash] || []).join(' ');
+  return `<svg width="22" height="6"><line x1="0" y1="3" x2="22" y2="3" stroke="#5b6472" ` +
+    `stroke-width="1.6" stroke-dasharray="${gaps}"/></svg>`;
+}
+
 function setUpPlots() {
-  const plots = [new Plot($('plot-F'), A.F, 'N'), new Plot($('plot-Ffr'), A.Ffr, 'N')];
-  for (const id of ['keys-F', 'keys-Ffr']) {
-    $(id).innerHTML = LEGS.map((i) => `<span style="color:${LEG_COLOURS[i]}">${i + 1}</span>`).join('');
-  }
+  // One plot per entry of DATA.plots: its title and unit, a key of its curves (by dash) and of
+  // the legs (by colour).
+  const plots = DATA.plots.map((spec) => {
+    const box = document.createElement('div');
+    box.className = 'plot';
+    const head = document.createElement('div');
+    head.className = 'head';
+    const title = document.createElement('span');
+    title.textContent = `${spec.title}, ${spec.unit}`;
+    const keys = document.createElement('span');
+    keys.className = 'keys';
+    const named = spec.curves.length > 1 ? spec.curves : [];
+    keys.innerHTML = named.map((c) => `${dashSample(c.dash)}<span class="curve"></span>`).join('') +
+      LEGS.map((i) => `<span style="color:${LEG_COLOURS[i]}">${i + 1}</span>`).join('');
+    keys.querySelectorAll('.curve').forEach((el, k) => { el.textContent = named[k].label; });
+    const canvas = document.createElement('canvas');
+    head.append(title, keys);
+    box.append(head, canvas);
+    $('plots').append(box);
+    const curves = spec.curves.map((c) => ({
+      values: c.minus ? A[c.array].map((v, k) => v - A[c.minus][k]) : A[c.array], dash: c.dash }));
+    return new Plot(canvas, curves, spec.unit);
+  });
   listeners.push((frame) => plots.forEach((p) => p.draw(frame)));
   return plots;
 }
@@ -304,6 +351,8 @@ function setUpLegend() {
     `<div class="row">${swatch(REACTION_COLOURS.E)}R<sub>E</sub>: leg on platform at E<sub>i</sub><br>` +
     `${swatch(REACTION_COLOURS.C)}R<sub>C</sub>: base on leg at C<sub>i</sub><br>` +
     `arrow length &prop; |R|; the longest: ${fmt(PEAK.R, 3)} N</div>` +
+    (DATA.payload.mass > 0 ? `<div class="row">${swatch(PAYLOAD_COLOUR)}payload ` +
+      `${fmt(DATA.payload.mass, 3)} kg at its centre of mass</div>` : '') +
     `<div class="row" style="margin-bottom:0">${swatch(FLAG_COLOUR)}flagged step (outline, banner, plot marks)</div>`;
 }
 
@@ -377,6 +426,16 @@ function setArrow(THREE, a, origin, force, scale) {
   place(THREE, a.head, origin.map((c, j) => c + u[j] * (length - head)), u, head);
 }
 
+function payload(THREE, size) {
+  // The payload: a cube at its centre of mass (platform frame), its side growing with the cube
+  // root of its mass (0.12 of the base's radius for 10 kg).
+  const side = 0.12 * size * Math.cbrt(DATA.payload.mass / 10);
+  const cube = new THREE.Mesh(new THREE.BoxGeometry(side, side, side),
+    new THREE.MeshStandardMaterial({ color: PAYLOAD_COLOUR, roughness: 0.6, transparent: true, opacity: 0.8 }));
+  cube.position.set(...DATA.payload.com);
+  return cube;
+}
+
 function extent() {
   const base = DATA.base_joints;
   const radius = Math.max(...base.map((p) => Math.hypot(p[0], p[1])));
@@ -444,7 +503,8 @@ function legText(leg, frame, d) {
   const F = A.F[frame * 6 + leg];
   const sense = F > 0 ? ' (push)' : F < 0 ? ' (pull)' : '';
   const bits = A.flag[frame];
-  return `leg ${leg + 1}   t = ${T[frame].toFixed(3)} s, step ${A.step[frame]}\n` +
+  const when = CAPTIONS ? `pose ${frame + 1} of ${M}` : `t = ${T[frame].toFixed(3)} s, step ${A.step[frame]}`;
+  return `leg ${leg + 1}   ${when}\n` +
     `F      ${fmt(F)} N${sense}\n` +
     `|R_E|  ${fmt(norm(vec(A.R_E, frame, leg)))} N   at E${leg + 1}, leg on platform\n` +
     `|R_C|  ${fmt(norm(vec(A.R_C, frame, leg)))} N   at C${leg + 1}, base on leg\n` +
@@ -480,6 +540,7 @@ class View {
     this.base = polygon(THREE, DATA.base_joints, '#aab2bf');
     this.platform = polygon(THREE, DATA.platform_joints, '#7f8da3');
     this.scene.add(this.base, this.platform);
+    if (DATA.payload.mass > 0) this.platform.add(payload(THREE, radius));
     this.legs = makeLegs(THREE, this.scene, DATA.legs.radius);
     this.picks = this.legs.flatMap((p) => [p.cylinder, p.rod, p.collar, p.E, p.C]);
     this.labels = LEGS.map((leg) => {
@@ -615,7 +676,9 @@ async function main() {
     THREE = await loadThree();
     const view = new View(THREE, $('stage'), plots);
     listeners.push((frame) => view.update(frame));
+    if (DATA.focus) listeners.push((frame) => view.select(DATA.focus[frame]));
     view.update(state.frame);
+    if (DATA.focus) view.select(DATA.focus[state.frame]);
   } catch (error) {
     $('nogl').style.display = 'block';
     $('nogl').textContent += ` (${error && error.message ? error.message : error})`;
