@@ -77,7 +77,8 @@ class Peaks:
             if sound < len(t):
                 size[~good] = -np.inf
             at = np.argmax(size, axis=0)
-            peak = np.sqrt(size[at, np.arange(6)])          # -inf: no sound finite step
+            top = size[at, np.arange(6)]                    # -inf: no sound finite step
+            peak = np.sqrt(np.where(top >= 0.0, top, np.nan))
             best = self.values.setdefault(key, np.full(6, np.nan))
             when = self.times.setdefault(key, np.full(6, np.nan))
             better = np.isfinite(peak) & ~(peak <= best)      # NaN best: any finite peak
