@@ -238,7 +238,7 @@ def test_a_measured_data_file_is_viewed_against_its_forces(tmp_path, trajectory)
     measured = tmp_path / "measured.csv"
     write_table(record.frame, measured)
     out = tmp_path / "measured.html"
-    assert run("view", "--trajectory", measured, "--out", out).exit_code == 0
+    assert run("view", "--measured", measured, "--out", out).exit_code == 0
     data = embedded(out.read_text())
     got = decode(data)
     F = record.frame[[f"F{i}" for i in range(1, 7)]].to_numpy()[got["step"]]
@@ -256,6 +256,12 @@ def test_a_measured_data_file_is_viewed_against_its_forces(tmp_path, trajectory)
     assert run("view", "--trajectory", trajectory, "--out", plain).exit_code == 0
     titles = [p["title"] for p in embedded(plain.read_text())["plots"]]
     assert titles == ["actuator force F (+ push, \u2212 pull)", "prismatic friction Ffr"]
+    # --measured requires the forces; one of --trajectory and --measured
+    message = one_error(run("view", "--measured", trajectory, "--out", tmp_path / "m.html"))
+    assert message == f"{trajectory}: a measured-data file needs the force columns F1..F6; " \
+                      "F1 is missing"
+    both = run("view", "--measured", measured, "--trajectory", trajectory, "--out", plain)
+    assert both.exit_code == 2 and "give one of --trajectory and --measured" in both.output
 
 
 @pytest.mark.parametrize(("name", "text", "expected"), [

@@ -17,9 +17,13 @@ def _options(command):
     """The options of ``view`` besides those of a log's format."""
     path = click.Path(path_type=Path)
     options = [
-        click.option("--trajectory", type=path, required=True,
+        click.option("--trajectory", type=path,
                      help="Trajectory or measured-data file (CSV or Parquet), as for "
                           "`gsfric simulate`."),
+        click.option("--measured", type=path,
+                     help="Measured-data file (CSV or Parquet): the trajectory with the "
+                          "measured forces F1..F6, plotted against the model's with the "
+                          "residual (instead of --trajectory; the forces are required)."),
         click.option("--platform", "platform_file", type=path,
                      help="Platform TOML (default: the reference platform)."),
         click.option("--out", type=path, required=True,
@@ -50,10 +54,10 @@ def _options(command):
 @click.command()
 @_options
 @log_options
-@checked_paths({"trajectory": "trajectory", "platform_file": "platform",
-                "column_map": "column-map"}, files=("out",))
-def view(trajectory, platform_file, out, mode, fps, title, threads, chunk, window, quiet,
-         column_map, units_map, angles, keep_columns):
+@checked_paths({"trajectory": "trajectory", "measured": "measured-data",
+                "platform_file": "platform", "column_map": "column-map"}, files=("out",))
+def view(trajectory, measured, platform_file, out, mode, fps, title, threads, chunk, window,
+         quiet, column_map, units_map, angles, keep_columns):
     """Write a 3-D view of a motion and its joint loads: one HTML page, opened offline.
 
     The trajectory is read and evaluated as by `gsfric simulate`. The page draws the base, the
@@ -64,12 +68,15 @@ def view(trajectory, platform_file, out, mode, fps, title, threads, chunk, windo
     with the residual. It needs no network and no server: three.js is inside it. Open it
     at a time with #t=SECONDS after its address (file:///.../view.html#t=2.5).
     """
+    if (trajectory is None) == (measured is None):
+        raise click.UsageError("give one of --trajectory and --measured")
     with warnings.catch_warnings():                    # shown one line each by the group
         warnings.simplefilter("always", UserWarning)
         log_format = LogFormat.from_options(column_map, units_map, angles, keep_columns)
-        summary = view_file(trajectory, out, platform_file, mode=mode, chunk=chunk,
-                            window=window, n_threads=threads, log_format=log_format, fps=fps,
-                            title=title)
+        summary = view_file(trajectory or measured, out, platform_file, mode=mode,
+                            chunk=chunk, window=window, n_threads=threads,
+                            log_format=log_format, fps=fps, title=title,
+                            measured=measured is not None)
     if not quiet:
         click.echo(f"wrote {out} ({summary.steps} steps as {summary.frames} frames, "
                    f"{summary.size / 1e6:.1f} MB, {summary.flagged} flagged)")

@@ -70,7 +70,8 @@ def check_view_paths(trajectory: Path, out: Path, platform) -> None:
 def view_file(trajectory: str | os.PathLike[str], out: str | os.PathLike[str], platform=None,
               *, mode: str = "kinematic", chunk: int = DEFAULT_CHUNK, window: int | None = None,
               polyorder: int = DEFAULT_POLYORDER, n_threads: int = 1, log_format=None,
-              fps: float = DEFAULT_FPS, title: str | None = None) -> ViewSummary:
+              fps: float = DEFAULT_FPS, title: str | None = None,
+              measured: bool = False) -> ViewSummary:
     """Evaluate a trajectory file and write its 3-D view (``gsfric.view``) to ``out``.
 
     Parameters
@@ -89,6 +90,9 @@ def view_file(trajectory: str | os.PathLike[str], out: str | os.PathLike[str], p
         Frames per second of motion time in the page (at most ``gsfric.view.MAX_FRAMES``).
     title : str, optional
         The page's title (default: the trajectory's file name).
+    measured : bool
+        The file must be a measured-data file: an ``InputError`` naming the first of
+        F1..F6 it lacks.
 
     Returns
     -------
@@ -114,7 +118,7 @@ def view_file(trajectory: str | os.PathLike[str], out: str | os.PathLike[str], p
     motions = iter_motions(trajectory, chunk=chunk, window=window, polyorder=polyorder,
                            log_format=log_format)
     frames = _frames(trajectory, motions, Evaluator(platform, mode=mode, n_threads=n_threads),
-                     FrameCollector(fps=fps), summary)
+                     FrameCollector(fps=fps), summary, measured)
     text = page(frames, platform, title=title if title is not None else
                 f"{trajectory.name}: {mode} mode", flag_names=FLAG_NAMES, steps=summary.steps,
                 plots=measured_plots(frames))
@@ -127,9 +131,10 @@ def view_file(trajectory: str | os.PathLike[str], out: str | os.PathLike[str], p
 
 
 def _frames(trajectory: Path, motions, evaluator: Evaluator, collector: FrameCollector,
-            summary: ViewSummary) -> Frames:
+            summary: ViewSummary, measured: bool = False) -> Frames:
     """Evaluate each chunk of ``motions`` (checked as ``simulate_file`` checks them) and keep
-    its frames; the steps, chunks, differentiation and flags counted into ``summary``."""
+    its frames; the steps, chunks, differentiation and flags counted into ``summary``.
+    ``measured``: F1..F6 must be among the carried columns."""
     flags = _Flags()
     for part in motions:
         motion = part.motion
@@ -138,10 +143,14 @@ def _frames(trajectory: Path, motions, evaluator: Evaluator, collector: FrameCol
                                                                     motion.rotation)
         check_poses(evaluator.platform, position, rotation, motion.t, str(trajectory))
         check_gaps(motion.t, str(trajectory))
+        missing = [f"F{i}" for i in range(1, 7) if f"F{i}" not in part.carried]
+        if measured and missing:
+            raise InputError(f"{trajectory}: a measured-data file needs the force columns "
+                             f"F1..F6; {missing[0]} is missing")
         result = evaluator.evaluate_quiet(motion)
-        measured = (np.column_stack([part.carried[f"F{i}"] for i in range(1, 7)])
+        forces = (np.column_stack([part.carried[f"F{i}"] for i in range(1, 7)])
                     if "F1" in part.carried else None)       # a measured-data file's
-        collector.add_result(result, part.start, measured)
+        collector.add_result(result, part.start, forces)
         flags.add(np.asarray(result.flag, np.int64), part.start, motion.t)
         summary.steps = part.start + len(motion)
         summary.chunks += 1
