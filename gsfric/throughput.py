@@ -29,6 +29,7 @@ from gsfric.compiled import native
 from gsfric.evaluation.evaluator import Evaluator, state_array
 from gsfric.evaluation.parameters import model_function
 from gsfric.models import random_motion, reference_platform
+from gsfric.trajectory import TIME_UNITS
 
 SIZES = (40, 1_000, 100_000, 1_000_000)
 """Steps per call of the full table."""
@@ -174,8 +175,8 @@ def measure(quick: bool = False, progress=None) -> Throughput:
     """Time every case (``progress(text)`` before each, when given)."""
     sizes, budget = (QUICK_SIZES, QUICK_BUDGET) if quick else (SIZES, BUDGET)
     where = machine()
-    motion = random_motion(np.random.default_rng(SEED), np.arange(max(sizes)) / RATE)
-    x_all = state_array(motion)
+    x_all = state_array(random_motion(np.random.default_rng(SEED),
+                                      np.arange(max(sizes)) / RATE))
     cases = []
     for n in sizes:
         x = np.ascontiguousarray(x_all[:n])
@@ -188,10 +189,11 @@ def measure(quick: bool = False, progress=None) -> Throughput:
 
 
 def _seconds(t: float) -> str:
-    for unit, scale in (("s", 1.0), ("ms", 1e-3), ("us", 1e-6)):
-        if t >= scale:
+    """``t`` seconds in s, ms, us or ns, three significant digits (999.96 ms is 1 s)."""
+    for unit in ("s", "ms", "us", "ns"):
+        scale = TIME_UNITS[unit]
+        if t >= scale * (1 - 5e-4) or unit == "ns":
             return f"{t / scale:.3g} {unit}"
-    return f"{t * 1e9:.3g} ns"
 
 
 def format_table(run: Throughput) -> str:

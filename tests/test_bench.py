@@ -47,3 +47,11 @@ def test_all_points_to_the_benchmarks_of_a_checkout():
     assert result.stderr.strip().splitlines() == [
         "gsfric: error: --all: every user path against its goal is measured from a source "
         "checkout: `make bench-all` (or `python -m benchmarks.all`)"]
+
+
+def test_call_times_are_printed_in_the_unit_their_rounding_needs():
+    times = (0.99996, 0.9994, 2.5e-5, 4e-9)
+    cases = tuple(Case("simd", 1, 40, calls=3, best=t, median=t) for t in times)
+    lines = format_table(Throughput(machine(), cases)).splitlines()[-len(times):]
+    assert [line.split()[4:6] for line in lines] == [["1", "s"], ["999", "ms"], ["25", "us"],
+                                                     ["4", "ns"]]
