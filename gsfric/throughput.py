@@ -40,6 +40,7 @@ BUDGET = 1.0
 QUICK_BUDGET = 0.2
 """Seconds of calls per case with ``--quick``."""
 MIN_CALLS = 3
+"""Timed calls per case at least, however long one takes (a median of three)."""
 RATE = 1000.0
 """Sampling rate of the benchmark's motion, Hz."""
 SEED = 20261122
@@ -60,7 +61,7 @@ class Case:
         Steps per call.
     calls : int
         Timed calls.
-    best, median : float
+    best_s, median_s : float
         Wall-clock seconds per call: the fastest and the median.
     """
 
@@ -68,13 +69,13 @@ class Case:
     threads: int
     steps: int
     calls: int
-    best: float
-    median: float
+    best_s: float
+    median_s: float
 
     @property
     def steps_per_second(self) -> float:
         """Steps per second of the fastest call; NaN when it took no measurable time."""
-        return self.steps / self.best if self.best > 0 else float("nan")
+        return self.steps / self.best_s if self.best_s > 0 else float("nan")
 
 
 @dataclass(frozen=True)
@@ -208,12 +209,12 @@ def format_table(run: Throughput) -> str:
     head = (f"{'implementation':<14} {'threads':>7} {'N':>9} {'steps/s':>10} "
             f"{'best call':>10} {'median':>10} {'vs per step':>12}")
     lines += [head, "-" * len(head)]
-    per_step = {c.steps: c.best for c in run.cases
+    per_step = {c.steps: c.best_s for c in run.cases
                 if c.implementation == "per step" and c.threads == 1}
     for c in run.cases:
-        ratio = f"{per_step[c.steps] / c.best:.1f}x" if c.steps in per_step and c.best > 0 \
+        ratio = f"{per_step[c.steps] / c.best_s:.1f}x" if c.steps in per_step and c.best_s > 0 \
             else "-"
         lines.append(f"{c.implementation:<14} {c.threads:>7} {c.steps:>9,} "
-                     f"{c.steps_per_second:>10.3g} {_seconds(c.best):>10} "
-                     f"{_seconds(c.median):>10} {ratio:>12}")
+                     f"{c.steps_per_second:>10.3g} {_seconds(c.best_s):>10} "
+                     f"{_seconds(c.median_s):>10} {ratio:>12}")
     return "\n".join(lines)

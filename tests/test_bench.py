@@ -22,8 +22,8 @@ def test_quick_table_has_every_case_and_writes_the_same_figures(tmp_path):
     assert sorted({c["steps"] for c in cases}) == list(QUICK_SIZES)
     assert len(cases) == len(rows) * len(QUICK_SIZES)
     for c in cases:
-        assert c["calls"] >= 3 and 0 < c["best"] <= c["median"]
-        assert math.isclose(c["steps_per_second"], c["steps"] / c["best"])
+        assert c["calls"] >= 3 and 0 < c["best_s"] <= c["median_s"]
+        assert math.isclose(c["steps_per_second"], c["steps"] / c["best_s"])
     text = result.stdout.splitlines()
     assert text[1].startswith("machine: ") and f"build {data['machine']['build']}" in text[1]
     table = text[text.index(next(t for t in text if t.startswith("implementation"))) + 2:]
@@ -35,7 +35,7 @@ def test_quick_table_has_every_case_and_writes_the_same_figures(tmp_path):
 
 
 def test_a_call_below_the_clock_resolution_has_no_rate():
-    case = Case("simd", 1, 40, calls=3, best=0.0, median=0.0)
+    case = Case("simd", 1, 40, calls=3, best_s=0.0, median_s=0.0)
     assert math.isnan(case.steps_per_second)
     line = format_table(Throughput(machine(), (case,))).splitlines()[-1]
     assert line.split()[3] == "nan" and line.endswith("-")
@@ -51,7 +51,7 @@ def test_all_points_to_the_benchmarks_of_a_checkout():
 
 def test_call_times_are_printed_in_the_unit_their_rounding_needs():
     times = (0.99996, 0.9994, 2.5e-5, 4e-9)
-    cases = tuple(Case("simd", 1, 40, calls=3, best=t, median=t) for t in times)
+    cases = tuple(Case("simd", 1, 40, calls=3, best_s=t, median_s=t) for t in times)
     lines = format_table(Throughput(machine(), cases)).splitlines()[-len(times):]
     assert [line.split()[4:6] for line in lines] == [["1", "s"], ["999", "ms"], ["25", "us"],
                                                      ["4", "ns"]]
