@@ -10,7 +10,7 @@ BACKEND := "meson-python>=0.18" "meson>=1.3" "ninja>=1.11"
 # the environment's meson and ninja first, for the build and the editable install's rebuilds
 export PATH := $(abspath $(BIN)):$(PATH)
 
-.PHONY: install paper test check test-slow test-floors bench derive docs clean
+.PHONY: install paper test check test-slow test-floors bench bench-all derive docs clean
 
 $(STAMP): pyproject.toml meson.build
 	$(PYTHON) -m venv $(VENV)
@@ -55,8 +55,13 @@ test-floors:
 	.venv-floors/bin/python -c "import pathlib, sysconfig; pathlib.Path(sysconfig.get_paths()['purelib'], 'gsfric-checkout.pth').write_text(str(pathlib.Path.cwd().resolve()) + '\n')"
 	PATH="$(abspath .venv-floors/bin):$$PATH" .venv-floors/bin/python -m pytest -n 2 --dist worksteal tests
 
+## The throughput table of the compiled model.
 bench: built
 	$(BIN)/gsfric bench
+
+## Every user path against its goal, in one run (about 5-10 minutes; benchmarks/all.py).
+bench-all: built
+	$(BIN)/python -m benchmarks.all
 
 ## The documentation site, tutorials executed, into docs/_build/html (warnings are errors).
 docs: built

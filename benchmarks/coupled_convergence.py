@@ -25,13 +25,15 @@ from pathlib import Path
 
 import numpy as np
 
-sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "tests"))
+ROOT = Path(__file__).resolve().parents[1]
+sys.path.insert(0, str(ROOT))
+sys.path.insert(0, str(ROOT / "tests"))
 
 from helpers_validation import random_platform  # noqa: E402
 
 import gsfric  # noqa: E402
-from gsfric import models
-from gsfric.bench import cases as bench  # noqa: E402
+from benchmarks import cases as bench  # noqa: E402
+from gsfric import models  # noqa: E402
 from gsfric.evaluation.evaluator import Evaluator  # noqa: E402
 from gsfric.evaluation.flags import FLAG_COUPLING  # noqa: E402
 

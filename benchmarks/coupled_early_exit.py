@@ -6,7 +6,7 @@ that solve's own last change is below an acceptance tolerance ``tol_a (1 N + |F0
 the full solve only for the others. With SIMD over steps (8 lanes on AVX-512) a group of 8
 steps needs the full solve as soon as one of its steps does.
 
-For the reference platform on the benchmark's states (``gsfric.bench.cases.states``: a smooth random
+For the reference platform on the benchmark's states (``benchmarks.cases.states``: a smooth random
 motion at 1 kHz) and, with ``--random``, on the random platforms of
 ``benchmarks/coupled_convergence.py``, at each mu r, this script derives the coupled actuator
 map with k = 1 .. N_ITERATIONS iterations (CasADi, no C compiler needed) and reports, for each k
@@ -38,13 +38,13 @@ sys.path.insert(0, str(ROOT / "tests"))
 
 from helpers_validation import random_platform  # noqa: E402
 
+from benchmarks import cases as bench  # noqa: E402
 from derive import build as dbuild  # noqa: E402
 from derive import coupled as dcoupled  # noqa: E402
 from derive import effects as fx  # noqa: E402
 from derive import model as mdl  # noqa: E402
 from gsfric import models  # noqa: E402
 from gsfric._optional import optional  # noqa: E402
-from gsfric.bench import cases as bench  # noqa: E402
 from gsfric.evaluation.evaluator import Evaluator, state_array  # noqa: E402
 
 TOLERANCES = (1e-8, 1e-9, 1e-10, 1e-11)

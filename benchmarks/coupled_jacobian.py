@@ -5,7 +5,7 @@ The fixed point of derive/coupled.py is ``s = G(s)`` on the 18 friction loads (p
 they cause (one back-substitution of the platform's 6x6 system), and the loads of those. This
 script derives ``G`` alone (the coupled model with the loads of its first iterate as an input,
 one plain iteration), takes its Jacobian ``J = dG/ds`` (CasADi), and at the fixed point of steps
-of ``gsfric.bench.cases.states`` on the reference platform reports, per mu r:
+of ``benchmarks.cases.states`` on the reference platform reports, per mu r:
 
 * the spectral radius of J: the factor by which a plain iteration shrinks the error;
 * that of ``(I - D)^-1 (J - D)``, ``D`` the 3x3 blocks of each leg's loads on its own: the
@@ -27,13 +27,13 @@ sys.path.insert(0, str(ROOT))
 
 import sympy as sp  # noqa: E402
 
+from benchmarks import cases as bench  # noqa: E402
 from derive import build as dbuild  # noqa: E402
 from derive import coupled as dcoupled  # noqa: E402
 from derive import effects as fx  # noqa: E402
 from derive import model as mdl  # noqa: E402
 from gsfric import models  # noqa: E402
 from gsfric._optional import optional  # noqa: E402
-from gsfric.bench import cases as bench  # noqa: E402
 from gsfric.evaluation.evaluator import Evaluator  # noqa: E402
 
 LEGS = 6

@@ -21,16 +21,21 @@ import time
 import numpy as np
 
 import gsfric
-from gsfric.bench.cases import bench_motion
 from gsfric.evaluation.evaluator import Evaluator, state_array
 from gsfric.evaluation.memory import aligned_empty
+from gsfric.models import random_motion
 
 STEPS = 100_000
 CALLS = 30
+RATE = 1000.0
+"""Sampling rate of the motion, Hz."""
+SEED = 20261122
+"""The motion's seed (the one of benchmarks/cases.py)."""
 
 
 def main() -> None:
-    x = np.ascontiguousarray(state_array(bench_motion(STEPS)))
+    x = np.ascontiguousarray(state_array(random_motion(np.random.default_rng(SEED),
+                                                           np.arange(STEPS) / RATE)))
     evaluator = Evaluator(gsfric.reference_platform(), n_threads=1)
     out = aligned_empty(STEPS, 6)     # whole cache lines: the vector stores' fast path
     evaluator.actuator_forces(x, out)                  # warm-up: load, first touch

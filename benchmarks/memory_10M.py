@@ -25,8 +25,11 @@ import tempfile
 import time
 from pathlib import Path
 
-from gsfric._optional import optional
-from gsfric.bench import simulate
+ROOT = Path(__file__).resolve().parents[1]
+sys.path.insert(0, str(ROOT))
+
+from benchmarks import simulate  # noqa: E402
+from gsfric._optional import optional  # noqa: E402
 
 ROWS_PER_GROUP = 250_000
 
@@ -40,7 +43,7 @@ def write_trajectory(path: Path, steps: int, rows_per_group: int = ROWS_PER_GROU
 
 def run_simulate(trajectory: Path, out: Path, chunk: int, threads: int = 1,
                  extra: tuple[str, ...] = ()) -> dict:
-    """``gsfric simulate`` in a subprocess (``gsfric.bench.simulate.run_simulate``, the runner of
+    """``gsfric simulate`` in a subprocess (``benchmarks.simulate.run_simulate``, the runner of
     ``gsfric bench``'s simulate case): exit code, output, wall and CPU time, peak RSS."""
     return simulate.run_simulate(trajectory, out, chunk=chunk, threads=threads, extra=extra)
 

@@ -28,7 +28,7 @@ from gsfric.errors import GsfricError, InputError, Interrupted, StepFlagError
 from gsfric.io.files import commit_check
 
 COMMANDS = {
-    "bench": "Print the throughput table: compiled vs NumPy-vectorised vs per-step loop.",
+    "bench": "Print the throughput table of the compiled model (steps per second).",
     "columns": "List every output column of `simulate` with its unit and sign convention.",
     "derive": "Regenerate generated/ from the SymPy derivation in derive/ (needs sympy).",
     "discover": "Find which physical effect the model is missing, fit it, and show the gap "

@@ -151,6 +151,11 @@ def test_the_installed_wheel_runs_without_a_compiler(installed):
     # the derivation is not installed: the command says so in one line, exit 2
     done = installed(*CLI, "derive", "--check", code=2)
     assert "source checkout" in done.stderr and len(done.stderr.strip().splitlines()) == 1
+    # the throughput table needs only the package; the other benchmarks are in a checkout
+    done = installed(*CLI, "bench", "--quick")
+    assert done.stdout.splitlines()[1].startswith("machine: ")
+    done = installed(*CLI, "bench", "--all", code=2)
+    assert "source checkout" in done.stderr and len(done.stderr.strip().splitlines()) == 1
     # export writes C for the user's compiler; --verify says in one line that it needs one
     installed(*CLI, "export", "--out", "ctrl")
     assert (installed.work / "ctrl" / "gsfric.c").is_file()

@@ -1,4 +1,4 @@
-"""The NumPy implementations of gsfric.bench.numpy_engine against the compiled map, at random states.
+"""The NumPy reference engine (tests/engines/numpy_reference.py) against the compiled map.
 
 The vectorised implementation reduces (2)-(16) to a 6x6 system per step; the per-step loop
 solves the dense 42x42 system. Their agreement with each other and with the compiled
@@ -8,16 +8,31 @@ reactions R_E, R_C, M_C equation by equation.
 
 from __future__ import annotations
 
+import ast
+from pathlib import Path
+
 import numpy as np
 import pytest
 from helpers import perturbed_platform, random_states, with_every_effect
 
 import gsfric
 from gsfric import models
-from gsfric.bench import numpy_engine as numpy_model
 from gsfric.evaluation.evaluator import Evaluator, state_array
 
+try:
+    from tests.engines import numpy_reference as numpy_model
+except ImportError:
+    from engines import numpy_reference as numpy_model
+
 RTOL = 1e-9
+
+INPUT_DEFINITIONS = {
+    "gsfric.compiled.state": {"state_layout"},
+    "gsfric.evaluation.parameters": {"JOINT_EPS", "PRISMATIC_EPS", "PRISMATIC_POINT"},
+    "gsfric.platform.catalog": {"EFFECTS"},
+    "gsfric.platform.description": {"Platform"},
+}
+"""All the reference engine may import from gsfric: the definitions of its inputs."""
 
 
 def _platforms(rng):
@@ -69,3 +84,16 @@ def test_the_42x42_system_holds_the_compiled_reactions(rng):
                                      result.M_C[k]])
         scale = np.abs(A) @ np.abs(z_compiled) + np.abs(b)
         assert np.all(np.abs(A @ z_compiled - b) <= RTOL * scale.max())
+
+
+def test_the_engine_imports_only_the_definitions_of_its_inputs():
+    """Independent by design: no formula from derive/, generated/ or the compiled model."""
+    tree = ast.parse(Path(numpy_model.__file__).read_text())
+    for node in ast.walk(tree):
+        if isinstance(node, ast.Import):
+            names = [a.name for a in node.names]
+            assert not [n for n in names if n.split(".")[0] in ("gsfric", "derive")], names
+        elif isinstance(node, ast.ImportFrom) and node.module.split(".")[0] in ("gsfric",
+                                                                                  "derive"):
+            imported = {a.name for a in node.names}
+            assert imported <= INPUT_DEFINITIONS.get(node.module, set()), node.module

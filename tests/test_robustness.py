@@ -20,8 +20,6 @@ from scipy.spatial.transform import Rotation
 
 import gsfric
 from gsfric import models
-from gsfric.bench.cases import Case
-from gsfric.bench.cases import ratio as _ratio
 from gsfric.cli import main
 from gsfric.errors import GsfricWarning, InputError, StepFlagError
 from gsfric.evaluation.evaluator import Evaluator
@@ -928,8 +926,3 @@ def test_long_non_uniform_spline_equals_scipy_with_its_penalties():
     exact = np.sin(t)[:, None]
     assert tr.spline_penalties(t, exact)[0] == pytest.approx(h ** 3 * tr.SPLINE_PENALTIES[0])
 
-
-def test_bench_ratio_of_a_zero_time_is_nan():
-    assert np.isnan(_ratio(1.0, 0.0)) and np.isnan(_ratio(None, 1.0)) and _ratio(6.0, 2.0) == 3
-    case = Case("compiled", 1, 40, best=0.0, cpu_best=0.0)
-    assert np.isnan(case.steps_per_second) and np.isnan(case.steps_per_cpu_second)

@@ -1,29 +1,34 @@
-"""``gsfric bench``: the throughput table of the compiled, NumPy and per-step evaluations."""
+"""``gsfric bench``: the throughput table of the compiled model (``gsfric.throughput``)."""
 
 from __future__ import annotations
 
+import json
 from pathlib import Path
 
 import click
 
-from gsfric.bench.all import run_all
-from gsfric.bench.throughput import run_bench
-from gsfric.sweep.scaling import dask_scaling
+from gsfric.commands.common import checked_paths, fail
+from gsfric.io.files import atomic_write
+from gsfric.throughput import format_table, measure
 
 
 @click.command()
-@click.option("--quick", is_flag=True, help="Small sizes only (N = 40 and 1e3; with --all, "
-              "every path at a small size, goals not judged).")
-@click.option("--all", "every", is_flag=True,
-              help="Every user path against its goal, in one run: evaluate, simulate to "
-                   "Parquet, threads beside a busy core, discover, the control loop, Dask.")
+@click.option("--quick", is_flag=True, help="Small sizes only (N = 40 and 1e3).")
 @click.option("--out", type=click.Path(dir_okay=False, path_type=Path),
-              help="Also write the table as JSON.")
-def bench(quick, every, out):
-    """Print the throughput table: compiled vs NumPy-vectorised vs per-step loop.
+              help="Also write the figures as JSON.")
+@click.option("--all", "every", is_flag=True, hidden=True)
+@checked_paths({}, files=("out",))
+def bench(quick, out, every):
+    """Print the throughput table of the compiled model (steps per second).
 
-    With --all: every user path against its goal, measured in one run."""
+    The compiled actuator map of the reference platform at N = 40 to 1e6 steps per call:
+    SIMD over steps on one and two threads, and one step per call."""
     if every:
-        run_all(quick=quick, out=out, dask=dask_scaling)
-    else:
-        run_bench(quick=quick, out=out)
+        fail("--all: every user path against its goal is measured from a source checkout: "
+             "`make bench-all` (or `python -m benchmarks.all`)")
+    run = measure(quick, progress=lambda s: click.echo(s, err=True))
+    click.echo(format_table(run))
+    if out is not None:
+        with atomic_write(out) as f:
+            f.write(json.dumps(run.as_dict(), indent=2) + "\n")
+        click.echo(f"wrote {out}")

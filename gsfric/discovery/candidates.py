@@ -21,8 +21,6 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from gsfric._checks import suggest
-from gsfric.errors import InputError
 from gsfric.platform import catalog
 from gsfric.platform.catalog import EFFECTS
 from gsfric.platform.description import Platform
@@ -284,11 +282,3 @@ def separating_motion(a: str, b: str) -> str:
                                  "signatures (see docs/reference/effects.md) separates them")
 
 CANDIDATE_NAMES = tuple(c.name for c in CANDIDATES)
-
-
-def candidate(name: str) -> Candidate:
-    """The candidate of a catalog effect name."""
-    for c in CANDIDATES:
-        if c.name == name:
-            return c
-    raise InputError(f"effect {name!r}: not a candidate{suggest(name, CANDIDATE_NAMES)}")

@@ -23,9 +23,6 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-CRITERIA = ("p_value", "p_bands", "cv_gain", "fold_share", "gap")
-"""The questions of the rule, in the order ``failures`` reports them."""
-
 
 @dataclass(frozen=True)
 class Evidence:

@@ -46,9 +46,6 @@ from gsfric.signal.rotations import (
 from gsfric.signal.windows import savgol_adaptive
 from gsfric.trajectory import Motion, is_uniform
 
-FORCE_SOURCES = ("specified", "noise record", "estimated")
-"""Where the force part of the floor comes from (``NoiseFloor.force_source``), by precedence."""
-
 
 @dataclass
 class ForceNoise:

@@ -28,8 +28,6 @@ from gsfric.discovery.dictionary import Unexplained
 from gsfric.discovery.floor import NoiseFloor
 from gsfric.discovery.selection import NoiseModel
 
-VERDICTS = ("explained", "no_discrepancy", "unexplained_discrepancy")
-
 
 @dataclass(frozen=True)
 class Verdict:

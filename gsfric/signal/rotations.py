@@ -154,7 +154,7 @@ def angular_rates(q0: np.ndarray, q1: np.ndarray, q2: np.ndarray
     ``alpha = 2 vec(q2 p*) / |p|^2 - omega 2 (p . q1) / |p|^2``, which for a unit quaternion
     are ``omega = 2 vec(qdot q*)`` and ``alpha = 2 vec(qddot q*)``. The products are written
     out, ``vec(d p*) = w_p v_d - w_d v_p + v_p x v_d``, with the rounding of
-    ``quaternion_multiply(d, quaternion_conjugate(p))``.
+    ``quaternion_multiply`` of d and the conjugate of p.
 
     Parameters
     ----------

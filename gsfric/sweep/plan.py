@@ -49,8 +49,6 @@ class Plan:
         Each variant's parameter values (``variants.csv``).
     platform : Platform
         The nominal platform, read once.
-    workspace_poses : int
-        Poses of the workspace (0 without one).
     """
 
     tasks: list[Task]
@@ -58,7 +56,6 @@ class Plan:
     inputs: dict
     variants: list[dict]
     platform: Platform
-    workspace_poses: int = 0
 
     @property
     def steps(self) -> int:
@@ -153,10 +150,8 @@ def plan(trajectories=None, workspace: Workspace | str | os.PathLike | None = No
     tasks: list[Task] = []
     hasher = hashlib.sha256()
     _file_tasks(files, platforms, chunk_steps, tasks, hasher)
-    n_poses = 0
     if workspace is not None:
         poses = workspace.poses()
-        n_poses = len(poses)
         check_reachable(platform, poses, source)
         _workspace_tasks(workspace, poses, platforms, chunk_steps, tasks)
     inputs = {"gsfric": __version__, "files": [str(f) for f in files],
@@ -167,4 +162,4 @@ def plan(trajectories=None, workspace: Workspace | str | os.PathLike | None = No
               "seed": seed, "chunk_steps": int(chunk_steps),
               **({"grid": int(grid)} if grid is not None else {})}
     hasher.update(json.dumps(inputs, sort_keys=True, default=str).encode())
-    return Plan(tasks, hasher.hexdigest()[:16], inputs, table, platform, n_poses)
+    return Plan(tasks, hasher.hexdigest()[:16], inputs, table, platform)

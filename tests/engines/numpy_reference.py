@@ -1,20 +1,33 @@
-"""Two implementations of the actuator forces in plain NumPy, for checks and benchmarks.
+"""A reference engine of the actuator forces in plain NumPy, independent of the compiled model.
 
-Both compute what the compiled combined map ``Evaluator.actuator_forces`` computes (the model of
-derive/model.py in the kinematic mode: actuator forces with friction and the catalog's effects),
-from the platform's description and states ``x`` (N, 24) laid out as ``state_array``:
+It computes what the compiled map ``Evaluator.actuator_forces`` computes (actuator forces with
+friction and the catalog's effects, kinematic mode) from a platform and states ``x`` (N, 24)
+laid out as ``state_array``. tests/test_reference_impl.py compares the two at random states of
+perturbed platforms; benchmarks/throughput.py times the compiled map against it.
 
-* ``actuator_forces_numpy``: vectorised over steps. The legs' loads reduce the 42 unknowns of
-  (2)-(16) to one 6x6 system per step in the legs' axial forces (the reduction of derive/legs.py),
-  solved for every step at once with ``numpy.linalg.solve``.
-* ``actuator_forces_loop``: one step at a time, in the paper's way: the dense 42x42 system of
-  (2)-(16) (unknowns R_E, R_C, M_C; ``system_42``) is built and solved at every step, then the
-  prismatic joint (28)-(32) and friction (33)-(35).
+Independent by design:
 
-Neither uses the generated code, and they share no code with each other beyond reading the
-platform's numbers (``parameters``), the state layout and the catalog's prismatic friction
-terms, so each checks the compiled map and the other, and together they check the 6x6
-reduction.
+* What it takes from gsfric is the definition of the inputs only: the ``Platform``'s numbers,
+  the state layout (``state_layout``), the regularisation speeds and the prismatic joint's
+  point (``evaluation.parameters``), and the effects' parameter names and defaults
+  (``platform.catalog.EFFECTS``). Nothing from derive/, generated/ or the compiled functions,
+  and no formula: tests/test_reference_impl.py checks these imports.
+* The mechanics is written from the paper's equations as vector mechanics, not from derive/'s
+  SymPy: the equilibrium (2)-(16) of platform, payload and legs (sums of forces, moments about
+  p and about C_i, Newton-Euler with gravity on every body, with the corrections listed in
+  docs/reference/errata.md), the prismatic joint (28)-(32) and friction (33)-(35). The effects
+  are written from their definitions in docs/reference/effects.md.
+* Two formulations that share only those numbers (``parameters``):
+
+  - ``actuator_forces_loop``: one step at a time, the paper's way: the dense 42x42 system of
+    (2)-(16) (unknowns R_E, R_C, M_C; ``system_42``) built and solved at every step, then the
+    prismatic joint and friction; no reduction.
+  - ``actuator_forces_numpy``: vectorised over steps; R_C and M_C eliminated by hand, leaving
+    one 6x6 system per step in the legs' axial forces, solved for every step at once.
+
+So an error in derive/'s reduction, the code generation, the SIMD-over-steps code or the
+packing of the parameters shows as a difference from both; an error common to all three would
+have to be in the published definition of an equation or an effect itself.
 """
 
 from __future__ import annotations
@@ -110,7 +123,7 @@ def parameters(platform: Platform) -> Parameters:
 
 
 def _prismatic_effects(q: dict, v, sgn_v, D, bending):
-    """The catalog's friction force on the upper part along u (derive/effects.py).
+    """The effects' friction force on the upper part along u (docs/reference/effects.md).
 
     ``bending`` is ``|u x M_3|``, the part of the prismatic joint's moment across the leg. The
     Coulomb parts are summed and the sum kept non-negative (friction never pushes).

@@ -4,8 +4,8 @@ from __future__ import annotations
 
 from dataclasses import dataclass, field
 
-from gsfric.bench.cases import Case, ratio
-from gsfric.bench.simulate import SIMULATE_STEPS
+from benchmarks.cases import Case, ratio
+from benchmarks.simulate import SIMULATE_STEPS
 
 TARGETS = {
     "compiled_1e5_steps_per_s": ("compiled map, one core, N = 1e5", ">=", 1e6, "steps/s"),

@@ -1,5 +1,8 @@
-"""``gsfric bench --all``: every path a user takes around the compiled core, each against its
-goal, measured in one run.
+"""Every path a user takes around the compiled core, each against its goal, measured in one run.
+
+Usage, from the root of a source checkout (or ``make bench-all``)::
+
+    python -m benchmarks.all [--quick] [--out all.json]
 
 Rows (``ROWS``, in this order):
 
@@ -15,7 +18,8 @@ Rows (``ROWS``, in this order):
 * ``control_loop``: the README's control loop, a new ``Evaluator`` and ``forces()`` over 40
   steps (median of many calls);
 * ``dask``: a workspace sweep on a Dask cluster of two worker processes against one (cluster
-  start-up excluded); measured by a function the caller passes (``gsfric.sweep.scaling``).
+  start-up excluded); measured by a function the caller passes (``benchmarks.dask_scaling``,
+  which ``main`` passes).
 
 ``quick=True`` runs every row at small sizes (``QUICK``) and judges no goal: for a test of the
 table, not for figures.
@@ -23,6 +27,7 @@ table, not for figures.
 
 from __future__ import annotations
 
+import argparse
 import sys
 import tempfile
 from collections.abc import Callable
@@ -32,10 +37,11 @@ from pathlib import Path
 import numpy as np
 
 import gsfric
-from gsfric.bench.cases import bench_motion, best_times
-from gsfric.bench.machine import describe_machine, load_average, parallel_capacity, publish
-from gsfric.bench.paths import busy_core_paths, control_loop_paths
-from gsfric.bench.simulate import run_gsfric, simulate_case
+from benchmarks.cases import bench_motion, best_times
+from benchmarks.dask_scaling import dask_scaling
+from benchmarks.machine import describe_machine, load_average, parallel_capacity, publish
+from benchmarks.paths import busy_core_paths, control_loop_paths
+from benchmarks.simulate import run_gsfric, simulate_case
 from gsfric.evaluation.evaluator import Evaluator, state_array
 
 
@@ -203,8 +209,8 @@ def _rows(sizes: Sizes) -> dict[str, Row]:
 def measure_all(quick: bool = False, dask: Callable[[int, int], dict] | None = None,
                 progress=print) -> AllReport:
     """Measure every row of ``ROWS`` (``dask``: the function that times the sweep on one and
-    two workers, ``dask(steps, runs)``, ``gsfric.sweep.scaling.dask_scaling``; without it that
-    row is "not run").
+    two workers, ``dask(steps, runs)``, ``benchmarks.dask_scaling.dask_scaling``; without it
+    that row is "not run").
 
     Returns
     -------
@@ -244,7 +250,7 @@ def format_all(report: AllReport) -> str:
     """The table: path, goal, measured, met (yes / NO / -), with the machine above it."""
     m = report.machine
     quick = " --quick (sizes too small to judge the goals)" if report.quick else ""
-    head = [f"gsfric bench --all{quick}",
+    head = [f"python -m benchmarks.all{quick}",
             f"machine: {m.get('cpu')}, {m.get('cores')} cores, Python {m.get('python')}, "
             f"NumPy {m.get('numpy')}; source {m.get('source')}",
             f"load average {m.get('load_average_start')} -> {m.get('load_average_end')}; "
@@ -267,3 +273,16 @@ def run_all(quick: bool = False, out: Path | None = None,
     report = measure_all(quick, dask, progress=lambda s: print(s, file=sys.stderr, flush=True))
     publish(format_all(report), report.as_dict(), out)
     return report
+
+
+def main(argv=None) -> None:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--quick", action="store_true",
+                        help="every path at a small size, goals not judged")
+    parser.add_argument("--out", type=Path, help="also write the table as JSON")
+    args = parser.parse_args(argv)
+    run_all(quick=args.quick, out=args.out, dask=dask_scaling)
+
+
+if __name__ == "__main__":
+    main()

@@ -1,10 +1,16 @@
-"""Throughput of the compiled combined map against two NumPy implementations (``gsfric bench``).
+"""Throughput of the compiled combined map against two NumPy implementations.
 
-The compiled map ``Evaluator.actuator_forces`` (actuator forces with friction, NumPy in to NumPy
-out, preallocated output) is timed on one and on two threads against the same physics written
-in NumPy (``gsfric.bench.numpy_engine``): vectorised over steps, and a per-step loop that solves the
-dense 42x42 system of (2)-(16) at every step. Every case runs on the reference platform over a
-smooth random motion.
+Usage, from the root of a source checkout::
+
+    python -m benchmarks.throughput [--quick] [--out results.json]
+
+``gsfric bench`` prints the compiled rows alone; this adds the NumPy engines, memory, the paths
+around the hot path, import time and the targets. The compiled map
+``Evaluator.actuator_forces`` (actuator forces with friction, NumPy in to NumPy out,
+preallocated output) is timed on one and on two threads against the same physics written in
+NumPy (``tests/engines/numpy_reference.py``): vectorised over steps, and a per-step loop that
+solves the dense 42x42 system of (2)-(16) at every step. Every case runs on the reference
+platform over a smooth random motion.
 
 For each case: steps per second (from the fastest call; for one-thread cases also per second of
 the calling thread's CPU time, which other load on the machine disturbs less), the latency of
@@ -23,17 +29,18 @@ figures cannot exceed it.
 
 from __future__ import annotations
 
+import argparse
 import sys
 import tempfile
 from pathlib import Path
 
 import numpy as np
 
-from gsfric.bench.cases import Case, states, time_case
-from gsfric.bench.machine import describe_machine, load_average, parallel_capacity, publish
-from gsfric.bench.memory import memory_case
-from gsfric.bench.paths import import_time, measure_paths
-from gsfric.bench.report import Report, format_report, ratios, targets
+from benchmarks.cases import Case, states, time_case
+from benchmarks.machine import describe_machine, load_average, parallel_capacity, publish
+from benchmarks.memory import memory_case
+from benchmarks.paths import import_time, measure_paths
+from benchmarks.report import Report, format_report, ratios, targets
 
 SIZES = (40, 1_000, 100_000, 1_000_000)
 QUICK_SIZES = (40, 1_000)
@@ -106,3 +113,15 @@ def run_bench(quick: bool = False, out: Path | None = None) -> Report:
                      progress=lambda s: print(s, file=sys.stderr, flush=True))
     publish(format_report(report), report.as_dict(), out)
     return report
+
+
+def main(argv=None) -> None:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--quick", action="store_true", help="only N = 40 and 1e3")
+    parser.add_argument("--out", type=Path, help="also write the report as JSON")
+    args = parser.parse_args(argv)
+    run_bench(quick=args.quick, out=args.out)
+
+
+if __name__ == "__main__":
+    main()

@@ -1,4 +1,4 @@
-"""How a workspace sweep scales on Dask: one worker process against two (``gsfric bench --all``).
+"""How a workspace sweep scales on Dask: one worker process against two (``benchmarks/all.py``).
 
 Each cluster is the one ``scheduler="local"`` starts (``local_cluster``: single-threaded worker
 processes), started for the measurement and warmed by a one-pose task (imports, the compiled

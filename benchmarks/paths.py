@@ -13,12 +13,12 @@ from pathlib import Path
 import numpy as np
 
 import gsfric
-from gsfric.bench import numpy_engine as numpy_model
-from gsfric.bench.cases import bench_motion, best_times
-from gsfric.bench.simulate import SIMULATE_STEPS, simulate_case
+from benchmarks.cases import CHECKOUT, bench_motion, best_times
+from benchmarks.simulate import SIMULATE_STEPS, simulate_case
 from gsfric.compiled import native
 from gsfric.evaluation.evaluator import Evaluator, state_array
 from gsfric.evaluation.memory import release_memory
+from tests.engines import numpy_reference as numpy_model
 
 
 def import_time(runs: int = 7) -> dict:
@@ -69,9 +69,10 @@ def measure_paths(budget: float, memory: bool, progress=print, simulate: bool = 
     out["busy_core"] = busy_core_paths(platform, state_array(motion), budget, progress)
     if memory:
         progress("  evaluate memory, N=1,000,000 (fresh process)")
-        code = ("import json; from gsfric.bench.memory import evaluate_memory_child; "
+        code = ("import json; from benchmarks.memory import evaluate_memory_child; "
                 "print(json.dumps(evaluate_memory_child(1_000_000)))")
-        run = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True)
+        run = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
+                             cwd=CHECKOUT)
         if run.returncode == 0:
             out["evaluate_memory_1e6"] = json.loads(run.stdout.strip().splitlines()[-1])
     if simulate:

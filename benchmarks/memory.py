@@ -18,7 +18,7 @@ from pathlib import Path
 import numpy as np
 
 import gsfric
-from gsfric.bench.cases import bench_motion, implementation_call
+from benchmarks.cases import CHECKOUT, bench_motion, implementation_call
 
 
 def _status_kib(key: str) -> int | None:
@@ -82,9 +82,10 @@ def memory_case(implementation: str, threads: int, x: np.ndarray, folder: Path) 
     path = folder / f"x{x.shape[0]}.npy"
     if not path.exists():
         np.save(path, x)
-    code = ("import json, sys; from gsfric.bench.memory import memory_child; "
+    code = ("import json, sys; from benchmarks.memory import memory_child; "
             f"print(json.dumps(memory_child({implementation!r}, {threads}, {str(path)!r})))")
-    run = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True)
+    run = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
+                         cwd=CHECKOUT)
     if run.returncode != 0:
         raise RuntimeError(f"memory case {implementation} N={x.shape[0]} failed: "
                            f"{run.stderr.strip().splitlines()[-1:]}")

@@ -17,9 +17,9 @@ from pathlib import Path
 
 import numpy as np
 
+from benchmarks.cases import CHECKOUT, RATE
 from gsfric import models
 from gsfric._optional import optional
-from gsfric.bench.cases import RATE
 
 SIMULATE_STEPS = 1_000_000   # benchmarks/memory_10M.py runs the same at 10 million
 
@@ -130,14 +130,14 @@ def simulate_case(steps: int, folder: Path) -> dict | None:
     trajectory, out = folder / "trajectory.parquet", folder / "forces.parquet"
     try:
         subprocess.run([sys.executable, "-c", "import sys; from pathlib import Path; "
-                        "from gsfric.bench.simulate import write_trajectory; "
+                        "from benchmarks.simulate import write_trajectory; "
                         "write_trajectory(Path(sys.argv[1]), int(sys.argv[2]))",
-                        str(trajectory), str(steps)], check=True)
+                        str(trajectory), str(steps)], check=True, cwd=CHECKOUT)
         run = subprocess.run([sys.executable, "-c", "import json, sys; "
-                              "from gsfric.bench.simulate import simulate_child; print(json.dumps("
+                              "from benchmarks.simulate import simulate_child; print(json.dumps("
                               "simulate_child(int(sys.argv[1]), sys.argv[2], sys.argv[3])))",
                               str(steps), str(trajectory), str(out)],
-                             capture_output=True, text=True)
+                             capture_output=True, text=True, cwd=CHECKOUT)
         if run.returncode != 0:
             return None
         return json.loads(run.stdout.strip().splitlines()[-1])

@@ -1,10 +1,13 @@
-"""What ``gsfric bench`` times and how: the inputs, the implementations and the timed calls.
+"""What the benchmarks time and how: the inputs, the implementations and the timed calls.
 
 Every case runs on the reference platform over a smooth random motion sampled every ``DT``
 seconds; an implementation is the compiled map ``Evaluator.actuator_forces`` (coupled or the
-paper's friction model) or one of the NumPy engines (``gsfric.bench.numpy_engine``). A case's
-times are the wall-clock seconds of successive calls after a warm-up call, and for one thread
-also the calling thread's CPU seconds.
+paper's friction model) or one of the NumPy reference engines
+(``tests/engines/numpy_reference.py``). A case's times are the wall-clock seconds of successive
+calls after a warm-up call, and for one thread also the calling thread's CPU seconds.
+
+Run from the root of a source checkout (``python -m benchmarks.throughput``): the benchmarks
+import ``benchmarks`` and ``tests.engines`` from it, and so do their child processes.
 """
 
 from __future__ import annotations
@@ -12,13 +15,16 @@ from __future__ import annotations
 import statistics
 import time
 from dataclasses import asdict, dataclass
+from pathlib import Path
 
 import numpy as np
 
 from gsfric import models
-from gsfric.bench import numpy_engine as numpy_model
 from gsfric.evaluation.evaluator import Evaluator, state_array
+from tests.engines import numpy_reference as numpy_model
 
+CHECKOUT = Path(__file__).resolve().parents[1]
+"""The source checkout: the working directory of the benchmarks' child processes."""
 RATE = 1000.0
 """Sampling rate of the benchmark's motions, Hz."""
 DT = 1 / RATE
