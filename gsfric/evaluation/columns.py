@@ -61,6 +61,14 @@ COLUMNS: tuple[Column, ...] = (
     Column("t", "s", "time of the step (as read from the input, converted to s)", "time"),
     Column("F{i}", "N", "actuator force of leg i with friction and effects; + pushes the "
            "platform away from the base (Result.F)", "forces", "F"),
+    Column("sigma_F{i}", "N", "one standard deviation of F_i from the differentiation of the "
+           "recorded poses (their noise through the smoother, the stamps' jitter included), "
+           "linearised in the rates (Result.sigma_F; gsfric.evaluation.uncertainty)",
+           "uncertainty", "sigma_F"),
+    Column("rest", "1", "legs whose speed is within 2 standard deviations of zero, possibly "
+           "at rest: their friction may be anything within the Coulomb level, not the "
+           "sliding value in F; the sum of 2^(i-1) over those legs i, 0 when all slide "
+           "(Result.rest)", "uncertainty", "rest"),
     Column("MfrE{i}", "N m", "friction moment of spherical joint E_i, the paper's scalar of "
            "(33): <= 0, negative = opposing (Result.MfrE_s; the vector is Result.MfrE)",
            "friction", "MfrE_s"),
@@ -108,6 +116,8 @@ MEASURED: tuple[Column, ...] = (
 
 GROUPS = {
     "forces": "F1..F6: actuator forces with friction, N",
+    "uncertainty": "sigma_F1..6 (N): one standard deviation of F from the differentiation; "
+                   "rest: the legs possibly at rest (a motion differentiated from poses)",
     "friction": "MfrE1..6, MfrC1..6 (N m), Ffr1..6 (N): the paper's friction scalars "
                 "(<= 0, negative = opposing)",
     "reactions": "REx1..REz6, RCx1..RCz6 (N), MC1..MC6 (N m): joint reactions",
@@ -118,7 +128,7 @@ GROUPS = {
 }
 """Output groups of ``simulate --columns``; ``t`` and ``flag`` are always written."""
 
-DEFAULT_GROUPS = ("forces", "friction", "reactions")
+DEFAULT_GROUPS = ("forces", "uncertainty", "friction", "reactions")
 """The groups ``simulate`` writes unless ``--columns`` says otherwise: with ``t`` and ``flag``
 (``t``, F, the paper's friction scalars, the joint reactions, the flag: ``len(plan(DEFAULT_GROUPS)) + 2``
 values a step); every other group is one ``--columns`` away (``all``: every group)."""

@@ -57,7 +57,15 @@ from gsfric.simulate.outputs import (
     result_columns,
     with_carried,
 )
+from gsfric.simulate.rates import RateComparison, compare_rates
 from gsfric.simulate.writer import Writer
+
+SIGMA_SHARE = 0.05
+"""``simulate`` warns when a leg's sigma_F (the differentiation's uncertainty of F; its root
+mean square over the steps where every leg slides: at a rest it is the friction's sign, which
+the ``rest`` column reports) exceeds this share of its largest |F|: beyond, the forces depend on
+how the motion was differentiated (window, time base, the log's own rates) by more than a
+sizing margin hides."""
 
 MAX_REPORTED = 10_000
 """Flagged step indices kept for the summary (the count is always exact)."""
@@ -89,6 +97,15 @@ class Summary:
         0-based indices of flagged steps (the first ``MAX_REPORTED``).
     differentiation : str
         How velocities and accelerations were obtained (``describe_differentiation``).
+    peak_F : ndarray, shape (6,)
+        Largest |F| of each leg over the steps, N (NaN: not computed).
+    sliding_sigma_F : ndarray, shape (6,)
+        Root mean square of sigma_F of each leg over the steps where no leg is possibly at
+        rest, N (NaN: not computed; with the ``uncertainty`` group only).
+    rest_steps : int
+        Steps with a leg possibly at rest (``rest`` != 0).
+    rates : RateComparison or None
+        The log's own rates against its poses differentiated, for a log with rate columns.
     """
 
     out: Path
@@ -99,6 +116,25 @@ class Summary:
     flag_counts: dict[str, int] = field(default_factory=dict)
     flagged_steps: np.ndarray = field(default_factory=lambda: np.zeros(0, dtype=np.int64))
     differentiation: str = ""
+    peak_F: np.ndarray = field(default_factory=lambda: np.full(6, np.nan))
+    sliding_sigma_F: np.ndarray = field(default_factory=lambda: np.full(6, np.nan))
+    rest_steps: int = 0
+    rates: RateComparison | None = None
+
+    def uncertainty_message(self, trajectory: Path) -> str | None:
+        """One line when a leg's typical sigma_F (``sliding_sigma_F``) exceeds
+        ``SIGMA_SHARE`` of its largest |F|, else None."""
+        with np.errstate(invalid="ignore", divide="ignore"):
+            share = self.sliding_sigma_F / self.peak_F
+        if not np.any(share > SIGMA_SHARE):
+            return None
+        leg = int(np.nanargmax(share))
+        return (f"{trajectory}: the forces hinge on the differentiation: sigma_F is "
+                f"{self.sliding_sigma_F[leg]:.4g} N on leg {leg + 1} (root mean square where "
+                f"the legs slide), {100 * share[leg]:.3g} % of its peak |F| of "
+                f"{self.peak_F[leg]:.4g} N (more than "
+                f"{100 * SIGMA_SHARE:g} %); see the sigma_F columns, give a --window, or map "
+                "the log's own rate columns")
 
     def flag_message(self, trajectory: Path) -> str:
         kinds = "; ".join(f"{name}: {count}" for name, count in self.flag_counts.items()
@@ -146,7 +182,7 @@ def simulate_file(trajectory: str | os.PathLike[str], out: str | os.PathLike[str
                   chunk: int = DEFAULT_CHUNK, window: int | None = None,
                   polyorder: int = DEFAULT_POLYORDER, n_threads: int = 1,
                   progress: bool | None = None, log_format=None, columns=None,
-                  float32: bool = False) -> Summary:
+                  float32: bool = False, uncertainty: bool = True) -> Summary:
     """Evaluate a trajectory file chunk by chunk and write every step's outputs.
 
     Parameters
@@ -179,6 +215,11 @@ def simulate_file(trajectory: str | os.PathLike[str], out: str | os.PathLike[str
     float32 : bool
         Write the outputs (not ``t``) as float32: relative error up to ``FLOAT32_RTOL``
         (6e-8) of each value, half the file.
+    uncertainty : bool
+        Write the ``uncertainty`` group (sigma_F1..6, rest) when the columns include it, warn
+        when sigma_F exceeds ``SIGMA_SHARE`` of a leg's peak force, and, for a log with its own
+        rates, compare them with its poses differentiated (``Summary.rates``); False leaves
+        all of it out.
 
     Returns
     -------
@@ -203,18 +244,24 @@ def simulate_file(trajectory: str | os.PathLike[str], out: str | os.PathLike[str
     strict = as_flag(strict, "strict")
     kind = _check_paths(trajectory, out, platform)
     platform = platform_from(platform)
-    plan = column_plan(parse_columns(None) if columns is None else
-                       parse_columns(",".join(columns)))
+    groups = parse_columns(None) if columns is None else parse_columns(",".join(columns))
+    if not as_flag(uncertainty, "uncertainty"):
+        groups = tuple(g for g in groups if g != "uncertainty")
+    plan = column_plan(groups)
     motions = iter_motions(trajectory, chunk=chunk, window=window, polyorder=polyorder,
                            log_format=log_format)
     run = _Run(trajectory, out, platform, plan, mode=mode, strict=strict, n_threads=n_threads,
                float32=float32, progress=progress)
+    run.smoothing = (window, polyorder) if uncertainty else None
     Writer.load(kind)
     try:
         run.write(motions, kind)
     finally:
         run.bar.close()
     summary = run.finish()
+    message = summary.uncertainty_message(trajectory) if uncertainty else None
+    if message:
+        warnings.warn(message, GsfricWarning, stacklevel=2)
     if summary.flagged:
         warnings.warn(summary.flag_message(trajectory) + f"; see the flag column of {out}",
                       GsfricWarning, stacklevel=2)
@@ -311,6 +358,9 @@ class _Run:
                         unit_scale=True, desc="simulate", file=sys.stderr, disable=not show,
                         dynamic_ncols=True, leave=False)
         self.stopped = False                      # a stage failed: evaluate no more
+        self.smoothing = None                     # (window, polyorder): compare own rates
+        self.own_rates = None                     # a motion with the log's own rates
+        self.sigma_squares, self.sigma_steps = np.zeros(6), 0   # sigma_F^2 summed, sliding
         self.sets: tuple[dict, dict] = ({}, {})   # the evaluation's outputs of even, odd chunks
         self.column_arrays: dict = {}             # the columns' arrays (of the writing thread)
         gains, delay = sensor_parameters(platform.effects)
@@ -376,6 +426,9 @@ class _Run:
                                                  axis=1), str(self.trajectory))
         if not self.summary.differentiation:
             self.summary.differentiation = describe_differentiation(part)
+            how = motion.differentiation()
+            if how is not None and how.rates:
+                self.own_rates = motion
 
     def _drain(self, pending: deque[Future], writes: _Writes) -> None:
         """Wait for the evaluations left and their writes, and write what waits for the
@@ -414,6 +467,7 @@ class _Run:
                 self.summary.flag_message(self.trajectory)
                 + " (--strict: stopped at the first chunk with flagged steps; "
                 "no output written)")
+        self._peaks(arrays)
         outputs = ChunkOutputs(np.asarray(motion.t, dtype=np.float64), arrays, flag)
         if self.shift is None:
             writes.submit([(outputs, part.carried)], which)
@@ -425,6 +479,24 @@ class _Run:
         self.summary.steps = start + len(motion)
         self.bar.update(len(motion))
 
+    def _peaks(self, arrays: dict) -> None:
+        """Count a piece's largest |F| and sigma_F per leg and its steps with a leg possibly
+        at rest into the summary."""
+        summary = self.summary
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore", RuntimeWarning)       # all-NaN legs
+            if "F" in arrays and len(arrays["F"]):
+                summary.peak_F = np.fmax(summary.peak_F, np.nanmax(np.abs(arrays["F"]), 0))
+        if "sigma_F" not in arrays or "rest" not in arrays:
+            return
+        resting = np.nan_to_num(arrays["rest"]).reshape(-1) != 0
+        summary.rest_steps += int(np.count_nonzero(resting))
+        sliding = arrays["sigma_F"][~resting]
+        self.sigma_squares += np.nansum(sliding ** 2, axis=0)
+        self.sigma_steps += len(sliding)
+        if self.sigma_steps:
+            summary.sliding_sigma_F = np.sqrt(self.sigma_squares / self.sigma_steps)
+
     def _write_one(self, writer: Writer, item) -> None:
         """Write one chunk (in the writing thread): its columns first, from ``ChunkOutputs``."""
         if isinstance(item, tuple):
@@ -434,6 +506,9 @@ class _Run:
         writer.write(item)
 
     def finish(self) -> Summary:
-        """The summary, its flags filled in."""
+        """The summary, its flags and the comparison of the log's own rates filled in."""
         self.flags.fill(self.summary)
+        if self.own_rates is not None and self.smoothing is not None \
+                and self.evaluator is not None:
+            self.summary.rates = compare_rates(self.evaluator, self.own_rates, *self.smoothing)
         return self.summary

@@ -1,0 +1,104 @@
+"""The uncertainty the differentiation of recorded poses leaves in the forces, and the steps
+where a joint is possibly at rest.
+
+Force uncertainty (``force_sigma``). The rates of a motion made from sampled poses carry one
+standard deviation each (``Motion.rate_uncertainty``: velocity, omega, acceleration, alpha per
+axis). F is linearised in them by central differences of the compiled actuator forces, one
+rate at a time, over plus and minus its own standard deviation (at that scale, so that a
+friction force that changes sign within it counts), and the contributions are added in
+quadrature: the twelve rate errors are taken as independent (the pose noise as white and
+independent between axes; a centred smoothing filter's first and second derivatives are
+uncorrelated). The sensitivities change with the pose and the speed over the motion's own time
+scale, not from step to step: they are computed every ``SIGMA_GRID_TIME`` of motion time (every
+step of a log sampled more slowly) and interpolated linearly between, which keeps the cost a
+fraction of the evaluation's.
+
+Rest (``possibly_at_rest``). A leg whose differentiated speed is within ``REST_BAND`` standard
+deviations of zero may be at rest: its friction is then static, anything between minus and
+plus its Coulomb level, not the sliding value that the model applies with the speed's sign.
+Such steps are marked per leg (the ``rest`` column of ``gsfric simulate``), not changed: the
+forces stay the model's sliding values, and the mark says that the friction part of F may lie
+anywhere within the Coulomb bound. The one rule for simulate, sweep and discover.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from gsfric.compiled.state import state_of
+from gsfric.trajectory import Motion
+
+SIGMA_GRID_TIME = 0.05
+"""Motion time, s, between the steps where F's sensitivities to the rates are computed
+(``force_sigma``): a platform's motions (below about 5 Hz) change pose and speed little over
+it, and at 1 kHz it costs half an evaluation of F per step."""
+
+REST_BAND = 2.0
+"""A leg whose speed is within this many standard deviations of zero is possibly at rest
+(``possibly_at_rest``): a speed that is truly zero lies within it 95 % of the time."""
+
+RATE_COLUMNS = slice(12, 24)
+"""The rates' columns in a state (``gsfric.compiled.state``): velocity, omega, acceleration,
+alpha."""
+
+
+def force_sigma(evaluator, motion: Motion) -> np.ndarray | None:
+    """One standard deviation of each actuator force from the differentiation, (N, 6), N (see
+    the module's docstring); None for a motion without ``rate_uncertainty`` or an evaluator in
+    paper mode (whose accelerations are constants)."""
+    uncertainty = motion.rate_uncertainty()
+    n = len(motion)
+    if uncertainty is None or evaluator.mode != "kinematic" or n == 0:
+        return None
+    t = np.asarray(motion.t, float)
+    step = (t[-1] - t[0]) / (n - 1) if n > 1 else SIGMA_GRID_TIME
+    stride = max(1, int(SIGMA_GRID_TIME / step)) if step > 0 else 1
+    grid = np.unique(np.r_[np.arange(0, n, stride), n - 1])
+    x = state_of((motion.position[grid], motion.rotation[grid], motion.velocity[grid],
+                  motion.omega[grid], motion.acceleration[grid], motion.alpha[grid]))
+    sigma = uncertainty.stacked()[grid]                                    # (G, 12)
+    g = len(grid)
+    states = np.repeat(x[None], 24, axis=0)                                # (24, G, 24)
+    rates = states[:, :, RATE_COLUMNS]                                   # a view
+    for k in range(12):
+        rates[2 * k, :, k] += sigma[:, k]
+        rates[2 * k + 1, :, k] -= sigma[:, k]
+    F = evaluator.actuator_forces(states.reshape(-1, 24), out=np.empty((24 * g, 6)))
+    F = F.reshape(12, 2, g, 6)
+    at_grid = np.sqrt(np.sum(((F[:, 0] - F[:, 1]) / 2.0) ** 2, axis=0))  # (G, 6)
+    if g == n:
+        return at_grid
+    steps = np.arange(n)
+    return np.stack([np.interp(steps, grid, at_grid[:, i]) for i in range(6)], axis=1)
+
+
+def leg_speed_sigma(platform, motion: Motion) -> np.ndarray | None:
+    """An upper bound of one standard deviation of each leg's speed from the differentiation,
+    (N, 6), m/s, or None (no ``rate_uncertainty``).
+
+    The leg speed is ``u . v + (r x u) . omega`` (u the leg's unit vector, r its platform
+    joint from the platform's origin, base frame); with |u| = 1 and |r x u| <= |r|, its
+    variance is at most ``max_k sigma_v,k^2 + |r|^2 max_k sigma_omega,k^2``."""
+    uncertainty = motion.rate_uncertainty()
+    if uncertainty is None:
+        return None
+    radius = np.linalg.norm(np.asarray(platform.geometry.platform_joints, float), axis=1)
+    v2 = np.max(uncertainty.velocity ** 2, axis=1)[:, None]
+    w2 = np.max(uncertainty.omega ** 2, axis=1)[:, None]
+    return np.sqrt(v2 + radius[None, :] ** 2 * w2)
+
+
+def possibly_at_rest(speed: np.ndarray, sigma: np.ndarray, band: float = REST_BAND
+                     ) -> np.ndarray:
+    """(N, 6) True where a joint's speed (N, 6) is within ``band`` of its standard deviations
+    ``sigma`` ((N, 6) or (6,)) of zero: possibly at rest, its friction bounded by the Coulomb
+    level rather than the sliding value."""
+    speed = np.asarray(speed, float)
+    return np.abs(speed) <= band * np.broadcast_to(np.asarray(sigma, float), speed.shape)
+
+
+def rest_legs(at_rest: np.ndarray) -> np.ndarray:
+    """The legs possibly at rest (N, 6) bool as one number per step (N,): the sum of
+    ``2**(i - 1)`` over the legs i (1..6) possibly at rest (0: every leg slides)."""
+    return (np.asarray(at_rest, bool) * (1 << np.arange(6))).sum(axis=1)
+
