@@ -306,11 +306,13 @@ class Evaluator:
         return Result(t=np.asarray(motion.t, float), arrays=Outputs(arrays, later), flag=flag,
                       mode=self.mode, source=(self.platform, motion), runner=_evaluate_quietly)
 
-    def uncertainty(self, motion: Motion, D_dot: np.ndarray) -> dict[str, np.ndarray]:
+    def uncertainty(self, motion: Motion, D_dot: np.ndarray, start: int = 0
+                    ) -> dict[str, np.ndarray]:
         """``sigma_F`` (N, 6), N, and ``rest`` (N,) of a motion with ``rate_uncertainty``
-        whose leg speeds are ``D_dot`` (N, 6) (``gsfric.evaluation.uncertainty``); empty for
-        one without, or in paper mode."""
-        sigma = force_sigma(self, motion)
+        whose leg speeds are ``D_dot`` (N, 6) (``gsfric.evaluation.uncertainty``; ``start``:
+        the index of its first step in a longer record); empty for one without, or in paper
+        mode."""
+        sigma = force_sigma(self, motion, start)
         if sigma is None:
             return {}
         at_rest = possibly_at_rest(D_dot, leg_speed_sigma(self.platform, motion))
@@ -549,7 +551,8 @@ def breakdown(platform: Platform, motion: Motion):
 
 
 def evaluate_outputs(evaluator: Evaluator, motion: Motion, names, buffers: dict | None = None,
-                     sensor: bool = True) -> tuple[dict[str, np.ndarray], np.ndarray]:
+                     sensor: bool = True, start: int = 0
+                     ) -> tuple[dict[str, np.ndarray], np.ndarray]:
     """Only the outputs ``names`` of ``motion`` and its step flags, as
     ``Evaluator.evaluate_quiet`` computes them, without a Result.
 
@@ -570,6 +573,8 @@ def evaluate_outputs(evaluator: Evaluator, motion: Motion, names, buffers: dict 
         are then views into it, valid until the next call with it.
     sensor : bool
         Apply the sensor's effects to F (when "F" is among ``names``).
+    start : int
+        Index of the motion's first step in the record it is a piece of (``force_sigma``).
 
     Returns
     -------
@@ -597,7 +602,7 @@ def evaluate_outputs(evaluator: Evaluator, motion: Motion, names, buffers: dict 
     if sensor and "F" in outs:
         evaluator._apply_sensor(np.asarray(motion.t, float), outs, flag)
     if derived:
-        extra = evaluator.uncertainty(motion, outs["D_dot"])
+        extra = evaluator.uncertainty(motion, outs["D_dot"], start)
         for name in derived:
             outs[name] = extra.get(name, np.full((n, UNCERTAINTY_OUTPUTS[name]), np.nan))
     return outs, flag

@@ -42,10 +42,16 @@ RATE_COLUMNS = slice(12, 24)
 alpha."""
 
 
-def force_sigma(evaluator, motion: Motion) -> np.ndarray | None:
+def force_sigma(evaluator, motion: Motion, start: int = 0) -> np.ndarray | None:
     """One standard deviation of each actuator force from the differentiation, (N, 6), N (see
     the module's docstring); None for a motion without ``rate_uncertainty`` or an evaluator in
-    paper mode (whose accelerations are constants)."""
+    paper mode (whose accelerations are constants).
+
+    The sensitivities are computed at the steps whose index in the record (``start`` + the
+    index in ``motion``: a piece of a longer record) is a multiple of the grid's stride, and at
+    every step before the first and after the last of them: a record evaluated in pieces gets
+    the values of the whole, but for the steps between a piece's last grid step and its end,
+    computed there rather than interpolated (they differ by the interpolation's error)."""
     uncertainty = motion.rate_uncertainty()
     n = len(motion)
     if uncertainty is None or evaluator.mode != "kinematic" or n == 0:
@@ -53,7 +59,11 @@ def force_sigma(evaluator, motion: Motion) -> np.ndarray | None:
     t = np.asarray(motion.t, float)
     step = (t[-1] - t[0]) / (n - 1) if n > 1 else SIGMA_GRID_TIME
     stride = max(1, int(SIGMA_GRID_TIME / step)) if step > 0 else 1
-    grid = np.unique(np.r_[np.arange(0, n, stride), n - 1])
+    grid = np.arange((-int(start)) % stride, n, stride)
+    if len(grid):
+        grid = np.r_[np.arange(grid[0]), grid, np.arange(grid[-1] + 1, n)]
+    else:
+        grid = np.arange(n)
     x = state_of((motion.position[grid], motion.rotation[grid], motion.velocity[grid],
                   motion.omega[grid], motion.acceleration[grid], motion.alpha[grid]))
     sigma = uncertainty.stacked()[grid]                                    # (G, 12)

@@ -459,7 +459,8 @@ class _Run:
             buffers_free.result()
         start, motion = part.start, part.motion
         arrays, flag = evaluate_outputs(self.evaluator, motion, self.names,
-                                        buffers=self.sets[which], sensor=self.shift is None)
+                                        buffers=self.sets[which], sensor=self.shift is None,
+                                        start=start)
         if self.flags.add(flag, start) and self.strict:
             self.summary.steps = start + len(motion)
             self.flags.fill(self.summary)
