@@ -645,7 +645,7 @@ def _given_rates(t, rates, first: str, second: str, smoothed: Smoothed, even: bo
         noise = _noise(t, d1, even)
         if second not in rates:
             made = smooth(t, d1, even, window, polyorder, lam)
-            d2 = made.second
+            d2 = made.first
             sigma = None if made.gains is None else \
                 (np.broadcast_to(noise, d1.shape), made.sigma()[0])
         else:

@@ -7,7 +7,9 @@ controller's own velocity and acceleration columns, and rests between the moves.
 
 from __future__ import annotations
 
+import tempfile
 import warnings
+from pathlib import Path
 
 import numpy as np
 import pandas as pd
@@ -104,8 +106,8 @@ def controller_log(seconds: float = 30.0, stamps: str = "clock", seed: int = 7,
     for axis, name in zip("xyz", ("Surge", "Sway", "Heave")):
         columns[f"v{axis}"], units[f"v{axis}"] = f"{name} vel [mm/s]", "mm/s"
         columns[f"a{axis}"], units[f"a{axis}"] = f"{name} acc [mm/s2]", "mm/s^2"
-    fmt = dict(columns=columns, units=units, angles="xyz", axes=["x", "-y", "-z"],
-               offset={"z": HOME}, wrap=2**32)
+    fmt = {"columns": columns, "units": units, "angles": "xyz", "axes": ["x", "-y", "-z"],
+           "offset": {"z": HOME}, "wrap": 2**32}
     return log, fmt, truth
 
 
@@ -156,13 +158,8 @@ def test_the_time_base_is_the_one_the_poses_are_smooth_on(stamps, noise, even):
     assert "1.1 % jitter" in motion.differentiation().describe()
 
 
-_written: list = []
-
-
-def _write(log: pd.DataFrame, tmp=None):
-    import tempfile
-    from pathlib import Path
-    folder = Path(tempfile.mkdtemp(prefix="gsfric-test-")) if tmp is None else tmp
+def _write(log: pd.DataFrame, folder: Path | None = None) -> Path:
+    folder = Path(tempfile.mkdtemp(prefix="gsfric-test-")) if folder is None else folder
     path = folder / "log.csv"
     log.to_csv(path, index=False)
     return path
@@ -212,8 +209,6 @@ def test_own_rates_differ_from_the_differentiated_ones_by_what_sigma_f_says(tmp_
 def test_simulate_prints_the_comparison_and_can_leave_the_uncertainty_out(tmp_path):
     log, fmt, _ = controller_log(20.0, "clock")
     path = _write(log, tmp_path)
-    toml = tmp_path / "log.toml"
-    _format(fmt).to_toml(toml) if hasattr(LogFormat, "to_toml") else None
     runner = CliRunner()
     out = tmp_path / "forces.csv"
     args = ["simulate", "--trajectory", str(path), "--column-map", str(_toml(fmt, tmp_path)),
@@ -232,7 +227,7 @@ def test_simulate_prints_the_comparison_and_can_leave_the_uncertainty_out(tmp_pa
     assert "sigma_F" not in result.stdout
 
 
-def _toml(fmt: dict, folder) -> object:
+def _toml(fmt: dict, folder: Path) -> Path:
     lines = ['angles = "xyz"', 'axes = ["x", "-y", "-z"]', f"wrap = {2**32}", "",
              "[offset]", f"z = {HOME}", "", "[columns]"]
     lines += [f'{k} = "{v}"' for k, v in fmt["columns"].items()]

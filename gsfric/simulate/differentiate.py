@@ -30,6 +30,7 @@ from gsfric._threads import in_parallel
 from gsfric.errors import InputError
 from gsfric.io.logs import EULER, QUATERNION, RATES
 from gsfric.io.readers import motion_from_columns
+from gsfric.signal.noise import white_noise_std
 from gsfric.signal.rotations import angular_rates, continuous_quaternions, rotation_from_quaternion
 from gsfric.signal.savgol import (
     DEFAULT_POLYORDER,
@@ -39,7 +40,6 @@ from gsfric.signal.savgol import (
     savgol_derivatives,
     savgol_gains,
 )
-from gsfric.signal.noise import white_noise_std
 from gsfric.signal.windows import gcv_window
 from gsfric.simulate.blocks import Block, EulerWatch, read_blocks
 from gsfric.trajectory import MIN_SAMPLES, UNIFORM_RTOL, Motion, RateUncertainty

@@ -210,8 +210,9 @@ def simulate_file(trajectory: str | os.PathLike[str], out: str | os.PathLike[str
         F1..F6 (measured data) also gets ``F1_measured..F6_measured`` and the residuals
         ``F1_residual..F6_residual`` (measured minus model) in the output.
     columns : iterable of str, optional
-        Output groups (``COLUMN_GROUPS``); default ``DEFAULT_COLUMN_GROUPS`` (forces, the
-        paper's friction scalars, reactions: 68 values a step). ``t`` and ``flag`` always.
+        Output groups (``COLUMN_GROUPS``); default ``DEFAULT_COLUMN_GROUPS`` (forces,
+        sigma_F and rest, the paper's friction scalars, reactions: 75 values a step). ``t``
+        and ``flag`` always.
     float32 : bool
         Write the outputs (not ``t``) as float32: relative error up to ``FLOAT32_RTOL``
         (6e-8) of each value, half the file.
