@@ -301,7 +301,8 @@ class RateUncertainty:
         return np.concatenate([self.velocity, self.omega, self.acceleration, self.alpha],
                               axis=1)
 
-    def slice(self, part: slice) -> RateUncertainty:
+    def slice(self, part) -> RateUncertainty:
+        """The steps ``part`` (a slice or an array of indices)."""
         return RateUncertainty(self.velocity[part], self.omega[part],
                                self.acceleration[part], self.alpha[part])
 

@@ -66,7 +66,7 @@ def force_sigma(evaluator, motion: Motion, start: int = 0) -> np.ndarray | None:
         grid = np.arange(n)
     x = state_of((motion.position[grid], motion.rotation[grid], motion.velocity[grid],
                   motion.omega[grid], motion.acceleration[grid], motion.alpha[grid]))
-    sigma = uncertainty.stacked()[grid]                                    # (G, 12)
+    sigma = uncertainty.slice(grid).stacked()                              # (G, 12)
     g = len(grid)
     states = np.repeat(x[None], 24, axis=0)                                # (24, G, 24)
     rates = states[:, :, RATE_COLUMNS]                                   # a view
