@@ -20,7 +20,7 @@ import gsfric
 from gsfric import models
 from gsfric.cli import main
 from gsfric.errors import GsfricWarning
-from gsfric.evaluation.uncertainty import force_sigma, possibly_at_rest
+from gsfric.evaluation.uncertainty import force_sigma, leg_speeds, possibly_at_rest
 from gsfric.io.logs import LogFormat
 from gsfric.io.readers import read_trajectory
 from gsfric.io.tables import read_table
@@ -29,6 +29,7 @@ from gsfric.signal.rotations import rpy_from_rotation
 from gsfric.signal.savgol import savgol_filter, savgol_gains
 from gsfric.signal.smoothing import evenly_spaced
 from gsfric.simulate.run import simulate_file
+from gsfric.sweep import sweep
 from gsfric.trajectory import Motion
 
 RATE, JITTER, HOME = 100.0, 0.011, 0.75
@@ -276,3 +277,26 @@ def test_possibly_at_rest_is_the_band_of_standard_deviations():
     assert possibly_at_rest(speed, np.full(6, 2e-3)).tolist() == \
         [[True, True, True, False, False, False]]
     assert possibly_at_rest(speed, np.full(6, 2e-3), band=5.0)[0, :5].all()
+
+
+def test_leg_speeds_are_the_evaluations_d_dot():
+    truth = paced_motion(np.arange(600) / RATE, [(2.0, 3.0)])
+    platform = gsfric.reference_platform()
+    result = _quiet(gsfric.evaluate, platform, truth)
+    np.testing.assert_allclose(leg_speeds(platform, truth), result.D_dot, rtol=1e-9,
+                               atol=1e-12)
+
+
+@pytest.mark.integration
+def test_sweep_counts_the_steps_at_rest_as_simulate_does(tmp_path):
+    log, fmt, _ = controller_log(20.0, "clock")
+    motion = _quiet(read_trajectory, _write(log, tmp_path), log_format=_format(fmt, False))
+    frame = motion.to_frame()[["t", "x", "y", "z", "qw", "qx", "qy", "qz"]]
+    frame["t"] = motion.t
+    frame.to_csv(tmp_path / "motion.csv", index=False)
+    _quiet(simulate_file, tmp_path / "motion.csv", tmp_path / "forces.csv")
+    rest = read_table(tmp_path / "forces.csv")["rest"].to_numpy()
+    result = _quiet(sweep, tmp_path / "sweep", trajectories=str(tmp_path / "motion.csv"),
+                    scheduler="serial", plots=False)
+    at_rest = set(result.envelopes["at_rest"])
+    assert at_rest == {int(np.count_nonzero(rest))} and np.count_nonzero(rest) > 100

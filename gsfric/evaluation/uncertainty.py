@@ -28,10 +28,10 @@ import numpy as np
 from gsfric.compiled.state import state_of
 from gsfric.trajectory import Motion
 
-SIGMA_GRID_TIME = 0.05
+SIGMA_GRID_TIME = 0.1
 """Motion time, s, between the steps where F's sensitivities to the rates are computed
-(``force_sigma``): a platform's motions (below about 5 Hz) change pose and speed little over
-it, and at 1 kHz it costs half an evaluation of F per step."""
+(``force_sigma``): a platform's motions (below about 2 Hz) change pose and speed little over
+it, and at 1 kHz it costs a quarter of an evaluation of F per step."""
 
 REST_BAND = 2.0
 """A leg whose speed is within this many standard deviations of zero is possibly at rest
@@ -93,9 +93,10 @@ def leg_speed_sigma(platform, motion: Motion) -> np.ndarray | None:
     if uncertainty is None:
         return None
     radius = np.linalg.norm(np.asarray(platform.geometry.platform_joints, float), axis=1)
-    v2 = np.max(uncertainty.velocity ** 2, axis=1)[:, None]
-    w2 = np.max(uncertainty.omega ** 2, axis=1)[:, None]
-    return np.sqrt(v2 + radius[None, :] ** 2 * w2)
+    v, w = uncertainty.velocity, uncertainty.omega
+    v2 = np.maximum(np.maximum(v[:, 0], v[:, 1]), v[:, 2]) ** 2
+    w2 = np.maximum(np.maximum(w[:, 0], w[:, 1]), w[:, 2]) ** 2
+    return np.sqrt(v2[:, None] + radius[None, :] ** 2 * w2[:, None])
 
 
 def possibly_at_rest(speed: np.ndarray, sigma: np.ndarray, band: float = REST_BAND
@@ -108,7 +109,30 @@ def possibly_at_rest(speed: np.ndarray, sigma: np.ndarray, band: float = REST_BA
 
 
 def rest_legs(at_rest: np.ndarray) -> np.ndarray:
-    """The legs possibly at rest (N, 6) bool as one number per step (N,): the sum of
+    """The legs possibly at rest (N, 6) bool as one number per step (N,) uint8: the sum of
     ``2**(i - 1)`` over the legs i (1..6) possibly at rest (0: every leg slides)."""
-    return (np.asarray(at_rest, bool) * (1 << np.arange(6))).sum(axis=1)
+    return np.packbits(np.asarray(at_rest, bool), axis=1, bitorder="little")[:, 0]
 
+
+
+def leg_speeds(platform, motion: Motion) -> np.ndarray:
+    """Each leg's speed (N, 6), m/s: ``u . (v + omega x r)``, r = R e_i the platform joint from
+    the platform's origin and u the unit vector from the base joint c_i to it (base frame): the
+    ``D_dot`` of an evaluation, without one."""
+    e = np.asarray(platform.geometry.platform_joints, float)
+    c = np.asarray(platform.geometry.base_joints, float)
+    r = np.einsum("njk,ik->nij", motion.rotation, e)                       # (N, 6, 3)
+    leg = r + motion.position[:, None, :] - c[None]
+    u = leg / np.linalg.norm(leg, axis=2, keepdims=True)
+    joint = motion.velocity[:, None, :] + np.cross(motion.omega[:, None, :], r)
+    return np.einsum("nij,nij->ni", u, joint)
+
+
+def steps_at_rest(platform, motion: Motion) -> int:
+    """Steps of ``motion`` with a leg possibly at rest (``possibly_at_rest``), 0 for a motion
+    without ``rate_uncertainty``."""
+    sigma = leg_speed_sigma(platform, motion)
+    if sigma is None:
+        return 0
+    return int(np.count_nonzero(possibly_at_rest(leg_speeds(platform, motion), sigma)
+                                .any(axis=1)))
