@@ -20,6 +20,7 @@ import gsfric
 from gsfric import models
 from gsfric.cli import main
 from gsfric.errors import GsfricWarning
+from gsfric.evaluation import state_array
 from gsfric.evaluation.uncertainty import force_sigma, leg_speeds, possibly_at_rest
 from gsfric.io.logs import LogFormat
 from gsfric.io.readers import read_trajectory
@@ -300,3 +301,30 @@ def test_sweep_counts_the_steps_at_rest_as_simulate_does(tmp_path):
                     scheduler="serial", plots=False)
     at_rest = set(result.envelopes["at_rest"])
     assert at_rest == {int(np.count_nonzero(rest))} and np.count_nonzero(rest) > 100
+
+
+@pytest.mark.parametrize("n, start", [(1000, 0), (1000, 3), (45, 2)])
+def test_sigma_f_between_the_grid_steps_is_the_linear_interpolation(n, start):
+    t = np.arange(n) / 1000.0                          # a grid step every 100 steps at 1 kHz
+    truth = models.sinusoidal(t)
+    rng = np.random.default_rng(5)
+    motion = Motion.from_samples(t, truth.position + rng.normal(0, 1e-5, (n, 3)),
+                                 quaternion=truth.quaternion(), window=31)
+    evaluator = gsfric.Evaluator(gsfric.reference_platform())
+    sigma = force_sigma(evaluator, motion, start=start)
+    grid = np.flatnonzero((np.arange(n) + start) % 100 == 0)
+    grid = np.r_[np.arange(grid[0]), grid, np.arange(grid[-1] + 1, n)] if len(grid) \
+        else np.arange(n)
+    for i in range(6):
+        np.testing.assert_allclose(sigma[:, i], np.interp(np.arange(n), grid, sigma[grid, i]),
+                                   rtol=1e-12, atol=1e-12 * sigma.max())
+    # at a grid step, one standard deviation of each rate moved by itself, added in quadrature
+    k = grid[len(grid) // 2]
+    x = state_array(motion.slice(k, k + 1))
+    parts = []
+    for j, s in enumerate(motion.rate_uncertainty().stacked()[k]):
+        up, down = x.copy(), x.copy()
+        up[0, 12 + j] += s
+        down[0, 12 + j] -= s
+        parts.append((evaluator.actuator_forces(up) - evaluator.actuator_forces(down))[0] / 2)
+    np.testing.assert_allclose(sigma[k], np.sqrt(np.sum(np.square(parts), axis=0)), rtol=1e-9)

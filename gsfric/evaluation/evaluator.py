@@ -300,7 +300,8 @@ class Evaluator:
         arrays = {k: v.reshape((n,) + tuple(shapes[k])) for k, v in outs.items()}
         if sensor:
             self._apply_sensor(np.asarray(motion.t, float), arrays, flag)
-        arrays.update(self.uncertainty(motion, arrays["D_dot"]))
+        if "D_dot" in arrays:
+            arrays.update(self.uncertainty(motion, arrays["D_dot"]))
         later = Pending(tuple(details), functools.partial(
             _details, self.platform, self.mode, self.K, self.n_threads, motion, flag))
         return Result(t=np.asarray(motion.t, float), arrays=Outputs(arrays, later), flag=flag,

@@ -76,10 +76,25 @@ def force_sigma(evaluator, motion: Motion, start: int = 0) -> np.ndarray | None:
     F = evaluator.actuator_forces(states.reshape(-1, 24), out=np.empty((24 * g, 6)))
     F = F.reshape(12, 2, g, 6)
     at_grid = np.sqrt(np.sum(((F[:, 0] - F[:, 1]) / 2.0) ** 2, axis=0))  # (G, 6)
-    if g == n:
-        return at_grid
-    steps = np.arange(n)
-    return np.stack([np.interp(steps, grid, at_grid[:, i]) for i in range(6)], axis=1)
+    return at_grid if g == n else _interpolated(grid, at_grid, stride, n)
+
+
+def _interpolated(grid: np.ndarray, values: np.ndarray, stride: int, n: int) -> np.ndarray:
+    """``values`` (G, 6) at the steps ``grid`` (every step up to the first multiple of
+    ``stride``, every ``stride``-th step, every step after the last) linearly interpolated at
+    the steps 0..n-1, (n, 6): the evenly strided part in one broadcast."""
+    out = np.empty((n, values.shape[1]))
+    out[grid] = values
+    strided = np.flatnonzero(np.diff(grid) == stride)
+    if len(strided):
+        first, last = strided[0], strided[-1] + 1         # grid indices of the strided run
+        lo, hi = grid[first], grid[last]
+        left, right = values[first:last], values[first + 1:last + 1]    # (K, 6) each
+        weight = (np.arange(stride) / stride)[None, :, None]            # (1, stride, 1)
+        block = out[lo:hi].reshape(last - first, stride, -1)
+        np.multiply(right[:, None, :] - left[:, None, :], weight, out=block)
+        block += left[:, None, :]
+    return out
 
 
 def leg_speed_sigma(platform, motion: Motion) -> np.ndarray | None:

@@ -217,10 +217,10 @@ def simulate_file(trajectory: str | os.PathLike[str], out: str | os.PathLike[str
         Write the outputs (not ``t``) as float32: relative error up to ``FLOAT32_RTOL``
         (6e-8) of each value, half the file.
     uncertainty : bool
-        Write the ``uncertainty`` group (sigma_F1..6, rest) when the columns include it, warn
-        when sigma_F exceeds ``SIGMA_SHARE`` of a leg's peak force, and, for a log with its own
-        rates, compare them with its poses differentiated (``Summary.rates``); False leaves
-        all of it out.
+        Write the ``uncertainty`` group (sigma_F1..6, rest; kinematic mode) when the columns
+        include it, warn when sigma_F exceeds ``SIGMA_SHARE`` of a leg's peak force, and, for
+        a log with its own rates, compare them with its poses differentiated
+        (``Summary.rates``); False leaves all of it out.
 
     Returns
     -------
@@ -246,7 +246,8 @@ def simulate_file(trajectory: str | os.PathLike[str], out: str | os.PathLike[str
     kind = _check_paths(trajectory, out, platform)
     platform = platform_from(platform)
     groups = parse_columns(None) if columns is None else parse_columns(",".join(columns))
-    if not as_flag(uncertainty, "uncertainty"):
+    uncertainty = as_flag(uncertainty, "uncertainty") and mode == "kinematic"
+    if not uncertainty:                 # the paper mode's accelerations are its constants
         groups = tuple(g for g in groups if g != "uncertainty")
     plan = column_plan(groups)
     motions = iter_motions(trajectory, chunk=chunk, window=window, polyorder=polyorder,
