@@ -25,7 +25,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from gsfric.compiled.state import state_of
+from gsfric.compiled.state import state_layout, state_of
 from gsfric.trajectory import Motion
 
 SIGMA_GRID_TIME = 0.1
@@ -36,10 +36,6 @@ it, and at 1 kHz it costs a quarter of an evaluation of F per step."""
 REST_BAND = 2.0
 """A leg whose speed is within this many standard deviations of zero is possibly at rest
 (``possibly_at_rest``): a speed that is truly zero lies within it 95 % of the time."""
-
-RATE_COLUMNS = slice(12, 24)
-"""The rates' columns in a state (``gsfric.compiled.state``): velocity, omega, acceleration,
-alpha."""
 
 
 def force_sigma(evaluator, motion: Motion, start: int = 0) -> np.ndarray | None:
@@ -67,13 +63,14 @@ def force_sigma(evaluator, motion: Motion, start: int = 0) -> np.ndarray | None:
     x = state_of((motion.position[grid], motion.rotation[grid], motion.velocity[grid],
                   motion.omega[grid], motion.acceleration[grid], motion.alpha[grid]))
     sigma = uncertainty.slice(grid).stacked()                              # (G, 12)
-    g = len(grid)
-    states = np.repeat(x[None], 24, axis=0)                                # (24, G, 24)
-    rates = states[:, :, RATE_COLUMNS]                                   # a view
-    for k in range(12):
-        rates[2 * k, :, k] += sigma[:, k]
-        rates[2 * k + 1, :, k] -= sigma[:, k]
-    F = evaluator.actuator_forces(states.reshape(-1, 24), out=np.empty((24 * g, 6)))
+    g, layout = len(grid), state_layout()
+    columns = np.concatenate([np.arange(layout.size)[part] for part in (
+        layout.velocity, layout.omega, layout.acceleration, layout.alpha)])   # sigma's order
+    states = np.repeat(x[None], 2 * len(columns), axis=0)                  # (24, G, 24)
+    for k, column in enumerate(columns):
+        states[2 * k, :, column] += sigma[:, k]
+        states[2 * k + 1, :, column] -= sigma[:, k]
+    F = evaluator.actuator_forces(states.reshape(-1, layout.size), out=np.empty((24 * g, 6)))
     F = F.reshape(12, 2, g, 6)
     at_grid = np.sqrt(np.sum(((F[:, 0] - F[:, 1]) / 2.0) ** 2, axis=0))  # (G, 6)
     return at_grid if g == n else _interpolated(grid, at_grid, stride, n)
