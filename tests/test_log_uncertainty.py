@@ -7,7 +7,6 @@ controller's own velocity and acceleration columns, and rests between the moves.
 
 from __future__ import annotations
 
-import tempfile
 import warnings
 from pathlib import Path
 
@@ -148,20 +147,19 @@ def test_savgol_and_local_gains_are_the_noise_they_pass():
 
 @pytest.mark.parametrize("stamps, noise, even", [("clock", 0.1, True), ("sampling", 0.1, False),
                                                  ("sampling", 1.0, True)])
-def test_the_time_base_is_the_one_the_poses_are_smooth_on(stamps, noise, even):
+def test_the_time_base_is_the_one_the_poses_are_smooth_on(stamps, noise, even, tmp_path):
     # the stamps are used where the motion times their error is the larger part of the
     # noise; below the pose noise the even grid is kept
     log, fmt, _ = controller_log(20.0, stamps, noise=noise)
     t = (log["Timestamp [us]"].to_numpy().astype(np.int64) - int(log.iloc[0, 0])) % 2**32 / 1e6
     position = log[["Surge [mm]", "Sway [mm]", "Heave [mm]"]].to_numpy() / 1e3
     assert evenly_spaced(t, position) is even
-    motion = _quiet(read_trajectory, _write(log), log_format=_format(fmt, rates=False))
+    motion = _quiet(read_trajectory, _write(log, tmp_path), log_format=_format(fmt, rates=False))
     assert motion.differentiation().even is even
     assert "1.1 % jitter" in motion.differentiation().describe()
 
 
-def _write(log: pd.DataFrame, folder: Path | None = None) -> Path:
-    folder = Path(tempfile.mkdtemp(prefix="gsfric-test-")) if folder is None else folder
+def _write(log: pd.DataFrame, folder: Path) -> Path:
     path = folder / "log.csv"
     log.to_csv(path, index=False)
     return path
@@ -171,9 +169,9 @@ def _write(log: pd.DataFrame, folder: Path | None = None) -> Path:
 
 
 @pytest.mark.parametrize("stamps", ["clock", "sampling"])
-def test_sigma_f_is_the_spread_of_the_forces_about_the_truth(stamps):
+def test_sigma_f_is_the_spread_of_the_forces_about_the_truth(stamps, tmp_path):
     log, fmt, truth = controller_log(30.0, stamps)
-    motion = _quiet(read_trajectory, _write(log), log_format=_format(fmt, rates=False))
+    motion = _quiet(read_trajectory, _write(log, tmp_path), log_format=_format(fmt, rates=False))
     platform = gsfric.reference_platform()
     evaluator = gsfric.Evaluator(platform)
     sigma = force_sigma(evaluator, motion)
