@@ -20,7 +20,7 @@ import numpy as np
 from gsfric._checks import as_array, as_float, fields_equal
 from gsfric._optional import optional
 from gsfric.errors import GsfricWarning, InputError
-from gsfric.signal.local import local_polynomial_derivatives
+from gsfric.signal.noise import divided_noise_std, white_noise_std
 from gsfric.signal.rotations import (
     angular_rates,
     continuous_quaternions,
@@ -29,14 +29,8 @@ from gsfric.signal.rotations import (
     quaternion_from_rotation,
     rotation_from_quaternion,
 )
-from gsfric.signal.savgol import (
-    DEFAULT_POLYORDER,
-    check_polyorder,
-    check_window,
-    savgol_derivatives,
-)
-from gsfric.signal.spline import spline_derivatives
-from gsfric.signal.windows import motion_filters, savgol_adaptive
+from gsfric.signal.savgol import DEFAULT_POLYORDER, check_polyorder
+from gsfric.signal.smoothing import Smoothed, evenly_spaced, smooth
 
 if TYPE_CHECKING:
     import pandas as pd
@@ -45,11 +39,10 @@ MIN_SAMPLES = 7
 """Fewest samples ``Motion.from_samples`` (and the trajectory readers) accept."""
 
 UNIFORM_RTOL = 1e-2
-"""Sampling counts as uniform when every time step is within this fraction of the mean step:
-time stamps that jitter by less (a controller's clock read with 0.3 % jitter, stamps rounded to
-a log's decimals) are taken as evenly spaced at the mean step, and the Savitzky-Golay filter
-(with the ``window`` given) is used. A stamp error of 1 % of the step moves a pose by at most
-1 % of a step's travel, below the pose noise of a measured log."""
+"""A file streamed in chunks (``gsfric.simulate``) must have every time step within this
+fraction of the mean step (``is_uniform``): its chunks are differentiated with one
+Savitzky-Golay filter at that step. A file read whole chooses its time base from its poses
+(``gsfric.signal.smoothing.evenly_spaced``)."""
 
 GIMBAL_SIN_BETA = 1e-3
 GIMBAL_JUMP = 0.5
@@ -208,13 +201,20 @@ def jitter(t: np.ndarray) -> float:
 
 
 def is_uniform(t: np.ndarray) -> bool:
-    """Whether the times t (N,), s, are uniformly sampled as ``Motion.from_samples`` takes
-    them: every step within ``UNIFORM_RTOL`` of the mean step (time stamps that jitter by
-    less are taken as evenly spaced)."""
+    """Whether the times t (N,), s, are uniform enough to be streamed in chunks: every step
+    within ``UNIFORM_RTOL`` of the mean step."""
     t = np.asarray(t, float)
     steps = np.diff(t)
     mean_step = (t[-1] - t[0]) / (len(t) - 1)
     return bool(np.all(np.abs(steps - mean_step) <= UNIFORM_RTOL * mean_step))
+
+
+def taken_as_even(motion: Motion) -> bool:
+    """Whether ``motion``'s stamps were differentiated as evenly spaced: as
+    ``Motion.from_samples`` decided, or ``is_uniform`` of its times for a motion not made by
+    it."""
+    how = motion.differentiation()
+    return how.even if how is not None else is_uniform(motion.t)
 
 
 @dataclass(frozen=True)
@@ -245,6 +245,11 @@ class Differentiation:
     jitter: float
     rates: tuple[str, ...] = ()
 
+    @property
+    def even(self) -> bool:
+        """Whether the stamps were taken as evenly spaced (a Savitzky-Golay filter)."""
+        return self.method.startswith("savgol")
+
     def describe(self) -> str:
         """One line, e.g. ``savgol (window 21, order 4) on stamps with 0.3 % jitter taken as
         evenly spaced; velocity from the log's columns``."""
@@ -260,6 +265,46 @@ class Differentiation:
         if self.rates:
             text += f"; {', '.join(self.rates)} from the log's columns"
         return text
+
+
+@dataclass(frozen=True)
+class RateUncertainty:
+    """One standard deviation of each differentiated rate of a motion, from the white noise of
+    its recorded poses (``gsfric.signal.smoothing``: the smoother's noise gain times the noise
+    of the poses on the time base used, which includes the stamps' jitter there).
+
+    Attributes
+    ----------
+    velocity : ndarray, shape (N, 3)
+        m/s, base frame axes.
+    omega : ndarray, shape (N, 3)
+        rad/s: ``2 gain sigma_q``, sigma_q the root mean square of the quaternion components'
+        noise (``omega = 2 vec(qdot q*)`` maps a noise of equal variance on the four
+        components to each axis with twice its standard deviation).
+    acceleration : ndarray, shape (N, 3)
+        m/s^2.
+    alpha : ndarray, shape (N, 3)
+        rad/s^2: ``2 gain sigma_q`` (the term in omega neglected).
+
+    Rates taken from the log's own columns carry the white noise of those columns (a given
+    acceleration) or its passage through the smoother (an acceleration made from a given
+    velocity). The pose noise is taken as white and independent between the axes.
+    """
+
+    velocity: np.ndarray
+    omega: np.ndarray
+    acceleration: np.ndarray
+    alpha: np.ndarray
+
+    def stacked(self) -> np.ndarray:
+        """(N, 12): velocity, omega, acceleration, alpha, in the state's order."""
+        return np.concatenate([self.velocity, self.omega, self.acceleration, self.alpha],
+                              axis=1)
+
+    def slice(self, part) -> RateUncertainty:
+        """The steps ``part`` (a slice or an array of indices)."""
+        return RateUncertainty(self.velocity[part], self.omega[part],
+                               self.acceleration[part], self.alpha[part])
 
 
 # -- Motion -------------------------------------------------------------------------------------
@@ -371,9 +416,11 @@ class Motion:
         The orientation becomes sign-continuous unit quaternions (angles are never
         differentiated); position and quaternion are smoothed and differentiated twice:
 
-        * uniform stamps (within ``UNIFORM_RTOL`` of the mean step): a Savitzky-Golay filter
-          of ``window`` samples and order ``polyorder``, or, with ``window=None``, the filter
-          of least estimated error chosen per sample (``adaptive_filters``);
+        * stamps taken as evenly spaced (exactly even, or jittered while the poses look no
+          noisier on the even grid than on the stamps: ``gsfric.signal.smoothing``): a
+          Savitzky-Golay filter of ``window`` samples and order ``polyorder`` at the mean step,
+          or, with ``window=None``, the filter of least estimated error chosen per sample
+          (``adaptive_filters``);
         * uneven stamps with a ``window``: the polynomial of that window fitted on the stamps
           themselves (``local_polynomial_derivatives``);
         * uneven stamps without a window: a cubic smoothing spline with penalty ``lam``, chosen
@@ -381,7 +428,9 @@ class Motion:
           biased towards zero.
 
         ``rates`` given are taken as they are; an acceleration not given whose velocity is, is
-        that velocity's smoothed derivative. ``differentiation()`` tells what was used. From
+        that velocity's smoothed derivative. ``differentiation()`` tells what was used and
+        ``rate_uncertainty()`` the standard deviation of every rate (the smoother's noise gain
+        times the white noise of the recorded poses on the time base used). From
         the smoothed quaternion p: ``omega = 2 vec(pdot p*) / |p|^2`` and
         ``alpha = 2 vec(pddot p*) / |p|^2 - omega 2 (p . pdot) / |p|^2`` (base frame).
 
@@ -439,24 +488,29 @@ class Motion:
         if lam is not None:
             lam = as_float(lam, "lam", minimum=0.0)
         rates = _checked_rates(rates, len(t))
-        (p0, p1, p2), (q0, q1, q2), filters = _smoothed(t, position, q, window, polyorder,
-                                                        lam, source)
-        omega, alpha = angular_rates(q0, q1, q2)
-        p1, p2 = _given_rates(t, rates, "velocity", "acceleration", p1, p2, window, polyorder,
-                              lam)
-        omega, alpha = _given_rates(t, rates, "omega", "alpha", omega, alpha, window,
-                                    polyorder, lam)
-        rotation = rotation_from_quaternion(q0)
-        results = (p0, p1, p2, rotation, omega, alpha)
+        even = evenly_spaced(t, position, q)
+        ps, qs = (smooth(t, y, even, window, polyorder, lam) for y in (position, q))
+        omega, alpha = angular_rates(qs.value, qs.first, qs.second)
+        rotation = rotation_from_quaternion(qs.value)
+        p1, p2, sigma_p = _given_rates(t, rates, "velocity", "acceleration", ps, even,
+                                       window, polyorder, lam)
+        qs_rates = Smoothed(qs.value, omega, alpha, qs.gains,
+                            np.full(3, 2.0 * np.sqrt(np.mean(qs.noise ** 2))))
+        omega, alpha, sigma_q = _given_rates(t, rates, "omega", "alpha", qs_rates, even,
+                                             window, polyorder, lam)
+        results = (ps.value, p1, p2, rotation, omega, alpha)
         if not all(np.isfinite(r).all() for r in results):
             raise InputError("differentiation gave non-finite values (values or time steps "
                              "out of range)")
-        motion = cls(t, p0, rotation, p1, omega, p2, alpha)
-        if filters is not None:
-            object.__setattr__(motion, "_filters", (int(polyorder), filters))
+        motion = cls(t, ps.value, rotation, p1, omega, p2, alpha)
+        if ps.filters is not None:
+            object.__setattr__(motion, "_filters", (int(polyorder), (ps.filters, qs.filters)))
         object.__setattr__(motion, "_recorded", (position, q))
         object.__setattr__(motion, "_differentiation",
-                           _how(t, window, polyorder, tuple(rates)))
+                           _how(t, even, window, polyorder, tuple(rates)))
+        if sigma_p is not None and sigma_q is not None:
+            object.__setattr__(motion, "_uncertainty", RateUncertainty(
+                sigma_p[0], sigma_q[0], sigma_p[1], sigma_q[1]))
         return motion
 
     def differentiation(self) -> Differentiation | None:
@@ -491,9 +545,20 @@ class Motion:
         if len(self.t[part]) == 0:
             raise InputError(f"Motion.slice({start}, {stop}): no steps in a motion of {len(self)}")
         # the steps of a valid motion are valid: no second validation pass
-        return Motion._trusted(self.t[part], self.position[part], self.rotation[part],
-                               self.velocity[part], self.omega[part], self.acceleration[part],
-                               self.alpha[part])
+        motion = Motion._trusted(self.t[part], self.position[part], self.rotation[part],
+                                 self.velocity[part], self.omega[part],
+                                 self.acceleration[part], self.alpha[part])
+        uncertainty = self.rate_uncertainty()
+        if uncertainty is not None:
+            object.__setattr__(motion, "_uncertainty", uncertainty.slice(part))
+        return motion
+
+    def rate_uncertainty(self) -> RateUncertainty | None:
+        """One standard deviation of the differentiated rates (``RateUncertainty``), or None
+        for a motion given with its rates (``from_arrays``) or whose smoother's noise gains
+        are not known (an uneven record of at most ``SPLINE_GCV_ROWS`` samples without a
+        window)."""
+        return getattr(self, "_uncertainty", None)
 
     def quaternion(self) -> np.ndarray:
         """The orientation as sign-continuous unit quaternions ``(qw, qx, qy, qz)``, (N, 4)."""
@@ -556,46 +621,6 @@ def _sampled_poses(t, position, euler, quaternion, source: str | None
     return t, position, continuous_quaternions(q)
 
 
-def _smoothed(t, position, q, window, polyorder, lam, source):
-    """The smoothed position and quaternion with their first two derivatives (three arrays
-    each), and the per-sample filters chosen (None unless uniform sampling without a
-    ``window``): see ``Motion.from_samples``."""
-    n = len(t)
-    if is_uniform(t):
-        mean_step = (t[-1] - t[0]) / (n - 1)
-        if window is None:
-            filters = (motion_filters(position, polyorder), motion_filters(q, polyorder))
-            return (savgol_adaptive(position, filters[0], mean_step),
-                    savgol_adaptive(q, filters[1], mean_step), filters)
-        check_window(window, polyorder, n)
-        return (savgol_derivatives(position, window, polyorder, mean_step),
-                savgol_derivatives(q, window, polyorder, mean_step), None)
-    if window is not None:
-        check_window(window, polyorder, n)
-        return (local_polynomial_derivatives(t, position, window, polyorder),
-                local_polynomial_derivatives(t, q, window, polyorder), None)
-    try:
-        return (spline_derivatives(t, position, lam), spline_derivatives(t, q, lam), None)
-    except ValueError as error:
-        raise InputError(f"smoothing spline failed: {error}") from None
-
-
-def _smoothed_signal(t, y, window, polyorder, lam) -> list[np.ndarray]:
-    """A signal (N, k) smoothed and differentiated twice as ``_smoothed`` does the poses."""
-    n = len(t)
-    if is_uniform(t):
-        step = (t[-1] - t[0]) / (n - 1)
-        if window is None:
-            return savgol_adaptive(y, motion_filters(y, polyorder), step)
-        return savgol_derivatives(y, window, polyorder, step)
-    if window is not None:
-        return local_polynomial_derivatives(t, y, window, polyorder)
-    try:
-        return spline_derivatives(t, y, lam)
-    except ValueError as error:
-        raise InputError(f"smoothing spline failed: {error}") from None
-
-
 RATE_NAMES = ("velocity", "omega", "acceleration", "alpha")
 
 
@@ -610,21 +635,37 @@ def _checked_rates(rates, n: int) -> dict[str, np.ndarray]:
     return out
 
 
-def _given_rates(t, rates, first: str, second: str, d1, d2, window, polyorder, lam):
-    """The first and second derivative (N, 3) of a pose part: those given in ``rates``, the
-    second otherwise derived from a given first one, else the differentiated ``d1, d2``."""
+def _given_rates(t, rates, first: str, second: str, smoothed: Smoothed, even: bool, window,
+                 polyorder, lam):
+    """The first and second derivative (N, 3) of a pose part and their standard deviations
+    ((N, 3) twice, or None): those given in ``rates`` (with the white noise of their columns),
+    the second otherwise smoothed from a given first one, else ``smoothed``'s."""
+    d1, d2, sigma = smoothed.first, smoothed.second, smoothed.sigma()
     if first in rates:
         d1 = rates[first]
+        noise = _noise(t, d1, even)
         if second not in rates:
-            d2 = _smoothed_signal(t, d1, window, polyorder, lam)[1]
+            made = smooth(t, d1, even, window, polyorder, lam)
+            d2 = made.first
+            sigma = None if made.gains is None else \
+                (np.broadcast_to(noise, d1.shape), made.sigma()[0])
+        else:
+            sigma = None if sigma is None else (np.broadcast_to(noise, d1.shape), sigma[1])
     if second in rates:
         d2 = rates[second]
-    return d1, d2
+        if sigma is not None:
+            sigma = (sigma[0], np.broadcast_to(_noise(t, d2, even), d2.shape))
+    return d1, d2, sigma
 
 
-def _how(t, window, polyorder, rates) -> Differentiation:
-    """The ``Differentiation`` that ``_smoothed`` used on the times t."""
-    if is_uniform(t):
+def _noise(t, y, even: bool) -> np.ndarray:
+    """White-noise standard deviation (k,) of a recorded signal y (N, k) on its time base."""
+    return white_noise_std(y) if even else divided_noise_std(t, y)
+
+
+def _how(t, even, window, polyorder, rates) -> Differentiation:
+    """The ``Differentiation`` that ``smooth`` used on the times t."""
+    if even:
         method = "savgol, per-sample filters" if window is None else "savgol"
     else:
         method = "smoothing spline" if window is None else "local polynomial"

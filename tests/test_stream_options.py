@@ -66,16 +66,21 @@ def test_column_groups_select_columns_with_the_same_values(full, tmp_path):
 
 def test_all_columns_are_every_group_in_the_result_frame_order(full):
     _, every, _ = full
-    frame_columns = list(gsfric.evaluate(models.reference_platform(),
-                                         models.sinusoidal(np.linspace(0, 1, 50))).to_frame())
+    truth = models.sinusoidal(np.linspace(0, 1, 50))
+    motion = Motion.from_samples(truth.t, truth.position, quaternion=truth.quaternion())
+    frame_columns = list(gsfric.evaluate(models.reference_platform(), motion).to_frame())
     assert list(every.columns) == frame_columns
+    # a motion given with its rates has no differentiation uncertainty: no such columns
+    given = list(gsfric.evaluate(models.reference_platform(), truth).to_frame())
+    assert given == [c for c in frame_columns if not c.startswith("sigma_F") and c != "rest"]
 
 
-CONTRACT = (["t"] + [f"F{i}" for i in range(1, 7)]
+CONTRACT = (["t"] + [f"F{i}" for i in range(1, 7)] + [f"sigma_F{i}" for i in range(1, 7)]
+            + ["rest"]
             + [f"{name}{i}" for name in ("Ffr", "MfrE_s", "MfrC_s", "Ffr_s") for i in range(1, 7)]
             + [f"{name}{a}{i}" for name in ("RE", "RC") for i in range(1, 7) for a in "xyz"]
             + [f"MC{i}" for i in range(1, 7)] + ["flag"])
-"""The columns a default simulate output promises: 74 values a step."""
+"""The columns a default simulate output promises: 81 values a step."""
 
 
 def test_default_columns_hold_the_documented_set_with_the_same_values(full, tmp_path):
@@ -85,7 +90,7 @@ def test_default_columns_hold_the_documented_set_with_the_same_values(full, tmp_
                   "--quiet")
     assert result.exit_code == 0, result.output
     default = pd.read_parquet(out)
-    assert len(CONTRACT) == 74 and sorted(default.columns) == sorted(CONTRACT)
+    assert len(CONTRACT) == 81 and sorted(default.columns) == sorted(CONTRACT)
     assert list(default.columns) == [c for c in every.columns if c in CONTRACT]
     pd.testing.assert_frame_equal(default, every[list(default.columns)])
 
@@ -130,8 +135,8 @@ def test_unknown_column_group_is_one_line_exit_2(tmp_path):
                   "forces,torques")
     assert result.exit_code == 2
     assert result.output.strip().splitlines() == [
-        "gsfric: error: --columns: unknown group 'torques'; choose from forces, friction, "
-        "reactions, friction_detail, frictionless, lengths (comma-separated) or all"]
+        "gsfric: error: --columns: unknown group 'torques'; choose from forces, uncertainty, "
+        "friction, reactions, friction_detail, frictionless, lengths (comma-separated) or all"]
     assert not (tmp_path / "o.csv").exists()
 
 
@@ -265,7 +270,8 @@ def test_flushing_while_writing_changes_nothing_in_the_file(full, tmp_path, monk
 def test_pieces_of_a_chunk_give_the_chunks_values(tmp_path, monkeypatch, delay):
     """A chunk evaluated and written in pieces (``EVALUATE_STEPS``, here 64 steps of chunks
     of 200) gives every value and flag of the chunk evaluated whole, with a sensor delay
-    too; the summary counts the chunks read."""
+    too; the summary counts the chunks read. sigma_F is interpolated between the same steps
+    of the record but for a piece's last few steps (``force_sigma``): within a few percent."""
     path = _trajectory(tmp_path / "t.parquet")
     platform = models.reference_platform().with_effect("time_offset", delay=delay) \
         if delay else models.reference_platform()
@@ -277,7 +283,11 @@ def test_pieces_of_a_chunk_give_the_chunks_values(tmp_path, monkeypatch, delay):
     assert summary.chunks == 4 and summary.steps == 700
     assert pq.ParquetFile(pieces).metadata.num_row_groups > pq.ParquetFile(
         whole).metadata.num_row_groups
-    pd.testing.assert_frame_equal(pd.read_parquet(pieces), pd.read_parquet(whole))
+    got, want = pd.read_parquet(pieces), pd.read_parquet(whole)
+    sigma = [f"sigma_F{i}" for i in range(1, 7)]
+    np.testing.assert_allclose(got[sigma], want[sigma], rtol=0.05,
+                               atol=0.05 * float(want[sigma].to_numpy().max()))
+    pd.testing.assert_frame_equal(got.drop(columns=sigma), want.drop(columns=sigma))
 
 
 def test_streamed_chunks_carry_their_rows_of_the_measured_forces(tmp_path):

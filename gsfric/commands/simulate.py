@@ -69,11 +69,16 @@ def _options(command):
                           "about 1.3 kB a step; they are evaluated 50,000 at a time); a file "
                           "of at most this many rows is read whole."),
         click.option("--window", type=int, default=None,
-                     help="Savitzky-Golay window, odd, samples; time stamps jittering by less "
-                          "than 1 % of the step are taken as evenly spaced, more uneven ones "
-                          "are fitted with polynomials of this window on their own stamps "
-                          "[default: a filter per sample for a file read whole, one window by "
-                          "cross-validation on the first chunk for a streamed one]."),
+                     help="Savitzky-Golay window, odd, samples; jittered time stamps are taken "
+                          "as evenly spaced unless the poses look noisier on the even grid "
+                          "than on the stamps, and are then fitted with polynomials of this "
+                          "window on their own stamps [default: a filter per sample for a "
+                          "file read whole, one window by cross-validation on the first chunk "
+                          "for a streamed one]."),
+        click.option("--no-uncertainty", "no_uncertainty", is_flag=True,
+                     help="Leave out sigma_F1..6 and rest (the differentiation's uncertainty "
+                          "of F and the legs possibly at rest), its warning and the "
+                          "comparison with the log's own rates."),
         click.option("--progress/--no-progress", default=None,
                      help="A progress bar on stderr, with total and ETA [default: when stderr "
                           "is a terminal]."),
@@ -115,8 +120,9 @@ def _options(command):
 @_no_cycle_collection()
 @checked_paths({"trajectory": "trajectory", "platform_file": "platform",
                 "column_map": "column-map"}, files=("out", "breakdown_file", "plot"))
-def simulate(trajectory, platform_file, out, mode, strict, threads, chunk, window, progress,
-             quiet, columns, float32, breakdown_file, plot, keep_flagged, verbose, column_map,
+def simulate(trajectory, platform_file, out, mode, strict, threads, chunk, window,
+             no_uncertainty, progress, quiet, columns, float32, breakdown_file, plot,
+             keep_flagged, verbose, column_map,
              units_map, angles, keep_columns):
     """Evaluate a motion: actuator forces, reactions and friction at every step.
 
@@ -144,7 +150,8 @@ def simulate(trajectory, platform_file, out, mode, strict, threads, chunk, windo
                                 chunk=chunk, window=window, n_threads=threads,
                                 progress=False if quiet else progress,
                                 log_format=log_format, columns=parse_columns(columns),
-                                float32=float32, keep_flagged=keep_flagged, plot=plot)
+                                float32=float32, keep_flagged=keep_flagged, plot=plot,
+                                uncertainty=not no_uncertainty)
         if breakdown_file is not None:
             _write_breakdown(trajectory, log_format, platform, breakdown_file, quiet)
     if not quiet:
@@ -153,6 +160,11 @@ def simulate(trajectory, platform_file, out, mode, strict, threads, chunk, windo
         if plot is not None:
             click.echo(f"wrote {plot}")
         click.echo(summary.peaks.table())
+        if summary.rest_steps:
+            click.echo(f"{summary.rest_steps} steps with a leg possibly at rest (the rest "
+                       "column): friction there is bounded by its Coulomb level")
+        if summary.rates is not None:
+            click.echo(summary.rates.describe())
 
 
 def _name_ignored_columns() -> None:

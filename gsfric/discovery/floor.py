@@ -44,7 +44,7 @@ from gsfric.signal.rotations import (
     rotation_from_quaternion,
 )
 from gsfric.signal.windows import savgol_adaptive
-from gsfric.trajectory import Motion, is_uniform
+from gsfric.trajectory import Motion, taken_as_even
 
 
 @dataclass
@@ -196,7 +196,7 @@ def pose_noise_forces(platform: Platform, motion: Motion,
     q = continuous_quaternions(quaternion_from_rotation(np.asarray(poses[1], float)))
     sigma_p, sigma_q = white_noise_std(position), white_noise_std(q)
     t = np.asarray(motion.t, float)
-    filters = motion.sample_filters() if is_uniform(t) else None
+    filters = motion.sample_filters() if taken_as_even(motion) else None
     if filters is not None and len(filters[0][0][0]) != len(t):
         filters = None
     if filters is None or len(position) != len(t):

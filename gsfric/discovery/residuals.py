@@ -34,7 +34,7 @@ from gsfric.errors import InputError
 from gsfric.evaluation.parameters import PRISMATIC_EPS
 from gsfric.platform.description import Platform
 from gsfric.signal.noise import divided_noise_std_every_window, high_frequency_std
-from gsfric.trajectory import Motion, is_uniform
+from gsfric.trajectory import Motion, taken_as_even
 
 DELAY = "time_offset.delay"
 
@@ -305,7 +305,7 @@ class Problem:
         if not recorded:
             poses = (np.asarray(motion.position, float), np.asarray(motion.rotation, float))
         sigma_v, self.reach = np.zeros((n, 6)), np.zeros(n, int)
-        if is_uniform(t):
+        if taken_as_even(motion):
             # the filters the motion was differentiated with, when it was made from these
             # samples (not chosen a second time)
             filters = motion.sample_filters() if recorded else None

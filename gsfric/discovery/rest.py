@@ -26,6 +26,7 @@ from __future__ import annotations
 import numpy as np
 from scipy.ndimage import binary_closing, binary_opening, uniform_filter1d
 
+from gsfric.evaluation.uncertainty import possibly_at_rest
 from gsfric.signal.noise import white_noise_std
 from gsfric.signal.rotations import (
     continuous_quaternions,
@@ -193,7 +194,8 @@ def sliding_mask(speed: np.ndarray, sigma_v: np.ndarray, floor: float,
     """(N, 6) True where a leg is known to slide.
 
     A pair (sample, leg) slides where ``|speed|`` exceeds ``rest_band`` sigma_v (and
-    ``floor``) and, with ``reach`` > 0, no rest lies within ``reach`` samples: no sample whose
+    ``floor``; ``gsfric.evaluation.uncertainty.possibly_at_rest``, the rule ``simulate``'s
+    ``rest`` column follows) and, with ``reach`` > 0, no rest lies within ``reach`` samples: no sample whose
     differentiator window reaches into a rest. A rest is a run of at least ``reach`` samples
     inside the band, with excursions out of the band shorter than ``reach`` samples (the
     differentiated noise is correlated over the window: such an excursion is one noise event,
@@ -224,8 +226,8 @@ def sliding_mask(speed: np.ndarray, sigma_v: np.ndarray, floor: float,
         (``Settings.rest_band``).
     """
     speed = np.asarray(speed, float)
-    band = np.maximum(rest_band * np.asarray(sigma_v, float), floor)
-    inside = np.abs(speed) <= np.broadcast_to(band, speed.shape)
+    inside = possibly_at_rest(speed, np.maximum(np.asarray(sigma_v, float), floor / rest_band),
+                              rest_band)
     reach = np.asarray(reach, int)
     if not reach.any():
         return ~inside

@@ -1,5 +1,6 @@
 """Evaluation of a platform over a motion: actuator forces, joint reactions and friction, the
-step flags, the breakdown of the forces into their parts, and the output columns.
+step flags, the breakdown of the forces into their parts, the output columns, and the
+differentiation's uncertainty of the forces with the legs possibly at rest (``uncertainty``).
 
 >>> from gsfric.evaluation import Evaluator, state_array
 """

@@ -64,6 +64,14 @@ COLUMNS: tuple[Column, ...] = (
     Column("t", "s", "time of the step (as read from the input, converted to s)", "time"),
     Column("F{i}", "N", "actuator force of leg i with friction and effects; + pushes the "
            "platform away from the base (Result.F)", "forces", "F"),
+    Column("sigma_F{i}", "N", "one standard deviation of F_i from the differentiation of the "
+           "recorded poses (their noise through the smoother, the stamps' jitter included), "
+           "linearised in the rates (Result.sigma_F; gsfric.evaluation.uncertainty)",
+           "uncertainty", "sigma_F"),
+    Column("rest", "1", "legs whose speed is within 2 standard deviations of zero, possibly "
+           "at rest: their friction may be anything within the Coulomb level, not the "
+           "sliding value in F; the sum of 2^(i-1) over those legs i, 0 when all slide "
+           "(Result.rest)", "uncertainty", "rest"),
     Column("Ffr{i}", "N", "friction force of prismatic joint i on the rod along the leg "
            "direction u_i (C_i to E_i), the friction that loads actuator i: negative while "
            "the leg extends, positive while it retracts (Result.Ffr)", "friction", "Ffr"),
@@ -112,6 +120,8 @@ MEASURED: tuple[Column, ...] = (
 
 GROUP_MEANINGS = {
     "forces": "actuator forces with friction and effects",
+    "uncertainty": "one standard deviation of F from the differentiation of the poses, and "
+                   "the legs possibly at rest (a motion differentiated from poses)",
     "friction": "the prismatic friction that loads the actuators (Ffr) and the paper's "
                 "post-hoc friction scalars (_s: <= 0, negative = opposing)",
     "reactions": "joint reactions (base frame) and the universal joints' constraint moments",
@@ -132,10 +142,10 @@ GROUPS = {group: _group_text(group) for group in GROUP_MEANINGS}
 """Output groups of ``simulate --columns`` (their columns and meaning); ``t`` and ``flag`` are
 always written."""
 
-DEFAULT_GROUPS = ("forces", "friction", "reactions")
+DEFAULT_GROUPS = ("forces", "uncertainty", "friction", "reactions")
 """The groups ``simulate`` writes unless ``--columns`` says otherwise: with ``t`` and ``flag``
-(``t``, F, the prismatic friction that loads the actuators, the paper's post-hoc friction
-scalars, the joint reactions, the flag: ``len(plan(DEFAULT_GROUPS)) + 2`` values a step);
+(``t``, F, its standard deviation and the legs possibly at rest, the prismatic friction that
+loads the actuators, the paper's post-hoc friction scalars, the joint reactions, the flag: ``len(plan(DEFAULT_GROUPS)) + 2`` values a step);
 every other group is one ``--columns`` away (``all``: every group)."""
 
 

@@ -32,11 +32,20 @@ from gsfric.evaluation.memory import aligned_empty
 from gsfric.evaluation.paper_constants import paper_constants as pc
 from gsfric.evaluation.parameters import model_function, packed, uniform_model
 from gsfric.evaluation.result import DETAILS, Outputs, Pending, Result
+from gsfric.evaluation.uncertainty import (
+    force_sigma,
+    leg_speed_sigma,
+    possibly_at_rest,
+    rest_legs,
+)
 from gsfric.platform.catalog import apply_sensor, sensor_parameters
 from gsfric.platform.description import Platform
 from gsfric.trajectory import ROTATION_TOL, Motion, first_non_rotation
 
 MODES = ("kinematic", "paper")
+UNCERTAINTY_OUTPUTS = {"sigma_F": 6, "rest": 1}
+"""Outputs computed in Python from the motion's ``rate_uncertainty`` (``Evaluator.uncertainty``)
+and their sizes per step; NaN for a motion without it."""
 CHUNK = 200_000
 MAX_THREADS = 1024
 """The largest ``n_threads`` accepted: a sane bound on a count of threads (the compiled code
@@ -289,10 +298,24 @@ class Evaluator:
         arrays = {k: v.reshape((n,) + tuple(shapes[k])) for k, v in outs.items()}
         if sensor:
             self._apply_sensor(np.asarray(motion.t, float), arrays, flag)
+        if "D_dot" in arrays:
+            arrays.update(self.uncertainty(motion, arrays["D_dot"]))
         later = Pending(tuple(details), functools.partial(
             _details, self.platform, self.mode, self.K, self.n_threads, motion, flag))
         return Result(t=np.asarray(motion.t, float), arrays=Outputs(arrays, later), flag=flag,
                       mode=self.mode, source=(self.platform, motion), runner=_evaluate_quietly)
+
+    def uncertainty(self, motion: Motion, D_dot: np.ndarray, start: int = 0
+                    ) -> dict[str, np.ndarray]:
+        """``sigma_F`` (N, 6), N, and ``rest`` (N,) of a motion with ``rate_uncertainty``
+        whose leg speeds are ``D_dot`` (N, 6) (``gsfric.evaluation.uncertainty``; ``start``:
+        the index of its first step in a longer record); empty for one without, or in paper
+        mode."""
+        sigma = force_sigma(self, motion, start)
+        if sigma is None:
+            return {}
+        at_rest = possibly_at_rest(D_dot, leg_speed_sigma(self.platform, motion))
+        return {"sigma_F": sigma, "rest": rest_legs(at_rest).astype(float)}
 
     def _inputs(self) -> list:
         return [self.P, self.Q] + ([self.K] if self.K is not None else [])
@@ -501,7 +524,8 @@ def breakdown(platform: Platform, motion: Motion):
 
 
 def evaluate_outputs(evaluator: Evaluator, motion: Motion, names, buffers: dict | None = None,
-                     sensor: bool = True) -> tuple[dict[str, np.ndarray], np.ndarray]:
+                     sensor: bool = True, start: int = 0
+                     ) -> tuple[dict[str, np.ndarray], np.ndarray]:
     """Only the outputs ``names`` of ``motion`` and its step flags, as
     ``Evaluator.evaluate_quiet`` computes them, without a Result.
 
@@ -515,12 +539,15 @@ def evaluate_outputs(evaluator: Evaluator, motion: Motion, names, buffers: dict 
     motion : Motion
         N steps.
     names : iterable of str
-        Output names (``Result`` arrays, e.g. "F", "R_E"; not the detail outputs).
+        Output names (``Result`` arrays, e.g. "F", "R_E", "sigma_F"; not the detail
+        outputs).
     buffers : dict, optional
         Lends the output arrays from call to call (filled on first use): the arrays returned
         are then views into it, valid until the next call with it.
     sensor : bool
         Apply the sensor's effects to F (when "F" is among ``names``).
+    start : int
+        Index of the motion's first step in the record it is a piece of (``force_sigma``).
 
     Returns
     -------
@@ -530,8 +557,13 @@ def evaluate_outputs(evaluator: Evaluator, motion: Motion, names, buffers: dict 
     """
     n = len(motion)
     sizes = {name: size for name, size, _ in evaluator._full.outputs}
+    names = list(dict.fromkeys(names))
+    derived = [name for name in names if name in UNCERTAINTY_OUTPUTS]
+    names = [name for name in names if name not in UNCERTAINTY_OUTPUTS]
+    if derived and "D_dot" not in names:
+        names.append("D_dot")
     outs: dict[str, np.ndarray] = {}
-    for name in dict.fromkeys(names):
+    for name in names:
         buf = None if buffers is None else buffers.get(name)
         if buf is None or buf.shape[0] < n:
             buf = np.empty((n, sizes[name]))
@@ -542,4 +574,8 @@ def evaluate_outputs(evaluator: Evaluator, motion: Motion, names, buffers: dict 
     evaluator._run(motion, 0, n, outs, flag)
     if sensor and "F" in outs:
         evaluator._apply_sensor(np.asarray(motion.t, float), outs, flag)
+    if derived:
+        extra = evaluator.uncertainty(motion, outs["D_dot"], start)
+        for name in derived:
+            outs[name] = extra.get(name, np.full((n, UNCERTAINTY_OUTPUTS[name]), np.nan))
     return outs, flag

@@ -117,6 +117,15 @@ class Result:
         Force of each leg on the platform at its spherical joint E_i, base frame, N.
     flag : ndarray of int, shape (N,)
         0 for a sound step, else the sum of the flag bits (``gsfric.evaluation.flags``).
+    sigma_F : ndarray, shape (N, 6)
+        One standard deviation of each actuator force from the differentiation of the
+        recorded poses, N (``gsfric.evaluation.uncertainty.force_sigma``): present for a
+        motion with ``Motion.rate_uncertainty()`` (made by ``Motion.from_samples`` or read
+        from a file) in the kinematic mode, absent otherwise.
+    rest : ndarray, shape (N,)
+        With ``sigma_F``: the legs possibly at rest (speed within ``REST_BAND`` standard
+        deviations of zero), the sum of ``2**(i - 1)`` over those legs i (1..6); their friction
+        is bounded by the Coulomb level rather than the sliding value in ``F``.
 
     Examples
     --------

@@ -50,9 +50,18 @@ def white_noise_std(y: np.ndarray) -> np.ndarray:
     if len(y) <= m:
         return np.zeros(y.shape[1:])
     differences = np.diff(y, n=m, axis=0)
-    changing = np.ptp(sliding_window_view(y, m + 1, axis=0), axis=-1) > 0.0
+    changing = changing_windows(y, m + 1)
     return np.array([robust_std(d[c]) if c.any() else 0.0
                      for d, c in zip(differences.T, changing.T)]) / np.sqrt(math.comb(2 * m, m))
+
+
+def changing_windows(y: np.ndarray, width: int) -> np.ndarray:
+    """(N - width + 1, k): whether the readings of each column of y (N, k) change over each
+    window of ``width`` consecutive samples (some consecutive pair differs; the windows of
+    ``sliding_window_view`` whose range is not 0), in one pass."""
+    changes = np.cumsum(np.diff(y, axis=0) != 0.0, axis=0)
+    changes = np.concatenate([np.zeros((1,) + changes.shape[1:], changes.dtype), changes])
+    return changes[width - 1:] - changes[:len(changes) - width + 1] > 0
 
 
 def divided_difference_coefficients(x: np.ndarray, width: int) -> np.ndarray:
@@ -89,10 +98,10 @@ def divided_noise_std(t: np.ndarray, y: np.ndarray) -> np.ndarray:
     (as ``white_noise_std``: the noise a smoother of recorded poses must remove; see
     ``divided_noise_std_every_window`` for the estimate over every window)."""
 
-    z2, windows = _divided_squares(t, y)
+    z2, _ = _divided_squares(t, y)
     # readings that do not change over a window (a rest logged at a finite resolution) carry
     # no noise that the motion would see: the noise is that of the windows that change
-    changing = np.ptp(windows, axis=2) > 0.0
+    changing = changing_windows(y, NOISE_DIFFERENCE_ORDER + 1)
     out = np.zeros(y.shape[1])
     for j in range(y.shape[1]):
         changed = z2[:, j][changing[:, j]]

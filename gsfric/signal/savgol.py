@@ -103,6 +103,21 @@ def savgol_derivatives(y: np.ndarray, window: int, polyorder: int, step: float) 
     return [savgol_filter(y, window, polyorder, deriv=k) / step**k for k in (0, 1, 2)]
 
 
+def savgol_gains(n: int, window: int, polyorder: int, deriv: int) -> np.ndarray:
+    """The noise gain of ``savgol_filter``'s ``deriv``-th derivative at each of n samples (N,),
+    per unit sample step: the norm of the weights that make it (centred inside, the end
+    polynomials' at the first and last ``window // 2`` samples), so that white noise of
+    standard deviation sigma becomes ``sigma * gain / step**deriv``."""
+    window, polyorder, half = int(window), int(polyorder), int(window) // 2
+    rows = np.linalg.norm(polynomial_derivative(window, polyorder, deriv)
+                          @ polynomial_fit(window, polyorder), axis=1)      # (window,)
+    gains = np.full(n, rows[half])
+    ends = min(half, n)
+    gains[:ends] = rows[:ends]
+    gains[n - ends:] = rows[window - ends:]
+    return gains
+
+
 def savgol_core(y: np.ndarray, window: int, polyorder: int, step: float,
                 lo: int, hi: int) -> list[np.ndarray]:
     """``savgol_derivatives`` at the rows lo..hi-1 of y (N, k) only, which need

@@ -118,15 +118,50 @@ def spline_penalties(t: np.ndarray, y: np.ndarray, lam: float | None = None
     return [float(chosen)] * y.shape[1]
 
 
-def spline_derivatives(t: np.ndarray, y: np.ndarray, lam: float | None) -> list[np.ndarray]:
-
+def spline_fit(t: np.ndarray, y: np.ndarray, lam: float | None
+               ) -> tuple[list[np.ndarray], list[float] | None]:
+    """The smoothed y (N, k) and its first two derivatives at the times t (N,) (three arrays
+    (N, k)), with the penalties used (``spline_penalties``; None for a record of at most
+    ``SPLINE_GCV_ROWS`` samples, where ``make_smoothing_spline`` chooses each column's own)."""
     n = len(t)
     if n > SPLINE_GCV_ROWS:
         penalties = spline_penalties(t, y, lam)
         if penalties is not None:
             spline = smoothing_splines(t, y, penalties)
-            return [spline.derivative(k)(t) if k else spline(t) for k in (0, 1, 2)]
+            return [spline.derivative(k)(t) if k else spline(t) for k in (0, 1, 2)], penalties
     make = optional("scipy.interpolate").make_smoothing_spline
     columns = [make(t, y[:, j], lam=lam) for j in range(y.shape[1])]
     return [np.stack([c.derivative(k)(t) if k else c(t) for c in columns], axis=1)
-            for k in (0, 1, 2)]
+            for k in (0, 1, 2)], None
+
+
+def spline_derivatives(t: np.ndarray, y: np.ndarray, lam: float | None) -> list[np.ndarray]:
+    """The smoothed y (N, k) and its first two derivatives (``spline_fit``)."""
+    return spline_fit(t, y, lam)[0]
+
+
+SPLINE_NOISE_DRAWS = 8
+"""Unit white-noise signals passed through a smoothing spline to measure its noise gains
+(``spline_noise_gains``)."""
+
+SPLINE_GAIN_SMOOTHING = 51
+"""Samples over which the measured squared gains are averaged: a few draws give each
+sample's gain to a few percent after it."""
+
+
+def spline_noise_gains(t: np.ndarray, penalty: float, draws: int = SPLINE_NOISE_DRAWS
+                       ) -> tuple[np.ndarray, np.ndarray]:
+    """The noise gains (N,) of the first and second derivatives of the smoothing spline of
+    penalty ``penalty`` at the times t (N,), 1/s and 1/s^2: white noise of standard deviation
+    sigma becomes ``sigma * gain`` on the derivative. Measured on ``draws`` draws of unit
+    white noise (seeded: the same times give the same gains), their squares averaged over
+    ``SPLINE_GAIN_SMOOTHING`` samples."""
+    t = np.asarray(t, float)
+    noise = np.random.default_rng(0).standard_normal((len(t), draws))
+    spline = smoothing_splines(t, noise, [penalty] * draws)
+    uniform_filter1d = optional("scipy.ndimage").uniform_filter1d
+    gains = []
+    for k in (1, 2):
+        power = np.mean(spline.derivative(k)(t) ** 2, axis=1)
+        gains.append(np.sqrt(uniform_filter1d(power, SPLINE_GAIN_SMOOTHING, mode="nearest")))
+    return gains[0], gains[1]

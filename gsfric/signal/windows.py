@@ -10,7 +10,13 @@ import numpy as np
 from gsfric._optional import optional
 from gsfric._threads import in_parallel
 from gsfric.signal.noise import white_noise_std
-from gsfric.signal.savgol import DEFAULT_POLYORDER, fill_ends, savgol_filter, savgol_weights
+from gsfric.signal.savgol import (
+    DEFAULT_POLYORDER,
+    fill_ends,
+    savgol_filter,
+    savgol_gains,
+    savgol_weights,
+)
 
 MAX_AUTO_WINDOW = 1601
 """Longest Savitzky-Golay window the automatic choice considers, samples: 0.8 s at 2 kHz, where
@@ -368,3 +374,16 @@ def savgol_adaptive(y: np.ndarray, filters, step: float) -> list[np.ndarray]:
                 values = savgol_filter(y, int(w), int(p), k)
                 out[k][rows] = values[rows] / step**k
     return out
+
+
+def adaptive_gains(filters, n: int) -> tuple[np.ndarray, np.ndarray]:
+    """The noise gains (N,) of the first and second derivatives of ``savgol_adaptive`` with
+    the per-sample ``filters`` (``motion_filters``), per unit sample step (``savgol_gains``)."""
+    out = []
+    for deriv, (orders, windows) in ((1, filters[0]), (2, filters[1])):
+        gains = np.empty(n)
+        for p, w in filter_pairs(orders, windows):
+            rows = (orders == p) & (windows == w)
+            gains[rows] = savgol_gains(n, int(w), int(p), deriv)[rows]
+        out.append(gains)
+    return out[0], out[1]

@@ -3,7 +3,7 @@
 Modules: ``blocks`` (a file read in validated blocks of rows), ``differentiate`` (the streamed
 motion estimate: ``iter_motions``), ``outputs`` (the output columns), ``delay`` (the sensor's
 time offset across chunks), ``writer`` (CSV and Parquet writing), ``run`` (``simulate_file``),
-``view`` (``view_file``: the 3-D view of a file, ``gsfric view``).
+``rates`` (the log's own rates against its poses differentiated), ``view`` (``view_file``: the 3-D view of a file, ``gsfric view``).
 """
 
 from gsfric.simulate.differentiate import MotionChunk, iter_motions

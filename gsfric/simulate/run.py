@@ -59,7 +59,15 @@ from gsfric.simulate.outputs import (
     result_columns,
     with_carried,
 )
+from gsfric.simulate.rates import RateComparison, compare_rates
 from gsfric.simulate.writer import Writer
+
+SIGMA_SHARE = 0.05
+"""``simulate`` warns when a leg's sigma_F (the differentiation's uncertainty of F; its root
+mean square over the steps where every leg slides: at a rest it is the friction's sign, which
+the ``rest`` column reports) exceeds this share of its largest |F|: beyond, the forces depend on
+how the motion was differentiated (window, time base, the log's own rates) by more than a
+sizing margin hides."""
 
 MAX_REPORTED = 10_000
 """Flagged step indices kept for the summary (the count is always exact)."""
@@ -106,6 +114,13 @@ class Summary:
         The per-leg peaks over the sound steps (``gsfric.evaluation.peaks``).
     trace : Trace or None
         The forces and friction over the record for ``plot`` (``gsfric.simulate.figure``).
+    sliding_sigma_F : ndarray, shape (6,)
+        Root mean square of sigma_F of each leg over the steps where no leg is possibly at
+        rest, N (NaN: not computed; with the ``uncertainty`` group only).
+    rest_steps : int
+        Steps with a leg possibly at rest (``rest`` != 0).
+    rates : RateComparison or None
+        The log's own rates against its poses differentiated, for a log with rate columns.
     """
 
     out: Path
@@ -120,6 +135,25 @@ class Summary:
     runs: int = 0
     peaks: Peaks = field(default_factory=Peaks)
     trace: Trace | None = None
+    sliding_sigma_F: np.ndarray = field(default_factory=lambda: np.full(6, np.nan))
+    rest_steps: int = 0
+    rates: RateComparison | None = None
+
+    def uncertainty_message(self, trajectory: Path) -> str | None:
+        """One line when a leg's typical sigma_F (``sliding_sigma_F``) exceeds
+        ``SIGMA_SHARE`` of its largest |F|, else None."""
+        peak = self.peaks.values.get("F", np.full(6, np.nan))
+        with np.errstate(invalid="ignore", divide="ignore"):
+            share = self.sliding_sigma_F / peak
+        if not np.any(share > SIGMA_SHARE):
+            return None
+        leg = int(np.nanargmax(share))
+        return (f"{trajectory}: the forces hinge on the differentiation: sigma_F is "
+                f"{self.sliding_sigma_F[leg]:.4g} N on leg {leg + 1} (root mean square where "
+                f"the legs slide), {100 * share[leg]:.3g} % of its peak |F| of "
+                f"{peak[leg]:.4g} N (more than "
+                f"{100 * SIGMA_SHARE:g} %); see the sigma_F columns, give a --window, or map "
+                "the log's own rate columns")
 
     def flag_message(self, trajectory: Path) -> str:
         kinds = "; ".join(f"{name}: {count}" for name, count in self.flag_counts.items()
@@ -180,7 +214,8 @@ def simulate_file(trajectory: str | os.PathLike[str], out: str | os.PathLike[str
                   polyorder: int = DEFAULT_POLYORDER, n_threads: int = 1,
                   progress: bool | None = None, log_format=None, columns=None,
                   float32: bool = False, keep_flagged: bool = False,
-                  plot: str | os.PathLike[str] | None = None) -> Summary:
+                  plot: str | os.PathLike[str] | None = None, uncertainty: bool = True
+                  ) -> Summary:
     """Evaluate a trajectory file chunk by chunk and write every step's outputs.
 
     Parameters
@@ -211,9 +246,9 @@ def simulate_file(trajectory: str | os.PathLike[str], out: str | os.PathLike[str
         F1..F6 (measured data) also gets ``F1_measured..F6_measured`` and the residuals
         ``F1_residual..F6_residual`` (measured minus model) in the output.
     columns : iterable of str, optional
-        Output groups (``COLUMN_GROUPS``); default ``DEFAULT_COLUMN_GROUPS`` (forces, the
-        prismatic friction with the paper's post-hoc friction scalars, reactions: 74 values a
-        step). ``t`` and ``flag`` always.
+        Output groups (``COLUMN_GROUPS``); default ``DEFAULT_COLUMN_GROUPS`` (forces,
+        sigma_F and rest, the prismatic friction with the paper's post-hoc friction scalars,
+        reactions: 81 values a step). ``t`` and ``flag`` always.
     float32 : bool
         Write the outputs (not ``t``) as float32: relative error up to ``FLOAT32_RTOL``
         (6e-8) of each value, half the file.
@@ -224,6 +259,11 @@ def simulate_file(trajectory: str | os.PathLike[str], out: str | os.PathLike[str
         Also write a figure (PNG, SVG or PDF by the extension; needs matplotlib) of the
         actuator forces and the prismatic friction of every leg over the record
         (``gsfric.simulate.figure``).
+    uncertainty : bool
+        Write the ``uncertainty`` group (sigma_F1..6, rest; kinematic mode) when the columns
+        include it, warn when sigma_F exceeds ``SIGMA_SHARE`` of a leg's peak force, and, for
+        a log with its own rates, compare them with its poses differentiated
+        (``Summary.rates``); False leaves all of it out.
 
     Returns
     -------
@@ -249,8 +289,11 @@ def simulate_file(trajectory: str | os.PathLike[str], out: str | os.PathLike[str
     strict = as_flag(strict, "strict")
     kind = _check_paths(trajectory, out, platform)
     platform = platform_from(platform)
-    plan = column_plan(parse_columns(None) if columns is None else
-                       parse_columns(",".join(columns)))
+    groups = parse_columns(None) if columns is None else parse_columns(",".join(columns))
+    uncertainty = as_flag(uncertainty, "uncertainty") and mode == "kinematic"
+    if not uncertainty:                 # the paper mode's accelerations are its constants
+        groups = tuple(g for g in groups if g != "uncertainty")
+    plan = column_plan(groups)
     motions = iter_motions(trajectory, chunk=chunk, window=window, polyorder=polyorder,
                            log_format=log_format)
     if plot is not None:
@@ -261,12 +304,16 @@ def simulate_file(trajectory: str | os.PathLike[str], out: str | os.PathLike[str
                float32=float32, progress=progress, keep_flagged=as_flag(keep_flagged,
                                                                         "keep_flagged"),
                trace=plot is not None)
+    run.smoothing = (window, polyorder) if uncertainty else None
     Writer.load(kind)
     try:
         run.write(motions, kind)
     finally:
         run.bar.close()
     summary = run.finish()
+    message = summary.uncertainty_message(trajectory) if uncertainty else None
+    if message:
+        warnings.warn(message, GsfricWarning, stacklevel=2)
     if summary.flagged:
         warnings.warn(summary.flag_message(trajectory) + f"; see the flag column of {out}",
                       GsfricWarning, stacklevel=2)
@@ -392,6 +439,9 @@ class _Run:
                         unit_scale=True, desc="simulate", file=sys.stderr, disable=not show,
                         dynamic_ncols=True, leave=False)
         self.stopped = False                      # a stage failed: evaluate no more
+        self.smoothing = None                     # (window, polyorder): compare own rates
+        self.own_rates = None                     # a motion with the log's own rates
+        self.sigma_squares, self.sigma_steps = np.zeros(6), 0   # sigma_F^2 summed, sliding
         self.sets: tuple[dict, dict] = ({}, {})   # the evaluation's outputs of even, odd chunks
         self.column_arrays: dict = {}             # the columns' arrays (of the writing thread)
         gains, delay = sensor_parameters(platform.effects)
@@ -463,6 +513,9 @@ class _Run:
                                                  axis=1), str(self.trajectory))
         if not self.summary.differentiation:
             self.summary.differentiation = describe_differentiation(part)
+            how = motion.differentiation()
+            if how is not None and how.rates:
+                self.own_rates = motion
 
     def _drain(self, pending: deque[Future], writes: _Writes) -> None:
         """Wait for the evaluations left and their writes, and write what waits for the
@@ -493,7 +546,8 @@ class _Run:
             buffers_free.result()
         start, motion = part.start, part.motion
         arrays, flag = evaluate_outputs(self.evaluator, motion, self.names,
-                                        buffers=self.sets[which], sensor=self.shift is None)
+                                        buffers=self.sets[which], sensor=self.shift is None,
+                                        start=start)
         self.summary.peaks.add(motion.t, arrays, flag)
         if self.summary.trace is not None:
             self.summary.trace.add(motion.t, arrays, flag)
@@ -504,6 +558,7 @@ class _Run:
                 self.summary.flag_message(self.trajectory)
                 + " (--strict: stopped at the first chunk with flagged steps; "
                 "no output written)")
+        self._uncertainty(arrays)
         outputs = ChunkOutputs(np.asarray(motion.t, dtype=np.float64), arrays, flag)
         if self.shift is None:
             writes.submit([(outputs, part.carried)], which)
@@ -515,6 +570,20 @@ class _Run:
         self.summary.steps = start + len(motion)
         self.bar.update(len(motion))
 
+    def _uncertainty(self, arrays: dict) -> None:
+        """Count a piece's sigma_F per leg where the legs slide and its steps with a leg
+        possibly at rest into the summary."""
+        summary = self.summary
+        if "sigma_F" not in arrays or "rest" not in arrays:
+            return
+        resting = np.nan_to_num(arrays["rest"]).reshape(-1) != 0
+        summary.rest_steps += int(np.count_nonzero(resting))
+        sliding = arrays["sigma_F"][~resting]
+        self.sigma_squares += np.nansum(sliding ** 2, axis=0)
+        self.sigma_steps += len(sliding)
+        if self.sigma_steps:
+            summary.sliding_sigma_F = np.sqrt(self.sigma_squares / self.sigma_steps)
+
     def _write_one(self, writer: Writer, item) -> None:
         """Write one chunk (in the writing thread): its columns first, from ``ChunkOutputs``."""
         if isinstance(item, tuple):
@@ -524,6 +593,9 @@ class _Run:
         writer.write(item)
 
     def finish(self) -> Summary:
-        """The summary, its flags filled in."""
+        """The summary, its flags and the comparison of the log's own rates filled in."""
         self.flags.fill(self.summary)
+        if self.own_rates is not None and self.smoothing is not None \
+                and self.evaluator is not None:
+            self.summary.rates = compare_rates(self.evaluator, self.own_rates, *self.smoothing)
         return self.summary

@@ -45,10 +45,13 @@ powers are dissipated (positive), ``-MfrE . omega_rel``, ``-MfrC . omega_leg``, 
 energies are their trapezoidal time integrals (NaN for workspace samples, which are no motion)."""
 
 ENVELOPE_COLUMNS = ("motion", "variant", "quantity", "leg", "value", "step", "t", *POSE,
-                    "steps", "flagged")
+                    "steps", "flagged", "at_rest")
 """Columns of ``envelopes.parquet``: ``step`` is the 0-based step of the motion (for the
 workspace, ``pose * states + state``), -1 for sums; ``steps`` and ``flagged`` count the
-case's evaluated and flagged steps (flagged steps are left out of the envelope)."""
+case's evaluated and flagged steps (flagged steps are left out of the envelope); ``at_rest``
+its steps with a leg possibly at rest (a motion differentiated from a file:
+``gsfric.evaluation.uncertainty.possibly_at_rest``; friction there is bounded by its Coulomb
+level, so the friction extremes of such steps are upper bounds; 0 for the workspace)."""
 
 LIMIT_QUANTITY = {"spherical_load": "R_E", "universal_load": "R_C", "universal_moment": "M_C",
                   "prismatic_load": "R_3", "prismatic_moment": "M_3"}
@@ -156,6 +159,8 @@ class Envelope:
         Dissipated friction energies ``ENERGIES`` so far, J.
     steps, flagged : int
         Evaluated and flagged steps so far.
+    at_rest : int
+        Steps with a leg possibly at rest so far (counted by the caller).
     last : (float, ndarray (3, 6)) or None
         Time and friction powers of the previous step (the trapezoid across blocks).
     """
@@ -170,6 +175,7 @@ class Envelope:
         self.energy = np.zeros((len(ENERGIES), 6))
         self.steps = 0
         self.flagged = 0
+        self.at_rest = 0
         self.last = None
         self._powers = np.array([rows.index(p) for p in ENERGIES.values()])
         layout = state_layout()
@@ -249,12 +255,12 @@ class Envelope:
                     w = float(self.energy[energies.index(q), leg]) if timed else math.nan
                     where = [-1] + [math.nan] * 7
                     out.append((motion, variant, q, leg + 1, w, *where, self.steps,
-                                self.flagged))
+                                self.flagged, self.at_rest))
                     continue
                 r = rows.index(q)
                 where = [int(self.step[r, leg]),
                          float(self.t[r, leg]) if timed and found[r, leg] else math.nan,
                          *pose[r, leg].tolist()]
                 out.append((motion, variant, q, leg + 1, float(value[r, leg]), *where,
-                            self.steps, self.flagged))
+                            self.steps, self.flagged, self.at_rest))
         return out

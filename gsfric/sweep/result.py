@@ -41,7 +41,8 @@ def fold(frames: Sequence[pd.DataFrame]) -> pd.DataFrame:
     """
     frame = pd.concat(frames, ignore_index=True)
     counts = (frame[(frame.quantity == "R_E") & (frame.leg == 1)]
-              .groupby(["motion", "variant"], sort=True)[["steps", "flagged"]].sum())
+              .groupby(["motion", "variant"], sort=True)[["steps", "flagged", "at_rest"]]
+              .sum())
     kind = frame.quantity.map({q: k for q, (k, _, _) in QUANTITIES.items()})
     summed = (kind == "sum").to_numpy()
     extremes = frame[~summed]
@@ -51,7 +52,7 @@ def fold(frames: Sequence[pd.DataFrame]) -> pd.DataFrame:
             .sort_values(["_order", "task"], kind="stable", na_position="last")
             .drop_duplicates(_KEY, keep="first").drop(columns="_order"))
     parts = [best, _sums(frame[summed])] if summed.any() else [best]
-    out = pd.concat(parts, ignore_index=True).drop(columns=["steps", "flagged"],
+    out = pd.concat(parts, ignore_index=True).drop(columns=["steps", "flagged", "at_rest"],
                                                    errors="ignore")
     return out.join(counts, on=["motion", "variant"])
 

@@ -15,11 +15,13 @@ import numpy as np
 import pandas as pd
 
 from gsfric.evaluation.evaluator import state_array
+from gsfric.evaluation.uncertainty import steps_at_rest
 from gsfric.platform.description import Platform
 from gsfric.simulate.differentiate import iter_motions
 from gsfric.sweep.blocks import Block, Evaluation
 from gsfric.sweep.envelope import ENVELOPE_COLUMNS, Envelope
 from gsfric.sweep.workspace import Workspace
+from gsfric.trajectory import Motion
 
 BLOCK_STEPS = 2048
 """Steps evaluated and reduced at a time inside a task. A block's values (78 per step, 1.3 MB,
@@ -68,20 +70,22 @@ class Task:
     workspace: Workspace | None = None
 
 
-def _pieces(task: Task, block: Block) -> Iterator[tuple[int, np.ndarray, np.ndarray]]:
-    """(first step, states (n, 24), times (n,)) of a task, piece by piece: a trajectory file
-    as it is streamed, a block of workspace poses ``BLOCK_STEPS`` states at a time (in the
-    block's buffers: valid until the next piece)."""
+def _pieces(task: Task, block: Block
+            ) -> Iterator[tuple[int, np.ndarray, np.ndarray, Motion | None]]:
+    """(first step, states (n, 24), times (n,), the motion or None) of a task, piece by piece:
+    a trajectory file as it is streamed, a block of workspace poses ``BLOCK_STEPS`` states at
+    a time (in the block's buffers: valid until the next piece; no motion)."""
     if task.path is not None:
         for piece in iter_motions(task.path, chunk=STREAM_CHUNK):
-            yield piece.start, state_array(piece.motion), np.asarray(piece.motion.t, float)
+            yield (piece.start, state_array(piece.motion), np.asarray(piece.motion.t, float),
+                   piece.motion)
         return
     ws = task.workspace
     per = max(1, block.size // ws.states)
     for p0 in range(0, len(task.poses), per):
         first = task.first_pose + p0
         x = ws.states_of(task.poses[p0:p0 + per], first, out=block.states)
-        yield first * ws.states, x, block.times[:len(x)]
+        yield first * ws.states, x, block.times[:len(x)], None
 
 
 def run_task(task: Task) -> pd.DataFrame:
@@ -97,8 +101,10 @@ def run_task(task: Task) -> pd.DataFrame:
     evaluations = [Evaluation(p) for p in task.platforms]
     envelopes = [Envelope() for _ in task.platforms]
     timed = task.path is not None
-    for start, x, t in _pieces(task, block):
-        for evaluation, envelope in zip(evaluations, envelopes):
+    for start, x, t, motion in _pieces(task, block):
+        for platform, evaluation, envelope in zip(task.platforms, evaluations, envelopes):
+            if motion is not None:
+                envelope.at_rest += steps_at_rest(platform, motion)
             for s, e in evaluation.blocks(block, x, t):
                 envelope.add(block.values, block.flag, x[s:e], t[s:e], start + s, timed,
                              block.pairs)
