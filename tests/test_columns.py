@@ -25,9 +25,10 @@ CONTRACT_NAMES = {"RE": "R_E", "RC": "R_C", "MC": "M_C"}
 @pytest.fixture(scope="module")
 def result():
     # a sliding motion on the reference platform: seal friction loads the actuators while the
-    # paper's post-hoc scalar of (35) stays small, so the two prismatic frictions differ
-    return gsfric.evaluate(models.reference_platform(),
-                           models.sinusoidal(np.linspace(0.0, 2.0, 201)))
+    # paper's post-hoc scalar of (35) stays small, so the two prismatic frictions differ; its
+    # poses differentiated, so that the Result has sigma_F and rest too
+    frame = models.sinusoidal(np.linspace(0.0, 2.0, 201)).to_frame()
+    return gsfric.evaluate(models.reference_platform(), frame)
 
 
 def _families(columns) -> dict[str, list[str]]:
@@ -43,7 +44,7 @@ def _families(columns) -> dict[str, list[str]]:
 def test_every_per_leg_array_written_as_x1_x6_holds_the_same_values(result):
     frame = result.to_frame()
     families = _families(frame.columns)
-    assert {"F", "Ffr", "Ffr_s", "MfrE_s", "MfrC_s", "F0", "D", "F_joint"} <= set(families)
+    assert {"F", "Ffr", "Ffr_s", "MfrE_s", "MfrC_s", "F0", "D", "F_joint", "sigma_F"} <= set(families)
     for base, names in families.items():
         array = CONTRACT_NAMES.get(base, base)
         assert array in result.arrays, f"column {names[0]} has no Result.{base}"
