@@ -100,9 +100,12 @@ def test_trace_bins_keep_every_extreme_in_bounded_memory(rng):
     F[1234, 2] = 50.0                       # one spike: a bin must keep it
     flag = np.zeros(n, dtype=np.int64)
     flag[7000] = 2
+    sigma = np.abs(rng.normal(size=(n, 6)))
+    sigma[4321, 5] = 9.0                    # the force's band keeps its largest sigma_F too
     trace = Trace()
     for s in range(0, n, 997):              # pieces that do not line up with the bins
-        trace.add(t[s:s + 997], {"F": F[s:s + 997], "Ffr": -F[s:s + 997]}, flag[s:s + 997])
+        trace.add(t[s:s + 997], {"F": F[s:s + 997], "Ffr": -F[s:s + 997],
+                                 "sigma_F": sigma[s:s + 997]}, flag[s:s + 997])
     assert MAX_BINS // 2 <= len(trace.t) <= MAX_BINS and trace.stride > 1
     np.testing.assert_allclose(np.diff(trace.t), trace.stride * 0.01)   # consecutive bins
     high, low = trace.high, trace.low
@@ -114,6 +117,8 @@ def test_trace_bins_keep_every_extreme_in_bounded_memory(rng):
     assert trace.t[k] == pytest.approx(t[k * trace.stride])
     assert high[k, 0, 2] == 50.0
     assert np.flatnonzero(trace.flagged).tolist() == [7000 // trace.stride]
+    assert high.shape[1] == 3 and high[4321 // trace.stride, 2, 5] == 9.0
+    np.testing.assert_array_equal(high[:, 2].max(axis=0), sigma.max(axis=0))
 
 
 def test_peaks_added_in_pieces_are_the_peaks_of_the_whole(rng):

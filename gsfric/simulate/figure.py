@@ -5,7 +5,8 @@ A record of any length is kept as at most ``MAX_BINS`` bins of consecutive steps
 holds the smallest and the largest value of every series over its steps, so that no peak is
 lost however many steps a bin holds; the bins widen (two merged into one) as the record grows.
 The figure draws each leg's band between them (a line while a bin is one step), with the
-flagged steps marked.
+flagged steps marked, and, where the motion was differentiated from poses, the force's band of
+one standard deviation from the differentiation (``sigma_F``, its largest value in each bin).
 """
 
 from __future__ import annotations
@@ -28,6 +29,9 @@ FORMATS = ("png", "svg", "pdf")
 SERIES = (("F", "actuator force F (N)"), ("Ffr", "prismatic friction Ffr (N)"))
 """(Result array, axis label) of each panel of the figure: the file's F1..F6 and Ffr1..Ffr6."""
 
+SIGMA = "sigma_F"
+"""The Result array of the force's uncertainty, kept after ``SERIES`` when a piece has it."""
+
 
 @dataclass
 class Trace:
@@ -39,9 +43,9 @@ class Trace:
         Steps per bin (a power of two).
     t : ndarray, shape (B,)
         First time of each bin, s.
-    low, high : ndarray, shape (B, len(SERIES), 6)
+    low, high : ndarray, shape (B, S, 6)
         Smallest and largest value of each series per leg over each bin's steps (NaN: no
-        finite value).
+        finite value): ``SERIES``, then ``SIGMA`` when the pieces have it (S = 3).
     flagged : ndarray of bool, shape (B,)
         Whether a bin holds a flagged step.
     fill : int
@@ -59,7 +63,10 @@ class Trace:
         """Add a piece: times (N,) s, ``arrays`` holding ``SERIES``' arrays (N, 6), flags
         (N,)."""
         n = len(t)
-        values = np.stack([np.reshape(arrays[key], (n, 6)) for key, _ in SERIES], axis=1)
+        keys = [key for key, _ in SERIES] + ([SIGMA] if SIGMA in arrays else [])
+        values = np.stack([np.reshape(arrays[key], (n, 6)) for key in keys], axis=1)
+        if not len(self.t):
+            self.low = self.high = np.zeros((0, len(keys), 6))
         bad = np.asarray(flag) != 0
         s = 0
         while s < n:
@@ -134,9 +141,13 @@ def write_figure(path, trace: Trace, t0: float, title: str = "") -> None:
     backend.FigureCanvasAgg(fig)
     axes = fig.subplots(len(SERIES), 1, sharex=True)
     t, low, high, flagged = trace.t - t0, trace.low, trace.high, trace.flagged
+    sigma = high[:, len(SERIES)] if high.shape[1] > len(SERIES) else None
     for j, (ax, (_, label)) in enumerate(zip(axes, SERIES)):
         for leg in range(6):
             colour = f"C{leg}"
+            if j == 0 and sigma is not None:
+                ax.fill_between(t, low[:, j, leg] - sigma[:, leg],
+                                high[:, j, leg] + sigma[:, leg], color=colour, alpha=0.15, lw=0)
             if trace.stride == 1:
                 ax.plot(t, high[:, j, leg], color=colour, lw=0.8, label=f"leg {leg + 1}")
             else:
@@ -152,6 +163,8 @@ def write_figure(path, trace: Trace, t0: float, title: str = "") -> None:
     axes[-1].set_xlabel(f"t from the record's start (s; t0 = {t0:.6g} s)")
     if trace.stride > 1:
         title += f" (band: smallest to largest over every {trace.stride} steps)"
+    if sigma is not None:
+        title += " (pale: F \u00b1 sigma_F, the differentiation's standard deviation)"
     if title:
         fig.suptitle(title.strip())
     suffix = check_figure(path)
