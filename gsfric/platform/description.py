@@ -652,14 +652,15 @@ class Platform:
         c = np.asarray(self.geometry.base_joints, float)
         rotation = np.asarray(rotation, float)
         squares = np.zeros((len(rotation), len(e)))   # summed as np.linalg.norm sums them
-        for k in range(3):                             # coordinate k, (N, 6), in place
-            d = rotation[:, k, 0, None] * e[:, 0]
-            d += rotation[:, k, 1, None] * e[:, 1]
-            d += rotation[:, k, 2, None] * e[:, 2]
-            d += position[:, k, None]
-            d -= c[:, k]
-            d *= d
-            squares += d
+        with np.errstate(over="ignore"):   # a pose beyond 1e154 m: an infinite length
+            for k in range(3):             # coordinate k, (N, 6), in place
+                d = rotation[:, k, 0, None] * e[:, 0]
+                d += rotation[:, k, 1, None] * e[:, 1]
+                d += rotation[:, k, 2, None] * e[:, 2]
+                d += position[:, k, None]
+                d -= c[:, k]
+                d *= d
+                squares += d
         return np.sqrt(squares, out=squares)
 
 

@@ -245,7 +245,7 @@ SWEEP_API = [
 
 DISCOVER_API = [
     ("motion-none", lambda f: discover(None, np.zeros((11, 6))), T,
-     r"^discover: motion must be a gsfric\.Motion", TypeError),
+     r"^data: expected a file path, a DataFrame or a Motion, got None", TypeError),
     ("forces-shape", lambda f: discover(M(), np.zeros((5, 6))), V,
      r"^forces: expected shape \(11, 6\), got \(5, 6\)", ValueError),
     ("forces-nan", lambda f: discover(M(), np.full((11, 6), np.nan)), V,
