@@ -40,12 +40,30 @@ def exports(tmp_path_factory) -> dict[str, Path]:
     return {"coupled": root / "coupled", "paper": root / "paper", "generic": root / "generic"}
 
 
-def _build(folder: Path, cc: str, flags, tmp: Path, extra=()) -> Path:
-    """example of ``folder`` built by ``cc`` with ``flags`` into ``tmp``."""
+@pytest.fixture(scope="module")
+def objects(exports, tmp_path_factory) -> dict[str, Path]:
+    """Each export's library compiled once by ``cc`` with ``STRICT`` (an object file), for the
+    tests that link a program of their own against it."""
+    root = tmp_path_factory.mktemp("objects")
+    built = {}
+    for name, folder in exports.items():
+        prefix = next(p.stem for p in folder.glob("*.h"))
+        built[name] = root / f"{prefix}.o"
+        run = subprocess.run(["cc", *STRICT, "-c", "-I", str(folder), "-o", str(built[name]),
+                              str(folder / f"{prefix}.c")], capture_output=True, text=True)
+        assert run.returncode == 0, run.stderr[-3000:]
+    return built
+
+
+def _build(folder: Path, cc: str, flags, tmp: Path, extra=(), library: Path | None = None
+           ) -> Path:
+    """example of ``folder`` built by ``cc`` with ``flags`` into ``tmp``, with the library's
+    source or, given, its object file ``library``."""
     prefix = next(p.stem for p in folder.glob("*.h"))
     target = tmp / f"example-{Path(cc).name}"
+    source = library if library is not None else folder / f"{prefix}.c"
     run = subprocess.run([cc, *flags, *extra, "-I", str(folder), "-o", str(target),
-                          str(folder / "example.c"), str(folder / f"{prefix}.c"), "-lm"],
+                          str(folder / "example.c"), str(source), "-lm"],
                          capture_output=True, text=True)
     assert run.returncode == 0, run.stderr[-3000:]
     return target
@@ -78,14 +96,15 @@ def test_builds_strictly_and_runs(exports, tmp_path, cc):
     assert np.all(got[:, 6] == 0)
 
 
-def test_generic_build_agrees(exports, tmp_path):
+def test_generic_build_agrees(exports, objects, tmp_path):
     x = _states(20)
     runs = {}
     for code, folder in (("specialised", "coupled"), ("generic", "generic")):
         header = next(exports[folder].glob("*.h")).read_text()
         assert f'_CODE "{code}"' in header
         (tmp_path / code).mkdir()
-        run = _example(_build(exports[folder], "cc", STRICT, tmp_path / code), x)
+        run = _example(_build(exports[folder], "cc", STRICT, tmp_path / code,
+                              library=objects[folder]), x)
         assert run.returncode == 0, run.stderr
         runs[code] = _numbers(run)
     F = Evaluator(reference_platform()).actuator_forces(x)
@@ -173,7 +192,7 @@ def test_sanitizers(exports, tmp_path):
     assert len(rows) == 3 and rows[1].split()[-1] == "1" and "nan" in rows[1]
 
 
-def test_two_prefixes_in_one_program(exports, tmp_path):
+def test_two_prefixes_in_one_program(exports, objects, tmp_path):
     main_c = tmp_path / "both.c"
     main_c.write_text("""#include <stdio.h>
 #include <string.h>
@@ -195,8 +214,8 @@ int main(void)
     target = tmp_path / "both"
     run = subprocess.run(["cc", *STRICT, "-I", str(exports["coupled"]), "-I",
                           str(exports["paper"]), "-o", str(target), str(main_c),
-                          str(exports["coupled"] / "hexa.c"), str(exports["paper"] / "hexp.c"),
-                          "-lm"], capture_output=True, text=True)
+                          str(objects["coupled"]), str(objects["paper"]), "-lm"],
+                         capture_output=True, text=True)
     assert run.returncode == 0, run.stderr[-3000:]
     out = subprocess.run([str(target)], capture_output=True, text=True).stdout.split()
     assert out[:3] == ["0", "0", "1"]  # evaluate's F is actuator_forces' to the bit
@@ -258,7 +277,7 @@ def test_prefixes_that_the_build_or_the_compiler_reserve(tmp_path, prefix, why):
     assert not (tmp_path / "o").exists()
 
 
-def test_pose_state_normalises_any_finite_quaternion(exports, tmp_path):
+def test_pose_state_normalises_any_finite_quaternion(exports, objects, tmp_path):
     """A quaternion of norm 1e200 (its squared norm overflows) or 1e-200 (underflows) is the
     same rotation as the unit one: the components are scaled by the largest first."""
     main_c = tmp_path / "pose.c"
@@ -281,7 +300,7 @@ int main(void)
 """)
     target = tmp_path / "pose"
     built = subprocess.run(["cc", *STRICT, "-I", str(exports["coupled"]), "-o", str(target),
-                            str(main_c), str(exports["coupled"] / "hexa.c"), "-lm"],
+                            str(main_c), str(objects["coupled"]), "-lm"],
                            capture_output=True, text=True)
     assert built.returncode == 0, built.stderr[-3000:]
     rows = [[float(v) for v in line.split()] for line in subprocess.run(
@@ -291,7 +310,7 @@ int main(void)
     np.testing.assert_allclose(rows[2], rows[0], atol=1e-15)
 
 
-def test_a_rotation_block_that_is_not_a_rotation_is_flagged(exports, tmp_path):
+def test_a_rotation_block_that_is_not_a_rotation_is_flagged(exports, objects, tmp_path):
     """The library flags what ``Motion`` refuses: T scaled by 2, mirrored, or off by more than
     ROTATION_TOL, with F NaN; a rotation rounded within the tolerance is a sound step."""
     x = _states(5)
@@ -303,7 +322,8 @@ def test_a_rotation_block_that_is_not_a_rotation_is_flagged(exports, tmp_path):
         row[rotation] = (row[rotation].reshape(3, 3) @ change).ravel()
     for name in ("coupled", "paper", "generic"):
         (tmp_path / name).mkdir()
-        got = _numbers(_example(_build(exports[name], "cc", STRICT, tmp_path / name), x))
+        got = _numbers(_example(_build(exports[name], "cc", STRICT, tmp_path / name,
+                                       library=objects[name]), x))
         assert list(got[:, 6]) == [FLAG_ROTATION] * 4 + [0], name
         assert np.isnan(got[:4, :6]).all() and np.isfinite(got[4, :6]).all()
     header = (exports["coupled"] / "hexa.h").read_text()
