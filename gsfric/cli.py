@@ -36,6 +36,8 @@ COMMANDS = {
     "effects": "List the catalog of optional effects, with their parameters, defaults and "
                "units.",
     "export": "Write a self-contained C99 library of a platform for a real-time controller.",
+    "identify": "Identify the platform's masses, inertias, friction and effects from a measured "
+                "record.",
     "paper": "Run the paper's 40-step motion and write Tables 1-3, a report and plots.",
     "platform": "Write a platform file to start from: `gsfric platform --template --out "
                 "my.toml`.",

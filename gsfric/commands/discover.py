@@ -7,10 +7,9 @@ from pathlib import Path
 
 import click
 
-from gsfric.commands.common import checked_paths, log_options
+from gsfric.commands.common import checked_paths, force_noise_values, log_options
 from gsfric.discovery.answer import verdict_line
 from gsfric.discovery.report import discover_file, write
-from gsfric.errors import InputError
 from gsfric.io.files import check_output_folder
 from gsfric.io.logs import LogFormat
 
@@ -55,7 +54,8 @@ def discover(measured, platform_file, out_dir, seed, force_noise, noise_record, 
     log_format = LogFormat.from_options(column_map, units_map, angles, None)
     check_output_folder(out_dir)
     result = discover_file(measured, platform_file, seed=seed, progress=show,
-                           force_noise=_values(force_noise), noise_record=noise_record,
+                           force_noise=force_noise_values(force_noise),
+                           noise_record=noise_record,
                            **({"log_format": log_format} if log_format else {}))
     written = write(result, out_dir)
     if not quiet:
@@ -63,13 +63,3 @@ def discover(measured, platform_file, out_dir, seed, force_noise, noise_record, 
             click.echo(f"wrote {path}")
     click.echo(verdict_line(result))
 
-
-def _values(text: str | None) -> list[float] | None:
-    """``--force-noise``'s numbers (one or six, by commas); InputError for anything else."""
-    if text is None:
-        return None
-    try:
-        return [float(v) for v in text.split(",")]
-    except ValueError:
-        raise InputError(f"--force-noise: one number (N) or six separated by commas, got "
-                         f"{text!r}") from None
