@@ -8,7 +8,9 @@ identify (``gsfric.identification.fit``). ``identify_file`` reads a measured fil
 ``excite`` designs a motion that identifies them well (``gsfric.identification.excite``).
 """
 
+from gsfric.identification.excite import Excitation, excite
 from gsfric.identification.fit import identify, validate
 from gsfric.identification.results import Combination, Estimate, Identification, Validation
 
-__all__ = ["identify", "validate", "Identification", "Estimate", "Combination", "Validation"]
+__all__ = ["Combination", "Estimate", "Excitation", "Identification", "Validation", "excite",
+           "identify", "validate"]

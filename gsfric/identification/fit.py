@@ -21,7 +21,7 @@ from gsfric.identification.parameters import (ParameterSet, body_from_factor, co
                                               pseudo_inertia)
 from gsfric.identification.regressor import Model, Structure, covariance, structure
 from gsfric.identification.results import Combination, Estimate, Identification, Validation
-from gsfric.identification.settings import IMPLAUSIBLE_SIGMA, MAX_NFEV, TYPICAL
+from gsfric.identification.settings import COST_TOL, IMPLAUSIBLE_SIGMA, MAX_NFEV, TYPICAL
 from gsfric.models import platform_from
 from gsfric.platform.description import Platform
 from gsfric.trajectory import Motion
@@ -71,6 +71,15 @@ def identify(motion: Motion, forces: np.ndarray, platform: Platform | str | None
     ------
     InputError
         Forces of the wrong shape or not finite; a motion that identifies nothing.
+
+    Examples
+    --------
+    >>> import gsfric
+    >>> from gsfric.synth import synthesize
+    >>> data = synthesize(samples=1000, rate=200.0, noise=0.5, seed=1)
+    >>> result = gsfric.identify(data.motion, data.frame.filter(regex="^F").to_numpy())
+    >>> result.rank == len(result.parameters), result.platform.platform.mass > 0
+    (True, True)
     """
     prior = platform_from(platform)
     forces = np.asarray(forces, float)
@@ -162,7 +171,6 @@ def _solve(model: Model, ps: ParameterSet, st: Structure, weights: np.ndarray,
     reference = float(np.max(st.scales * typical))
     d = np.where(st.idle, reference / typical, st.scales)
     pin = st.singular[0] * (st.null.T * d)        # (p - rank, p), rows on theta - prior
-    cache = {}
 
     def residual(z):
         theta = _theta(ps, z)
@@ -174,13 +182,12 @@ def _solve(model: Model, ps: ParameterSet, st: Structure, weights: np.ndarray,
         _, J = model.jacobian(theta)
         D = _dtheta(ps, z)
         data = -(J * weights[None, :, None]).reshape(-1, J.shape[2]) @ D
-        cache["J"] = J
         return np.vstack([data, pin @ D])
 
     z0 = _start(ps, ps.prior if start is None else start)
     z0 = np.clip(z0, lb, ub)
     sol = least_squares(residual, z0, jac=jacobian, bounds=(lb, ub), method="trf",
-                        x_scale="jac", max_nfev=MAX_NFEV)
+                        x_scale="jac", max_nfev=MAX_NFEV, ftol=COST_TOL / (0.5 * forces.size))
     return _theta(ps, sol.x), int(sol.nfev)
 
 

@@ -131,6 +131,16 @@ class Identification:
     source, source_sha256 : str
         The measured file and its SHA-256 (empty for arrays).
     validation : Validation or None
+
+    Examples
+    --------
+    >>> import gsfric
+    >>> from gsfric.synth import synthesize
+    >>> data = synthesize(samples=1000, rate=200.0, noise=0.5, seed=1)
+    >>> result = gsfric.identify(data.motion, data.frame.filter(regex="^F").to_numpy())
+    >>> mass = result.parameters["platform.mass"]
+    >>> mass.unit, mass.identifiable, abs(mass.value - 13.0) < 5 * mass.std
+    ('kg', True, True)
     """
 
     parameters: dict[str, Estimate]

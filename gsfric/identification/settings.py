@@ -40,13 +40,21 @@ MAX_NFEV = 60
 """Most residual evaluations of the nonlinear least squares (Gauss-Newton on a nearly linear
 model converges in a few; more means the model does not describe the data)."""
 
+COST_TOL = 0.01
+"""The fit stops when a step lowers the weighted cost (half the sum of squared residuals in
+units of the noise) by less than ``COST_TOL``: moving one parameter by a standard deviation
+changes the cost by 0.5, so a smaller change is a hundredth of a standard deviation or less.
+It is passed to ``least_squares`` as ``ftol = COST_TOL / cost``, the cost of rows of unit
+noise being about half their number."""
+
 CONFIDENCE_Z = 1.959963984540054
 """Two-sided 95 % normal quantile: the intervals written in the platform file's comments."""
 
-MAX_SAMPLES_EXCITE = 2000
-"""Samples of the coarse grid on which ``excite`` scores candidate motions (the information of
-a smooth excitation grows with the samples but its shape is set by the low harmonics: a coarse
-grid ranks candidates as the full one does, at a fraction of the cost)."""
+MAX_SAMPLES_EXCITE = 400
+"""Samples of one period on which ``excite`` scores candidate motions (100 Hz over the default
+4 s period: 80 samples per cycle of the highest harmonic, 1.25 Hz). The information of a smooth
+excitation grows with the samples, but its shape is set by the low harmonics: a coarse grid
+ranks candidates as the full one does, at a fraction of the cost."""
 
 EXCITE_CANDIDATES = 24
 """Random Fourier-series candidates ``excite`` scores before refining the best one."""
