@@ -126,7 +126,7 @@ def test_a_motion_without_rotation_cannot_reach_the_inertia():
 
 @pytest.mark.integration
 def test_forces_of_the_wrong_sign_never_reach_the_platform_file(tmp_path):
-    data, _ = _record(seed=4, samples=1500)
+    data, _ = _record(seed=4, samples=600)
     frame = data.frame.copy()
     for i in range(1, 7):
         frame[f"F{i}"] = -frame[f"F{i}"]

@@ -12,9 +12,11 @@ identifiable directions free and make the solution unique.
 
 from __future__ import annotations
 
+import warnings
+
 import numpy as np
 
-from gsfric.errors import InputError
+from gsfric.errors import GsfricWarning, InputError
 from gsfric.evaluation.evaluator import state_array
 from gsfric.identification.parameters import (ParameterSet, body_from_factor, consistent,
                                               factor_bounds, factor_of_body, parameter_set,
@@ -215,15 +217,28 @@ def _result(model: Model, ps: ParameterSet, theta: np.ndarray, forces: np.ndarra
     sub = cov[np.ix_(ident, ident)]
     scale = np.sqrt(np.maximum(np.diag(sub), 1e-300))
     prior_residual = forces - model.forces(ps.prior)
+    platform, doubts = _checked_platform(ps, theta)
     return Identification(
         parameters=estimates, combinations=combinations,
         correlation=sub / np.outer(scale, scale), correlation_names=[ps.names[k] for k in ident],
-        platform=ps.platform_of(theta), prior=ps.platform,
-        unreachable=_unreachable(ps, st),
-        implausible=_implausible(ps, st, theta, cov, J, residual, 1.0 / noise),
+        platform=platform, prior=ps.platform, unreachable=_unreachable(ps, st),
+        implausible=_implausible(ps, st, theta, cov, J, residual, 1.0 / noise) + doubts,
         residual=_rms(residual), residual_prior=_rms(prior_residual), noise=noise,
         noise_given=given is not None, rank=st.rank, condition=st.condition,
         samples=len(forces), evaluations=nfev)
+
+
+def _checked_platform(ps: ParameterSet, theta: np.ndarray) -> tuple[Platform, list[str]]:
+    """The platform of theta, and the plausibility warnings of ``Platform`` (a centre of mass
+    outside the body or beyond the longest leg) that it raises and the prior does not."""
+    said = []
+    for values in (ps.prior, theta):
+        with warnings.catch_warnings(record=True) as caught:
+            warnings.simplefilter("always", GsfricWarning)
+            platform = ps.platform_of(values)
+        said.append(list(dict.fromkeys(str(w.message) for w in caught
+                                       if issubclass(w.category, GsfricWarning))))
+    return platform, [m for m in said[1] if m not in said[0]]
 
 
 def _rms(residual: np.ndarray) -> np.ndarray:
