@@ -146,11 +146,17 @@ def test_command_round_trip(tmp_path):
     gsfric.io.write_table(data.frame, measured)
     prior = tmp_path / "prior.toml"
     prior.write_text(_toml(_wrong_prior()))
+    check, _ = _record(seed=6, samples=1500)
+    second = tmp_path / "second.csv"
+    gsfric.io.write_table(check.frame, second)
     out = tmp_path / "out"
     run = CliRunner().invoke(main, ["identify", "--measured", str(measured), "--platform",
-                                    str(prior), "--out", str(out)])
+                                    str(prior), "--out", str(out), "--validate", str(second)])
     assert run.exit_code == 0, run.output
+    validation = json.loads((out / "identification.json").read_text())["validation"]
+    assert max(validation["rms_after_N"]) < 1.1 * NOISE < min(validation["rms_before_N"])
     summary = json.loads((out / "identification.json").read_text())
+    assert "validation on" in run.output
     identified = Platform.from_toml(out / "platform.toml")
     mass = summary["parameters"]["platform.mass"]
     assert identified.platform.mass == pytest.approx(mass["value"], rel=1e-12)
