@@ -104,7 +104,8 @@ class Excitation:
     units: dict
 
     def relative_std(self) -> dict:
-        """Expected std / |platform's value| per parameter (None without one or at zero)."""
+        """Expected std divided by the absolute value of the platform's, per parameter (None
+        without a std or at a zero value)."""
         return {n: (s / abs(self.prior[n]) if s is not None and self.prior[n] != 0 else None)
                 for n, s in self.expected_std.items()}
 

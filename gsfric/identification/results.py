@@ -35,7 +35,7 @@ class Estimate:
 
     @property
     def rel_std(self) -> float | None:
-        """std / |value| (None without a std; inf at a zero value)."""
+        """std divided by the absolute value (None without a std; inf at a zero value)."""
         if self.std is None:
             return None
         return self.std / abs(self.value) if self.value != 0 else float("inf")
