@@ -75,7 +75,8 @@ def test_compiled_and_difference_columns_agree():
     ps = parameter_set(reference_platform())
     motion = sinusoidal(np.linspace(0.0, 2.0, 101))
     model = Model(ps, state_array(motion), motion.t)
-    _, J = model.jacobian(ps.prior)
+    F, J = model.jacobian(ps.prior)
+    np.testing.assert_array_equal(F, model.forces(ps.prior))
     for name in ("friction.prismatic_coulomb", "friction.joint_viscous"):
         k = ps.names.index(name)
         h = 1e-6

@@ -52,16 +52,16 @@ class Model:
         """F (N, 6) N and dF/dtheta (N, 6, p), each column in N per unit of its parameter."""
         ps = self.ps
         P, Q, gains = ps.inputs(theta)
-        F = self.forces(theta)
+        raw = apply_sensor(self.t, self.evaluator.actuator_forces(self.x, P=P, Q=Q),
+                           np.zeros(6), self.delay)          # delayed, before the gains
+        F = raw * (1.0 + gains)
         J = np.empty(F.shape + (len(theta),))
         compiled = [k for k, p in enumerate(ps.parameters) if p.jacobian is not None]
         if compiled:
-            raw, dF = self.evaluator.jacobian(self.x, Q=Q, P=P)
+            _, dF = self.evaluator.jacobian(self.x, Q=Q, P=P)
             for k in compiled:
                 J[:, :, k] = apply_sensor(self.t, dF[:, :, ps.parameters[k].jacobian], gains,
                                           self.delay)
-        raw = apply_sensor(self.t, self.evaluator.actuator_forces(self.x, P=P, Q=Q),
-                           np.zeros(6), self.delay)
         for k, p in enumerate(ps.parameters):
             if p.kind == "gain":
                 J[:, :, k] = 0.0
