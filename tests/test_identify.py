@@ -233,3 +233,10 @@ def test_95_percent_intervals_contain_the_truth_95_percent_of_the_time():
                 inside += abs(e.value - value) <= 1.96 * e.std
                 total += 1
     assert 0.91 <= inside / total <= 0.985, inside / total
+
+
+@pytest.mark.parametrize("noise", [0.0, -1.0, [1.0, 2.0], float("nan")])
+def test_a_force_noise_that_is_not_positive_is_refused(noise):
+    motion = sinusoidal(np.arange(40) / 100.0)
+    with pytest.raises(gsfric.InputError, match="force_noise"):
+        gsfric.identify(motion, np.zeros((40, 6)), force_noise=noise)

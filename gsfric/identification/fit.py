@@ -90,8 +90,7 @@ def identify(motion: Motion, forces: np.ndarray, platform: Platform | str | None
                          f"shape {forces.shape}")
     ps = parameter_set(prior, sensors=sensors)
     model = Model(ps, state_array(motion), motion.t)
-    given = None if force_noise is None else np.broadcast_to(
-        np.asarray(force_noise, float), (6,)).copy()
+    given = None if force_noise is None else _given_noise(force_noise)
     weights = np.ones(6) if given is None else 1.0 / given
     _, J0 = model.jacobian(ps.prior)
     st0 = structure(J0, weights, ps.units)
@@ -105,6 +104,14 @@ def identify(motion: Motion, forces: np.ndarray, platform: Platform | str | None
                              start=theta)
         nfev += more
     return _result(model, ps, theta, forces, weights, given, nfev)
+
+
+def _given_noise(value) -> np.ndarray:
+    """The load cells' noise (6,) N of one value or six; InputError otherwise."""
+    noise = np.asarray(value, float).ravel()
+    if noise.size not in (1, 6) or not np.all(np.isfinite(noise) & (noise > 0)):
+        raise InputError(f"force_noise: one positive number (N) or six, got {value!r}")
+    return np.broadcast_to(noise, (6,)).copy()
 
 
 def _noise(residual: np.ndarray, rank: int) -> np.ndarray:
