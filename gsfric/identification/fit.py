@@ -19,8 +19,8 @@ import numpy as np
 from gsfric.errors import GsfricWarning, InputError
 from gsfric.evaluation.evaluator import state_array
 from gsfric.identification.parameters import (ParameterSet, body_from_factor, consistent,
-                                              factor_bounds, factor_of_body, parameter_set,
-                                              pseudo_inertia)
+                                              factor_bounds, factor_of_body,
+                                              nearest_consistent, parameter_set)
 from gsfric.identification.regressor import Model, Structure, covariance, structure
 from gsfric.identification.results import Combination, Estimate, Identification, Validation
 from gsfric.identification.settings import COST_TOL, IMPLAUSIBLE_SIGMA, MAX_NFEV, TYPICAL
@@ -97,13 +97,12 @@ def identify(motion: Motion, forces: np.ndarray, platform: Platform | str | None
     if st0.rank == 0:
         raise InputError("the motion identifies no parameter: " + "; ".join(
             _unreachable(ps, st0)))
-    theta, nfev = _solve(model, ps, st0, weights, forces)
+    z, nfev = _solve(model, ps, st0, weights, forces)
     if given is None:
-        weights = 1.0 / _noise(forces - model.forces(theta), st0.rank)
-        theta, more = _solve(model, ps, structure(J0, weights, ps.units), weights, forces,
-                             start=theta)
+        weights = 1.0 / _noise(forces - model.forces(_theta(ps, z)), st0.rank)
+        z, more = _solve(model, ps, structure(J0, weights, ps.units), weights, forces, start=z)
         nfev += more
-    return _result(model, ps, theta, forces, weights, given, nfev)
+    return _result(model, ps, _theta(ps, z), forces, weights, given, nfev)
 
 
 def _given_noise(value) -> np.ndarray:
@@ -152,23 +151,24 @@ def _dtheta(ps: ParameterSet, z: np.ndarray) -> np.ndarray:
 
 
 def _start(ps: ParameterSet, theta: np.ndarray) -> np.ndarray:
-    """The fit's coordinates of theta; a body that is not consistent is moved to the nearest
-    consistent one (its pseudo-inertia's eigenvalues raised to a small positive floor)."""
+    """The fit's coordinates of theta; a body that is not consistent, or too nearly singular
+    for its Cholesky factor, starts from the nearest consistent one."""
     body, rest = _coordinates(ps)
     pi = theta[body]
-    if not consistent(pi):
-        w, v = np.linalg.eigh(pseudo_inertia(pi))
-        J = (v * np.maximum(w, 1e-6 * max(w.max(), 1e-3))) @ v.T
-        inertia = np.trace(J[:3, :3]) * np.eye(3) - J[:3, :3]
-        pi = np.array([J[3, 3], *J[:3, 3], *(inertia[i, j] for i, j in
-                                              [(0, 0), (0, 1), (0, 2), (1, 1), (1, 2), (2, 2)])])
+    try:
+        if not consistent(pi):
+            raise np.linalg.LinAlgError
+        factor = factor_of_body(pi)
+    except np.linalg.LinAlgError:
+        factor = factor_of_body(nearest_consistent(pi))
     lower, upper = ps.bounds()
-    return np.r_[factor_of_body(pi), np.clip(theta[rest], lower[rest], upper[rest])]
+    return np.r_[factor, np.clip(theta[rest], lower[rest], upper[rest])]
 
 
 def _solve(model: Model, ps: ParameterSet, st: Structure, weights: np.ndarray,
            forces: np.ndarray, start: np.ndarray | None = None) -> tuple[np.ndarray, int]:
-    """theta minimising the weighted residual, null directions held at the prior."""
+    """The fit's coordinates z (from ``start``, else the prior's) minimising the weighted
+    residual, null directions held at the prior; and the residual evaluations."""
     from scipy.optimize import least_squares
 
     body, rest = _coordinates(ps)
@@ -193,11 +193,10 @@ def _solve(model: Model, ps: ParameterSet, st: Structure, weights: np.ndarray,
         data = -(J * weights[None, :, None]).reshape(-1, J.shape[2]) @ D
         return np.vstack([data, pin @ D])
 
-    z0 = _start(ps, ps.prior if start is None else start)
-    z0 = np.clip(z0, lb, ub)
+    z0 = np.clip(_start(ps, ps.prior) if start is None else start, lb, ub)
     sol = least_squares(residual, z0, jac=jacobian, bounds=(lb, ub), method="trf",
                         x_scale="jac", max_nfev=MAX_NFEV, ftol=COST_TOL / (0.5 * forces.size))
-    return _theta(ps, sol.x), int(sol.nfev)
+    return sol.x, int(sol.nfev)
 
 
 def _result(model: Model, ps: ParameterSet, theta: np.ndarray, forces: np.ndarray,

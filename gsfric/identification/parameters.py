@@ -285,9 +285,20 @@ def body_from_factor(u: np.ndarray) -> np.ndarray:
     values[diagonal] = np.exp(values[diagonal])
     U = np.zeros((4, 4))
     U[rows, cols] = values
-    J = U @ U.T
+    return body_of_pseudo_inertia(U @ U.T)
+
+
+def body_of_pseudo_inertia(J: np.ndarray) -> np.ndarray:
+    """Standard parameters (10,) of a 4x4 pseudo-inertia (the inverse of ``pseudo_inertia``)."""
     inertia = np.trace(J[:3, :3]) * np.eye(3) - J[:3, :3]
     return np.array([J[3, 3], *J[:3, 3], *(inertia[i, j] for i, j in _UPPER)])
+
+
+def nearest_consistent(pi: np.ndarray, floor: float = 1e-6) -> np.ndarray:
+    """A consistent body near ``pi``: its pseudo-inertia's eigenvalues raised to ``floor``
+    times the largest (a start for the fit when the prior is not consistent, or barely)."""
+    w, v = np.linalg.eigh(pseudo_inertia(pi))
+    return body_of_pseudo_inertia((v * np.maximum(w, floor * max(w.max(), 1e-3))) @ v.T)
 
 
 FACTOR_BOUNDS = (-25.0, 10.0)
