@@ -92,17 +92,27 @@ def identify(motion: Motion, forces: np.ndarray, platform: Platform | str | None
     model = Model(ps, state_array(motion), motion.t)
     given = None if force_noise is None else _given_noise(force_noise)
     weights = np.ones(6) if given is None else 1.0 / given
-    _, J0 = model.jacobian(ps.prior)
+    F0, J0 = model.jacobian(ps.prior)
     st0 = structure(J0, weights, ps.units)
     if st0.rank == 0:
         raise InputError("the motion identifies no parameter: " + "; ".join(
             _unreachable(ps, st0)))
-    z, nfev = _solve(model, ps, st0, weights, forces)
+    linear = ps.prior + _step(J0, weights, st0, forces - F0)
+    z, nfev = _solve(model, ps, st0, weights, forces, start=_start(ps, linear))
     if given is None:
         weights = 1.0 / _noise(forces - model.forces(_theta(ps, z)), st0.rank)
         z, more = _solve(model, ps, structure(J0, weights, ps.units), weights, forces, start=z)
         nfev += more
     return _result(model, ps, _theta(ps, z), forces, weights, given, nfev)
+
+
+def _step(J: np.ndarray, weights: np.ndarray, st: Structure, residual: np.ndarray
+          ) -> np.ndarray:
+    """The Gauss-Newton step (p,) on the identifiable directions for a residual (N, 6): the
+    linear weighted least-squares estimate from the regressor (the rigid-body part of F is
+    linear in the inertial parameters), the nonlinear fit's start."""
+    A = (J * weights[None, :, None]).reshape(-1, J.shape[2])
+    return covariance(J, weights, st) @ (A.T @ (residual * weights).ravel())
 
 
 def _given_noise(value) -> np.ndarray:
@@ -288,8 +298,7 @@ def _implausible(ps: ParameterSet, st: Structure, theta: np.ndarray, cov: np.nda
                  J: np.ndarray, residual: np.ndarray, weights: np.ndarray) -> list[str]:
     """Masses the data want negative: the unconstrained (Gauss-Newton) estimate from the
     solution more than ``IMPLAUSIBLE_SIGMA`` standard deviations below zero."""
-    A = (J * weights[None, :, None]).reshape(-1, J.shape[2])
-    free = theta + cov @ (A.T @ (residual * weights).ravel())
+    free = theta + _step(J, weights, st, residual)
     out = []
     for k, name in enumerate(ps.names):
         if name in MASSES and st.identifiable[k]:
