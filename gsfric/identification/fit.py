@@ -1,7 +1,8 @@
 """Weighted nonlinear least squares of the parameters on measured actuator forces.
 
 The residual is the measured minus the model's forces, each leg's rows weighted by the inverse
-of its noise (given, or estimated from the first fit's residual and the fit repeated). The
+of its noise (given, or estimated from the first fit's residual and the fit repeated). The fit
+starts from the linear weighted least-squares estimate on the regressor at the prior. The
 unknowns are the body's log-Cholesky coordinates (``parameters.body_from_factor``: consistent
 by construction) and every other parameter within its bounds (``scipy.optimize.least_squares``,
 trust-region reflective, on the regressor of ``regressor.Model``). Directions the data do not
