@@ -10,7 +10,8 @@ evaluated here over trajectories, with NumPy and the compiled functions only.
 (40, 6)
 
 Main names: ``evaluate`` (a platform over a motion -> ``Result``), ``discover`` (measured
-data -> ``Discovery``: which effect the model misses), ``Platform``
+data -> ``Discovery``: which effect the model misses), ``identify`` (measured data ->
+``Identification``: the platform's parameters with their standard deviations), ``Platform``
 (``reference_platform()``, ``paper_platform()``, ``Platform.from_toml``), ``Motion`` (and
 ``gsfric.models`` for reference motions), ``read_trajectory`` / ``read_measured`` with a
 ``LogFormat`` for other programs' logs, ``Evaluator`` for repeated calls, ``columns`` for the
@@ -29,6 +30,8 @@ _LAZY = {
     "evaluate": ("gsfric.simulate.api", "evaluate"),
     "discover": ("gsfric.discovery.api", "discover"),
     "Discovery": ("gsfric.discovery.results", "Discovery"),
+    "identify": ("gsfric.identification.fit", "identify"),
+    "Identification": ("gsfric.identification.results", "Identification"),
     "reference_platform": ("gsfric.models", "reference_platform"),
     "paper_platform": ("gsfric.models", "paper_platform"),
     "LogFormat": ("gsfric.io.logs", "LogFormat"),
@@ -43,7 +46,8 @@ _MODULES = {"models": "gsfric.models", "io": "gsfric.io", "columns": "gsfric.eva
             "catalog": "gsfric.platform.catalog", "trajectory": "gsfric.trajectory",
             "platform": "gsfric.platform", "evaluation": "gsfric.evaluation",
             "signal": "gsfric.signal", "simulate": "gsfric.simulate", "synth": "gsfric.synth",
-            "discovery": "gsfric.discovery", "sweep": "gsfric.sweep", "paper": "gsfric.paper"}
+            "discovery": "gsfric.discovery", "identification": "gsfric.identification",
+            "sweep": "gsfric.sweep", "paper": "gsfric.paper"}
 """Modules reachable as attributes, e.g. ``gsfric.models.sinusoidal``."""
 
 __all__ = sorted(_LAZY) + ["columns", "io", "models", "sweep"]

@@ -35,7 +35,10 @@ COMMANDS = {
                 "shrink.",
     "effects": "List the catalog of optional effects, with their parameters, defaults and "
                "units.",
+    "excite": "Design an excitation motion that identifies the platform's parameters well.",
     "export": "Write a self-contained C99 library of a platform for a real-time controller.",
+    "identify": "Identify the platform's masses, inertias, friction and effects from a measured "
+                "record.",
     "log": "Read a controller's log: `gsfric log inspect LOG` proposes its log format and a "
            "rig.",
     "paper": "Run the paper's 40-step motion and write Tables 1-3, a report and plots.",

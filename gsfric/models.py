@@ -230,6 +230,26 @@ def sinusoidal(t: np.ndarray, amplitude=(0.05, 0.05, 0.04, 0.08, 0.08, 0.1),
     q = A * np.sin(arg)
     qd = A * w * np.cos(arg)
     qdd = -A * w**2 * np.sin(arg)
+    return pose_motion(t, q, qd, qdd, centre)
+
+
+def pose_motion(t: np.ndarray, q: np.ndarray, qd: np.ndarray, qdd: np.ndarray,
+                centre=(0.0, 0.0, HOME_HEIGHT)) -> Motion:
+    """The motion of pose coordinates and their exact rates.
+
+    Parameters
+    ----------
+    t : ndarray (N,), s
+    q, qd, qdd : ndarray (N, 6)
+        x, y, z (m, added to ``centre``) and the angles psi, theta, phi (rad) of the
+        orientation ``Rz(psi) Ry(theta) Rx(phi)``; their first and second time derivatives.
+    centre : 3 values, m
+
+    Returns
+    -------
+    Motion
+        With the angular velocity and acceleration following analytically from the angle rates.
+    """
     psi, theta, phi = q[:, 3], q[:, 4], q[:, 5]
     Rz, Ry, Rx = _rot(2, psi), _rot(1, theta), _rot(0, phi)
     Rzy = Rz @ Ry

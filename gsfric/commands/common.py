@@ -14,6 +14,7 @@ from pathlib import Path
 
 import click
 
+from gsfric.errors import InputError
 from gsfric.io.files import check_run_paths, trajectory_files
 
 EXIT_CHECK = 1
@@ -97,3 +98,14 @@ def partial_of(name: str) -> Callable[[dict], Path | None]:
         out = kwargs.get(name)
         return None if out is None else Path(out).with_name(Path(out).name + ".partial")
     return partial
+
+
+def force_noise_values(text: str | None) -> list[float] | None:
+    """``--force-noise``'s numbers (one or six, by commas); InputError for anything else."""
+    if text is None:
+        return None
+    try:
+        return [float(v) for v in text.split(",")]
+    except ValueError:
+        raise InputError(f"--force-noise: one number (N) or six separated by commas, got "
+                         f"{text!r}") from None

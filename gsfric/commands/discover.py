@@ -7,10 +7,9 @@ from pathlib import Path
 
 import click
 
-from gsfric.commands.common import checked_paths, log_options
+from gsfric.commands.common import checked_paths, force_noise_values, log_options
 from gsfric.discovery.answer import verdict_line
 from gsfric.discovery.api import discover as discover_data
-from gsfric.errors import InputError
 from gsfric.io.logs import LogFormat
 
 
@@ -53,20 +52,10 @@ def discover(measured, platform_file, out_dir, seed, force_noise, noise_record, 
     show = False if quiet else sys.stderr.isatty() if progress is None else progress
     log_format = LogFormat.from_options(column_map, units_map, angles, None)
     result = discover_data(measured, platform=platform_file, out=out_dir, seed=seed,
-                           progress=show, force_noise=_values(force_noise),
+                           progress=show, force_noise=force_noise_values(force_noise),
                            noise_record=noise_record, log_format=log_format)
     if not quiet:
         for path in result.written:
             click.echo(f"wrote {path}")
     click.echo(verdict_line(result))
 
-
-def _values(text: str | None) -> list[float] | None:
-    """``--force-noise``'s numbers (one or six, by commas); InputError for anything else."""
-    if text is None:
-        return None
-    try:
-        return [float(v) for v in text.split(",")]
-    except ValueError:
-        raise InputError(f"--force-noise: one number (N) or six separated by commas, got "
-                         f"{text!r}") from None

@@ -205,8 +205,10 @@ class Evaluator:
                                      f"({len(rows)} rows); give finite states")
         return F
 
-    def jacobian(self, x: np.ndarray, Q=None) -> tuple[np.ndarray, np.ndarray]:
+    def jacobian(self, x: np.ndarray, Q=None, P=None) -> tuple[np.ndarray, np.ndarray]:
         """F (N, 6) and dF/dtheta (N, 6, n_theta); theta names in ``jacobian_parameters()``.
+
+        ``P`` and ``Q`` replace the Evaluator's own parameters (as in ``actuator_forces``).
 
         Raises
         ------
@@ -214,7 +216,8 @@ class Evaluator:
             As ``actuator_forces``: not an array, a wrong shape, a NaN or infinite state.
         """
         Q = self.Q if Q is None else _parameters(Q, "jacobian", "Q", self.Q.size)
-        res = native.get("jacobian")([x, self.P, Q], None, self.n_threads)
+        P = self.P if P is None else _parameters(P, "jacobian", "P", self.P.size)
+        res = native.get("jacobian")([x, P, Q], None, self.n_threads)
         x = np.asarray(x, dtype=float)
         where = first_nonfinite(x.reshape(-1, x.shape[-1]))
         if where is not None:

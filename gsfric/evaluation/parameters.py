@@ -94,7 +94,14 @@ def parameter_values(platform: Platform) -> dict[str, object]:
 
 def parameter_vector(platform: Platform) -> np.ndarray:
     """The platform packed into the generated functions' parameter input P."""
-    return _pack(_slots("eval", "P"), parameter_values(platform))
+    return pack_parameters(parameter_values(platform))
+
+
+def pack_parameters(values: dict[str, object]) -> np.ndarray:
+    """Named blocks (``parameter_values``' keys) packed into one parameter input P, without
+    the checks of a ``Platform``: for parameter studies that step a value past what a
+    platform file accepts (a finite-difference step of an identification)."""
+    return _pack(_slots("eval", "P"), values)
 
 
 def effect_vector(platform: Platform) -> np.ndarray:

@@ -216,6 +216,8 @@ PLATFORM_COMMANDS = {
     "export": ("export", "--platform", "{p}", "--out", "{tmp}/o"),
     "discover": ("discover", "--measured", "{data}", "--platform", "{p}", "--out", "{tmp}/o",
                  "--quiet"),
+    "identify": ("identify", "--measured", "{data}", "--platform", "{p}", "--out", "{tmp}/o"),
+    "excite": ("excite", "--platform", "{p}", "--out", "{tmp}/o.csv", "--duration", "4"),
 }
 
 
@@ -251,7 +253,8 @@ def good_platform_cases() -> list[Case]:
     order mark, as every other TOML input (accepted and skipped)."""
     cases = [Case(id=f"platform-{command}-{how}", argv=argv, expect=OK,
                   files={"data": trajectory(), "p": make(platform())})
-             for command, argv in PLATFORM_COMMANDS.items() if command != "discover"
+             for command, argv in PLATFORM_COMMANDS.items()
+             if command not in ("discover", "identify")
              for how, make in (("valid", lambda m: m), ("bom", _bom))]
     cases += [Case(id=f"toml-{kind}-bom", argv=argv, expect=OK,
                    files={"data": trajectory(), "f": _bom(maker)})

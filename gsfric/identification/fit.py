@@ -1,0 +1,324 @@
+"""Weighted nonlinear least squares of the parameters on measured actuator forces.
+
+The residual is the measured minus the model's forces, each leg's rows weighted by the inverse
+of its noise (given, or estimated from the first fit's residual and the fit repeated). The fit
+starts from the linear weighted least-squares estimate on the regressor at the prior. The
+unknowns are the body's log-Cholesky coordinates (``parameters.body_from_factor``: consistent
+by construction) and every other parameter within its bounds (``scipy.optimize.least_squares``,
+trust-region reflective, on the regressor of ``regressor.Model``). Directions the data do not
+reach (the regressor's null space at the prior, ``regressor.structure``) are held at the
+prior's values by extra residual rows as stiff as the best-determined direction: they leave the
+identifiable directions free and make the solution unique.
+"""
+
+from __future__ import annotations
+
+import warnings
+
+import numpy as np
+
+from gsfric.errors import GsfricWarning, InputError
+from gsfric.evaluation.evaluator import state_array
+from gsfric.identification.parameters import (ParameterSet, body_from_factor, consistent,
+                                              factor_bounds, factor_of_body,
+                                              nearest_consistent, parameter_set)
+from gsfric.identification.regressor import Model, Structure, covariance, structure
+from gsfric.identification.results import Combination, Estimate, Identification, Validation
+from gsfric.identification.settings import COST_TOL, IMPLAUSIBLE_SIGMA, MAX_NFEV, TYPICAL
+from gsfric.models import platform_from
+from gsfric.platform.description import Platform
+from gsfric.trajectory import Motion
+
+HINTS = (
+    ("platform.inertia_origin", "rotations with angular accelerations about all three axes "
+                                "(roll, pitch and yaw)"),
+    ("platform.first_moment", "tilts (roll, pitch) and angular accelerations, so that the "
+                              "centre of mass's offset changes the legs' loads"),
+    ("platform.mass", "vertical accelerations (heave) or poses that load the legs differently"),
+    ("legs.", "leg-length changes at varying speeds and accelerations, and tilts"),
+    ("friction.", "every leg moving in both directions at several speeds, under varying load"),
+    ("effects.sensor_bias", "poses that change each leg's load"),
+    ("effects.force_scale", "poses and accelerations that change each leg's load by a large "
+                            "fraction of it"),
+    ("effects.", "motion over the range where the effect acts (its speeds, strokes, loads)"),
+)
+"""What motion reaches a parameter, by the start of its name."""
+
+MASSES = ("platform.mass", "legs.lower_mass", "legs.upper_mass")
+
+
+def identify(motion: Motion, forces: np.ndarray, platform: Platform | str | None = None, *,
+             sensors: bool = False, force_noise=None) -> Identification:
+    """Identify a platform's parameters from a motion and the actuator forces measured along it.
+
+    Parameters
+    ----------
+    motion : Motion
+        N steps (``gsfric.read_measured``).
+    forces : ndarray, shape (N, 6)
+        Measured actuator forces F1..F6, N.
+    platform : Platform, path or None
+        The prior: its values start the fit and hold what the data cannot reach (default the
+        reference platform).
+    sensors : bool
+        Also estimate the load cells' offsets (``effects.sensor_bias``) and gains
+        (``effects.force_scale``).
+    force_noise : float or sequence of 6 floats, optional
+        The load cells' noise (standard deviation, N); default: estimated from the residual.
+
+    Returns
+    -------
+    Identification
+
+    Raises
+    ------
+    InputError
+        Forces of the wrong shape or not finite; a motion that identifies nothing.
+
+    Examples
+    --------
+    >>> import gsfric
+    >>> from gsfric.synth import synthesize
+    >>> data = synthesize(samples=1000, rate=200.0, noise=0.5, seed=1)
+    >>> result = gsfric.identify(data.motion, data.frame.filter(regex="^F").to_numpy())
+    >>> result.rank == len(result.parameters), result.platform.platform.mass > 0
+    (True, True)
+    """
+    prior = platform_from(platform)
+    forces = np.asarray(forces, float)
+    if forces.shape != (len(motion), 6) or not np.all(np.isfinite(forces)):
+        raise InputError(f"forces: expected finite values of shape ({len(motion)}, 6), got "
+                         f"shape {forces.shape}")
+    ps = parameter_set(prior, sensors=sensors)
+    model = Model(ps, state_array(motion), motion.t)
+    given = None if force_noise is None else _given_noise(force_noise)
+    weights = np.ones(6) if given is None else 1.0 / given
+    F0, J0 = model.jacobian(ps.prior)
+    st0 = structure(J0, weights, ps.units)
+    if st0.rank == 0:
+        raise InputError("the motion identifies no parameter: " + "; ".join(
+            _unreachable(ps, st0)))
+    linear = ps.prior + _step(J0, weights, st0, forces - F0)
+    z, nfev = _solve(model, ps, st0, weights, forces, start=_start(ps, linear))
+    if given is None:
+        weights = 1.0 / _noise(forces - model.forces(_theta(ps, z)), st0.rank)
+        z, more = _solve(model, ps, structure(J0, weights, ps.units), weights, forces, start=z)
+        nfev += more
+    return _result(model, ps, _theta(ps, z), forces, weights, given, nfev)
+
+
+def _step(J: np.ndarray, weights: np.ndarray, st: Structure, residual: np.ndarray
+          ) -> np.ndarray:
+    """The Gauss-Newton step (p,) on the identifiable directions for a residual (N, 6): the
+    linear weighted least-squares estimate from the regressor (the rigid-body part of F is
+    linear in the inertial parameters), the nonlinear fit's start."""
+    A = (J * weights[None, :, None]).reshape(-1, J.shape[2])
+    return covariance(J, weights, st) @ (A.T @ (residual * weights).ravel())
+
+
+def _given_noise(value) -> np.ndarray:
+    """The load cells' noise (6,) N of one value or six; InputError otherwise."""
+    noise = np.asarray(value, float).ravel()
+    if noise.size not in (1, 6) or not np.all(np.isfinite(noise) & (noise > 0)):
+        raise InputError(f"force_noise: one positive number (N) or six, got {value!r}")
+    return np.broadcast_to(noise, (6,)).copy()
+
+
+def _noise(residual: np.ndarray, rank: int) -> np.ndarray:
+    """Each leg's noise standard deviation (6,) N from a residual (N, 6), for a fit of ``rank``
+    directions (shared by the six legs)."""
+    n = len(residual)
+    dof = max(n - rank / 6.0, 1.0)
+    return np.maximum(np.sqrt(np.sum(residual ** 2, axis=0) / dof), 1e-12)
+
+
+def _coordinates(ps: ParameterSet) -> tuple[np.ndarray, np.ndarray]:
+    """Indices of the body's parameters in theta, and of the others."""
+    kinds = np.array([p.kind for p in ps.parameters])
+    return np.flatnonzero(kinds == "body"), np.flatnonzero(kinds != "body")
+
+
+def _theta(ps: ParameterSet, z: np.ndarray) -> np.ndarray:
+    """theta of the fit's coordinates z (the body's first, log-Cholesky)."""
+    body, rest = _coordinates(ps)
+    theta = np.empty(len(ps.parameters))
+    theta[body] = body_from_factor(z[: body.size])
+    theta[rest] = z[body.size:]
+    return theta
+
+
+def _dtheta(ps: ParameterSet, z: np.ndarray) -> np.ndarray:
+    """d theta / d z (p, p): the body block by central differences of its (cheap) map."""
+    body, rest = _coordinates(ps)
+    D = np.zeros((len(ps.parameters), len(z)))
+    D[rest, body.size + np.arange(rest.size)] = 1.0
+    for k in range(body.size):
+        h = 1e-6 * max(1.0, abs(z[k]))
+        up, down = z[: body.size].copy(), z[: body.size].copy()
+        up[k] += h
+        down[k] -= h
+        D[body, k] = (body_from_factor(up) - body_from_factor(down)) / (2 * h)
+    return D
+
+
+def _start(ps: ParameterSet, theta: np.ndarray) -> np.ndarray:
+    """The fit's coordinates of theta; a body that is not consistent, or too nearly singular
+    for its Cholesky factor, starts from the nearest consistent one."""
+    body, rest = _coordinates(ps)
+    pi = theta[body]
+    try:
+        if not consistent(pi):
+            raise np.linalg.LinAlgError
+        factor = factor_of_body(pi)
+    except np.linalg.LinAlgError:
+        factor = factor_of_body(nearest_consistent(pi))
+    lower, upper = ps.bounds()
+    return np.r_[factor, np.clip(theta[rest], lower[rest], upper[rest])]
+
+
+def _solve(model: Model, ps: ParameterSet, st: Structure, weights: np.ndarray,
+           forces: np.ndarray, start: np.ndarray | None = None) -> tuple[np.ndarray, int]:
+    """The fit's coordinates z (from ``start``, else the prior's) minimising the weighted
+    residual, null directions held at the prior; and the residual evaluations."""
+    from scipy.optimize import least_squares
+
+    body, rest = _coordinates(ps)
+    lower, upper = ps.bounds()
+    body_lower, body_upper = factor_bounds()
+    lb = np.r_[body_lower[: body.size], lower[rest]]
+    ub = np.r_[body_upper[: body.size], upper[rest]]
+    typical = np.array([TYPICAL.get(u, 1.0) for u in ps.units])
+    reference = float(np.max(st.scales * typical))
+    d = np.where(st.idle, reference / typical, st.scales)
+    pin = st.singular[0] * (st.null.T * d)        # (p - rank, p), rows on theta - prior
+
+    def residual(z):
+        theta = _theta(ps, z)
+        data = ((forces - model.forces(theta)) * weights).ravel()
+        return np.r_[data, pin @ (theta - ps.prior)]
+
+    def jacobian(z):
+        theta = _theta(ps, z)
+        _, J = model.jacobian(theta)
+        D = _dtheta(ps, z)
+        data = -(J * weights[None, :, None]).reshape(-1, J.shape[2]) @ D
+        return np.vstack([data, pin @ D])
+
+    z0 = np.clip(_start(ps, ps.prior) if start is None else start, lb, ub)
+    sol = least_squares(residual, z0, jac=jacobian, bounds=(lb, ub), method="trf",
+                        x_scale="jac", max_nfev=MAX_NFEV, ftol=COST_TOL / (0.5 * forces.size))
+    return sol.x, int(sol.nfev)
+
+
+def _result(model: Model, ps: ParameterSet, theta: np.ndarray, forces: np.ndarray,
+            weights: np.ndarray, given, nfev: int) -> Identification:
+    """The Identification at the solution theta."""
+    F, J = model.jacobian(theta)
+    residual = forces - F
+    noise = _noise(residual, 0) if given is None else given
+    st = structure(J, 1.0 / noise, ps.units)
+    cov = covariance(J, 1.0 / noise, st)
+    std = np.sqrt(np.maximum(np.diag(cov), 0.0))
+    estimates = {}
+    for k, p in enumerate(ps.parameters):
+        ok = bool(st.identifiable[k])
+        estimates[p.name] = Estimate(float(theta[k]), float(std[k]) if ok else None, p.unit,
+                                     ok, float(ps.prior[k]))
+    combinations = {}
+    for i, coef in st.combinations.items():
+        keep = {ps.names[k]: float(c) for k, c in enumerate(coef) if abs(c) > 1e-9}
+        combinations[_expression(keep)] = Combination(
+            float(coef @ theta), float(np.sqrt(max(coef @ cov @ coef, 0.0))),
+            ps.parameters[i].unit, keep)
+    ident = np.flatnonzero(st.identifiable)
+    sub = cov[np.ix_(ident, ident)]
+    scale = np.sqrt(np.maximum(np.diag(sub), 1e-300))
+    prior_residual = forces - model.forces(ps.prior)
+    platform, doubts = _checked_platform(ps, theta)
+    return Identification(
+        parameters=estimates, combinations=combinations,
+        correlation=sub / np.outer(scale, scale), correlation_names=[ps.names[k] for k in ident],
+        platform=platform, prior=ps.platform, unreachable=_unreachable(ps, st),
+        implausible=_implausible(ps, st, theta, cov, J, residual, 1.0 / noise) + doubts,
+        residual=_rms(residual), residual_prior=_rms(prior_residual), noise=noise,
+        noise_given=given is not None, rank=st.rank, condition=st.condition,
+        samples=len(forces), evaluations=nfev)
+
+
+def _checked_platform(ps: ParameterSet, theta: np.ndarray) -> tuple[Platform, list[str]]:
+    """The platform of theta, and the plausibility warnings of ``Platform`` (a centre of mass
+    outside the body or beyond the longest leg) that it raises and the prior does not."""
+    said = []
+    for values in (ps.prior, theta):
+        with warnings.catch_warnings(record=True) as caught:
+            warnings.simplefilter("always", GsfricWarning)
+            platform = ps.platform_of(values)
+        said.append(list(dict.fromkeys(str(w.message) for w in caught
+                                       if issubclass(w.category, GsfricWarning))))
+    return platform, [m for m in said[1] if m not in said[0]]
+
+
+def _rms(residual: np.ndarray) -> np.ndarray:
+    return np.sqrt(np.mean(residual ** 2, axis=0))
+
+
+def _expression(coefficients: dict[str, float]) -> str:
+    """``a + 0.5 b - 2 c`` of {name: coefficient} (the leading one first, coefficient 1)."""
+    text = ""
+    for name, c in coefficients.items():
+        if c == 1.0 and not text:
+            text = name
+            continue
+        sign = "-" if c < 0 else "+"
+        text += f" {sign} {abs(c):.4g} {name}" if text else f"{c:.4g} {name}"
+    return text
+
+
+def _hint(name: str) -> str:
+    return next(h for prefix, h in HINTS if name.startswith(prefix))
+
+
+def _unreachable(ps: ParameterSet, st: Structure) -> list[str]:
+    """One line per parameter not identifiable alone: why, and what motion would reach it."""
+    out = []
+    for k, name in enumerate(ps.names):
+        if st.identifiable[k]:
+            continue
+        if st.idle[k]:
+            why = "does not act on the forces along this motion"
+        else:
+            combos = [_expression({ps.names[j]: c for j, c in enumerate(coef) if abs(c) > 1e-9})
+                      for coef in st.combinations.values() if abs(coef[k]) > 1e-9]
+            why = ("only in combination: " + "; ".join(combos) if combos else
+                   "its effect on the forces is that of other parameters")
+        out.append(f"{name}: {why}; needs {_hint(name)}")
+    return out
+
+
+def _implausible(ps: ParameterSet, st: Structure, theta: np.ndarray, cov: np.ndarray,
+                 J: np.ndarray, residual: np.ndarray, weights: np.ndarray) -> list[str]:
+    """Masses the data want negative: the unconstrained (Gauss-Newton) estimate from the
+    solution more than ``IMPLAUSIBLE_SIGMA`` standard deviations below zero."""
+    free = theta + _step(J, weights, st, residual)
+    out = []
+    for k, name in enumerate(ps.names):
+        if name in MASSES and st.identifiable[k]:
+            std = float(np.sqrt(max(cov[k, k], 0.0)))
+            if free[k] < -IMPLAUSIBLE_SIGMA * std:
+                out.append(f"{name}: the data call for {free[k]:.4g} kg (std {std:.2g} kg), a "
+                           "negative mass: check the forces' sign and unit, and that the "
+                           "platform file describes this rig")
+    return out
+
+
+def validate(result: Identification, motion: Motion, forces: np.ndarray,
+             source: str = "") -> Validation:
+    """Prediction error on a second record (``motion``, measured ``forces`` (N, 6) N) with the
+    prior and the identified platform."""
+    forces = np.asarray(forces, float)
+    x = state_array(motion)
+    out = []
+    for platform in (result.prior, result.platform):
+        ps = parameter_set(platform)
+        out.append(_rms(forces - Model(ps, x, motion.t).forces(ps.prior)))
+    return Validation(out[0], out[1], result.noise, source)

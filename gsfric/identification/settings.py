@@ -1,0 +1,64 @@
+"""Thresholds of the identification, each with its reason (one place; every module of
+``gsfric.identification`` may import it)."""
+
+from __future__ import annotations
+
+RANK_RTOL = 1e-5
+"""A direction of the column-normalised, noise-weighted regressor whose singular value is below
+``RANK_RTOL`` times the largest is taken as not identifiable. With unit columns, the ratio is the
+inverse of the condition number: below 1e-5 a combination's standard deviation would be 10^5
+times that of the best-determined one (useless for any rig), and it is within a factor 100 of
+the relative error of the regressor's columns (central differences of stepped parameters,
+``FD_RSTEP``), so it cannot be told apart from a direction the data do not reach."""
+
+ZERO_RTOL = 1e-9
+"""A parameter whose column (in its typical unit, ``TYPICAL``) is below ``ZERO_RTOL`` times the
+largest one does not act on the forces along this motion at all (an inertia without rotation,
+a friction coefficient without speed): it is held at its prior value and named as unreached."""
+
+MIXED_TOL = 1e-3
+"""A parameter is individually identifiable when less than ``MIXED_TOL`` of its (unit-scaled)
+direction lies in the regressor's null space; otherwise only combinations with others are."""
+
+FD_RSTEP = 1e-4
+"""Central-difference step of a parameter without a compiled derivative, relative to
+``max(|value|, TYPICAL[unit])``. F is affine in the inertial parameters (up to the friction they
+load), so the truncation error is of the order of the step squared times the friction's
+curvature; 1e-4 keeps the rounding error of the difference (1e-16 / 1e-4 of F) far below it."""
+
+TYPICAL = {"kg": 1.0, "kg m": 0.1, "kg m^2": 0.01, "N": 1.0, "1": 0.01, "N s/m": 1.0,
+           "N m s/rad": 0.01, "m": 0.1, "m/s": 0.01, "N s^2/m^2": 1.0, "N/m": 1.0, "s": 1e-3}
+"""Typical size of a parameter of each unit: the floor of its finite-difference step, and the
+scale of the test for columns that do not act (``ZERO_RTOL``)."""
+
+IMPLAUSIBLE_SIGMA = 3.0
+"""A mass the data call for (the unconstrained estimate) more than ``IMPLAUSIBLE_SIGMA``
+standard deviations below zero is implausible: the fit is refused, not written (a force sign or
+unit, or a platform that does not match the rig)."""
+
+MAX_NFEV = 60
+"""Most residual evaluations of the nonlinear least squares (Gauss-Newton on a nearly linear
+model converges in a few; more means the model does not describe the data)."""
+
+COST_TOL = 1e-4
+"""The fit stops at a step that lowers the weighted cost (half the sum of squared residuals in
+units of the noise) by less than ``COST_TOL``. Moving one parameter by a standard deviation
+changes the cost by 0.5, so 0.01 would already be a hundredth of a standard deviation; the
+trust-region method stops at the first such step, even one shortened by its region, so the
+tolerance is a hundred times smaller still. It is passed to ``least_squares`` as
+``ftol = COST_TOL / cost``, the cost of rows of unit noise being about half their number."""
+
+CONFIDENCE_Z = 1.959963984540054
+"""Two-sided 95 % normal quantile: the intervals written in the platform file's comments."""
+
+MAX_SAMPLES_EXCITE = 400
+"""Samples of one period on which ``excite`` scores candidate motions (100 Hz over the default
+4 s period: 80 samples per cycle of the highest harmonic, 1.25 Hz). The information of a smooth
+excitation grows with the samples, but its shape is set by the low harmonics: a coarse grid
+ranks candidates as the full one does, at a fraction of the cost."""
+
+EXCITE_CANDIDATES = 24
+"""Random Fourier-series candidates ``excite`` scores before refining the best one."""
+
+EXCITE_HARMONICS = 5
+"""Harmonics of the excitation's finite Fourier series per pose coordinate."""

@@ -1,0 +1,242 @@
+"""Identification: recovery of known parameters, what a poor motion cannot reach, implausible
+data kept out of the platform file, the command's round trip."""
+
+from __future__ import annotations
+
+import json
+
+import numpy as np
+import pytest
+from click.testing import CliRunner
+
+import gsfric
+from gsfric.cli import main
+from gsfric.evaluation import state_array
+from gsfric.identification import excite, validate
+from gsfric.identification.parameters import (body_from_factor, body_standard, consistent,
+                                              factor_of_body, parameter_set)
+from gsfric.identification.regressor import Model, structure
+from gsfric.models import reference_platform, sinusoidal
+from gsfric.platform.description import Platform
+from gsfric.platform.text import commented_toml
+from gsfric.synth import synthesize
+
+NOISE = 0.5
+
+
+def _record(seed: int, samples: int = 3000, platform=None, motion=None):
+    data = synthesize(platform or reference_platform(), samples=samples, rate=500.0,
+                      noise=NOISE, seed=seed, motion=motion)
+    return data, data.frame[[f"F{i}" for i in range(1, 7)]].to_numpy()
+
+
+def _wrong_prior():
+    p = reference_platform()
+    return p.with_body(mass=12.0).with_legs(upper_mass=0.9).with_friction(
+        prismatic_coulomb=0.05, prismatic_seal=1.0)
+
+
+def test_model_of_the_prior_gives_the_platforms_forces():
+    """The parameter set packs the prior (payload folded into the body) without changing F."""
+    p = reference_platform().with_body(payload_com=[0.01, 0.0, 0.02])
+    motion = sinusoidal(np.linspace(0.0, 2.0, 201))
+    ps = parameter_set(p)
+    F = Model(ps, state_array(motion), motion.t).forces(ps.prior)
+    expected = gsfric.Evaluator(p).actuator_forces(state_array(motion))
+    np.testing.assert_allclose(F, expected, atol=1e-9)
+
+
+def test_log_cholesky_round_trip_and_consistency():
+    pi = body_standard(reference_platform().with_body(com=[0.01, -0.02, 0.03]))
+    np.testing.assert_allclose(body_from_factor(factor_of_body(pi)), pi, atol=1e-12)
+    rng = np.random.default_rng(0)
+    assert all(consistent(body_from_factor(rng.normal(size=10))) for _ in range(50))
+    bad = pi.copy()
+    bad[4] = -1.0                           # negative Ixx about the origin
+    assert not consistent(bad)
+
+
+def test_regressor_of_a_pose_held_still_reaches_only_static_loads():
+    """At rest the forces are six static loads: no friction, no inertia acts, and the rank is
+    at most six."""
+    ps = parameter_set(reference_platform())
+    still = sinusoidal(np.arange(50) / 100.0, amplitude=np.zeros(6))
+    _, J = Model(ps, state_array(still), still.t).jacobian(ps.prior)
+    st = structure(J, np.ones(6), ps.units)
+    assert st.rank <= 6
+    idle = {n for n, i in zip(ps.names, st.idle) if i}
+    assert {"platform.inertia_origin.xx", "platform.inertia_origin.zz",
+            "friction.prismatic_viscous", "friction.joint_viscous"} <= idle
+    assert not any(st.identifiable[ps.names.index(n)] for n in idle)
+
+
+def test_compiled_and_difference_columns_agree():
+    """The compiled Jacobian's friction columns equal central differences of the forces."""
+    ps = parameter_set(reference_platform())
+    motion = sinusoidal(np.linspace(0.0, 2.0, 101))
+    model = Model(ps, state_array(motion), motion.t)
+    F, J = model.jacobian(ps.prior)
+    np.testing.assert_array_equal(F, model.forces(ps.prior))
+    for name in ("friction.prismatic_coulomb", "friction.joint_viscous"):
+        k = ps.names.index(name)
+        h = 1e-6
+        up, down = ps.prior.copy(), ps.prior.copy()
+        up[k] += h
+        down[k] -= h
+        difference = (model.forces(up) - model.forces(down)) / (2 * h)
+        np.testing.assert_allclose(J[:, :, k], difference, rtol=1e-5, atol=1e-6)
+
+
+@pytest.mark.integration
+def test_identify_recovers_the_true_parameters_within_their_intervals():
+    data, forces = _record(seed=1)
+    result = gsfric.identify(data.motion, forces, _wrong_prior())
+    truth = parameter_set(reference_platform())
+    assert result.rank == len(result.parameters)
+    misses = [name for name, value in zip(truth.names, truth.prior)
+              if abs(result.parameters[name].value - value) > 4 * result.parameters[name].std]
+    assert misses == []
+    assert np.all(np.abs(result.residual / NOISE - 1) < 0.05)
+    assert result.platform.platform.mass > 0
+
+
+@pytest.mark.integration
+def test_a_pose_held_still_names_what_it_cannot_reach():
+    t = np.arange(600) / 200.0
+    still = sinusoidal(t, amplitude=np.zeros(6))
+    data, forces = _record(seed=2, motion=still)
+    result = gsfric.identify(data.motion, forces)
+    assert result.rank < len(result.parameters)
+    unreached = {line.split(":")[0] for line in result.unreachable}
+    assert {"friction.prismatic_viscous", "platform.inertia_origin.zz"} <= unreached
+    assert any("needs rotations" in line for line in result.unreachable)
+    assert not result.parameters["platform.inertia_origin.zz"].identifiable
+
+
+@pytest.mark.integration
+def test_a_motion_without_rotation_cannot_reach_the_inertia():
+    t = np.arange(2000) / 500.0
+    motion = sinusoidal(t, amplitude=(0.05, 0.05, 0.04, 0.0, 0.0, 0.0),
+                        frequency=(0.7, 1.1, 1.3, 0.0, 0.0, 0.0))
+    data, forces = _record(seed=3, motion=motion)
+    result = gsfric.identify(data.motion, forces)
+    for axis in ("xx", "yy", "zz"):
+        assert not result.parameters[f"platform.inertia_origin.{axis}"].identifiable
+    assert result.parameters["platform.mass"].identifiable
+
+
+@pytest.mark.integration
+def test_forces_of_the_wrong_sign_never_reach_the_platform_file(tmp_path):
+    data, _ = _record(seed=4, samples=600)
+    frame = data.frame.copy()
+    for i in range(1, 7):
+        frame[f"F{i}"] = -frame[f"F{i}"]
+    path = tmp_path / "flipped.csv"
+    gsfric.io.write_table(frame, path)
+    out = tmp_path / "out"
+    run = CliRunner().invoke(main, ["identify", "--measured", str(path), "--out", str(out)])
+    assert run.exit_code == 2
+    assert "negative mass" in run.output
+    assert not (out / "platform.toml").exists()
+
+
+@pytest.mark.integration
+def test_command_round_trip(tmp_path):
+    data, _ = _record(seed=5)
+    measured = tmp_path / "measured.csv"
+    gsfric.io.write_table(data.frame, measured)
+    prior = tmp_path / "prior.toml"
+    prior.write_text(_toml(_wrong_prior()))
+    check, _ = _record(seed=6, samples=1500)
+    second = tmp_path / "second.csv"
+    gsfric.io.write_table(check.frame, second)
+    out = tmp_path / "out"
+    run = CliRunner().invoke(main, ["identify", "--measured", str(measured), "--platform",
+                                    str(prior), "--out", str(out), "--validate", str(second)])
+    assert run.exit_code == 0, run.output
+    validation = json.loads((out / "identification.json").read_text())["validation"]
+    assert max(validation["rms_after_N"]) < 1.1 * NOISE < min(validation["rms_before_N"])
+    summary = json.loads((out / "identification.json").read_text())
+    assert "validation on" in run.output
+    identified = Platform.from_toml(out / "platform.toml")
+    mass = summary["parameters"]["platform.mass"]
+    assert identified.platform.mass == pytest.approx(mass["value"], rel=1e-12)
+    assert identified.legs.upper_mass == pytest.approx(
+        summary["parameters"]["legs.upper_mass"]["value"], rel=1e-12)
+    assert summary["source_sha256"] in (out / "platform.toml").read_text()
+    assert abs(mass["value"] - 13.0) < 4 * mass["std"]
+
+
+def _toml(platform: Platform) -> str:
+    return commented_toml(platform)
+
+
+@pytest.mark.integration
+def test_excitation_starts_and_ends_at_rest_within_the_limits():
+    result = excite(duration=8.0, rate=100.0, max_speed=0.2, max_acceleration=2.0)
+    motion = result.motion
+    assert motion.t[-1] == pytest.approx(8.0)
+    for rates in (motion.velocity, motion.omega, motion.acceleration, motion.alpha):
+        np.testing.assert_allclose(rates[[0, -1]], 0.0, atol=1e-9)
+    p = reference_platform()
+    lengths = p.leg_lengths(motion.position, motion.rotation)
+    assert p.geometry.stroke[0] < lengths.min() and lengths.max() < p.geometry.stroke[1]
+    speed = np.gradient(lengths, motion.t, axis=0)
+    assert np.abs(speed).max() <= 0.2 * 1.01
+    assert result.rank == len(result.expected_std)
+    assert np.isfinite(result.condition) and np.isfinite(result.sinusoid_condition)
+
+
+@pytest.mark.integration
+def test_excite_command_writes_a_trajectory_simulate_reads(tmp_path):
+    out = tmp_path / "traj.csv"
+    run = CliRunner().invoke(main, ["excite", "--out", str(out), "--duration", "4",
+                                    "--rate", "100"])
+    assert run.exit_code == 0, run.output
+    assert "condition number" in run.output and "plain sinusoid" in run.output
+    motion = gsfric.read_trajectory(out)
+    assert len(motion) == 401
+
+
+@pytest.mark.integration
+def test_designed_excitation_identifies_every_parameter_to_5_percent():
+    """60 s at 500 Hz, force noise 0.5 % of the static load: every parameter with a non-zero
+    true value is within 5 % (relative std), except the prismatic joints' viscous coefficient,
+    whose force (0.02 N s/m at most 0.3 m/s) is far below the noise; and the identified model
+    predicts a second record to within the noise."""
+    design = excite(duration=60.0, rate=500.0)
+    true = reference_platform()
+    data = synthesize(true, motion=design.motion, noise=design.force_noise, seed=11)
+    result = gsfric.identify(data.motion, data.frame.filter(regex="^F").to_numpy(),
+                             _wrong_prior())
+    truth = parameter_set(true)
+    loose = [n for n, v in zip(truth.names, truth.prior)
+             if v != 0 and n != "friction.prismatic_viscous"
+             and not result.parameters[n].rel_std <= 0.05]
+    assert loose == []
+    check = synthesize(true, samples=4000, rate=500.0, noise=design.force_noise, seed=12)
+    v = validate(result, check.motion, check.frame.filter(regex="^F").to_numpy())
+    assert np.all(v.after < 1.05 * design.force_noise)
+    assert np.all(v.before > 2 * design.force_noise)
+
+
+@pytest.mark.slow
+def test_95_percent_intervals_contain_the_truth_95_percent_of_the_time():
+    truth = parameter_set(reference_platform())
+    inside = total = 0
+    for seed in range(40):
+        data, forces = _record(seed=100 + seed, samples=2000)
+        result = gsfric.identify(data.motion, forces, _wrong_prior())
+        for name, value in zip(truth.names, truth.prior):
+            e = result.parameters[name]
+            if e.std is not None:
+                inside += abs(e.value - value) <= 1.96 * e.std
+                total += 1
+    assert 0.91 <= inside / total <= 0.985, inside / total
+
+
+@pytest.mark.parametrize("noise", [0.0, -1.0, [1.0, 2.0], float("nan")])
+def test_a_force_noise_that_is_not_positive_is_refused(noise):
+    motion = sinusoidal(np.arange(40) / 100.0)
+    with pytest.raises(gsfric.InputError, match="force_noise"):
+        gsfric.identify(motion, np.zeros((40, 6)), force_noise=noise)
