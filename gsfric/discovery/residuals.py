@@ -62,6 +62,8 @@ class Columns:
         self.stored = stored
         self.t = t
         self.F = F
+        # each leg's forces contiguous: np.interp reads them whole at every call
+        self._legs = np.ascontiguousarray(np.asarray(F, float).T)
         self.base = F[used] if base is None else base
         self.used = used
         self.weight = weight
@@ -79,8 +81,8 @@ class Columns:
         g1 = self.used.start + r1
         x = self.t[g0:g1] - delay
         out = np.empty((g1 - g0, self.F.shape[1]))
-        for i in range(self.F.shape[1]):
-            out[:, i] = np.interp(x, self.t, self.F[:, i])
+        for i, leg in enumerate(self._legs):
+            out[:, i] = np.interp(x, self.t, leg)
         out -= self.base[r0:r1]
         out /= size
         out *= self.weight[r0:r1]
@@ -97,9 +99,12 @@ class Columns:
             return self.stored[rows][:, :, cols]
         m = len(range(*rows.indices(self.stored.shape[0])))
         out = np.empty((m, self.stored.shape[1], len(cols)))
+        stored = [k for k, c in enumerate(cols) if c < k0]
+        if stored:
+            out[:, :, stored] = self.stored[rows][:, :, [cols[k] for k in stored]]
         for k, c in enumerate(cols):
-            out[:, :, k] = self.stored[rows][:, :, c] if c < k0 else self._shifted(c - k0,
-                                                                                  rows)
+            if c >= k0:
+                out[:, :, k] = self._shifted(c - k0, rows)
         return out
 
     def __getitem__(self, key):
