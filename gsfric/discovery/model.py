@@ -101,6 +101,7 @@ class ParametricModel:
         offsets = {b["name"]: b["offset"] for b in layout("eval", "P")}
         self._P_index = np.array([offsets[n] for n in BASE_PARAMETERS])
         self._dense = _compiled_jacobian_is_dense()
+        self._kept_jacobian = None     # (key, F, dF/dtheta) of the last compiled Jacobian
         self.evaluations = 0
 
     def __len__(self) -> int:
@@ -206,29 +207,18 @@ class ParametricModel:
         if self._dense:
             n = len(self)
             r0, r1, _ = (slice(0, n) if rows is None else rows).indices(n)
-            evaluator = Evaluator(self.platform_at(theta), n_threads=self.n_threads)
             if out is None:
                 out = np.empty((r1 - r0, 6, len(cols)))
             own_k = [k for k, c in enumerate(cols) if c < self.n_compiled]
             # with a delay, a column needs all steps (shifted in time); otherwise only rows
-            J = np.empty((n, 6, len(own))) if sensor_on else None
-            F0 = np.empty((n, 6))
-            Q = theta[self.n_base:self.n_compiled]
-            for s in range(0, n, chunk):
-                e = min(n, s + chunk)
-                F0[s:e], J0 = evaluator.jacobian(self.x[s:e], Q=Q)
-                if J is not None:
-                    J[s:e] = J0[:, :, own]
-                else:
-                    a, b = max(s, r0), min(e, r1)
-                    if a < b:
-                        out[a - r0:b - r0][:, :, own_k] = J0[a - s:b - s][:, :, own]
-                del J0
-            self.evaluations += 1
-            if J is not None:
-                for j, k in enumerate(own_k):
+            F0, J = self._compiled_jacobian(theta, 0, n, chunk) if sensor_on else \
+                self._compiled_jacobian(theta, r0, r1, chunk)
+            if sensor_on:
+                for j, k in zip(own, own_k):
                     out[:, :, k] = apply_sensor(self.t, J[:, :, j], gains, delay)[r0:r1]
-                del J
+            else:
+                out[:, :, own_k] = J[:, :, own]
+            del J
             F = self._read(theta, F0)
             if len(own) < len(cols):
                 d_gains, d_delay = sensor_jacobian(self.t, F0, gains, delay)
@@ -249,6 +239,37 @@ class ParametricModel:
         m = len(cols)
         J = (values[1:1 + m] - values[1 + m:]) / (2 * steps[:, None, None])
         return F, np.ascontiguousarray(J.transpose(1, 2, 0))
+
+    def _compiled_jacobian(self, theta: np.ndarray, r0: int, r1: int, chunk: int
+                           ) -> tuple[np.ndarray, np.ndarray]:
+        """F (N, 6) without sensor effects and the compiled Jacobian of every compiled
+        parameter over rows r0:r1, (r1 - r0, 6, n_compiled), evaluated ``chunk`` steps at a
+        time.
+
+        The result is kept for the next call: a call at the same compiled parameters and rows
+        (a Gauss-Newton refinement's last point, where the next linearisation starts, asking
+        for more columns) takes it instead of evaluating again, and releases it."""
+        key = (theta[:self.n_compiled].tobytes(), r0, r1)
+        kept, self._kept_jacobian = self._kept_jacobian, None
+        if kept is not None and kept[0] == key:
+            return kept[1], kept[2]
+        del kept
+        n = len(self)
+        evaluator = Evaluator(self.platform_at(theta), n_threads=self.n_threads)
+        Q = theta[self.n_base:self.n_compiled]
+        F0 = np.empty((n, 6))
+        J = np.empty((r1 - r0, 6, self.n_compiled))
+        for s in range(0, n, chunk):
+            e = min(n, s + chunk)
+            F0[s:e], J0 = evaluator.jacobian(self.x[s:e], Q=Q)
+            a, b = max(s, r0), min(e, r1)
+            if a < b:
+                J[a - r0:b - r0] = J0[a - s:b - s]
+            del J0
+        self.evaluations += 1
+        # F0 goes to the caller, who may change it in place: the kept one is a copy
+        self._kept_jacobian = (key, F0.copy(), J)
+        return F0, J
 
     def evaluate(self, theta: np.ndarray, keep: Sequence[str] = ("D", "D_dot"),
                  chunk: int = 20000) -> Result:
