@@ -100,7 +100,9 @@ class Columns:
         m = len(range(*rows.indices(self.stored.shape[0])))
         out = np.empty((m, self.stored.shape[1], len(cols)))
         stored = [k for k, c in enumerate(cols) if c < k0]
-        if stored:
+        if stored == list(range(k0)) and cols[:k0] == stored:
+            out[:, :, :k0] = self.stored[rows]          # every stored column, in order
+        elif stored:
             out[:, :, stored] = self.stored[rows][:, :, [cols[k] for k in stored]]
         for k, c in enumerate(cols):
             if c >= k0:
