@@ -211,14 +211,19 @@ class ParametricModel:
                 out = np.empty((r1 - r0, 6, len(cols)))
             own_k = [k for k, c in enumerate(cols) if c < self.n_compiled]
             # with a delay, a column needs all steps (shifted in time); otherwise only rows
-            F0, J = self._compiled_jacobian(theta, 0, n, chunk) if sensor_on else \
+            F0, parts = self._compiled_jacobian(theta, 0, n, chunk) if sensor_on else \
                 self._compiled_jacobian(theta, r0, r1, chunk)
             if sensor_on:
-                for j, k in zip(own, own_k):
+                J = np.empty((n, 6, len(own)))
+                for a, b, part in parts:
+                    J[a:b] = part[:, :, own]
+                for j, k in enumerate(own_k):
                     out[:, :, k] = apply_sensor(self.t, J[:, :, j], gains, delay)[r0:r1]
+                del J
             else:
-                out[:, :, own_k] = J[:, :, own]
-            del J
+                for a, b, part in parts:
+                    out[a - r0:b - r0][:, :, own_k] = part[:, :, own]
+            del parts
             F = self._read(theta, F0)
             if len(own) < len(cols):
                 d_gains, d_delay = sensor_jacobian(self.t, F0, gains, delay)
@@ -241,10 +246,10 @@ class ParametricModel:
         return F, np.ascontiguousarray(J.transpose(1, 2, 0))
 
     def _compiled_jacobian(self, theta: np.ndarray, r0: int, r1: int, chunk: int
-                           ) -> tuple[np.ndarray, np.ndarray]:
+                           ) -> tuple[np.ndarray, list[tuple[int, int, np.ndarray]]]:
         """F (N, 6) without sensor effects and the compiled Jacobian of every compiled
-        parameter over rows r0:r1, (r1 - r0, 6, n_compiled), evaluated ``chunk`` steps at a
-        time.
+        parameter over rows r0:r1, evaluated ``chunk`` steps at a time: a list of
+        ``(a, b, dF/dtheta)``, rows a:b of the record, (b - a, 6, n_compiled) each.
 
         The result is kept for the next call: a call at the same compiled parameters and rows
         (a Gauss-Newton refinement's last point, where the next linearisation starts, asking
@@ -258,18 +263,18 @@ class ParametricModel:
         evaluator = Evaluator(self.platform_at(theta), n_threads=self.n_threads)
         Q = theta[self.n_base:self.n_compiled]
         F0 = np.empty((n, 6))
-        J = np.empty((r1 - r0, 6, self.n_compiled))
+        parts = []
         for s in range(0, n, chunk):
             e = min(n, s + chunk)
             F0[s:e], J0 = evaluator.jacobian(self.x[s:e], Q=Q)
             a, b = max(s, r0), min(e, r1)
             if a < b:
-                J[a - r0:b - r0] = J0[a - s:b - s]
+                parts.append((a, b, J0[a - s:b - s]))
             del J0
         self.evaluations += 1
         # F0 goes to the caller, who may change it in place: the kept one is a copy
-        self._kept_jacobian = (key, F0.copy(), J)
-        return F0, J
+        self._kept_jacobian = (key, F0.copy(), parts)
+        return F0, parts
 
     def evaluate(self, theta: np.ndarray, keep: Sequence[str] = ("D", "D_dot"),
                  chunk: int = 20000) -> Result:
