@@ -151,6 +151,7 @@ class ParametricModel:
     def forces(self, theta: np.ndarray) -> np.ndarray:
         """F(theta), (N, 6) N."""
         P, Q = self.vectors(theta)
+        self._kept_jacobian = None          # kept for the next call only
         self.evaluations += 1
         return self._read(theta, self._evaluator.actuator_forces(self.x, P=P, Q=Q))
 
@@ -178,6 +179,7 @@ class ParametricModel:
                 moved[:, columns] *= 1.0 + e
                 F.append(self._evaluator.actuator_forces(moved, P=P, Q=Q))
             out[:, :, axis] = (F[0] - F[1]) / (2 * h)
+        self._kept_jacobian = None          # kept for the next call only
         self.evaluations += 6
         return out
 
@@ -189,6 +191,7 @@ class ParametricModel:
             P, Q = self.vectors(theta)
             self._evaluator.actuator_forces(self.x, out=out[g], P=P, Q=Q)
             out[g] = self._read(theta, out[g])
+        self._kept_jacobian = None          # kept for the next call only
         self.evaluations += thetas.shape[0]
         return out
 
@@ -213,17 +216,18 @@ class ParametricModel:
             # with a delay, a column needs all steps (shifted in time); otherwise only rows
             F0, parts = self._compiled_jacobian(theta, 0, n, chunk) if sensor_on else \
                 self._compiled_jacobian(theta, r0, r1, chunk)
-            if sensor_on:
-                J = np.empty((n, 6, len(own)))
-                for a, b, part in parts:
+            J = np.empty((n, 6, len(own))) if sensor_on else None
+            while parts:                # each chunk released once read
+                a, b, part = parts.pop(0)
+                if J is not None:
                     J[a:b] = part[:, :, own]
+                else:
+                    out[a - r0:b - r0][:, :, own_k] = part[:, :, own]
+                del part
+            if J is not None:
                 for j, k in enumerate(own_k):
                     out[:, :, k] = apply_sensor(self.t, J[:, :, j], gains, delay)[r0:r1]
                 del J
-            else:
-                for a, b, part in parts:
-                    out[a - r0:b - r0][:, :, own_k] = part[:, :, own]
-            del parts
             F = self._read(theta, F0)
             if len(own) < len(cols):
                 d_gains, d_delay = sensor_jacobian(self.t, F0, gains, delay)
@@ -249,11 +253,13 @@ class ParametricModel:
                            ) -> tuple[np.ndarray, list[tuple[int, int, np.ndarray]]]:
         """F (N, 6) without sensor effects and the compiled Jacobian of every compiled
         parameter over rows r0:r1, evaluated ``chunk`` steps at a time: a list of
-        ``(a, b, dF/dtheta)``, rows a:b of the record, (b - a, 6, n_compiled) each.
+        ``(a, b, dF/dtheta)``, rows a:b of the record, (b - a, 6, n_compiled) each (the
+        caller's own list: it may empty it, releasing each chunk as it reads it).
 
-        The result is kept for the next call: a call at the same compiled parameters and rows
-        (a Gauss-Newton refinement's last point, where the next linearisation starts, asking
-        for more columns) takes it instead of evaluating again, and releases it."""
+        The result is kept until the model's next evaluation: if that is a call at the same
+        compiled parameters and rows (a Gauss-Newton refinement's last point, where the next
+        linearisation starts, asking for more columns), it takes the result instead of
+        evaluating again; any other evaluation releases it."""
         key = (theta[:self.n_compiled].tobytes(), r0, r1)
         kept, self._kept_jacobian = self._kept_jacobian, None
         if kept is not None and kept[0] == key:
@@ -274,7 +280,7 @@ class ParametricModel:
         self.evaluations += 1
         # F0 goes to the caller, who may change it in place: the kept one is a copy
         self._kept_jacobian = (key, F0.copy(), parts)
-        return F0, parts
+        return F0, list(parts)
 
     def evaluate(self, theta: np.ndarray, keep: Sequence[str] = ("D", "D_dot"),
                  chunk: int = 20000) -> Result:
@@ -283,6 +289,7 @@ class ParametricModel:
         so that memory stays bounded (the full evaluation has about 200 numbers a step)."""
         evaluator = Evaluator(self.platform_at(theta, self.effect_names(theta)),
                               n_threads=self.n_threads)
+        self._kept_jacobian = None          # kept for the next call only
         self.evaluations += 1
         n = len(self)
         arrays = {}
