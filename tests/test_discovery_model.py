@@ -1,4 +1,5 @@
-"""The discovery's parametric model: the compiled Jacobian kept for the next linearisation."""
+"""The discovery's parametric model and design columns: the compiled Jacobian kept for the next
+linearisation, the delay's secant columns computed from the forces."""
 
 from __future__ import annotations
 
@@ -6,6 +7,7 @@ import numpy as np
 
 from gsfric import models
 from gsfric.discovery.model import ParametricModel
+from gsfric.discovery.residuals import Columns
 
 
 def _model() -> ParametricModel:
@@ -46,3 +48,24 @@ def test_another_point_or_evaluation_evaluates_again():
     assert model.evaluations == 4
     assert np.array_equal(F_again, F_moved) and np.array_equal(J_again, J_moved)
     assert not np.array_equal(J_moved, model.jacobian(theta, names[:2])[1])
+
+
+def test_columns_read_as_the_joined_array():
+    # stored columns and delay columns ((F(t - d) - F(t)) / size times the weight), read by
+    # rows and columns in any order, as one array holding them side by side
+    rng = np.random.default_rng(1)
+    t = np.arange(300) / 100.0
+    F = rng.normal(size=(300, 6))
+    used = slice(10, 290)
+    stored = rng.normal(size=(280, 6, 4))
+    weight = (rng.random((280, 6)) > 0.3).astype(float)
+    delays = [(0.01, 0.01), (-0.02, 0.02)]
+    columns = Columns(stored, t, F, used, weight, delays)
+    shifted = [(np.stack([np.interp(t[used] - d, t, F[:, i]) for i in range(6)], axis=1)
+                - F[used]) / size * weight for d, size in delays]
+    joined = np.concatenate([stored, np.stack(shifted, axis=2)], axis=2)
+    assert columns.shape == joined.shape
+    for cols in (None, [5, 0, 4], [0, 1, 2, 3, 2, 4], [3, 1], [4]):
+        for rows in (slice(0, 280), slice(7, 133)):
+            expected = joined[rows] if cols is None else joined[rows][:, :, cols]
+            assert np.array_equal(columns.rows(rows, cols), expected)

@@ -102,14 +102,14 @@ class Columns:
             return self.stored[rows][:, :, cols]
         m = len(range(*rows.indices(self.stored.shape[0])))
         out = np.empty((m, self.stored.shape[1], len(cols)))
-        stored = [k for k, c in enumerate(cols) if c < k0]
-        if stored == list(range(k0)) and cols[:k0] == stored:
+        every = cols[:k0] == list(range(k0))
+        if every:
             out[:, :, :k0] = self.stored[rows]          # every stored column, in order
-        elif stored:
-            out[:, :, stored] = self.stored[rows][:, :, [cols[k] for k in stored]]
         for k, c in enumerate(cols):
             if c >= k0:
                 out[:, :, k] = self._shifted(c - k0, rows)
+            elif not every or k >= k0:
+                out[:, :, k] = self.stored[rows][:, :, c]
         return out
 
     def __getitem__(self, key):
