@@ -147,7 +147,6 @@ class Whitener:
         Filtered samples whose window (the sample and the ``order`` before it) touches an
         invalid one are zero: ``valid`` (N, 6) if given, else the fit's own ``valid`` when
         ``a`` has its length."""
-        p = self.order
         if valid is None and self.valid is not None and len(self.valid) == a.shape[0]:
             valid = self.valid
         out = fir_channels(self.taps(), a)
