@@ -11,7 +11,7 @@ from hypothesis import strategies as st
 from scipy import signal, stats
 
 from gsfric.discovery import pvalues
-from gsfric.signal.filters import all_pole, fir
+from gsfric.signal.filters import all_pole, fir, fir_channels
 
 
 @pytest.mark.parametrize("seed", range(4))
@@ -26,6 +26,27 @@ def test_all_pole_after_fir_is_lfilter(seed):
     got = all_pole(den, taps)
     assert np.max(np.abs(got - expected)) <= 1e-12 * np.max(np.abs(expected))
     assert np.array_equal(all_pole(np.array([2.0]), x), x / 2)
+
+
+@pytest.mark.parametrize("seed", range(6))
+def test_fir_channels_is_each_channels_fir_to_the_bit(seed):
+    # the whitener's filter of every leg at once: the same sums in the same order as fir
+    # (lfilter), zeros where a channel's order is shorter, and exact zeros kept
+    rng = np.random.default_rng(seed)
+    orders = rng.integers(0, 12, size=6)
+    p = int(orders.max())
+    x = rng.normal(size=(300, 6, 3)) * 10.0 ** rng.integers(-6, 6)
+    x[rng.random(x.shape) < 0.2] = 0.0
+    b = np.zeros((p + 1, 6))
+    b[0] = 1.0
+    expected = np.empty((300 - p, 6, 3))
+    for i, q in enumerate(orders):
+        b[1:q + 1, i] = rng.normal(scale=0.3, size=q)
+        expected[:, i] = fir(b[:q + 1, i], x[:, i], start=p)
+    got = fir_channels(b, x)
+    assert np.array_equal(got, expected)
+    assert np.array_equal(np.signbit(got), np.signbit(expected))
+    assert np.array_equal(fir_channels(np.ones((1, 6)), x), x)
 
 
 def test_all_pole_singular():

@@ -46,8 +46,8 @@ class Columns:
     ``stored.shape[2]`` columns); the secant columns of ``time_offset`` are not: a delay only
     shifts the model's forces in time (``gsfric.catalog``), so each such column,
     ``(F(t - delay) - F(t)) / size`` times the sliding weight, is computed from the forces F
-    of the whole record (N, 6) for the rows asked for, when asked for (``base``, (M, 6): F(t)
-    over the used samples, default F's). The largest array of a
+    of the whole record (N, 6) when first asked for, over every used sample, and kept
+    (``base``, (M, 6): F(t) over the used samples, default F's). The largest array of a
     round then holds only the columns that cost a model evaluation.
 
     Indexing as an array: ``columns[a:b]`` gives rows a..b of every column, (b - a, 6, k);
@@ -62,10 +62,13 @@ class Columns:
         self.stored = stored
         self.t = t
         self.F = F
+        # each leg's forces contiguous: np.interp reads them whole at every call
+        self._legs = np.ascontiguousarray(np.asarray(F, float).T)
         self.base = F[used] if base is None else base
         self.used = used
         self.weight = weight
         self.delays = [(float(d), float(size)) for d, size in delays]
+        self._delayed = None        # the delay columns, (M, 6, len(delays)), once computed
 
     @property
     def shape(self) -> tuple[int, int, int]:
@@ -73,18 +76,20 @@ class Columns:
         return (m, legs, k + len(self.delays))
 
     def _shifted(self, j: int, rows: slice) -> np.ndarray:
-        delay, size = self.delays[j]
-        r0, r1, _ = rows.indices(self.stored.shape[0])
-        g0 = self.used.start + r0
-        g1 = self.used.start + r1
-        x = self.t[g0:g1] - delay
-        out = np.empty((g1 - g0, self.F.shape[1]))
-        for i in range(self.F.shape[1]):
-            out[:, i] = np.interp(x, self.t, self.F[:, i])
-        out -= self.base[r0:r1]
-        out /= size
-        out *= self.weight[r0:r1]
-        return out
+        """Delay column j at ``rows``, (m, 6)."""
+        if self._delayed is None:
+            m = self.stored.shape[0]
+            g0 = self.used.start
+            self._delayed = np.empty((m, self.F.shape[1], len(self.delays)))
+            for k, (delay, size) in enumerate(self.delays):
+                x = self.t[g0:g0 + m] - delay
+                out = self._delayed[:, :, k]
+                for i, leg in enumerate(self._legs):
+                    out[:, i] = np.interp(x, self.t, leg)
+                out -= self.base
+                out /= size
+                out *= self.weight
+        return self._delayed[rows][:, :, j]
 
     def rows(self, rows: slice, cols: Sequence[int] | None = None) -> np.ndarray:
         """Columns ``cols`` (default all) at ``rows``, (m, 6, len(cols))."""
@@ -97,9 +102,14 @@ class Columns:
             return self.stored[rows][:, :, cols]
         m = len(range(*rows.indices(self.stored.shape[0])))
         out = np.empty((m, self.stored.shape[1], len(cols)))
+        every = cols[:k0] == list(range(k0))
+        if every:
+            out[:, :, :k0] = self.stored[rows]          # every stored column, in order
         for k, c in enumerate(cols):
-            out[:, :, k] = self.stored[rows][:, :, c] if c < k0 else self._shifted(c - k0,
-                                                                                  rows)
+            if c >= k0:
+                out[:, :, k] = self._shifted(c - k0, rows)
+            elif not every or k >= k0:
+                out[:, :, k] = self.stored[rows][:, :, c]
         return out
 
     def __getitem__(self, key):

@@ -35,7 +35,7 @@ import numpy as np
 
 from gsfric._optional import optional
 from gsfric.discovery.pvalues import f_sf
-from gsfric.signal.filters import fir
+from gsfric.signal.filters import fir_channels
 
 # -- AR noise model ---------------------------------------------------------------------------
 
@@ -147,19 +147,22 @@ class Whitener:
         Filtered samples whose window (the sample and the ``order`` before it) touches an
         invalid one are zero: ``valid`` (N, 6) if given, else the fit's own ``valid`` when
         ``a`` has its length."""
-        p = self.order
         if valid is None and self.valid is not None and len(self.valid) == a.shape[0]:
             valid = self.valid
-        out = np.empty((a.shape[0] - p,) + a.shape[1:])
-        for i, phi in enumerate(self.coefficients):
-            if len(phi) == 0:
-                out[:, i] = a[p:, i]
-            else:
-                out[:, i] = fir(np.concatenate([[1.0], -phi]), a[:, i], start=p)
+        out = fir_channels(self.taps(), a)
         if valid is not None:
             window = self.kept(valid)
             out *= window.reshape(window.shape + (1,) * (out.ndim - 2))
         return out
+
+    def taps(self) -> np.ndarray:
+        """The filters ``1 - sum phi_j L^j`` of the legs side by side, (order + 1, 6): column i
+        holds ``[1, -phi_1, ..., -phi_p]`` of leg i, zeros beyond its own order."""
+        b = np.zeros((self.order + 1, len(self.coefficients)))
+        b[0] = 1.0
+        for i, phi in enumerate(self.coefficients):
+            b[1:len(phi) + 1, i] = -phi
+        return b
 
     def kept(self, valid: np.ndarray | None = None, n: int | None = None) -> np.ndarray:
         """The filtered samples (N - order, 6) that ``apply`` keeps: those whose window holds

@@ -67,3 +67,45 @@ def all_pole(a: np.ndarray, u: np.ndarray) -> np.ndarray:
     if info != 0:
         raise ValueError(f"all_pole: the recursion is singular (LAPACK info {info})")
     return y.reshape(u.shape)
+
+
+def fir_channels(b: np.ndarray, x: np.ndarray) -> np.ndarray:
+    """Each channel filtered by its own taps, full windows only: ``y[t, c] = sum_j b[j, c]
+    x[t + p - j, c]`` for t = 0 .. N - p - 1, p = len(b) - 1.
+
+    Channel c of the result equals ``fir(b[:, c], x[:, c], start=p)`` to the last bit
+    (the taps added in ``lfilter``'s order, oldest first; a channel with fewer taps is given
+    zeros on its oldest ones, which add nothing), computed in one pass over every channel.
+
+    Parameters
+    ----------
+    b : ndarray (p + 1, C)
+        Taps of each channel, newest first (``b[0]`` multiplies the current sample).
+    x : ndarray (N, C, ...)
+        Signals along the first axis, channels along the second (N > p).
+
+    Returns
+    -------
+    ndarray (N - p, C, ...)
+
+    Examples
+    --------
+    >>> from gsfric.signal.filters import fir_channels
+    >>> import numpy as np
+    >>> fir_channels(np.array([[1.0, 1.0], [-0.5, 0.0]]), np.arange(8.0).reshape(4, 2))
+    array([[2., 3.],
+           [3., 5.],
+           [4., 7.]])
+    """
+    b = np.asarray(b, float)
+    x = np.asarray(x, float)
+    p, n = len(b) - 1, x.shape[0]
+    taps = b.reshape(b.shape + (1,) * (x.ndim - 2))
+    y = x[:n - p] * taps[p]
+    if p == 0:
+        return y
+    term = np.empty_like(y)
+    for j in range(p - 1, -1, -1):
+        np.multiply(x[p - j:n - j], taps[j], out=term)
+        y += term
+    return y
