@@ -258,14 +258,18 @@ def test_move_to_noise(record):
 
 
 def test_spline_noise_draws(record):
-    """On a jittered time base the speed band is the smoothing splines' noise gain, measured
-    on ``spline_noise_draws`` draws."""
+    """On a jittered time base (poses sampled at jittered stamps) the speed band is the
+    smoothing splines' noise gain, measured on ``spline_noise_draws`` draws."""
     motion, forces, platform = record
     t = np.asarray(motion.t)
     jitter = np.r_[0.0, np.random.default_rng(0).uniform(-0.2, 0.2, len(t) - 1)] * (t[1] - t[0])
     position, rotation = motion.recorded_poses()
-    jittered = Motion.from_samples(t + jitter, position,
-                                   quaternion=quaternion_from_rotation(rotation))
+    q = quaternion_from_rotation(rotation)
+    at = t + jitter
+    position = np.stack([np.interp(at, t, position[:, k]) for k in range(3)], axis=1)
+    q = np.stack([np.interp(at, t, q[:, k]) for k in range(4)], axis=1)
+    jittered = Motion.from_samples(at, position,
+                                   quaternion=q / np.linalg.norm(q, axis=1, keepdims=True))
     default = problem((jittered, forces, platform)).sigma_v
     one = problem((jittered, forces, platform), spline_noise_draws=1).sigma_v
     assert not np.allclose(one, default, rtol=1e-3)

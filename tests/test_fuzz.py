@@ -333,18 +333,21 @@ def test_random_toml_text_never_crashes(tmp_path_factory, text):
 @settings(deadline=None, max_examples=25,
           suppress_health_check=[HealthCheck.function_scoped_fixture, HealthCheck.too_slow])
 @given(text=mutated_csv(), chunk=st.sampled_from(["8", "100000"]))
-def test_cli_answers_random_files_with_exit_0_or_2(tmp_path_factory, text, chunk):
+def test_cli_answers_random_files_with_exit_0_1_or_2(tmp_path_factory, text, chunk):
     folder = tmp_path_factory.mktemp("cli")
     path = folder / "trajectory.csv"
     path.write_text(text, encoding="utf-8", errors="surrogatepass")
     out = folder / "out.csv"
     result = CliRunner().invoke(main, ["simulate", "--trajectory", str(path), "--out", str(out),
                                        "--chunk", chunk], catch_exceptions=False)
-    assert result.exit_code in (0, 2), result.output
+    # 1: a check failed, here the share of flagged steps above its limit (a jump in a pose)
+    assert result.exit_code in (0, 1, 2), result.output
     errors = [line for line in result.stderr.splitlines() if line.startswith("gsfric: error:")]
     others = [line for line in result.stderr.splitlines()
               if line and not line.startswith(("gsfric: error:", "gsfric: warning:"))]
     assert others == []
-    assert len(errors) == (result.exit_code == 2)
+    assert len(errors) == (result.exit_code != 0)
+    if result.exit_code == 1:
+        assert "are flagged by the model" in errors[0] and "--keep-flagged" in errors[0]
     assert out.exists() == (result.exit_code == 0)
     assert [p.name for p in folder.iterdir() if p.name.startswith(".")] == []
