@@ -198,7 +198,7 @@ def test_excite_command_writes_a_trajectory_simulate_reads(tmp_path):
     assert len(motion) == 401
 
 
-@pytest.mark.integration
+@pytest.mark.slow
 def test_designed_excitation_identifies_every_parameter_to_5_percent():
     """60 s at 500 Hz, force noise 0.5 % of the static load: every parameter with a non-zero
     true value is within 5 % (relative std), except the prismatic joints' viscous coefficient,
