@@ -150,10 +150,13 @@ def _cli(argv: list[str], folder: Path, source: Path) -> None:
     before = source.read_bytes() if source.is_file() else None
     with time_limit(LIMIT):
         result = CliRunner().invoke(main, argv, catch_exceptions=False)
-    assert result.exit_code in (0, 2), (result.exit_code, result.output)
+    # 1: a check failed, the share of flagged steps above its limit (a damaged pose)
+    assert result.exit_code in (0, 1, 2), (result.exit_code, result.output)
     lines = [x for x in result.stderr.splitlines() if x]
     assert all(x.startswith(("gsfric: error:", "gsfric: warning:")) for x in lines), lines
-    assert sum(x.startswith("gsfric: error:") for x in lines) == (result.exit_code == 2)
+    errors = [x for x in lines if x.startswith("gsfric: error:")]
+    assert len(errors) == (result.exit_code != 0)
+    assert result.exit_code != 1 or "are flagged by the model" in errors[0]
     assert (source.read_bytes() if source.is_file() else None) == before
     assert not [p for p in folder.iterdir() if ".gsfric-" in p.name]
 
