@@ -38,12 +38,18 @@ from tqdm import tqdm
 
 from gsfric._checks import as_count, as_flag, as_path
 from gsfric._threads import one_blas_thread
-from gsfric.errors import GsfricWarning, InputError, StepFlagError
+from gsfric.errors import GsfricWarning, StepFlagError
 from gsfric.evaluation.columns import plan as column_plan
 from gsfric.evaluation.evaluator import MAX_THREADS, Evaluator, evaluate_outputs
 from gsfric.evaluation.flags import FLAG_NAMES, FLAG_NONFINITE, check_flagged, flag_counts
 from gsfric.evaluation.peaks import PEAK_ARRAYS, Peaks
-from gsfric.io.files import atomic_write, check_outputs, is_stream
+from gsfric.io.files import (
+    atomic_write,
+    check_output_place,
+    check_outputs,
+    is_stream,
+    output_group,
+)
 from gsfric.io.tables import check_file, count_rows, table_kind
 from gsfric.models import platform_from
 from gsfric.platform.catalog import sensor_parameters
@@ -300,26 +306,29 @@ def simulate_file(trajectory: str | os.PathLike[str], out: str | os.PathLike[str
         plot = as_path(plot, "plot")
         check_outputs([plot], {"trajectory": trajectory, "platform": platform, "out": out})
         check_figure(plot)
+        check_output_place(plot)
     run = _Run(trajectory, out, platform, plan, mode=mode, strict=strict, n_threads=n_threads,
                float32=float32, progress=progress, keep_flagged=as_flag(keep_flagged,
                                                                         "keep_flagged"),
                trace=plot is not None)
     run.smoothing = (window, polyorder) if uncertainty else None
     Writer.load(kind)
-    try:
-        run.write(motions, kind)
-    finally:
-        run.bar.close()
-    summary = run.finish()
+    with output_group():                # the table and the figure, both or neither
+        try:
+            run.write(motions, kind)
+        finally:
+            run.bar.close()
+        summary = run.finish()
+        if plot is not None and summary.trace is not None and summary.steps:
+            write_figure(plot, summary.trace, summary.peaks.t0,
+                         title=f"{trajectory.name}: {summary.steps} steps, "
+                               f"{summary.flagged} flagged")
     message = summary.uncertainty_message(trajectory) if uncertainty else None
     if message:
         warnings.warn(message, GsfricWarning, stacklevel=2)
     if summary.flagged:
         warnings.warn(summary.flag_message(trajectory) + f"; see the flag column of {out}",
                       GsfricWarning, stacklevel=2)
-    if plot is not None and summary.trace is not None and summary.steps:
-        write_figure(plot, summary.trace, summary.peaks.t0,
-                     title=f"{trajectory.name}: {summary.steps} steps, {summary.flagged} flagged")
     return summary
 
 
@@ -328,12 +337,9 @@ def _check_paths(trajectory: Path, out: Path, platform) -> str:
     such as /dev/null or /dev/stdout), after checking the paths: ``out`` must not be the
     trajectory, nor the platform's file when ``platform`` is one."""
     check_outputs([out], {"trajectory": trajectory, "platform": platform})
-    if out.exists() and out.is_dir():
-        raise InputError(f"{out}: is a directory; give a file name")
+    check_output_place(out)
     kind = "csv" if not out.suffix and is_stream(out) else table_kind(out)
     check_file(trajectory)
-    if not out.parent.is_dir():
-        raise InputError(f"{out}: directory {str(out.parent)!r} does not exist")
     return kind
 
 
