@@ -65,7 +65,15 @@ import tomlkit
 from gsfric._checks import as_float, short, suggest
 from gsfric.errors import InputError
 from gsfric.io.files import read_toml
-from gsfric.platform.description import FRICTION_MODELS, Body, Friction, Geometry, Legs, Platform
+from gsfric.platform.description import (
+    FRICTION_MODELS,
+    Body,
+    Friction,
+    Geometry,
+    Legs,
+    Platform,
+    check_principal_moments,
+)
 from gsfric.platform.text import commented_toml
 
 DERIVED = {
@@ -401,7 +409,9 @@ def _moments(value: object, name: str) -> tuple[float, float, float]:
     if not isinstance(value, (list, tuple, np.ndarray)) or len(value) != 3:
         raise InputError(f"{name}: expected the three principal moments [x, y, z] in kg m^2, "
                          f"got {short(value)}")
-    return tuple(as_float(v, f"{name}[{k}]", minimum=0.0) for k, v in enumerate(value))
+    moments = tuple(as_float(v, f"{name}[{k}]", minimum=0.0) for k, v in enumerate(value))
+    check_principal_moments(moments, name, stacklevel=5)
+    return moments
 
 
 def _distance(value: object, name: str, longest: float) -> float:

@@ -229,6 +229,54 @@ def platform_cases() -> list[Case]:
     return cases
 
 
+def _rig_with(line: str):
+    """The base rig file (``makers.rig``) with ``line`` added."""
+    def make(folder):
+        path = rig()(folder)
+        path.write_text(path.read_text() + line + "\n")
+        return path
+    return make
+
+
+RIG_FAULTS = [
+    ("inertia-negative", "platform_inertia = [-0.2, 0.2, 0.4]", ERROR,
+     r"r\.toml: platform_inertia\[0\]: must be >= 0"),
+    ("inertia-nan", "lower_inertia = [0.05, nan, 0.001]", ERROR,
+     r"r\.toml: lower_inertia\[1\]: must be finite"),
+    ("inertia-inf", "upper_inertia = [0.01, 0.01, inf]", ERROR,
+     r"r\.toml: upper_inertia\[2\]: must be finite"),
+    ("inertia-two", "platform_inertia = [0.2, 0.4]", ERROR,
+     r"r\.toml: platform_inertia: expected the three principal moments"),
+    ("inertia-matrix", "platform_inertia = [[0.2, 0, 0], [0, 0.2, 0], [0, 0, 0.4]]", ERROR,
+     r"r\.toml: platform_inertia\[0\]: expected a number"),
+    ("inertia-text", 'platform_inertia = "0.2"', ERROR,
+     r"r\.toml: platform_inertia: expected the three principal moments"),
+    ("com-beyond-leg", "lower_com = 5.0", ERROR, r"r\.toml: lower_com: .*\(0, 1\.1\] m"),
+    ("unknown-key", "platfrom_inertia = [0.2, 0.2, 0.4]", ERROR,
+     r"r\.toml: platfrom_inertia: unknown key \(did you mean 'platform_inertia'\?\)"),
+    ("repeated-key", "platform_mass = 3.0", ERROR, r"r\.toml: .*'platform_mass' given twice"),
+    ("inertia-impossible", "platform_inertia = [0.1, 0.1, 0.5]", WARN,
+     r"platform_inertia: principal moments 0\.1, 0\.1, 0\.5 kg m\^2 violate the triangle"),
+]
+"""Faults of a rig file (its explicit keys): each becomes a case of every command that reads
+one (``RIG_COMMANDS``); an error names the file and the key, a warning the key."""
+
+RIG_COMMANDS = {
+    "show": ("platform", "--show", "--rig", "{r}"),
+    "template": ("platform", "--template", "--rig", "{r}", "--out", "{tmp}/o.toml"),
+    "log-inspect": ("log", "inspect", "{data}", "--rig", "{r}", "--out", "{tmp}/o"),
+}
+
+
+def rig_cases() -> list[Case]:
+    return [Case(id=f"rig-{command}-{fault}", argv=argv, expect=expect,
+                 code=2 if expect == ERROR else 0, message=message,
+                 absent=("o", "o.toml") if expect == ERROR else (),
+                 files={"data": trajectory(), "r": _rig_with(line)})
+            for fault, line, expect, message in RIG_FAULTS
+            for command, argv in RIG_COMMANDS.items()]
+
+
 def _bom(maker):
     """``maker``'s file with a UTF-8 byte order mark in front (as Windows editors write)."""
     def make(folder):
