@@ -96,6 +96,8 @@ USAGE = {
     "effects": ("effects",),
     "derive": ("derive", "--check"),
     "bench": ("bench",),
+    "view": ("view", "--trajectory", "{data}", "--out", "{tmp}/o.html"),
+    "log": ("log", "inspect", "{data}", "--out", "{tmp}/o"),
 }
 """A valid command line of each command (the usage cases add one mistake to it)."""
 
@@ -173,6 +175,14 @@ def usage_cases() -> list[Case]:
                           argv=(*USAGE["sweep"], option, values[0], option, values[1]),
                           message=rf"^{option}: 'platform\.payload_mass' given twice; give each "
                           "parameter once$", files=files, absent=("o",)))
+    for command, argv in USAGE.items():      # one value each: a second would replace it
+        if "--out" in argv:
+            out = argv[argv.index("--out") + 1]
+            cases.append(Case(id=f"usage-{command}-repeated-out", expect=ERROR, code=2,
+                              argv=(*argv, "--out", out.replace("/o", "/o2")),
+                              message=r"^--out: given more than once; give it once",
+                              files=files, absent=("o", "o.csv", "o.toml", "o.html", "o2",
+                                                   "o2.csv", "o2.toml", "o2.html")))
     for name, argv, message in BAD_VALUES:
         cases.append(Case(id=f"usage-{name}", argv=argv, expect=ERROR, code=2,
                           message=message, files=files, absent=("o", "o.csv")))
