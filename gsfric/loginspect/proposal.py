@@ -34,6 +34,7 @@ from gsfric.signal.rotations import (
     quaternion_from_rpy,
     rotation_from_quaternion,
     rpy_from_rotation,
+    unit_quaternions,
 )
 
 STROKE_MARGIN = 0.1
@@ -330,7 +331,7 @@ def _quaternions(angles, kind: str, convention: str) -> np.ndarray:
         return quaternion_from_rpy(angles, convention)
     if kind == "euler":
         return quaternion_from_euler(*angles.T)
-    return angles / np.linalg.norm(angles, axis=1, keepdims=True)
+    return unit_quaternions(angles)[0]
 
 
 def _platform_poses(fmt: LogFormat, position, angles, kind):

@@ -20,7 +20,11 @@ from gsfric.errors import GsfricWarning, InputError
 from gsfric.io.arrow import column_from_arrow, data_columns
 from gsfric.io.logs import FORCES, QUATERNION, ColumnReader
 from gsfric.io.tables import check_file, check_unique_columns, csv_options, field_count_problem
-from gsfric.signal.rotations import quaternion_from_euler
+from gsfric.signal.rotations import (
+    MIN_QUATERNION_LENGTH,
+    quaternion_from_euler,
+    unit_quaternions,
+)
 from gsfric.trajectory import GIMBAL_JUMP, GIMBAL_SIN_BETA
 
 
@@ -122,12 +126,12 @@ def _quaternions(path: Path, angles: np.ndarray, orientation: tuple[str, ...], s
     themselves when they are given (else None)."""
     if orientation != QUATERNION:
         return quaternion_from_euler(*angles.T), angles
-    norms = np.linalg.norm(angles, axis=1)
-    zero = np.flatnonzero(norms < 1e-12)
+    unit, norms = unit_quaternions(angles)
+    zero = np.flatnonzero(norms < MIN_QUATERNION_LENGTH)
     if len(zero):
         raise InputError(f"{path}: row {file_row(start + int(zero[0])) + 1}: quaternion of "
                          "zero length")
-    return angles / norms[:, None], None
+    return unit, None
 
 
 # -- CSV and Parquet frames ---------------------------------------------------------------------

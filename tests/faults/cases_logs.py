@@ -10,7 +10,7 @@ from __future__ import annotations
 
 import numpy as np
 from makers import content, csv_edit, frame_edit
-from runner import ERROR, Case
+from runner import ERROR, OK, WARN, Case
 
 
 def _gap(lines):
@@ -72,8 +72,57 @@ def _noise_cases() -> list[Case]:
     return cases
 
 
+def _set(lines, column: str, value: str, row: int = 50):
+    """The CSV ``lines`` with data row ``row`` (0-based) of ``column`` set to ``value``."""
+    k = lines[0].split(",").index(column)
+    cells = lines[row + 1].split(",")
+    cells[k] = value
+    return [*lines[:row + 1], ",".join(cells), *lines[row + 2:]]
+
+
+def _zero_quaternion(lines):
+    for column in ("qw", "qx", "qy", "qz"):
+        lines = _set(lines, column, "0")
+    return lines
+
+
+POSE_READINGS = [
+    ("x-inf", lambda lines: _set(lines, "x", "inf"), r"row 51: column 'x' is infinite"),
+    ("x-1e200", lambda lines: _set(lines, "x", "1e200"),
+     r"row 51: column 'x' = 1e\+200 .*farther than 100 m from the origin"),
+    ("qw-minus-inf", lambda lines: _set(lines, "qw", "-inf"), r"row 51: column 'qw' is infinite"),
+    ("quaternion-zero", _zero_quaternion, r"row 51: quaternion of zero length"),
+]
+"""One pose reading no rig can have (a glitch of the log): an error naming the row and the
+column, from every command that reads a log's poses (``LOG_READERS``)."""
+
+LOG_READERS = {
+    "log-inspect": ("log", "inspect", "{data}", "--out", "{tmp}/o"),
+    "simulate": ("simulate", "--trajectory", "{data}", "--out", "{tmp}/o.csv", "--no-progress"),
+}
+
+
+def _pose_cases() -> list[Case]:
+    cases = [Case(id=f"log-{command}-pose-{fault}", argv=argv, expect=ERROR, code=2,
+                  message=message, files={"data": csv_edit("t.csv", edit)},
+                  absent=("o", "o.csv"))
+             for fault, edit, message in POSE_READINGS if fault != "x-1e200"
+             for command, argv in LOG_READERS.items()]
+    cases.append(Case(id="log-log-inspect-pose-x-1e200", argv=LOG_READERS["log-inspect"],
+                      expect=ERROR, code=2, message=POSE_READINGS[1][2],
+                      files={"data": csv_edit("t.csv", POSE_READINGS[1][1])}, absent=("o",)))
+    # a quaternion of length 1e200 is a direction, normalised without overflow: one flip
+    cases += [Case(id=f"log-{command}-pose-quaternion-1e200", argv=argv, expect=expect,
+                   message=message, files={"data": csv_edit("t.csv", lambda lines: _set(
+                       lines, "qx", "1e200"))})
+              for command, argv, expect, message in (
+                  ("log-inspect", LOG_READERS["log-inspect"], OK, ""),
+                  ("simulate", LOG_READERS["simulate"], WARN, r"1 of 100 steps flagged"))]
+    return cases
+
+
 def log_cases() -> list[Case]:
-    return [*_noise_cases(),
+    return [*_noise_cases(), *_pose_cases(),
         Case(id="log-discover-t-gap", expect=ERROR, code=2,
              argv=("discover", "--measured", "{data}", "--out", "{tmp}/dd", "--quiet"),
              message=r"t: dropout of about 500 samples .* first after row 50",
