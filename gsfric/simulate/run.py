@@ -332,6 +332,22 @@ def simulate_file(trajectory: str | os.PathLike[str], out: str | os.PathLike[str
     return summary
 
 
+def check_chunk(platform, part: MotionChunk, trajectory: Path) -> None:
+    """A chunk read from ``trajectory`` checked against the platform before any physics, by
+    every command that evaluates a file (``gsfric.platform.usable``): its recorded poses
+    (``check_poses``), its time gaps (``check_gaps``), and a measured-data file's forces
+    F1..F6 (``check_forces``: their unit)."""
+    motion = part.motion
+    recorded = motion.recorded_poses()
+    position, rotation = recorded if recorded is not None else (motion.position,
+                                                                motion.rotation)
+    check_poses(platform, position, rotation, motion.t, str(trajectory))
+    check_gaps(motion.t, str(trajectory))
+    if "F1" in part.carried:
+        check_forces(platform, np.stack([part.carried[f"F{i}"] for i in range(1, 7)], axis=1),
+                     str(trajectory))
+
+
 def _check_paths(trajectory: Path, out: Path, platform) -> str:
     """The output's kind ("csv" or "parquet"; CSV for a device or FIFO without an extension,
     such as /dev/null or /dev/stdout), after checking the paths: ``out`` must not be the
@@ -509,14 +525,7 @@ class _Run:
         """The chunk's poses (and measured forces) checked against the platform before any
         physics (``gsfric.platform.usable``); the differentiation noted in the summary."""
         motion = part.motion
-        recorded = motion.recorded_poses()
-        position, rotation = recorded if recorded is not None else (motion.position,
-                                                                    motion.rotation)
-        check_poses(self.platform, position, rotation, motion.t, str(self.trajectory))
-        check_gaps(motion.t, str(self.trajectory))
-        if "F1" in part.carried:
-            check_forces(self.platform, np.stack([part.carried[f"F{i}"] for i in range(1, 7)],
-                                                 axis=1), str(self.trajectory))
+        check_chunk(self.platform, part, self.trajectory)
         if not self.summary.differentiation:
             self.summary.differentiation = describe_differentiation(part)
             how = motion.differentiation()

@@ -8,6 +8,7 @@ import pandas as pd
 from makers import (
     base_csv,
     base_frame,
+    cell,
     column_map,
     content,
     csv_edit,
@@ -23,16 +24,6 @@ from makers import (
 from runner import ERROR, OK, WARN, Case
 
 # -- trajectory and measured-data tables --------------------------------------------------------
-
-
-def _cell(row: int, column: str, value: str):
-    """A CSV edit: data row ``row`` (1-based) of ``column`` set to ``value``."""
-    def edit(lines):
-        header = lines[0].split(",")
-        cells = lines[row].split(",")
-        cells[header.index(column)] = value
-        return [*lines[:row], ",".join(cells), *lines[row + 1:]]
-    return edit
 
 
 def _drop(column: str):
@@ -91,15 +82,15 @@ TABLE_FAULTS = [
      r"t\.csv"),
     ("no-x", frame_edit("t.csv", _drop("x")), ERROR, 2, r"t\.csv.*'?x'?"),
     ("no-t", frame_edit("t.csv", _drop("t")), ERROR, 2, r"t\.csv.*'?t'?"),
-    ("nan-cell", csv_edit("t.csv", _cell(5, "x", "nan")), ERROR, 2, r"t\.csv.*row 5"),
-    ("inf-cell", csv_edit("t.csv", _cell(5, "y", "inf")), ERROR, 2, r"t\.csv.*row 5"),
-    ("empty-cell", csv_edit("t.csv", _cell(7, "z", "")), ERROR, 2, r"t\.csv.*row 7"),
-    ("text-cell", csv_edit("t.csv", _cell(9, "x", "abc")), ERROR, 2, r"t\.csv.*row 9"),
-    ("huge-cell", csv_edit("t.csv", _cell(9, "x", "1e999")), ERROR, 2, r"t\.csv.*row 9"),
-    ("t-repeated", csv_edit("t.csv", _cell(6, "t", "0.04")), ERROR, 2, r"t\.csv.*row [56]"),
+    ("nan-cell", csv_edit("t.csv", cell(5, "x", "nan")), ERROR, 2, r"t\.csv.*row 5"),
+    ("inf-cell", csv_edit("t.csv", cell(5, "y", "inf")), ERROR, 2, r"t\.csv.*row 5"),
+    ("empty-cell", csv_edit("t.csv", cell(7, "z", "")), ERROR, 2, r"t\.csv.*row 7"),
+    ("text-cell", csv_edit("t.csv", cell(9, "x", "abc")), ERROR, 2, r"t\.csv.*row 9"),
+    ("huge-cell", csv_edit("t.csv", cell(9, "x", "1e999")), ERROR, 2, r"t\.csv.*row 9"),
+    ("t-repeated", csv_edit("t.csv", cell(6, "t", "0.04")), ERROR, 2, r"t\.csv.*row [56]"),
     ("t-backwards", csv_edit("t.csv", _swap_rows(10, 11)), ERROR, 2, r"t\.csv.*row 1[01]"),
-    ("zero-quaternion", csv_edit("t.csv", lambda ls: _cell(4, "qz", "0")(_cell(4, "qy", "0")(
-        _cell(4, "qx", "0")(_cell(4, "qw", "0")(ls))))), ERROR, 2, r"t\.csv.*row 4"),
+    ("zero-quaternion", csv_edit("t.csv", lambda ls: cell(4, "qz", "0")(cell(4, "qy", "0")(
+        cell(4, "qx", "0")(cell(4, "qw", "0")(ls))))), ERROR, 2, r"t\.csv.*row 4"),
     ("semicolons", csv_edit("t.csv", lambda ls: [x.replace(",", ";") for x in ls]), ERROR, 2,
      r"t\.csv"),
     ("duplicate-column", csv_edit("t.csv", lambda ls: [x + "," + x.split(",")[1]
