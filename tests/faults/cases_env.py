@@ -192,11 +192,17 @@ def usage_cases() -> list[Case]:
 # -- interruptions while the outputs are written ------------------------------------------------
 
 
-def stop_while_writing(stop: BaseException):
-    """The first fsync of a regular file raises ``stop``: the signal arrives mid-write."""
+def stop_while_writing(stop: BaseException, nth: int = 1):
+    """The ``nth`` fsync of a file raises ``stop`` (those before succeed): the signal arrives
+    mid-write (of a later file of the run, ``nth`` > 1)."""
     def patch(monkeypatch, paths):
+        real, calls = os.fsync, []
+
         def fsync(fd):
-            raise stop
+            calls.append(fd)
+            if len(calls) >= nth:
+                raise stop
+            real(fd)
 
         monkeypatch.setattr(os, "fsync", fsync)
     return patch
@@ -217,8 +223,20 @@ WRITERS = {
 }
 
 
+LATER_FILES = {
+    "simulate-plot": ((*SIMULATE, "--plot", "{tmp}/p.png"), "o.csv", "p.png"),
+    "simulate-breakdown": ((*SIMULATE, "--breakdown", "{tmp}/b.csv"), "o.csv", "b.csv"),
+}
+"""Commands writing several files: a stop while the second is written leaves none of them
+(the earlier main output unchanged)."""
+
+
 def interrupt_cases() -> list[Case]:
-    cases = []
+    cases = [Case(id=f"stop-{command}-{name}", argv=argv, expect=ERROR, code=code,
+                  message=message, files={"data": trajectory(), "old": old_output(out)},
+                  patch=stop_while_writing(stop, nth=2), absent=(later,))
+             for command, (argv, out, later) in LATER_FILES.items()
+             for name, stop, code, message in STOPS]
     for command, (argv, out) in WRITERS.items():
         for name, stop, code, message in STOPS:
             earlier = {} if out == "o" else {"old": old_output(out)}
