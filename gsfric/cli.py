@@ -219,14 +219,18 @@ def _refuse_repeated_options(command: click.Command, parent: click.Context,
                              args: list[str]) -> None:
     """``UsageError`` for an option of one value given more than once (``--out a --out b``):
     click keeps the last, silently dropping the first. Options that collect their values
-    (``--vary``), flags and counts may repeat; a group's subcommand is checked too. Any other
-    problem of ``args`` is left to the command's own parsing, which reports it."""
-    ctx = click.Context(command, info_name=command.name, parent=parent,
-                        resilient_parsing=True)
+    (``--vary``), flags and counts may repeat; a group's subcommand is checked too. A line
+    that does not parse raises click's own error, with the command named for its help hint
+    (click leaves it out of some, such as a missing option value)."""
+    ctx = click.Context(command, info_name=command.name, parent=parent)
     try:
         _, rest, order = command.make_parser(ctx).parse_args(args=list(args))
-    except click.UsageError:
-        return
+    except click.UsageError as exc:
+        if exc.ctx is None:
+            exc.ctx = ctx
+        raise
+    if any(name in args for name in ctx.help_option_names):
+        return                                          # --help wins, as in click
     seen: set[str] = set()
     for param in order:
         if not isinstance(param, click.Option) or param.multiple or param.count or \

@@ -177,6 +177,11 @@ def usage_cases() -> list[Case]:
                           "parameter once$", files=files, absent=("o",)))
     for command, argv in USAGE.items():      # one value each: a second would replace it
         if "--out" in argv:
+            help_of = " ".join(argv[:2] if command == "log" else argv[:1])
+            cases.append(Case(id=f"usage-{command}-out-without-value",
+                              argv=(*argv, "--out"), expect=ERROR, code=2,
+                              message=rf"'--out' requires an argument.* \(see `gsfric "
+                                      rf"{help_of} --help`\)$", files=files))
             out = argv[argv.index("--out") + 1]
             cases.append(Case(id=f"usage-{command}-repeated-out", expect=ERROR, code=2,
                               argv=(*argv, "--out", out.replace("/o", "/o2")),
