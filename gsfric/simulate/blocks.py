@@ -19,7 +19,7 @@ from gsfric._optional import optional
 from gsfric.errors import GsfricWarning, InputError
 from gsfric.io.arrow import column_from_arrow, data_columns
 from gsfric.io.logs import FORCES, QUATERNION, ColumnReader
-from gsfric.io.tables import check_file, check_unique_columns, csv_options, field_count_problem
+from gsfric.io.tables import check_csv_header, check_file, csv_options, field_count_problem
 from gsfric.signal.rotations import (
     MIN_QUATERNION_LENGTH,
     quaternion_from_euler,
@@ -172,7 +172,7 @@ def _csv_frames(path: Path, rows: int) -> Iterator[Frame]:
             except OSError as error:
                 raise InputError(f"{path}: cannot read ({error.strerror})") from None
             names = [str(c) for c in frame.columns]
-            check_unique_columns(path, names)
+            check_csv_header(path, names)
             yield names, [column for _, column in frame.items()]
 
 

@@ -92,7 +92,9 @@ TABLE_FAULTS = [
     ("zero-quaternion", csv_edit("t.csv", lambda ls: cell(4, "qz", "0")(cell(4, "qy", "0")(
         cell(4, "qx", "0")(cell(4, "qw", "0")(ls))))), ERROR, 2, r"t\.csv.*row 4"),
     ("semicolons", csv_edit("t.csv", lambda ls: [x.replace(",", ";") for x in ls]), ERROR, 2,
-     r"t\.csv"),
+     r"t\.csv: the header 't;x;.* is one column separated by semicolons"),
+    ("tabs", csv_edit("t.csv", lambda ls: [x.replace(",", "\t") for x in ls]), ERROR, 2,
+     r"t\.csv: the header .* is one column separated by tabs"),
     ("duplicate-column", csv_edit("t.csv", lambda ls: [x + "," + x.split(",")[1]
                                                        for x in ls[:1]] + [
         x + "," + x.split(",")[1] for x in ls[1:]]), ERROR, 2, r"t\.csv"),

@@ -137,7 +137,12 @@ def _measured_force_cases() -> list[Case]:
 
 
 def log_cases() -> list[Case]:
-    return [*_noise_cases(), *_pose_cases(), *_measured_force_cases(),
+    dialects = [Case(id=f"log-log-inspect-{name}", argv=LOG_READERS["log-inspect"],
+                     expect=ERROR, code=2, message=rf"t\.csv: the header .* separated by {name}",
+                     files={"data": csv_edit("t.csv", lambda ls, m=mark: [
+                         x.replace(",", m) for x in ls])}, absent=("o",))
+                for name, mark in (("semicolons", ";"), ("tabs", "\t"))]  # as TABLE_FAULTS
+    return [*_noise_cases(), *_pose_cases(), *_measured_force_cases(), *dialects,
         Case(id="log-discover-t-gap", expect=ERROR, code=2,
              argv=("discover", "--measured", "{data}", "--out", "{tmp}/dd", "--quiet"),
              message=r"t: dropout of about 500 samples .* first after row 50",
