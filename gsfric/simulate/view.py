@@ -17,7 +17,7 @@ from pathlib import Path
 
 import numpy as np
 
-from gsfric._checks import as_count, as_path
+from gsfric._checks import as_count, as_flag, as_path
 from gsfric._threads import one_blas_thread
 from gsfric.errors import GsfricWarning, InputError
 from gsfric.evaluation.evaluator import MAX_THREADS, Evaluator
@@ -108,6 +108,7 @@ def view_file(trajectory: str | os.PathLike[str], out: str | os.PathLike[str], p
     if isinstance(fps, bool) or not isinstance(fps, (int, float)) or not np.isfinite(fps) \
             or fps <= 0:
         raise InputError(f"fps: must be a positive number, got {fps!r}")
+    measured = as_flag(measured, "measured")
     check_view_paths(trajectory, out, platform)
     platform = platform_from(platform)
     summary = ViewSummary(out=out)
