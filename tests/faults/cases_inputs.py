@@ -223,10 +223,13 @@ def platform_cases() -> list[Case]:
 
 
 def _rig_with(line: str):
-    """The base rig file (``makers.rig``) with ``line`` added."""
+    """The base rig file (``makers.rig``) with ``line`` added, or replacing the line of its
+    key when the file has one."""
     def make(folder):
         path = rig()(folder)
-        path.write_text(path.read_text() + line + "\n")
+        key = line.split("=")[0].strip()
+        lines = [x for x in path.read_text().splitlines() if x.split("=")[0].strip() != key]
+        path.write_text("\n".join([*lines, line]) + "\n")
         return path
     return make
 
@@ -245,9 +248,14 @@ RIG_FAULTS = [
     ("inertia-text", 'platform_inertia = "0.2"', ERROR,
      r"r\.toml: platform_inertia: expected the three principal moments"),
     ("com-beyond-leg", "lower_com = 5.0", ERROR, r"r\.toml: lower_com: .*\(0, 1\.1\] m"),
+    ("repeated-key", "platform_mass = 3.0\nplatform_mass = 3.0", ERROR,
+     r"r\.toml: .*'platform_mass' given twice"),
     ("unknown-key", "platfrom_inertia = [0.2, 0.2, 0.4]", ERROR,
      r"r\.toml: platfrom_inertia: unknown key \(did you mean 'platform_inertia'\?\)"),
-    ("repeated-key", "platform_mass = 3.0", ERROR, r"r\.toml: .*'platform_mass' given twice"),
+    ("radius-1e200", "base_radius = 1e200", ERROR,
+     r"r\.toml: base_radius: must be a positive length in m, at most 1000 m"),
+    ("stroke-1e300", "stroke = [0.5, 1e300]", ERROR, r"r\.toml: stroke: d_max must be at most"),
+    ("home-1e300", "home_height = 1e300", ERROR, r"r\.toml: home_height: must be at most"),
     ("inertia-impossible", "platform_inertia = [0.1, 0.1, 0.5]", WARN,
      r"platform_inertia: principal moments 0\.1, 0\.1, 0\.5 kg m\^2 violate the triangle"),
 ]
