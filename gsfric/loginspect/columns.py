@@ -149,7 +149,8 @@ def time_column(path: Path, data: dict[str, np.ndarray], roles: Mapping[str, Rol
         raise InputError(f"{path}: row {int(empty[0]) + 1}: column {name!r} is empty or NaN")
     if not np.median(np.diff(data[name].astype(float))) > 0:
         raise InputError(f"{path}: column {name!r}: does not count up, not a time")
-    clock = V.read_clock(data[name], roles[name].unit)
+    unit = roles[name].unit if roles[name].unit in UNITS["time"] else None  # F1's "1": no time
+    clock = V.read_clock(data[name], unit)
     if clock.resets:
         row = clock.resets[0]
         before, after = data[name][row - 1], data[name][row]

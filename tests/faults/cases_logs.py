@@ -9,7 +9,7 @@ This is the place for those cases: add them to ``log_cases`` as ``Case`` rows (t
 from __future__ import annotations
 
 import numpy as np
-from makers import cell, content, csv_edit, frame_edit
+from makers import cell, content, csv_edit, frame_edit, trajectory
 from runner import ERROR, OK, WARN, Case
 
 
@@ -142,7 +142,12 @@ def log_cases() -> list[Case]:
                      files={"data": csv_edit("t.csv", lambda ls, m=mark: [
                          x.replace(",", m) for x in ls])}, absent=("o",))
                 for name, mark in (("semicolons", ";"), ("tabs", "\t"))]  # as TABLE_FAULTS
-    return [*_noise_cases(), *_pose_cases(), *_measured_force_cases(), *dialects,
+    not_a_time = [Case(id=f"log-log-inspect-time-is-{column}",
+                       argv=(*LOG_READERS["log-inspect"], "--time", column), expect=ERROR,
+                       code=2, message=rf"t\.csv: (row \d+: )?column '{column}'",
+                       files={"data": trajectory()}, absent=("o",))
+                  for column in ("F1", "x", "qw")]        # a force, a position, a quaternion
+    return [*_noise_cases(), *_pose_cases(), *_measured_force_cases(), *dialects, *not_a_time,
         Case(id="log-discover-t-gap", expect=ERROR, code=2,
              argv=("discover", "--measured", "{data}", "--out", "{tmp}/dd", "--quiet"),
              message=r"t: dropout of about 500 samples .* first after row 50",
