@@ -148,6 +148,12 @@ class _Group(click.Group):
                 gc.enable()
         return getattr(module, cmd_name)
 
+    def resolve_command(self, ctx, args):
+        name, command, rest = super().resolve_command(ctx, args)
+        if command is not None and not ctx.resilient_parsing:
+            _refuse_repeated_options(command, ctx, rest)
+        return name, command, rest
+
     def format_commands(self, ctx, formatter):
         """The list of commands with their short help (from ``COMMANDS``, nothing imported)."""
         limit = formatter.width - 6 - max(len(name) for name in COMMANDS)
@@ -210,6 +216,37 @@ class _Group(click.Group):
             fail("aborted", EXIT_CHECK)
         except click.ClickException as exc:
             fail(exc.format_message(), EXIT_INPUT)
+
+
+def _refuse_repeated_options(command: click.Command, parent: click.Context,
+                             args: list[str]) -> None:
+    """``UsageError`` for an option of one value given more than once (``--out a --out b``):
+    click keeps the last, silently dropping the first. Options that collect their values
+    (``--vary``), flags and counts may repeat; a group's subcommand is checked too. A line
+    that does not parse raises click's own error, with the command named for its help hint
+    (click leaves it out of some, such as a missing option value)."""
+    ctx = click.Context(command, info_name=command.name, parent=parent)
+    try:
+        _, rest, order = command.make_parser(ctx).parse_args(args=list(args))
+    except click.UsageError as exc:
+        if exc.ctx is None:
+            exc.ctx = ctx
+        raise
+    if any(name in args for name in ctx.help_option_names):
+        return                                          # --help wins, as in click
+    seen: set[str] = set()
+    for param in order:
+        if not isinstance(param, click.Option) or param.multiple or param.count or \
+                param.is_flag:
+            continue
+        if param.name in seen:
+            raise click.UsageError(f"{param.opts[0]}: given more than once; give it once",
+                                   ctx)
+        seen.add(param.name)
+    if isinstance(command, click.Group) and rest:
+        sub = command.get_command(ctx, rest[0])
+        if sub is not None:
+            _refuse_repeated_options(sub, ctx, rest[1:])
 
 
 def _help_hint(ctx: click.Context | None) -> str:

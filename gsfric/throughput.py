@@ -25,6 +25,7 @@ from dataclasses import asdict, dataclass
 
 import numpy as np
 
+from gsfric._checks import as_flag
 from gsfric.compiled import native
 from gsfric.evaluation.evaluator import Evaluator, state_array
 from gsfric.evaluation.parameters import model_function
@@ -174,6 +175,7 @@ def _calls(x: np.ndarray, lanes: int, per_step: bool) -> dict[tuple[str, int], C
 
 def measure(quick: bool = False, progress=None) -> Throughput:
     """Time every case (``progress(text)`` before each, when given)."""
+    quick = as_flag(quick, "quick")
     sizes, budget = (QUICK_SIZES, QUICK_BUDGET) if quick else (SIZES, BUDGET)
     where = machine()
     x_all = state_array(random_motion(np.random.default_rng(SEED),

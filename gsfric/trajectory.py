@@ -22,12 +22,14 @@ from gsfric._optional import optional
 from gsfric.errors import GsfricWarning, InputError
 from gsfric.signal.noise import divided_noise_std, white_noise_std
 from gsfric.signal.rotations import (
+    MIN_QUATERNION_LENGTH,
     angular_rates,
     continuous_quaternions,
     euler_from_rotation,
     quaternion_from_euler,
     quaternion_from_rotation,
     rotation_from_quaternion,
+    unit_quaternions,
 )
 from gsfric.signal.savgol import DEFAULT_POLYORDER, check_polyorder
 from gsfric.signal.smoothing import Smoothed, evenly_spaced, smooth
@@ -130,7 +132,9 @@ def check_sampling_rate(t: np.ndarray, what: str = "t", unit: str = "s",
 
 
 MAX_POSITION = 100.0
-"""Positions farther than this from the base frame's origin, m, draw a warning (mm given as m)."""
+"""Positions farther than this from the base frame's origin, m, draw a warning (mm given as m);
+``gsfric log inspect``, which takes the unit from the values, refuses them (no hexapod reaches
+that far: a glitch in the log)."""
 
 # -- differentiation ----------------------------------------------------------------------------
 
@@ -613,11 +617,10 @@ def _sampled_poses(t, position, euler, quaternion, source: str | None
         q = quaternion_from_euler(euler[:, 0], euler[:, 1], euler[:, 2])
     else:
         q = as_array(quaternion, (n, 4), "quaternion")
-        norms = np.linalg.norm(q, axis=1)
-        zero = np.flatnonzero(norms < 1e-12)
+        q, norms = unit_quaternions(q)
+        zero = np.flatnonzero(norms < MIN_QUATERNION_LENGTH)
         if len(zero):
             raise InputError(f"{_where(source, zero[:1])}: quaternion of zero length")
-        q = q / norms[:, None]
     return t, position, continuous_quaternions(q)
 
 

@@ -256,7 +256,8 @@ def test_bad_input_gets_one_line_naming_the_column_or_row_and_writes_nothing(
     ("Heave acc [mm/s^2]", "acceleration", "z", "mm/s^2"), ("Roll [deg]", "angle", "roll", "deg"),
     ("Yaw rate [deg/s]", "omega", "z", "deg/s"), ("omega_y", "omega", "y", None),
     ("alpha_x", "alpha", "x", None), ("alpha", "euler", "alpha", None),
-    ("Act3 [N]", "force", "3", "N"), ("F6", "force", "6", None), ("Mode", "", "", None),
+    ("Act3 [N]", "force", "3", "N"), ("F6", "force", "6", None), ("F1", "force", "1", None),
+    ("load_1", "force", "1", None), ("qw [1]", "quaternion", "qw", "1"), ("Mode", "", "", None),
     ("Oil temp [C]", "", "", None),
 ])
 def test_a_column_name_says_its_quantity_axis_and_unit(name, kind, axis, unit):
@@ -265,11 +266,14 @@ def test_a_column_name_says_its_quantity_axis_and_unit(name, kind, axis, unit):
 
 
 def test_a_file_in_gsfrics_own_columns_is_read_as_it_is(tmp_path):
+    """The columns of a measured-data file, F1..F6 among them, map to themselves."""
     _, si = real_like_log()
-    si[["t", "x", "y", "z", "qw", "qx", "qy", "qz"]].to_csv(tmp_path / "log.csv", index=False)
+    names = ("t", "x", "y", "z", "qw", "qx", "qy", "qz", *(f"F{i}" for i in range(1, 7)))
+    si = si.assign(**{f"F{i}": 40.0 + i for i in range(1, 7)})
+    si[list(names)].to_csv(tmp_path / "log.csv", index=False)
     found = inspect_log(tmp_path / "log.csv")
     fmt = found.log_format
-    assert fmt.columns == {k: k for k in ("t", "x", "y", "z", "qw", "qx", "qy", "qz")}
+    assert fmt.columns == {k: k for k in names}
     assert not fmt.units and not fmt.offset and fmt.frame.identity and fmt.wrap is None
     assert not found.ignored
 

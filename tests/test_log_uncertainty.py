@@ -14,6 +14,7 @@ import numpy as np
 import pandas as pd
 import pytest
 from click.testing import CliRunner
+from helpers import trajectory_frame
 
 import gsfric
 from gsfric import models
@@ -225,6 +226,23 @@ def test_simulate_prints_the_comparison_and_can_leave_the_uncertainty_out(tmp_pa
     frame = read_table(out)
     assert "sigma_F1" not in frame and "rest" not in frame
     assert "sigma_F" not in result.stdout
+
+
+def test_a_platform_held_still_without_noise_has_every_leg_possibly_at_rest(tmp_path):
+    """Poses written exactly and never changing: the rate uncertainty is 0 and the legs'
+    speeds are round-off; every leg of every step is possibly at rest (rest = 63), while a
+    moving record of the same exact poses has none."""
+    moving = trajectory_frame(100)
+    still = moving.copy()
+    for name in ("x", "y", "z", "qw", "qx", "qy", "qz"):
+        still[name] = still[name].iloc[0]
+    rests = {}
+    for name, frame in (("still", still), ("moving", moving)):
+        frame.to_csv(tmp_path / f"{name}.csv", index=False)
+        summary = simulate_file(tmp_path / f"{name}.csv", tmp_path / f"{name}-F.csv")
+        rests[name] = (summary.rest_steps, read_table(tmp_path / f"{name}-F.csv")["rest"])
+    assert rests["still"][0] == 100 and (rests["still"][1] == 63).all()
+    assert rests["moving"][0] == 0 and (rests["moving"][1] == 0).all()
 
 
 def _toml(fmt: dict, folder: Path) -> Path:

@@ -16,6 +16,7 @@ from gsfric.evaluation.breakdown import flat
 from gsfric.evaluation.columns import DEFAULT_GROUPS as DEFAULT_COLUMN_GROUPS
 from gsfric.evaluation.columns import GROUPS as COLUMN_GROUPS
 from gsfric.evaluation.evaluator import breakdown
+from gsfric.io.files import output_group
 from gsfric.io.logs import LogFormat
 from gsfric.io.readers import read_trajectory
 from gsfric.io.tables import write_table
@@ -146,19 +147,22 @@ def simulate(trajectory, platform_file, out, mode, strict, threads, chunk, windo
             _name_ignored_columns()
         log_format = LogFormat.from_options(column_map, units_map, angles, keep_columns)
         platform = platform_from(platform_file)
-        summary = simulate_file(trajectory, out, platform, mode=mode, strict=strict,
-                                chunk=chunk, window=window, n_threads=threads,
-                                progress=False if quiet else progress,
-                                log_format=log_format, columns=parse_columns(columns),
-                                float32=float32, keep_flagged=keep_flagged, plot=plot,
-                                uncertainty=not no_uncertainty)
-        if breakdown_file is not None:
-            _write_breakdown(trajectory, log_format, platform, breakdown_file, quiet)
+        with output_group():            # the table, --plot and --breakdown: all or none
+            summary = simulate_file(trajectory, out, platform, mode=mode, strict=strict,
+                                    chunk=chunk, window=window, n_threads=threads,
+                                    progress=False if quiet else progress,
+                                    log_format=log_format, columns=parse_columns(columns),
+                                    float32=float32, keep_flagged=keep_flagged, plot=plot,
+                                    uncertainty=not no_uncertainty)
+            if breakdown_file is not None:
+                _write_breakdown(trajectory, log_format, platform, breakdown_file)
     if not quiet:
         click.echo(f"wrote {out} ({summary.steps} steps, {summary.flagged} flagged; "
                    f"differentiated by {summary.differentiation})")
         if plot is not None:
             click.echo(f"wrote {plot}")
+        if breakdown_file is not None:
+            click.echo(f"wrote {breakdown_file}")
         click.echo(summary.peaks.table())
         if summary.rest_steps:
             click.echo(f"{summary.rest_steps} steps with a leg possibly at rest (the rest "
@@ -182,9 +186,7 @@ def _name_ignored_columns() -> None:
     warnings.showwarning = show_names
 
 
-def _write_breakdown(trajectory, log_format, platform, breakdown_file, quiet) -> None:
+def _write_breakdown(trajectory, log_format, platform, breakdown_file) -> None:
     """``--breakdown``: F per leg split into its parts along the whole trajectory."""
     motion = read_trajectory(trajectory, log_format=log_format)
     write_table(flat(breakdown(platform, motion)), breakdown_file)
-    if not quiet:
-        click.echo(f"wrote {breakdown_file}")

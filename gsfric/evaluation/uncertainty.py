@@ -38,6 +38,15 @@ REST_BAND = 2.0
 (``possibly_at_rest``): a speed that is truly zero lies within it 95 % of the time."""
 
 
+SPEED_ROUNDOFF = 100.0
+"""Floor of a leg speed's standard deviation, in units of ``eps * reach / dt`` (float64's
+relative resolution times the farthest platform joint from the base frame's origin, over the
+median sample interval): the smallest speed that differentiated poses can resolve, with the
+smoother's gain on round-off below this factor. A record free of noise (poses written exactly,
+a platform held still) has a rate uncertainty of 0; without the floor its legs at rest, whose
+speeds come out as round-off of about 1e-16 m/s, would not count as possibly at rest."""
+
+
 def force_sigma(evaluator, motion: Motion, start: int = 0) -> np.ndarray | None:
     """One standard deviation of each actuator force from the differentiation, (N, 6), N (see
     the module's docstring); None for a motion without ``rate_uncertainty`` or an evaluator in
@@ -108,7 +117,18 @@ def leg_speed_sigma(platform, motion: Motion) -> np.ndarray | None:
     v, w = uncertainty.velocity, uncertainty.omega
     v2 = np.maximum(np.maximum(v[:, 0], v[:, 1]), v[:, 2]) ** 2
     w2 = np.maximum(np.maximum(w[:, 0], w[:, 1]), w[:, 2]) ** 2
-    return np.sqrt(v2[:, None] + radius[None, :] ** 2 * w2[:, None])
+    sigma = np.sqrt(v2[:, None] + radius[None, :] ** 2 * w2[:, None])
+    return np.maximum(sigma, _speed_floor(radius, motion))
+
+
+def _speed_floor(radius: np.ndarray, motion: Motion) -> float:
+    """The smallest leg speed, m/s, that the motion's differentiated poses resolve
+    (``SPEED_ROUNDOFF``)."""
+    t = np.asarray(motion.t, float)
+    if len(t) < 2:
+        return 0.0
+    reach = float(np.max(np.linalg.norm(motion.position, axis=1)) + np.max(radius))
+    return SPEED_ROUNDOFF * np.finfo(float).eps * reach / float(np.median(np.diff(t)))
 
 
 def possibly_at_rest(speed: np.ndarray, sigma: np.ndarray, band: float = REST_BAND

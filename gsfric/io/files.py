@@ -26,6 +26,9 @@ _COMMIT_CHECK: contextvars.ContextVar = contextvars.ContextVar("gsfric_commit_ch
                                                                default=None)
 
 
+_GROUP: contextvars.ContextVar = contextvars.ContextVar("gsfric_output_group", default=None)
+"""The (temporary name, path) of the files written so far in the current ``output_group``."""
+
 _TEMP_TAG = ".gsfric-"
 """Temporary outputs are named ``.{name}.gsfric-{pid}-{random}.tmp`` beside the output, so that a
 later run can recognise (and remove) those of its own that a killed process (SIGKILL, a power
@@ -190,9 +193,35 @@ def check_run_paths(reads: Inputs, files: Iterable[PathArg | None] = (),
         out/map.toml, an input of the run; choose another output directory``.
     """
     named = _named_inputs(reads)
+    files = [f for f in files if f is not None]
     folders = [Path(f) for f in folders if f is not None and str(f) != ""]
     check_outputs([*files, *folders], named)
     _check_inside(folders, named)
+    for path in files:
+        check_output_place(path)
+
+
+def check_output_place(path: PathArg) -> None:
+    """Refuse, before any work, an output file that could not be written where it is given:
+    a directory or another node that is not a file, device or FIFO (``atomic_write``), or a
+    file whose folder (a symbolic link's, the target's) does not exist. A command writing
+    several files checks each one so: a later one that cannot be written must not fail the
+    run after an earlier one is in place.
+
+    Raises
+    ------
+    InputError
+        ``{path}: is a directory; give a file name``, ``{path}: directory 'DIR' does not
+        exist``, ``{path}: 'DIR' is not a directory``.
+    """
+    given = Path(path)
+    if _output_node(given) == "stream":
+        return
+    parent = resolve_output(given).parent
+    if not parent.exists():
+        raise InputError(f"{given}: directory {str(parent)!r} does not exist")
+    if not parent.is_dir():
+        raise InputError(f"{given}: {str(parent)!r} is not a directory")
 
 
 def _check_inside(folders: Iterable[Path], named: list[tuple[str, Path]]) -> None:
@@ -277,6 +306,35 @@ def _before_commit() -> None:
     check = _COMMIT_CHECK.get()
     if check is not None:
         check()
+
+
+@contextlib.contextmanager
+def output_group() -> Iterator[None]:
+    """Within the block, the regular files that ``atomic_write`` writes are moved into place
+    together when the block ends without an error (a run's table, its breakdown and its
+    figure): each stays a complete temporary file until then, and an error or a signal in the
+    block removes every one, leaving all the earlier files of those names as they were. A
+    group inside a group joins the outer one. Character devices and FIFOs are written into as
+    the block runs (``atomic_write``)."""
+    if _GROUP.get() is not None:
+        yield
+        return
+    pending: list[tuple[str, Path]] = []
+    token = _GROUP.set(pending)
+    try:
+        yield
+        _before_commit()
+        for tmp_name, path in pending:
+            _replace_file(tmp_name, path)
+        for directory in {path.parent for _, path in pending}:
+            _sync_directory(directory)
+    except BaseException:
+        for tmp_name, _ in pending:
+            with contextlib.suppress(FileNotFoundError):
+                os.unlink(tmp_name)
+        raise
+    finally:
+        _GROUP.reset(token)
 
 
 @contextlib.contextmanager
@@ -371,6 +429,9 @@ def _write_replacing(given: Path, path: Path, mode: str,
                 yield handle
                 handle.flush()
                 os.fsync(handle.fileno())
+            if _GROUP.get() is not None:          # moved into place with the group's others
+                _GROUP.get().append((tmp_name, path))
+                return
             _before_commit()
             _replace_file(tmp_name, path)
         except OSError as error:

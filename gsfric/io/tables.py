@@ -92,8 +92,21 @@ def csv_options() -> dict[str, Any]:
     return options
 
 
-def check_unique_columns(path: Path, names: list[str]) -> None:
-    """InputError when pandas renamed a repeated CSV column ``x`` to ``x.1``."""
+OTHER_SEPARATORS = {";": "semicolons", "\t": "tabs", "|": "vertical bars"}
+"""Separators of other CSV dialects: a header read as one column holding one of them is such
+a file (gsfric reads comma-separated values, with a point as the decimal mark)."""
+
+
+def check_csv_header(path: Path, names: list[str]) -> None:
+    """InputError for a CSV header read as one column that holds another dialect's separator
+    (``OTHER_SEPARATORS``, naming it), or with a repeated column (``x`` renamed ``x.1`` by
+    pandas)."""
+    if len(names) == 1:
+        for mark, what in OTHER_SEPARATORS.items():
+            if mark in names[0]:
+                raise InputError(f"{path}: the header {names[0][:40]!r} is one column separated "
+                                 f"by {what}: write the file with commas between the columns "
+                                 "(and a point as the decimal mark)")
     for name in names:
         match = re.fullmatch(r"(.*)\.[0-9]+", name)
         if match and match.group(1) in names:
@@ -172,7 +185,7 @@ def read_table(path: str | os.PathLike[str]) -> pd.DataFrame:
         except OSError as error:
             raise InputError(f"{path}: cannot read ({error.strerror})") from None
         names = [str(c) for c in frame.columns]
-        check_unique_columns(path, names)
+        check_csv_header(path, names)
     else:
         pyarrow = optional("pyarrow")
         try:

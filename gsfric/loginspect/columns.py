@@ -21,6 +21,8 @@ from gsfric.io.logs import RATES, UNITS
 from gsfric.loginspect import values as V
 from gsfric.loginspect.names import AXIS_WORDS, Role, role
 from gsfric.loginspect.names import RATE_QUANTITY as QUANTITY_RATE
+from gsfric.signal.rotations import MIN_QUATERNION_LENGTH, unit_quaternions
+from gsfric.trajectory import MAX_POSITION
 
 NUMERIC_SHARE = 0.9
 """A text column is read as numbers with a bad row (and that row named) when at least this
@@ -147,7 +149,8 @@ def time_column(path: Path, data: dict[str, np.ndarray], roles: Mapping[str, Rol
         raise InputError(f"{path}: row {int(empty[0]) + 1}: column {name!r} is empty or NaN")
     if not np.median(np.diff(data[name].astype(float))) > 0:
         raise InputError(f"{path}: column {name!r}: does not count up, not a time")
-    clock = V.read_clock(data[name], roles[name].unit)
+    unit = roles[name].unit if roles[name].unit in UNITS["time"] else None  # F1's "1": no time
+    clock = V.read_clock(data[name], unit)
     if clock.resets:
         row = clock.resets[0]
         before, after = data[name][row - 1], data[name][row]
@@ -202,13 +205,17 @@ def pose_units(path: Path, data, roles, columns: dict[str, str], kind: str,
                cmap: ColumnMap) -> tuple[np.ndarray, str]:
     """The pose columns (N, k) in SI and their unit (from the names, or the values)."""
     raw = np.stack([data[c].astype(float) for c in columns.values()], axis=1)
-    if np.isnan(raw).any():
-        row, k = np.argwhere(np.isnan(raw))[0]
+    if not np.isfinite(raw).all():
+        row, k = np.argwhere(~np.isfinite(raw))[0]
         raise InputError(f"{path}: row {row + 1}: column {list(columns.values())[k]!r} is "
-                         "empty or NaN")
+                         f"{'empty or NaN' if np.isnan(raw[row, k]) else 'infinite'}")
     named = {roles[c].unit for c in columns.values()}
     shown = ", ".join(f"{k} = {c!r}" for k, c in columns.items())
     if kind == "quaternion":
+        zero = np.flatnonzero(unit_quaternions(raw)[1] < MIN_QUATERNION_LENGTH)
+        if len(zero):
+            raise InputError(f"{path}: row {zero[0] + 1}: quaternion of zero length "
+                             f"({', '.join(map(repr, columns.values()))})")
         for key, column in columns.items():
             cmap.add(key, column, None)
         cmap.assume("orientation", f"{shown}, a quaternion (w first)", "the columns' names")
@@ -226,6 +233,11 @@ def pose_units(path: Path, data, roles, columns: dict[str, str], kind: str,
     else:
         unit, evidence = V.angle_unit(raw)
     factor = UNITS["length" if kind == "position" else "angle"][unit]
+    if kind == "position" and np.abs(raw * factor).max() > MAX_POSITION:
+        row, k = np.argwhere(np.abs(raw * factor) > MAX_POSITION)[0]
+        raise InputError(f"{path}: row {row + 1}: column {list(columns.values())[k]!r} = "
+                         f"{raw[row, k]:.4g} {unit}, farther than {MAX_POSITION:g} m from the "
+                         "origin: no hexapod reaches it (a glitch, or another unit?)")
     cmap.assume(kind if kind != "angle" else "orientation", f"{shown} in {unit}", evidence)
     for key, column in columns.items():
         cmap.add(key, column, unit)

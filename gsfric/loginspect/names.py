@@ -108,8 +108,8 @@ def split_name(name: str) -> tuple[tuple[str, ...], str | None]:
     words = [w.lower() for part in re.split(r"[^0-9A-Za-z]+", text) if part
              for w in _CAMEL.split(part) if w]
     if unit is None and len(words) > 1 and _unit(words[-1]) in KNOWN_UNITS \
-            and words[-1] not in ("m", "n", "g"):
-        unit = _unit(words.pop())              # "pos_x_mm", "time_us"
+            and words[-1] not in ("m", "n", "g") and not words[-1].isdigit():
+        unit = _unit(words.pop())              # "pos_x_mm", "time_us"; not F1's leg "1"
     return tuple(words), unit
 
 

@@ -18,14 +18,15 @@ from pathlib import Path
 import numpy as np
 import tomlkit
 
-from gsfric.errors import InputError
+from gsfric._checks import as_path, short
+from gsfric.errors import InputError, InputTypeError
 from gsfric.io.frames import LogFrame
 from gsfric.io.logs import RPY_CONVENTIONS, LogFormat
 from gsfric.io.tables import read_table
 from gsfric.loginspect import columns as C
 from gsfric.loginspect import values as V
 from gsfric.loginspect.names import VEHICLE_WORDS
-from gsfric.models import reference_platform
+from gsfric.models import platform_from, reference_platform
 from gsfric.platform.description import Platform
 from gsfric.platform.rig import Rig, rig_toml
 from gsfric.platform.usable import home_height
@@ -34,6 +35,7 @@ from gsfric.signal.rotations import (
     quaternion_from_rpy,
     rotation_from_quaternion,
     rpy_from_rotation,
+    unit_quaternions,
 )
 
 STROKE_MARGIN = 0.1
@@ -132,8 +134,8 @@ def inspect_log(path: str | os.PathLike[str], *, platform: Platform | None = Non
     ----------
     path : path-like
         The log, CSV or Parquet.
-    platform : Platform, optional
-        The rig's platform: its geometry and stroke give the home height (mid-stroke) and the
+    platform : Platform or path-like, optional
+        The rig's platform (or its TOML file, ``gsfric.models.platform_from``): its geometry and stroke give the home height (mid-stroke) and the
         legs. Default: ``rig``'s, or the reference platform's sizes scaled to the log.
     rig : Rig, optional
         The rig's sizes (``gsfric.platform.rig``), instead of ``platform``.
@@ -147,9 +149,17 @@ def inspect_log(path: str | os.PathLike[str], *, platform: Platform | None = Non
     ------
     InputError
         One line naming the file and the column or row: an empty file, no numeric column, no
-        time-like column, no position or orientation columns.
+        time-like column, no position or orientation columns; both ``platform`` and ``rig``.
+    InputTypeError
+        ``path`` not a path, ``rig`` not a ``Rig``.
     """
-    path = Path(path)
+    path = as_path(path, "path")
+    if platform is not None and rig is not None:
+        raise InputError("give platform or rig, not both")
+    platform = platform_from(platform) if platform is not None else None
+    if rig is not None and not isinstance(rig, Rig):
+        raise InputTypeError(f"rig: expected a gsfric.platform.rig.Rig (Rig.from_toml), got "
+                             f"{short(rig)}")
     table = read_table(path)
     data = C.numeric_frame(path, table)
     roles = C.roles_of(data)
@@ -330,7 +340,7 @@ def _quaternions(angles, kind: str, convention: str) -> np.ndarray:
         return quaternion_from_rpy(angles, convention)
     if kind == "euler":
         return quaternion_from_euler(*angles.T)
-    return angles / np.linalg.norm(angles, axis=1, keepdims=True)
+    return unit_quaternions(angles)[0]
 
 
 def _platform_poses(fmt: LogFormat, position, angles, kind):

@@ -90,13 +90,20 @@ def _inertia(value: object, name: str) -> np.ndarray:
     smallest = float(moments.min())
     if smallest < -_SYMMETRY_TOL * scale:
         raise InputError(f"{name}: not positive semi-definite (smallest eigenvalue {smallest:g})")
-    if moments[2] > moments[0] + moments[1] + _TRIANGLE_TOL * scale:
-        warnings.warn(f"{name}: principal moments {moments[0]:.4g}, {moments[1]:.4g}, "
-                      f"{moments[2]:.4g} kg m^2 violate the triangle inequality "
-                      f"({moments[2]:.4g} > {moments[0]:.4g} + {moments[1]:.4g}): no rigid "
-                      "body has them; check the inertia (about the centre of mass, kg m^2)",
-                      GsfricWarning, stacklevel=5)
+    check_principal_moments(moments, name, stacklevel=6)
     return inertia
+
+
+def check_principal_moments(moments, name: str, stacklevel: int = 2) -> None:
+    """A ``GsfricWarning`` naming ``name`` when the three principal moments of inertia
+    (kg m^2, any order) break the triangle inequality (the largest more than the sum of the
+    others, beyond ``_TRIANGLE_TOL`` of it): no rigid body has them (a typing or unit error)."""
+    low, mid, high = sorted(float(m) for m in moments)
+    if high > low + mid + _TRIANGLE_TOL * abs(high):
+        warnings.warn(f"{name}: principal moments {low:.4g}, {mid:.4g}, {high:.4g} kg m^2 "
+                      f"violate the triangle inequality ({high:.4g} > {low:.4g} + {mid:.4g}): "
+                      "no rigid body has them; check the inertia (about the centre of mass, "
+                      "kg m^2)", GsfricWarning, stacklevel=stacklevel)
 
 
 def default_universal_axes(base_joints: np.ndarray) -> np.ndarray:

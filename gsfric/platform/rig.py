@@ -65,7 +65,15 @@ import tomlkit
 from gsfric._checks import as_float, short, suggest
 from gsfric.errors import InputError
 from gsfric.io.files import read_toml
-from gsfric.platform.description import FRICTION_MODELS, Body, Friction, Geometry, Legs, Platform
+from gsfric.platform.description import (
+    FRICTION_MODELS,
+    Body,
+    Friction,
+    Geometry,
+    Legs,
+    Platform,
+    check_principal_moments,
+)
 from gsfric.platform.text import commented_toml
 
 DERIVED = {
@@ -89,6 +97,11 @@ LEG_SLENDERNESS = 10.0
 
 BUSHINGS = (0.5, 0.2)
 """First bushing's distance from C_i and the spacing of the two, as fractions of d_min."""
+
+MAX_LENGTH = 1000.0
+"""The longest radius or leg a rig may state, m: hundreds of times the largest hexapods (a few
+metres), so any larger value is a unit or typing error; it keeps every product of the sizes
+finite (1e200 m would overflow the legs' lengths to inf)."""
 
 REFERENCE_FRICTION = dict(joint_viscous=0.02, joint_coulomb=0.04, joint_radius=0.05,
                           prismatic_viscous=0.02, prismatic_coulomb=0.1, prismatic_seal=2.0)
@@ -157,8 +170,9 @@ class Rig:
     def __post_init__(self) -> None:
         for name in ("base_radius", "platform_radius"):
             value = as_float(getattr(self, name), name)
-            if value <= 0:
-                raise InputError(f"{name}: must be a positive length in m, got {value:g}")
+            if not 0 < value <= MAX_LENGTH:
+                raise InputError(f"{name}: must be a positive length in m, at most "
+                                 f"{MAX_LENGTH:g} m, got {value:g}")
             object.__setattr__(self, name, value)
         for name in ("base_half_angle", "platform_half_angle"):
             value = as_float(getattr(self, name), name)
@@ -178,6 +192,9 @@ class Rig:
         if self.home_height is not None:
             object.__setattr__(self, "home_height",
                                as_float(self.home_height, "home_height", minimum=0.0))
+            if self.home_height > MAX_LENGTH:
+                raise InputError(f"home_height: must be at most {MAX_LENGTH:g} m, got "
+                                 f"{self.home_height:g} m")
         for name in ("platform_inertia", "lower_inertia", "upper_inertia"):
             if getattr(self, name) is not None:
                 object.__setattr__(self, name, _moments(getattr(self, name), name))
@@ -375,6 +392,8 @@ def _stroke(value: object) -> tuple[float, float]:
         raise InputError(f"stroke: expected [d_min, d_max] in m, got {short(value)}")
     lo = as_float(value[0], "stroke[0]", minimum=0.0)
     hi = as_float(value[1], "stroke[1]")
+    if hi > MAX_LENGTH:
+        raise InputError(f"stroke: d_max must be at most {MAX_LENGTH:g} m, got {hi:g} m")
     if not 0 < lo < hi:
         raise InputError(f"stroke: expected 0 < d_min < d_max, got [{lo:g}, {hi:g}] m")
     return (lo, hi)
@@ -401,7 +420,9 @@ def _moments(value: object, name: str) -> tuple[float, float, float]:
     if not isinstance(value, (list, tuple, np.ndarray)) or len(value) != 3:
         raise InputError(f"{name}: expected the three principal moments [x, y, z] in kg m^2, "
                          f"got {short(value)}")
-    return tuple(as_float(v, f"{name}[{k}]", minimum=0.0) for k, v in enumerate(value))
+    moments = tuple(as_float(v, f"{name}[{k}]", minimum=0.0) for k, v in enumerate(value))
+    check_principal_moments(moments, name, stacklevel=5)
+    return moments
 
 
 def _distance(value: object, name: str, longest: float) -> float:

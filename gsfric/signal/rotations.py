@@ -99,6 +99,35 @@ def quaternion_from_rotation(rotation: np.ndarray) -> np.ndarray:
     return q.reshape(r.shape[:-2] + (4,))
 
 
+MIN_QUATERNION_LENGTH = 1e-12
+"""A quaternion shorter than this is refused as of zero length: it gives no direction (an
+empty or zeroed reading), whatever its scale."""
+
+
+def unit_quaternions(quaternion: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Quaternions scaled to unit length, and their lengths, without overflow or underflow:
+    each is divided by its largest component first, so a length of 1e200 (or 1e-200) is
+    exact where the sum of squares would be infinite (or zero).
+
+    Parameters
+    ----------
+    quaternion : array_like, shape (..., 4)
+
+    Returns
+    -------
+    unit : ndarray, shape (..., 4)
+        NaN for a zero or non-finite quaternion.
+    length : ndarray, shape (...)
+        0 for a zero quaternion; inf beyond the floating-point range.
+    """
+    q = np.asarray(quaternion, dtype=float)
+    scale = np.max(np.abs(q), axis=-1, keepdims=True)
+    with np.errstate(invalid="ignore", divide="ignore", over="ignore"):
+        scaled = q / scale
+        length = np.linalg.norm(scaled, axis=-1, keepdims=True)
+        return scaled / length, np.where(scale[..., 0] == 0, 0.0, (length * scale)[..., 0])
+
+
 def rotation_from_quaternion(quaternion: np.ndarray) -> np.ndarray:
     """Rotation matrices of quaternions ``(qw, qx, qy, qz)`` (normalized first).
 
@@ -112,7 +141,7 @@ def rotation_from_quaternion(quaternion: np.ndarray) -> np.ndarray:
         Entries written one by one into the result (no intermediate stacks).
     """
     q = np.asarray(quaternion, dtype=float)
-    w, x, y, z = np.moveaxis(q / np.linalg.norm(q, axis=-1, keepdims=True), -1, 0)
+    w, x, y, z = np.moveaxis(unit_quaternions(q)[0], -1, 0)
     xx, yy, zz = x * x, y * y, z * z
     xy, xz, yz = x * y, x * z, y * z
     wx, wy, wz = w * x, w * y, w * z

@@ -19,8 +19,12 @@ from gsfric._optional import optional
 from gsfric.errors import GsfricWarning, InputError
 from gsfric.io.arrow import column_from_arrow, data_columns
 from gsfric.io.logs import FORCES, QUATERNION, ColumnReader
-from gsfric.io.tables import check_file, check_unique_columns, csv_options, field_count_problem
-from gsfric.signal.rotations import quaternion_from_euler
+from gsfric.io.tables import check_csv_header, check_file, csv_options, field_count_problem
+from gsfric.signal.rotations import (
+    MIN_QUATERNION_LENGTH,
+    quaternion_from_euler,
+    unit_quaternions,
+)
 from gsfric.trajectory import GIMBAL_JUMP, GIMBAL_SIN_BETA
 
 
@@ -122,12 +126,12 @@ def _quaternions(path: Path, angles: np.ndarray, orientation: tuple[str, ...], s
     themselves when they are given (else None)."""
     if orientation != QUATERNION:
         return quaternion_from_euler(*angles.T), angles
-    norms = np.linalg.norm(angles, axis=1)
-    zero = np.flatnonzero(norms < 1e-12)
+    unit, norms = unit_quaternions(angles)
+    zero = np.flatnonzero(norms < MIN_QUATERNION_LENGTH)
     if len(zero):
         raise InputError(f"{path}: row {file_row(start + int(zero[0])) + 1}: quaternion of "
                          "zero length")
-    return angles / norms[:, None], None
+    return unit, None
 
 
 # -- CSV and Parquet frames ---------------------------------------------------------------------
@@ -168,7 +172,7 @@ def _csv_frames(path: Path, rows: int) -> Iterator[Frame]:
             except OSError as error:
                 raise InputError(f"{path}: cannot read ({error.strerror})") from None
             names = [str(c) for c in frame.columns]
-            check_unique_columns(path, names)
+            check_csv_header(path, names)
             yield names, [column for _, column in frame.items()]
 
 

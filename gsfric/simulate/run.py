@@ -38,12 +38,18 @@ from tqdm import tqdm
 
 from gsfric._checks import as_count, as_flag, as_path
 from gsfric._threads import one_blas_thread
-from gsfric.errors import GsfricWarning, InputError, StepFlagError
+from gsfric.errors import GsfricWarning, StepFlagError
 from gsfric.evaluation.columns import plan as column_plan
 from gsfric.evaluation.evaluator import MAX_THREADS, Evaluator, evaluate_outputs
 from gsfric.evaluation.flags import FLAG_NAMES, FLAG_NONFINITE, check_flagged, flag_counts
 from gsfric.evaluation.peaks import PEAK_ARRAYS, Peaks
-from gsfric.io.files import atomic_write, check_outputs, is_stream
+from gsfric.io.files import (
+    atomic_write,
+    check_output_place,
+    check_outputs,
+    is_stream,
+    output_group,
+)
 from gsfric.io.tables import check_file, count_rows, table_kind
 from gsfric.models import platform_from
 from gsfric.platform.catalog import sensor_parameters
@@ -300,27 +306,46 @@ def simulate_file(trajectory: str | os.PathLike[str], out: str | os.PathLike[str
         plot = as_path(plot, "plot")
         check_outputs([plot], {"trajectory": trajectory, "platform": platform, "out": out})
         check_figure(plot)
+        check_output_place(plot)
     run = _Run(trajectory, out, platform, plan, mode=mode, strict=strict, n_threads=n_threads,
                float32=float32, progress=progress, keep_flagged=as_flag(keep_flagged,
                                                                         "keep_flagged"),
                trace=plot is not None)
     run.smoothing = (window, polyorder) if uncertainty else None
     Writer.load(kind)
-    try:
-        run.write(motions, kind)
-    finally:
-        run.bar.close()
-    summary = run.finish()
+    with output_group():                # the table and the figure, both or neither
+        try:
+            run.write(motions, kind)
+        finally:
+            run.bar.close()
+        summary = run.finish()
+        if plot is not None and summary.trace is not None and summary.steps:
+            write_figure(plot, summary.trace, summary.peaks.t0,
+                         title=f"{trajectory.name}: {summary.steps} steps, "
+                               f"{summary.flagged} flagged")
     message = summary.uncertainty_message(trajectory) if uncertainty else None
     if message:
         warnings.warn(message, GsfricWarning, stacklevel=2)
     if summary.flagged:
         warnings.warn(summary.flag_message(trajectory) + f"; see the flag column of {out}",
                       GsfricWarning, stacklevel=2)
-    if plot is not None and summary.trace is not None and summary.steps:
-        write_figure(plot, summary.trace, summary.peaks.t0,
-                     title=f"{trajectory.name}: {summary.steps} steps, {summary.flagged} flagged")
     return summary
+
+
+def check_chunk(platform, part: MotionChunk, trajectory: Path) -> None:
+    """A chunk read from ``trajectory`` checked against the platform before any physics, by
+    every command that evaluates a file (``gsfric.platform.usable``): its recorded poses
+    (``check_poses``), its time gaps (``check_gaps``), and a measured-data file's forces
+    F1..F6 (``check_forces``: their unit)."""
+    motion = part.motion
+    recorded = motion.recorded_poses()
+    position, rotation = recorded if recorded is not None else (motion.position,
+                                                                motion.rotation)
+    check_poses(platform, position, rotation, motion.t, str(trajectory))
+    check_gaps(motion.t, str(trajectory))
+    if "F1" in part.carried:
+        check_forces(platform, np.stack([part.carried[f"F{i}"] for i in range(1, 7)], axis=1),
+                     str(trajectory))
 
 
 def _check_paths(trajectory: Path, out: Path, platform) -> str:
@@ -328,12 +353,9 @@ def _check_paths(trajectory: Path, out: Path, platform) -> str:
     such as /dev/null or /dev/stdout), after checking the paths: ``out`` must not be the
     trajectory, nor the platform's file when ``platform`` is one."""
     check_outputs([out], {"trajectory": trajectory, "platform": platform})
-    if out.exists() and out.is_dir():
-        raise InputError(f"{out}: is a directory; give a file name")
+    check_output_place(out)
     kind = "csv" if not out.suffix and is_stream(out) else table_kind(out)
     check_file(trajectory)
-    if not out.parent.is_dir():
-        raise InputError(f"{out}: directory {str(out.parent)!r} does not exist")
     return kind
 
 
@@ -503,14 +525,7 @@ class _Run:
         """The chunk's poses (and measured forces) checked against the platform before any
         physics (``gsfric.platform.usable``); the differentiation noted in the summary."""
         motion = part.motion
-        recorded = motion.recorded_poses()
-        position, rotation = recorded if recorded is not None else (motion.position,
-                                                                    motion.rotation)
-        check_poses(self.platform, position, rotation, motion.t, str(self.trajectory))
-        check_gaps(motion.t, str(self.trajectory))
-        if "F1" in part.carried:
-            check_forces(self.platform, np.stack([part.carried[f"F{i}"] for i in range(1, 7)],
-                                                 axis=1), str(self.trajectory))
+        check_chunk(self.platform, part, self.trajectory)
         if not self.summary.differentiation:
             self.summary.differentiation = describe_differentiation(part)
             how = motion.differentiation()

@@ -17,18 +17,17 @@ from pathlib import Path
 
 import numpy as np
 
-from gsfric._checks import as_count, as_path
+from gsfric._checks import as_count, as_flag, as_path
 from gsfric._threads import one_blas_thread
 from gsfric.errors import GsfricWarning, InputError
 from gsfric.evaluation.evaluator import MAX_THREADS, Evaluator
 from gsfric.evaluation.flags import FLAG_NAMES
-from gsfric.io.files import check_outputs, is_stream
+from gsfric.io.files import check_output_place, check_outputs, is_stream
 from gsfric.io.tables import check_file
 from gsfric.models import platform_from
-from gsfric.platform.usable import check_gaps, check_poses
 from gsfric.signal.savgol import DEFAULT_POLYORDER
 from gsfric.simulate.differentiate import DEFAULT_CHUNK, iter_motions
-from gsfric.simulate.run import Summary, _Flags, describe_differentiation
+from gsfric.simulate.run import Summary, _Flags, check_chunk, describe_differentiation
 from gsfric.view import DEFAULT_FPS, FrameCollector, Frames, page, write_page
 from gsfric.view.comparison import measured_plots
 
@@ -59,11 +58,8 @@ def check_view_paths(trajectory: Path, out: Path, platform) -> None:
     stream = is_stream(out)
     if not stream and out.suffix.lower() not in HTML_SUFFIXES:
         raise InputError(f"{out}: unknown extension {out.suffix or '(none)'!r}; use .html")
-    if out.is_dir():
-        raise InputError(f"{out}: is a directory; give a file name")
+    check_output_place(out)
     check_file(trajectory)
-    if not stream and not out.parent.is_dir():
-        raise InputError(f"{out}: directory {str(out.parent)!r} does not exist")
 
 
 @one_blas_thread
@@ -112,6 +108,7 @@ def view_file(trajectory: str | os.PathLike[str], out: str | os.PathLike[str], p
     if isinstance(fps, bool) or not isinstance(fps, (int, float)) or not np.isfinite(fps) \
             or fps <= 0:
         raise InputError(f"fps: must be a positive number, got {fps!r}")
+    measured = as_flag(measured, "measured")
     check_view_paths(trajectory, out, platform)
     platform = platform_from(platform)
     summary = ViewSummary(out=out)
@@ -132,17 +129,14 @@ def view_file(trajectory: str | os.PathLike[str], out: str | os.PathLike[str], p
 
 def _frames(trajectory: Path, motions, evaluator: Evaluator, collector: FrameCollector,
             summary: ViewSummary, measured: bool = False) -> Frames:
-    """Evaluate each chunk of ``motions`` (checked as ``simulate_file`` checks them) and keep
+    """Evaluate each chunk of ``motions`` (checked as ``simulate_file`` checks them:
+    ``check_chunk``) and keep
     its frames; the steps, chunks, differentiation and flags counted into ``summary``.
     ``measured``: F1..F6 must be among the carried columns."""
     flags = _Flags()
     for part in motions:
         motion = part.motion
-        recorded = motion.recorded_poses()
-        position, rotation = recorded if recorded is not None else (motion.position,
-                                                                    motion.rotation)
-        check_poses(evaluator.platform, position, rotation, motion.t, str(trajectory))
-        check_gaps(motion.t, str(trajectory))
+        check_chunk(evaluator.platform, part, trajectory)
         missing = [f"F{i}" for i in range(1, 7) if f"F{i}" not in part.carried]
         if measured and missing:
             raise InputError(f"{trajectory}: a measured-data file needs the force columns "

@@ -15,9 +15,12 @@ from gsfric import models
 from gsfric.discovery import discover
 from gsfric.errors import InputError, InputTypeError
 from gsfric.evaluation.evaluator import Evaluator, state_array
+from gsfric.loginspect import inspect_log
 from gsfric.platform.description import Platform
-from gsfric.simulate import simulate_file
+from gsfric.platform.rig import Rig
+from gsfric.simulate import simulate_file, view_file
 from gsfric.sweep import sweep
+from gsfric.throughput import measure
 from gsfric.trajectory import Motion
 
 T, V = InputTypeError, InputError
@@ -223,6 +226,46 @@ SIMULATE_API = [
      r"^chunk", ValueError),
 ]
 
+SIMULATE_API += [
+    ("plot-number", lambda f: simulate_file(f["t"], f["tmp"] / "o.csv", plot=3), T,
+     r"^plot: expected a file path", TypeError),
+    ("plot-missing-folder", lambda f: simulate_file(f["t"], f["tmp"] / "o.csv",
+                                                    plot=f["tmp"] / "no" / "p.png"), V,
+     r"no/p\.png: directory .* does not exist", ValueError),
+    ("plot-is-out", lambda f: simulate_file(f["t"], f["tmp"] / "o.csv",
+                                            plot=f["tmp"] / "o.csv"), V,
+     r"o\.csv: is the out file itself", ValueError),
+    ("keep-flagged-text", lambda f: simulate_file(f["t"], f["tmp"] / "o.csv",
+                                                  keep_flagged="no"), T, r"^keep_flagged",
+     TypeError),
+    ("uncertainty-text", lambda f: simulate_file(f["t"], f["tmp"] / "o.csv",
+                                                 uncertainty="no"), T, r"^uncertainty",
+     TypeError),
+    ("view-measured-text", lambda f: view_file(f["t"], f["tmp"] / "v.html", measured="no"), T,
+     r"^measured: expected True or False", TypeError),
+    ("view-out-folder-missing", lambda f: view_file(f["t"], f["tmp"] / "no" / "v.html"), V,
+     r"no/v\.html: directory .* does not exist", ValueError),
+]
+"""``simulate_file`` and ``view_file``: each argument's type and each output's place."""
+
+LOG_API = [
+    ("path-number", lambda f: inspect_log(3), T, r"^path: expected a file path", TypeError),
+    ("rig-dict", lambda f: inspect_log(f["t"], rig={}), T, r"^rig: expected a .*Rig",
+     TypeError),
+    ("platform-and-rig", lambda f: inspect_log(
+        f["t"], platform=models.reference_platform(),
+        rig=Rig.from_platform(models.reference_platform())), V,
+     r"^give platform or rig, not both$", ValueError),
+    ("platform-file-missing", lambda f: inspect_log(f["t"], platform=f["tmp"] / "none.toml"),
+     V, r"none\.toml: file not found", ValueError),
+    ("axes-number", lambda f: inspect_log(f["t"], axes=5), V, r"^axes: expected three signed",
+     ValueError),
+    ("bench-quick-text", lambda f: measure("yes"), T, r"^quick: expected True or False",
+     TypeError),
+]
+"""``inspect_log`` (and ``gsfric.throughput.measure``): the types and combinations of their
+arguments, refused before any work."""
+
 SWEEP_API = [
     ("out-none", lambda f: sweep(None, trajectories=str(f["t"])), T,
      r"^out: expected a file path", TypeError),
@@ -344,7 +387,7 @@ of a wrong shape, rotation blocks that are no rotation."""
 
 GROUPS = {"evaluator": EVALUATOR, "arrays": ARRAYS, "evaluate": EVALUATE, "motion": MOTION,
           "platform": PLATFORM, "simulate": SIMULATE_API, "sweep": SWEEP_API,
-          "discover": DISCOVER_API, "io": IO_API}
+          "discover": DISCOVER_API, "io": IO_API, "log": LOG_API}
 
 
 def api_cases() -> list[ApiCase]:

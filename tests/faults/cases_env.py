@@ -96,6 +96,8 @@ USAGE = {
     "effects": ("effects",),
     "derive": ("derive", "--check"),
     "bench": ("bench",),
+    "view": ("view", "--trajectory", "{data}", "--out", "{tmp}/o.html"),
+    "log": ("log", "inspect", "{data}", "--out", "{tmp}/o"),
 }
 """A valid command line of each command (the usage cases add one mistake to it)."""
 
@@ -173,6 +175,19 @@ def usage_cases() -> list[Case]:
                           argv=(*USAGE["sweep"], option, values[0], option, values[1]),
                           message=rf"^{option}: 'platform\.payload_mass' given twice; give each "
                           "parameter once$", files=files, absent=("o",)))
+    for command, argv in USAGE.items():      # one value each: a second would replace it
+        if "--out" in argv:
+            help_of = " ".join(argv[:2] if command == "log" else argv[:1])
+            cases.append(Case(id=f"usage-{command}-out-without-value",
+                              argv=(*argv, "--out"), expect=ERROR, code=2,
+                              message=rf"'--out' requires an argument.* \(see `gsfric "
+                                      rf"{help_of} --help`\)$", files=files))
+            out = argv[argv.index("--out") + 1]
+            cases.append(Case(id=f"usage-{command}-repeated-out", expect=ERROR, code=2,
+                              argv=(*argv, "--out", out.replace("/o", "/o2")),
+                              message=r"^--out: given more than once; give it once",
+                              files=files, absent=("o", "o.csv", "o.toml", "o.html", "o2",
+                                                   "o2.csv", "o2.toml", "o2.html")))
     for name, argv, message in BAD_VALUES:
         cases.append(Case(id=f"usage-{name}", argv=argv, expect=ERROR, code=2,
                           message=message, files=files, absent=("o", "o.csv")))
@@ -182,11 +197,17 @@ def usage_cases() -> list[Case]:
 # -- interruptions while the outputs are written ------------------------------------------------
 
 
-def stop_while_writing(stop: BaseException):
-    """The first fsync of a regular file raises ``stop``: the signal arrives mid-write."""
+def stop_while_writing(stop: BaseException, nth: int = 1):
+    """The ``nth`` fsync of a file raises ``stop`` (those before succeed): the signal arrives
+    mid-write (of a later file of the run, ``nth`` > 1)."""
     def patch(monkeypatch, paths):
+        real, calls = os.fsync, []
+
         def fsync(fd):
-            raise stop
+            calls.append(fd)
+            if len(calls) >= nth:
+                raise stop
+            real(fd)
 
         monkeypatch.setattr(os, "fsync", fsync)
     return patch
@@ -207,8 +228,20 @@ WRITERS = {
 }
 
 
+LATER_FILES = {
+    "simulate-plot": ((*SIMULATE, "--plot", "{tmp}/p.png"), "o.csv", "p.png"),
+    "simulate-breakdown": ((*SIMULATE, "--breakdown", "{tmp}/b.csv"), "o.csv", "b.csv"),
+}
+"""Commands writing several files: a stop while the second is written leaves none of them
+(the earlier main output unchanged)."""
+
+
 def interrupt_cases() -> list[Case]:
-    cases = []
+    cases = [Case(id=f"stop-{command}-{name}", argv=argv, expect=ERROR, code=code,
+                  message=message, files={"data": trajectory(), "old": old_output(out)},
+                  patch=stop_while_writing(stop, nth=2), absent=(later,))
+             for command, (argv, out, later) in LATER_FILES.items()
+             for name, stop, code, message in STOPS]
     for command, (argv, out) in WRITERS.items():
         for name, stop, code, message in STOPS:
             earlier = {} if out == "o" else {"old": old_output(out)}

@@ -8,6 +8,7 @@ import pandas as pd
 from makers import (
     base_csv,
     base_frame,
+    cell,
     column_map,
     content,
     csv_edit,
@@ -23,16 +24,6 @@ from makers import (
 from runner import ERROR, OK, WARN, Case
 
 # -- trajectory and measured-data tables --------------------------------------------------------
-
-
-def _cell(row: int, column: str, value: str):
-    """A CSV edit: data row ``row`` (1-based) of ``column`` set to ``value``."""
-    def edit(lines):
-        header = lines[0].split(",")
-        cells = lines[row].split(",")
-        cells[header.index(column)] = value
-        return [*lines[:row], ",".join(cells), *lines[row + 1:]]
-    return edit
 
 
 def _drop(column: str):
@@ -91,17 +82,19 @@ TABLE_FAULTS = [
      r"t\.csv"),
     ("no-x", frame_edit("t.csv", _drop("x")), ERROR, 2, r"t\.csv.*'?x'?"),
     ("no-t", frame_edit("t.csv", _drop("t")), ERROR, 2, r"t\.csv.*'?t'?"),
-    ("nan-cell", csv_edit("t.csv", _cell(5, "x", "nan")), ERROR, 2, r"t\.csv.*row 5"),
-    ("inf-cell", csv_edit("t.csv", _cell(5, "y", "inf")), ERROR, 2, r"t\.csv.*row 5"),
-    ("empty-cell", csv_edit("t.csv", _cell(7, "z", "")), ERROR, 2, r"t\.csv.*row 7"),
-    ("text-cell", csv_edit("t.csv", _cell(9, "x", "abc")), ERROR, 2, r"t\.csv.*row 9"),
-    ("huge-cell", csv_edit("t.csv", _cell(9, "x", "1e999")), ERROR, 2, r"t\.csv.*row 9"),
-    ("t-repeated", csv_edit("t.csv", _cell(6, "t", "0.04")), ERROR, 2, r"t\.csv.*row [56]"),
+    ("nan-cell", csv_edit("t.csv", cell(5, "x", "nan")), ERROR, 2, r"t\.csv.*row 5"),
+    ("inf-cell", csv_edit("t.csv", cell(5, "y", "inf")), ERROR, 2, r"t\.csv.*row 5"),
+    ("empty-cell", csv_edit("t.csv", cell(7, "z", "")), ERROR, 2, r"t\.csv.*row 7"),
+    ("text-cell", csv_edit("t.csv", cell(9, "x", "abc")), ERROR, 2, r"t\.csv.*row 9"),
+    ("huge-cell", csv_edit("t.csv", cell(9, "x", "1e999")), ERROR, 2, r"t\.csv.*row 9"),
+    ("t-repeated", csv_edit("t.csv", cell(6, "t", "0.04")), ERROR, 2, r"t\.csv.*row [56]"),
     ("t-backwards", csv_edit("t.csv", _swap_rows(10, 11)), ERROR, 2, r"t\.csv.*row 1[01]"),
-    ("zero-quaternion", csv_edit("t.csv", lambda ls: _cell(4, "qz", "0")(_cell(4, "qy", "0")(
-        _cell(4, "qx", "0")(_cell(4, "qw", "0")(ls))))), ERROR, 2, r"t\.csv.*row 4"),
+    ("zero-quaternion", csv_edit("t.csv", lambda ls: cell(4, "qz", "0")(cell(4, "qy", "0")(
+        cell(4, "qx", "0")(cell(4, "qw", "0")(ls))))), ERROR, 2, r"t\.csv.*row 4"),
     ("semicolons", csv_edit("t.csv", lambda ls: [x.replace(",", ";") for x in ls]), ERROR, 2,
-     r"t\.csv"),
+     r"t\.csv: the header 't;x;.* is one column separated by semicolons"),
+    ("tabs", csv_edit("t.csv", lambda ls: [x.replace(",", "\t") for x in ls]), ERROR, 2,
+     r"t\.csv: the header .* is one column separated by tabs"),
     ("duplicate-column", csv_edit("t.csv", lambda ls: [x + "," + x.split(",")[1]
                                                        for x in ls[:1]] + [
         x + "," + x.split(",")[1] for x in ls[1:]]), ERROR, 2, r"t\.csv"),
@@ -229,6 +222,62 @@ def platform_cases() -> list[Case]:
                               code=2, message=message, absent=("o", "o.csv"),
                               files={"data": trajectory(), "p": maker}))
     return cases
+
+
+def _rig_with(line: str):
+    """The base rig file (``makers.rig``) with ``line`` added, or replacing the line of its
+    key when the file has one."""
+    def make(folder):
+        path = rig()(folder)
+        key = line.split("=")[0].strip()
+        lines = [x for x in path.read_text().splitlines() if x.split("=")[0].strip() != key]
+        path.write_text("\n".join([*lines, line]) + "\n")
+        return path
+    return make
+
+
+RIG_FAULTS = [
+    ("inertia-negative", "platform_inertia = [-0.2, 0.2, 0.4]", ERROR,
+     r"r\.toml: platform_inertia\[0\]: must be >= 0"),
+    ("inertia-nan", "lower_inertia = [0.05, nan, 0.001]", ERROR,
+     r"r\.toml: lower_inertia\[1\]: must be finite"),
+    ("inertia-inf", "upper_inertia = [0.01, 0.01, inf]", ERROR,
+     r"r\.toml: upper_inertia\[2\]: must be finite"),
+    ("inertia-two", "platform_inertia = [0.2, 0.4]", ERROR,
+     r"r\.toml: platform_inertia: expected the three principal moments"),
+    ("inertia-matrix", "platform_inertia = [[0.2, 0, 0], [0, 0.2, 0], [0, 0, 0.4]]", ERROR,
+     r"r\.toml: platform_inertia\[0\]: expected a number"),
+    ("inertia-text", 'platform_inertia = "0.2"', ERROR,
+     r"r\.toml: platform_inertia: expected the three principal moments"),
+    ("com-beyond-leg", "lower_com = 5.0", ERROR, r"r\.toml: lower_com: .*\(0, 1\.1\] m"),
+    ("repeated-key", "platform_mass = 3.0\nplatform_mass = 3.0", ERROR,
+     r"r\.toml: .*'platform_mass' given twice"),
+    ("unknown-key", "platfrom_inertia = [0.2, 0.2, 0.4]", ERROR,
+     r"r\.toml: platfrom_inertia: unknown key \(did you mean 'platform_inertia'\?\)"),
+    ("radius-1e200", "base_radius = 1e200", ERROR,
+     r"r\.toml: base_radius: must be a positive length in m, at most 1000 m"),
+    ("stroke-1e300", "stroke = [0.5, 1e300]", ERROR, r"r\.toml: stroke: d_max must be at most"),
+    ("home-1e300", "home_height = 1e300", ERROR, r"r\.toml: home_height: must be at most"),
+    ("inertia-impossible", "platform_inertia = [0.1, 0.1, 0.5]", WARN,
+     r"platform_inertia: principal moments 0\.1, 0\.1, 0\.5 kg m\^2 violate the triangle"),
+]
+"""Faults of a rig file (its explicit keys): each becomes a case of every command that reads
+one (``RIG_COMMANDS``); an error names the file and the key, a warning the key."""
+
+RIG_COMMANDS = {
+    "show": ("platform", "--show", "--rig", "{r}"),
+    "template": ("platform", "--template", "--rig", "{r}", "--out", "{tmp}/o.toml"),
+    "log-inspect": ("log", "inspect", "{data}", "--rig", "{r}", "--out", "{tmp}/o"),
+}
+
+
+def rig_cases() -> list[Case]:
+    return [Case(id=f"rig-{command}-{fault}", argv=argv, expect=expect,
+                 code=2 if expect == ERROR else 0, message=message,
+                 absent=("o", "o.toml") if expect == ERROR else (),
+                 files={"data": trajectory(), "r": _rig_with(line)})
+            for fault, line, expect, message in RIG_FAULTS
+            for command, argv in RIG_COMMANDS.items()]
 
 
 def _bom(maker):

@@ -59,6 +59,14 @@ FOLDER_READS = {
 that its ``FOLDER_COMMANDS`` command line leaves out: every one must lie outside the output
 folder."""
 
+FURTHER_OUTPUTS = {
+    "simulate": (FILE_COMMANDS["simulate"][0] + ("--out", "{tmp}/o.csv"), "o.csv",
+                 {"--plot": "p.png", "--breakdown": "b.csv"}),
+}
+"""Commands writing several files: argv with the main ``--out``, the main output's name, and
+each option of a further file with a name it may take. All the files or none: a further one
+that cannot be written leaves no output of the run."""
+
 
 def _hardlink(name: str, target: str):
     def make(base: Path) -> Path:
@@ -84,6 +92,23 @@ def full_disk(monkeypatch, paths) -> None:
         real(fd)
 
     monkeypatch.setattr(os, "fsync", fsync)
+
+
+def full_disk_after(count: int):
+    """``full_disk`` from the ``count``-th fsync of a regular file on (those before succeed):
+    a disk that fills while a run writes its later files."""
+    def patch(monkeypatch, paths) -> None:
+        real, seen = os.fsync, []
+
+        def fsync(fd):
+            if stat.S_ISREG(os.fstat(fd).st_mode):
+                seen.append(fd)
+                if len(seen) >= count:
+                    raise OSError(errno.ENOSPC, os.strerror(errno.ENOSPC))
+            real(fd)
+
+        monkeypatch.setattr(os, "fsync", fsync)
+    return patch
 
 
 def _still_a_device(path: str):
@@ -206,8 +231,43 @@ def _inside_cases(command: str, argv, data_kind: str) -> list[Case]:
     return cases
 
 
+def _further_cases(command: str, argv, main: str, options: dict[str, str]) -> list[Case]:
+    """Each further output of a command writing several files, by class: in a missing folder,
+    under a file, a directory, the main output, an input, and a disk that fills after the
+    main output: an error naming it, and neither it nor the main output written (an earlier
+    main output unchanged)."""
+    cases = []
+    for option, name in options.items():
+        tag = f"out-{command}-{option.lstrip('-')}"
+        absent = (main, name)
+        cases += [
+            Case(id=f"{tag}-missing-folder", argv=(*argv, option, "{tmp}/no/" + name),
+                 expect=ERROR, code=2, message=rf"no/{name}: directory .* does not exist",
+                 files=dict(INPUTS), absent=absent),
+            Case(id=f"{tag}-through-a-file", argv=(*argv, option, "{tmp}/f/" + name),
+                 expect=ERROR, code=2, message=rf"f/{name}: .*/f' is not a directory",
+                 files={**INPUTS, "f": content("f", "a file")}, absent=(main,)),
+            Case(id=f"{tag}-directory", argv=(*argv, option, "{tmp}/d"), expect=ERROR,
+                 code=2, message=r"/d: is a directory", files={**INPUTS, "d": folder("d")},
+                 absent=(main,)),
+            Case(id=f"{tag}-is-out", argv=(*argv, option, "{tmp}/" + main), expect=ERROR,
+                 code=2, message=rf"{main}: is the same file as the output", files=dict(INPUTS),
+                 absent=(main,)),
+            Case(id=f"{tag}-is-trajectory", argv=(*argv, option, "{data}"), expect=ERROR,
+                 code=2, message=r"t\.csv: is the trajectory file itself", files=dict(INPUTS),
+                 absent=(main,)),
+            Case(id=f"{tag}-full-disk", argv=(*argv, option, "{tmp}/" + name), expect=ERROR,
+                 code=3, message=rf"{name}: cannot write \(No space left on device\); nothing "
+                 "was written", files={**INPUTS, "old": old_output(main)},
+                 patch=full_disk_after(2), absent=(name,)),
+        ]
+    return cases
+
+
 def output_cases() -> list[Case]:
     cases = []
+    for command, (argv, main, options) in FURTHER_OUTPUTS.items():
+        cases += _further_cases(command, argv, main, options)
     for command, (argv, aliases) in FILE_COMMANDS.items():
         cases += _file_cases(command, argv, aliases)
     for command, (argv, alias, kind) in FOLDER_COMMANDS.items():

@@ -61,6 +61,17 @@ def csv_edit(name: str, edit: Callable[[list[str]], list[str]], newline: str = "
     return content(name, lambda: newline.join(edit(base_csv().splitlines())) + newline)
 
 
+def cell(row: int, column: str, value: str) -> Callable[[list[str]], list[str]]:
+    """A CSV edit (for ``csv_edit``): data row ``row`` (1-based) of ``column`` set to
+    ``value``."""
+    def edit(lines):
+        header = lines[0].split(",")
+        cells = lines[row].split(",")
+        cells[header.index(column)] = value
+        return [*lines[:row], ",".join(cells), *lines[row + 1:]]
+    return edit
+
+
 def frame_edit(name: str, edit: Callable) -> Maker:
     """The base frame through ``edit(frame) -> frame``, written as CSV or Parquet by name."""
     def make(folder: Path) -> Path:

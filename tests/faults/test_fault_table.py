@@ -16,14 +16,14 @@ from cases_env import (
     thread_cases,
     usage_cases,
 )
-from cases_inputs import good_platform_cases, platform_cases, table_cases
+from cases_inputs import good_platform_cases, platform_cases, rig_cases, table_cases
 from cases_logs import log_cases
 from cases_outputs import output_cases
 from runner import check_api_case, check_case
 
 pytestmark = pytest.mark.integration  # end to end: `make check` leaves it out
 
-CASES = [*table_cases(), *platform_cases(), *good_platform_cases(), *log_cases(),
+CASES = [*table_cases(), *platform_cases(), *rig_cases(), *good_platform_cases(), *log_cases(),
          *output_cases(), *compiler_cases(), *thread_cases(), *usage_cases(),
          *interrupt_cases(), *stale_cases()]
 
