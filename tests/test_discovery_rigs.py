@@ -321,7 +321,7 @@ def test_offsets_imitating_a_quadratic_load_cell_are_not_explained():
     """A load cell with a quadratic characteristic over the small force range of
     point-to-point moves: per-leg offsets explain it to within the noise, but no better than
     the generic basis, which explains significantly more. Whatever is named, the verdict must
-    not be 'explained' (before the rule: `sensor_bias`, 'explained', rms_after 1.03 x noise)."""
+    not be 'explained' (judged by the residual alone, `sensor_bias` would be, at 1.03 x noise)."""
     result = _quadratic_load_cell_on_rests(PAPER, seed=192, phi=0.0)
     assert result.verdict == "unexplained_discrepancy"
     for rnd in result.rounds:
@@ -447,9 +447,9 @@ def _smooth_motion(family: str, seed: int, samples: int = 3000, rate: float = 20
 def test_large_and_small_delays_are_recovered(family, delay, platform, noise, phi):
     """The delay's estimate is global (a profile over +-0.5 s, then Gauss-Newton): delays of
     many samples and fractions of one, either sign, are recovered, and the residual left is
-    the noise (before: a delay of 2.5 samples under AR(0.95) noise on the coupled model was
-    refined to a local optimum where viscous friction took part of the shifted force, 5.8x
-    the noise)."""
+    the noise (a local search alone can stop where viscous friction takes part of the shifted
+    force: for a delay of 2.5 samples under AR(0.95) noise on the coupled model, 5.8x the
+    noise)."""
     data = synthesize(platform, {"time_offset": {"delay": delay}},
                       motion=_smooth_motion(family, 11), noise=noise, noise_correlation=phi,
                       pose_noise=1e-6, seed=12)
@@ -549,9 +549,9 @@ def long_rests(samples, rate, rng) -> Motion:
 @pytest.mark.slow
 def test_a_mode_ringing_after_the_stops_is_not_explained():
     """A 7 Hz mode of the structure, excited by the force's rate, rings on into the long rests
-    that the fit leaves out; on the moves a delay imitates part of it (before the rest test:
-    `time_offset`, 'explained', rms_after 4.2 x noise). The rests show it: largest just after
-    each stop."""
+    that the fit leaves out; on the moves a delay imitates part of it (judged on the moves
+    alone: `time_offset`, 'explained', rms_after 4.2 x noise). The rests show it: largest just
+    after each stop."""
     from scipy.signal import lfilter
 
     from gsfric.simulate.api import evaluate
@@ -581,7 +581,7 @@ def test_a_mode_ringing_after_the_stops_is_not_explained():
 def test_offsets_as_good_as_a_quadratic_load_cell_under_slow_noise_are_not_explained():
     """The quadratic load cell of the test above on the heavy platform under AR(1) noise with
     phi = 0.9: six offsets and the generic basis explain the same, neither adds to the other
-    (before the rule: `sensor_bias`, 'explained', rms_after 0.98 x noise). The data cannot tell
+    (judged by the residual alone: `sensor_bias`, 'explained', at 0.98 x noise). The data cannot tell
     the catalog term from the error outside the catalog: not 'explained'."""
     heavy = PAPER.with_body(payload_mass=1.5 * PAPER.platform.payload_mass).with_friction(
         prismatic_viscous=2 * PAPER.friction.prismatic_viscous)
