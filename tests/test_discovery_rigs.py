@@ -581,8 +581,8 @@ def test_a_mode_ringing_after_the_stops_is_not_explained():
 def test_offsets_as_good_as_a_quadratic_load_cell_under_slow_noise_are_not_explained():
     """The quadratic load cell of the test above on the heavy platform under AR(1) noise with
     phi = 0.9: six offsets and the generic basis explain the same, neither adds to the other
-    (judged by the residual alone: `sensor_bias`, 'explained', at 0.98 x noise). The data cannot tell
-    the catalog term from the error outside the catalog: not 'explained'."""
+    (judged by the residual alone: `sensor_bias`, 'explained', at 0.98 x noise). The data
+    cannot tell the catalog term from the error outside the catalog: not 'explained'."""
     heavy = PAPER.with_body(payload_mass=1.5 * PAPER.platform.payload_mass).with_friction(
         prismatic_viscous=2 * PAPER.friction.prismatic_viscous)
     result = _quadratic_load_cell_on_rests(heavy, seed=265, phi=0.9)
