@@ -38,6 +38,7 @@ def _relative_error(a, b, reference=None):
     return np.max(np.abs(a - b)) / scale
 
 
+@pytest.mark.integration  # the whole symbolic chain evaluated by SymPy
 @pytest.mark.parametrize("mode, model", [("kinematic", "paper"), ("kinematic", "coupled"),
                                          ("paper", "paper")])
 def test_compiled_equals_lambdified_sympy_at_random_states(rng, mode, model):

@@ -265,6 +265,7 @@ def _start_slow_simulate(tmp_path: Path) -> tuple[subprocess.Popen, Path]:
     return proc, out
 
 
+@pytest.mark.integration  # a process of its own, stopped by a signal
 @pytest.mark.parametrize("sig, code, name", [(signal.SIGTERM, 143, "SIGTERM"),
                                              (signal.SIGHUP, 129, "SIGHUP"),
                                              (signal.SIGINT, 130, None)])
@@ -279,6 +280,7 @@ def test_signal_removes_the_temporary_and_keeps_the_old_output(tmp_path, sig, co
     assert leftovers(tmp_path) == []
 
 
+@pytest.mark.integration
 def test_sigkill_leaves_a_temporary_that_the_next_run_removes(tmp_path):
     proc, out = _start_slow_simulate(tmp_path)
     proc.kill()
@@ -371,6 +373,7 @@ STOP_INSIDE_AN_EXTENSION_IMPORT = textwrap.dedent("""
 """)
 
 
+@pytest.mark.integration
 @pytest.mark.parametrize("name, code", [("SIGTERM", 143), ("SIGINT", 130)])
 def test_a_stop_that_an_import_turned_into_an_unchained_error_is_still_a_stop(tmp_path, name,
                                                                               code):
@@ -404,6 +407,7 @@ STOP_SWALLOWED = textwrap.dedent("""
 """)
 
 
+@pytest.mark.integration
 @pytest.mark.parametrize("name, code", [("SIGTERM", 143), ("SIGINT", 130)])
 def test_a_stop_whose_exception_was_swallowed_still_keeps_the_old_output(tmp_path, name, code):
     """The run goes on to its end, but what it wrote does not replace the earlier output."""

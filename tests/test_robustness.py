@@ -752,6 +752,7 @@ def test_chunk_and_window_are_checked(tmp_path):
         list(iter_motions(path, chunk=50, window=10))
 
 
+@pytest.mark.integration
 def test_200k_steps_in_small_chunks_bounded_memory(tmp_path):
     """The benchmark's own functions on 200k steps with chunks of 10k: every row written once,
     in order, and a peak RSS far below the ~0.9 GB that evaluating 200k steps at once takes.
