@@ -109,3 +109,32 @@ def force_noise_values(text: str | None) -> list[float] | None:
     except ValueError:
         raise InputError(f"--force-noise: one number (N) or six separated by commas, got "
                          f"{text!r}") from None
+
+
+def evaluation_options() -> dict[str, Callable]:
+    """The options of a command that evaluates a trajectory file as ``simulate`` does
+    (``simulate``, ``view``), by name: platform, mode, threads, chunk, window."""
+    return {
+        "platform": click.option("--platform", "platform_file", type=click.Path(path_type=Path),
+                                 help="Platform TOML (default: the reference platform)."),
+        "mode": click.option(
+            "--mode", type=click.Choice(["kinematic", "paper"]), default="kinematic",
+            show_default=True,
+            help="kinematic: velocities and accelerations differentiated from the motion; "
+                 "paper: the paper's constant accelerations (its Tables 1-3)."),
+        "threads": click.option("--threads", type=click.IntRange(1, 64), default=1,
+                                show_default=True,
+                                help="Threads of the compiled evaluation."),
+        "chunk": click.option(
+            "--chunk", type=int, default=100_000, show_default=True,
+            help="Steps read and differentiated at a time (memory grows with it, about 1.3 kB "
+                 "a step; they are evaluated 50,000 at a time); a file of at most this many "
+                 "rows is read whole."),
+        "window": click.option(
+            "--window", type=int, default=None,
+            help="Savitzky-Golay window, odd, samples; jittered time stamps are taken as evenly "
+                 "spaced unless the poses look noisier on the even grid than on the stamps, "
+                 "and are then fitted with polynomials of this window on their own stamps "
+                 "[default: a filter per sample for a file read whole, one window by "
+                 "cross-validation on the first chunk for a streamed one]."),
+    }

@@ -10,7 +10,7 @@ from pathlib import Path
 
 import click
 
-from gsfric.commands.common import checked_paths, log_options
+from gsfric.commands.common import checked_paths, evaluation_options, log_options
 from gsfric.errors import IgnoredColumnsWarning, InputError
 from gsfric.evaluation.breakdown import flat
 from gsfric.evaluation.columns import DEFAULT_GROUPS as DEFAULT_COLUMN_GROUPS
@@ -47,35 +47,22 @@ def _no_cycle_collection():
 def _options(command):
     """The options of ``simulate`` besides those of a log's format."""
     path = click.Path(path_type=Path)
+    shared = evaluation_options()
     options = [
         click.option("--trajectory", type=path, required=True,
                      help="Trajectory or measured-data file (CSV or Parquet): t,x,y,z with "
                           "alpha,beta,gamma, qw,qx,qy,qz or roll,pitch,yaw; other names and "
                           "units with --column-map and --units."),
-        click.option("--platform", "platform_file", type=path,
-                     help="Platform TOML (default: the reference platform)."),
+        shared["platform"],
         click.option("--out", type=path, required=True,
                      help="Output file, CSV or Parquet by extension; written to a temporary "
                           "file and renamed when complete."),
-        click.option("--mode", type=click.Choice(["kinematic", "paper"]), default="kinematic",
-                     show_default=True,
-                     help="kinematic: velocities and accelerations differentiated from the "
-                          "motion; paper: the paper's constant accelerations (its Tables 1-3)."),
+        shared["mode"],
         click.option("--strict", is_flag=True,
                      help="Fail (exit 1, no output) at the first chunk with a flagged step."),
-        click.option("--threads", type=click.IntRange(1, 64), default=1, show_default=True,
-                     help="Threads of the compiled evaluation (OpenMP)."),
-        click.option("--chunk", type=int, default=100_000, show_default=True,
-                     help="Steps read and differentiated at a time (memory grows with it, "
-                          "about 1.3 kB a step; they are evaluated 50,000 at a time); a file "
-                          "of at most this many rows is read whole."),
-        click.option("--window", type=int, default=None,
-                     help="Savitzky-Golay window, odd, samples; jittered time stamps are taken "
-                          "as evenly spaced unless the poses look noisier on the even grid "
-                          "than on the stamps, and are then fitted with polynomials of this "
-                          "window on their own stamps [default: a filter per sample for a "
-                          "file read whole, one window by cross-validation on the first chunk "
-                          "for a streamed one]."),
+        shared["threads"],
+        shared["chunk"],
+        shared["window"],
         click.option("--no-uncertainty", "no_uncertainty", is_flag=True,
                      help="Leave out sigma_F1..6 and rest (the differentiation's uncertainty "
                           "of F and the legs possibly at rest), its warning and the "

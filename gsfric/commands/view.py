@@ -7,7 +7,7 @@ from pathlib import Path
 
 import click
 
-from gsfric.commands.common import checked_paths, log_options
+from gsfric.commands.common import checked_paths, evaluation_options, log_options
 from gsfric.io.logs import LogFormat
 from gsfric.simulate import view_file
 from gsfric.view import DEFAULT_FPS, MAX_FRAMES
@@ -16,6 +16,7 @@ from gsfric.view import DEFAULT_FPS, MAX_FRAMES
 def _options(command):
     """The options of ``view`` besides those of a log's format."""
     path = click.Path(path_type=Path)
+    shared = evaluation_options()
     options = [
         click.option("--trajectory", type=path,
                      help="Trajectory or measured-data file (CSV or Parquet), as for "
@@ -24,13 +25,11 @@ def _options(command):
                      help="Measured-data file (CSV or Parquet): the trajectory with the "
                           "measured forces F1..F6, plotted against the model's with the "
                           "residual (instead of --trajectory; the forces are required)."),
-        click.option("--platform", "platform_file", type=path,
-                     help="Platform TOML (default: the reference platform)."),
+        shared["platform"],
         click.option("--out", type=path, required=True,
                      help="The page, .html; written to a temporary file and renamed when "
                           "complete."),
-        click.option("--mode", type=click.Choice(["kinematic", "paper"]), default="kinematic",
-                     show_default=True, help="As for `gsfric simulate`."),
+        shared["mode"],
         click.option("--fps", type=click.FloatRange(min=0, min_open=True), default=DEFAULT_FPS,
                      show_default=True,
                      help=f"Frames per second of motion time kept for playback (at most "
@@ -38,12 +37,9 @@ def _options(command):
                           "second)."),
         click.option("--title", default=None,
                      help="The page's title [default: the trajectory's name and the mode]."),
-        click.option("--threads", type=click.IntRange(1, 64), default=1, show_default=True,
-                     help="Threads of the compiled evaluation."),
-        click.option("--chunk", type=int, default=100_000, show_default=True,
-                     help="Steps read and differentiated at a time, as for `gsfric simulate`."),
-        click.option("--window", type=int, default=None,
-                     help="Savitzky-Golay window, odd, samples, as for `gsfric simulate`."),
+        shared["threads"],
+        shared["chunk"],
+        shared["window"],
         click.option("--quiet", is_flag=True, help="No summary line."),
     ]
     for option in reversed(options):

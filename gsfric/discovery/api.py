@@ -60,10 +60,8 @@ def discover(data, forces: np.ndarray | None = None,
         Also write summary.json, report.md, platform.toml and the plots there (as
         ``gsfric discover --out``). Checked before the work starts: it must not be, or
         hold, an input.
-    seed : int
-        Seed of the block bootstrap.
-    progress : bool
-        Progress on stderr.
+    seed, progress : int, bool
+        Seed of the block bootstrap; progress on stderr.
     figures : bool
         With ``out``: write the plots and report.html (the 3-D view).
     force_noise : float, sequence of 6 floats or ForceNoise, optional
@@ -97,8 +95,7 @@ def discover(data, forces: np.ndarray | None = None,
 
     Examples
     --------
-    A record with a hidden low-speed friction peak (a run takes seconds, so it is not run as a
-    doctest):
+    A record with a hidden low-speed friction peak (seconds to run, so not a doctest):
 
     >>> import gsfric
     >>> from gsfric.synth import synthesize
@@ -116,25 +113,31 @@ def discover(data, forces: np.ndarray | None = None,
                               "measured-data": data if is_file else None})
         check_output_folder(out)
     sensor = _force_noise(force_noise, noise_record, log_format)
-    run = dict(seed=seed, progress=progress, force_noise=sensor, **options)
-    if is_file:
-        result = _discover_file(data, platform, log_format, run)
-    elif isinstance(data, Motion):
-        if forces is None:
-            raise InputError("forces: required with a Motion (shape (N, 6), N)")
-        result = discover_motion(data, forces, platform, **run)
-    elif hasattr(data, "columns"):
-        missing = [c for c in FORCES if c not in data.columns]
-        if missing:
-            raise InputError(f"DataFrame: missing force columns {', '.join(missing)}")
-        result = discover_motion(motion_from_frame(data), data[list(FORCES)].to_numpy(float),
-                                 platform, **run)
-    else:
-        raise InputTypeError(f"data: expected a file path, a DataFrame or a Motion, got "
-                             f"{short(data)}")
+    result = _discover_data(data, forces, platform, log_format,
+                            dict(seed=seed, progress=progress, force_noise=sensor, **options))
     if out is not None:
         result.written = write(result, out, figures=figures)
     return result
+
+
+def _discover_data(data, forces, platform, log_format: LogFormat | None, run: dict
+                   ) -> Discovery:
+    """The workflow on ``data`` as ``discover`` takes it (a file, a Motion with its forces or a
+    DataFrame); ``run``: the workflow's keyword arguments."""
+    if isinstance(data, (str, os.PathLike)):
+        return _discover_file(data, platform, log_format, run)
+    if isinstance(data, Motion):
+        if forces is None:
+            raise InputError("forces: required with a Motion (shape (N, 6), N)")
+        return discover_motion(data, forces, platform, **run)
+    if hasattr(data, "columns"):
+        missing = [c for c in FORCES if c not in data.columns]
+        if missing:
+            raise InputError(f"DataFrame: missing force columns {', '.join(missing)}")
+        return discover_motion(motion_from_frame(data), data[list(FORCES)].to_numpy(float),
+                               platform, **run)
+    raise InputTypeError(f"data: expected a file path, a DataFrame or a Motion, got "
+                         f"{short(data)}")
 
 
 def _discover_file(measured: str | os.PathLike[str], platform, log_format: LogFormat | None,
