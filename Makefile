@@ -9,6 +9,9 @@ PYTEST := $(BIN)/python -m pytest
 BACKEND := "meson-python>=0.18" "meson>=1.3" "ninja>=1.11"
 # the environment's meson and ninja first, for the build and the editable install's rebuilds
 export PATH := $(abspath $(BIN)):$(PATH)
+# Python caches the bytecode of the tests and derive/ (in __pycache__, ignored by git), so that
+# each test worker and each command a test runs does not compile them again
+unexport PYTHONDONTWRITEBYTECODE
 
 .PHONY: install paper test check test-slow test-floors bench bench-all derive docs clean
 
@@ -24,10 +27,12 @@ $(STAMP): pyproject.toml meson.build
 install: $(STAMP)
 
 # The editable install rebuilds the compiled model on import when its sources changed: once
-# here, before parallel test workers import it.
+# here, before parallel test workers import it. Its importer never writes bytecode: the
+# package's is compiled here, once, instead of in every process that imports it.
 .PHONY: built
 built: $(STAMP)
 	$(BIN)/python -c "import gsfric.compiled.native as n; n.library()"
+	$(BIN)/python -m compileall -q gsfric
 
 ## The main job: the paper's 40-step evaluation, its tables, report and plots, in out/paper.
 paper: built

@@ -9,18 +9,18 @@ import logging
 import os
 import pickle
 import signal
-import subprocess
-import sys
 import tracemalloc
 
 import numpy as np
 import pandas as pd
 import pytest
+from click.testing import CliRunner
 from scipy.spatial.transform import Rotation
 
 import gsfric
 from gsfric import io, models
 from gsfric.compiled.state import state_layout
+from gsfric.cli import main
 from gsfric.errors import GsfricWarning, InputError
 from gsfric.evaluation.evaluator import Evaluator
 from gsfric.simulate.api import evaluate
@@ -217,17 +217,17 @@ def test_limits_list_exactly_the_exceeding_cases(serial, inputs, tmp_path):
     assert (result.out / "limits.csv").exists() and (result.out / "envelope.png").exists()
     cli = _cli("sweep", "--out", str(tmp_path / "cli"), "--trajectories", inputs["trajectories"],
                "--platform", str(toml), "--scheduler", "serial", "--no-plots", "--strict")
-    assert cli.returncode == 1, cli.stderr
+    assert cli.exit_code == 1, cli.stderr
     assert "case(s) exceed" in cli.stdout
 
 
 def _cli(*args):
-    return subprocess.run([sys.executable, "-m", "gsfric.cli", *args], capture_output=True,
-                          text=True)
+    """The command's exit code, stdout and stderr (in this process: click's runner)."""
+    return CliRunner().invoke(main, list(args), catch_exceptions=False)
 
 
 def _one_line_error(proc, *words):
-    assert proc.returncode == 2, proc.stderr
+    assert proc.exit_code == 2, proc.stderr
     lines = proc.stderr.strip().splitlines()
     assert len(lines) == 1 and lines[0].startswith("gsfric: error:"), proc.stderr
     for w in words:
