@@ -29,7 +29,7 @@ _LAZY = {
     "Result": ("gsfric.evaluation.result", "Result"),
     "evaluate": ("gsfric.simulate.api", "evaluate"),
     "discover": ("gsfric.discovery.api", "discover"),
-    "Discovery": ("gsfric.discovery.results", "Discovery"),
+    "Discovery": ("gsfric.discovery.outcome", "Discovery"),
     "identify": ("gsfric.identification.fit", "identify"),
     "Identification": ("gsfric.identification.results", "Identification"),
     "reference_platform": ("gsfric.models", "reference_platform"),

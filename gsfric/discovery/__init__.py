@@ -18,7 +18,8 @@ noise floor of the verdict), ``dictionary`` (structure outside the catalog), ``v
 
 from gsfric.discovery.api import discover
 from gsfric.discovery.candidates import CANDIDATE_NAMES, CANDIDATES, REFIT
-from gsfric.discovery.results import Discovery, Finding
+from gsfric.discovery.outcome import Discovery
+from gsfric.discovery.results import Finding
 from gsfric.discovery.settings import Settings
 
 __all__ = ["CANDIDATES", "CANDIDATE_NAMES", "REFIT", "Discovery", "Finding", "Settings",

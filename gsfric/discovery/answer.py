@@ -8,13 +8,10 @@ glossary of the report's statistics, and the commented platform file written bac
 
 from __future__ import annotations
 
-from typing import TYPE_CHECKING
-
+from gsfric.discovery.results import DiscoveryRecord, Finding
 from gsfric.platform import catalog
 from gsfric.platform.text import commented_toml
 
-if TYPE_CHECKING:
-    from gsfric.discovery.results import Discovery, Finding
 
 GLOSSARY: dict[str, str] = {
     "verdict": "`explained`: the effects named (or the refit) close the gap and no structure "
@@ -90,7 +87,7 @@ def _effect(f: Finding) -> str:
     return f"{f.name} ({items[0][0]}..{items[-1][0]} from {low} to {high})"
 
 
-def noise_floor(d: Discovery) -> float:
+def noise_floor(d: DiscoveryRecord) -> float:
     """The noise floor the console line compares with, N RMS (``GLOSSARY``): the verdict's
     floor, or the force channels' high-frequency noise where no floor was made."""
     if d.noise is None:
@@ -100,14 +97,14 @@ def noise_floor(d: Discovery) -> float:
     return float(d.noise.high_frequency)
 
 
-def gap_closed(d: Discovery) -> float:
+def gap_closed(d: DiscoveryRecord) -> float:
     """Share of the gap above the noise floor that the final model closes, 0..1."""
     floor = min(noise_floor(d), d.rms_after)
     closable = d.rms_before - floor
     return 0.0 if closable <= 0 else min(max((d.rms_before - d.rms_after) / closable, 0.0), 1.0)
 
 
-def _refit_changes(d: Discovery) -> list[str]:
+def _refit_changes(d: DiscoveryRecord) -> list[str]:
     out = []
     for name, e in d.refit.parameters.items():
         final = e.final if e.final is not None else e.refit
@@ -118,7 +115,7 @@ def _refit_changes(d: Discovery) -> list[str]:
     return out
 
 
-def verdict_line(d: Discovery) -> str:
+def verdict_line(d: DiscoveryRecord) -> str:
     """The answer in one line, e.g. ``explained: seal_friction (force = 12.3 N) and
     time_offset (delay = 4.1 ms) close 93 % of the gap; residual 0.11 N RMS vs noise floor
     0.10 N``."""
@@ -144,7 +141,7 @@ def verdict_line(d: Discovery) -> str:
     return f"no_discrepancy: model and data agree within the noise; {tail}"
 
 
-def platform_text(d: Discovery) -> str:
+def platform_text(d: DiscoveryRecord) -> str:
     """The final model as a commented platform TOML: where it came from (``d.source``,
     ``d.platform_source``), what changed from what, units in comments (reads back as
     ``d.platform``)."""

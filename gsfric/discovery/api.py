@@ -21,7 +21,7 @@ from gsfric._checks import short
 from gsfric.discovery.floor import ForceNoise, read_noise_record
 from gsfric.discovery.report import write
 from gsfric.discovery.rest import poses_from_columns
-from gsfric.discovery.results import Discovery
+from gsfric.discovery.outcome import Discovery
 from gsfric.discovery.workflow import discover_motion
 from gsfric.errors import InputError, InputTypeError
 from gsfric.io.files import check_output_folder, check_outputs

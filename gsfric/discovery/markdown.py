@@ -4,17 +4,14 @@
 from __future__ import annotations
 
 import math
-from typing import TYPE_CHECKING
-
 import numpy as np
 
 from gsfric.discovery.answer import GLOSSARY, units_of, verdict_line
 from gsfric.discovery.regimes import hotspots
+from gsfric.discovery.results import DiscoveryRecord
 from gsfric.discovery.summary import per_leg_rms
 from gsfric.platform import catalog
 
-if TYPE_CHECKING:
-    from gsfric.discovery.results import Discovery
 
 
 def _g(x, digits: int = 4) -> str:
@@ -33,7 +30,7 @@ def _table(header: list[str], rows: list[list]) -> list[str]:
     return lines + [""]
 
 
-def report(d: Discovery) -> str:
+def report(d: DiscoveryRecord) -> str:
     """The readable report (Markdown): report.md's text."""
     L = _header(d)
     for section in (_unexplained, _effects_named, _disagreement, _own_parameters, _rounds,
@@ -42,7 +39,7 @@ def report(d: Discovery) -> str:
     return "\n".join(L)
 
 
-def _header(d: Discovery) -> list[str]:
+def _header(d: DiscoveryRecord) -> list[str]:
     """Title, data and model."""
     L = ["# Discrepancy discovery", ""]
     n = d.used.stop - d.used.start
@@ -56,7 +53,7 @@ def _header(d: Discovery) -> list[str]:
     return L
 
 
-def _unexplained(d: Discovery) -> list[str]:
+def _unexplained(d: DiscoveryRecord) -> list[str]:
     """An ``unexplained_discrepancy``: where the structure was found and what it looks like."""
     L: list[str] = []
     if d.structures:
@@ -107,7 +104,7 @@ def _unexplained(d: Discovery) -> list[str]:
     return L
 
 
-def _effects_named(d: Discovery) -> list[str]:
+def _effects_named(d: DiscoveryRecord) -> list[str]:
     """The effects named (or that none is missing), the gap and the notes."""
     L: list[str] = []
     if d.effects and d.verdict == "unexplained_discrepancy":
@@ -140,7 +137,7 @@ def _effects_named(d: Discovery) -> list[str]:
     return L
 
 
-def _floor_text(d: Discovery) -> str:
+def _floor_text(d: DiscoveryRecord) -> str:
     """The noise floor in words: its two parts and their sources, the residual against it,
     and why the other two noise figures are not the floor."""
     floor = d.noise.floor
@@ -157,7 +154,7 @@ def _floor_text(d: Discovery) -> str:
             "the floor.")
 
 
-def _disagreement(d: Discovery) -> list[str]:
+def _disagreement(d: DiscoveryRecord) -> list[str]:
     """The bands where the model as given was furthest off."""
     L: list[str] = []
     L += ["## Where model and measurement disagreed", ""]
@@ -175,7 +172,7 @@ def _disagreement(d: Discovery) -> list[str]:
     return L
 
 
-def _own_parameters(d: Discovery) -> list[str]:
+def _own_parameters(d: DiscoveryRecord) -> list[str]:
     """The refit of the model's own parameters."""
     L: list[str] = []
     L += ["## The model's own parameters", ""]
@@ -202,7 +199,7 @@ def _own_parameters(d: Discovery) -> list[str]:
     return L
 
 
-def _rounds(d: Discovery) -> list[str]:
+def _rounds(d: DiscoveryRecord) -> list[str]:
     """Each round's tests and decision."""
     L: list[str] = []
     L += ["## Rounds", "",
@@ -238,7 +235,7 @@ def _rounds(d: Discovery) -> list[str]:
     return L
 
 
-def _effects_found(d: Discovery) -> list[str]:
+def _effects_found(d: DiscoveryRecord) -> list[str]:
     """Each named effect: parameters, intervals and evidence."""
     L: list[str] = []
     if d.effects:
@@ -262,7 +259,7 @@ def _effects_found(d: Discovery) -> list[str]:
     return L
 
 
-def _gaps(d: Discovery) -> list[str]:
+def _gaps(d: DiscoveryRecord) -> list[str]:
     """The gap per leg and per regime."""
     L: list[str] = []
     L += ["## Gap per leg", ""]
@@ -277,7 +274,7 @@ def _gaps(d: Discovery) -> list[str]:
     return L
 
 
-def _method(d: Discovery) -> list[str]:
+def _method(d: DiscoveryRecord) -> list[str]:
     """The plots and how the decisions are made."""
     L: list[str] = []
     L += ["## Plots", "",
@@ -310,12 +307,12 @@ def _count(n: int) -> str:
     return words[n] if 0 <= n < len(words) else str(n)
 
 
-def _glossary(d: Discovery) -> list[str]:
+def _glossary(d: DiscoveryRecord) -> list[str]:
     """What each statistic of the report means."""
     return ["## Glossary", ""] + [f"- **{term}**: {text}" for term, text in GLOSSARY.items()] + [""]
 
 
-def stribeck_scale(d: Discovery) -> float:
+def stribeck_scale(d: DiscoveryRecord) -> float:
     """The speed scale of the low-speed friction, m/s: the Stribeck velocity found, or the
     model's, or the catalog's default (the linear band of the speed plot's axis)."""
     for f in d.effects:

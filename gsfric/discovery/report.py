@@ -26,7 +26,7 @@ import numpy as np
 from gsfric._optional import optional
 from gsfric.discovery.answer import platform_text
 from gsfric.discovery.markdown import stribeck_scale
-from gsfric.discovery.results import Discovery
+from gsfric.discovery.outcome import Discovery
 from gsfric.discovery.view import write_view
 from gsfric.io.files import atomic_write, output_folder
 

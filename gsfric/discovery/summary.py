@@ -12,11 +12,11 @@ import numpy as np
 from gsfric.discovery.answer import verdict_line
 from gsfric.discovery.candidates import separating_motion
 from gsfric.discovery.regimes import hotspots
+from gsfric.discovery.results import DiscoveryRecord
 from gsfric.platform import catalog
 
 if TYPE_CHECKING:
     from gsfric.discovery.final_tests import LackOfFit
-    from gsfric.discovery.results import Discovery
 
 
 def _clean(value):
@@ -47,7 +47,7 @@ def per_leg_rms(r: np.ndarray) -> list[float]:
     return [float(v) for v in np.sqrt(np.mean(r ** 2, axis=0))]
 
 
-def summary(d: Discovery) -> dict:
+def summary(d: DiscoveryRecord) -> dict:
     """The content of summary.json (SPEC), plus the refit, rounds and per-leg gaps, the
     measured-data file (``data.file``) and the answer in one line (``answer``,
     ``answer.verdict_line``)."""
@@ -91,7 +91,7 @@ def summary(d: Discovery) -> dict:
     return _clean(out)
 
 
-def _effects(d: Discovery) -> list[dict]:
+def _effects(d: DiscoveryRecord) -> list[dict]:
     """summary.json's ``effects``: each named effect's parameters and evidence."""
     effects = []
     for f in d.effects:
@@ -106,7 +106,7 @@ def _effects(d: Discovery) -> list[dict]:
     return effects
 
 
-def _ambiguous(d: Discovery) -> list[dict]:
+def _ambiguous(d: DiscoveryRecord) -> list[dict]:
     """summary.json's ``ambiguous``: the winners the data cannot tell from other candidates,
     and the refitted changes that a candidate explains as well."""
     ambiguous = []
@@ -129,7 +129,7 @@ def _ambiguous(d: Discovery) -> list[dict]:
     return ambiguous
 
 
-def _rounds(d: Discovery) -> list[dict]:
+def _rounds(d: DiscoveryRecord) -> list[dict]:
     """summary.json's ``rounds``: each round's tests and decision."""
     rounds = []
     for rnd in d.rounds:
@@ -150,7 +150,7 @@ def _rounds(d: Discovery) -> list[dict]:
     return rounds
 
 
-def _unexplained(d: Discovery, lof: LackOfFit) -> dict | None:
+def _unexplained(d: DiscoveryRecord, lof: LackOfFit) -> dict | None:
     """summary.json's ``unexplained``: the structure left, for an ``unexplained_discrepancy``."""
     unexplained = None
     if d.verdict == "unexplained_discrepancy":

@@ -47,12 +47,12 @@ from gsfric.discovery.floor import (
     noise_floor,
     pose_noise_forces,
 )
+from gsfric.discovery.outcome import Discovery
 from gsfric.discovery.refine import half_stability, refine
 from gsfric.discovery.regimes import bands as regime_bands
 from gsfric.discovery.residuals import Problem, checked_forces
 from gsfric.discovery.results import (
     NOISE_METHOD,
-    Discovery,
     Finding,
     FindingEvidence,
     NoiseEstimate,
