@@ -31,7 +31,7 @@ import pytest
 from click.testing import CliRunner
 
 from gsfric.cli import main
-from gsfric.discovery import CANDIDATE_NAMES, discover
+from gsfric.discovery import CANDIDATE_NAMES, discover, rounds
 from gsfric.discovery import statistics as st
 from gsfric.discovery.settings import Settings
 from gsfric.errors import InputError
@@ -455,10 +455,9 @@ def test_names_stroke_friction_with_a_reference_inside_the_stroke(seed):
 def test_a_winner_that_refined_does_not_lower_the_residual_leaves_the_others_in(monkeypatch):
     # the round's winner is dropped when, refined on the compiled model, it does not lower
     # the residual; that says nothing of the other candidates, and the search goes on
-    from gsfric.discovery import workflow
 
     case = make_case(["sensor_bias", "payload_offset"], 1, size=8.0, phi=0.0)
-    refine = workflow.refine
+    refine = rounds.refine
     failed = []
 
     def first_effect_fails(problem, theta, names, whitener, start=None):
@@ -469,7 +468,7 @@ def test_a_winner_that_refined_does_not_lower_the_residual_leaves_the_others_in(
             return theta_new, r + problem.mask(np.full_like(r, 100.0)), J
         return theta_new, r, J
 
-    monkeypatch.setattr(workflow, "refine", first_effect_fails)
+    monkeypatch.setattr(rounds, "refine", first_effect_fails)
     result = run_case(case)
     assert len(failed) == 1 and failed[0] not in result.names
     assert set(result.names) == {"sensor_bias", "payload_offset"} - set(failed)

@@ -5,8 +5,8 @@ from types import SimpleNamespace
 import numpy as np
 
 from gsfric.discovery.residuals import Design
+from gsfric.discovery.rounds import _noise_whitener
 from gsfric.discovery.settings import Settings
-from gsfric.discovery.workflow import _noise_whitener
 
 DEFAULTS = Settings()
 

@@ -17,7 +17,16 @@ import numpy as np
 import pytest
 
 import gsfric
-from gsfric.discovery import dictionary, discover, final_tests, floor, refine, regimes, workflow
+from gsfric.discovery import (
+    conclusion,
+    dictionary,
+    discover,
+    final_tests,
+    floor,
+    refine,
+    regimes,
+    rounds,
+)
 from gsfric.discovery.floor import ForceNoise
 from gsfric.discovery.residuals import DELAY, Problem
 from gsfric.discovery.selection import low_band_of, screen_candidates
@@ -150,7 +159,7 @@ def linearised(record):
     the model's parameters and its noise model."""
     p = problem(record, **ROUND)
     design = p.linearise(p.model.theta0, [], p.candidates)
-    return p, design, workflow._noise_whitener(design, p)
+    return p, design, rounds._noise_whitener(design, p)
 
 
 def screen(record, linearised, **changes):
@@ -226,8 +235,7 @@ def test_n_threads(record, monkeypatch):
             super().__init__(platform, n_threads=n_threads)
 
     monkeypatch.setattr(floor, "Evaluator", Evaluator)
-    state = workflow._State(p, np.random.default_rng(0), p.model.theta0, notes=[])
-    workflow._floor(state, motion, platform, p.residual(p.model.theta0), 1.0)
+    conclusion._floor(p, motion, platform, p.residual(p.model.theta0), 1.0)
     assert threads == [3]
 
 
@@ -298,7 +306,7 @@ def test_secant_rounding(record):
 def test_max_order(record, linearised):
     p, design, whitener = linearised
     assert whitener.order >= 1
-    assert workflow._noise_whitener(design, problem(record, **ROUND, max_order=0)).order == 0
+    assert rounds._noise_whitener(design, problem(record, **ROUND, max_order=0)).order == 0
 
 
 def test_ridge(record, linearised):
@@ -345,7 +353,7 @@ def test_n_bootstrap(record, linearised):
     def widths(p):
         names = p.refit_names([])
         r, J = refit_jacobian(p, names)
-        intervals = workflow._intervals(p, J, names, whitener, r, np.random.default_rng(0),
+        intervals = conclusion._intervals(p, J, names, whitener, r, np.random.default_rng(0),
                                         p.model.theta0)
         return np.array([hi - lo for lo, hi in intervals.values()])
 
@@ -538,9 +546,8 @@ def test_drift_pieces():
 
 def noise_floor(p: Problem) -> floor.NoiseFloor:
     """The verdict's floor of the record at the model's parameters."""
-    state = workflow._State(p, np.random.default_rng(0), p.model.theta0, notes=[])
     full = p.y - p.model.forces(p.model.theta0)[p.used]
-    return workflow._floor(state, p.model.motion, p.platform, full, 1.0)
+    return conclusion._floor(p, p.model.motion, p.platform, full, 1.0)
 
 
 def test_floor_segment(record):

@@ -20,8 +20,8 @@ from gsfric.platform.description import (
     Geometry,
     Legs,
     Platform,
-    default_universal_axes,
 )
+from gsfric.platform.values import default_universal_axes
 from gsfric.signal.rotations import rotation_from_rpy
 
 EFFECTS = {

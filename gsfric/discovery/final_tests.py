@@ -18,6 +18,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from gsfric.discovery import lackfit, structure, transients
+from gsfric.discovery import statistics as st
 from gsfric.discovery.evidence import Structure
 from gsfric.discovery.residuals import Problem
 from gsfric.discovery.selection import low_band_of
@@ -254,14 +255,10 @@ def lack_of_fit(problem: Problem, theta: np.ndarray, residual: np.ndarray,
     fitted = results["drift"].fitted if by is not None and by.name == "drift" else basis.fitted
     t = data.t
     thirds = np.array_split(np.arange(len(t)), 3)
-    time_rms = {f"{t[g[0]]:.4g}-{t[g[-1]]:.4g} s": _rms(fitted[g]) for g in thirds}
+    time_rms = {f"{t[g[0]]:.4g}-{t[g[-1]]:.4g} s": st.rms(fitted[g]) for g in thirds}
     basis.fitted = results["drift"].fitted = None
     shown = by or STRUCTURE_TESTS[0]
     found = basis if shown.name == "basis" else results[shown.name]
     return LackOfFit(basis, results, first.significant, first.gap, first.structure_rms,
                      first.per_leg_rms, time_rms, lackfit.dominant_frequency(t, residual),
                      shown.looks_like(found), shown.main_signal(found))
-
-
-def _rms(r: np.ndarray) -> float:
-    return float(np.sqrt(np.mean(r ** 2)))

@@ -17,6 +17,29 @@ from gsfric.platform.catalog import shift
 # -- Gauss-Newton refinement on the compiled model ---------------------------------------------
 
 
+@dataclass(frozen=True)
+class Refined:
+    """Parameters fitted on the compiled model, and the residual and derivatives there.
+
+    Attributes
+    ----------
+    theta : ndarray, shape (n_theta,)
+        Every parameter of the compiled model (``ParametricModel.index``).
+    names : tuple of str
+        The parameters fitted (Jacobian parameters).
+    r : ndarray, shape (M, 6)
+        Residual ``F_measured - F_model`` at theta over the used samples, N; zero at the
+        (sample, leg) pairs not known to slide.
+    J : ndarray, shape (M, 6, len(names))
+        Derivatives of F with respect to ``names`` at theta, times the sliding weight.
+    """
+
+    theta: np.ndarray
+    names: tuple[str, ...]
+    r: np.ndarray
+    J: np.ndarray
+
+
 def refine(problem: Problem, theta: np.ndarray, names: list[str], whitener: st.Whitener,
            start: tuple[np.ndarray, np.ndarray] | None = None
            ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:

@@ -210,6 +210,25 @@ class Design:
         return cols
 
 
+@dataclass(frozen=True)
+class _Secants:
+    """The secant columns of a design (``Problem._secant_variants``), in column order.
+
+    ``names``, ``signs``: each column's amplitude parameter and the sign of its step;
+    ``variants``, ``grid``: each candidate's columns (one per variant) and the grid values
+    of each variant; ``steps`` (n_theta,) and ``sizes``: the parameters and step size of each
+    column evaluated by the compiled model; ``delays``: (signed step, size) of each
+    ``time_offset`` column computed when asked for (``Columns``), the last columns."""
+
+    names: list[str]
+    signs: list[float]
+    variants: dict[str, list[list[int]]]
+    grid: dict[str, list[dict]]
+    steps: list[np.ndarray]
+    sizes: list[float]
+    delays: list[tuple[float, float]]
+
+
 def checked_forces(motion: Motion, forces: np.ndarray, settings: Settings) -> np.ndarray:
     """The measured forces (N, 6), N, as floats; an ``InputError`` for a wrong shape, a
     problem of the data that no model effect explains (``rest.data_problems``, runs of
@@ -250,6 +269,100 @@ def _trim(n: int, settings: Settings) -> tuple[int, int]:
     return trim, needed
 
 
+@dataclass(frozen=True)
+class SpeedBand:
+    """The uncertainty of each leg's differentiated speed due to pose noise (``speed_band``).
+
+    Attributes
+    ----------
+    sigma_v : ndarray, shape (N, 6)
+        Standard deviation of each leg's speed, m/s.
+    reach : ndarray of int, shape (N,)
+        The differentiator's half window at each sample, samples.
+    poses : (ndarray (N, 3), ndarray (N, 3, 3)) or None
+        The recorded poses (positions, m; rotations), None when the motion has none: its
+        smoothed poses underestimate the pose noise.
+    """
+
+    sigma_v: np.ndarray
+    reach: np.ndarray
+    poses: tuple[np.ndarray, np.ndarray] | None
+
+
+def speed_band(motion: Motion, platform: Platform,
+               poses: tuple[np.ndarray, np.ndarray] | None, settings: Settings) -> SpeedBand:
+    """The speed band of each leg from the recorded ``poses`` (default: the motion's), as the
+    motion was differentiated: Savitzky-Golay filters on a uniform time base (a log's time
+    stamps rounded to 0.1 us included), else smoothing splines."""
+    n = len(motion)
+    t = np.asarray(motion.t, float)
+    if poses is None:
+        poses = motion.recorded_poses()
+    recorded = poses
+    if recorded is None:
+        poses = (np.asarray(motion.position, float), np.asarray(motion.rotation, float))
+    sigma_v, reach = np.zeros((n, 6)), np.zeros(n, int)
+    if taken_as_even(motion):
+        # the filters the motion was differentiated with, when it was made from these
+        # samples (not chosen a second time)
+        filters = motion.sample_filters() if recorded is not None else None
+        if filters is not None and len(filters[0][0][0]) != n:
+            filters = None
+        gain, reach = rest.differentiator(*poses, filters=filters,
+                                          move_to_noise=settings.move_to_noise)
+        sigma_v = rest.speed_uncertainty(platform, t, *poses, gain=gain)
+    else:
+        # jittered times: the smoothing splines' own noise gain, on divided differences
+        spline = rest.spline_differentiator(t, *poses, settings.spline_noise_draws)
+        if spline is not None:
+            gain, reach = spline
+            D = platform.leg_lengths(*poses)
+            sigma_v = gain[:, None] * divided_noise_std_every_window(t, D)[None, :]
+    return SpeedBand(sigma_v, reach, recorded)
+
+
+@dataclass(frozen=True)
+class Sliding:
+    """The (sample, leg) pairs known to slide (``sliding_pairs``), over the used samples.
+
+    Attributes
+    ----------
+    sliding : ndarray of bool, shape (M, 6)
+        Pairs whose speed is beyond the speed band (and not within a rest).
+    weight : ndarray, shape (M, 6)
+        ``sliding`` as 1.0 / 0.0.
+    sigma_v : ndarray, shape (6,)
+        Each leg's median speed band over the used samples, m/s.
+    move_reach : int
+        The reach of the moves' windows, where a rest begins and ends, samples.
+    """
+
+    sliding: np.ndarray
+    weight: np.ndarray
+    sigma_v: np.ndarray
+    move_reach: int
+
+
+def sliding_pairs(D_dot: np.ndarray, band: SpeedBand, used: slice, needed: int,
+                  settings: Settings) -> Sliding:
+    """The sliding pairs of the ``used`` samples, from each leg's speed ``D_dot`` (N, 6), m/s,
+    beyond the speed ``band``; an ``InputError`` when fewer than ``needed`` pairs slide."""
+    sliding = rest.sliding_mask(D_dot, band.sigma_v, 3 * PRISMATIC_EPS, reach=band.reach,
+                                rest_band=settings.rest_band)[used]
+    move_reach = rest.move_reach(band.reach[used], sliding.any(axis=1))
+    pairs = int(np.count_nonzero(sliding))
+    if pairs < needed:
+        window = 2 * move_reach + 1
+        raise InputError(
+            f"measured data: {pairs} (sample, leg) pairs slide beyond the speed "
+            f"uncertainty of the differentiated poses; the workflow needs at least "
+            f"{needed}: moves shorter than the differentiator's window ({window} samples) "
+            "or too slow for the pose noise cannot be told from rests")
+    # per leg, the median over the used samples (the band itself is per sample)
+    return Sliding(sliding, sliding.astype(float), np.median(band.sigma_v[used], axis=0),
+                   move_reach)
+
+
 class Problem:
     """The data, the model, what may change and within which bounds.
 
@@ -281,7 +394,13 @@ class Problem:
         self.context = {"mean_length": float(D.mean()), "min_length": float(D.min()),
                         "max_length": float(D.max())}
         # rests and reversals: pairs (sample, leg) not known to slide are left out
-        self._sliding_pairs(self._speed_band(motion, platform, poses), needed)
+        band = speed_band(motion, platform, poses, settings)
+        self.poses, self.reach = band.poses, band.reach
+        """The recorded poses (``SpeedBand.poses``) and the differentiator's half window at
+        each sample (N,), samples."""
+        pairs = sliding_pairs(self.result.D_dot, band, self.used, needed, settings)
+        self.sliding, self.weight = pairs.sliding, pairs.weight
+        self.sigma_v, self.move_reach = pairs.sigma_v, pairs.move_reach
         # the speeds the sliding samples cover: a Stribeck decay above nearly all of them is
         # a speed-independent friction on this data (see ``Settings.stribeck_quantile``)
         speeds = np.abs(self.result.D_dot[self.used])[self.sliding]
@@ -296,63 +415,6 @@ class Problem:
         self.candidates = [c for c in self.candidates if c.name not in self.skipped]
         self.own_effects = [c for c in CANDIDATES if c.name in platform.effects]
         self.plausible = self._plausible(settings)
-
-    def _speed_band(self, motion: Motion, platform: Platform,
-                    poses: tuple[np.ndarray, np.ndarray] | None) -> np.ndarray:
-        """The standard deviation (N, 6), m/s, of each leg's differentiated speed due to pose
-        noise, from the recorded ``poses`` (default: the motion's), as the motion was
-        differentiated: Savitzky-Golay filters on a uniform time base (a log's time stamps
-        rounded to 0.1 us included), else smoothing splines; sets ``reach`` (N,), the
-        differentiator's half window, samples."""
-        n = len(motion)
-        t = np.asarray(motion.t, float)
-        if poses is None:
-            poses = motion.recorded_poses()
-        recorded = poses is not None
-        self.poses = poses
-        """The recorded poses (positions (N, 3), m; rotations (N, 3, 3)), None when the motion
-        has none: its smoothed poses underestimate the pose noise."""
-        if not recorded:
-            poses = (np.asarray(motion.position, float), np.asarray(motion.rotation, float))
-        sigma_v, self.reach = np.zeros((n, 6)), np.zeros(n, int)
-        if taken_as_even(motion):
-            # the filters the motion was differentiated with, when it was made from these
-            # samples (not chosen a second time)
-            filters = motion.sample_filters() if recorded else None
-            if filters is not None and len(filters[0][0][0]) != n:
-                filters = None
-            gain, self.reach = rest.differentiator(
-                *poses, filters=filters, move_to_noise=self.settings.move_to_noise)
-            sigma_v = rest.speed_uncertainty(platform, t, *poses, gain=gain)
-        else:
-            # jittered times: the smoothing splines' own noise gain, on divided differences
-            spline = rest.spline_differentiator(t, *poses, self.settings.spline_noise_draws)
-            if spline is not None:
-                gain, self.reach = spline
-                D = platform.leg_lengths(*poses)
-                sigma_v = gain[:, None] * divided_noise_std_every_window(t, D)[None, :]
-        return sigma_v
-
-    def _sliding_pairs(self, sigma_v: np.ndarray, needed: int) -> None:
-        """The sliding (sample, leg) pairs of the used samples beyond the speed band sigma_v
-        (N, 6) (``sliding``, ``weight``), its per-leg median (``sigma_v``) and the reach of the
-        moves' windows (``move_reach``); at least ``needed`` pairs must slide."""
-        # per leg, the median over the used samples (the band itself is per sample)
-        self.sigma_v = np.median(sigma_v[self.used], axis=0)
-        self.sliding = rest.sliding_mask(self.result.D_dot, sigma_v, 3 * PRISMATIC_EPS,
-                                         reach=self.reach,
-                                         rest_band=self.settings.rest_band)[self.used]
-        # the reach of the moves' windows, where a rest begins and ends
-        self.move_reach = rest.move_reach(self.reach[self.used], self.sliding.any(axis=1))
-        pairs = int(np.count_nonzero(self.sliding))
-        if pairs < needed:
-            window = 2 * self.move_reach + 1
-            raise InputError(
-                f"measured data: {pairs} (sample, leg) pairs slide beyond the speed "
-                f"uncertainty of the differentiated poses; the workflow needs at least "
-                f"{needed}: moves shorter than the differentiator's window ({window} samples) "
-                "or too slow for the pose noise cannot be told from rests")
-        self.weight = self.sliding.astype(float)
 
     def _plausible(self, settings: Settings) -> dict[str, tuple[float, float]]:
         out = {}
@@ -428,12 +490,9 @@ class Problem:
         variant's coefficient is the amplitude's distance from zero (non-negative).
         """
         theta = self.with_fixed(theta, candidates)
-        index = self.model.index
         refit = self.refit_names(active)
         plain = [c for c in candidates if not c.stepped]
         columns = refit + [col for c in plain for col in c.columns]
-        names = list(columns)
-        signs = [1.0] * len(columns)
         variants: dict[str, list[list[int]]] = {}
         grid: dict[str, list[dict]] = {}
         k = len(refit)
@@ -441,15 +500,42 @@ class Problem:
             variants[c.name] = [list(range(k, k + len(c.columns)))]
             grid[c.name] = [{}]
             k += len(c.columns)
-        steps, owners, sizes, delays = [], [], [], []
-        for c in candidates:
-            if not c.stepped:
-                continue
+        sec = self._secant_variants(theta, [c for c in candidates if c.stepped], k)
+        variants.update(sec.variants)
+        grid.update(sec.grid)
+        names = columns + sec.names
+        signs = np.array([1.0] * len(columns) + sec.signs)
+        X = np.empty((len(self.y), 6, len(names) - len(sec.delays)))
+        F, _ = self.model.jacobian(theta, columns, rows=self.used,
+                                   out=X[:, :, :len(columns)])
+        for j, (step, size) in enumerate(zip(sec.steps, sec.sizes)):
+            X[:, :, len(columns) + j] = secant(self.model.forces(step)[self.used],
+                                               F[self.used], size,
+                                               self.settings.secant_rounding)
+        X *= self.weight[:, :, None]
+        if sec.delays:
+            # the forces at theta as the compiled model's force map gives them (what a
+            # secant's model evaluation would shift), against F of the Jacobian's pass
+            X = Columns(X, np.asarray(self.model.t, float), self.model.forces(theta),
+                        self.used, self.weight, sec.delays, base=F[self.used])
+        lower, upper = self._column_bounds(theta, names, signs, len(columns))
+        return Design(theta, self.mask(self.y - F[self.used]), X, names, lower, upper,
+                      list(range(len(refit))), variants, grid, signs)
+
+    def _secant_variants(self, theta: np.ndarray, stepped: Sequence[Candidate], k: int
+                         ) -> _Secants:
+        """The secant columns of the ``stepped`` candidates at theta, the first of them
+        column ``k`` of the design: one per sign of the amplitude, secant size and grid value
+        (``linearise``)."""
+        index = self.model.index
+        out = _Secants([], [], {}, {}, [], [], [])
+        owners = []
+        for c in stepped:
             amp = f"{c.name}.{c.amplitude}"
             settings = [{}]
             for gname, values in c.grids(self.context).items():
                 settings = [{**s_, gname: v} for s_ in settings for v in values]
-            variants[c.name], grid[c.name] = [], []
+            out.variants[c.name], out.grid[c.name] = [], []
             for sign, size, values in product(c.signs, c.secants, settings):
                 step = theta.copy()
                 for gname, v in values.items():
@@ -457,41 +543,35 @@ class Problem:
                 step[index[amp]] += sign * size
                 if self.lazy and amp == DELAY and theta[index[amp]] == 0.0:
                     # a shift of F in time: computed when asked for (``Columns``)
-                    delays.append((sign * size, size))
+                    out.delays.append((sign * size, size))
                 else:
-                    steps.append(step)
-                    sizes.append(size)
-                variants[c.name].append([k])
-                grid[c.name].append(values)
-                names.append(amp)
-                signs.append(sign)
+                    out.steps.append(step)
+                    out.sizes.append(size)
+                out.variants[c.name].append([k])
+                out.grid[c.name].append(values)
+                out.names.append(amp)
+                out.signs.append(sign)
                 owners.append(c.name)
                 k += 1
-        if delays and owners[-len(delays):] != [DELAY.split(".")[0]] * len(delays):
+        delays = len(out.delays)
+        if delays and owners[-delays:] != [DELAY.split(".")[0]] * delays:
             raise AssertionError("the time_offset secant columns must come last")
-        X = np.empty((len(self.y), 6, len(names) - len(delays)))
-        F, _ = self.model.jacobian(theta, columns, rows=self.used,
-                                   out=X[:, :, :len(columns)])
-        for j, step in enumerate(steps):
-            X[:, :, len(columns) + j] = secant(self.model.forces(step)[self.used],
-                                               F[self.used], sizes[j],
-                                               self.settings.secant_rounding)
-        X *= self.weight[:, :, None]
-        if delays:
-            # the forces at theta as the compiled model's force map gives them (what a
-            # secant's model evaluation would shift), against F of the Jacobian's pass
-            X = Columns(X, np.asarray(self.model.t, float), self.model.forces(theta),
-                        self.used, self.weight, delays, base=F[self.used])
-        signs = np.array(signs)
+        return out
+
+    def _column_bounds(self, theta: np.ndarray, names: list[str], signs: np.ndarray,
+                       first_secant: int) -> tuple[np.ndarray, np.ndarray]:
+        """Bounds of each column's coefficient: the step of its parameter from theta within
+        ``bounds``; from column ``first_secant`` on, the signed distance of the amplitude
+        from its value (times ``signs``), non-negative."""
+        index = self.model.index
         lower = np.empty(len(names))
         upper = np.empty(len(names))
         for j, name in enumerate(names):
             lo, hi = self.bounds(name)
             lo, hi = lo - theta[index[name]], hi - theta[index[name]]
-            if j >= len(columns):
+            if j >= first_secant:
                 # coefficient = signed distance of the amplitude from its value, >= 0
                 lo, hi = (lo, hi) if signs[j] > 0 else (-hi, -lo)
                 lo = max(lo, 0.0)
             lower[j], upper[j] = lo, hi
-        return Design(theta, self.mask(self.y - F[self.used]), X, names, lower, upper,
-                       list(range(len(refit))), variants, grid, signs)
+        return lower, upper

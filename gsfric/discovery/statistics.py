@@ -574,6 +574,11 @@ def band_p_value(blocks: Blocks, null: Fit, alternative: Fit, k: int) -> float:
     return min(1.0, 2 * min(band_tests(blocks, null, alternative, k)))
 
 
+def rms(a: np.ndarray) -> float:
+    """Root mean square of every element of ``a``, in ``a``'s unit."""
+    return float(np.sqrt(np.mean(a ** 2)))
+
+
 def bootstrap_weights(rng: np.random.Generator, n_blocks: int, n_draws: int) -> np.ndarray:
     """Counts (n_draws, n_blocks) of blocks drawn with replacement (block bootstrap)."""
     draws = rng.integers(0, n_blocks, size=(n_draws, n_blocks))

@@ -25,6 +25,24 @@ of the travel since the last reversal, and their pulses sit right after each rev
 the speed is small. ``reversal_structure`` bins the residual, signed by the direction of
 travel, by that travel (``travel_since_reversal``) and asks, as ``state_structure`` does,
 whether the bin means of the other folds predict the held-out fold.
+
+A friction that the speed describes, whatever its law, is the same at the same speed early and
+late in a stroke. Play (no friction while the leg travels through it) and pre-sliding friction
+(a stiffness before sliding, a hysteresis loop after each reversal) are functions of the travel
+since the last reversal instead, and their pulses sit right after each reversal and each start
+in the other direction, where the speed is small and the tests binned by speed see few
+samples. ``reversal_structure`` needs no model of either: the residual signed by the direction
+of travel, ``r d``, is averaged in bins of the travel since the reversal
+(``Settings.travel_edges``), and the bin means of the other contiguous folds predict the
+held-out fold, against a single level per fold; where every reversal lies in one fold, the
+other legs predict a held-out leg. Noise, white or slow, does not repeat after every reversal
+in another stretch of time; a pulse that every reversal leaves does. The size is measured on
+the pairs within the last edge of a reversal, where such a pulse lives (its share of all pairs
+does not dilute it), and a one-way test of the bins against one level gives the p-value: the
+pairs of one reversal, leg and bin are averaged to one value first (the unit of independence
+under slow noise), and each bin keeps its own variance (Alexander-Govern: the units of the
+short bins near the reversal average fewer pairs than those far from it; the classic F-test's
+common variance made it fire on 13 % of white-noise records at the 1 % level).
 """
 
 from __future__ import annotations
@@ -200,14 +218,7 @@ def dynamic_structure(residual: np.ndarray, inputs: dict[str, np.ndarray], valid
     empty = Structure(False, 0.0, 0.0, [0.0] * legs, p_value=1.0, details={"inputs": {}})
     if rows <= k + 10:
         return empty
-    scale = np.sqrt(np.maximum(np.diag(A), 1e-300))
-    An = A / np.outer(scale, scale)
-    coef = np.linalg.lstsq(An, b / scale, rcond=1e-10)[0] / scale
-    rss_full = yy - 2 * coef @ b + coef @ A @ coef
-    ar_cols = np.arange(legs * order)
-    Ar = A[np.ix_(ar_cols, ar_cols)]
-    coef_ar = np.linalg.lstsq(Ar, b[ar_cols], rcond=1e-10)[0]
-    rss_ar = yy - 2 * coef_ar @ b[ar_cols] + coef_ar @ Ar @ coef_ar
+    coef, rss_full, rss_ar = _arx_fit(A, b, yy, legs * order)
     df2 = rows - k
     if rss_full <= 0 or df2 <= 0:
         return empty
@@ -218,19 +229,40 @@ def dynamic_structure(residual: np.ndarray, inputs: dict[str, np.ndarray], valid
     for leg in range(legs):
         if design[leg] is not None:
             mask[design[leg], leg] = True
-    left = float(np.sqrt(np.mean((r - driven)[mask] ** 2)))
-    # the gap the driven part closes: the fall of the residual's mean square when it is taken
-    # out, over what is left. Under resonant or narrow-band noise the AR recursion has poles
-    # near the unit circle and magnifies a small input coefficient into a large "driven part"
-    # that the noise then cancels (taking it out leaves more than before): its RMS alone is
-    # no measure of what it explains.
-    whole = float(np.mean(r[mask] ** 2))
-    closed = max(whole - left ** 2, 0.0)
-    gap = float(np.sqrt(closed) / left) if left > 0 else np.inf
+    gap = _driven_gap(r, driven, mask)
     total = max(sum(shares.values()), 1e-300)
     return Structure(accept(Evidence(p, gap=gap), Rule(alpha, min_gap=min_gap)), float(gap),
                      **_sizes(driven, mask), p_value=p,
                      details={"inputs": {n: v / total for n, v in shares.items()}})
+
+
+def _arx_fit(A: np.ndarray, b: np.ndarray, yy: float, n_ar: int
+             ) -> tuple[np.ndarray, float, float]:
+    """The least-squares ARX coefficients of the normal equations A (k, k), b (k,), y'y, and
+    the residual sums of squares of the full model and of its first ``n_ar`` (AR) columns
+    alone."""
+    scale = np.sqrt(np.maximum(np.diag(A), 1e-300))
+    An = A / np.outer(scale, scale)
+    coef = np.linalg.lstsq(An, b / scale, rcond=1e-10)[0] / scale
+    rss_full = yy - 2 * coef @ b + coef @ A @ coef
+    ar_cols = np.arange(n_ar)
+    Ar = A[np.ix_(ar_cols, ar_cols)]
+    coef_ar = np.linalg.lstsq(Ar, b[ar_cols], rcond=1e-10)[0]
+    rss_ar = yy - 2 * coef_ar @ b[ar_cols] + coef_ar @ Ar @ coef_ar
+    return coef, rss_full, rss_ar
+
+
+def _driven_gap(r: np.ndarray, driven: np.ndarray, mask: np.ndarray) -> float:
+    """The gap the driven part (M, 6) closes in the residual r (M, 6) over the pairs of
+    ``mask``: the fall of the residual's mean square when it is taken out, over what is left.
+    Under resonant or narrow-band noise the AR recursion has poles near the unit circle and
+    magnifies a small input coefficient into a large "driven part" that the noise then
+    cancels (taking it out leaves more than before): its RMS alone is no measure of what it
+    explains."""
+    left = float(np.sqrt(np.mean((r - driven)[mask] ** 2)))
+    whole = float(np.mean(r[mask] ** 2))
+    closed = max(whole - left ** 2, 0.0)
+    return float(np.sqrt(closed) / left) if left > 0 else np.inf
 
 
 def _arx_equations(r: np.ndarray, inputs: dict[str, np.ndarray], valid: np.ndarray,
@@ -367,26 +399,9 @@ REVERSAL_KEYS = ("significant", "p_value", "gap", "cv_gain", "structure_rms", "p
 def reversal_structure(residual: np.ndarray, direction: np.ndarray, travel: np.ndarray,
                        valid: np.ndarray, *, n_folds: int, alpha: float, min_gap: float,
                        edges: np.ndarray) -> Structure:
-    """Does the friction-like residual depend on the travel since the last reversal?
-
-    A friction that the speed describes, whatever its law, is the same at the same speed early
-    and late in a stroke. Play in a joint (no friction while the leg travels through it) and
-    pre-sliding friction (a stiffness before sliding, a hysteresis loop after each reversal)
-    are functions of the travel since the last reversal instead, and their pulses sit right
-    after each reversal and each start in the other direction, where the speed is small and
-    the tests binned by speed see few samples. This test needs no model of either: the
-    residual signed by the direction of travel, ``r d``, is averaged in bins of the travel
-    since the reversal (``edges``, ``Settings.travel_edges``), and the bin means of the
-    other contiguous folds predict the held-out fold (as ``state_structure``), against a single
-    level per fold; where every reversal lies in one fold, the other legs predict a held-out
-    leg. Noise, white or slow, does not repeat after every reversal in another stretch of time;
-    a pulse that every reversal leaves does. The size is measured on the pairs within the last
-    edge of a reversal, where such a pulse lives (its share of all pairs does not dilute it),
-    and a one-way test of the bins against one level gives the p-value: the pairs of one
-    reversal, leg and bin are averaged to one value first (the unit of independence under slow
-    noise), and each bin keeps its own variance (Alexander-Govern: the units of the short bins
-    near the reversal average fewer pairs than those far from it; the classic F-test's common
-    variance made it fire on 13 % of white-noise records at the 1 % level).
+    """Does the friction-like residual depend on the travel since the last reversal? The
+    residual signed by the direction of travel, binned by that travel, held out fold by fold
+    (see the module docstring).
 
     Parameters
     ----------
@@ -413,20 +428,17 @@ def reversal_structure(residual: np.ndarray, direction: np.ndarray, travel: np.n
         ``profile`` (the mean ``r d`` per bin, N, with the bins' upper travel edges, m),
         ``reversals`` (reversals seen).
     """
-    edges = np.asarray(edges, float)
-    r = np.asarray(residual, float)
+    edges, r = np.asarray(edges, float), np.asarray(residual, float)
     m, legs = r.shape
-    empty = Structure(False, 0.0, 0.0, [0.0] * legs, p_value=1.0,
-                      details={"cv_gain": 0.0, "profile": [], "reversals": 0},
-                      keys=REVERSAL_KEYS)
+    empty = Structure(False, 0.0, 0.0, [0.0] * legs, p_value=1.0, keys=REVERSAL_KEYS,
+                      details={"cv_gain": 0.0, "profile": [], "reversals": 0})
     ok = valid & np.isfinite(travel) & (direction != 0)
     if np.count_nonzero(ok) < 10 * (len(edges) + 1):
         return empty
     fold = np.minimum(np.arange(m) * n_folds // max(m, 1), n_folds - 1)
     rows, legs_of = np.nonzero(ok)
     y = r[rows, legs_of] * direction[rows, legs_of]
-    b = np.searchsorted(edges, travel[rows, legs_of])
-    nb = len(edges) + 1
+    b, nb = np.searchsorted(edges, travel[rows, legs_of]), len(edges) + 1
     near = b < nb - 1
     f, groups = _prediction_groups(fold[rows], legs_of, near, n_folds, legs)
     count, total, mean, level = _other_groups(f, b, y, groups, nb)
@@ -439,13 +451,18 @@ def reversal_structure(residual: np.ndarray, direction: np.ndarray, travel: np.n
     all_mean = total.sum(0) / np.maximum(count.sum(0), 1)
     fitted = np.zeros_like(r)
     fitted[rows, legs_of] = (all_mean[b] - y.mean()) * direction[rows, legs_of]
-    mask = np.zeros_like(ok)
-    mask[rows[near], legs_of[near]] = True
     profile = _profile(list(edges) + [float(np.nanmax(travel[ok]))], all_mean, count.sum(0))
     return Structure(accept(Evidence(p, gap=gap), Rule(alpha, min_gap=min_gap)), gap,
-                     **_sizes(fitted, mask), p_value=p,
+                     **_sizes(fitted, _pairs(ok.shape, rows[near], legs_of[near])), p_value=p,
                      details={"cv_gain": float(g), "profile": profile,
                               "reversals": int(turn.max(axis=0).sum())}, keys=REVERSAL_KEYS)
+
+
+def _pairs(shape: tuple[int, int], rows: np.ndarray, legs: np.ndarray) -> np.ndarray:
+    """A mask of the given shape (M, 6), true at the (sample, leg) pairs ``rows``, ``legs``."""
+    mask = np.zeros(shape, bool)
+    mask[rows, legs] = True
+    return mask
 
 
 def _sizes(fitted: np.ndarray, mask: np.ndarray) -> dict:

@@ -7,6 +7,19 @@ static and not given by the speed's sign. ``rest_transients`` looks there withou
 friction: within a rest the force is a constant plus noise, the noise's lagged differences are
 as large at the start of a rest as at its end, and a transient after the stop makes them
 larger at the start.
+
+Within a rest nothing of the model changes: the pose is fixed, the rigid-body force and the
+static friction (whatever it is, up to its static level) are constants. So the residual's
+differences over a lag h, ``x_t - x_{t-h}``, are differences of noise there, and for any
+stationary noise, white or as slow as it comes, their mean square is the same at every time.
+A mode ringing after the stop, a creep or a relaxation of the load cell, the controller
+settling are largest just after the stop. For each rest core (``rest_runs``) and lag,
+``u = (e_start - e_end) / (e_start + e_end)``, with ``e`` the mean square of the lagged
+differences over the first and the last ``window`` of the core; noise gives u of mean 0. The
+cores are grouped by rest (the legs' cores that overlap in time: one stop of the platform),
+the groups' mean u is tested against 0 (one-sided t-test, at ``alpha`` over the number of
+lags), and the size is the RMS excess of the differences at the start over their level at the
+end (relative, the lag of the largest); the lag with the smallest p-value reports.
 """
 
 from __future__ import annotations
@@ -63,21 +76,8 @@ def rest_transients(residual: np.ndarray, runs: list[tuple[int, int, int]], *, a
                     min_gap: float, window: float, lags: tuple[int, ...],
                     min_rests: int) -> Structure:
     """Does something happen after each stop that the noise does not do? A model-free test on
-    the rests, where friction is not given by the speed's sign.
-
-    Within a rest nothing of the model changes: the pose is fixed, the rigid-body force and the
-    static friction (whatever it is, up to its static level) are constants. So the residual's
-    differences over a lag h, ``x_t - x_{t-h}``, are differences of noise there, and for any
-    stationary noise, white or as slow as it comes, their mean square is the same at every
-    time. A mode ringing after the stop, a creep or a relaxation of the load cell, the
-    controller settling are largest just after the stop. For each core and lag,
-    ``u = (e_start - e_end) / (e_start + e_end)``, with ``e`` the mean square of the lagged
-    differences over the first and the last ``window`` of the core; noise gives u of mean 0.
-    The cores are grouped by rest (the legs' cores that overlap in time: one stop of the
-    platform), the groups' mean u is tested against 0 (one-sided t-test, at ``alpha`` over the
-    number of lags), and the size is the RMS excess of the differences at the start over their
-    level at the end (relative, the lag of the largest); the lag with the smallest p-value
-    reports.
+    the rests, where friction is not given by the speed's sign: the lagged differences of the
+    residual at the start of each rest against those at its end (see the module docstring).
 
     Parameters
     ----------
@@ -106,25 +106,18 @@ def rest_transients(residual: np.ndarray, runs: list[tuple[int, int, int]], *, a
         (number of cores).
     """
     legs = residual.shape[1]
-
-    def empty(rests: int) -> Structure:
-        return Structure(False, 0.0, 0.0, [0.0] * legs, p_value=1.0,
-                         details={"lag": 0, "u": 0.0, "rests": rests, "cores": len(runs)},
-                         keys=("significant", "p_value", "gap", "lag", "structure_rms",
-                               "per_leg_rms", "rests", "cores", "u"))
-
     if len(runs) < 4:
-        return empty(0)
+        return _no_transient(legs, 0, len(runs))
     group, groups = _rest_groups(runs)
     if groups < min_rests:
-        return empty(groups)
+        return _no_transient(legs, groups, len(runs))
     best = None
     for h in lags:
         found = _lag_test(residual, runs, group, h, window, min_rests)
         if found is not None and (best is None or found["p_value"] < best["p_value"]):
             best = found
     if best is None:
-        return empty(groups)
+        return _no_transient(legs, groups, len(runs))
     structure_rms, per_leg = _transient_size(residual, runs, window)
     level = alpha / len(lags)
     p, gap = best.pop("p_value"), best.pop("gap")
@@ -132,6 +125,15 @@ def rest_transients(residual: np.ndarray, runs: list[tuple[int, int, int]], *, a
                      structure_rms, per_leg, p_value=p, details={**best, "cores": len(runs)},
                      keys=("significant", "p_value", "gap", "lag", "u", "rests",
                            "structure_rms", "per_leg_rms", "cores"))
+
+
+def _no_transient(legs: int, rests: int, cores: int) -> Structure:
+    """``rest_transients``' result when nothing could be tested: ``rests`` rests and
+    ``cores`` cores over ``legs`` legs."""
+    return Structure(False, 0.0, 0.0, [0.0] * legs, p_value=1.0,
+                     details={"lag": 0, "u": 0.0, "rests": rests, "cores": cores},
+                     keys=("significant", "p_value", "gap", "lag", "structure_rms",
+                           "per_leg_rms", "rests", "cores", "u"))
 
 
 def _rest_groups(runs: list[tuple[int, int, int]]) -> tuple[np.ndarray, int]:

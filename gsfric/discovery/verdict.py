@@ -70,13 +70,7 @@ def decide(*, structures: list[Unexplained], structure_found: bool, structure_te
     noise : NoiseModel
         The AR model of the final residual.
     """
-    ratio = floor.residual_over_floor
-    against = (f"the residual is {ratio:.3g} x the noise floor of {floor.rms:.4g} N "
-               f"({floor.force_source} force noise and the pose noise in the model's forces)")
-    if not math.isfinite(ratio):
-        # a record too short for the spectral estimate: nothing to compare with
-        ratio, against = 0.0, ("no noise floor could be estimated (too few samples); give "
-                               "--force-noise or --noise-record")
+    ratio, against = _against(floor)
     if structures:
         what = "; ".join(s.description for s in structures)
         return Verdict("unexplained_discrepancy",
@@ -100,15 +94,33 @@ def decide(*, structures: list[Unexplained], structure_found: bool, structure_te
     else:
         verdict, by = "no_discrepancy", "none"
     if ratio > ratio_limit:
-        orders = max(noise.ar_order) if noise.ar_order else 0
-        reason = (f"{against}, but no structure is found in it (no line, coupling, sensor "
-                  "memory, drift or dependence on the state; no lack of fit): its excess over "
-                  f"the floor is a coloured noise that an AR model of order up to {orders} "
-                  "whitens. The floor is estimated from the force channels above a quarter of "
-                  "the sample rate, which holds no slow noise: either the load cells' noise is "
-                  "slower than white, or a discrepancy too smooth to tell from it on this "
-                  "motion. Give the load cells' noise (--force-noise, or --noise-record with a "
-                  "recording at rest) to decide")
-    else:
-        reason = against + ": within the noise"
-    return Verdict(verdict, reason, by)
+        return Verdict(verdict, _coloured_excess(against, noise), by)
+    return Verdict(verdict, against + ": within the noise", by)
+
+
+def _against(floor: NoiseFloor) -> tuple[float, str]:
+    """The residual over the noise floor, and the verdict's sentence comparing them (0 and
+    what to give when no floor could be estimated)."""
+    ratio = floor.residual_over_floor
+    if not math.isfinite(ratio):
+        # a record too short for the spectral estimate: nothing to compare with
+        return 0.0, ("no noise floor could be estimated (too few samples); give "
+                     "--force-noise or --noise-record")
+    return ratio, (f"the residual is {ratio:.3g} x the noise floor of {floor.rms:.4g} N "
+                   f"({floor.force_source} force noise and the pose noise in the model's "
+                   "forces)")
+
+
+def _coloured_excess(against: str, noise: NoiseModel) -> str:
+    """The reason of a verdict whose residual is above an estimated floor without any
+    structure in it (``against``: the comparison with the floor; ``noise``: the AR model of
+    the final residual)."""
+    orders = max(noise.ar_order) if noise.ar_order else 0
+    return (f"{against}, but no structure is found in it (no line, coupling, sensor "
+            "memory, drift or dependence on the state; no lack of fit): its excess over "
+            f"the floor is a coloured noise that an AR model of order up to {orders} "
+            "whitens. The floor is estimated from the force channels above a quarter of "
+            "the sample rate, which holds no slow noise: either the load cells' noise is "
+            "slower than white, or a discrepancy too smooth to tell from it on this "
+            "motion. Give the load cells' noise (--force-noise, or --noise-record with a "
+            "recording at rest) to decide")

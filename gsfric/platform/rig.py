@@ -72,9 +72,9 @@ from gsfric.platform.description import (
     Geometry,
     Legs,
     Platform,
-    check_principal_moments,
 )
 from gsfric.platform.text import commented_toml
+from gsfric.platform.values import check_principal_moments
 
 DERIVED = {
     "home_height": "legs at mid-stroke, platform level",

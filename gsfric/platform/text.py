@@ -20,7 +20,8 @@ import numpy as np
 import tomlkit
 
 from gsfric.platform import catalog
-from gsfric.platform.description import Platform, default_universal_axes
+from gsfric.platform.description import Platform
+from gsfric.platform.values import default_universal_axes
 
 MEANINGS: dict[str, str] = {
     "gravity": "along -z of the base frame",

@@ -295,23 +295,46 @@ def simulate_file(trajectory: str | os.PathLike[str], out: str | os.PathLike[str
     strict = as_flag(strict, "strict")
     kind = _check_paths(trajectory, out, platform)
     platform = platform_from(platform)
-    groups = parse_columns(None) if columns is None else parse_columns(",".join(columns))
     uncertainty = as_flag(uncertainty, "uncertainty") and mode == "kinematic"
-    if not uncertainty:                 # the paper mode's accelerations are its constants
-        groups = tuple(g for g in groups if g != "uncertainty")
-    plan = column_plan(groups)
+    plan = _column_plan(columns, uncertainty)
     motions = iter_motions(trajectory, chunk=chunk, window=window, polyorder=polyorder,
                            log_format=log_format)
-    if plot is not None:
-        plot = as_path(plot, "plot")
-        check_outputs([plot], {"trajectory": trajectory, "platform": platform, "out": out})
-        check_figure(plot)
-        check_output_place(plot)
+    plot = _checked_plot(plot, {"trajectory": trajectory, "platform": platform, "out": out})
     run = _Run(trajectory, out, platform, plan, mode=mode, strict=strict, n_threads=n_threads,
                float32=float32, progress=progress, keep_flagged=as_flag(keep_flagged,
                                                                         "keep_flagged"),
-               trace=plot is not None)
-    run.smoothing = (window, polyorder) if uncertainty else None
+               trace=plot is not None,
+               smoothing=(window, polyorder) if uncertainty else None)
+    summary = _write_outputs(run, motions, kind, plot)
+    _warn(summary, trajectory, uncertainty)
+    return summary
+
+
+def _column_plan(columns: Iterable[str] | None, uncertainty: bool) -> list:
+    """The output columns (``evaluation.columns.plan``) of the groups ``columns`` (default
+    ``DEFAULT_COLUMN_GROUPS``), the ``uncertainty`` group only when asked for."""
+    groups = parse_columns(None) if columns is None else parse_columns(",".join(columns))
+    if not uncertainty:                 # the paper mode's accelerations are its constants
+        groups = tuple(g for g in groups if g != "uncertainty")
+    return column_plan(groups)
+
+
+def _checked_plot(plot: str | os.PathLike[str] | None, inputs: dict) -> Path | None:
+    """The figure's path, checked before any work: not one of the ``inputs`` (name -> path or
+    object), a known format, a writable place."""
+    if plot is None:
+        return None
+    plot = as_path(plot, "plot")
+    check_outputs([plot], inputs)
+    check_figure(plot)
+    check_output_place(plot)
+    return plot
+
+
+def _write_outputs(run: _Run, motions: Iterable[MotionChunk], kind: str,
+                   plot: Path | None) -> Summary:
+    """Evaluate and write every chunk of ``motions`` to the output of kind ``kind``, then the
+    figure ``plot``: both or neither."""
     Writer.load(kind)
     with output_group():                # the table and the figure, both or neither
         try:
@@ -321,15 +344,21 @@ def simulate_file(trajectory: str | os.PathLike[str], out: str | os.PathLike[str
         summary = run.finish()
         if plot is not None and summary.trace is not None and summary.steps:
             write_figure(plot, summary.trace, summary.peaks.t0,
-                         title=f"{trajectory.name}: {summary.steps} steps, "
+                         title=f"{run.trajectory.name}: {summary.steps} steps, "
                                f"{summary.flagged} flagged")
+    return summary
+
+
+def _warn(summary: Summary, trajectory: Path, uncertainty: bool) -> None:
+    """The run's warnings on ``trajectory`` (``GsfricWarning``, pointing where
+    ``simulate_file`` was called): a force that hinges on the differentiation (with
+    ``uncertainty``), the flagged steps."""
     message = summary.uncertainty_message(trajectory) if uncertainty else None
     if message:
-        warnings.warn(message, GsfricWarning, stacklevel=2)
+        warnings.warn(message, GsfricWarning, stacklevel=3)
     if summary.flagged:
-        warnings.warn(summary.flag_message(trajectory) + f"; see the flag column of {out}",
-                      GsfricWarning, stacklevel=2)
-    return summary
+        warnings.warn(summary.flag_message(trajectory) + f"; see the flag column of "
+                      f"{summary.out}", GsfricWarning, stacklevel=3)
 
 
 def check_chunk(platform, part: MotionChunk, trajectory: Path) -> None:
@@ -449,7 +478,8 @@ class _Run:
 
     def __init__(self, trajectory: Path, out: Path, platform, plan, *, mode: str,
                  strict: bool, n_threads: int, float32: bool, progress: bool | None,
-                 keep_flagged: bool = False, trace: bool = False) -> None:
+                 keep_flagged: bool = False, trace: bool = False,
+                 smoothing: tuple[int | None, int] | None = None) -> None:
         self.trajectory, self.platform, self.plan = trajectory, platform, plan
         self.mode, self.strict, self.n_threads, self.float32 = mode, strict, n_threads, float32
         self.keep_flagged = keep_flagged
@@ -461,7 +491,7 @@ class _Run:
                         unit_scale=True, desc="simulate", file=sys.stderr, disable=not show,
                         dynamic_ncols=True, leave=False)
         self.stopped = False                      # a stage failed: evaluate no more
-        self.smoothing = None                     # (window, polyorder): compare own rates
+        self.smoothing = smoothing                # (window, polyorder): compare own rates
         self.own_rates = None                     # a motion with the log's own rates
         self.sigma_squares, self.sigma_steps = np.zeros(6), 0   # sigma_F^2 summed, sliding
         self.sets: tuple[dict, dict] = ({}, {})   # the evaluation's outputs of even, odd chunks

@@ -384,14 +384,21 @@ def sweep(out: str | os.PathLike, trajectories=None,
     running = _Progress(partial, p, on_chunk)
     todo = running.resume()
     try:
-        chosen = _resolve_scheduler(scheduler, sum(t.steps for t in todo)) if todo else "serial"
-        if progress is None:
-            progress = sys.stderr.isatty()
-        seconds = _run_tasks(todo, chosen, workers, running, progress)
-        return _write(out, running, len(todo), chosen, seconds, plots)
+        return _complete(out, running, todo, scheduler, workers, progress, plots)
     except BaseException as exc:
         _keep_or_remove(running, exc)
         raise
+
+
+def _complete(out: Path, running: _Progress, todo: list[Task], scheduler,
+              workers: int | None, progress: bool | None, plots: bool) -> SweepResult:
+    """Run the tasks ``todo`` that ``running`` has not done yet (``sweep``'s ``scheduler``,
+    ``workers``, ``progress``), and write the sweep to ``out``."""
+    chosen = _resolve_scheduler(scheduler, sum(t.steps for t in todo)) if todo else "serial"
+    if progress is None:
+        progress = sys.stderr.isatty()
+    seconds = _run_tasks(todo, chosen, workers, running, progress)
+    return _write(out, running, len(todo), chosen, seconds, plots)
 
 
 def _keep_or_remove(running: _Progress, exc: BaseException) -> None:
