@@ -364,7 +364,7 @@ class Platform:
                                  f"got {type(getattr(self, name)).__name__}")
         _set(self, "effects", _effects(self.effects))
         _set(self, "limits", limits_table(self.limits))
-        check_plausible(self)
+        check_plausible(self.geometry, self.legs, self.platform)
 
     __eq__ = fields_equal
     __hash__ = None  # type: ignore[assignment]

@@ -9,15 +9,11 @@ from __future__ import annotations
 
 import warnings
 from collections.abc import Mapping
-from typing import TYPE_CHECKING
 
 import numpy as np
 
 from gsfric._checks import as_array, as_float, short, suggest
 from gsfric.errors import GsfricWarning, InputError
-
-if TYPE_CHECKING:
-    from gsfric.platform.description import Platform
 
 LIMITS = {
     "actuator_force": "N, actuator force: a number (|F| <= value) or [min, max]",
@@ -119,11 +115,16 @@ def stroke_range(value: object) -> tuple[float, float] | None:
     return (d_min, d_max)
 
 
-def check_plausible(p: Platform) -> None:
+def check_plausible(g, legs, body) -> None:
     """Warnings (``GsfricWarning``) for values that are possible but most likely in the wrong
     unit or place: joints beyond ``MAX_JOINT_DISTANCE`` (mm given as m), leg centres of mass
-    beyond the longest leg, the body's centre of mass far outside the platform."""
-    g = p.geometry
+    beyond the longest leg, the body's centre of mass far outside the platform.
+
+    Parameters
+    ----------
+    g, legs, body : Geometry, Legs, Body
+        A platform's ``geometry``, ``legs`` and ``platform`` (``gsfric.platform.description``).
+    """
     for name, joints in (("geometry.base_joints", g.base_joints),
                          ("geometry.platform_joints", g.platform_joints)):
         far = float(np.linalg.norm(joints, axis=1).max())
@@ -134,15 +135,14 @@ def check_plausible(p: Platform) -> None:
     radius = float(np.linalg.norm(g.platform_joints, axis=1).max())
     reach = radius + float(np.linalg.norm(g.base_joints, axis=1).max())
     longest = g.stroke[1] if g.stroke is not None else None
-    if longest is not None and p.legs.model == "rigid":
+    if longest is not None and legs.model == "rigid":
         for com in ("lower_com", "upper_com"):
-            value = getattr(p.legs, com)
+            value = getattr(legs, com)
             if value > longest:
                 warnings.warn(f"legs.{com}: {value:g} m is longer than the longest leg "
                               f"(geometry.stroke d_max = {longest:g} m): the centre of mass "
                               "lies outside the leg", GsfricWarning, stacklevel=4)
-    for name, com in (("platform.com", p.platform.com),
-                      ("platform.payload_com", p.platform.payload_com)):
+    for name, com in (("platform.com", body.com), ("platform.payload_com", body.payload_com)):
         distance = float(np.linalg.norm(com))
         if reach > 0 and distance > 2 * reach:
             warnings.warn(f"{name}: {distance:.4g} m from the platform frame origin, more "
