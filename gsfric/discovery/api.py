@@ -12,6 +12,7 @@ outputs (``report.write``). ``gsfric discover`` calls it.
 
 from __future__ import annotations
 
+import dataclasses
 import os
 from collections.abc import Sequence
 
@@ -19,9 +20,9 @@ import numpy as np
 
 from gsfric._checks import short
 from gsfric.discovery.floor import ForceNoise, read_noise_record
+from gsfric.discovery.outcome import Discovery
 from gsfric.discovery.report import write
 from gsfric.discovery.rest import poses_from_columns
-from gsfric.discovery.outcome import Discovery
 from gsfric.discovery.workflow import discover_motion
 from gsfric.errors import InputError, InputTypeError
 from gsfric.io.files import check_output_folder, check_outputs
@@ -116,7 +117,7 @@ def discover(data, forces: np.ndarray | None = None,
     result = _discover_data(data, forces, platform, log_format,
                             dict(seed=seed, progress=progress, force_noise=sensor, **options))
     if out is not None:
-        result.written = write(result, out, figures=figures)
+        return dataclasses.replace(result, written=write(result, out, figures=figures))
     return result
 
 
@@ -151,19 +152,19 @@ def _discover_file(measured: str | os.PathLike[str], platform, log_format: LogFo
     check_poses(model, *poses, motion.t, str(measured))
     check_forces(model, forces, str(measured))
     result = discover_motion(motion, forces, model, poses=poses, **run)
-    result.source = str(measured)
-    if isinstance(platform, (str, os.PathLike)):
-        result.platform_source = str(platform)
+    notes = []
     how = motion.differentiation()
     if how is not None:
-        result.notes.append(f"differentiation: {how.describe()}")
+        notes.append(f"differentiation: {how.describe()}")
     if lengths is not None:
         gap = float(np.sqrt(np.mean((lengths - result.result_before.D) ** 2)))
         if gap > LENGTH_GAP:
-            result.notes.append(
+            notes.append(
                 f"the leg lengths D1..D6 in the file differ from those of the recorded pose by "
                 f"{gap * 1e3:.3g} mm RMS: check the platform's geometry")
-    return result
+    given = str(platform) if isinstance(platform, (str, os.PathLike)) else ""
+    return dataclasses.replace(result, source=str(measured), platform_source=given,
+                               notes=[*result.notes, *notes])
 
 
 def _force_noise(force_noise, noise_record, log_format) -> ForceNoise | None:
