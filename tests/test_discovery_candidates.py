@@ -50,8 +50,8 @@ def test_fixed_values_are_exactly_the_held_parameters():
 def test_a_setting_for_a_parameter_the_catalog_lacks_is_refused():
     with pytest.raises(GsfricError, match=r"candidate seal_friction: speed is not a parameter "
                                           r"of the catalog's seal_friction \(force\)"):
-        cand.Candidate("seal_friction", {"force": 0.0}, {"force": "N"}, "signature",
-                       bounds_of={"speed": (0.0, 1.0)})
+        cand.Candidate(name="seal_friction", parameters={"force": 0.0}, units={"force": "N"},
+                       signature="signature", bounds_of={"speed": (0.0, 1.0)})
 
 
 def test_fitting_settings_must_cover_the_catalog(monkeypatch):

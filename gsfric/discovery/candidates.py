@@ -20,7 +20,7 @@ the effect's amplitude.
 from __future__ import annotations
 
 from collections.abc import Callable, Mapping
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, fields
 
 import numpy as np
 
@@ -79,22 +79,17 @@ REFIT: tuple[Refit, ...] = (
 
 
 @dataclass(frozen=True)
-class Candidate:
-    """A catalog effect as a candidate explanation of the gap.
+class Fitting:
+    """How discovery fits one catalog effect: everything of a candidate but what the catalog
+    gives (its name, parameters, defaults and units).
 
     Attributes
     ----------
-    name : str
-        Catalog (SPEC) effect name.
-    parameters : Mapping[str, float]
-        The catalog's parameters of the effect (short names, the catalog's order) and their
-        defaults, in their units.
-    units : Mapping[str, str]
-        The catalog's unit of each parameter.
     signature : str
         Where the effect shows in the residuals (for the report).
     bounds : tuple of float
-        Physical bounds (lower, upper) of every fitted parameter not in ``bounds_of``.
+        Physical bounds (lower, upper) of every fitted parameter not in ``bounds_of``, in the
+        parameter's unit.
     bounds_of : Mapping[str, tuple[float, float]]
         Physical bounds of single fitted parameters.
     held : tuple[str, ...]
@@ -113,9 +108,6 @@ class Candidate:
         None if the candidate applies to the platform, else the reason why not.
     """
 
-    name: str
-    parameters: Mapping[str, float]
-    units: Mapping[str, str]
     signature: str
     bounds: tuple[float, float] = (0.0, INF)
     bounds_of: Mapping[str, tuple[float, float]] = field(default_factory=dict)
@@ -136,6 +128,27 @@ class Candidate:
     """Steps of the amplitude at which its one-sided (secant) columns are taken, for an
     amplitude on which F is nonlinear (``time_offset``: a delay of several samples shifts a
     friction step, which the derivative at zero delay does not describe)."""
+
+
+@dataclass(frozen=True, kw_only=True)
+class Candidate(Fitting):
+    """A catalog effect as a candidate explanation of the gap: the catalog's effect with
+    discovery's ``Fitting`` of it.
+
+    Attributes
+    ----------
+    name : str
+        Catalog (SPEC) effect name.
+    parameters : Mapping[str, float]
+        The catalog's parameters of the effect (short names, the catalog's order) and their
+        defaults, in their units.
+    units : Mapping[str, str]
+        The catalog's unit of each parameter.
+    """
+
+    name: str
+    parameters: Mapping[str, float]
+    units: Mapping[str, str]
 
     def __post_init__(self) -> None:
         named = set(self.bounds_of) | set(self.held) | set(self.grid) | set(self.refined)
@@ -258,43 +271,43 @@ TIME_OFFSET_STEPS = (0.002, 0.006, 0.018, 0.054, 0.162)
 of 3, from less than a sample at 200 Hz to about the shortest motion features); the best
 secant starts the Gauss-Newton refinement."""
 
-FITTING: dict[str, dict] = {
-    "stribeck": dict(
-        signature="friction-like (opposing the leg speed), concentrated at speed reversals",
+FITTING: dict[str, Fitting] = {
+    "stribeck": Fitting(
+        "friction-like (opposing the leg speed), concentrated at speed reversals",
         bounds_of={"velocity": (5e-4, 0.5)}, grid_from=_stribeck_velocities, coulomb=True,
         simpler=2),
-    "seal_friction": dict(
-        signature="friction-like, the same at every speed and load", coulomb=True, simpler=0),
-    "quadratic_drag": dict(
-        signature="friction-like, growing with the square of the leg speed"),
-    "stroke_friction": dict(
-        signature="friction-like, growing along the stroke from one end", bounds=(-INF, INF),
+    "seal_friction": Fitting(
+        "friction-like, the same at every speed and load", coulomb=True, simpler=0),
+    "quadratic_drag": Fitting(
+        "friction-like, growing with the square of the leg speed"),
+    "stroke_friction": Fitting(
+        "friction-like, growing along the stroke from one end", bounds=(-INF, INF),
         grid_from=_stroke_ends, coulomb=True, signs=(1.0, -1.0), simpler=2,
         refined=("reference",)),
-    "payload_offset": dict(
-        signature="load-like, varying with the pose (moment of the payload's weight)",
+    "payload_offset": Fitting(
+        "load-like, varying with the pose (moment of the payload's weight)",
         bounds=(-0.5, 0.5)),
-    "sensor_bias": dict(
-        signature="a constant offset per leg, in every regime", bounds=(-INF, INF)),
-    "joint_friction_coupling": dict(
-        signature="friction-like, from the joints' friction moments, largest at high load",
+    "sensor_bias": Fitting(
+        "a constant offset per leg, in every regime", bounds=(-INF, INF)),
+    "joint_friction_coupling": Fitting(
+        "friction-like, from the joints' friction moments, largest at high load",
         applies=_coupled_applies),
-    "leg_weight": dict(
-        signature="load-like, varying with the legs' inclination", applies=_leg_weight_applies),
-    "bushing_friction": dict(
-        signature="friction-like, growing with the bending moment in the prismatic joint",
+    "leg_weight": Fitting(
+        "load-like, varying with the legs' inclination", applies=_leg_weight_applies),
+    "bushing_friction": Fitting(
+        "friction-like, growing with the bending moment in the prismatic joint",
         held=("spacing",), fixed=_bushing_spacing, coulomb=True, simpler=1,
         applies=_coupled_applies),
-    "force_scale": dict(
-        signature="proportional to the measured force on each leg (a load cell's gain error)",
+    "force_scale": Fitting(
+        "proportional to the measured force on each leg (a load cell's gain error)",
         bounds=(-0.5, 0.5), simpler=3),
-    "time_offset": dict(
-        signature="proportional to the rate of change of the force (a delay between the pose "
-                  "and force channels), largest where the force changes fastest",
+    "time_offset": Fitting(
+        "proportional to the rate of change of the force (a delay between the pose and force "
+        "channels), largest where the force changes fastest",
         bounds=(-0.5, 0.5), simpler=1, signs=(1.0, -1.0), secants=TIME_OFFSET_STEPS),
 }
-"""How discovery fits each catalog effect: ``Candidate``'s own fields (everything but the name,
-parameters and units, which are the catalog's), by effect name."""
+"""How discovery fits each catalog effect, by effect name (the rest of a candidate is the
+catalog's)."""
 
 
 def _candidates() -> tuple[Candidate, ...]:
@@ -305,9 +318,15 @@ def _candidates() -> tuple[Candidate, ...]:
     if missing or extra:
         raise GsfricError("discovery's FITTING does not match the effect catalog: "
                           f"no settings for {missing}, settings for unknown effects {extra}")
-    return tuple(Candidate(e["name"], {p["name"]: float(p["default"]) for p in e["parameters"]},
-                           {p["name"]: p["unit"] for p in e["parameters"]}, **FITTING[e["name"]])
-                 for e in entries)
+    return tuple(_candidate(e, FITTING[e["name"]]) for e in entries)
+
+
+def _candidate(entry: dict, fitting: Fitting) -> Candidate:
+    """The candidate of one catalog entry (``catalog.describe()``) fitted by ``fitting``."""
+    own = {f.name: getattr(fitting, f.name) for f in fields(Fitting)}
+    return Candidate(name=entry["name"],
+                     parameters={p["name"]: float(p["default"]) for p in entry["parameters"]},
+                     units={p["name"]: p["unit"] for p in entry["parameters"]}, **own)
 
 
 CANDIDATES: tuple[Candidate, ...] = _candidates()
