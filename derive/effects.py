@@ -51,7 +51,6 @@ import sympy as sp
 
 from .vectors import cross, norm
 
-
 GENERATED = "generated"
 """Kind of an effect that is a term of the mechanics: its parameters are inputs Q."""
 
