@@ -260,9 +260,9 @@ def test_runtime_catalog_is_derives_catalog_and_only_generated_effects_are_in_Q(
     the manifest with its kind, defaults, units and descriptions; Q (the compiled functions'
     input, the Jacobian's effect columns) holds the generated effects' parameters only, so a
     sensor effect leaking into Q would change its size."""
-    entries = [dict(name=e.name, description=e.description, kind=e.kind,
-                    parameters=[dict(name=p.name, default=p.default, unit=p.unit,
-                                     description=p.description) for p in e.parameters])
+    entries = [{"name": e.name, "description": e.description, "kind": e.kind,
+                "parameters": [{"name": p.name, "default": p.default, "unit": p.unit,
+                                "description": p.description} for p in e.parameters]}
                for e in fx.CATALOG]
     assert describe() == entries
     assert {e["kind"] for e in entries} == {fx.GENERATED, fx.SENSOR}
