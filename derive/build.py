@@ -6,7 +6,8 @@
 * ``generated/gsfric_model.casadi``: the same functions serialized, for evaluation without a C
   compiler;
 * ``generated/manifest.json``: hash of the derive/ sources, tool versions, each function's inputs
-  and outputs with shapes and units, the effect catalog.
+  and outputs with shapes and units, the effect catalog (both kinds of
+  effect, ``derive/effects.py``).
 
 Nothing written depends on the time or the machine, so regenerating is byte-identical.
 """
@@ -249,7 +250,7 @@ def _manifest(funcs: list, meta: dict, files: dict[str, bytes]) -> dict:
         coupled_iterations=coupled.N_ITERATIONS,
         jacobian_parameters=meta["theta"],
         jacobian_platform_parameters=list(JACOBIAN_P),
-        effects=[dict(name=e.name, description=e.description,
+        effects=[dict(name=e.name, description=e.description, kind=e.kind,
                       parameters=[dict(name=p.name, default=p.default, unit=p.unit,
                                        description=p.description) for p in e.parameters])
                  for e in fx.CATALOG],

@@ -1,8 +1,9 @@
-"""The catalog of optional physical effects, each a symbolic term with its parameters as inputs.
+"""The catalog of optional effects: the one list of their names, parameters, defaults and units.
 
-Every effect is always present in the generated functions; its parameters switch it on (all
-defaults leave the model unchanged). The names are a contract (see SPEC); the parameters are
-documented here and in docs/reference/effects.md.
+Every generated effect is a symbolic term always present in the generated functions, with its
+parameters as inputs; the parameters switch it on (all defaults leave the model unchanged). The
+names are a contract (see SPEC); the parameters are documented here and in
+docs/reference/effects.md.
 
 Prismatic-joint friction effects add to the friction force on the upper part ``F_fr`` (along u,
 opposing the sliding speed v, with the regularised sign of friction.py):
@@ -28,6 +29,20 @@ Effects on the loads:
   them.
 
 And on the reading: ``sensor_bias``: a constant offset b_i in each force reading F_i.
+
+``CATALOG`` is the one list of every effect, of two kinds (``Effect.kind``):
+
+* ``"generated"``: the terms above, inputs ``Q`` of the generated functions (``Q`` holds their
+  parameters in catalog order, ``parameter_names``);
+* ``"sensor"``: errors of the measuring chain that the runtime applies to the model's actuator
+  forces F (gsfric/platform/catalog.py, ``apply_sensor``); they are not inputs ``Q``:
+
+  - ``force_scale``: a gain error g_i of each load cell, ``F_i -> (1 + g_i) F_i``;
+  - ``time_offset``: the force channels lag the pose channels by ``delay``,
+    ``F(t) -> F(t - delay)``.
+
+derive/build.py writes the whole catalog into generated/manifest.json, from which the runtime
+reads every effect's name, parameters, defaults, units and descriptions.
 """
 
 from dataclasses import dataclass
@@ -36,9 +51,29 @@ import sympy as sp
 
 from .vectors import cross, norm
 
+GENERATED = "generated"
+"""Kind of an effect that is a term of the mechanics: its parameters are inputs Q."""
+
+SENSOR = "sensor"
+"""Kind of an effect of the measuring chain, applied by the runtime to F: not an input Q."""
+
 
 @dataclass(frozen=True)
 class Parameter:
+    """One parameter of an effect.
+
+    Attributes
+    ----------
+    name : str
+        Short name, unique within its effect (``static``); the flat name is ``effect.name``.
+    default : float
+        Value that leaves the model unchanged (or a neutral dimension), in ``unit``.
+    unit : str
+        SI unit ("1" for a ratio).
+    description : str
+        What the number is, for ``gsfric effects`` and the docs.
+    """
+
     name: str
     default: float
     unit: str
@@ -47,9 +82,25 @@ class Parameter:
 
 @dataclass(frozen=True)
 class Effect:
+    """One optional effect.
+
+    Attributes
+    ----------
+    name : str
+        Effect name, fixed by SPEC (``stribeck``).
+    description : str
+        One line on what it is.
+    parameters : tuple of Parameter
+        Its parameters, in the order they take in Q (generated effects).
+    kind : str
+        ``GENERATED`` (a term of the mechanics, parameters in Q) or ``SENSOR`` (applied by the
+        runtime to F, not in Q).
+    """
+
     name: str
     description: str
     parameters: tuple[Parameter, ...]
+    kind: str = GENERATED
 
 
 CATALOG: tuple[Effect, ...] = (
@@ -87,7 +138,21 @@ CATALOG: tuple[Effect, ...] = (
         Parameter("coefficient", 0.0, "1", "friction coefficient of the bushings"),
         Parameter("spacing", 0.1, "m", "distance between the two bushings"),
     )),
+    Effect("force_scale", "gain error of each load cell: F_i -> (1 + g_i) F_i", tuple(
+        Parameter(f"g{i}", 0.0, "1", f"relative gain error of load cell {i}")
+        for i in range(1, 7)
+    ), kind=SENSOR),
+    Effect("time_offset",
+           "delay of the force channels behind the pose channels: F(t) -> F(t - delay)", (
+               Parameter("delay", 0.0, "s", "delay of the force readings behind the poses"),
+           ), kind=SENSOR),
 )
+"""Every effect, generated ones first (in the order of Q), then the sensor effects."""
+
+
+def generated() -> tuple[Effect, ...]:
+    """The effects whose parameters are the input Q, in Q's order."""
+    return tuple(e for e in CATALOG if e.kind == GENERATED)
 
 
 def parameter_names() -> list[str]:
@@ -98,7 +163,7 @@ def parameter_names() -> list[str]:
     list of str
         One name per entry of Q (``len(Q)`` names), e.g. ``"stribeck.static"``.
     """
-    return [f"{e.name}.{p.name}" for e in CATALOG for p in e.parameters]
+    return [f"{e.name}.{p.name}" for e in generated() for p in e.parameters]
 
 
 def prismatic_effects_force(q: dict, v, sgn_v, D, u, M_3):

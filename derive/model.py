@@ -13,7 +13,7 @@ Two modes share every equation and differ only in where the bodies' acceleration
 
 Inputs (each a named block; the generated functions take them concatenated, see ``LAYOUT``):
 state ``x`` (24 per step), parameters ``P`` (platform description), effect parameters ``Q``
-(effects.CATALOG), and in paper mode the constants ``K``.
+(the generated effects of effects.CATALOG), and in paper mode the constants ``K``.
 
 ``build`` reads as the physics runs: ``_platform`` (what platform and payload need), ``_leg``
 for each leg (kinematics, the parts' needs, the reduction to one unknown), ``_solve`` (the 6x6

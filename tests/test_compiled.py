@@ -14,11 +14,13 @@ from helpers import chain_values, numpy_flags, perturbed_platform, random_states
 from scipy.spatial.transform import Rotation
 
 from derive import build as dbuild
+from derive import effects as fx
 from derive import model as mdl
 from gsfric import models
 from gsfric.cli import main
 from gsfric.compiled import native
 from gsfric.compiled.functions import _tuples_readable
+from gsfric.compiled.manifest import function as manifest_function
 from gsfric.compiled.state import state_of
 from gsfric.errors import GsfricError
 from gsfric.evaluation.evaluator import Evaluator, state_array
@@ -26,7 +28,7 @@ from gsfric.evaluation.flags import FLAG_NONFINITE
 from gsfric.evaluation.paper_constants import paper_constants
 from gsfric.evaluation.parameters import _slots, effect_vector, jacobian_parameters
 from gsfric.evaluation.result import DETAILS
-from gsfric.platform.catalog import parameter_names
+from gsfric.platform.catalog import SENSOR, describe, parameter_names, sensor_parameters
 from gsfric.trajectory import Motion
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -251,6 +253,35 @@ def test_effect_vector_follows_the_catalog_order(platform):
     assert q[names.index("seal_friction.force")] == 2.5
     assert q[names.index("sensor_bias.b3")] == 0.7
     assert q[names.index("stribeck.velocity")] > 0
+
+
+def test_runtime_catalog_is_derives_catalog_and_only_generated_effects_are_in_Q():
+    """Every effect of derive/effects.py, sensor effects included, reaches the runtime through
+    the manifest with its kind, defaults, units and descriptions; Q (the compiled functions'
+    input, the Jacobian's effect columns) holds the generated effects' parameters only, so a
+    sensor effect leaking into Q would change its size."""
+    entries = [{"name": e.name, "description": e.description, "kind": e.kind,
+                "parameters": [{"name": p.name, "default": p.default, "unit": p.unit,
+                                "description": p.description} for p in e.parameters]}
+               for e in fx.CATALOG]
+    assert describe() == entries
+    assert {e["kind"] for e in entries} == {fx.GENERATED, fx.SENSOR}
+    names = parameter_names()
+    assert names == fx.parameter_names()
+    q_size = next(i["size"] for i in manifest_function("eval")["inputs"] if i["name"] == "Q")
+    assert len(names) == q_size
+    assert jacobian_parameters()[-q_size:] == names
+    sensor = {f"{e['name']}.{p['name']}" for e in entries if e["kind"] == SENSOR
+              for p in e["parameters"]}
+    assert sensor and not sensor & set(names)
+
+
+def test_sensor_parameters_default_to_the_catalogs_values():
+    gains, delay = sensor_parameters({"force_scale": {"g2": 0.1}})
+    defaults = {p["name"]: p["default"] for e in describe() if e["kind"] == SENSOR
+                for p in e["parameters"]}
+    assert gains.tolist() == [0.1 if k == 2 else defaults[f"g{k}"] for k in range(1, 7)]
+    assert delay == defaults["delay"]
 
 
 def test_bound_hot_path_equals_the_general_call_and_checks_its_buffers(rng):

@@ -100,7 +100,7 @@ def _compiled():
 def _parameters(platform) -> dict:
     """The chain's parameter blocks for ``platform``, effects at their defaults."""
     return dict(parameter_values(platform),
-                effects=[p.default for e in fx.CATALOG for p in e.parameters])
+                effects=[p.default for e in fx.generated() for p in e.parameters])
 
 
 def _evaluate(platform, motion) -> dict:

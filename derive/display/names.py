@@ -11,7 +11,7 @@ from __future__ import annotations
 import re
 from dataclasses import dataclass
 
-from ..effects import CATALOG
+from ..effects import generated
 from ..model import (CONSTANT_LATEX, PAPER_CONSTANTS, PARAMETER_LATEX, PARAMETERS, STATE,
                      STATE_LATEX, Model)
 
@@ -203,7 +203,7 @@ def legend(model: Model) -> list[tuple[str, str, str, str]]:
         else:
             tex = symbol.scalar
         rows.append((name, tex, unit, description))
-    for effect in CATALOG:
+    for effect in generated():
         for parameter in effect.parameters:
             full = f"{effect.name}.{parameter.name}"
             if effect.name == "payload_offset":

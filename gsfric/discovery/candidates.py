@@ -6,21 +6,25 @@ refit can only explain the data with a value outside its range (a Coulomb coeffi
 a lubricated joint), the refit is held at the range's edge and the remaining gap is left to the
 candidate effects.
 
-Each candidate (``CANDIDATES``, one per catalog effect, names fixed in SPEC) lists the
-parameters fitted (with physical bounds), the parameters held fixed (set from the platform:
-the bushing spacing is the platform's or the catalog's), and, for the parameters on which the
-model is strongly nonlinear, a grid of starting values: ``stribeck.velocity`` (then fitted),
-the stroke reference (9 leg lengths along the data's stroke; refined once the effect is named,
-``Candidate.refined``).
+There is one candidate per effect of the catalog (``CANDIDATES``, in the catalog's order): its
+name, parameters, defaults and units are the catalog's (``gsfric.platform.catalog``, read from
+the manifest). What is discovery's own is ``FITTING``, by effect: the physical bounds of the
+fitted parameters, the parameters held fixed (set from the platform: the bushing spacing is the
+platform's or the catalog's), and, for the parameters on which the model is strongly nonlinear,
+a grid of starting values: ``stribeck.velocity`` (then fitted), the stroke reference (9 leg
+lengths along the data's stroke; refined once the effect is named, ``Candidate.refined``).
+Every other parameter of an effect is fitted; the first fitted one, in the catalog's order, is
+the effect's amplitude.
 """
 
 from __future__ import annotations
 
 from collections.abc import Callable, Mapping
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, fields
 
 import numpy as np
 
+from gsfric.errors import GsfricError
 from gsfric.platform import catalog
 from gsfric.platform.catalog import EFFECTS
 from gsfric.platform.description import Platform
@@ -75,17 +79,21 @@ REFIT: tuple[Refit, ...] = (
 
 
 @dataclass(frozen=True)
-class Candidate:
-    """A catalog effect as a candidate explanation of the gap.
+class Fitting:
+    """How discovery fits one catalog effect: everything of a candidate but what the catalog
+    gives (its name, parameters, defaults and units).
 
     Attributes
     ----------
-    name : str
-        Catalog (SPEC) effect name.
-    fitted : tuple[str, ...]
-        Parameters fitted, short names.
-    lower, upper : tuple[float, ...]
-        Physical bounds of the fitted parameters.
+    signature : str
+        Where the effect shows in the residuals (for the report).
+    bounds : tuple of float
+        Physical bounds (lower, upper) of every fitted parameter not in ``bounds_of``, in the
+        parameter's unit.
+    bounds_of : Mapping[str, tuple[float, float]]
+        Physical bounds of single fitted parameters.
+    held : tuple[str, ...]
+        Parameters not fitted, set by ``fixed``.
     grid : Mapping[str, tuple[float, ...]]
         Starting values tried for parameters on which F is strongly nonlinear.
     coulomb : bool
@@ -94,19 +102,16 @@ class Candidate:
     signs : tuple of float
         Signs the amplitude may take (stroke_friction: both).
     fixed : Callable[[Platform, dict], dict]
-        Values of the parameters that are not fitted, from the platform and the data context
+        Values of the ``held`` parameters, from the platform and the data context
         (``{"mean_length": float}``).
     applies : Callable[[Platform], str | None]
         None if the candidate applies to the platform, else the reason why not.
-    signature : str
-        Where the effect shows in the residuals (for the report).
     """
 
-    name: str
-    fitted: tuple[str, ...]
-    lower: tuple[float, ...]
-    upper: tuple[float, ...]
     signature: str
+    bounds: tuple[float, float] = (0.0, INF)
+    bounds_of: Mapping[str, tuple[float, float]] = field(default_factory=dict)
+    held: tuple[str, ...] = ()
     grid: Mapping[str, tuple[float, ...]] = field(default_factory=dict)
     coulomb: bool = False
     signs: tuple[float, ...] = (1.0,)
@@ -123,6 +128,52 @@ class Candidate:
     """Steps of the amplitude at which its one-sided (secant) columns are taken, for an
     amplitude on which F is nonlinear (``time_offset``: a delay of several samples shifts a
     friction step, which the derivative at zero delay does not describe)."""
+
+
+@dataclass(frozen=True, kw_only=True)
+class Candidate(Fitting):
+    """A catalog effect as a candidate explanation of the gap: the catalog's effect with
+    discovery's ``Fitting`` of it.
+
+    Attributes
+    ----------
+    name : str
+        Catalog (SPEC) effect name.
+    parameters : Mapping[str, float]
+        The catalog's parameters of the effect (short names, the catalog's order) and their
+        defaults, in their units.
+    units : Mapping[str, str]
+        The catalog's unit of each parameter.
+    """
+
+    name: str
+    parameters: Mapping[str, float]
+    units: Mapping[str, str]
+
+    def __post_init__(self) -> None:
+        named = set(self.bounds_of) | set(self.held) | set(self.grid) | set(self.refined)
+        unknown = sorted(named - set(self.parameters))
+        if unknown:
+            raise GsfricError(f"candidate {self.name}: {', '.join(unknown)} is not a parameter "
+                              f"of the catalog's {self.name} ({', '.join(self.parameters)})")
+        if not self.fitted:
+            raise GsfricError(f"candidate {self.name}: every parameter is held or refined; "
+                              "nothing is fitted")
+
+    @property
+    def fitted(self) -> tuple[str, ...]:
+        """Parameters fitted, short names, in the catalog's order (the amplitude first)."""
+        return tuple(p for p in self.parameters if p not in self.held + self.refined)
+
+    @property
+    def lower(self) -> tuple[float, ...]:
+        """Physical lower bounds of the fitted parameters."""
+        return tuple(self.bounds_of.get(p, self.bounds)[0] for p in self.fitted)
+
+    @property
+    def upper(self) -> tuple[float, ...]:
+        """Physical upper bounds of the fitted parameters."""
+        return tuple(self.bounds_of.get(p, self.bounds)[1] for p in self.fitted)
 
     def grids(self, context: dict) -> dict[str, tuple[float, ...]]:
         """Starting values of the grid parameters, the data-dependent ones included."""
@@ -220,37 +271,65 @@ TIME_OFFSET_STEPS = (0.002, 0.006, 0.018, 0.054, 0.162)
 of 3, from less than a sample at 200 Hz to about the shortest motion features); the best
 secant starts the Gauss-Newton refinement."""
 
-CANDIDATES: tuple[Candidate, ...] = (
-    Candidate("stribeck", ("static", "velocity"), (0.0, 5e-4), (INF, 0.5),
-              "friction-like (opposing the leg speed), concentrated at speed reversals",
-              grid_from=_stribeck_velocities, coulomb=True, simpler=2),
-    Candidate("seal_friction", ("force",), (0.0,), (INF,),
-              "friction-like, the same at every speed and load", coulomb=True, simpler=0),
-    Candidate("quadratic_drag", ("coefficient",), (0.0,), (INF,),
-              "friction-like, growing with the square of the leg speed"),
-    Candidate("stroke_friction", ("slope",), (-INF,), (INF,),
-              "friction-like, growing along the stroke from one end", grid_from=_stroke_ends,
-              coulomb=True, signs=(1.0, -1.0), simpler=2, refined=("reference",)),
-    Candidate("payload_offset", ("x", "y", "z"), (-0.5, -0.5, -0.5), (0.5, 0.5, 0.5),
-              "load-like, varying with the pose (moment of the payload's weight)"),
-    Candidate("sensor_bias", tuple(f"b{i}" for i in range(1, 7)), (-INF,) * 6, (INF,) * 6,
-              "a constant offset per leg, in every regime"),
-    Candidate("joint_friction_coupling", ("scale",), (0.0,), (INF,),
-              "friction-like, from the joints' friction moments, largest at high load",
-              applies=_coupled_applies),
-    Candidate("leg_weight", ("lower_mass", "upper_mass"), (0.0, 0.0), (INF, INF),
-              "load-like, varying with the legs' inclination", applies=_leg_weight_applies),
-    Candidate("bushing_friction", ("coefficient",), (0.0,), (INF,),
-              "friction-like, growing with the bending moment in the prismatic joint",
-              fixed=_bushing_spacing, coulomb=True, simpler=1, applies=_coupled_applies),
-    Candidate("force_scale", tuple(f"g{i}" for i in range(1, 7)), (-0.5,) * 6, (0.5,) * 6,
-              "proportional to the measured force on each leg (a load cell's gain error)",
-              simpler=3),
-    Candidate("time_offset", ("delay",), (-0.5,), (0.5,),
-              "proportional to the rate of change of the force (a delay between the pose and "
-              "force channels), largest where the force changes fastest", simpler=1,
-              signs=(1.0, -1.0), secants=TIME_OFFSET_STEPS),
-)
+FITTING: dict[str, Fitting] = {
+    "stribeck": Fitting(
+        "friction-like (opposing the leg speed), concentrated at speed reversals",
+        bounds_of={"velocity": (5e-4, 0.5)}, grid_from=_stribeck_velocities, coulomb=True,
+        simpler=2),
+    "seal_friction": Fitting(
+        "friction-like, the same at every speed and load", coulomb=True, simpler=0),
+    "quadratic_drag": Fitting(
+        "friction-like, growing with the square of the leg speed"),
+    "stroke_friction": Fitting(
+        "friction-like, growing along the stroke from one end", bounds=(-INF, INF),
+        grid_from=_stroke_ends, coulomb=True, signs=(1.0, -1.0), simpler=2,
+        refined=("reference",)),
+    "payload_offset": Fitting(
+        "load-like, varying with the pose (moment of the payload's weight)",
+        bounds=(-0.5, 0.5)),
+    "sensor_bias": Fitting(
+        "a constant offset per leg, in every regime", bounds=(-INF, INF)),
+    "joint_friction_coupling": Fitting(
+        "friction-like, from the joints' friction moments, largest at high load",
+        applies=_coupled_applies),
+    "leg_weight": Fitting(
+        "load-like, varying with the legs' inclination", applies=_leg_weight_applies),
+    "bushing_friction": Fitting(
+        "friction-like, growing with the bending moment in the prismatic joint",
+        held=("spacing",), fixed=_bushing_spacing, coulomb=True, simpler=1,
+        applies=_coupled_applies),
+    "force_scale": Fitting(
+        "proportional to the measured force on each leg (a load cell's gain error)",
+        bounds=(-0.5, 0.5), simpler=3),
+    "time_offset": Fitting(
+        "proportional to the rate of change of the force (a delay between the pose and force "
+        "channels), largest where the force changes fastest",
+        bounds=(-0.5, 0.5), simpler=1, signs=(1.0, -1.0), secants=TIME_OFFSET_STEPS),
+}
+"""How discovery fits each catalog effect, by effect name (the rest of a candidate is the
+catalog's)."""
+
+
+def _candidates() -> tuple[Candidate, ...]:
+    """One candidate per catalog effect, in the catalog's order, with ``FITTING``'s settings."""
+    entries = catalog.describe()
+    missing = [e["name"] for e in entries if e["name"] not in FITTING]
+    extra = sorted(set(FITTING) - {e["name"] for e in entries})
+    if missing or extra:
+        raise GsfricError("discovery's FITTING does not match the effect catalog: "
+                          f"no settings for {missing}, settings for unknown effects {extra}")
+    return tuple(_candidate(e, FITTING[e["name"]]) for e in entries)
+
+
+def _candidate(entry: dict, fitting: Fitting) -> Candidate:
+    """The candidate of one catalog entry (``catalog.describe()``) fitted by ``fitting``."""
+    own = {f.name: getattr(fitting, f.name) for f in fields(Fitting)}
+    return Candidate(name=entry["name"],
+                     parameters={p["name"]: float(p["default"]) for p in entry["parameters"]},
+                     units={p["name"]: p["unit"] for p in entry["parameters"]}, **own)
+
+
+CANDIDATES: tuple[Candidate, ...] = _candidates()
 
 SEPARATING_MOTION = {
     frozenset({"stribeck", "seal_friction"}):

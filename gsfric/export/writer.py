@@ -145,7 +145,7 @@ def check_effects(platform: Platform) -> None:
     carried = set(GENERATED_EFFECTS) | {"force_scale"}
     for name, params in platform.effects.items():
         if name == "time_offset":
-            if params.get("delay", 0.0) != 0.0:
+            if any(v != SENSOR_EFFECTS[name][p] for p, v in params.items()):
                 raise InputError("effects.time_offset: a delay of the force readings acts on a "
                                  "time series, not on one step; the export cannot carry it "
                                  "(remove it from the platform file, or delay F in the "

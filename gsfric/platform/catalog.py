@@ -1,13 +1,14 @@
-"""The catalog of optional effects (names, parameters, defaults, units).
+"""The catalog of optional effects (names, parameters, defaults, units), read from the manifest.
 
-``EFFECTS`` maps effect name -> {parameter: default}; ``describe()`` gives the full entries.
-Two kinds of effect:
+derive/effects.py is the one list of every effect; derive/build.py writes it into
+generated/manifest.json, from which this module reads it. ``EFFECTS`` maps effect name ->
+{parameter: default}; ``describe()`` gives the full entries. Two kinds of effect (an entry's
+``kind``):
 
 * **generated** (``GENERATED_EFFECTS``): terms of the mechanics (friction, loads), defined with
-  their symbolic form in derive/effects.py and listed in the manifest; they are inputs ``Q`` of
-  the compiled functions.
-* **sensor** (``SENSOR_EFFECTS``): errors of the measuring chain, applied by the runtime as a
-  transform of the model's actuator forces F (N, 6) along a motion of times t:
+  their symbolic form in derive/effects.py; they are inputs ``Q`` of the compiled functions.
+* **sensor** (``SENSOR_EFFECTS``): errors of the measuring chain, applied by the runtime (this
+  module) as a transform of the model's actuator forces F (N, 6) along a motion of times t:
 
   - ``force_scale`` (``g1..g6``, 1): a gain error of each load cell,
     ``F_i -> (1 + g_i) F_i``;
@@ -27,47 +28,37 @@ import numpy as np
 
 from gsfric.compiled.manifest import manifest
 
-SENSOR_EFFECTS: dict[str, dict[str, float]] = {
-    "force_scale": {f"g{i}": 0.0 for i in range(1, 7)},
-    "time_offset": {"delay": 0.0},
-}
-"""Sensor effects applied by the runtime: name -> {parameter: default}."""
+GENERATED = "generated"
+"""``kind`` of an effect whose parameters are inputs Q of the compiled functions."""
 
-_SENSOR_DESCRIPTIONS = {
-    "force_scale": ("gain error of each load cell: F_i -> (1 + g_i) F_i", "1",
-                    "relative gain error of load cell {i}"),
-    "time_offset": ("delay of the force channels behind the pose channels: F(t) -> F(t - delay)",
-                    "s", "delay of the force readings behind the poses"),
-}
+SENSOR = "sensor"
+"""``kind`` of an effect that the runtime applies to the model's forces (not in Q)."""
 
 
 def describe() -> list[dict]:
-    """Effects: name, description, parameters (name, default, unit); generated ones first."""
-    out = list(manifest()["effects"])
-    for name, params in SENSOR_EFFECTS.items():
-        text, unit, about = _SENSOR_DESCRIPTIONS[name]
-        out.append({"name": name, "description": text, "kind": "sensor",
-                    "parameters": [{"name": p, "default": d, "unit": unit,
-                                    "description": about.format(i=p[1:])}
-                                   for p, d in params.items()]})
-    return out
+    """Every effect: name, description, kind, parameters (name, default, unit, description);
+    generated ones first, in the order of Q."""
+    return [dict(e) for e in manifest()["effects"]]
 
 
-def _generated() -> dict[str, dict[str, float]]:
+def _of_kind(kind: str) -> dict[str, dict[str, float]]:
+    """Effects of one ``kind``: name -> {parameter: default}, in catalog order."""
     return {e["name"]: {p["name"]: float(p["default"]) for p in e["parameters"]}
-            for e in manifest()["effects"]}
+            for e in manifest()["effects"] if e["kind"] == kind}
 
 
 def parameter_names() -> list[str]:
     """Flat names ``effect.parameter`` of the generated effects: the order of the vector Q."""
-    return [f"{e['name']}.{p['name']}" for e in manifest()["effects"] for p in e["parameters"]]
+    return [f"{e}.{p}" for e, params in _of_kind(GENERATED).items() for p in params]
 
 
 def sensor_parameters(effects: Mapping[str, Mapping[str, float]]) -> tuple[np.ndarray, float]:
     """Gains (6,) and delay (s) of a platform's ``effects`` (defaults where not switched on)."""
+    sensor = _of_kind(SENSOR)
     scale = effects.get("force_scale", {})
-    gains = np.array([float(scale.get(f"g{i}", 0.0)) for i in range(1, 7)])
-    delay = float(effects.get("time_offset", {}).get("delay", 0.0))
+    gains = np.array([float(scale.get(p, d)) for p, d in sensor["force_scale"].items()])
+    (name, default), = sensor["time_offset"].items()
+    delay = float(effects.get("time_offset", {}).get(name, default))
     return gains, delay
 
 
@@ -121,10 +112,14 @@ def sensor_jacobian(t: np.ndarray, F: np.ndarray, gains: np.ndarray, delay: floa
 
 
 def __getattr__(name):
+    """``EFFECTS`` (every effect), ``GENERATED_EFFECTS`` and ``SENSOR_EFFECTS``: name ->
+    {parameter: default}, read from the manifest on first use."""
     if name == "EFFECTS":
-        return {**_generated(), **{k: dict(v) for k, v in SENSOR_EFFECTS.items()}}
+        return {**_of_kind(GENERATED), **_of_kind(SENSOR)}
     if name == "GENERATED_EFFECTS":
-        return _generated()
+        return _of_kind(GENERATED)
+    if name == "SENSOR_EFFECTS":
+        return _of_kind(SENSOR)
     raise AttributeError(name)
 
 
