@@ -26,7 +26,7 @@
  * Rotation test: a call without flags (the control loop's) may still test every step's state
  * for a rotation block that is not a rotation (the test of FLAG_ROTATION, with its settings):
  * such a step's outputs are NaN and the call reports the first of them. The test reads each
- * block of states just before its evaluation reads them again.
+ * block of states right after its evaluation, while they are in the cache.
  */
 #include <math.h>
 #include <pthread.h>
@@ -48,8 +48,8 @@ typedef void (*batch_eval_t)(const double **in, const long long *in_stride, doub
 #define XBLOCK 4096                /* steps per block of a motion input (x: 768 KB); as long as a
                                       batch whose outputs go past the caches (STREAM_STEPS) */
 #define X_SIZE 24                  /* p (3), T (9), v, omega, a, alpha (3 each) */
-#define CHECK_STEPS 4096           /* steps per SIMD call when their rotations are tested first:
-                                      their states (768 KB) stay in the cache for the call, and
+#define CHECK_STEPS 4096           /* steps per SIMD call when their rotations are tested: their
+                                      states (768 KB) are still in the cache for the test, and
                                       every call streams its outputs (STREAM_STEPS) */
 
 typedef struct {
@@ -204,7 +204,7 @@ static void flag_steps(const range_task *t, long long s, long long e, int checke
 }
 
 /* 1 when some step of s..e-1 fails the rotation test of t->check (one pass, no branch per
- * step: a few multiplications per step, on a state about to be read by the evaluation) */
+ * step: a few multiplications per step, on states the evaluation has just read) */
 static int any_rejected(const range_task *t, long long s, long long e)
 {
     const double *x = t->in[0];
@@ -306,7 +306,9 @@ static int blocked(const range_task *t)
 /* A range by the SIMD-over-steps function: one call over the range (long ranges stream
  * their outputs past the caches; the non-finite outputs are found on the vectors before they
  * are written), or with t->check one call per CHECK_STEPS steps (the last taking the rest),
- * each after the rotation test of its states, which brings them into the cache. */
+ * each followed by the rotation test of its states while the call has left them in the
+ * cache (before the call, the test would read them from memory: a pass bound by the memory,
+ * where the evaluation hides those reads behind its arithmetic). */
 static void run_simd(range_task *t)
 {
     const gsfric_fn *fn = t->fn;
@@ -315,13 +317,12 @@ static void run_simd(range_task *t)
         long long e = t->stop - s < 2 * step ? t->stop : s + step;
         const double *in[MAX_ARGS];
         double *out[MAX_ARGS];
-        int rejected = t->check && any_rejected(t, s, e);
         for (int k = 0; k < fn->n_in; ++k) in[k] = t->in[k] + s * t->in_stride[k];
         for (int k = 0; k < fn->n_out; ++k)
             out[k] = t->out[k] ? t->out[k] + s * t->out_stride[k] : 0;
         fn->simd(in, t->in_stride, out, t->out_stride, e - s, t->flags ? t->flag + s : NULL);
         if (t->flags) flag_steps(t, s, e, 1);
-        if (rejected) reject_steps(t, s, e);
+        if (t->check && any_rejected(t, s, e)) reject_steps(t, s, e);
         if (e == t->stop) break;
     }
 }
