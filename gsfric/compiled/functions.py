@@ -251,17 +251,13 @@ class CompiledFunction:
         the errors (default the function's name). The callable holds only read-only arrays
         (the C side builds each call's own argument arrays): threads may share it.
         """
-        fixed = [np.ascontiguousarray(c, dtype=np.float64) for c in constants]
-        n_in = len(self.inputs)
-        fixed_ptrs = (ctypes.c_void_p * n_in)(0, *[c.ctypes.data for c in fixed])
-        in_strides = (ctypes.c_longlong * n_in)(self.inputs[0][1], *([0] * (n_in - 1)))
         index = self._index[output]
         size_x, size_out = self.inputs[0][1], self.outputs[index][1]
+        fixed, fixed_ptrs, in_strides, checked = self._fixed(constants, size_x, check)
         fn = ctypes.byref(self._fn)
         out_strides, name, threads = self._out_strides, caller or self.name, int(n_threads)
         by_object = _objects_readable(self._lib)
         run_one = self._lib.gsfric_run_one_objects if by_object else self._lib.gsfric_run_one
-        checked = None if check is None else ctypes.addressof(check)
         bound, bound_ref, tuples = self._bound_struct(fixed_ptrs, in_strides, index, threads,
                                                       by_object, checked)
         run_tuple = self._lib.gsfric_bound_states
@@ -295,6 +291,17 @@ class CompiledFunction:
         call.keep = (fixed, fixed_ptrs, in_strides, bound, check, self)  # alive with the call
         return call
 
+    def _fixed(self, constants: list[np.ndarray], size_x: int, check: FlagSpec | None):
+        """The fixed arguments of a control-loop callable: the constants as float64 arrays
+        (kept alive by the callable), their pointers (input 0's left null), the inputs'
+        strides (input 0's ``size_x``, the constants broadcast) and the address of the
+        rotation test's settings ``check`` (or None)."""
+        fixed = [np.ascontiguousarray(c, dtype=np.float64) for c in constants]
+        n_in = len(self.inputs)
+        fixed_ptrs = (ctypes.c_void_p * n_in)(0, *[c.ctypes.data for c in fixed])
+        in_strides = (ctypes.c_longlong * n_in)(size_x, *([0] * (n_in - 1)))
+        return fixed, fixed_ptrs, in_strides, None if check is None else ctypes.addressof(check)
+
     def _bound_struct(self, fixed_ptrs, in_strides, index: int, threads: int, by_object: bool,
                       checked: int | None):
         """The fixed arguments of a bound call in one ``_Bound`` (kept alive by the caller;
@@ -314,13 +321,10 @@ class CompiledFunction:
         omega, acceleration, alpha, out=None)``, shapes (N, 3) and rotation (N, 3, 3); arrays
         that are not C-contiguous float64 are converted; ``out`` (N, size) is allocated when
         not given. The states are laid out in C; ``check`` and ``caller`` as in ``bound``."""
-        fixed = [np.ascontiguousarray(c, dtype=np.float64) for c in constants]
-        n_in = len(self.inputs)
         size_x = state_layout().size
         if self.inputs[0][1] != size_x:
             raise GsfricError(f"{self.name}: input 0 is not a motion's state")
-        fixed_ptrs = (ctypes.c_void_p * n_in)(0, *[c.ctypes.data for c in fixed])
-        in_strides = (ctypes.c_longlong * n_in)(size_x, *([0] * (n_in - 1)))
+        fixed, fixed_ptrs, in_strides, checked = self._fixed(constants, size_x, check)
         index = self._index[output]
         size_out = self.outputs[index][1]
         fn = ctypes.byref(self._fn)
@@ -329,7 +333,6 @@ class CompiledFunction:
         by_object = _objects_readable(self._lib)
         run = self._lib.gsfric_run_one_motion_objects if by_object else \
             self._lib.gsfric_run_one_motion
-        checked = None if check is None else ctypes.addressof(check)
         bound, bound_ref, tuples = self._bound_struct(fixed_ptrs, in_strides, index, threads,
                                                       by_object, checked)
         run_tuple = self._lib.gsfric_bound_motion
