@@ -28,6 +28,7 @@ from gsfric.signal.rotations import (
     euler_from_rotation,
     quaternion_from_euler,
     quaternion_from_rotation,
+    rotation_defects,
     rotation_from_quaternion,
     unit_quaternions,
 )
@@ -62,16 +63,7 @@ def first_non_rotation(rotation: np.ndarray) -> tuple[int, str] | None:
     """The first of the (N, 3, 3) matrices that is not a rotation (to ``ROTATION_TOL``, or a
     determinant < 0), as (index, "(|R^T R - I| = 3, det = 8)"); None when all are (NaN
     entries pass: the finite checks name them)."""
-    e = np.ascontiguousarray(rotation.reshape(-1, 9).T)      # entry 3 i + j of every matrix
-    col = [e[j::3] for j in range(3)]                         # column j: (3, N)
-    error = np.zeros(e.shape[1])
-    for j in range(3):                                        # the entries of R^T R - I
-        for k in range(j, 3):
-            gram = col[j][0] * col[k][0] + col[j][1] * col[k][1] + col[j][2] * col[k][2]
-            error = np.fmax(error, np.abs(gram - (j == k)))
-    a, b, c = col
-    det = (a[0] * (b[1] * c[2] - b[2] * c[1]) - a[1] * (b[0] * c[2] - b[2] * c[0])
-           + a[2] * (b[0] * c[1] - b[1] * c[0]))
+    error, det = rotation_defects(rotation)
     bad = np.flatnonzero((error > ROTATION_TOL) | (det < 0))
     if not len(bad):
         return None

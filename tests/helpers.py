@@ -9,9 +9,11 @@ import pandas as pd
 import gsfric
 from gsfric import models
 from gsfric.compiled.manifest import layout
+from gsfric.compiled.state import state_layout
 from gsfric.evaluation import flags
 from gsfric.evaluation.evaluator import state_array
 from gsfric.evaluation.parameters import effect_vector, parameter_vector
+from gsfric.trajectory import ROTATION_TOL
 
 PAPER_MISPRINTS = {
     (1, 10, "MfrE5", "-0.0133", ("digits", "small")),   # an order of magnitude low
@@ -119,7 +121,8 @@ def numpy_flags(x: np.ndarray, arrays: dict, stroke: tuple[float, float] | None)
     x : ndarray (N, 24)
         The states evaluated.
     arrays : dict of name -> ndarray (N, size)
-        Every output of the evaluation; a non-finite step's are set to NaN here.
+        Every output of the evaluation; a non-finite step's, or one whose rotation block is
+        not a rotation, are set to NaN here.
     stroke : (float, float) or None
         As for ``flag_spec``.
 
@@ -143,6 +146,12 @@ def numpy_flags(x: np.ndarray, arrays: dict, stroke: tuple[float, float] | None)
         flag[(finite & (np.abs(arrays["coupling_change"]) > limit).any(axis=1))] |= \
             flags.FLAG_COUPLING
     flag[~finite] |= flags.FLAG_NONFINITE
+    T = x[:, state_layout().rotation].reshape(n, 3, 3)
+    with np.errstate(invalid="ignore"):
+        gram = np.abs(np.einsum("nji,njk->nik", T, T) - np.eye(3)).reshape(n, 9)
+        rotation = (np.nan_to_num(gram, nan=0.0) > ROTATION_TOL).any(axis=1) | \
+            (np.linalg.det(T) < 0)
+    flag[rotation] = flags.FLAG_ROTATION                 # its only flag, outputs NaN
     for v in arrays.values():
-        v[~finite] = np.nan
+        v[~finite | rotation] = np.nan
     return flag

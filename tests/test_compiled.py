@@ -21,10 +21,10 @@ from gsfric.cli import main
 from gsfric.compiled import native
 from gsfric.compiled.functions import _tuples_readable
 from gsfric.compiled.manifest import function as manifest_function
-from gsfric.compiled.state import state_of
-from gsfric.errors import GsfricError
+from gsfric.compiled.state import state_layout, state_of
+from gsfric.errors import GsfricError, InputError
 from gsfric.evaluation.evaluator import Evaluator, state_array
-from gsfric.evaluation.flags import FLAG_NONFINITE
+from gsfric.evaluation.flags import FLAG_NONFINITE, FLAG_ROTATION
 from gsfric.evaluation.paper_constants import paper_constants
 from gsfric.evaluation.parameters import _slots, effect_vector, jacobian_parameters
 from gsfric.evaluation.result import DETAILS
@@ -415,3 +415,74 @@ def test_control_loop_calls_pass_their_arrays_as_one_tuple():
     assert _tuples_readable(lib)
     t = (np.zeros(2), np.ones((3, 4)), None)
     assert [lib.gsfric_tuple_item(t, k) for k in range(3)] == [id(v) for v in t]
+
+
+def _with_non_rotations(x: np.ndarray, steps) -> np.ndarray:
+    """A copy of states x whose rotation blocks at ``steps`` are scaled, mirrored (det -1) or
+    sheared in turn, each far enough for ``ROTATION_TOL``."""
+    x = x.copy()
+    changes = [np.diag([2.0, 2.0, 2.0]), np.diag([-1.0, 1.0, 1.0]), np.eye(3) + np.eye(3, k=1)
+               * 1e-4]
+    for j, k in enumerate(steps):
+        T = x[k, state_layout().rotation].reshape(3, 3)
+        x[k, state_layout().rotation] = (T @ changes[j % 3]).ravel()
+    return x
+
+
+@pytest.mark.parametrize("threads", [1, 2])
+def test_control_loop_calls_name_the_first_non_rotation_of_any_thread_or_block(rng, threads):
+    """Over 2 x 4096 + 21 steps (two threads' ranges, several blocks of a range) the rotation
+    test in C reports the earliest bad step however the steps are split, the bound call (into
+    ``out``) as the general one and the motion's; ``out`` holds NaN at every bad step and the
+    forces of a clean call elsewhere; blocks rounded within the tolerance pass."""
+    n = 2 * 4096 + 21
+    ev = Evaluator(models.reference_platform(), n_threads=threads)
+    x = random_states(rng, n)
+    clean = ev.actuator_forces(x)
+    rounded = x.copy()
+    rounded[:, state_layout().rotation] += rng.uniform(-1e-12, 1e-12, (n, 9))
+    np.testing.assert_allclose(ev.actuator_forces(rounded, np.empty((n, 6))), clean,
+                               rtol=1e-6, atol=1e-6)
+    for steps in ([n - 1], [6000, 3001, 5000], [4097, 4200], [0, n - 1]):
+        bad = _with_non_rotations(x, steps)
+        first = min(steps)
+        out = np.zeros((n, 6))
+        with pytest.raises(InputError, match=rf"^actuator_forces: x\[{first}\]: the rotation "
+                                             r"block is not a rotation \("):
+            ev.actuator_forces(bad, out)
+        assert np.isnan(out[steps]).all()
+        keep = np.setdiff1d(np.arange(n), steps)
+        np.testing.assert_array_equal(out[keep], clean[keep])
+        with pytest.raises(InputError, match=rf"^actuator_forces: x\[{first}\]"):
+            ev.actuator_forces(bad)
+        T = bad[:, state_layout().rotation].reshape(n, 3, 3)
+        p, _, v, w, a, al = state_layout().split(bad)
+        with pytest.raises(InputError, match=rf"^forces: rotation\[{first}\]: not a rotation"):
+            ev.forces(p, T, v, w, a, al)
+
+
+def test_evaluation_flags_a_non_rotation_as_the_exported_library_does(rng):
+    """With flags (evaluate's pass over raw states) a step whose rotation block is not a
+    rotation is flagged FLAG_ROTATION alone, its outputs NaN (as the library of ``gsfric
+    export`` does), the others as without it; the NumPy reference agrees."""
+    n = 300
+    ev = Evaluator(models.reference_platform())
+    x = random_states(rng, n)
+    steps = [0, 7, 150, n - 1]
+    bad = _with_non_rotations(x, steps)
+    bad[150, 5] = np.nan           # T[0, 2]: its sheared columns 0, 1 still flag it alone
+    results = []
+    for states in (x, bad):
+        outs = {name: np.empty((n, size)) for name, size, _ in ev._full.outputs}
+        flag = np.empty(n, dtype=np.int64)
+        ev._full([states, ev.P, ev.Q], outs, flags=ev.flag_spec(), flag=flag)
+        results.append((outs, flag))
+    (clean, flag0), (outs, flag) = results
+    assert (flag[steps] == FLAG_ROTATION).all()
+    keep = np.setdiff1d(np.arange(n), steps)
+    np.testing.assert_array_equal(flag[keep], flag0[keep])
+    raw = ev._full([bad, ev.P, ev.Q])
+    np.testing.assert_array_equal(numpy_flags(bad, raw, ev.platform.geometry.stroke), flag)
+    for name, value in outs.items():
+        assert np.isnan(value[steps]).all(), name
+        np.testing.assert_array_equal(value[keep], clean[name][keep], err_msg=name)

@@ -22,6 +22,11 @@
  * XBLOCK steps in a small buffer of its own and evaluates block after block: no state array of
  * N steps, no pass over the motion before the evaluation. The same blocks give the outputs the
  * flags need but the caller did not ask for (a per-range scratch buffer).
+ *
+ * Rotation test: a call without flags (the control loop's) may still test every step's state
+ * for a rotation block that is not a rotation (the test of FLAG_ROTATION, with its settings):
+ * such a step's outputs are NaN and the call reports the first of them. The test reads each
+ * block of states right after its evaluation, while they are in the cache.
  */
 #include <math.h>
 #include <pthread.h>
@@ -43,6 +48,9 @@ typedef void (*batch_eval_t)(const double **in, const long long *in_stride, doub
 #define XBLOCK 4096                /* steps per block of a motion input (x: 768 KB); as long as a
                                       batch whose outputs go past the caches (STREAM_STEPS) */
 #define X_SIZE 24                  /* p (3), T (9), v, omega, a, alpha (3 each) */
+#define CHECK_STEPS 4096           /* steps per SIMD call when their rotations are tested: their
+                                      states (768 KB) are still in the cache for the test, and
+                                      every call streams its outputs (STREAM_STEPS) */
 
 typedef struct {
     batch_eval_t simd;   /* NULL: none */
@@ -58,6 +66,7 @@ typedef struct {
 #define FLAG_SINGULAR 4
 #define FLAG_UNIVERSAL 8
 #define FLAG_COUPLING 16
+#define FLAG_ROTATION 32
 
 typedef struct {
     int d, s2, h;        /* output indices of leg lengths (6), s2 (6), singularity measure (1) */
@@ -68,7 +77,33 @@ typedef struct {
     long long x_size;         /* values of input 0 per step */
     int cc, f0;               /* output indices of coupling_change (6) and F0 (6), or -1 */
     double coupling_tol;      /* flag |cc| > coupling_tol (1 + |F0|) on a finite step */
+    long long rotation;       /* offset of the rotation block T (9 values, row-major) in
+                                 input 0, or -1: no rotation flag */
+    double rotation_tol;      /* flag an entry of |T^T T - I| above this, or det T < 0 */
 } gsfric_flags;
+
+/* FLAG_ROTATION when the rotation block T of state x is not a rotation (an entry of
+ * |T^T T - I| above fl->rotation_tol, or det T < 0: a scaled, sheared or mirrored matrix),
+ * else 0. NaN entries pass (they are FLAG_NONFINITE). Straight code, no branch: a few
+ * nanoseconds per step in a loop over steps. */
+static inline long long rotation_flag(const gsfric_flags *fl, const double *x)
+{
+    if (fl->rotation < 0) return 0;
+    const double *T = x + fl->rotation;
+    double tol = fl->rotation_tol;
+    /* T^T T - I: the products of T's columns j and k, j <= k */
+    double g00 = T[0] * T[0] + T[3] * T[3] + T[6] * T[6] - 1.0;
+    double g11 = T[1] * T[1] + T[4] * T[4] + T[7] * T[7] - 1.0;
+    double g22 = T[2] * T[2] + T[5] * T[5] + T[8] * T[8] - 1.0;
+    double g01 = T[0] * T[1] + T[3] * T[4] + T[6] * T[7];
+    double g02 = T[0] * T[2] + T[3] * T[5] + T[6] * T[8];
+    double g12 = T[1] * T[2] + T[4] * T[5] + T[7] * T[8];
+    double det = T[0] * (T[4] * T[8] - T[7] * T[5]) - T[3] * (T[1] * T[8] - T[7] * T[2])
+                 + T[6] * (T[1] * T[5] - T[4] * T[2]);
+    int bad = (fabs(g00) > tol) | (fabs(g11) > tol) | (fabs(g22) > tol) | (fabs(g01) > tol)
+              | (fabs(g02) > tol) | (fabs(g12) > tol) | (det < 0.0);
+    return bad ? FLAG_ROTATION : 0;
+}
 
 /* The bits of one step from its outputs (NULL: not computed, that flag not raised) and
  * whether every value of the step is finite. The geometric causes are tested on the values
@@ -106,6 +141,8 @@ typedef struct {
     long long start, stop;
     long long failed;
     const double *const *motion;  /* NULL, or the six arrays of a motion in place of input 0 */
+    const gsfric_flags *check;    /* NULL, or (without flags) the rotation test of input 0 */
+    long long rejected;           /* the first step that fails `check`, or -1 */
 } range_task;
 
 /* 1 when none of y[0..n) is infinite or NaN (exponent bits all set), by integer operations
@@ -128,8 +165,19 @@ static const double *step_row(const range_task *t, int k, long long i)
     return k >= 0 && t->out[k] ? t->out[k] + i * t->out_stride[k] : NULL;
 }
 
+/* Set every output of step i to NaN */
+static void clear_step(const range_task *t, long long i)
+{
+    for (int k = 0; k < t->fn->n_out; ++k) {
+        if (!t->out[k]) continue;
+        double *y = t->out[k] + i * t->out_stride[k];
+        for (long long j = 0; j < t->out_stride[k]; ++j) y[j] = NAN;
+    }
+}
+
 /* Flag steps s..e-1 into t->flag. With `checked`, t->flag[i] already holds 1 where some
- * output of step i is non-finite (the SIMD function's `bad`), else the outputs are checked. */
+ * output of step i is non-finite (the SIMD function's `bad`), else the outputs are checked.
+ * A step flagged FLAG_ROTATION has no other flag, and NaN outputs as a non-finite one. */
 static void flag_steps(const range_task *t, long long s, long long e, int checked)
 {
     const gsfric_flags *fl = t->flags;
@@ -148,15 +196,31 @@ static void flag_steps(const range_task *t, long long s, long long e, int checke
         const double *h = step_row(t, fl->h, i);
         const double *cc = step_row(t, fl->f0, i) ? step_row(t, fl->cc, i) : NULL;
         const double *F0 = cc ? step_row(t, fl->f0, i) : NULL;
-        long long f = step_flags(fl, finite, D, s2, h, cc, F0);
-        if (!finite) {
-            for (int k = 0; k < n_out; ++k) {
-                if (!t->out[k]) continue;
-                double *y = t->out[k] + i * t->out_stride[k];
-                for (long long j = 0; j < t->out_stride[k]; ++j) y[j] = NAN;
-            }
-        }
+        long long rotation = rotation_flag(fl, x);
+        long long f = rotation ? rotation : step_flags(fl, finite, D, s2, h, cc, F0);
+        if (!finite || rotation) clear_step(t, i);
         t->flag[i] = f;
+    }
+}
+
+/* 1 when some step of s..e-1 fails the rotation test of t->check (one pass, no branch per
+ * step: a few multiplications per step, on states the evaluation has just read) */
+static int any_rejected(const range_task *t, long long s, long long e)
+{
+    const double *x = t->in[0];
+    long long stride = t->in_stride[0], bad = 0;
+    for (long long i = s; i < e; ++i) bad |= rotation_flag(t->check, x + i * stride);
+    return bad != 0;
+}
+
+/* After the evaluation of steps s..e-1 of which some fail the rotation test: their outputs
+ * NaN, the first of them in t->rejected (unless an earlier one is there) */
+static void reject_steps(range_task *t, long long s, long long e)
+{
+    for (long long i = s; i < e; ++i) {
+        if (!rotation_flag(t->check, t->in[0] + i * t->in_stride[0])) continue;
+        clear_step(t, i);
+        if (t->rejected < 0) t->rejected = i;
     }
 }
 
@@ -218,9 +282,11 @@ static void run_blocks(range_task *t)
         for (int k = 0; k < n_out; ++k)
             out[k] = t->out[k] ? t->out[k] + s * t->out_stride[k] : scratch[k];
         range_task block = {fn, in, in_stride, out, t->out_stride, t->flags,
-                            t->flag ? t->flag + s : NULL, t->use_simd, 0, e - s, 0, NULL};
+                            t->flag ? t->flag + s : NULL, t->use_simd, 0, e - s, 0, NULL,
+                            t->check, -1};
         run_range(&block);
         t->failed += block.failed;
+        if (t->rejected < 0 && block.rejected >= 0) t->rejected = s + block.rejected;
     }
 done:
     free(x);
@@ -235,6 +301,30 @@ static int blocked(const range_task *t)
     for (int q = 0; q < n_need; ++q)
         if (need[q] >= 0 && need[q] < t->fn->n_out && !t->out[need[q]]) return 1;
     return 0;
+}
+
+/* A range by the SIMD-over-steps function: one call over the range (long ranges stream
+ * their outputs past the caches; the non-finite outputs are found on the vectors before they
+ * are written), or with t->check one call per CHECK_STEPS steps (the last taking the rest),
+ * each followed by the rotation test of its states while the call has left them in the
+ * cache (before the call, the test would read them from memory: a pass bound by the memory,
+ * where the evaluation hides those reads behind its arithmetic). */
+static void run_simd(range_task *t)
+{
+    const gsfric_fn *fn = t->fn;
+    long long step = t->check ? CHECK_STEPS : t->stop - t->start;
+    for (long long s = t->start; s < t->stop; s += step) {
+        long long e = t->stop - s < 2 * step ? t->stop : s + step;
+        const double *in[MAX_ARGS];
+        double *out[MAX_ARGS];
+        for (int k = 0; k < fn->n_in; ++k) in[k] = t->in[k] + s * t->in_stride[k];
+        for (int k = 0; k < fn->n_out; ++k)
+            out[k] = t->out[k] ? t->out[k] + s * t->out_stride[k] : 0;
+        fn->simd(in, t->in_stride, out, t->out_stride, e - s, t->flags ? t->flag + s : NULL);
+        if (t->flags) flag_steps(t, s, e, 1);
+        if (t->check && any_rejected(t, s, e)) reject_steps(t, s, e);
+        if (e == t->stop) break;
+    }
 }
 
 static void *run_range(void *arg)
@@ -265,20 +355,10 @@ static void *run_range(void *arg)
         }
     }
     if (t->use_simd) {
-        /* one call over the range (long ranges stream their outputs past the caches); the
-         * non-finite outputs are found on the vectors before they are written */
-        const double *my_in[MAX_ARGS];
-        double *my_out[MAX_ARGS];
-        long long s = t->start;
-        for (int k = 0; k < n_in; ++k) my_in[k] = t->in[k] + s * t->in_stride[k];
-        for (int k = 0; k < n_out; ++k)
-            my_out[k] = t->out[k] ? t->out[k] + s * t->out_stride[k] : 0;
-        fn->simd(my_in, t->in_stride, my_out, t->out_stride, t->stop - s,
-                 t->flags ? t->flag + s : NULL);
-        if (t->flags) flag_steps(t, s, t->stop, 1);
+        run_simd(t);
         goto done;
     }
-    long long block = t->flags ? BLOCK : t->stop - t->start;
+    long long block = t->flags || t->check ? BLOCK : t->stop - t->start;
     for (long long s = t->start; s < t->stop; s += block) {
         long long e = s + block < t->stop ? s + block : t->stop;
         for (long long i = s; i < e; ++i) {
@@ -288,6 +368,7 @@ static void *run_range(void *arg)
             if (fn->eval(carg, cres, iw, w, 0)) t->failed += 1;
         }
         if (t->flags) flag_steps(t, s, e, 0);
+        if (t->check && any_rejected(t, s, e)) reject_steps(t, s, e);
     }
 done:
     free(carg);
@@ -298,11 +379,16 @@ done:
 }
 
 /* Evaluate fn over n steps (and flag them when flags is not NULL: flag[i] gets step i's bits).
- * Returns the number of steps whose evaluation reported an error. */
+ * With check instead of flags: the rotation test of check (rotation_flag) on the state of
+ * every step; the steps that fail it get NaN outputs, and *rejected the first of them (-1:
+ * none). Returns the number of steps whose evaluation reported an error. */
 long long gsfric_run(const gsfric_fn *fn, const double **in, const long long *in_stride,
                      double **out, const long long *out_stride, long long n, int n_threads,
-                     const gsfric_flags *flags, long long *flag, const double *const *motion)
+                     const gsfric_flags *flags, long long *flag, const double *const *motion,
+                     const gsfric_flags *check, long long *rejected)
 {
+    if (rejected) *rejected = -1;
+    if (flags || !rejected) check = NULL;
     if (fn->n_in > MAX_ARGS || fn->n_out > MAX_ARGS) return n;
     if (n <= 0) return 0;
     int use_simd = fn->simd != NULL;
@@ -322,7 +408,7 @@ long long gsfric_run(const gsfric_fn *fn, const double **in, const long long *in
         long long lo = k ? (n * k / n_threads) & ~7LL : 0;
         long long hi = k + 1 < n_threads ? (n * (k + 1) / n_threads) & ~7LL : n;
         tasks[k] = (range_task){fn, in, in_stride, out, out_stride, flags, flag, use_simd,
-                                lo, hi, 0, motion};
+                                lo, hi, 0, motion, check, -1};
     }
     for (int k = 1; k < n_threads; ++k)
         started[k] = pthread_create(&threads[k], NULL, run_range, &tasks[k]) == 0;
@@ -334,25 +420,39 @@ long long gsfric_run(const gsfric_fn *fn, const double **in, const long long *in
             run_range(&tasks[k]);  /* no thread to be had: run it here */
     }
     long long failed = 0;
-    for (int k = 0; k < n_threads; ++k) failed += tasks[k].failed;
+    for (int k = 0; k < n_threads; ++k) {
+        failed += tasks[k].failed;
+        if (check && *rejected < 0) *rejected = tasks[k].rejected;
+    }
     return failed;
 }
 
+/* A control-loop call's status: 0; k + 1 when step k is the first whose state fails the
+ * rotation test; -m when the evaluation failed at m steps */
+static long long status(long long failed, long long rejected)
+{
+    return failed ? -failed : rejected + 1;
+}
+
 /* The control loop's call: input 0 is x, the others are fixed[k] (read only, shared); only
- * output `index` is computed, into y. The argument arrays are this call's own. */
+ * output `index` is computed, into y; every state has the rotation test of check (NULL:
+ * none). The argument arrays are this call's own. Returns the call's status (`status`). */
 long long gsfric_run_one(const gsfric_fn *fn, const double **fixed, const long long *in_stride,
                          const long long *out_stride, const double *x, int index, double *y,
-                         long long n, int n_threads)
+                         long long n, int n_threads, const gsfric_flags *check)
 {
     const double *in[MAX_ARGS];
     double *out[MAX_ARGS];
+    long long rejected;
     if (fn->n_in > MAX_ARGS || fn->n_out > MAX_ARGS || index < 0 || index >= fn->n_out)
-        return n;
+        return -n;
     for (int k = 0; k < fn->n_in; ++k) in[k] = fixed[k];
     in[0] = x;
     for (int k = 0; k < fn->n_out; ++k) out[k] = 0;
     out[index] = y;
-    return gsfric_run(fn, in, in_stride, out, out_stride, n, n_threads, NULL, NULL, NULL);
+    long long failed = gsfric_run(fn, in, in_stride, out, out_stride, n, n_threads, NULL, NULL,
+                                  NULL, check, &rejected);
+    return status(failed, rejected);
 }
 
 /* The same from a motion's six arrays (see the top of this file) instead of x. */
@@ -360,18 +460,22 @@ long long gsfric_run_one_motion(const gsfric_fn *fn, const double **fixed,
                                 const long long *in_stride, const long long *out_stride,
                                 const double *p, const double *T, const double *v,
                                 const double *w, const double *a, const double *alpha,
-                                int index, double *y, long long n, int n_threads)
+                                int index, double *y, long long n, int n_threads,
+                                const gsfric_flags *check)
 {
     const double *in[MAX_ARGS];
     double *out[MAX_ARGS];
     const double *motion[6] = {p, T, v, w, a, alpha};
+    long long rejected;
     if (fn->n_in > MAX_ARGS || fn->n_out > MAX_ARGS || index < 0 || index >= fn->n_out)
-        return n;
+        return -n;
     for (int k = 0; k < fn->n_in; ++k) in[k] = fixed[k];
     in[0] = NULL;
     for (int k = 0; k < fn->n_out; ++k) out[k] = 0;
     out[index] = y;
-    return gsfric_run(fn, in, in_stride, out, out_stride, n, n_threads, NULL, NULL, motion);
+    long long failed = gsfric_run(fn, in, in_stride, out, out_stride, n, n_threads, NULL, NULL,
+                                  motion, check, &rejected);
+    return status(failed, rejected);
 }
 
 /* The control loop's calls can take NumPy arrays as Python objects: their data pointer is
@@ -389,10 +493,10 @@ long long gsfric_array_data(const void *obj) { return (long long)array_data(obj)
 long long gsfric_run_one_objects(const gsfric_fn *fn, const double **fixed,
                                  const long long *in_stride, const long long *out_stride,
                                  const void *x, int index, const void *y, long long n,
-                                 int n_threads)
+                                 int n_threads, const gsfric_flags *check)
 {
     return gsfric_run_one(fn, fixed, in_stride, out_stride, array_data(x), index,
-                          array_data(y), n, n_threads);
+                          array_data(y), n, n_threads, check);
 }
 
 long long gsfric_run_one_motion_objects(const gsfric_fn *fn, const double **fixed,
@@ -400,11 +504,12 @@ long long gsfric_run_one_motion_objects(const gsfric_fn *fn, const double **fixe
                                         const long long *out_stride, const void *p,
                                         const void *T, const void *v, const void *w,
                                         const void *a, const void *alpha, int index,
-                                        const void *y, long long n, int n_threads)
+                                        const void *y, long long n, int n_threads,
+                                        const gsfric_flags *check)
 {
     return gsfric_run_one_motion(fn, fixed, in_stride, out_stride, array_data(p),
                                  array_data(T), array_data(v), array_data(w), array_data(a),
-                                 array_data(alpha), index, array_data(y), n, n_threads);
+                                 array_data(alpha), index, array_data(y), n, n_threads, check);
 }
 
 /* The control loop's call with its fixed arguments in one structure, built once per bound
@@ -420,6 +525,7 @@ typedef struct {
     const long long *out_stride;
     int index;
     int n_threads;
+    const gsfric_flags *check;  /* the rotation test of every state, or NULL */
 } gsfric_bound;
 
 static const void *tuple_item(const void *tuple, int k)
@@ -434,7 +540,7 @@ long long gsfric_bound_states(const gsfric_bound *b, const void *arrays, long lo
 {
     return gsfric_run_one(b->fn, b->fixed, b->in_stride, b->out_stride,
                           array_data(tuple_item(arrays, 0)), b->index,
-                          array_data(tuple_item(arrays, 1)), n, b->n_threads);
+                          array_data(tuple_item(arrays, 1)), n, b->n_threads, b->check);
 }
 
 /* arrays: (position, rotation, velocity, omega, acceleration, alpha, out) */
@@ -444,7 +550,8 @@ long long gsfric_bound_motion(const gsfric_bound *b, const void *arrays, long lo
     for (int k = 0; k < 6; ++k) m[k] = array_data(tuple_item(arrays, k));
     return gsfric_run_one_motion(b->fn, b->fixed, b->in_stride, b->out_stride, m[0], m[1],
                                  m[2], m[3], m[4], m[5], b->index,
-                                 array_data(tuple_item(arrays, 6)), n, b->n_threads);
+                                 array_data(tuple_item(arrays, 6)), n, b->n_threads,
+                                 b->check);
 }
 
 #ifdef GSFRIC_PER_STEP_ONLY

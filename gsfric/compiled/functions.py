@@ -16,6 +16,7 @@ import numpy as np
 from gsfric.compiled.manifest import BASENAME, function
 from gsfric.compiled.state import motion_arrays, state_layout
 from gsfric.errors import GsfricError, InputError, InputTypeError
+from gsfric.signal.rotations import rotation_defects
 
 
 class _Fn(ctypes.Structure):
@@ -28,7 +29,8 @@ class _Bound(ctypes.Structure):
 
     _fields_ = [("fn", ctypes.POINTER(_Fn)), ("fixed", ctypes.c_void_p),
                 ("in_stride", ctypes.c_void_p), ("out_stride", ctypes.c_void_p),
-                ("index", ctypes.c_int), ("n_threads", ctypes.c_int)]
+                ("index", ctypes.c_int), ("n_threads", ctypes.c_int),
+                ("check", ctypes.c_void_p)]
 
 
 class FlagSpec(ctypes.Structure):
@@ -38,7 +40,8 @@ class FlagSpec(ctypes.Structure):
                 ("has_stroke", ctypes.c_int), ("stroke_lo", ctypes.c_double),
                 ("stroke_hi", ctypes.c_double), ("universal_limit", ctypes.c_double),
                 ("singular_limit", ctypes.c_double), ("x_size", ctypes.c_longlong),
-                ("cc", ctypes.c_int), ("f0", ctypes.c_int), ("coupling_tol", ctypes.c_double)]
+                ("cc", ctypes.c_int), ("f0", ctypes.c_int), ("coupling_tol", ctypes.c_double),
+                ("rotation", ctypes.c_longlong), ("rotation_tol", ctypes.c_double)]
 
     def outputs_read(self) -> tuple[int, ...]:
         """The indices of the outputs the flags read (``flag_outputs`` in ``batch.c``): they
@@ -52,24 +55,26 @@ def declare(lib: ctypes.CDLL) -> ctypes.CDLL:
     lib.gsfric_run.restype = ctypes.c_longlong
     lib.gsfric_run.argtypes = [ctypes.POINTER(_Fn), ctypes.c_void_p, ctypes.c_void_p,
                                ctypes.c_void_p, ctypes.c_void_p, ctypes.c_longlong, ctypes.c_int,
-                               ctypes.c_void_p, ctypes.c_void_p, ctypes.c_void_p]
+                               ctypes.c_void_p, ctypes.c_void_p, ctypes.c_void_p,
+                               ctypes.c_void_p, ctypes.c_void_p]
+    check = ctypes.c_void_p  # the gsfric_flags of the rotation test, or None
     lib.gsfric_run_one.restype = ctypes.c_longlong
     lib.gsfric_run_one.argtypes = [ctypes.POINTER(_Fn), ctypes.c_void_p, ctypes.c_void_p,
                                    ctypes.c_void_p, ctypes.c_void_p, ctypes.c_int,
-                                   ctypes.c_void_p, ctypes.c_longlong, ctypes.c_int]
+                                   ctypes.c_void_p, ctypes.c_longlong, ctypes.c_int, check]
     lib.gsfric_run_one_motion.restype = ctypes.c_longlong
     lib.gsfric_run_one_motion.argtypes = [ctypes.POINTER(_Fn), ctypes.c_void_p, ctypes.c_void_p,
                                           ctypes.c_void_p, *([ctypes.c_void_p] * 6),
                                           ctypes.c_int, ctypes.c_void_p, ctypes.c_longlong,
-                                          ctypes.c_int]
+                                          ctypes.c_int, check]
     objects = [ctypes.POINTER(_Fn), ctypes.c_void_p, ctypes.c_void_p, ctypes.c_void_p]
     lib.gsfric_run_one_objects.restype = ctypes.c_longlong
     lib.gsfric_run_one_objects.argtypes = objects + [ctypes.py_object, ctypes.c_int,
                                                      ctypes.py_object, ctypes.c_longlong,
-                                                     ctypes.c_int]
+                                                     ctypes.c_int, check]
     lib.gsfric_run_one_motion_objects.restype = ctypes.c_longlong
     lib.gsfric_run_one_motion_objects.argtypes = objects + [ctypes.py_object] * 6 + [
-        ctypes.c_int, ctypes.py_object, ctypes.c_longlong, ctypes.c_int]
+        ctypes.c_int, ctypes.py_object, ctypes.c_longlong, ctypes.c_int, check]
     for bound in (lib.gsfric_bound_states, lib.gsfric_bound_motion):
         bound.restype = ctypes.c_longlong
         bound.argtypes = [ctypes.c_void_p, ctypes.py_object, ctypes.c_longlong]
@@ -115,7 +120,8 @@ class CompiledFunction:
 
     def __call__(self, inputs, outputs=None, n_threads: int = 1, select=None,
                  flags: FlagSpec | None = None, flag: np.ndarray | None = None,
-                 motion=None) -> dict:
+                 motion=None, check: FlagSpec | None = None, caller: str | None = None
+                 ) -> dict:
         """Evaluate over N steps.
 
         Parameters
@@ -135,6 +141,11 @@ class CompiledFunction:
         motion : sequence of 6 ndarray, optional
             position (N, 3), rotation (N, 3, 3), velocity, omega, acceleration, alpha (N, 3)
             in place of the state input 0 (laid out in C, block by block: no (N, 24) array).
+        check : FlagSpec, optional
+            Without ``flags``: the rotation test of ``check`` (``rotation``, ``rotation_tol``)
+            on every step's state; the first step that fails it is an ``InputError`` (step
+            and the measure that fails, ``caller`` naming the call; default the function's
+            name). With ``flags`` the steps are flagged ``FLAG_ROTATION`` instead.
 
         Returns
         -------
@@ -152,22 +163,30 @@ class CompiledFunction:
             (ctypes.c_void_p * 6)(*[a.ctypes.data for a in parts])
         out_ptrs = (ctypes.c_void_p * len(self.outputs))()
         result = self._output_buffers(outputs or {}, select, n, out_ptrs)
-        flag_ptr = None
-        if flags is not None:
-            if flag is None or flag.shape != (n,) or flag.dtype != np.int64 or \
-                    not flag.flags.c_contiguous:
-                raise InputError(f"{self.name}: flag must be a C-contiguous int64 array of "
-                                  f"shape ({n},)")
-            if not flag.flags.writeable:
-                raise InputError(read_only(self.name, "flag"))
-            flag_ptr = flag.ctypes.data
+        flag_ptr = None if flags is None else self._flag_pointer(flag, n)
+        rejected = ctypes.c_longlong(-1)
         failed = self._lib.gsfric_run(ctypes.byref(self._fn), in_ptrs, in_strides, out_ptrs,
                                       self._out_strides, n, int(n_threads),
                                       None if flags is None else ctypes.byref(flags), flag_ptr,
-                                      motion_ptrs)
+                                      motion_ptrs, None if check is None else ctypes.byref(check),
+                                      ctypes.byref(rejected))
         if failed:
             raise GsfricError(f"{self.name}: evaluation failed at {failed} steps")
+        if rejected.value >= 0:
+            raise not_rotation(caller or self.name, rejected.value, check,
+                               states=arrays[0], rotation=None if parts is None else parts[1])
         return result
+
+    def _flag_pointer(self, flag: np.ndarray | None, n: int) -> int:
+        """The data pointer of the step flags' array ``flag``, checked: int64 (n,),
+        C-contiguous, writeable."""
+        if flag is None or flag.shape != (n,) or flag.dtype != np.int64 or \
+                not flag.flags.c_contiguous:
+            raise InputError(f"{self.name}: flag must be a C-contiguous int64 array of "
+                              f"shape ({n},)")
+        if not flag.flags.writeable:
+            raise InputError(read_only(self.name, "flag"))
+        return flag.ctypes.data
 
     def _input_arrays(self, inputs, parts: list[np.ndarray] | None) -> tuple[list, int]:
         """The inputs as C-contiguous float64 arrays (None for a state laid out from the
@@ -220,27 +239,27 @@ class CompiledFunction:
             result[name] = buf
         return result
 
-    def bound(self, constants: list[np.ndarray], output: str, n_threads: int = 1):
+    def bound(self, constants: list[np.ndarray], output: str, n_threads: int = 1,
+              check: FlagSpec | None = None, caller: str | None = None):
         """A lean callable ``f(x, out)`` for the control loop's repeated calls.
 
         Input 0 varies (``x``, C-contiguous float64 of shape (N, size)); the other inputs are
         fixed to ``constants`` (one block each, broadcast to every step); only ``output`` is
         computed, into ``out`` (C-contiguous float64, (N, size)). Shapes are checked, nothing
-        is copied or allocated. The callable holds only read-only arrays (the C side builds
-        each call's own argument arrays): threads may share it.
+        is copied or allocated. With ``check``, every state has its rotation test (as in
+        ``__call__``; the rows of the steps that fail it are NaN); ``caller`` names the call in
+        the errors (default the function's name). The callable holds only read-only arrays
+        (the C side builds each call's own argument arrays): threads may share it.
         """
-        fixed = [np.ascontiguousarray(c, dtype=np.float64) for c in constants]
-        n_in = len(self.inputs)
-        fixed_ptrs = (ctypes.c_void_p * n_in)(0, *[c.ctypes.data for c in fixed])
-        in_strides = (ctypes.c_longlong * n_in)(self.inputs[0][1], *([0] * (n_in - 1)))
         index = self._index[output]
         size_x, size_out = self.inputs[0][1], self.outputs[index][1]
+        fixed, fixed_ptrs, in_strides, checked = self._fixed(constants, size_x, check)
         fn = ctypes.byref(self._fn)
-        out_strides, name, threads = self._out_strides, self.name, int(n_threads)
+        out_strides, name, threads = self._out_strides, caller or self.name, int(n_threads)
         by_object = _objects_readable(self._lib)
         run_one = self._lib.gsfric_run_one_objects if by_object else self._lib.gsfric_run_one
         bound, bound_ref, tuples = self._bound_struct(fixed_ptrs, in_strides, index, threads,
-                                                      by_object)
+                                                      by_object, checked)
         run_tuple = self._lib.gsfric_bound_states
 
         def call(x: np.ndarray, out: np.ndarray) -> np.ndarray:
@@ -258,51 +277,64 @@ class CompiledFunction:
                 raise InputError(f"{name}: x must be C-contiguous float64 (N, {size_x}) "
                                   f"and out (N, {size_out})")
             if tuples:
-                run_tuple(bound_ref, (x, out), x.shape[0])
+                status = run_tuple(bound_ref, (x, out), x.shape[0])
             elif by_object:
-                run_one(fn, fixed_ptrs, in_strides, out_strides, x, index, out, x.shape[0],
-                        threads)
+                status = run_one(fn, fixed_ptrs, in_strides, out_strides, x, index, out,
+                                 x.shape[0], threads, checked)
             else:
-                run_one(fn, fixed_ptrs, in_strides, out_strides, x.ctypes.data, index,
-                        out.ctypes.data, x.shape[0], threads)
+                status = run_one(fn, fixed_ptrs, in_strides, out_strides, x.ctypes.data, index,
+                                 out.ctypes.data, x.shape[0], threads, checked)
+            if status:
+                raise _failure(status, name, check, states=x)
             return out
 
-        call.keep = (fixed, fixed_ptrs, in_strides, bound, self)  # alive with the callable
+        call.keep = (fixed, fixed_ptrs, in_strides, bound, check, self)  # alive with the call
         return call
 
-    def _bound_struct(self, fixed_ptrs, in_strides, index: int, threads: int, by_object: bool):
-        """The fixed arguments of a bound call in one ``_Bound`` (kept alive by the caller),
-        a reference to it, and whether the call may pass its arrays in one tuple; ``(None,
-        None, False)`` when it may not (the struct is only read by the tuple calls)."""
+    def _fixed(self, constants: list[np.ndarray], size_x: int, check: FlagSpec | None):
+        """The fixed arguments of a control-loop callable: the constants as float64 arrays
+        (kept alive by the callable), their pointers (input 0's left null), the inputs'
+        strides (input 0's ``size_x``, the constants broadcast) and the address of the
+        rotation test's settings ``check`` (or None)."""
+        fixed = [np.ascontiguousarray(c, dtype=np.float64) for c in constants]
+        n_in = len(self.inputs)
+        fixed_ptrs = (ctypes.c_void_p * n_in)(0, *[c.ctypes.data for c in fixed])
+        in_strides = (ctypes.c_longlong * n_in)(size_x, *([0] * (n_in - 1)))
+        return fixed, fixed_ptrs, in_strides, None if check is None else ctypes.addressof(check)
+
+    def _bound_struct(self, fixed_ptrs, in_strides, index: int, threads: int, by_object: bool,
+                      checked: int | None):
+        """The fixed arguments of a bound call in one ``_Bound`` (kept alive by the caller;
+        ``checked``: the address of the rotation test's settings, or None), a reference to
+        it, and whether the call may pass its arrays in one tuple; ``(None, None, False)``
+        when it may not (the struct is only read by the tuple calls)."""
         if not (by_object and _tuples_readable(self._lib)):
             return None, None, False
         bound = _Bound(ctypes.pointer(self._fn), ctypes.cast(fixed_ptrs, ctypes.c_void_p),
                        ctypes.cast(in_strides, ctypes.c_void_p),
-                       ctypes.cast(self._out_strides, ctypes.c_void_p), index, threads)
+                       ctypes.cast(self._out_strides, ctypes.c_void_p), index, threads, checked)
         return bound, ctypes.byref(bound), True
 
-    def bound_motion(self, constants: list[np.ndarray], output: str, n_threads: int = 1):
+    def bound_motion(self, constants: list[np.ndarray], output: str, n_threads: int = 1,
+                     check: FlagSpec | None = None, caller: str | None = None):
         """``bound``'s callable from a motion's arrays: ``f(position, rotation, velocity,
         omega, acceleration, alpha, out=None)``, shapes (N, 3) and rotation (N, 3, 3); arrays
         that are not C-contiguous float64 are converted; ``out`` (N, size) is allocated when
-        not given. The states are laid out in C."""
-        fixed = [np.ascontiguousarray(c, dtype=np.float64) for c in constants]
-        n_in = len(self.inputs)
+        not given. The states are laid out in C; ``check`` and ``caller`` as in ``bound``."""
         size_x = state_layout().size
         if self.inputs[0][1] != size_x:
             raise GsfricError(f"{self.name}: input 0 is not a motion's state")
-        fixed_ptrs = (ctypes.c_void_p * n_in)(0, *[c.ctypes.data for c in fixed])
-        in_strides = (ctypes.c_longlong * n_in)(size_x, *([0] * (n_in - 1)))
+        fixed, fixed_ptrs, in_strides, checked = self._fixed(constants, size_x, check)
         index = self._index[output]
         size_out = self.outputs[index][1]
         fn = ctypes.byref(self._fn)
-        out_strides, name, threads = self._out_strides, self.name, int(n_threads)
+        out_strides, name, threads = self._out_strides, caller or self.name, int(n_threads)
         f64 = np.float64
         by_object = _objects_readable(self._lib)
         run = self._lib.gsfric_run_one_motion_objects if by_object else \
             self._lib.gsfric_run_one_motion
         bound, bound_ref, tuples = self._bound_struct(fixed_ptrs, in_strides, index, threads,
-                                                      by_object)
+                                                      by_object, checked)
         run_tuple = self._lib.gsfric_bound_motion
         empty = np.empty
 
@@ -332,18 +364,44 @@ class CompiledFunction:
             elif not out.flags.writeable:
                 raise InputError(read_only(name, "out"))
             if tuples:
-                run_tuple(bound_ref, (p, T, v, w, a, al, out), n)
+                status = run_tuple(bound_ref, (p, T, v, w, a, al, out), n)
             elif by_object:
-                run(fn, fixed_ptrs, in_strides, out_strides, p, T, v, w, a, al, index, out, n,
-                    threads)
+                status = run(fn, fixed_ptrs, in_strides, out_strides, p, T, v, w, a, al, index,
+                             out, n, threads, checked)
             else:
-                run(fn, fixed_ptrs, in_strides, out_strides, p.ctypes.data, T.ctypes.data,
-                    v.ctypes.data, w.ctypes.data, a.ctypes.data, al.ctypes.data, index,
-                    out.ctypes.data, n, threads)
+                status = run(fn, fixed_ptrs, in_strides, out_strides, p.ctypes.data,
+                             T.ctypes.data, v.ctypes.data, w.ctypes.data, a.ctypes.data,
+                             al.ctypes.data, index, out.ctypes.data, n, threads, checked)
+            if status:
+                raise _failure(status, name, check, rotation=T)
             return out
 
-        call.keep = (fixed, fixed_ptrs, in_strides, bound, self)  # alive with the callable
+        call.keep = (fixed, fixed_ptrs, in_strides, bound, check, self)  # alive with the call
         return call
+
+
+def not_rotation(name: str, step: int, check: FlagSpec, states: np.ndarray | None = None,
+                 rotation: np.ndarray | None = None) -> InputError:
+    """The error for step ``step`` of a call ``name``, whose rotation block failed the test of
+    ``check`` (``rotation_flag`` in batch.c): the block of ``states`` (N, size) or (size,), or
+    ``rotation`` (N, 3, 3) of a motion, and the measure that fails."""
+    if rotation is None:
+        block = states.reshape(-1, states.shape[-1])[step, check.rotation:check.rotation + 9]
+        where = f"x[{step}]: the rotation block is"
+    else:
+        block, where = rotation[step], f"rotation[{step}]:"
+    error, det = (float(v[0]) for v in rotation_defects(np.reshape(block, (1, 3, 3))))
+    why = (f"|R^T R - I| = {error:.3g} > {check.rotation_tol:g}"
+           if error > check.rotation_tol else f"det R = {det:.3g} < 0")
+    return InputError(f"{name}: {where} not a rotation ({why})")
+
+
+def _failure(status: int, name: str, check: FlagSpec | None, **arrays) -> GsfricError:
+    """The error of a control-loop call's non-zero ``status`` (``status`` in batch.c): the
+    evaluation failed at -status steps, or step status - 1 is ``not_rotation``."""
+    if status < 0:
+        return GsfricError(f"{name}: evaluation failed at {-status} steps")
+    return not_rotation(name, status - 1, check, **arrays)
 
 
 def read_only(name: str, argument: str) -> str:

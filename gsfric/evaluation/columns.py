@@ -105,7 +105,8 @@ COLUMNS: tuple[Column, ...] = (
            "(Result.MfrC)", "friction_detail", "MfrC"),
     Column("flag", "1", "0 for a sound step; else the sum of 1 (non-finite value), 2 (leg "
            "length outside the stroke), 4 (near-singular platform Jacobian), 8 (leg near its "
-           "universal joint's first axis), 16 (coupled friction solve not converged)", "flags"),
+           "universal joint's first axis), 16 (coupled friction solve not converged), 32 "
+           "(rotation block of the state not a rotation matrix)", "flags"),
 )
 """Every column of ``Result.to_frame``, in order."""
 

@@ -25,9 +25,9 @@ from tqdm import tqdm
 from gsfric._checks import as_count, as_flag, short
 from gsfric.compiled import native
 from gsfric.compiled.functions import FlagSpec
-from gsfric.compiled.state import first_nonfinite, state_layout, state_of
+from gsfric.compiled.state import first_nonfinite, state_of
 from gsfric.errors import GsfricWarning, InputError, InputTypeError, StepFlagError
-from gsfric.evaluation.flags import FLAG_NONFINITE, flag_message, flag_spec
+from gsfric.evaluation.flags import FLAG_NONFINITE, flag_message, flag_spec, rotation_spec
 from gsfric.evaluation.memory import aligned_empty
 from gsfric.evaluation.paper_constants import paper_constants as pc
 from gsfric.evaluation.parameters import model_function, packed, uniform_model
@@ -40,7 +40,7 @@ from gsfric.evaluation.uncertainty import (
 )
 from gsfric.platform.catalog import apply_sensor, sensor_parameters
 from gsfric.platform.description import Platform
-from gsfric.trajectory import ROTATION_TOL, Motion, first_non_rotation
+from gsfric.trajectory import Motion
 
 MODES = ("kinematic", "paper")
 UNCERTAINTY_OUTPUTS = {"sigma_F": 6, "rest": 1}
@@ -127,10 +127,10 @@ class Evaluator:
 
         ``P`` and ``Q`` may be given per step, (N, size), to vary parameters along the batch.
         No flags: the control loop's call. A finite state whose forces are not finite (a
-        singular pose) gives its NaN or infinite row; ``evaluate`` flags such steps. With
-        ``out`` and the Evaluator's own parameters (the control loop's call) the rotation
-        blocks are trusted, not checked (a check costs more than the evaluation of a few
-        steps): ``Motion`` and ``evaluate`` check them.
+        singular pose) gives its NaN or infinite row; ``evaluate`` flags such steps. Every
+        state's rotation block is tested in C as it is evaluated (``FLAG_ROTATION``'s test,
+        ``gsfric.trajectory.ROTATION_TOL``): a step that fails it raises, with or without
+        ``out`` (whose rows of such steps are then NaN).
 
         Raises
         ------
@@ -139,8 +139,7 @@ class Evaluator:
         InputError
             A wrong shape or dtype, ``P`` or ``Q`` of another shape than (size,) or (N, size),
             a read-only ``out``, a NaN or infinite state (naming its row), a rotation block
-            that is not a rotation (``gsfric.trajectory.ROTATION_TOL``; without ``out``, or
-            with ``P`` or ``Q``), paper mode.
+            that is not a rotation (naming the first such step, ``x[k]``), paper mode.
         """
         if self.mode != "kinematic":
             raise InputError("actuator_forces: the kinematic mode's hot path; this Evaluator "
@@ -150,14 +149,15 @@ class Evaluator:
             actuator = self._calls.get(key)
             if actuator is None:  # two threads may both build one: either is right
                 actuator = self._calls[key] = native.get(self._actuator).bound(
-                    [self.P, self.Q], "F", self.n_threads)
+                    [self.P, self.Q], "F", self.n_threads, rotation_spec(), "actuator_forces")
             return _finite_states(actuator(x, out), "actuator_forces", x)
         P = self.P if P is None else _parameters(P, "actuator_forces", "P", self.P.size)
         Q = self.Q if Q is None else _parameters(Q, "actuator_forces", "Q", self.Q.size)
         f = native.get(self._actuator if P is self.P
                        else model_function("actuator", uniform_model(P)))
-        res = f([x, P, Q], None if out is None else {"F": out}, self.n_threads)
-        return _checked_states(res["F"], "actuator_forces", x)
+        res = f([x, P, Q], None if out is None else {"F": out}, self.n_threads,
+                check=rotation_spec(), caller="actuator_forces")
+        return _finite_states(res["F"], "actuator_forces", x)
 
     def forces(self, position, rotation, velocity, omega, acceleration, alpha,
                out: np.ndarray | None = None) -> np.ndarray:
@@ -174,16 +174,16 @@ class Evaluator:
         out : ndarray (N, 6), optional
             C-contiguous float64 buffer for the result.
 
-        The states are laid out in C, block by block (no ``state_array``); no flags. The
-        rotation matrices are trusted, not checked (the control loop's call; ``Motion`` checks
-        them).
+        The states are laid out in C, block by block (no ``state_array``); no flags. Every
+        rotation matrix is tested in C as it is evaluated (as in ``actuator_forces``).
 
         Raises
         ------
         InputTypeError
             An argument that is not an array of numbers.
         InputError
-            Wrong shapes, a NaN or infinite value (naming the array and row), paper mode.
+            Wrong shapes, a NaN or infinite value (naming the array and row), a matrix that
+            is not a rotation (naming the first, ``rotation[k]``), paper mode.
         """
         if self.mode != "kinematic":
             raise InputError("forces: the kinematic mode's hot path; this Evaluator is in "
@@ -192,7 +192,7 @@ class Evaluator:
         call = self._calls.get(key)
         if call is None:  # two threads may both build one: either is right
             call = self._calls[key] = native.get(self._actuator).bound_motion(
-                [self.P, self.Q], "F", self.n_threads)
+                [self.P, self.Q], "F", self.n_threads, rotation_spec(), "forces")
         F = call(position, rotation, velocity, omega, acceleration, alpha, out)
         if not math.isfinite(_total(F, None)):
             motion = (position, rotation, velocity, omega, acceleration, alpha)
@@ -213,16 +213,17 @@ class Evaluator:
         Raises
         ------
         InputTypeError, InputError
-            As ``actuator_forces``: not an array, a wrong shape, a NaN or infinite state.
+            As ``actuator_forces``: not an array, a wrong shape, a NaN or infinite state, a
+            rotation block that is not a rotation.
         """
         Q = self.Q if Q is None else _parameters(Q, "jacobian", "Q", self.Q.size)
         P = self.P if P is None else _parameters(P, "jacobian", "P", self.P.size)
-        res = native.get("jacobian")([x, P, Q], None, self.n_threads)
+        res = native.get("jacobian")([x, P, Q], None, self.n_threads, check=rotation_spec(),
+                                     caller="jacobian")
         x = np.asarray(x, dtype=float)
         where = first_nonfinite(x.reshape(-1, x.shape[-1]))
         if where is not None:
             raise InputError(f"jacobian: state {where} is not finite; give finite states")
-        _state_rotations(x, "jacobian")
         n = res["F"].shape[0]
         # CasADi stores the (6, n_theta) Jacobian column-major
         return res["F"], res["dF"].reshape(n, -1, 6).transpose(0, 2, 1)
@@ -435,31 +436,6 @@ def _finite_states(F: np.ndarray, name: str, x) -> np.ndarray:
     if where is not None:
         raise InputError(f"{name}: state {where} is not finite; give finite states")
     return F
-
-
-def _checked_states(F: np.ndarray, name: str, x) -> np.ndarray:
-    """``F`` of the states ``x`` once they are known finite (``_finite_states``) and their
-    rotation blocks rotations (``_state_rotations``)."""
-    _finite_states(F, name, x)
-    _state_rotations(np.asarray(x, dtype=float), name)
-    return F
-
-
-def _state_rotations(x: np.ndarray, name: str) -> None:
-    """``InputError`` when the rotation block of a state (N, size) or (size,) is not a
-    rotation."""
-    states = state_layout()
-    rows = x.reshape(-1, states.size)
-    _rotations(rows[:, states.rotation].reshape(-1, 3, 3), name, "state row")
-
-
-def _rotations(rotation: np.ndarray, name: str, where: str) -> None:
-    """``InputError`` naming the first of the (N, 3, 3) matrices that is not a rotation
-    (``gsfric.trajectory.first_non_rotation``, the check of ``Motion``)."""
-    bad = first_non_rotation(rotation.reshape(-1, 3, 3))
-    if bad is not None:
-        raise InputError(f"{name}: {where} {bad[0]} is not a rotation matrix {bad[1]}; "
-                         f"|R^T R - I| must be at most {ROTATION_TOL:g} and det > 0")
 
 
 def _parameters(value, name: str, argument: str, size: int) -> np.ndarray:

@@ -15,11 +15,16 @@ Step flags (bits of ``Result.flag``; 0 = sound step):
   undefined;
 * 16 ``FLAG_COUPLING``: the coupled friction model's fixed point has not converged: the axial
   forces changed by more than ``COUPLING_TOLERANCE * (1 N + |F0|)`` over the last of its
-  iterations (joint friction so large that it nearly locks the mechanism; docs/explanation/friction.md).
+  iterations (joint friction so large that it nearly locks the mechanism; docs/explanation/friction.md);
+* 32 ``FLAG_ROTATION``: the state's rotation block is not a rotation (an entry of
+  ``|T^T T - I|`` above ``gsfric.trajectory.ROTATION_TOL``, or ``det T < 0``): the step's only
+  flag, its outputs NaN. ``Motion`` refuses such a matrix, so an evaluation never has one;
+  the control loop's calls, which take raw states and return no flags, run the same test in C
+  with ``rotation_spec`` and raise ``InputError`` naming the step; a controller's call to the
+  library of ``gsfric export`` cannot raise, and flags it.
 
 Every flag is computed in C in the same pass as the outputs (``compiled/batch.c``) with the
 settings of ``flag_spec`` (tests/helpers.py has an independent NumPy version for the tests).
-The library of ``gsfric export`` adds 32 ``FLAG_ROTATION`` (``EXPORT_FLAG_BITS``).
 
 ``check_flagged`` refuses a record whose steps are mostly flagged, naming the flag and its
 cause in the platform (``flag_cause``).
@@ -28,6 +33,7 @@ cause in the platform (``flag_cause``).
 from __future__ import annotations
 
 import dataclasses
+import functools
 
 import numpy as np
 
@@ -36,28 +42,23 @@ from gsfric.compiled.state import state_layout
 from gsfric.errors import InputError
 from gsfric.platform.description import Platform
 from gsfric.platform.usable import FIXES, MOSTLY, home_height
+from gsfric.trajectory import ROTATION_TOL
 
 FLAG_NONFINITE = 1
 FLAG_STROKE = 2
 FLAG_SINGULAR = 4
 FLAG_UNIVERSAL = 8
 FLAG_COUPLING = 16
+FLAG_ROTATION = 32
 FLAG_NAMES = {FLAG_NONFINITE: "non-finite value", FLAG_STROKE: "leg length outside the stroke",
               FLAG_SINGULAR: "near-singular platform Jacobian",
               FLAG_UNIVERSAL: "leg near its universal joint's first axis",
-              FLAG_COUPLING: "coupled friction solve not converged"}
+              FLAG_COUPLING: "coupled friction solve not converged",
+              FLAG_ROTATION: "rotation block of the state not a rotation matrix"}
 FLAG_BITS = {"NONFINITE": FLAG_NONFINITE, "STROKE": FLAG_STROKE, "SINGULAR": FLAG_SINGULAR,
-             "UNIVERSAL": FLAG_UNIVERSAL, "COUPLING": FLAG_COUPLING}
-"""Each flag's name (``FLAG_<name>`` here and in compiled/batch.c) and bit."""
-FLAG_ROTATION = 32
-EXPORT_FLAG_NAMES = {**FLAG_NAMES,
-                     FLAG_ROTATION: "rotation block of the state not a rotation matrix"}
-EXPORT_FLAG_BITS = {**FLAG_BITS, "ROTATION": FLAG_ROTATION}
-"""The flags of the library ``gsfric export`` writes: the ones above and ``ROTATION``, a state
-whose rotation block is not a rotation (``gsfric.trajectory.ROTATION_TOL``, the test of
-``first_non_rotation``; its outputs are NaN). gsfric raises ``InputError`` for such a state
-before evaluating it (``Motion``, ``Evaluator``); a controller's call cannot raise, so the
-library flags it."""
+             "UNIVERSAL": FLAG_UNIVERSAL, "COUPLING": FLAG_COUPLING, "ROTATION": FLAG_ROTATION}
+"""Each flag's name (``FLAG_<name>`` here, in compiled/batch.c and, with the library's
+prefix, in the library of ``gsfric export``) and bit."""
 COUPLING_TOLERANCE = 1e-6
 COND_LIMIT = 1e6
 SINGULAR_LIMIT = 2.0 / COND_LIMIT
@@ -77,9 +78,21 @@ def flag_spec(outputs, stroke: tuple[float, float] | None) -> FlagSpec:
     """
     index = {name: k for k, (name, _, _) in enumerate(outputs)}
     lo, hi = stroke if stroke is not None else (0.0, 0.0)
+    states = state_layout()
     return FlagSpec(index["D"], index["s2"], index["h"], stroke is not None, lo, hi,
-                    UNIVERSAL_LIMIT, SINGULAR_LIMIT, state_layout().size,
-                    index.get("coupling_change", -1), index.get("F0", -1), COUPLING_TOLERANCE)
+                    UNIVERSAL_LIMIT, SINGULAR_LIMIT, states.size,
+                    index.get("coupling_change", -1), index.get("F0", -1), COUPLING_TOLERANCE,
+                    states.rotation.start, ROTATION_TOL)
+
+
+@functools.lru_cache(maxsize=None)
+def rotation_spec() -> FlagSpec:
+    """The settings of ``FLAG_ROTATION``'s test alone (no output read, no other flag): the
+    ``check`` of the compiled calls that return no flags (``CompiledFunction``), so that the
+    control loop's calls refuse the states ``evaluate`` would flag. Shared, read only."""
+    states = state_layout()
+    return FlagSpec(-1, -1, -1, 0, 0.0, 0.0, UNIVERSAL_LIMIT, SINGULAR_LIMIT, states.size,
+                    -1, -1, COUPLING_TOLERANCE, states.rotation.start, ROTATION_TOL)
 
 
 def _index_list(idx: np.ndarray, limit: int = 10) -> str:
@@ -153,6 +166,9 @@ def flag_cause(platform: Platform, bit: int) -> str:
             return (f"platform key {huge[0][0]} = {huge[0][1]:g}: beyond {HUGE:g} the model's "
                     "products overflow (every output infinite or NaN); give it in SI units")
         return f"the values of the poses or of the platform overflow; fix with {FIXES}"
+    if bit == FLAG_ROTATION:
+        return ("the rotation matrices of the poses are not rotations (scaled, sheared or "
+                f"mirrored beyond {ROTATION_TOL:g}): build them from quaternions or angles")
     if bit == FLAG_SINGULAR:
         return ("the platform's force Jacobian is near singular at these poses: "
                 "geometry.base_joints and geometry.platform_joints (joints that make the legs "

@@ -97,8 +97,8 @@ def state_macros(prefix: str) -> str:
 def flag_macros(prefix: str) -> str:
     """``#define PREFIX_FLAG_<NAME> bit`` for every step flag, with what it means."""
     upper = prefix.upper()
-    return "\n".join(f"#define {upper}_FLAG_{name} {bit}  /* {flags.EXPORT_FLAG_NAMES[bit]} */"
-                     for name, bit in flags.EXPORT_FLAG_BITS.items())
+    return "\n".join(f"#define {upper}_FLAG_{name} {bit}  /* {flags.FLAG_NAMES[bit]} */"
+                     for name, bit in flags.FLAG_BITS.items())
 
 
 def flag_settings(spec) -> str:

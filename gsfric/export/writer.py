@@ -27,7 +27,6 @@ from gsfric.export import folded, source, text
 from gsfric.io.files import output_folder
 from gsfric.platform.catalog import GENERATED_EFFECTS, SENSOR_EFFECTS, sensor_parameters
 from gsfric.platform.description import Platform
-from gsfric.trajectory import ROTATION_TOL
 
 MODELS = ("coupled", "paper")
 CODES = ("specialised", "generic")
@@ -247,9 +246,8 @@ def _values(platform: Platform, platform_file, model: str, prefix: str,
         "state_table": "\n".join(f"| {o} | {'x'.join(map(str, s))} | {u} | {n}: {d} |"
                                  for o, s, u, n, d in state),
         "flag_table": "\n".join(f"| {bit} `{prefix.upper()}_FLAG_{key}` | "
-                                f"{flags.EXPORT_FLAG_NAMES[bit]} |"
-                                for key, bit in flags.EXPORT_FLAG_BITS.items()),
-        "rotation_tol": text.number(ROTATION_TOL, "ROTATION_TOL"),
+                                f"{flags.FLAG_NAMES[bit]} |"
+                                for key, bit in flags.FLAG_BITS.items()),
     }
 
 

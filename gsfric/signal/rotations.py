@@ -21,6 +21,24 @@ def _scipy_rotation():
     """SciPy's ``Rotation`` class, loaded on first use (``gsfric._optional``)."""
     return optional("scipy.spatial.transform").Rotation
 
+def rotation_defects(rotation: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """How far each of the (N, 3, 3) matrices is from a rotation: the largest entry of
+    |R^T R - I| (N,) (the entries a NaN makes NaN left out) and the determinant (N,) (a
+    rotation: 0 and 1). The test of ``gsfric.trajectory.first_non_rotation`` and of the
+    compiled code's ``rotation_flag`` (gsfric/compiled/batch.c)."""
+    e = np.ascontiguousarray(np.reshape(rotation, (-1, 9)).T)  # entry 3 i + j of every matrix
+    col = [e[j::3] for j in range(3)]                          # column j: (3, N)
+    error = np.zeros(e.shape[1])
+    for j in range(3):                                         # the entries of R^T R - I
+        for k in range(j, 3):
+            gram = col[j][0] * col[k][0] + col[j][1] * col[k][1] + col[j][2] * col[k][2]
+            error = np.fmax(error, np.abs(gram - (j == k)))
+    a, b, c = col
+    det = (a[0] * (b[1] * c[2] - b[2] * c[1]) - a[1] * (b[0] * c[2] - b[2] * c[0])
+           + a[2] * (b[0] * c[1] - b[1] * c[0]))
+    return error, det
+
+
 def rotation_from_euler(alpha: np.ndarray | float, beta: np.ndarray | float,
                         gamma: np.ndarray | float) -> np.ndarray:
     """Rotation matrices ``Rz(gamma) Rx(beta) Rz(alpha)`` from ZXZ angles.

@@ -5,6 +5,7 @@ settings given to every public entry point; each must raise the library's own er
 from __future__ import annotations
 
 import functools
+import re
 
 import numpy as np
 from makers import platform, trajectory
@@ -12,6 +13,7 @@ from runner import ApiCase
 
 import gsfric
 from gsfric import models
+from gsfric.compiled.state import state_layout
 from gsfric.discovery import discover
 from gsfric.errors import InputError, InputTypeError
 from gsfric.evaluation.evaluator import Evaluator, state_array
@@ -328,10 +330,27 @@ def _bytes_view() -> np.ndarray:
     return np.frombuffer(bytes(11 * 6 * 8)).reshape(11, 6)
 
 
-def _scaled_rotation(k: int = 4) -> np.ndarray:
+def _not_rotation(kind: str, k: int) -> np.ndarray:
+    """X() with the rotation block T of step k scaled by 2, mirrored (a column negated: det
+    -1, T^T T = I), sheared (1e-3 of column 0 added to column 1), holding a NaN, or within the
+    tolerance (1e-12 added to every entry)."""
     x = X()
-    x[k, 3:12] *= 2.0
+    T = x[k, state_layout().rotation].reshape(3, 3)     # a view into x
+    if kind == "scaled":
+        T *= 2.0
+    elif kind == "mirrored":
+        T[:, 0] *= -1.0
+    elif kind == "sheared":
+        T[:, 1] += 1e-3 * T[:, 0]
+    elif kind == "nan":
+        T[1, 1] = np.nan
+    else:
+        T += 1e-12
     return x
+
+
+def _rotations(x: np.ndarray) -> np.ndarray:
+    return x[:, state_layout().rotation].reshape(-1, 3, 3)
 
 
 OUTPUTS = {
@@ -350,15 +369,33 @@ PARAMETERS = {
 }
 """Every call that takes a parameter vector (P, Q) given per call."""
 
+STATE_CALLS = {
+    "actuator": (lambda x: Evaluator(P()).actuator_forces(x), "actuator_forces: x"),
+    "actuator-out": (lambda x: Evaluator(P()).actuator_forces(x, np.empty((11, 6))),
+                     "actuator_forces: x"),
+    "actuator-per-step-q": (lambda x: Evaluator(P()).actuator_forces(
+        x, Q=np.tile(Evaluator(P()).Q, (11, 1))), "actuator_forces: x"),
+    "jacobian": (lambda x: Evaluator(P()).jacobian(x), "jacobian: x"),
+    "forces": (lambda x: _forces(None, _rotations(x)), "forces: rotation"),
+    "forces-out": (lambda x: Evaluator(P()).forces(
+        M().position, _rotations(x), M().velocity, M().omega, M().acceleration, M().alpha,
+        np.empty((11, 6))), "forces: rotation"),
+}
+"""Every call that evaluates states given as arrays, and the start of its error for step k:
+each tests every step's rotation block in the compiled code (``FLAG_ROTATION``'s test)."""
+
+NOT_ROTATIONS = {"scaled": r"\(\|R\^T R - I\| = 3 > 1e-06\)$",
+                 "mirrored": r"\(det R = -1 < 0\)$",
+                 "sheared": r"\(\|R\^T R - I\| = 0\.001 > 1e-06\)$"}
+"""Blocks that are no rotation (``_not_rotation``) and the end of the error they give."""
+
 ROTATIONS = {
-    "actuator": lambda: Evaluator(P()).actuator_forces(_scaled_rotation()),
-    "actuator-one-state": lambda: Evaluator(P()).actuator_forces(_scaled_rotation(0)[0]),
-    "jacobian": lambda: Evaluator(P()).jacobian(_scaled_rotation()),
+    "actuator-one-state": lambda: Evaluator(P()).actuator_forces(
+        _not_rotation("scaled", 0)[0]),
     "motion-mirrored": lambda: _motion(rotation=-np.array(M().rotation)),
     "motion": lambda: _motion(rotation=np.array(M().rotation) * 2.0),
 }
-"""Every call that checks rotation matrices (a state's rotation block): one check, ``Motion``'s.
-The control loop's calls (``actuator_forces`` into ``out``, ``forces``) trust them."""
+"""The other calls that check rotation matrices: a single state; ``Motion``."""
 
 
 def _array_rows() -> list:
@@ -377,7 +414,28 @@ def _array_rows() -> list:
                   "array of numbers", TypeError)]
     for name, call in ROTATIONS.items():
         rows.append((f"{name}-not-a-rotation", lambda f, c=call: c(), V,
-                     r"not a rotation matrix \(\|R\^T R - I\| = \d", ValueError))
+                     r"not a rotation( matrix)? \(\|R\^T R - I\| = \d", ValueError))
+    return rows + _state_rotation_rows()
+
+
+def _state_rotation_rows() -> list:
+    """Each state call (``STATE_CALLS``) with each kind of block that is no rotation, a NaN in
+    the block and a rotation within the tolerance, at the first and the last step."""
+    rows = []
+    for name, (call, start) in STATE_CALLS.items():
+        what = ": the rotation block is" if start.endswith("x") else ":"
+        for k in (0, 10):
+            for kind, end in NOT_ROTATIONS.items():
+                rows.append((f"{name}-{kind}-step-{k}", lambda f, c=call, a=(kind, k):
+                             c(_not_rotation(*a)), V,
+                             rf"^{re.escape(start)}\[{k}\]{what} not a rotation {end}",
+                             ValueError))
+            nan = (rf"^{start.split(':')[0]}: state row {k} \(rotation\) is not finite"
+                   if start.endswith("x") else rf"^forces: rotation row {k} is not finite")
+            rows.append((f"{name}-nan-step-{k}", lambda f, c=call, k=k:
+                         c(_not_rotation("nan", k)), V, nan, ValueError))
+            rows.append((f"{name}-within-tolerance-step-{k}", lambda f, c=call, k=k:
+                         c(_not_rotation("within", k)), None, "", None))
     return rows
 
 
