@@ -250,7 +250,7 @@ def _manifest(funcs: list, meta: dict, files: dict[str, bytes]) -> dict:
         coupled_iterations=coupled.N_ITERATIONS,
         jacobian_parameters=meta["theta"],
         jacobian_platform_parameters=list(JACOBIAN_P),
-        effects=[dict(name=e.name, description=e.description, kind=e.kind,
+        effects=[dict(name=e.name, description=e.description, term=e.term, kind=e.kind,
                       parameters=[dict(name=p.name, default=p.default, unit=p.unit,
                                        description=p.description) for p in e.parameters])
                  for e in fx.CATALOG],

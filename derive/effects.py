@@ -2,7 +2,7 @@
 
 Every generated effect is a symbolic term always present in the generated functions, with its
 parameters as inputs; the parameters switch it on (all defaults leave the model unchanged). The
-names are a contract (see SPEC); the parameters are documented here and in
+names are a contract of the platform files and the command line; the parameters are documented here and in
 docs/reference/effects.md.
 
 Prismatic-joint friction effects add to the friction force on the upper part ``F_fr`` (along u,
@@ -87,9 +87,12 @@ class Effect:
     Attributes
     ----------
     name : str
-        Effect name, fixed by SPEC (``stribeck``).
+        Effect name (``stribeck``), a contract of the platform files and the command line.
     description : str
         One line on what it is.
+    term : str
+        The term it adds, in plain text (``F_fr`` the prismatic friction force on the upper
+        part along the leg, ``v`` the sliding speed, ``F_i`` leg i's actuator force).
     parameters : tuple of Parameter
         Its parameters, in the order they take in Q (generated effects).
     kind : str
@@ -99,51 +102,63 @@ class Effect:
 
     name: str
     description: str
+    term: str
     parameters: tuple[Parameter, ...]
     kind: str = GENERATED
 
 
 CATALOG: tuple[Effect, ...] = (
-    Effect("stribeck", "low-speed friction peak in the prismatic joints", (
+    Effect("stribeck", "low-speed friction peak in the prismatic joints",
+           "F_fr += -sgn(v) static exp(-(v/velocity)^2)", (
         Parameter("static", 0.0, "N", "height of the friction peak at zero speed"),
         Parameter("velocity", 0.01, "m/s", "Stribeck velocity: speed at which the peak decays by 1/e"),
     )),
-    Effect("seal_friction", "load-independent Coulomb friction in the prismatic joints", (
+    Effect("seal_friction", "load-independent Coulomb friction in the prismatic joints",
+           "F_fr += -sgn(v) force", (
         Parameter("force", 0.0, "N", "Coulomb force of the seals"),
     )),
-    Effect("quadratic_drag", "prismatic friction growing with v|v|", (
+    Effect("quadratic_drag", "prismatic friction growing with v abs(v)",
+           "F_fr += -coefficient v abs(v)", (
         Parameter("coefficient", 0.0, "N s^2/m^2", "drag coefficient"),
     )),
-    Effect("stroke_friction", "prismatic friction varying along the stroke", (
+    Effect("stroke_friction", "prismatic friction varying along the stroke",
+           "F_fr += -sgn(v) slope (D - reference)", (
         Parameter("slope", 0.0, "N/m", "change of Coulomb force per metre of leg length"),
         Parameter("reference", 0.0, "m", "leg length at which the change is zero"),
     )),
-    Effect("payload_offset", "payload centre of mass away from its nominal position", (
+    Effect("payload_offset", "payload centre of mass away from its nominal position",
+           "payload centre of mass += (x, y, z) (platform frame)", (
         Parameter("x", 0.0, "m", "offset along the platform's x axis"),
         Parameter("y", 0.0, "m", "offset along the platform's y axis"),
         Parameter("z", 0.0, "m", "offset along the platform's z axis"),
     )),
-    Effect("sensor_bias", "constant offset in each force reading", tuple(
+    Effect("sensor_bias", "constant offset in each force reading",
+           "F_i += b_i", tuple(
         Parameter(f"b{i}", 0.0, "N", f"offset of F{i}") for i in range(1, 7)
     )),
     Effect("joint_friction_coupling",
-           "friction moments of the spherical and universal joints carried by the actuators", (
+           "friction moments of the spherical and universal joints carried by the actuators",
+           "joint friction moments (33)-(34) enter the equilibrium, times scale", (
                Parameter("scale", 0.0, "1", "fraction of the joint friction moments included"),
            )),
-    Effect("leg_weight", "weight of the leg parts, for a model without it", (
+    Effect("leg_weight", "weight of the leg parts, for a model without it",
+           "gravity on mass lower_mass at the lower part's centre, upper_mass at the upper "
+           "part's", (
         Parameter("lower_mass", 0.0, "kg", "mass whose weight acts at the lower part's centre"),
         Parameter("upper_mass", 0.0, "kg", "mass whose weight acts at the upper part's centre"),
     )),
-    Effect("bushing_friction", "prismatic friction from the bushing forces of the moment M_3", (
+    Effect("bushing_friction", "prismatic friction from the bushing forces of the moment M_3",
+           "F_fr += -sgn(v) coefficient 2 norm(u x M_3) / spacing", (
         Parameter("coefficient", 0.0, "1", "friction coefficient of the bushings"),
         Parameter("spacing", 0.1, "m", "distance between the two bushings"),
     )),
-    Effect("force_scale", "gain error of each load cell: F_i -> (1 + g_i) F_i", tuple(
+    Effect("force_scale", "gain error of each load cell",
+           "F_i -> (1 + g_i) F_i", tuple(
         Parameter(f"g{i}", 0.0, "1", f"relative gain error of load cell {i}")
         for i in range(1, 7)
     ), kind=SENSOR),
-    Effect("time_offset",
-           "delay of the force channels behind the pose channels: F(t) -> F(t - delay)", (
+    Effect("time_offset", "delay of the force channels behind the pose channels",
+           "F(t) -> F(t - delay)", (
                Parameter("delay", 0.0, "s", "delay of the force readings behind the poses"),
            ), kind=SENSOR),
 )

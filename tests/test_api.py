@@ -23,6 +23,7 @@ from gsfric.errors import InputError
 from gsfric.evaluation import columns
 from gsfric.evaluation.evaluator import Evaluator
 from gsfric.evaluation.memory import _POOL, POOL_MIN_BYTES, release_memory
+from gsfric.platform import catalog
 from gsfric.platform.catalog import describe
 
 ROOT = Path(__file__).resolve().parent.parent
@@ -118,6 +119,18 @@ def test_columns_listing_and_reference_table_come_from_one_source():
     assert block, "docs/reference/columns.md has no generated output table"
     assert block.group(1).strip() == table, (
         "docs/reference/columns.md's table is stale: paste `gsfric columns --markdown`")
+
+
+def test_effects_reference_table_comes_from_the_catalog():
+    table = CliRunner().invoke(main, ["effects", "--markdown"]).output.strip()
+    assert table == catalog.markdown_table()
+    rows = table.splitlines()[2:]
+    assert [row.split("`")[1] for row in rows] == [e["name"] for e in catalog.describe()]
+    page = (ROOT / "docs" / "reference" / "effects.md").read_text()
+    block = re.search(r"<!-- effects: begin.*?-->\n(.*?)\n<!-- effects: end -->", page, re.S)
+    assert block, "docs/reference/effects.md has no generated table"
+    assert block.group(1).strip() == table, (
+        "docs/reference/effects.md's table is stale: paste `gsfric effects --markdown`")
 
 
 def test_effects_listing_names_every_parameter_with_its_unit():

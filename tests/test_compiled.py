@@ -260,7 +260,8 @@ def test_runtime_catalog_is_derives_catalog_and_only_generated_effects_are_in_Q(
     the manifest with its kind, defaults, units and descriptions; Q (the compiled functions'
     input, the Jacobian's effect columns) holds the generated effects' parameters only, so a
     sensor effect leaking into Q would change its size."""
-    entries = [{"name": e.name, "description": e.description, "kind": e.kind,
+    entries = [{"name": e.name, "description": e.description, "term": e.term,
+                "kind": e.kind,
                 "parameters": [{"name": p.name, "default": p.default, "unit": p.unit,
                                 "description": p.description} for p in e.parameters]}
                for e in fx.CATALOG]

@@ -36,9 +36,20 @@ SENSOR = "sensor"
 
 
 def describe() -> list[dict]:
-    """Every effect: name, description, kind, parameters (name, default, unit, description);
-    generated ones first, in the order of Q."""
+    """Every effect: name, description, term, kind, parameters (name, default, unit,
+    description); generated ones first, in the order of Q."""
     return [dict(e) for e in manifest()["effects"]]
+
+
+def markdown_table() -> str:
+    """The reference's table of effects (docs/reference/effects.md, between its markers)."""
+    lines = ["| effect | what | term | parameters (default, unit) |", "|---|---|---|---|"]
+    for e in describe():
+        what = e["description"] + (" (sensor effect)" if e["kind"] == SENSOR else "")
+        params = "; ".join(f"`{p['name']}` ({p['default']:g}, {p['unit']}): {p['description']}"
+                           for p in e["parameters"])
+        lines.append(f"| `{e['name']}` | {what} | `{e['term']}` | {params} |")
+    return "\n".join(lines)
 
 
 def _of_kind(kind: str) -> dict[str, dict[str, float]]:
