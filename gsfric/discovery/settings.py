@@ -44,7 +44,10 @@ class Settings:
     plausible : mapping or None
         Plausible ranges ``{name: (lower, upper)}`` replacing the defaults of ``REFIT``.
     gauss_newton : int
-        Most Gauss-Newton iterations of a refinement.
+        Most evaluations of the model's forces in a refinement (the trust-region
+        Gauss-Newton of ``evaluation.fitting.fit``; 0 keeps the start). A refinement
+        stops at its cost tolerance within a dozen on the calibration records (a Stribeck
+        peak from a secant's start takes the most); the rest is headroom.
     n_threads : int
         Threads of the compiled evaluation (0: every core).
 
@@ -63,7 +66,7 @@ class Settings:
     candidates: tuple[str, ...] = CANDIDATE_NAMES
     refit: tuple[str, ...] = tuple(r.name for r in REFIT)
     plausible: Mapping[str, tuple[float, float]] | None = None
-    gauss_newton: int = 4
+    gauss_newton: int = 30
     n_threads: int = 0
 
     # -- the data ------------------------------------------------------------------------
