@@ -45,9 +45,10 @@ class Settings:
         Plausible ranges ``{name: (lower, upper)}`` replacing the defaults of ``REFIT``.
     gauss_newton : int
         Most evaluations of the model's forces in a refinement (the trust-region
-        Gauss-Newton of ``evaluation.fitting.fit``; 0 keeps the start). A refinement
-        stops at its cost tolerance within a dozen on the calibration records (a Stribeck
-        peak from a secant's start takes the most); the rest is headroom.
+        Gauss-Newton of ``evaluation.fitting.fit``; 0 keeps the start). Near its solution a
+        refinement meets its cost tolerance in a few; a Stribeck peak refined from its
+        secant's start takes about a dozen; more than 30 means the model does not describe
+        the data.
     n_threads : int
         Threads of the compiled evaluation (0: every core).
 
