@@ -6,10 +6,10 @@ starts from the linear weighted least-squares estimate on the regressor at the p
 unknowns are the body's log-Cholesky coordinates (``parameters.body_from_factor``: consistent
 by construction) and every other parameter within its bounds (``evaluation.fitting.fit``:
 ``scipy.optimize.least_squares``, trust-region reflective, on the regressor of
-``regressor.Model``). Directions the data do not
-reach (the regressor's null space at the prior, ``regressor.structure``) are held at the
-prior's values by extra residual rows as stiff as the best-determined direction: they leave the
-identifiable directions free and make the solution unique.
+``regressor.Model``). Directions the data do not reach (the regressor's null space at the
+prior, ``regressor.structure``) are held at the prior's values by extra residual rows as stiff
+as the best-determined direction: they leave the identifiable directions free and make the
+solution unique.
 """
 
 from __future__ import annotations
