@@ -118,7 +118,9 @@ class _Problem:
             data = data @ D
         if self.held is not None:
             data = np.vstack([data, self.held[0] if D is None else self.held[0] @ D])
-        return data[:, self.free]
+        # row-major like the rows (a column selection would be column-major: another
+        # rounding in least_squares' factorisations)
+        return data if self.free.all() else np.ascontiguousarray(data[:, self.free])
 
 
 def fit(forces: Forces, derivative: Derivative, measured: np.ndarray, start: np.ndarray,
