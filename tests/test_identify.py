@@ -172,6 +172,33 @@ def _toml(platform: Platform) -> str:
 
 
 @pytest.mark.integration
+def test_discover_starts_from_the_identified_platform(tmp_path):
+    """identify -> discover: the platform file identify writes is discover's starting model
+    (the refit's *model* values are the file's, far from the reference platform's)."""
+    truth = reference_platform().with_friction(prismatic_coulomb=0.16, prismatic_viscous=30.0)
+    data, _ = _record(seed=7, samples=2000, platform=truth)
+    measured = tmp_path / "measured.csv"
+    gsfric.io.write_table(data.frame, measured)
+    identified = tmp_path / "identified"
+    run = CliRunner().invoke(main, ["identify", "--measured", str(measured), "--out",
+                                    str(identified)])
+    assert run.exit_code == 0, run.output
+    start = Platform.from_toml(identified / "platform.toml")
+    found = tmp_path / "found"
+    run = CliRunner().invoke(main, ["discover", "--measured", str(measured), "--platform",
+                                    str(identified / "platform.toml"), "--out", str(found),
+                                    "--quiet"])
+    assert run.exit_code == 0, run.output
+    refit = json.loads((found / "summary.json").read_text())["refit"]["parameters"]
+    reference = reference_platform().friction
+    for name in ("prismatic_coulomb", "prismatic_viscous"):
+        model = refit[name]["model"]
+        assert model == pytest.approx(getattr(start.friction, name), rel=1e-12)
+        assert abs(model - getattr(truth.friction, name)) < 0.5 * abs(
+            getattr(truth.friction, name) - getattr(reference, name))
+
+
+@pytest.mark.integration
 def test_excitation_starts_and_ends_at_rest_within_the_limits():
     result = excite(duration=8.0, rate=100.0, max_speed=0.2, max_acceleration=2.0)
     motion = result.motion

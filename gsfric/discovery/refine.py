@@ -1,5 +1,5 @@
-"""Fitting a chosen model on the compiled model: Gauss-Newton refinement within bounds, the
-global profile of a delay, and the stability of a named effect across the record's halves."""
+"""Fitting a chosen model on the compiled model: the refinement within bounds, the global
+profile of a delay, and the stability of a named effect across the record's halves."""
 
 from __future__ import annotations
 
@@ -12,9 +12,10 @@ from gsfric.discovery import statistics as st
 from gsfric.discovery.evidence import Evidence, Rule, accept
 from gsfric.discovery.pvalues import chi2_sf
 from gsfric.discovery.residuals import DELAY, Problem
+from gsfric.evaluation.fitting import fit
 from gsfric.platform.catalog import shift
 
-# -- Gauss-Newton refinement on the compiled model ---------------------------------------------
+# -- refinement on the compiled model -----------------------------------------------------------
 
 
 @dataclass(frozen=True)
@@ -43,7 +44,10 @@ class Refined:
 def refine(problem: Problem, theta: np.ndarray, names: list[str], whitener: st.Whitener,
            start: tuple[np.ndarray, np.ndarray] | None = None
            ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """Gauss-Newton on the named parameters within their bounds (prewhitened objective).
+    """The named parameters fitted within their bounds to the prewhitened residual
+    (``evaluation.fitting.fit``: the sliding pairs weighted 1, the others 0; at most
+    ``Settings.gauss_newton`` evaluations), after the delay's global profile when
+    ``time_offset.delay`` is among them.
 
     ``start``, if given, is the residual (M, 6) and Jacobian (M, 6, k) at theta (which must
     lie within the bounds). Returns theta, the residual and the Jacobian at the result.
@@ -60,34 +64,20 @@ def refine(problem: Problem, theta: np.ndarray, names: list[str], whitener: st.W
         if profiled.theta is not None:
             theta, inside = profiled.theta, False
 
-    def at(th):
-        F, J = model.jacobian(th, names, rows=problem.used)
-        r = problem.mask(problem.y - F[problem.used])
-        J *= problem.weight[:, :, None]
-        return r, J, float(np.sum(whitener.apply(r) ** 2))
+    def at(x: np.ndarray) -> np.ndarray:
+        full = theta.copy()
+        full[cols] = x
+        return full
 
-    if start is not None and inside:
-        r, J = start
-        current = float(np.sum(whitener.apply(r) ** 2))
-    else:
-        r, J, current = at(theta)
-    s = problem.settings
-    for _ in range(s.gauss_newton):
-        A, b, _, _ = st.Blocks.whitened(whitener, J, r, s.n_blocks, ridge=s.ridge).total()
-        step = st.solve(A, b, lo - theta[cols], hi - theta[cols], ridge=s.ridge)
-        for scale in (1.0, 0.5, 0.25):
-            trial = theta.copy()
-            trial[cols] = np.clip(theta[cols] + scale * step, lo, hi)
-            r_t, J_t, value = at(trial)
-            if value <= current:
-                break
-        else:
-            break
-        gain = (current - value) / max(current, 1e-300)
-        theta, r, J, current = trial, r_t, J_t, value
-        if gain < 1e-5:
-            break
-    return theta, r, J
+    def derivative(x: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        F, J = model.jacobian(at(x), names, rows=problem.used)
+        return F[problem.used], J
+
+    result = fit(lambda x: model.forces(at(x))[problem.used], derivative, problem.y,
+                 theta[cols], lo, hi, max_nfev=problem.settings.gauss_newton,
+                 weight=problem.weight, whiten=whitener.apply,
+                 at_start=start if start is not None and inside else None)
+    return at(result.theta), result.residual, result.jacobian
 
 
 @dataclass

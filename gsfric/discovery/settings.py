@@ -44,7 +44,11 @@ class Settings:
     plausible : mapping or None
         Plausible ranges ``{name: (lower, upper)}`` replacing the defaults of ``REFIT``.
     gauss_newton : int
-        Most Gauss-Newton iterations of a refinement.
+        Most evaluations of the model's forces in a refinement (the trust-region
+        Gauss-Newton of ``evaluation.fitting.fit``; 0 keeps the start). Near its solution a
+        refinement meets its cost tolerance in a few; a Stribeck peak refined from its
+        secant's start takes about a dozen; more than 30 means the model does not describe
+        the data.
     n_threads : int
         Threads of the compiled evaluation (0: every core).
 
@@ -63,7 +67,7 @@ class Settings:
     candidates: tuple[str, ...] = CANDIDATE_NAMES
     refit: tuple[str, ...] = tuple(r.name for r in REFIT)
     plausible: Mapping[str, tuple[float, float]] | None = None
-    gauss_newton: int = 4
+    gauss_newton: int = 30
     n_threads: int = 0
 
     # -- the data ------------------------------------------------------------------------

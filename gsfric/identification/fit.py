@@ -4,27 +4,30 @@ The residual is the measured minus the model's forces, each leg's rows weighted 
 of its noise (given, or estimated from the first fit's residual and the fit repeated). The fit
 starts from the linear weighted least-squares estimate on the regressor at the prior. The
 unknowns are the body's log-Cholesky coordinates (``parameters.body_from_factor``: consistent
-by construction) and every other parameter within its bounds (``scipy.optimize.least_squares``,
-trust-region reflective, on the regressor of ``regressor.Model``). Directions the data do not
-reach (the regressor's null space at the prior, ``regressor.structure``) are held at the
-prior's values by extra residual rows as stiff as the best-determined direction: they leave the
-identifiable directions free and make the solution unique.
+by construction) and every other parameter within its bounds (``evaluation.fitting.fit``:
+``scipy.optimize.least_squares``, trust-region reflective, on the regressor of
+``regressor.Model``). Directions the data do not reach (the regressor's null space at the
+prior, ``regressor.structure``) are held at the prior's values by extra residual rows as stiff
+as the best-determined direction: they leave the identifiable directions free and make the
+solution unique.
 """
 
 from __future__ import annotations
 
 import warnings
+from functools import partial
 
 import numpy as np
 
 from gsfric.errors import GsfricWarning, InputError
 from gsfric.evaluation.evaluator import state_array
+from gsfric.evaluation.fitting import fit
 from gsfric.identification.parameters import (ParameterSet, body_from_factor, consistent,
                                               factor_bounds, factor_of_body,
                                               nearest_consistent, parameter_set)
 from gsfric.identification.regressor import Model, Structure, covariance, structure
 from gsfric.identification.results import Combination, Estimate, Identification, Validation
-from gsfric.identification.settings import COST_TOL, IMPLAUSIBLE_SIGMA, MAX_NFEV, TYPICAL
+from gsfric.identification.settings import IMPLAUSIBLE_SIGMA, MAX_NFEV, TYPICAL
 from gsfric.models import platform_from
 from gsfric.platform.description import Platform
 from gsfric.trajectory import Motion
@@ -179,9 +182,8 @@ def _start(ps: ParameterSet, theta: np.ndarray) -> np.ndarray:
 def _solve(model: Model, ps: ParameterSet, st: Structure, weights: np.ndarray,
            forces: np.ndarray, start: np.ndarray | None = None) -> tuple[np.ndarray, int]:
     """The fit's coordinates z (from ``start``, else the prior's) minimising the weighted
-    residual, null directions held at the prior; and the residual evaluations."""
-    from scipy.optimize import least_squares
-
+    residual, null directions held at the prior (``evaluation.fitting.fit``); and the
+    residual evaluations."""
     body, rest = _coordinates(ps)
     lower, upper = ps.bounds()
     body_lower, body_upper = factor_bounds()
@@ -191,23 +193,11 @@ def _solve(model: Model, ps: ParameterSet, st: Structure, weights: np.ndarray,
     reference = float(np.max(st.scales * typical))
     d = np.where(st.idle, reference / typical, st.scales)
     pin = st.singular[0] * (st.null.T * d)        # (p - rank, p), rows on theta - prior
-
-    def residual(z):
-        theta = _theta(ps, z)
-        data = ((forces - model.forces(theta)) * weights).ravel()
-        return np.r_[data, pin @ (theta - ps.prior)]
-
-    def jacobian(z):
-        theta = _theta(ps, z)
-        _, J = model.jacobian(theta)
-        D = _dtheta(ps, z)
-        data = -(J * weights[None, :, None]).reshape(-1, J.shape[2]) @ D
-        return np.vstack([data, pin @ D])
-
-    z0 = np.clip(_start(ps, ps.prior) if start is None else start, lb, ub)
-    sol = least_squares(residual, z0, jac=jacobian, bounds=(lb, ub), method="trf",
-                        x_scale="jac", max_nfev=MAX_NFEV, ftol=COST_TOL / (0.5 * forces.size))
-    return sol.x, int(sol.nfev)
+    z0 = _start(ps, ps.prior) if start is None else start
+    solution = fit(model.forces, model.jacobian, forces, z0, lb, ub, max_nfev=MAX_NFEV,
+                   weight=weights, coordinates=(partial(_theta, ps), partial(_dtheta, ps)),
+                   held=(pin, ps.prior))
+    return solution.z, solution.nfev
 
 
 def _result(model: Model, ps: ParameterSet, theta: np.ndarray, forces: np.ndarray,

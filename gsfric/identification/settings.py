@@ -40,14 +40,6 @@ MAX_NFEV = 60
 """Most residual evaluations of the nonlinear least squares (Gauss-Newton on a nearly linear
 model converges in a few; more means the model does not describe the data)."""
 
-COST_TOL = 1e-4
-"""The fit stops at a step that lowers the weighted cost (half the sum of squared residuals in
-units of the noise) by less than ``COST_TOL``. Moving one parameter by a standard deviation
-changes the cost by 0.5, so 0.01 would already be a hundredth of a standard deviation; the
-trust-region method stops at the first such step, even one shortened by its region, so the
-tolerance is a hundred times smaller still. It is passed to ``least_squares`` as
-``ftol = COST_TOL / cost``, the cost of rows of unit noise being about half their number."""
-
 CONFIDENCE_Z = 1.959963984540054
 """Two-sided 95 % normal quantile: the intervals written in the platform file's comments."""
 
