@@ -129,9 +129,9 @@ class ParametricModel:
         return P, theta[self.n_base:self.n_compiled].copy()
 
     def sensor(self, theta: np.ndarray) -> tuple[np.ndarray, float]:
-        """Gains (6,) and delay (s) of the sensor effects in theta."""
-        k = self.n_compiled
-        return np.asarray(theta[k:k + 6], float), float(theta[k + 6])
+        """Gains (6,) and delay (s) of the sensor effects in theta (read by name)."""
+        return sensor_parameters({e: {p: theta[self.index[f"{e}.{p}"]] for p in ps}
+                                  for e, ps in SENSOR_EFFECTS.items()})
 
     def _read(self, theta: np.ndarray, F: np.ndarray) -> np.ndarray:
         gains, delay = self.sensor(theta)
