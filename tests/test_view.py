@@ -312,21 +312,26 @@ def test_the_page_is_not_written_onto_the_trajectory(tmp_path):
 # -- in a browser ----------------------------------------------------------------------------
 
 
-def screenshot(page: Path, time: float, out: Path) -> np.ndarray:
-    """A 1000 x 800 picture of the page opened at ``#t=time`` by headless Chromium with
-    software WebGL, as (800, 1000, 3) uint8."""
-    image = pytest.importorskip("PIL.Image")
+def chromium(*args: str) -> None:
+    """Headless Chromium with software WebGL and a fresh profile, showing a page for 10 s of
+    virtual time; ``args``: what to do with it and the page."""
     profile = tempfile.mkdtemp()
     try:
         subprocess.run(["chromium", "--headless", "--no-sandbox", "--use-gl=angle",
                         "--use-angle=swiftshader", "--no-first-run",
                         "--disable-background-networking", "--disable-component-update",
                         "--disable-sync", f"--user-data-dir={profile}",
-                        "--virtual-time-budget=10000", f"--screenshot={out}",
-                        "--window-size=1000,800", f"{page.as_uri()}#t={time}"],
+                        "--virtual-time-budget=10000", *args],
                        capture_output=True, timeout=180, check=False)
     finally:
         shutil.rmtree(profile, ignore_errors=True)
+
+
+def screenshot(page: Path, time: float, out: Path) -> np.ndarray:
+    """A 1000 x 800 picture of the page opened at ``#t=time`` by headless Chromium with
+    software WebGL, as (800, 1000, 3) uint8."""
+    image = pytest.importorskip("PIL.Image")
+    chromium(f"--screenshot={out}", "--window-size=1000,800", f"{page.as_uri()}#t={time}")
     assert out.exists(), "chromium wrote no screenshot"
     return np.asarray(image.open(out).convert("RGB"))
 
@@ -387,19 +392,11 @@ def requested_hosts(page: str) -> list[str]:
                     seen.append(urllib.parse.urlsplit(target).netloc or target)
 
     threading.Thread(target=record, daemon=True).start()
-    profile = tempfile.mkdtemp()
     try:
-        subprocess.run(["chromium", "--headless", "--no-sandbox", "--use-gl=angle",
-                        "--use-angle=swiftshader", "--no-first-run",
-                        "--disable-background-networking", "--disable-component-update",
-                        "--disable-sync", f"--user-data-dir={profile}",
-                        "--virtual-time-budget=10000",
-                        f"--proxy-server=http://127.0.0.1:{server.getsockname()[1]}",
-                        "--proxy-bypass-list=<-loopback>", "--dump-dom", page],
-                       capture_output=True, timeout=180, check=False)
+        chromium(f"--proxy-server=http://127.0.0.1:{server.getsockname()[1]}",
+                 "--proxy-bypass-list=<-loopback>", "--dump-dom", page)
     finally:
         server.close()
-        shutil.rmtree(profile, ignore_errors=True)
     return [host for host in seen if not BROWSER_OWN.search(host)]
 
 

@@ -214,14 +214,12 @@ def _pieces(parts: Iterable[MotionChunk], size: int) -> Iterator[MotionChunk]:
 
 
 @one_blas_thread
-def simulate_file(trajectory: str | os.PathLike[str], out: str | os.PathLike[str],
-                  platform=None, *, mode: str = "kinematic", strict: bool = False,
-                  chunk: int = DEFAULT_CHUNK, window: int | None = None,
-                  polyorder: int = DEFAULT_POLYORDER, n_threads: int = 1,
-                  progress: bool | None = None, log_format=None, columns=None,
-                  float32: bool = False, keep_flagged: bool = False,
-                  plot: str | os.PathLike[str] | None = None, uncertainty: bool = True
-                  ) -> Summary:
+def simulate_file(trajectory: str | os.PathLike[str], out: str | os.PathLike[str], platform=None,
+                  *, mode: str = "kinematic", strict: bool = False, chunk: int = DEFAULT_CHUNK,
+                  window: int | None = None, polyorder: int = DEFAULT_POLYORDER,
+                  n_threads: int = 1, progress: bool | None = None, log_format=None,
+                  columns=None, float32: bool = False, keep_flagged: bool = False,
+                  plot: str | os.PathLike[str] | None = None, uncertainty: bool = True) -> Summary:
     """Evaluate a trajectory file chunk by chunk and write every step's outputs.
 
     Parameters
@@ -234,61 +232,48 @@ def simulate_file(trajectory: str | os.PathLike[str], out: str | os.PathLike[str
         As ``gsfric.models.platform_from``; default: the reference platform.
     mode : {"kinematic", "paper"}
     strict : bool
-        Raise ``StepFlagError`` at the first chunk with a flagged step (no output is written).
-        Without it, a record with more than ``FLAGGED_LIMIT`` (``gsfric.platform.usable``) of
-        its steps flagged raises ``StepFlagError`` at the end (no output is written) unless
-        ``keep_flagged``.
+        ``StepFlagError`` at the first flagged step. Without it, at the end when more than
+        ``FLAGGED_LIMIT`` (``gsfric.platform.usable``) of the steps are flagged, unless
+        ``keep_flagged``; either way no output is written.
     chunk : int
         Steps read and differentiated at a time; memory grows with it (about 1.3 kB per
         step). They are evaluated and written ``EVALUATE_STEPS`` at a time.
-    window, polyorder :
-        Smoothing of the differentiation, see ``iter_motions``.
-    n_threads : int
-        Threads of the compiled evaluation.
+    window, polyorder, n_threads :
+        Smoothing of the differentiation (``iter_motions``); threads of the evaluation.
     progress : bool or None
         Progress bar on stderr (tqdm); None: only when stderr is a terminal.
     log_format : gsfric.io.LogFormat, optional
-        Column map, units, angle convention and carried columns of the file. A file with
-        F1..F6 (measured data) also gets ``F1_measured..F6_measured`` and the residuals
-        ``F1_residual..F6_residual`` (measured minus model) in the output.
+        Column map, units, angle convention and carried columns of the file. Measured F1..F6
+        add ``F*_measured`` and ``F*_residual`` (measured minus model) to the output.
     columns : iterable of str, optional
-        Output groups (``COLUMN_GROUPS``); default ``DEFAULT_COLUMN_GROUPS`` (forces,
-        sigma_F and rest, the prismatic friction with the paper's post-hoc friction scalars,
-        reactions: 81 values a step). ``t`` and ``flag`` always.
+        Output groups (``COLUMN_GROUPS``); default ``DEFAULT_COLUMN_GROUPS``. ``t`` and
+        ``flag`` always.
     float32 : bool
-        Write the outputs (not ``t``) as float32: relative error up to ``FLOAT32_RTOL``
-        (6e-8) of each value, half the file.
+        Outputs (not ``t``) as float32: relative error up to ``FLOAT32_RTOL``, half the file.
     keep_flagged : bool
-        Write the output whatever share of the steps is flagged (up to half of them: more is
-        an ``InputError``), with a warning.
+        Write the output, with a warning, when up to half the steps are flagged.
     plot : path-like, optional
-        Also write a figure (PNG, SVG or PDF by the extension; needs matplotlib) of the
-        actuator forces and the prismatic friction of every leg over the record
-        (``gsfric.simulate.figure``).
+        Also a figure (PNG, SVG or PDF by the extension) of every leg's actuator force and
+        prismatic friction over the record (``gsfric.simulate.figure``).
     uncertainty : bool
-        Write the ``uncertainty`` group (sigma_F1..6, rest; kinematic mode) when the columns
-        include it, warn when sigma_F exceeds ``SIGMA_SHARE`` of a leg's peak force, and, for
-        a log with its own rates, compare them with its poses differentiated
-        (``Summary.rates``); False leaves all of it out.
+        The ``uncertainty`` group (sigma_F1..6, rest; kinematic mode), its warning above
+        ``SIGMA_SHARE`` of a leg's peak force and a log's own rates against its differentiated
+        poses (``Summary.rates``); False leaves them out.
 
     Returns
     -------
     Summary
-        Flags are also reported as one warning (``GsfricWarning``) when not strict.
+        (Flags also as one ``GsfricWarning`` when not strict.)
 
     Raises
     ------
-    InputTypeError
-        A path that is not a str or os.PathLike, ``n_threads`` or ``chunk`` not an integer,
-        ``strict`` not a bool.
-    InputError
-        Bad trajectory (naming the row and column), bad output path (an input, a directory),
-        ``n_threads`` outside 1..``MAX_THREADS``.
+    InputTypeError, InputError
+        An argument of the wrong type or value (``n_threads`` in 1..``MAX_THREADS``), a bad
+        trajectory (row and column named) or output path (an input, a directory).
     OutputError
         The output could not be written (a full disk); an earlier file is unchanged.
     StepFlagError
-        ``strict`` and a flagged step; more than ``FLAGGED_LIMIT`` of the steps flagged and
-        not ``keep_flagged``.
+        See ``strict``.
     """
     trajectory, out = as_path(trajectory, "trajectory"), as_path(out, "out")
     n_threads = as_count(n_threads, "n_threads", minimum=1, maximum=MAX_THREADS)
@@ -300,11 +285,11 @@ def simulate_file(trajectory: str | os.PathLike[str], out: str | os.PathLike[str
     motions = iter_motions(trajectory, chunk=chunk, window=window, polyorder=polyorder,
                            log_format=log_format)
     plot = _checked_plot(plot, {"trajectory": trajectory, "platform": platform, "out": out})
+    keep_flagged = as_flag(keep_flagged, "keep_flagged")
+    smoothing = (window, polyorder) if uncertainty else None
     run = _Run(trajectory, out, platform, plan, mode=mode, strict=strict, n_threads=n_threads,
-               float32=float32, progress=progress, keep_flagged=as_flag(keep_flagged,
-                                                                        "keep_flagged"),
-               trace=plot is not None,
-               smoothing=(window, polyorder) if uncertainty else None)
+               float32=float32, progress=progress, keep_flagged=keep_flagged,
+               trace=plot is not None, smoothing=smoothing)
     summary = _write_outputs(run, motions, kind, plot)
     _warn(summary, trajectory, uncertainty)
     return summary
