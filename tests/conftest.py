@@ -1,11 +1,31 @@
-"""Shared fixtures."""
+"""Shared fixtures, and the linear-algebra threads of parallel test workers."""
 
 from __future__ import annotations
 
+import os
+
 import numpy as np
 import pytest
+from threadpoolctl import threadpool_limits
 
 from gsfric import models
+
+_BLAS_LIMIT = []
+"""The BLAS thread limit of this test worker, kept for the session (see pytest_configure)."""
+
+
+def pytest_configure(config):
+    """A worker of ``pytest -n N`` gets its share of the cores for BLAS (NumPy's and SciPy's
+    linear algebra), and so does every process it starts (the CLI, a notebook's kernel): N
+    workers each running a BLAS thread per core would oversubscribe the cores, and a
+    multithreaded BLAS whose threads wait for a core spins instead of computing."""
+    workers = getattr(config, "workerinput", {}).get("workercount")
+    if not workers:
+        return
+    share = str(max(1, (os.cpu_count() or 1) // int(workers)))
+    for name in ("OPENBLAS_NUM_THREADS", "OMP_NUM_THREADS", "MKL_NUM_THREADS"):
+        os.environ.setdefault(name, share)
+    _BLAS_LIMIT.append(threadpool_limits(limits=int(share), user_api="blas"))
 
 
 @pytest.fixture

@@ -384,6 +384,37 @@ def test_bounded_solve_matches_scipy():
         assert np.sum((X @ t - y) ** 2) <= np.sum((X @ ref - y) ** 2) * (1 + 1e-6)
 
 
+def test_the_held_guess_is_what_bvls_finds(monkeypatch):
+    """When the coefficients that the unbounded solution puts beyond a bound meet the
+    optimality conditions held there, ``solve`` skips BVLS: its result is then BVLS's, to the
+    bit (the optimum of a convex QP is unique and the free coefficients are solved the same
+    way), and it is taken on most problems."""
+    rng = np.random.default_rng(5)
+    problems = []
+    for _ in range(300):
+        k = int(rng.integers(1, 9))
+        X = rng.normal(size=(40, k)) * 10.0 ** rng.uniform(-2, 2, k)
+        y = rng.normal(size=40) + X @ rng.normal(size=k)
+        lo = np.where(rng.random(k) < 0.6, 0.0, -np.inf)
+        hi = np.where(rng.random(k) < 0.2, 0.5, np.inf)
+        problems.append((X.T @ X, X.T @ y, lo, hi))
+    guessed = [st.solve(*p, ridge=DEFAULTS.ridge) for p in problems]
+    taken = 0
+    original = st._optimal
+
+    def refused(*args):
+        nonlocal taken
+        taken += original(*args)
+        return False
+
+    monkeypatch.setattr(st, "_optimal", refused)
+    for p, t in zip(problems, guessed):
+        np.testing.assert_array_equal(st.solve(*p, ridge=DEFAULTS.ridge), t)
+    bounded = sum(1 for A, b, lo, hi in problems
+                  if not np.all(np.clip(np.linalg.solve(A, b), lo, hi) == np.linalg.solve(A, b)))
+    assert bounded > 100 and taken > bounded / 2
+
+
 def test_block_cross_products_add_up():
     rng = np.random.default_rng(3)
     X, z = rng.normal(size=(1003, 6, 4)), rng.normal(size=(1003, 6))

@@ -391,19 +391,31 @@ def solve(A: np.ndarray, b: np.ndarray, lower: np.ndarray | None = None,
     t = np.linalg.solve(As, bs)
     if np.all(t >= lo) and np.all(t <= hi):
         return t / d
-    return _bounded(As, bs, lo, hi) / d
+    return _bounded(As, bs, lo, hi, t) / d
 
 
-def _bounded(A: np.ndarray, b: np.ndarray, lo: np.ndarray, hi: np.ndarray) -> np.ndarray:
-    """Box-constrained convex QP ``min t'At - 2b't``, ``lo <= t <= hi`` (A positive definite).
+def _bounded(A: np.ndarray, b: np.ndarray, lo: np.ndarray, hi: np.ndarray,
+             unbounded: np.ndarray) -> np.ndarray:
+    """Box-constrained convex QP ``min t'At - 2b't``, ``lo <= t <= hi`` (A positive definite),
+    from the ``unbounded`` minimiser.
 
     The coefficients held on a bound are those of the bounded least squares
     ``min |L't - L^-1 b|^2``, ``A = L L'``, by BVLS (``scipy.optimize.lsq_linear``; a
     coefficient whose bounds are equal is held there, a pinned parameter); the others are
     solved from their normal equations, as an unbounded fit solves them: a column held at zero
     then leaves the others' fit exactly as it is without that column, and the F-tests and
-    cross-validations that compare the two fits find no difference, not a rounding one."""
-    held = lo >= hi
+    cross-validations that compare the two fits find no difference, not a rounding one.
+
+    Most often the coefficients held are those the unbounded minimiser puts beyond a bound:
+    when that choice meets the optimality conditions of the QP (the others within their bounds,
+    the held ones pushed outward by the gradient), it is the optimum's, and BVLS is not run.
+    """
+    pinned = lo >= hi
+    guess = pinned | (unbounded < lo) | (unbounded > hi)
+    t = _held_solution(A, b, lo, hi, guess, np.where(unbounded > hi, hi, lo))
+    if _optimal(A, b, lo, hi, guess, t):
+        return t
+    held = pinned.copy()
     t = np.where(held, lo, 0.0)
     if not held.all():
         L = np.linalg.cholesky(A[np.ix_(~held, ~held)])
@@ -412,11 +424,34 @@ def _bounded(A: np.ndarray, b: np.ndarray, lo: np.ndarray, hi: np.ndarray) -> np
                                                      method="bvls").active_mask
         t[~held] = np.select([side < 0, side > 0], [lo[~held], hi[~held]], 0.0)
         held[~held] = side != 0
+    return _held_solution(A, b, lo, hi, held, t)
+
+
+def _held_solution(A: np.ndarray, b: np.ndarray, lo: np.ndarray, hi: np.ndarray,
+                   held: np.ndarray, at: np.ndarray) -> np.ndarray:
+    """The coefficients ``held`` at their values in ``at``, the others from their normal
+    equations (clipped to their bounds)."""
+    t = np.where(held, at, 0.0)
     free = ~held
     if free.any():
         rhs = b[free] - A[np.ix_(free, held)] @ t[held]
         t[free] = np.clip(np.linalg.solve(A[np.ix_(free, free)], rhs), lo[free], hi[free])
     return t
+
+
+def _optimal(A: np.ndarray, b: np.ndarray, lo: np.ndarray, hi: np.ndarray,
+             held: np.ndarray, t: np.ndarray) -> bool:
+    """Whether t, with the coefficients ``held`` on a bound, meets the Karush-Kuhn-Tucker
+    conditions of ``min t'At - 2b't`` within the bounds: each free coefficient strictly inside
+    its bounds, and the gradient ``At - b`` of each held one pointing out of the box (>= 0 at
+    a lower bound, <= 0 at an upper one; either at a pinned one)."""
+    free = ~held
+    if np.any(t[free] <= lo[free]) or np.any(t[free] >= hi[free]):
+        return False
+    gradient = A[held] @ t - b[held]
+    pinned = (lo >= hi)[held]
+    at_lower = t[held] == lo[held]
+    return bool(np.all(pinned | np.where(at_lower, gradient >= 0, gradient <= 0)))
 
 
 def sse(A: np.ndarray, b: np.ndarray, c: float, t: np.ndarray) -> float:
