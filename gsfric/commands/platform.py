@@ -15,12 +15,6 @@ from gsfric.models import reference_platform
 from gsfric.platform.rig import Rig, rig_platform_toml, rig_toml
 from gsfric.platform.text import commented_toml
 
-SIZES = ("base_radius", "base_half_angle", "platform_radius", "platform_half_angle",
-         "home_height", "stroke", "platform_mass", "lower_mass", "upper_mass", "payload_mass",
-         "friction_model")
-"""The size options, by ``Rig`` field."""
-
-
 def _size_options(command):
     options = [
         click.option("--base-radius", type=float, metavar="M",
