@@ -8,12 +8,13 @@ from pathlib import Path
 
 import click
 
-from gsfric.commands.common import checked_paths, fail
+from gsfric.commands.common import checked_paths, fail, with_options
 from gsfric.errors import InputError
 from gsfric.io.files import atomic_write
 from gsfric.models import reference_platform
 from gsfric.platform.rig import Rig, rig_platform_toml, rig_toml
 from gsfric.platform.text import commented_toml
+
 
 def _size_options(command):
     options = [
@@ -39,9 +40,7 @@ def _size_options(command):
         click.option("--friction-model", type=click.Choice(["coupled", "paper"]),
                      help="Friction model [default: coupled]."),
     ]
-    for option in reversed(options):
-        command = option(command)
-    return command
+    return with_options(command, options)
 
 
 @click.command()
