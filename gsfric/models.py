@@ -152,14 +152,7 @@ def paper_platform() -> Platform:
     >>> gsfric.paper_platform().friction.model
     'paper'
     """
-    return Platform(
-        gravity=9.81,
-        geometry=reference_geometry(),
-        platform=Body(mass=10.0, inertia=np.eye(3) * 0.07, payload_mass=3.0),
-        legs=Legs(model="paper"),
-        friction=Friction(),
-        effects={},
-    )
+    return reference_platform().replace(legs=Legs(model="paper"), friction=Friction())
 
 
 def _axis_angle(axis_angle: np.ndarray) -> np.ndarray:

@@ -52,6 +52,11 @@ def log_options(command=None, *, keep=True):
                      help="Log columns to copy unchanged into the output (other columns that "
                           "are not gsfric inputs are ignored, with a note)."),
     ][:None if keep else 3]
+    return with_options(command, options)
+
+
+def with_options(command, options: list[Callable]):
+    """``command`` decorated with the click ``options``, listed in the order --help shows them."""
     for option in reversed(options):
         command = option(command)
     return command

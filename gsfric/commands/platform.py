@@ -8,17 +8,12 @@ from pathlib import Path
 
 import click
 
-from gsfric.commands.common import checked_paths, fail
+from gsfric.commands.common import checked_paths, fail, with_options
 from gsfric.errors import InputError
 from gsfric.io.files import atomic_write
 from gsfric.models import reference_platform
 from gsfric.platform.rig import Rig, rig_platform_toml, rig_toml
 from gsfric.platform.text import commented_toml
-
-SIZES = ("base_radius", "base_half_angle", "platform_radius", "platform_half_angle",
-         "home_height", "stroke", "platform_mass", "lower_mass", "upper_mass", "payload_mass",
-         "friction_model")
-"""The size options, by ``Rig`` field."""
 
 
 def _size_options(command):
@@ -45,9 +40,7 @@ def _size_options(command):
         click.option("--friction-model", type=click.Choice(["coupled", "paper"]),
                      help="Friction model [default: coupled]."),
     ]
-    for option in reversed(options):
-        command = option(command)
-    return command
+    return with_options(command, options)
 
 
 @click.command()

@@ -10,7 +10,7 @@ from pathlib import Path
 
 import click
 
-from gsfric.commands.common import checked_paths, evaluation_options, log_options
+from gsfric.commands.common import checked_paths, evaluation_options, log_options, with_options
 from gsfric.errors import IgnoredColumnsWarning, InputError
 from gsfric.evaluation.breakdown import flat
 from gsfric.evaluation.columns import DEFAULT_GROUPS as DEFAULT_COLUMN_GROUPS
@@ -97,9 +97,7 @@ def _options(command):
         click.option("--verbose", "-v", is_flag=True,
                      help="Name the log's ignored columns (counted in one warning otherwise)."),
     ]
-    for option in reversed(options):
-        command = option(command)
-    return command
+    return with_options(command, options)
 
 
 @click.command()

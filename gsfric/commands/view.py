@@ -7,7 +7,7 @@ from pathlib import Path
 
 import click
 
-from gsfric.commands.common import checked_paths, evaluation_options, log_options
+from gsfric.commands.common import checked_paths, evaluation_options, log_options, with_options
 from gsfric.io.logs import LogFormat
 from gsfric.simulate import view_file
 from gsfric.view import DEFAULT_FPS, MAX_FRAMES
@@ -42,9 +42,7 @@ def _options(command):
         shared["window"],
         click.option("--quiet", is_flag=True, help="No summary line."),
     ]
-    for option in reversed(options):
-        command = option(command)
-    return command
+    return with_options(command, options)
 
 
 @click.command()

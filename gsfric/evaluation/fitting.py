@@ -128,8 +128,7 @@ def fit(forces: Forces, derivative: Derivative, measured: np.ndarray, start: np.
         whiten: Callable[[np.ndarray], np.ndarray] | None = None,
         coordinates: tuple[Callable, Callable] | None = None,
         held: tuple[np.ndarray, np.ndarray] | None = None,
-        at_start: tuple[np.ndarray, np.ndarray] | None = None,
-        cost_tol: float = COST_TOL) -> Fit:
+        at_start: tuple[np.ndarray, np.ndarray] | None = None) -> Fit:
     """Fit the model's parameters to measured forces within bounds (see the module).
 
     Parameters
@@ -156,8 +155,6 @@ def fit(forces: Forces, derivative: Derivative, measured: np.ndarray, start: np.
         Extra rows ``matrix @ (theta - reference)`` holding directions at the reference.
     at_start : (residual, jacobian), optional
         ``Fit.residual`` and ``Fit.jacobian`` at the start when known (spares an evaluation).
-    cost_tol : float
-        The stopping rule's change of cost (``COST_TOL``).
 
     Returns
     -------
@@ -179,7 +176,7 @@ def fit(forces: Forces, derivative: Derivative, measured: np.ndarray, start: np.
     free = problem.free
     sol = least_squares(problem.rows, z0[free], jac=problem.rows_jacobian,
                         bounds=(lower[free], upper[free]), method="trf", x_scale="jac",
-                        max_nfev=max_nfev, ftol=cost_tol / rows)
+                        max_nfev=max_nfev, ftol=COST_TOL / rows)
     return _result(problem, problem.coordinates(sol.x), float(sol.cost), int(sol.status),
                    int(sol.nfev))
 

@@ -186,8 +186,8 @@ def statements(fn, output_index: list[str], arg: str = "x") -> list[Statement]:
     return out
 
 
-def function_text(body: list[Statement], c_name: str, outputs=None, arg: str = "x") -> str:
-    """``static void c_name(const double *arg, double **res)`` of the statements ``body``
+def function_text(body: list[Statement], c_name: str, outputs=None) -> str:
+    """``static void c_name(const double *x, double **res)`` of the statements ``body``
     that the outputs ``outputs`` need (indices of ``fn``'s outputs; None: all), in order.
     The outputs it stores into must not be NULL."""
     keep = [s.output >= 0 and (outputs is None or s.output in outputs) for s in body]
@@ -197,5 +197,5 @@ def function_text(body: list[Statement], c_name: str, outputs=None, arg: str = "
             keep[k] = True
             needed.update(body[k].uses)
     lines = [f"    {s.text}" for s, kept in zip(body, keep) if kept]
-    return "\n".join([f"static void {c_name}(const double *{arg}, double **res)", "{", *lines,
+    return "\n".join([f"static void {c_name}(const double *x, double **res)", "{", *lines,
                       "}"]) + "\n"

@@ -9,6 +9,8 @@ import os
 import re
 import stat
 import warnings
+from collections.abc import Iterator
+from contextlib import contextmanager
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
@@ -97,6 +99,27 @@ OTHER_SEPARATORS = {";": "semicolons", "\t": "tabs", "|": "vertical bars"}
 a file (gsfric reads comma-separated values, with a point as the decimal mark)."""
 
 
+@contextmanager
+def csv_errors(path: Path) -> Iterator[None]:
+    """Around pandas reading the CSV file ``path``: its ``ParserWarning`` made an error, and
+    its errors (empty file, not UTF-8, unparsable, unreadable) as one-line ``InputError``s
+    naming the file (and the first row with too many or too few fields)."""
+    pd = optional("pandas")
+    try:
+        with warnings.catch_warnings():
+            warnings.simplefilter("error", pd.errors.ParserWarning)
+            yield
+    except pd.errors.EmptyDataError:
+        raise InputError(f"{path}: file is empty (no header line)") from None
+    except UnicodeDecodeError as error:
+        raise InputError(f"{path}: not UTF-8 text (byte {error.start})") from None
+    except (ValueError, OverflowError, pd.errors.ParserError, pd.errors.ParserWarning) as error:
+        reason = field_count_problem(path) or str(error)
+        raise InputError(f"{path}: cannot parse as CSV: {reason}") from None
+    except OSError as error:
+        raise InputError(f"{path}: cannot read ({error.strerror})") from None
+
+
 def check_csv_header(path: Path, names: list[str]) -> None:
     """InputError for a CSV header read as one column that holds another dialect's separator
     (``OTHER_SEPARATORS``, naming it), or with a repeated column (``x`` renamed ``x.1`` by
@@ -169,21 +192,8 @@ def read_table(path: str | os.PathLike[str]) -> pd.DataFrame:
     path = Path(path)
     kind = check_file(path)
     if kind == "csv":
-        options = csv_options()
-        try:
-            with warnings.catch_warnings():
-                warnings.simplefilter("error", pd.errors.ParserWarning)
-                frame = pd.read_csv(path, **options)
-        except pd.errors.EmptyDataError:
-            raise InputError(f"{path}: file is empty (no header line)") from None
-        except UnicodeDecodeError as error:
-            raise InputError(f"{path}: not UTF-8 text (byte {error.start})") from None
-        except (ValueError, OverflowError, pd.errors.ParserError,
-                pd.errors.ParserWarning) as error:
-            reason = field_count_problem(path) or str(error)
-            raise InputError(f"{path}: cannot parse as CSV: {reason}") from None
-        except OSError as error:
-            raise InputError(f"{path}: cannot read ({error.strerror})") from None
+        with csv_errors(path):
+            frame = pd.read_csv(path, **csv_options())
         names = [str(c) for c in frame.columns]
         check_csv_header(path, names)
     else:

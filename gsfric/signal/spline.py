@@ -135,11 +135,6 @@ def spline_fit(t: np.ndarray, y: np.ndarray, lam: float | None
             for k in (0, 1, 2)], None
 
 
-def spline_derivatives(t: np.ndarray, y: np.ndarray, lam: float | None) -> list[np.ndarray]:
-    """The smoothed y (N, k) and its first two derivatives (``spline_fit``)."""
-    return spline_fit(t, y, lam)[0]
-
-
 SPLINE_NOISE_DRAWS = 8
 """Unit white-noise signals passed through a smoothing spline to measure its noise gains
 (``spline_noise_gains``)."""

@@ -19,7 +19,7 @@ from gsfric._optional import optional
 from gsfric.errors import GsfricWarning, InputError
 from gsfric.io.arrow import column_from_arrow, data_columns
 from gsfric.io.logs import FORCES, QUATERNION, ColumnReader
-from gsfric.io.tables import check_csv_header, check_file, csv_options, field_count_problem
+from gsfric.io.tables import check_csv_header, check_file, csv_errors, csv_options
 from gsfric.signal.rotations import (
     MIN_QUATERNION_LENGTH,
     quaternion_from_euler,
@@ -144,41 +144,17 @@ Frame = tuple[list[str], list]
 def _csv_frames(path: Path, rows: int) -> Iterator[Frame]:
     """Blocks of at most ``rows`` rows; errors as ``read_table`` gives them."""
     pd = optional("pandas")
-    try:
-        with warnings.catch_warnings():
-            warnings.simplefilter("error", pd.errors.ParserWarning)
-            reader = pd.read_csv(path, chunksize=rows, **csv_options())
-    except pd.errors.EmptyDataError:
-        raise InputError(f"{path}: file is empty (no header line)") from None
-    except UnicodeDecodeError as error:
-        raise InputError(f"{path}: not UTF-8 text (byte {error.start})") from None
-    except (ValueError, OverflowError, pd.errors.ParserError, pd.errors.ParserWarning) as error:
-        raise _csv_parse_error(path, error) from None
-    except OSError as error:
-        raise InputError(f"{path}: cannot read ({error.strerror})") from None
+    with csv_errors(path):
+        reader = pd.read_csv(path, chunksize=rows, **csv_options())
     with reader:
         while True:
-            try:
-                with warnings.catch_warnings():
-                    warnings.simplefilter("error", pd.errors.ParserWarning)
-                    frame = next(reader)
-            except StopIteration:
+            with csv_errors(path):
+                frame = next(reader, None)
+            if frame is None:
                 return
-            except UnicodeDecodeError as error:
-                raise InputError(f"{path}: not UTF-8 text (byte {error.start})") from None
-            except (ValueError, OverflowError, pd.errors.ParserError,
-                    pd.errors.ParserWarning) as error:
-                raise _csv_parse_error(path, error) from None
-            except OSError as error:
-                raise InputError(f"{path}: cannot read ({error.strerror})") from None
             names = [str(c) for c in frame.columns]
             check_csv_header(path, names)
             yield names, [column for _, column in frame.items()]
-
-
-def _csv_parse_error(path: Path, error: Exception) -> InputError:
-    reason = field_count_problem(path) or str(error)
-    return InputError(f"{path}: cannot parse as CSV: {reason}")
 
 
 def _parquet_frames(path: Path, rows: int) -> Iterator[Frame]:

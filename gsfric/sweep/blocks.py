@@ -71,6 +71,13 @@ class Block:
         self.out = {"G": self.values.reshape(n, rows * 6)}
         self.flag = self._flag[:n]
 
+    def spans(self, n: int) -> Iterator[tuple[int, int]]:
+        """The blocks ``s:e`` of ``n`` steps, the buffers laid out for each (``use``)."""
+        for s in range(0, n, self.size):
+            e = min(n, s + self.size)
+            self.use(e - s)
+            yield s, e
+
     def buffer(self, name: str, width: int) -> np.ndarray:
         """A buffer (n, width) of the current block for the output ``name``, reused from
         block to block: the outputs the step flags read, which the compiled code would
@@ -115,10 +122,7 @@ class Evaluation:
 
     def _compiled(self, block: Block, x: np.ndarray) -> Iterator[tuple[int, int]]:
         ev = self.evaluator         # every flag, the coupled solve's included, set in C
-        n = len(x)
-        for s in range(0, n, block.size):
-            e = min(n, s + block.size)
-            block.use(e - s)
+        for s, e in block.spans(len(x)):
             out = {"G": block.out["G"], **{name: block.buffer(name, width)
                                            for name, width in self.read}}
             self.fn([x[s:e], ev.P, ev.Q], out, 1, select=self.select, flags=self.spec,
@@ -129,10 +133,7 @@ class Evaluation:
                    ) -> Iterator[tuple[int, int]]:
         motion = Motion(t, *state_layout().split(x))
         result = self.evaluator.evaluate_quiet(motion)       # flagged steps are counted
-        n = len(x)
-        for s in range(0, n, block.size):
-            e = min(n, s + block.size)
-            block.use(e - s)
+        for s, e in block.spans(len(x)):
             values({k: result.arrays[k][s:e] for k in VALUE_INPUTS}, block.values)
             block.flag[...] = result.flag[s:e]
             yield s, e
