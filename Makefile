@@ -15,10 +15,14 @@ unexport PYTHONDONTWRITEBYTECODE
 
 .PHONY: install paper test check test-slow test-floors bench bench-all derive docs clean
 
+# The dependencies are installed by uv (itself installed by pip, with the build backend): it
+# downloads and unpacks them in parallel, and builds gsfric (the compile of the model) while it
+# does. It writes no bytecode at install time: Python compiles each module on its first import,
+# once, and only the modules that are imported (pip would compile every installed file first).
 $(STAMP): pyproject.toml meson.build
 	$(PYTHON) -m venv $(VENV)
-	$(BIN)/pip install --quiet --upgrade pip $(BACKEND)
-	$(BIN)/pip install --quiet --no-build-isolation -e ".[test]"
+	$(BIN)/pip install --quiet --upgrade pip uv $(BACKEND)
+	$(BIN)/uv pip install --quiet --python $(BIN)/python --no-build-isolation -e ".[test]"
 	# derive/ is not an installed package (the wheel ships only its output): the checkout is
 	# put on this environment's path so that the notebooks and tests can import it
 	$(BIN)/python -c "import pathlib, sysconfig; pathlib.Path(sysconfig.get_paths()['purelib'], 'gsfric-checkout.pth').write_text(str(pathlib.Path.cwd().resolve()) + '\n')"
