@@ -30,7 +30,6 @@ from .sources import source_hash
 
 ROOT = Path(__file__).resolve().parent.parent
 GENERATED = ROOT / "generated"
-DERIVE = Path(__file__).resolve().parent
 BASENAME = "gsfric_model"
 
 # Parameters of P whose Jacobian the identification needs, followed by all of Q. The one list:

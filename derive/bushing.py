@@ -25,9 +25,6 @@ The friction force on the rod along u, opposing the sliding speed v:
 (viscous, Coulomb at both bushings, load-independent seal friction).
 """
 
-import sympy as sp
-
-from .friction import smooth_sign
 from .vectors import cross, dot, norm
 
 
@@ -48,8 +45,3 @@ def bushing_friction_parts(v, N_a, N_b, c, mu, seal, sgn):
     ``sgn``: the regularised sign of v (``friction.smooth_sign(v, eps)``).
     """
     return -c * v, -mu * (norm(N_a) + norm(N_b)) * sgn, -seal * sgn
-
-
-def bushing_friction(v, N_a, N_b, c, mu, seal, eps):
-    """The friction force on the rod along u, N (sum of ``bushing_friction_parts``)."""
-    return sp.Add(*bushing_friction_parts(v, N_a, N_b, c, mu, seal, smooth_sign(v, eps)))

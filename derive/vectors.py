@@ -16,8 +16,3 @@ def cross(a: sp.Matrix, b: sp.Matrix) -> sp.Matrix:
 def norm(a: sp.Matrix):
     """Euclidean length ``sqrt(a . a)`` of a (3, 1) matrix (the unit of a)."""
     return sp.sqrt(dot(a, a))
-
-
-def columns(*cols: sp.Matrix) -> sp.Matrix:
-    """The (3, k) matrix with the given (3, 1) columns."""
-    return sp.Matrix.hstack(*cols)
