@@ -6,6 +6,7 @@ import os
 
 import numpy as np
 import pytest
+from helpers import build_folder_lock
 from threadpoolctl import threadpool_limits
 
 from gsfric import models
@@ -26,6 +27,14 @@ def pytest_configure(config):
     for name in ("OPENBLAS_NUM_THREADS", "OMP_NUM_THREADS", "MKL_NUM_THREADS"):
         os.environ.setdefault(name, share)
     _BLAS_LIMIT.append(threadpool_limits(limits=int(share), user_api="blas"))
+
+
+@pytest.fixture(autouse=True)
+def build_folder_in_use():
+    """Each test holds the build folder's lock shared (``helpers.build_folder_lock``): what
+    it starts may check the editable install's build, which test_packaging reconfigures."""
+    with build_folder_lock(exclusive=False):
+        yield
 
 
 @pytest.fixture

@@ -3,6 +3,11 @@ noise."""
 
 from __future__ import annotations
 
+import contextlib
+import fcntl
+import sys
+from pathlib import Path
+
 import numpy as np
 import pandas as pd
 
@@ -14,6 +19,32 @@ from gsfric.evaluation import flags
 from gsfric.evaluation.evaluator import state_array
 from gsfric.evaluation.parameters import effect_vector, parameter_vector
 from gsfric.trajectory import ROTATION_TOL
+
+def editable_build_folder() -> Path | None:
+    """The build folder of the editable install (meson-python's finder), if gsfric is one."""
+    for finder in sys.meta_path:
+        folder = getattr(finder, "_build_path", None)
+        if folder and getattr(finder, "_name", None) == "gsfric":
+            return Path(folder)
+    return None
+
+
+@contextlib.contextmanager
+def build_folder_lock(exclusive: bool):
+    """A lock on the editable install's build folder (none without one), shared or exclusive.
+
+    Every process that imports gsfric from the editable install checks the build there
+    (meson-python runs ninja), and that check fails while another process reconfigures the
+    folder, as building the wheel or the sdist from it does: tests hold the lock shared, the
+    package builds exclusively."""
+    folder = editable_build_folder()
+    if folder is None:
+        yield
+        return
+    with open(folder / "gsfric-tests.lock", "a") as handle:
+        fcntl.flock(handle, fcntl.LOCK_EX if exclusive else fcntl.LOCK_SH)
+        yield
+
 
 PAPER_MISPRINTS = {
     (1, 10, "MfrE5", "-0.0133", ("digits", "small")),   # an order of magnitude low

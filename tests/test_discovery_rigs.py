@@ -11,7 +11,7 @@ import pytest
 from click.testing import CliRunner
 
 from gsfric.cli import main
-from gsfric.discovery import discover
+from gsfric.discovery import CANDIDATE_NAMES, discover
 from gsfric.discovery.rest import data_problems, poses_from_columns, speed_uncertainty
 from gsfric.discovery.settings import Settings
 from gsfric.errors import InputError
@@ -332,8 +332,7 @@ def test_offsets_imitating_a_quadratic_load_cell_are_not_explained():
 def test_delay_outside_the_fit_set_is_unexplained():
     data = synthesize(PAPER, ["time_offset:delay=0.01"], samples=4000, noise=0.1, seed=6,
                       pose_noise=1e-5)
-    names = tuple(n for n in __import__("gsfric.discovery", fromlist=["x"]).CANDIDATE_NAMES
-                  if n != "time_offset")
+    names = tuple(n for n in CANDIDATE_NAMES if n != "time_offset")
     result = run(data, candidates=names)
     assert result.verdict == "unexplained_discrepancy"
     assert result.names == []

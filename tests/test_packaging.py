@@ -23,6 +23,7 @@ import zipfile
 from pathlib import Path
 
 import pytest
+from helpers import build_folder_lock, editable_build_folder
 
 from gsfric.compiled import native
 
@@ -34,15 +35,6 @@ ROOT = Path(__file__).resolve().parent.parent
 _HARMLESS = (re.compile(r"^WARNING: Location '.*' is ignored"),)
 
 
-def _editable_build_folder() -> Path | None:
-    """The build folder of the editable install (meson-python's finder), if gsfric is one."""
-    for finder in sys.meta_path:
-        folder = getattr(finder, "_build_path", None)
-        if folder and getattr(finder, "_name", None) == "gsfric":
-            return Path(folder)
-    return None
-
-
 def _pip(*args, cwd: Path) -> str:
     run = subprocess.run([sys.executable, "-m", "pip", *args], capture_output=True, text=True,
                          cwd=cwd)
@@ -50,13 +42,22 @@ def _pip(*args, cwd: Path) -> str:
     return run.stdout + run.stderr
 
 
+@pytest.fixture(autouse=True)
+def build_folder_in_use():
+    """This module's builds reconfigure the build folder: they hold its lock exclusively while
+    they do (``helpers.build_folder_lock``), not shared for the whole test."""
+    yield
+
+
 @pytest.fixture(scope="module")
 def wheel(tmp_path_factory) -> tuple[Path, str]:
     """The wheel (from the editable install's build folder when there is one) and its log."""
     out = tmp_path_factory.mktemp("dist")
-    folder = _editable_build_folder()
+    folder = editable_build_folder()
     settings = [f"-Cbuild-dir={folder}", "--no-build-isolation"] if folder else []
-    log = _pip("wheel", "--no-deps", "--wheel-dir", str(out), *settings, str(ROOT), cwd=out)
+    with build_folder_lock(exclusive=True):
+        log = _pip("wheel", "--no-deps", "--wheel-dir", str(out), *settings, str(ROOT),
+                   cwd=out)
     return next(out.glob("gsfric-*.whl")), log
 
 
@@ -176,12 +177,13 @@ def test_the_installed_wheel_evaluates_where_fcntl_cannot_be_imported(installed)
 
 
 def test_the_sdist_holds_what_a_build_needs(tmp_path):
-    folder = _editable_build_folder()
+    folder = editable_build_folder()
     settings = [f"-Cbuild-dir={folder}"] if folder else []
     build = pytest.importorskip("build")
-    run = subprocess.run([sys.executable, "-m", "build", "--sdist", "--no-isolation",
-                          "--outdir", str(tmp_path), *settings, str(ROOT)],
-                         capture_output=True, text=True, cwd=tmp_path)
+    with build_folder_lock(exclusive=True):
+        run = subprocess.run([sys.executable, "-m", "build", "--sdist", "--no-isolation",
+                              "--outdir", str(tmp_path), *settings, str(ROOT)],
+                             capture_output=True, text=True, cwd=tmp_path)
     assert build and run.returncode == 0, run.stdout[-3000:] + run.stderr[-3000:]
     names = tarfile.open(next(tmp_path.glob("gsfric-*.tar.gz"))).getnames()
     root = names[0].split("/")[0]
