@@ -35,8 +35,8 @@ def build_folder_lock(exclusive: bool):
 
     Every process that imports gsfric from the editable install checks the build there
     (meson-python runs ninja), and that check fails while another process reconfigures the
-    folder, as building the wheel or the sdist from it does: tests hold the lock shared, the
-    package builds exclusively."""
+    folder, as building the wheel from it does: tests hold the lock shared, the wheel's build
+    exclusively."""
     folder = editable_build_folder()
     if folder is None:
         yield

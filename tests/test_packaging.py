@@ -44,8 +44,8 @@ def _pip(*args, cwd: Path) -> str:
 
 @pytest.fixture(autouse=True)
 def build_folder_in_use():
-    """This module's builds reconfigure the build folder: they hold its lock exclusively while
-    they do (``helpers.build_folder_lock``), not shared for the whole test."""
+    """The wheel's build reconfigures the build folder: it holds the folder's lock exclusively
+    while it does (``helpers.build_folder_lock``), not shared for the whole test."""
     yield
 
 
@@ -177,13 +177,12 @@ def test_the_installed_wheel_evaluates_where_fcntl_cannot_be_imported(installed)
 
 
 def test_the_sdist_holds_what_a_build_needs(tmp_path):
-    folder = editable_build_folder()
-    settings = [f"-Cbuild-dir={folder}"] if folder else []
+    """An sdist compiles nothing: it is made in a build folder of its own (meson-python's
+    temporary one), leaving the editable install's alone."""
     build = pytest.importorskip("build")
-    with build_folder_lock(exclusive=True):
-        run = subprocess.run([sys.executable, "-m", "build", "--sdist", "--no-isolation",
-                              "--outdir", str(tmp_path), *settings, str(ROOT)],
-                             capture_output=True, text=True, cwd=tmp_path)
+    run = subprocess.run([sys.executable, "-m", "build", "--sdist", "--no-isolation",
+                          "--outdir", str(tmp_path), str(ROOT)],
+                         capture_output=True, text=True, cwd=tmp_path)
     assert build and run.returncode == 0, run.stdout[-3000:] + run.stderr[-3000:]
     names = tarfile.open(next(tmp_path.glob("gsfric-*.tar.gz"))).getnames()
     root = names[0].split("/")[0]
