@@ -212,6 +212,14 @@ def test_excitation_starts_and_ends_at_rest_within_the_limits():
     assert np.abs(speed).max() <= 0.2 * 1.01
     assert result.rank == len(result.expected_std)
     assert np.isfinite(result.condition) and np.isfinite(result.sinusoid_condition)
+    # no fit knows a parameter better than the noise over its largest effect allows (the
+    # Cramer-Rao bound of the parameter alone, with every force at that effect)
+    forces = 6 * len(motion)
+    for name, std in result.expected_std.items():
+        value = abs(result.prior[name])
+        if std is not None and value > 0:
+            bound = result.force_noise * value / (np.sqrt(forces) * result.largest_effect[name])
+            assert std >= bound * (1 - 1e-9), name
 
 
 @pytest.mark.integration

@@ -33,7 +33,7 @@ from gsfric.evaluation.evaluator import Evaluator, state_array
 from gsfric.identification.parameters import parameter_set
 from gsfric.identification.regressor import Model, covariance, structure
 from gsfric.identification.settings import (EXCITE_CANDIDATES, EXCITE_HARMONICS,
-                                            MAX_SAMPLES_EXCITE, TYPICAL)
+                                            MAX_SAMPLES_EXCITE, TYPICAL, WEAK_RELATIVE_STD)
 from gsfric.models import platform_from, pose_motion, sinusoidal
 from gsfric.platform.description import Platform
 from gsfric.trajectory import Motion
@@ -88,6 +88,11 @@ class Excitation:
     prior : dict[str, float]
         The platform's value of each parameter (for relative standard deviations).
     units : dict[str, str]
+    largest_effect : dict[str, float]
+        The largest change of an actuator force along the motion that each parameter makes at
+        its platform value (|value| times the largest |dF_i/d parameter|), N: with ``n``
+        forces, no fit can know it better than ``force_noise |value| / (sqrt(n)
+        largest_effect)``.
     """
 
     motion: Motion
@@ -102,6 +107,7 @@ class Excitation:
     expected_std: dict
     prior: dict
     units: dict
+    largest_effect: dict
 
     def relative_std(self) -> dict:
         """Expected std divided by the absolute value of the platform's, per parameter (None
@@ -120,6 +126,9 @@ class Excitation:
             text = "not identifiable" if std is None else f"{std:.3g} {self.units[name]}"
             if rel[name] is not None:
                 text += f" ({100 * rel[name]:.3g} %)"
+                if rel[name] > WEAK_RELATIVE_STD:
+                    text += (f"; it moves a force by {self.largest_effect[name]:.2g} N at "
+                             f"most along this motion")
             lines.append(f"  {name}: {text}")
         return "\n".join(lines)
 
@@ -296,7 +305,9 @@ def _excitation(ps, platform, coef, duration, rate, period, noise) -> Excitation
         sinusoid_condition=s_condition, rank=rank, sinusoid_rank=s_rank, force_noise=noise,
         expected_std={n: (float(std[k]) if st.identifiable[k] else None)
                       for k, n in enumerate(ps.names)},
-        prior=dict(zip(ps.names, map(float, ps.prior))), units=dict(zip(ps.names, ps.units)))
+        prior=dict(zip(ps.names, map(float, ps.prior))), units=dict(zip(ps.names, ps.units)),
+        largest_effect=dict(zip(ps.names, map(float, np.abs(J).max(axis=(0, 1))
+                                              * np.abs(ps.prior)))))
 
 
 def _default_noise(platform: Platform) -> float:
