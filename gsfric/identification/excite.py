@@ -90,9 +90,9 @@ class Excitation:
     units : dict[str, str]
     largest_effect : dict[str, float]
         The largest change of an actuator force along the motion that each parameter makes at
-        its platform value (|value| times the largest |dF_i/d parameter|), N: with ``n``
-        forces, no fit can know it better than ``force_noise |value| / (sqrt(n)
-        largest_effect)``.
+        its platform value (the value's size times the largest size of the forces'
+        derivative with respect to it), N: with ``n`` forces, no fit can know it better than
+        ``force_noise * abs(value) / (sqrt(n) * largest_effect)``.
     """
 
     motion: Motion
