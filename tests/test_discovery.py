@@ -399,20 +399,17 @@ def test_the_held_guess_is_what_bvls_finds(monkeypatch):
         hi = np.where(rng.random(k) < 0.2, 0.5, np.inf)
         problems.append((X.T @ X, X.T @ y, lo, hi))
     guessed = [st.solve(*p, ridge=DEFAULTS.ridge) for p in problems]
-    taken = 0
+    verdicts = []           # the shortcut's verdict on each problem that needed the bounds
     original = st._optimal
 
     def refused(*args):
-        nonlocal taken
-        taken += original(*args)
+        verdicts.append(original(*args))
         return False
 
     monkeypatch.setattr(st, "_optimal", refused)
     for p, t in zip(problems, guessed):
         np.testing.assert_array_equal(st.solve(*p, ridge=DEFAULTS.ridge), t)
-    bounded = sum(1 for A, b, lo, hi in problems
-                  if not np.all(np.clip(np.linalg.solve(A, b), lo, hi) == np.linalg.solve(A, b)))
-    assert bounded > 100 and taken > bounded / 2
+    assert len(verdicts) > 100 and np.mean(verdicts) > 0.5
 
 
 def test_block_cross_products_add_up():
