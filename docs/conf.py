@@ -65,12 +65,23 @@ html_theme_options = {
 html_static_path: list[str] = []
 
 
+_OUTSIDE_SCRIPT = """
+import sys
+from pathlib import Path
+from gsfric.discovery.outside import markdown_table
+Path(sys.argv[1]).write_text(markdown_table(), encoding="utf-8")
+"""
+
+
 def _write_generated(app) -> None:
-    """Files the pages include that the code writes: the commented platform template."""
+    """Files the pages include that the code writes: the commented platform template and the
+    table of what discovery looks for outside the catalog."""
     out = Path(app.srcdir, "_generated")
     out.mkdir(exist_ok=True)
     subprocess.run([sys.executable, "-m", "gsfric", "platform", "--template",
                     "--out", str(out / "platform-template.toml")],
+                   check=True, capture_output=True)
+    subprocess.run([sys.executable, "-c", _OUTSIDE_SCRIPT, str(out / "outside-catalog.md")],
                    check=True, capture_output=True)
 
 

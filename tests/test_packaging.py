@@ -12,6 +12,7 @@ The sdist is checked for what a build from it needs.
 
 from __future__ import annotations
 
+import json
 import os
 import re
 import subprocess
@@ -36,8 +37,11 @@ _HARMLESS = (re.compile(r"^WARNING: Location '.*' is ignored"),)
 
 
 def _pip(*args, cwd: Path) -> str:
+    # the build backend's meson and ninja live beside this Python: found when the suite is
+    # run with that Python directly rather than through `make` (which puts them on PATH)
+    path = os.pathsep.join([str(Path(sys.executable).parent), os.environ.get("PATH", "")])
     run = subprocess.run([sys.executable, "-m", "pip", *args], capture_output=True, text=True,
-                         cwd=cwd)
+                         cwd=cwd, env={**os.environ, "PATH": path})
     assert run.returncode == 0, run.stdout[-3000:] + run.stderr[-3000:]
     return run.stdout + run.stderr
 
@@ -70,8 +74,6 @@ def _check_no_warnings(log: str) -> None:
 def _check_wheel(wheel: Path) -> None:
     names = set(zipfile.ZipFile(wheel).namelist())
     manifest = ROOT / "generated" / "manifest.json"
-    import json
-
     for name in json.loads(manifest.read_text())["files"]:
         assert f"gsfric/_generated/{name}" in names
     assert "gsfric/_generated/manifest.json" in names

@@ -14,7 +14,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from gsfric.discovery import dictionary, lackfit
+from gsfric.discovery import dictionary, outside
 from gsfric.discovery import statistics as st
 from gsfric.discovery.candidates import CANDIDATES
 from gsfric.discovery.final_tests import LackOfFit, lack_of_fit
@@ -211,7 +211,7 @@ def _imitator_notes(rounds: Sequence[Round]) -> list[str]:
         main = rnd.generic.main_signal
         notes.append(
             f"round {rnd.index}: {name} explains nothing that a generic out-of-catalog structure "
-            f"(mainly {main}: {lackfit.MEANING.get(main, '')}) "
+            f"(mainly {main}: {outside.looks_like('basis', main)}) "
             "does not explain as well or better: the data cannot tell "
             f"{name} from an error outside the catalog; it is named as the simpler explanation, "
             "the verdict is not 'explained'")
@@ -237,7 +237,7 @@ def _sourced(lof: LackOfFit, rounds: Sequence[Round]) -> LackOfFit:
         return dataclasses.replace(lof, source=None)
     main = rnd.generic.main_signal if rnd.generic is not None else None
     return dataclasses.replace(lof, source=f"round {rnd.index}", main_signal=main,
-                               looks_like=lackfit.MEANING.get(main, "") if main else "")
+                               looks_like=outside.looks_like("basis", main))
 
 
 def _verdict(problem: Problem, refit: Refit, found: Rounds, lof: LackOfFit, rms_after: float,

@@ -32,13 +32,13 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from gsfric._optional import optional
-from gsfric.discovery import lackfit
+from gsfric.discovery import lackfit, outside
 from gsfric.discovery.residuals import Problem
 from gsfric.discovery.settings import Settings
 from gsfric.trajectory import Motion
 
-GROUPS = ("line", "coupling", "sensor memory", "drift", "state")
-"""The dictionary's groups, in the order of the report."""
+GROUPS = outside.names("dictionary")
+"""The dictionary's groups (``outside.OUTSIDE``), in the order of the report."""
 
 
 @dataclass

@@ -17,7 +17,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from gsfric.discovery import lackfit, structure, transients
+from gsfric.discovery import lackfit, outside, structure, transients
 from gsfric.discovery import statistics as st
 from gsfric.discovery.evidence import Structure
 from gsfric.discovery.residuals import Problem
@@ -146,6 +146,21 @@ def _basis_signal(result: Structure) -> str | None:
     return max(signals, key=signals.get) if signals else None
 
 
+def _basis_words(result: Structure) -> tuple[str | None, str]:
+    signal = _basis_signal(result)
+    return signal, outside.looks_like("basis", signal)
+
+
+def _state_words(result: Structure) -> tuple[str, str]:
+    variable = result.details["variable"]
+    return f"repeats with {variable}", outside.state_meaning(variable)
+
+
+def _words(name: str) -> Callable[[Structure], tuple[str, str]]:
+    found = outside.entry("test", name)
+    return lambda result: (found.shows, found.looks_like)
+
+
 @dataclass(frozen=True)
 class StructureTest:
     """One lack-of-fit test of the final residual.
@@ -154,34 +169,26 @@ class StructureTest:
     ----------
     name : str
         Its key in summary.json's ``lack_of_fit`` (the basis's result is ``lack_of_fit``
-        itself).
+        itself); the others' entries in ``outside.OUTSIDE``.
     run : callable
         ``run(data: FinalResidual) -> Structure``.
-    main_signal, looks_like : callable
-        What the structure is and what it suggests, from the test's result, when this test is
-        the first to find it.
+    words : callable
+        ``words(result) -> (main_signal, looks_like)``: what the structure is and what it
+        suggests, when this test is the first to find it.
     """
 
     name: str
     run: Callable[[FinalResidual], Structure]
-    main_signal: Callable[[Structure], str | None]
-    looks_like: Callable[[Structure], str]
+    words: Callable[[Structure], tuple[str | None, str]]
 
 
 STRUCTURE_TESTS: tuple[StructureTest, ...] = (
-    StructureTest("basis", _basis, _basis_signal,
-                  lambda r: lackfit.MEANING.get(_basis_signal(r), "") if _basis_signal(r)
-                  else ""),
-    StructureTest("drift", _drift, lambda r: "drifts over the record",
-                  lambda r: lackfit.DRIFT_MEANING),
-    StructureTest("state", _state, lambda r: f"repeats with {r.details['variable']}",
-                  lambda r: structure.state_meaning(r.details["variable"])),
-    StructureTest("dynamic", _dynamic, lambda r: "driven by the motion",
-                  lambda r: structure.DYNAMIC_MEANING),
-    StructureTest("reversal", _reversal, lambda r: "follows the travel since each reversal",
-                  lambda r: structure.REVERSAL_MEANING),
-    StructureTest("rest", _rest, lambda r: "transient at the rests",
-                  lambda r: transients.REST_MEANING),
+    StructureTest("basis", _basis, _basis_words),
+    StructureTest("drift", _drift, _words("drift")),
+    StructureTest("state", _state, _state_words),
+    StructureTest("dynamic", _dynamic, _words("dynamic")),
+    StructureTest("reversal", _reversal, _words("reversal")),
+    StructureTest("rest", _rest, _words("rest")),
 )
 """The tests, in their order of precedence."""
 
@@ -259,6 +266,7 @@ def lack_of_fit(problem: Problem, theta: np.ndarray, residual: np.ndarray,
     basis.fitted = results["drift"].fitted = None
     shown = by or STRUCTURE_TESTS[0]
     found = basis if shown.name == "basis" else results[shown.name]
+    main_signal, looks_like = shown.words(found)
     return LackOfFit(basis, results, first.significant, first.gap, first.structure_rms,
                      first.per_leg_rms, time_rms, lackfit.dominant_frequency(t, residual),
-                     shown.looks_like(found), shown.main_signal(found))
+                     looks_like, main_signal)

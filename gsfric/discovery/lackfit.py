@@ -39,31 +39,17 @@ from __future__ import annotations
 
 import numpy as np
 
+from gsfric.discovery import outside
 from gsfric.discovery import statistics as st
 from gsfric.discovery.evidence import Evidence, Rule, Structure, accept
 from gsfric.discovery.settings import Settings
 
-SIGNALS = ("dF/dt", "F|F|", "F^3", "F", "sgn(v)", "acceleration", "drift", "dF/dt between legs",
-           "pose scale")
+SIGNALS = outside.names("basis")
+"""The generic signals (``outside.OUTSIDE``), in the order of the basis's columns."""
 
 CATALOG_EQUIVALENT = {"dF/dt": "time_offset", "F": "force_scale", "sgn(v)": "seal_friction"}
 """Signals that a catalog effect reproduces (a common delay, a common gain, a common Coulomb
 force): out of the catalog only when that effect is not a candidate."""
-
-MEANING = {
-    "dF/dt": "correlated with the rate of change of the force: a delay between the pose and "
-             "force channels, or a dynamic sensor",
-    "F|F|": "growing with the square of the force: a nonlinear load cell",
-    "F^3": "growing with the cube of the force: a nonlinear (saturating) load cell",
-    "F": "proportional to the force: a gain error of the load cells",
-    "sgn(v)": "friction-like, following the sign of the leg speed with a law outside the catalog",
-    "acceleration": "correlated with the legs' acceleration: an inertia or timing error",
-    "drift": "a slow drift in time: a thermal drift or a zero shift of the load cells",
-    "dF/dt between legs": "correlated with the rate of change of the force, differently on each "
-                          "leg: a delay that differs between the force channels",
-    "pose scale": "what a scale error of the recorded position (x, y or z) makes of the "
-                  "rigid-body force: a calibration error of the pose measurement",
-}
 
 
 def basis(t: np.ndarray, F: np.ndarray, speed: np.ndarray, sliding: np.ndarray,
@@ -214,11 +200,6 @@ def dominant_frequency(t: np.ndarray, residual: np.ndarray) -> float:
 DRIFT_SIGNALS = ("sgn(v) drift",)
 """The tested column of ``drift_basis``: the friction level changing linearly over the record
 (the level itself, ``sgn(v)``, is fitted beside it under the null as well)."""
-
-DRIFT_MEANING = ("a friction that changes over the record (the friction-like part of the "
-                 "residual grows or shrinks with time): a seal or lubricant warming up or "
-                 "wearing in")
-
 
 def drift_basis(t: np.ndarray, speed: np.ndarray, sliding: np.ndarray) -> np.ndarray:
     """The columns (M, 6, 2) of the drift test: the friction level ``sgn(v)`` and its change

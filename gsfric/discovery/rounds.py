@@ -18,7 +18,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from gsfric.discovery import lackfit
+from gsfric.discovery import lackfit, outside
 from gsfric.discovery import statistics as st
 from gsfric.discovery.candidates import Candidate
 from gsfric.discovery.evidence import Evidence, Rule, accept
@@ -355,7 +355,7 @@ def _slow_structure(problem: Problem, sc: _Screened, index: int, level: float
     return _SlowPart(generic, name, (
         f"round {index}: {name} fits a part of the gap that slow noise could also make "
         f"(not named), but a generic out-of-catalog structure (mainly {generic.main_signal}: "
-        f"{lackfit.MEANING.get(generic.main_signal, '')}) explains it as well or better, "
+        f"{outside.looks_like('basis', generic.main_signal)}) explains it as well or better, "
         "and a significant part beyond the catalog: the catalog does not explain the data"))
 
 

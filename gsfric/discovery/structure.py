@@ -53,21 +53,6 @@ from gsfric.discovery.evidence import Evidence, Rule, Structure, accept
 from gsfric.discovery.pvalues import alexander_govern, f_sf
 from gsfric.signal.filters import all_pole, fir
 
-STATE_MEANING = {
-    "leg length": "a function of the stroke position, the same at every visit: a spring or "
-                  "cable force, a screw's ripple, a position-dependent friction",
-    "leg speed": "a function of the leg speed, the same at every visit: a friction or damping "
-                 "law outside the catalog",
-    "model force": "a function of the leg's own force: a nonlinear or hysteretic load cell",
-}
-"""What a repeatable residual in bins of each state variable of ``state_features`` suggests;
-the force of another leg means crosstalk between the load cells' channels."""
-
-
-DYNAMIC_MEANING = ("driven by the motion through a filter (it follows the force's rate or the legs' "
-                   "acceleration beyond the residual's own past): a resonance of the structure, "
-                   "a delay or the dynamics of the sensor")
-
 
 def state_features(D: np.ndarray, speed: np.ndarray, F: np.ndarray) -> dict[str, np.ndarray]:
     """The state variables binned by ``state_structure``, each (M, 6): the leg's length (m),
@@ -77,14 +62,6 @@ def state_features(D: np.ndarray, speed: np.ndarray, F: np.ndarray) -> dict[str,
     for k in range(1, F.shape[1]):
         out[f"force of leg i+{k}"] = np.roll(F, -k, axis=1)
     return out
-
-
-def state_meaning(variable: str) -> str:
-    """Plain words for a repeatable residual in bins of ``variable``."""
-    if variable.startswith("force of leg"):
-        return ("a function of another leg's force: crosstalk between the load cells' channels "
-                "or a load path the model does not have")
-    return STATE_MEANING.get(variable, "")
 
 
 STATE_KEYS = ("significant", "variable", "gap", "cv_gain", "structure_rms", "per_leg_rms",
@@ -537,8 +514,3 @@ def _one_way_p(y: np.ndarray, b: np.ndarray, nb: int, unit: np.ndarray) -> float
     groups = [u_mean[u_bin == k] for k in range(nb) if np.count_nonzero(u_bin == k) >= 3]
     p = alexander_govern(groups) if len(groups) >= 2 else 1.0
     return p if np.isfinite(p) else 1.0
-
-
-REVERSAL_MEANING = ("a friction-like force that depends on the travel since the last reversal, "
-                    "not on the speed: play in a joint, a pre-sliding (Dahl-like) friction, or "
-                    "a friction that builds up after each reversal")

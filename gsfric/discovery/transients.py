@@ -196,8 +196,3 @@ def _transient_size(residual: np.ndarray, runs: list[tuple[int, int, int]], wind
     per_leg = [float(np.sqrt(max(s0[legs_of == k].mean() - s1[legs_of == k].mean(), 0.0)))
                if np.any(legs_of == k) else 0.0 for k in range(residual.shape[1])]
     return float(np.sqrt(max(s0.mean() - s1.mean(), 0.0))), per_leg
-
-
-REST_MEANING = ("largest just after each stop and dying out during the rest: a mode of the "
-                "structure ringing after the stop, a creep or relaxation of the load cells, or "
-                "the controller settling")
