@@ -51,6 +51,12 @@ FIXED_MODELS = {"coupled": 1, "posthoc": 0}
 SIMD_FUNCTIONS = ("eval", *(f"{f}_{suffix}" for suffix in FIXED_MODELS
                             for f in ("actuator", "eval", "envelope")))
 
+# Functions whose SIMD-over-steps version is a file of its own, compiled with less
+# optimisation (meson.build): the Jacobian (dF/dtheta of every parameter, the fits of discover
+# and identify) is the longest body of the model, and a compiler's time on it grows much faster
+# than its speed with the optimisation level.
+SIMD_SEPARATE = ("jacobian",)
+
 
 def _layout(specs) -> list[dict]:
     out, offset = [], 0
@@ -205,6 +211,9 @@ def _code_files(funcs: list, out_dir: Path) -> dict[str, bytes]:
         files[f"{BASENAME}_batch.c"] = simd.batch_file(
             [f for f in funcs if f.name() in {f"{BASENAME}_{n}" for n in SIMD_FUNCTIONS}],
             on_request=mdl.ON_REQUEST).encode()
+        for name in SIMD_SEPARATE:
+            files[f"{BASENAME}_{name}_batch.c"] = simd.batch_file(
+                [f for f in funcs if f.name() == f"{BASENAME}_{name}"], probes=False).encode()
     finally:
         for p in tmp.glob("*"):
             p.unlink()
@@ -257,7 +266,9 @@ def _manifest(funcs: list, meta: dict, files: dict[str, bytes]) -> dict:
 
 
 def write(files: dict[str, bytes], out_dir: Path = GENERATED) -> None:
-    """Write ``generate()``'s files into ``out_dir``, each to a temporary name then renamed.
+    """Write ``generate()``'s files into ``out_dir``, each to a temporary name then renamed;
+    a file whose bytes are already those is left alone (its time too: the build recompiles
+    only the C that changed).
 
     Parameters
     ----------
@@ -266,9 +277,12 @@ def write(files: dict[str, bytes], out_dir: Path = GENERATED) -> None:
     """
     out_dir.mkdir(parents=True, exist_ok=True)
     for name, data in files.items():
+        target = out_dir / name
+        if target.exists() and target.read_bytes() == data:
+            continue
         tmp = out_dir / f".{name}.tmp"
         tmp.write_bytes(data)
-        tmp.replace(out_dir / name)
+        tmp.replace(target)
 
 
 def is_stale(out_dir: Path = GENERATED) -> str | None:

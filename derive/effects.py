@@ -204,9 +204,14 @@ def prismatic_effects_force(q: dict, v, sgn_v, D, u, M_3):
     sympy.Expr
         Force along u on the upper part, N (opposing v).
     """
-    coulomb = sp.Max(0, q["stribeck.static"] * sp.exp(-(v / q["stribeck.velocity"]) ** 2)
-               + q["seal_friction.force"]
-               + q["stroke_friction.slope"] * (D - q["stroke_friction.reference"])
-               + q["bushing_friction.coefficient"] * 2 * norm(cross(u, M_3))
-               / q["bushing_friction.spacing"])
+    level = (q["stribeck.static"] * sp.exp(-(v / q["stribeck.velocity"]) ** 2)
+             + q["seal_friction.force"]
+             + q["stroke_friction.slope"] * (D - q["stroke_friction.reference"])
+             + q["bushing_friction.coefficient"] * 2 * norm(cross(u, M_3))
+             / q["bushing_friction.spacing"])
+    # max(0, level), with the derivative of level where level is 0: the parameters, zero by
+    # default, grow the force from there (a max's derivative at the tie would be half of it,
+    # and whether a level such as a Stribeck term far above its speed is 0 or a subnormal
+    # number depends on the exp of the build)
+    coulomb = sp.Piecewise((level, level >= 0), (0, True))
     return -sgn_v * coulomb - q["quadratic_drag.coefficient"] * v * sp.Abs(v)

@@ -222,7 +222,9 @@ static inline vd v_inv(vd a) { return v_rcp(a); }
 """
 
 
-def _header() -> str:
+def _header(probes: bool = True) -> str:
+    """The file's definitions; with ``probes``, the functions the tests call (one file of a
+    module has them)."""
     lines = [
         "/* SIMD-over-steps evaluation of gsfric's generated functions: see derive/simd.py. */",
         "#include <math.h>",
@@ -282,6 +284,8 @@ def _header() -> str:
     for name, body in _LANEWISE_UNARY.items():
         lines.append(f"static inline vd {name}(vd a) {{ vd r; "
                      f"for (int i = 0; i < GSFRIC_LANES; ++i) r[i] = {body}; return r; }}")
+    if not probes:
+        return "\n".join(lines) + "\n"
     lines += [
         "",
         "/* The lane width this file was compiled with, and its vector exp (for the tests). */",
@@ -504,8 +508,9 @@ def batch_source(f, prefix: str, on_request=()) -> str:
     return "\n".join(lines)
 
 
-def batch_file(functions, on_request=()) -> str:
+def batch_file(functions, on_request=(), probes: bool = True) -> str:
     """One C file with a ``_batch`` function for each CasADi function (``on_request``: see
-    ``batch_source``)."""
-    return _header() + "\n" + "\n".join(batch_source(f, f.name(), on_request)
-                                        for f in functions)
+    ``batch_source``); ``probes``: with the functions the tests call (``gsfric_simd_lanes``,
+    ...), which only one file linked into a module may have."""
+    return _header(probes) + "\n" + "\n".join(batch_source(f, f.name(), on_request)
+                                              for f in functions)

@@ -170,6 +170,28 @@ def test_parameter_jacobian_equals_finite_differences(rng):
         assert np.max(np.abs(fd - dF[:, :, k])) < 1e-5 * scale + 1e-9, name
 
 
+def test_the_jacobian_where_a_friction_level_is_zero_is_the_rising_one():
+    """The Coulomb level of the catalog's prismatic effects is max(0, level). Far above its
+    speed a Stribeck term is 0, so with the other effects at their default 0 the level is 0:
+    the Jacobian of the parameters that grow it from there is the one-sided derivative upward
+    (the direction a fit from zero takes), at every step and in every build."""
+    platform = models.reference_platform().with_effect("stribeck", static=2.0, velocity=0.01)
+    x = state_array(models.sinusoidal(np.linspace(0.0, 40.0, 4000)))
+    ev = Evaluator(platform)
+    F, dF = ev.jacobian(x)
+    names = jacobian_parameters()
+    q_names = [n for n in names if "." in n]
+    for name in ("seal_friction.force", "bushing_friction.coefficient"):
+        Q = ev.Q.copy()
+        assert Q[q_names.index(name)] == 0.0
+        h = 1e-6
+        Q[q_names.index(name)] = h
+        rising = (ev.actuator_forces(x, Q=Q) - F) / h
+        k = names.index(name)
+        scale = np.max(np.abs(rising))
+        assert np.max(np.abs(rising - dF[:, :, k])) < 1e-5 * scale, name
+
+
 def test_parameters_vary_per_step(rng):
     platform = perturbed_platform(rng)
     x = random_states(rng, 10)

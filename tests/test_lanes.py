@@ -15,13 +15,16 @@ import pytest
 from helpers import numpy_flags, perturbed_platform, random_states, with_every_effect
 from scipy.spatial.transform import Rotation
 
+from derive.build import SIMD_FUNCTIONS, SIMD_SEPARATE
+
 from gsfric import models
 from gsfric.compiled import native
 from gsfric.evaluation.evaluator import Evaluator, state_array
 from gsfric.trajectory import Motion
 
-FUNCTIONS = ("eval", "eval_coupled", "eval_posthoc", "actuator_coupled", "actuator_posthoc")
-"""The SIMD-over-steps functions (derive/build.py): the generic map and the fixed models'."""
+FUNCTIONS = (*SIMD_FUNCTIONS, *SIMD_SEPARATE)
+"""The SIMD-over-steps functions (derive/build.py): the generic map, the fixed models' and the
+parameter Jacobian."""
 BUILDS = native.cpu_builds()
 """The builds installed that this CPU runs (on an AVX-512 machine: 8 and 4 lanes and the x86-64
 baseline's per-step functions)."""
