@@ -6,19 +6,13 @@ cross-validation, a gap of at least ``Settings.dictionary_min_gap`` times the no
 noise model fitted to the residual left by the group (what the group explains cannot inflate
 the noise model that judges it).
 
-The groups (``GROUPS``), each with one column per leg and feature (a cell's own trouble is
-one cell's):
-
-* ``line``: sine and cosine at each of the residual's most prominent spectral peaks
-  (interference on the load cells: mains, a drive's switching, a pump);
-* ``coupling``: the other legs' model forces (cross-talk between load-cell channels);
-* ``sensor memory``: the reading's error of a load cell with a dead band (play) whose width
-  is chosen per leg (from a tenth of the residual, the sign of the force's rate of change,
-  to three times it), and a dead band around zero force (hysteresis, a reading that depends
-  on the direction of the force change);
-* ``drift``: time polynomials and piecewise levels (a zero drifting, a step over the record);
-* ``state``: the leg's stroke, its square, its speed, its speed's magnitude and the
-  platform's position (a dependence on speed, stroke or pose that no candidate removed).
+The groups (``GROUPS``: the ``dictionary`` entries of ``outside.OUTSIDE``, which say what each
+suggests) have one column per leg and feature (a cell's own trouble is one cell's): sines at
+the residual's most prominent spectral peaks (``line``), the other legs' model forces
+(``coupling``), a load cell's reading through a dead band whose width is chosen per leg from a
+tenth of the residual to three times it, and a dead band around zero force (``sensor memory``),
+time polynomials and piecewise levels (``drift``), the leg's stroke, its square, its speed, its
+speed's magnitude and the platform's position (``state``).
 
 The groups are taken by forward selection (``find``), and each accepted group is described
 in a rig engineer's words (``Unexplained.description``).

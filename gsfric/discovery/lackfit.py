@@ -1,20 +1,12 @@
 """Lack of fit: does structure remain in the final residual that no catalog effect explains?
 
 The final residual is tested against a small generic basis of signals that the common
-out-of-model errors of a rig produce, none of them a catalog term in this form:
-
-* ``dF/dt`` (a delay between pose and force channels),
-* ``F |F|`` and ``F^3`` (a nonlinear load cell),
-* ``F`` (a gain error),
-* ``sgn(v)`` on sliding samples (friction of another law),
-* ``a`` the leg's acceleration (an inertia or timing error),
-* a cubic drift in time (a thermal drift of the load cells),
-* as a competitor of a round's winner only (``selection.generic_competitor``), ``dF/de`` for a
-  scale error e of each position axis of the recorded pose (x, y, z read ``1 + e`` times the
-  true ones, velocity and acceleration with them: a pose measurement's calibration), given by
-  the model (``ParametricModel.pose_scale``),
-* ``dF/dt`` with coefficients that sum to zero over the legs (five contrasts: leg k's against
-  leg 6's; a delay that differs between the force channels beyond their common delay).
+out-of-model errors of a rig produce, none of them a catalog term in this form: the ``basis``
+entries of ``outside.OUTSIDE``, which say what each suggests. Two are built apart from the
+others: ``pose scale`` (a competitor of a round's winner only, ``selection.generic_competitor``)
+is ``dF/de`` for a scale error e of each position axis of the recorded pose, given by the model
+(``ParametricModel.pose_scale``); ``dF/dt between legs`` is dF/dt with coefficients that sum to
+zero over the legs (five contrasts: leg k's against leg 6's).
 
 Each other column is shared by the six legs (one coefficient, scaled to unit RMS over all
 legs): the load cells of a rig are alike, and a delay or a nonlinearity common to them is then
