@@ -27,7 +27,7 @@ def answered(tmp_path_factory):
     measured = work / "m.parquet"
     data.frame.to_parquet(measured)
     result = CliRunner().invoke(main, ["discover", "--measured", str(measured), "--out",
-                                       str(work / "out"), "--no-progress"])
+                                       str(work / "out"), "--no-progress", "--no-plots"])
     assert result.exit_code == 0, result.output
     return work / "out", result.output.strip().splitlines()[-1], measured
 

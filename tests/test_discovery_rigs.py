@@ -354,7 +354,8 @@ def test_fitted_model_round_trip_through_the_cli(tmp_path):
     data.frame.to_csv(measured, index=False)
     runner = CliRunner()
     out = tmp_path / "out"
-    res = runner.invoke(main, ["discover", "--measured", str(measured), "--out", str(out)])
+    res = runner.invoke(main, ["discover", "--measured", str(measured), "--out", str(out),
+                               "--no-plots"])
     assert res.exit_code == 0, res.output
     summary = json.loads((out / "summary.json").read_text())
     assert summary["verdict"] == "explained"

@@ -289,8 +289,11 @@ def test_discover_takes_the_force_noise_from_the_command_line(tmp_path, mains_re
     frame.to_csv(path, index=False)
     out = tmp_path / "out"
     run = CliRunner().invoke(main, ["discover", "--measured", str(path), "--out", str(out),
-                                    "--quiet", "--force-noise", "0.03"])
+                                    "--quiet", "--no-plots", "--force-noise", "0.03"])
     assert run.exit_code == 0, run.output
+    # --no-plots: the files of the answer, no figure and no 3-D view
+    assert sorted(p.name for p in out.iterdir()) == ["platform.toml", "report.md",
+                                                     "summary.json"]
     summary = json.loads((out / "summary.json").read_text())
     floor = summary["noise"]["floor"]
     assert floor["force_source"] == "specified" and floor["force"] == [0.03] * 6

@@ -187,7 +187,7 @@ def test_discover_starts_from_the_identified_platform(tmp_path):
     found = tmp_path / "found"
     run = CliRunner().invoke(main, ["discover", "--measured", str(measured), "--platform",
                                     str(identified / "platform.toml"), "--out", str(found),
-                                    "--quiet"])
+                                    "--quiet", "--no-plots"])
     assert run.exit_code == 0, run.output
     refit = json.loads((found / "summary.json").read_text())["refit"]["parameters"]
     reference = reference_platform().friction

@@ -305,7 +305,7 @@ def test_the_controller_log_reads_simulates_and_discovers(tmp_path):
     assert len(forces) == 2000 and not forces["flag"].any()
     folder = tmp_path / "discover"
     result = _cli("discover", "--measured", LOG, "--column-map", LOG_FORMAT, "--out", folder,
-                  "--quiet")
+                  "--quiet", "--no-plots")
     assert result.exit_code == 0, result.output
     summary = json.loads((folder / "summary.json").read_text())
     names = [e["name"] for e in summary["effects"]]

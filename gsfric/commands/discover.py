@@ -34,6 +34,9 @@ from gsfric.io.logs import LogFormat
 @click.option("--progress/--no-progress", default=None,
               help="A progress bar over the workflow's stages on stderr [default: when stderr "
                    "is a terminal].")
+@click.option("--no-plots", is_flag=True,
+              help="Skip the plots and report.html (the 3-D view); summary.json, report.md "
+                   "and platform.toml are written.")
 @click.option("--quiet", is_flag=True,
               help="No progress bar and no list of written files (warnings and errors still "
                    "go to stderr).")
@@ -41,8 +44,8 @@ from gsfric.io.logs import LogFormat
 @checked_paths({"measured": "measured-data", "platform_file": "platform",
                 "noise_record": "noise-record", "column_map": "column-map"},
                folders=("out_dir",))
-def discover(measured, platform_file, out_dir, seed, force_noise, noise_record, progress, quiet,
-             column_map, units_map, angles):
+def discover(measured, platform_file, out_dir, seed, force_noise, noise_record, progress,
+             no_plots, quiet, column_map, units_map, angles):
     """Find which physical effect the model is missing, fit it, and show the gap shrink.
 
     The last line printed is the answer, e.g. `explained: seal_friction (force = 3 N) closes
@@ -53,7 +56,8 @@ def discover(measured, platform_file, out_dir, seed, force_noise, noise_record, 
     log_format = LogFormat.from_options(column_map, units_map, angles, None)
     result = discover_data(measured, platform=platform_file, out=out_dir, seed=seed,
                            progress=show, force_noise=force_noise_values(force_noise),
-                           noise_record=noise_record, log_format=log_format)
+                           noise_record=noise_record, log_format=log_format,
+                           figures=not no_plots)
     if not quiet:
         for path in result.written:
             click.echo(f"wrote {path}")
