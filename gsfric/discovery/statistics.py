@@ -382,14 +382,18 @@ def solve(A: np.ndarray, b: np.ndarray, lower: np.ndarray | None = None,
     k = len(b)
     if k == 0:
         return np.zeros(0)
-    d = np.sqrt(np.maximum(np.diag(A), 1e-300))
-    As = A / np.outer(d, d) + ridge * np.eye(k)
+    diagonal = A.diagonal()
+    d = np.sqrt(np.maximum(diagonal, 1e-300))
+    As = A / np.outer(d, d)
+    As.flat[::k + 1] += ridge
     # a column without data (zero diagonal) carries no information: its coefficient is 0
-    bs = np.where(np.diag(A) > 0, b, 0.0) / d
+    bs = np.where(diagonal > 0, b, 0.0) / d
+    t = np.linalg.solve(As, bs)
+    if lower is None and upper is None:
+        return t / d
     lo = np.full(k, -np.inf) if lower is None else np.asarray(lower, float) * d
     hi = np.full(k, np.inf) if upper is None else np.asarray(upper, float) * d
-    t = np.linalg.solve(As, bs)
-    if np.all(t >= lo) and np.all(t <= hi):
+    if (t >= lo).all() and (t <= hi).all():
         return t / d
     return _bounded(As, bs, lo, hi, t) / d
 
@@ -446,12 +450,12 @@ def _optimal(A: np.ndarray, b: np.ndarray, lo: np.ndarray, hi: np.ndarray,
     its bounds, and the gradient ``At - b`` of each held one pointing out of the box (>= 0 at
     a lower bound, <= 0 at an upper one; either at a pinned one)."""
     free = ~held
-    if np.any(t[free] <= lo[free]) or np.any(t[free] >= hi[free]):
+    if (t[free] <= lo[free]).any() or (t[free] >= hi[free]).any():
         return False
     gradient = A[held] @ t - b[held]
     pinned = (lo >= hi)[held]
     at_lower = t[held] == lo[held]
-    return bool(np.all(pinned | np.where(at_lower, gradient >= 0, gradient <= 0)))
+    return bool((pinned | np.where(at_lower, gradient >= 0, gradient <= 0)).all())
 
 
 def sse(A: np.ndarray, b: np.ndarray, c: float, t: np.ndarray) -> float:
