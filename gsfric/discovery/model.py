@@ -14,7 +14,7 @@ map (two evaluations per parameter), which gives the same numbers to about 1e-8 
 from __future__ import annotations
 
 import warnings
-from collections.abc import Sequence
+from collections.abc import Iterator, Sequence
 
 import numpy as np
 
@@ -101,7 +101,6 @@ class ParametricModel:
         offsets = {b["name"]: b["offset"] for b in layout("eval", "P")}
         self._P_index = np.array([offsets[n] for n in BASE_PARAMETERS])
         self._dense = _compiled_jacobian_is_dense()
-        self._kept_jacobian = None     # (key, F, dF/dtheta) of the last compiled Jacobian
         self.evaluations = 0
 
     def __len__(self) -> int:
@@ -151,7 +150,6 @@ class ParametricModel:
     def forces(self, theta: np.ndarray) -> np.ndarray:
         """F(theta), (N, 6) N."""
         P, Q = self.vectors(theta)
-        self._kept_jacobian = None          # kept for the next call only
         self.evaluations += 1
         return self._read(theta, self._evaluator.actuator_forces(self.x, P=P, Q=Q))
 
@@ -179,7 +177,6 @@ class ParametricModel:
                 moved[:, columns] *= 1.0 + e
                 F.append(self._evaluator.actuator_forces(moved, P=P, Q=Q))
             out[:, :, axis] = (F[0] - F[1]) / (2 * h)
-        self._kept_jacobian = None          # kept for the next call only
         self.evaluations += 6
         return out
 
@@ -191,7 +188,6 @@ class ParametricModel:
             P, Q = self.vectors(theta)
             self._evaluator.actuator_forces(self.x, out=out[g], P=P, Q=Q)
             out[g] = self._read(theta, out[g])
-        self._kept_jacobian = None          # kept for the next call only
         self.evaluations += thetas.shape[0]
         return out
 
@@ -214,16 +210,15 @@ class ParametricModel:
                 out = np.empty((r1 - r0, 6, len(cols)))
             own_k = [k for k, c in enumerate(cols) if c < self.n_compiled]
             # with a delay, a column needs all steps (shifted in time); otherwise only rows
-            F0, parts = self._compiled_jacobian(theta, 0, n, chunk) if sensor_on else \
-                self._compiled_jacobian(theta, r0, r1, chunk)
+            F0 = np.empty((n, 6))
             J = np.empty((n, 6, len(own))) if sensor_on else None
-            while parts:                # each chunk released once read
-                a, b, part = parts.pop(0)
+            needed = (0, n) if sensor_on else (r0, r1)
+            for a, b, part in self._compiled_jacobian(theta, *needed, chunk, F0):
                 if J is not None:
                     J[a:b] = part[:, :, own]
                 else:
                     out[a - r0:b - r0][:, :, own_k] = part[:, :, own]
-                del part
+                del part            # released before the next chunk is evaluated
             if J is not None:
                 for j, k in enumerate(own_k):
                     out[:, :, k] = apply_sensor(self.t, J[:, :, j], gains, delay)[r0:r1]
@@ -249,38 +244,23 @@ class ParametricModel:
         J = (values[1:1 + m] - values[1 + m:]) / (2 * steps[:, None, None])
         return F, np.ascontiguousarray(J.transpose(1, 2, 0))
 
-    def _compiled_jacobian(self, theta: np.ndarray, r0: int, r1: int, chunk: int
-                           ) -> tuple[np.ndarray, list[tuple[int, int, np.ndarray]]]:
-        """F (N, 6) without sensor effects and the compiled Jacobian of every compiled
-        parameter over rows r0:r1, evaluated ``chunk`` steps at a time: a list of
-        ``(a, b, dF/dtheta)``, rows a:b of the record, (b - a, 6, n_compiled) each (the
-        caller's own list: it may empty it, releasing each chunk as it reads it).
-
-        The result is kept until the model's next evaluation: if that is a call at the same
-        compiled parameters and rows (a Gauss-Newton refinement's last point, where the next
-        linearisation starts, asking for more columns), it takes the result instead of
-        evaluating again; any other evaluation releases it."""
-        key = (theta[:self.n_compiled].tobytes(), r0, r1)
-        kept, self._kept_jacobian = self._kept_jacobian, None
-        if kept is not None and kept[0] == key:
-            return kept[1], kept[2]
-        del kept
+    def _compiled_jacobian(self, theta: np.ndarray, r0: int, r1: int, chunk: int,
+                           F0: np.ndarray) -> Iterator[tuple[int, int, np.ndarray]]:
+        """The compiled Jacobian of every compiled parameter over rows r0:r1, evaluated
+        ``chunk`` steps at a time: ``(a, b, dF/dtheta)`` for rows a:b of the record,
+        (b - a, 6, n_compiled) each, one chunk alive at a time; F without sensor effects
+        written into ``F0`` (N, 6) by the time the iteration ends."""
         n = len(self)
         evaluator = Evaluator(self.platform_at(theta), n_threads=self.n_threads)
         Q = theta[self.n_base:self.n_compiled]
-        F0 = np.empty((n, 6))
-        parts = []
+        self.evaluations += 1
         for s in range(0, n, chunk):
             e = min(n, s + chunk)
             F0[s:e], J0 = evaluator.jacobian(self.x[s:e], Q=Q)
             a, b = max(s, r0), min(e, r1)
             if a < b:
-                parts.append((a, b, J0[a - s:b - s]))
+                yield a, b, J0[a - s:b - s]
             del J0
-        self.evaluations += 1
-        # F0 goes to the caller, who may change it in place: the kept one is a copy
-        self._kept_jacobian = (key, F0.copy(), parts)
-        return F0, list(parts)
 
     def evaluate(self, theta: np.ndarray, keep: Sequence[str] = ("D", "D_dot"),
                  chunk: int = 20000) -> Result:
@@ -289,7 +269,6 @@ class ParametricModel:
         so that memory stays bounded (the full evaluation has about 200 numbers a step)."""
         evaluator = Evaluator(self.platform_at(theta, self.effect_names(theta)),
                               n_threads=self.n_threads)
-        self._kept_jacobian = None          # kept for the next call only
         self.evaluations += 1
         n = len(self)
         arrays = {}

@@ -46,9 +46,9 @@ class Columns:
     ``stored.shape[2]`` columns); the secant columns of ``time_offset`` are not: a delay only
     shifts the model's forces in time (``gsfric.catalog``), so each such column,
     ``(F(t - delay) - F(t)) / size`` times the sliding weight, is computed from the forces F
-    of the whole record (N, 6) when first asked for, over every used sample, and kept
-    (``base``, (M, 6): F(t) over the used samples, default F's). The largest array of a
-    round then holds only the columns that cost a model evaluation.
+    of the whole record (N, 6) over the rows asked for, at each request (``base``, (M, 6):
+    F(t) over the used samples, default F's). The largest array of a round then holds only
+    the columns that cost a model evaluation.
 
     Indexing as an array: ``columns[a:b]`` gives rows a..b of every column, (b - a, 6, k);
     ``columns[:, :, j]`` one column (M, 6), ``columns[:, :, [j, ...]]`` several.
@@ -68,7 +68,6 @@ class Columns:
         self.used = used
         self.weight = weight
         self.delays = [(float(d), float(size)) for d, size in delays]
-        self._delayed = None        # the delay columns, (M, 6, len(delays)), once computed
 
     @property
     def shape(self) -> tuple[int, int, int]:
@@ -76,20 +75,20 @@ class Columns:
         return (m, legs, k + len(self.delays))
 
     def _shifted(self, j: int, rows: slice) -> np.ndarray:
-        """Delay column j at ``rows``, (m, 6)."""
-        if self._delayed is None:
-            m = self.stored.shape[0]
-            g0 = self.used.start
-            self._delayed = np.empty((m, self.F.shape[1], len(self.delays)))
-            for k, (delay, size) in enumerate(self.delays):
-                x = self.t[g0:g0 + m] - delay
-                out = self._delayed[:, :, k]
-                for i, leg in enumerate(self._legs):
-                    out[:, i] = np.interp(x, self.t, leg)
-                out -= self.base
-                out /= size
-                out *= self.weight
-        return self._delayed[rows][:, :, j]
+        """Delay column j at ``rows`` (a step of 1), (m, 6), computed at each request: the
+        interpolation costs less than a model evaluation, and kept for every delay over
+        the record it would be the round's second largest array."""
+        delay, size = self.delays[j]
+        start, stop, _ = rows.indices(self.stored.shape[0])
+        g0 = self.used.start
+        x = self.t[g0 + start:g0 + stop] - delay
+        out = np.empty((stop - start, self.F.shape[1]))
+        for i, leg in enumerate(self._legs):
+            out[:, i] = np.interp(x, self.t, leg)
+        out -= self.base[start:stop]
+        out /= size
+        out *= self.weight[start:stop]
+        return out
 
     def rows(self, rows: slice, cols: Sequence[int] | None = None) -> np.ndarray:
         """Columns ``cols`` (default all) at ``rows``, (m, 6, len(cols))."""
