@@ -161,7 +161,7 @@ def test_a_third_flagged_fails_naming_the_share_and_where_unless_kept(tmp_path):
     # one run around the lifted rows (the streamed smoothing may round its edges by a step)
     assert np.all(np.diff(flagged) == 1) and abs(len(flagged) - 300) <= 4
     t = frame["t"].to_numpy() - frame["t"].iloc[0]
-    where = (f"1 run (t from the record's start: {t[flagged[0]]:.3f}-{t[flagged[-1]]:.3f} s "
+    where = (f"1 stretch (t from the record's start: {t[flagged[0]]:.3f}-{t[flagged[-1]]:.3f} s "
              f"({len(flagged)} steps))")
     share = f"{100 * len(flagged) / 1000:.3g} %"
     assert (f"{len(flagged)} of 1000 steps flagged (leg length outside the stroke: "
@@ -180,7 +180,7 @@ def test_a_few_flagged_steps_warn_with_their_time_ranges(tmp_path):
     result = _cli("simulate", "--trajectory", path, "--out", tmp_path / "o.csv")
     assert result.exit_code == 0, result.output
     assert "70 of 1000 steps flagged (leg length outside the stroke: 70; 7 % of" in result.stderr
-    assert ("2 runs (t from the record's start: 1.000-1.490 s (50 steps), 7.000-7.190 s "
+    assert ("2 stretches (t from the record's start: 1.000-1.490 s (50 steps), 7.000-7.190 s "
             "(20 steps))") in result.stderr
     # the peaks leave the flagged steps out
     frame = read_table(tmp_path / "o.csv")

@@ -175,7 +175,7 @@ class Summary:
         longest = sorted(self.flagged_ranges, key=lambda r: (-r[2], r[0]))[:SHOWN_RANGES]
         spans = ", ".join(f"{a:.3f}-{b:.3f} s ({n} steps)" if n > 1 else f"{a:.3f} s"
                           for a, b, n in sorted(longest))
-        word = "run" if self.runs == 1 else "runs"
+        word = "stretch" if self.runs == 1 else "stretches"
         which = "" if self.runs <= len(longest) else f", the {len(longest)} longest"
         return f"{self.runs} {word} (t from the record's start{which}: {spans})"
 
