@@ -16,6 +16,7 @@ from gsfric.identification import excite, validate
 from gsfric.identification.parameters import (body_from_factor, body_standard, consistent,
                                               factor_of_body, parameter_set)
 from gsfric.identification.regressor import Model, structure
+from gsfric.identification.settings import WEAK_RELATIVE_STD
 from gsfric.models import reference_platform, sinusoidal
 from gsfric.platform.description import Platform
 from gsfric.platform.text import commented_toml
@@ -275,3 +276,19 @@ def test_a_force_noise_that_is_not_positive_is_refused(noise):
     motion = sinusoidal(np.arange(40) / 100.0)
     with pytest.raises(gsfric.InputError, match="force_noise"):
         gsfric.identify(motion, np.zeros((40, 6)), force_noise=noise)
+
+
+def test_weakly_determined_parameters_are_named_with_their_effect_against_the_noise():
+    """A parameter the record determines to worse than WEAK_RELATIVE_STD of its prior value is
+    named once, with the force it moves against the noise; none better determined is."""
+    data, forces = _record(3, samples=2000)
+    result = gsfric.identify(data.motion, forces, reference_platform())
+    weak = {line.split(":")[0]: line for line in result.weak}
+    for name, e in result.parameters.items():
+        loose = e.std is not None and e.prior != 0 and e.std > WEAK_RELATIVE_STD * abs(e.prior)
+        assert (name in weak) == loose, name
+    assert weak, "a 4 s record at 0.5 N of noise leaves the viscous friction weak"
+    line = weak["friction.prismatic_viscous"]
+    assert "N of noise" in line and "needs every leg moving" in line
+    assert all(f"weakly determined: {w}" in result.statement() for w in result.weak)
+    assert result.summary()["weak"] == result.weak

@@ -27,7 +27,8 @@ from gsfric.identification.parameters import (ParameterSet, body_from_factor, co
                                               nearest_consistent, parameter_set)
 from gsfric.identification.regressor import Model, Structure, covariance, structure
 from gsfric.identification.results import Combination, Estimate, Identification, Validation
-from gsfric.identification.settings import IMPLAUSIBLE_SIGMA, MAX_NFEV, TYPICAL
+from gsfric.identification.settings import (IMPLAUSIBLE_SIGMA, MAX_NFEV, TYPICAL,
+                                            WEAK_RELATIVE_STD)
 from gsfric.models import platform_from
 from gsfric.platform.description import Platform
 from gsfric.trajectory import Motion
@@ -225,10 +226,12 @@ def _result(model: Model, ps: ParameterSet, theta: np.ndarray, forces: np.ndarra
     scale = np.sqrt(np.maximum(np.diag(sub), 1e-300))
     prior_residual = forces - model.forces(ps.prior)
     platform, doubts = _checked_platform(ps, theta)
+    correlation, names = sub / np.outer(scale, scale), [ps.names[k] for k in ident]
     return Identification(
         parameters=estimates, combinations=combinations,
-        correlation=sub / np.outer(scale, scale), correlation_names=[ps.names[k] for k in ident],
+        correlation=correlation, correlation_names=names,
         platform=platform, prior=ps.platform, unreachable=_unreachable(ps, st),
+        weak=_weak(ps, estimates, J, noise, correlation, names),
         implausible=_implausible(ps, st, theta, cov, J, residual, 1.0 / noise) + doubts,
         residual=_rms(residual), residual_prior=_rms(prior_residual), noise=noise,
         noise_given=given is not None, rank=st.rank, condition=st.condition,
@@ -282,6 +285,33 @@ def _unreachable(ps: ParameterSet, st: Structure) -> list[str]:
             why = ("only in combination: " + "; ".join(combos) if combos else
                    "its effect on the forces is that of other parameters")
         out.append(f"{name}: {why}; needs {_hint(name)}")
+    return out
+
+
+def _weak(ps: ParameterSet, estimates: dict[str, Estimate], J: np.ndarray,
+          noise: np.ndarray, correlation: np.ndarray, names: list[str]) -> list[str]:
+    """One line per identifiable parameter whose standard deviation exceeds
+    ``WEAK_RELATIVE_STD`` of its prior value (as ``excite`` reports it; a parameter whose
+    prior is zero has no scale to be weak against), with the reason: the largest change of a
+    force it makes along the motion (its value times the largest derivative, N) against the
+    noise, or, when that change is above the noise, the parameter whose effect it shares
+    (``correlation`` (q, q) of the identifiable ``names``); and what motion would reach it."""
+    out = []
+    rms_noise = float(np.sqrt(np.mean(noise ** 2)))
+    for k, name in enumerate(ps.names):
+        e = estimates[name]
+        if e.std is None or e.prior == 0 or e.std <= WEAK_RELATIVE_STD * abs(e.prior):
+            continue
+        effect = float(np.abs(J[:, :, k]).max() * max(abs(e.value), abs(e.prior)))
+        why = (f"it moves a force by {effect:.2g} N at most along this motion, against "
+               f"{rms_noise:.2g} N of noise")
+        if effect > rms_noise and len(names) > 1:
+            i = names.index(name)
+            r = np.where(np.arange(len(names)) == i, 0.0, correlation[i])
+            j = int(np.argmax(np.abs(r)))
+            why += f", much as {names[j]} does (correlation {r[j]:+.2f})"
+        out.append(f"{name}: std {e.std:.2g} {e.unit}, {100 * e.std / abs(e.prior):.3g} % of "
+                   f"its prior value; {why}; needs {_hint(name)}")
     return out
 
 

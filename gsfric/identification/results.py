@@ -111,6 +111,10 @@ class Identification:
     prior : Platform
     unreachable : list of str
         One line per parameter the motion cannot identify: why, and what motion would.
+    weak : list of str
+        One line per identifiable parameter whose std exceeds ``WEAK_RELATIVE_STD`` of its
+        prior value: how far it moves a force along the motion against the noise, and what
+        motion would determine it better.
     implausible : list of str
         Results no rig can have (a mass the data want negative): a non-empty list keeps the
         platform file from being written.
@@ -150,6 +154,7 @@ class Identification:
     platform: Platform
     prior: Platform
     unreachable: list[str]
+    weak: list[str]
     implausible: list[str]
     residual: np.ndarray
     residual_prior: np.ndarray
@@ -177,7 +182,8 @@ class Identification:
             "residual_rms_prior_N": self.residual_prior.tolist(),
             "noise_N": self.noise.tolist(),
             "noise": "given" if self.noise_given else "estimated from the residual",
-            "unreachable": self.unreachable, "implausible": self.implausible,
+            "unreachable": self.unreachable, "weak": self.weak,
+            "implausible": self.implausible,
             "validation": None if self.validation is None else self.validation.summary(),
             "evaluations": self.evaluations,
         }
@@ -190,6 +196,7 @@ class Identification:
                  f"{np.sqrt(np.mean(self.residual_prior ** 2)):.4g} N) vs noise "
                  f"{np.sqrt(np.mean(self.noise ** 2)):.4g} N"]
         lines += [f"not identifiable: {u}" for u in self.unreachable]
+        lines += [f"weakly determined: {w}" for w in self.weak]
         lines += [f"implausible: {u}" for u in self.implausible]
         return "\n".join(lines)
 

@@ -56,7 +56,8 @@ EXCITE_HARMONICS = 5
 """Harmonics of the excitation's finite Fourier series per pose coordinate."""
 
 WEAK_RELATIVE_STD = 0.05
-"""An expected relative standard deviation above which ``excite``'s report also gives how much
-the parameter moves a force along the motion (its ``largest_effect``): a parameter known to
-worse than a few percent is one whose whole effect is near the force noise, which a longer or
-faster motion shifts only as far as the limits allow."""
+"""A standard deviation, relative to the platform's value, above which ``excite``'s report and
+``identify``'s statement (``Identification.weak``) also give how much the parameter moves a
+force along the motion: a parameter known to worse than a few percent is one whose whole effect
+is near the force noise, which a longer or faster motion shifts only as far as the limits
+allow."""
