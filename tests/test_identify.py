@@ -292,3 +292,16 @@ def test_weakly_determined_parameters_are_named_with_their_effect_against_the_no
     assert "N of noise" in line and "needs every leg moving" in line
     assert all(f"weakly determined: {w}" in result.statement() for w in result.weak)
     assert result.summary()["weak"] == result.weak
+
+
+@pytest.mark.parametrize("options, message", [
+    (dict(period=0.002), r"period: 0\.002 s at 500 Hz holds 1 samples; .* at least 0\.2 s"),
+    (dict(rate=1.0, duration=4.0), r"period: 4 s at 1 Hz holds 4 samples"),
+    (dict(duration=1e9), r"duration: 1e\+09 s at 500 Hz is 5e\+11 samples, more than"),
+    (dict(rate=1e6, duration=600.0), r"duration: 600 s at 1e\+06 Hz is 6e\+08 samples"),
+])
+def test_excite_refuses_a_motion_of_too_few_or_too_many_samples(options, message):
+    """A period of a sample or two would be a motion that does not move; a duration of
+    billions of samples would exhaust the memory before any output: both refused at once."""
+    with pytest.raises(gsfric.InputError, match=message):
+        excite(**options)

@@ -33,6 +33,7 @@ from gsfric.evaluation.evaluator import Evaluator, state_array
 from gsfric.identification.parameters import parameter_set
 from gsfric.identification.regressor import Model, covariance, structure
 from gsfric.identification.settings import (EXCITE_CANDIDATES, EXCITE_HARMONICS,
+                                            EXCITE_SAMPLES_PER_CYCLE, MAX_EXCITE_SAMPLES,
                                             MAX_SAMPLES_EXCITE, TYPICAL, WEAK_RELATIVE_STD)
 from gsfric.models import platform_from, pose_motion, sinusoidal
 from gsfric.platform.description import Platform
@@ -246,13 +247,16 @@ def excite(platform: Platform | str | None = None, *, duration: float = 60.0,
     Raises
     ------
     InputError
-        A non-positive duration, rate or limit; a platform with no feasible motion.
+        A non-positive duration, rate or limit; a period of too few samples at the rate
+        (``EXCITE_SAMPLES_PER_CYCLE``), a motion of more than ``MAX_EXCITE_SAMPLES``; a
+        platform with no feasible motion.
     """
     platform = platform_from(platform)
     for name, value in (("duration", duration), ("rate", rate), ("period", period),
                         ("max_speed", max_speed), ("max_acceleration", max_acceleration)):
         if not (np.isfinite(value) and value > 0):
             raise InputError(f"{name}: must be a positive number, got {value!r}")
+    _check_samples(duration, rate, period)
     ps = parameter_set(platform, sensors=sensors)
     noise = force_noise if force_noise is not None else _default_noise(platform)
     limits = (float(max_speed), float(max_acceleration))
@@ -272,6 +276,24 @@ def excite(platform: Platform | str | None = None, *, duration: float = 60.0,
                          "or check the platform's stroke")
     best = _refine(ps, platform, best, best_key, rng, basis, coarse, period, limits, noise)
     return _excitation(ps, platform, best, duration, rate, period, noise)
+
+
+def _check_samples(duration: float, rate: float, period: float) -> None:
+    """An ``InputError`` for a period that holds too few samples at the rate to draw the
+    series, or a motion of more samples than ``MAX_EXCITE_SAMPLES``."""
+    fewest = EXCITE_SAMPLES_PER_CYCLE * EXCITE_HARMONICS
+    if period * rate < fewest:
+        raise InputError(f"period: {period:g} s at {rate:g} Hz holds {int(period * rate)} "
+                         f"samples; the series needs at least {fewest} a period "
+                         f"({EXCITE_SAMPLES_PER_CYCLE} a cycle of its highest harmonic, "
+                         f"{EXCITE_HARMONICS} cycles a period): a period of at least "
+                         f"{fewest / rate:.3g} s at this rate")
+    samples = np.ceil(duration / period - 1e-9) * period * rate + 1
+    if samples > MAX_EXCITE_SAMPLES:
+        raise InputError(f"duration: {duration:g} s at {rate:g} Hz is {samples:.3g} samples, "
+                         f"more than the {MAX_EXCITE_SAMPLES:,} an excitation is designed "
+                         "with (each sample's regressor is kept); a shorter duration or a "
+                         "lower rate")
 
 
 def _refine(ps, platform, best, best_key, rng, basis, t, period, limits, noise):

@@ -55,6 +55,16 @@ EXCITE_CANDIDATES = 24
 EXCITE_HARMONICS = 5
 """Harmonics of the excitation's finite Fourier series per pose coordinate."""
 
+EXCITE_SAMPLES_PER_CYCLE = 20
+"""Fewest samples per cycle of the excitation's highest harmonic (``EXCITE_HARMONICS`` cycles a
+period): fewer draw the series as a polygon, whose leg speeds and accelerations (the limits'
+and the regressor's) are no longer those of the motion a controller would follow."""
+
+MAX_EXCITE_SAMPLES = 1_000_000
+"""Most samples of a designed excitation (33 minutes at 500 Hz): its expected standard
+deviations hold the regressor of every sample (about 1.5 kB a sample with the load cells'
+parameters), 1.5 GB at this size."""
+
 WEAK_RELATIVE_STD = 0.05
 """A standard deviation, relative to the platform's value, above which ``excite``'s report and
 ``identify``'s statement (``Identification.weak``) also give how much the parameter moves a
