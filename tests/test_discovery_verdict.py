@@ -14,7 +14,6 @@ from click.testing import CliRunner
 from gsfric.cli import main
 from gsfric.discovery import Settings, dictionary, discover
 from gsfric.discovery.floor import (
-    ForceNoise,
     noise_floor,
     pose_noise_forces,
     read_noise_record,
@@ -25,7 +24,7 @@ from gsfric.discovery.verdict import decide
 from gsfric.errors import InputError
 from gsfric.evaluation.evaluator import Evaluator
 from gsfric.io.logs import LogFormat
-from gsfric.signal.noise import spectral_noise_std
+from gsfric.signal.noise import ForceNoise, spectral_noise_std
 from gsfric.synth import synthesize
 from gsfric.trajectory import Motion
 

@@ -13,8 +13,13 @@ import gsfric
 from gsfric.cli import main
 from gsfric.evaluation import state_array
 from gsfric.identification import excite, validate
-from gsfric.identification.parameters import (body_from_factor, body_standard, consistent,
-                                              factor_of_body, parameter_set)
+from gsfric.identification.parameters import (
+    body_from_factor,
+    body_standard,
+    consistent,
+    factor_of_body,
+    parameter_set,
+)
 from gsfric.identification.regressor import Model, structure
 from gsfric.identification.settings import WEAK_RELATIVE_STD
 from gsfric.models import reference_platform, sinusoidal
@@ -274,8 +279,18 @@ def test_95_percent_intervals_contain_the_truth_95_percent_of_the_time():
 @pytest.mark.parametrize("noise", [0.0, -1.0, [1.0, 2.0], float("nan")])
 def test_a_force_noise_that_is_not_positive_is_refused(noise):
     motion = sinusoidal(np.arange(40) / 100.0)
-    with pytest.raises(gsfric.InputError, match="force_noise"):
+    with pytest.raises(gsfric.InputError, match="--force-noise"):
         gsfric.identify(motion, np.zeros((40, 6)), force_noise=noise)
+
+
+@pytest.mark.parametrize("noise", [1e9, 1e-30])
+def test_a_force_noise_implausible_against_the_channels_is_refused_as_discover_does(noise):
+    """A noise far above a channel's spread (a unit error) or below what a converter
+    resolves: refused by name, as ``discover`` refuses it, before any fit."""
+    data, forces = _record(1, samples=400)
+    with pytest.raises(gsfric.InputError, match=r"--force-noise: F1: a force noise of .* is "
+                                                r"implausible against the measured channel"):
+        gsfric.identify(data.motion, forces, force_noise=noise)
 
 
 def test_weakly_determined_parameters_are_named_with_their_effect_against_the_noise():
@@ -295,10 +310,10 @@ def test_weakly_determined_parameters_are_named_with_their_effect_against_the_no
 
 
 @pytest.mark.parametrize("options, message", [
-    (dict(period=0.002), r"period: 0\.002 s at 500 Hz holds 1 samples; .* at least 0\.2 s"),
-    (dict(rate=1.0, duration=4.0), r"period: 4 s at 1 Hz holds 4 samples"),
-    (dict(duration=1e9), r"duration: 1e\+09 s at 500 Hz is 5e\+11 samples, more than"),
-    (dict(rate=1e6, duration=600.0), r"duration: 600 s at 1e\+06 Hz is 6e\+08 samples"),
+    ({"period": 0.002}, r"period: 0\.002 s at 500 Hz holds 1 samples; .* at least 0\.2 s"),
+    ({"rate": 1.0, "duration": 4.0}, r"period: 4 s at 1 Hz holds 4 samples"),
+    ({"duration": 1e9}, r"duration: 1e\+09 s at 500 Hz is 5e\+11 samples, more than"),
+    ({"rate": 1e6, "duration": 600.0}, r"duration: 600 s at 1e\+06 Hz is 6e\+08 samples"),
 ])
 def test_excite_refuses_a_motion_of_too_few_or_too_many_samples(options, message):
     """A period of a sample or two would be a motion that does not move; a duration of

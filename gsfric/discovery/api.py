@@ -19,7 +19,7 @@ from collections.abc import Sequence
 import numpy as np
 
 from gsfric._checks import short
-from gsfric.discovery.floor import ForceNoise, read_noise_record
+from gsfric.discovery.floor import read_noise_record
 from gsfric.discovery.outcome import Discovery
 from gsfric.discovery.report import write
 from gsfric.discovery.rest import poses_from_columns
@@ -31,6 +31,7 @@ from gsfric.io.readers import motion_from_frame, read_measured_columns
 from gsfric.models import platform_from
 from gsfric.platform.description import Platform
 from gsfric.platform.usable import check_forces, check_poses
+from gsfric.signal.noise import ForceNoise
 from gsfric.signal.savgol import DEFAULT_POLYORDER
 from gsfric.trajectory import Motion
 

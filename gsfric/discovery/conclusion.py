@@ -19,7 +19,6 @@ from gsfric.discovery import statistics as st
 from gsfric.discovery.candidates import CANDIDATES
 from gsfric.discovery.final_tests import LackOfFit, lack_of_fit
 from gsfric.discovery.floor import (
-    ForceNoise,
     NoiseFloor,
     estimated_force_noise,
     noise_floor,
@@ -42,6 +41,7 @@ from gsfric.discovery.selection import noise_model
 from gsfric.discovery.verdict import Verdict, decide
 from gsfric.platform.catalog import EFFECTS
 from gsfric.platform.description import Platform
+from gsfric.signal.noise import ForceNoise
 from gsfric.trajectory import Motion
 
 

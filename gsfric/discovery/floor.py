@@ -24,7 +24,6 @@ sign of a speed near zero, and those pairs are not sliding).
 from __future__ import annotations
 
 import os
-from collections.abc import Sequence
 from dataclasses import dataclass, replace
 from pathlib import Path
 
@@ -36,7 +35,7 @@ from gsfric.io.logs import FORCES, UNITS, LogFormat
 from gsfric.io.readers import read_trajectory
 from gsfric.io.tables import numeric_columns, read_columns
 from gsfric.platform.description import Platform
-from gsfric.signal.noise import spectral_noise_std, white_noise_std
+from gsfric.signal.noise import ForceNoise, spectral_noise_std, white_noise_std
 from gsfric.signal.rotations import (
     angular_rates,
     continuous_quaternions,
@@ -45,81 +44,6 @@ from gsfric.signal.rotations import (
 )
 from gsfric.signal.windows import savgol_adaptive
 from gsfric.trajectory import Motion, taken_as_even
-
-
-@dataclass
-class ForceNoise:
-    """The load cells' noise as the user gives it.
-
-    Attributes
-    ----------
-    std : tuple of float
-        Standard deviation per leg (6), N.
-    source : str
-        ``specified`` or ``noise record``.
-    detail : str
-        Where it comes from (the option, the file).
-    motion : (float, float) or None
-        A noise record's poses: the largest travel of the platform frame's origin from its
-        first sample, m, and the largest turn, rad; None without poses.
-    """
-
-    std: tuple[float, ...]
-    source: str
-    detail: str = ""
-    motion: tuple[float, float] | None = None
-
-    @classmethod
-    def specified(cls, values: float | Sequence[float], detail: str = "--force-noise"
-                  ) -> ForceNoise:
-        """A sensor specification: one value for the six legs or six, each finite and > 0."""
-        values = np.atleast_1d(np.asarray(values, dtype=float)).ravel()
-        if values.size not in (1, 6):
-            raise InputError(f"{detail}: give one value or six (one per leg), got "
-                             f"{values.size}")
-        bad = np.flatnonzero(~np.isfinite(values) | (values <= 0))
-        if bad.size:
-            raise InputError(f"{detail}: the force noise must be a finite number > 0 N, got "
-                             f"{values[bad[0]]:g}")
-        return cls(tuple(float(v) for v in np.broadcast_to(values, (6,))), "specified", detail)
-
-    @classmethod
-    def from_record(cls, forces: np.ndarray, detail: str) -> ForceNoise:
-        """A recording at rest: each force channel (N, 6) less its mean."""
-        forces = np.asarray(forces, float)
-        if len(forces) < 20:
-            raise InputError(f"{detail}: a noise record needs at least 20 samples, got "
-                             f"{len(forces)}")
-        std = forces.std(axis=0, ddof=1)
-        if not np.all(std > 0):
-            leg = int(np.flatnonzero(~(std > 0))[0]) + 1
-            raise InputError(f"{detail}: F{leg} does not change over the record: no noise to "
-                             "measure")
-        return cls(tuple(float(v) for v in std), "noise record", detail)
-
-    def check_at_rest(self, travel: float, turn: float) -> None:
-        """``InputError`` when the record's poses (``motion``) travel more than ``travel`` m
-        or turn more than ``turn`` rad (``Settings.record_travel``, ``record_turn``)."""
-        if self.motion is None:
-            return
-        moved, turned = self.motion
-        if moved > travel or turned > turn:
-            raise InputError(f"{self.detail}: not at rest: the platform moves {moved:.3g} m "
-                             f"and turns {turned:.3g} rad from its first sample (a noise "
-                             f"record must stay within {travel:g} m and {turn:g} rad); record "
-                             "the load cells with the platform still")
-
-    def check_plausible(self, forces: np.ndarray, limits: tuple[float, float]) -> None:
-        """``InputError`` when a leg's noise lies outside ``limits`` (``Settings.noise_spread``)
-        times the standard deviation of its measured channel ``forces`` (N, 6), N."""
-        spread = np.asarray(forces, float).std(axis=0)
-        std = np.asarray(self.std)
-        for leg in np.flatnonzero((spread > 0) & ((std > limits[1] * spread)
-                                                  | (std < limits[0] * spread))):
-            raise InputError(f"{self.detail}: F{leg + 1}: a force noise of {std[leg]:.3g} N is "
-                             f"implausible against the measured channel's spread "
-                             f"{spread[leg]:.3g} N (standard deviation); the noise must lie "
-                             f"within {limits[0]:g} to {limits[1]:g} times it (is it in N?)")
 
 
 @dataclass

@@ -9,6 +9,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from gsfric.discovery.candidates import CANDIDATE_NAMES, REFIT
+from gsfric.signal.noise import PLAUSIBLE_SPREAD
 
 
 @dataclass(frozen=True)
@@ -93,12 +94,10 @@ class Settings:
     record_turn: float = 1e-3
     """Largest rotation (rad) of the platform from its first sample in a noise record: the
     angular ``record_travel`` (1 mm at a 1 m lever)."""
-    noise_spread: tuple[float, float] = (1e-9, 10.0)
+    noise_spread: tuple[float, float] = PLAUSIBLE_SPREAD
     """A given force noise (``--force-noise``, a noise record's, a column map's) must lie
     within these multiples of each measured force channel's standard deviation
-    (``ForceNoise.check_plausible``): a channel's spread holds its noise, so a noise ten times
-    larger is a unit error (kN given as N, a wrong channel); a billionth of it no load cell's
-    converter resolves (24 bits are 6e-8)."""
+    (``ForceNoise.check_plausible``; why: ``gsfric.signal.noise.PLAUSIBLE_SPREAD``)."""
 
     # -- rests and the speed band ------------------------------------------------------------
     rest_band: float = 5.0

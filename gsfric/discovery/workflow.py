@@ -34,7 +34,6 @@ from tqdm import tqdm
 from gsfric._checks import short
 from gsfric._threads import one_blas_thread
 from gsfric.discovery.conclusion import Given, conclude
-from gsfric.discovery.floor import ForceNoise
 from gsfric.discovery.outcome import Discovery
 from gsfric.discovery.refit import refit_own_parameters
 from gsfric.discovery.residuals import Problem, checked_forces
@@ -45,6 +44,7 @@ from gsfric.evaluation.flags import check_flagged, flag_counts
 from gsfric.models import platform_from
 from gsfric.platform.description import Platform
 from gsfric.platform.usable import check_forces, check_poses
+from gsfric.signal.noise import ForceNoise
 from gsfric.trajectory import Motion
 
 

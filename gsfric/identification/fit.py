@@ -31,6 +31,7 @@ from gsfric.identification.settings import (IMPLAUSIBLE_SIGMA, MAX_NFEV, TYPICAL
                                             WEAK_RELATIVE_STD)
 from gsfric.models import platform_from
 from gsfric.platform.description import Platform
+from gsfric.signal.noise import PLAUSIBLE_SPREAD, ForceNoise
 from gsfric.trajectory import Motion
 
 HINTS = (
@@ -67,8 +68,10 @@ def identify(motion: Motion, forces: np.ndarray, platform: Platform | str | None
     sensors : bool
         Also estimate the load cells' offsets (``effects.sensor_bias``) and gains
         (``effects.force_scale``).
-    force_noise : float or sequence of 6 floats, optional
-        The load cells' noise (standard deviation, N); default: estimated from the residual.
+    force_noise : float, sequence of 6 floats or ForceNoise, optional
+        The load cells' noise (standard deviation, N; ``--force-noise``), plausible against
+        each measured channel's spread (``gsfric.signal.noise.PLAUSIBLE_SPREAD``, as
+        ``discover`` checks it); default: estimated from the residual.
 
     Returns
     -------
@@ -95,7 +98,7 @@ def identify(motion: Motion, forces: np.ndarray, platform: Platform | str | None
                          f"shape {forces.shape}")
     ps = parameter_set(prior, sensors=sensors)
     model = Model(ps, state_array(motion), motion.t)
-    given = None if force_noise is None else _given_noise(force_noise)
+    given = None if force_noise is None else _given_noise(force_noise, forces)
     weights = np.ones(6) if given is None else 1.0 / given
     F0, J0 = model.jacobian(ps.prior)
     st0 = structure(J0, weights, ps.units)
@@ -120,12 +123,12 @@ def _step(J: np.ndarray, weights: np.ndarray, st: Structure, residual: np.ndarra
     return covariance(J, weights, st) @ (A.T @ (residual * weights).ravel())
 
 
-def _given_noise(value) -> np.ndarray:
-    """The load cells' noise (6,) N of one value or six; InputError otherwise."""
-    noise = np.asarray(value, float).ravel()
-    if noise.size not in (1, 6) or not np.all(np.isfinite(noise) & (noise > 0)):
-        raise InputError(f"force_noise: one positive number (N) or six, got {value!r}")
-    return np.broadcast_to(noise, (6,)).copy()
+def _given_noise(value, forces: np.ndarray) -> np.ndarray:
+    """The load cells' noise (6,) N of one value or six (``ForceNoise.specified``), plausible
+    against each measured channel's spread (``PLAUSIBLE_SPREAD``); InputError otherwise."""
+    noise = value if isinstance(value, ForceNoise) else ForceNoise.specified(value)
+    noise.check_plausible(forces, PLAUSIBLE_SPREAD)
+    return np.broadcast_to(np.asarray(noise.std, float), (6,)).copy()
 
 
 def _noise(residual: np.ndarray, rank: int) -> np.ndarray:

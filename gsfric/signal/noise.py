@@ -1,14 +1,24 @@
-"""White-noise level of sampled signals, from high-order differences (uniform or not)."""
+"""White-noise level of sampled signals, from high-order differences (uniform or not); the load
+cells' noise as a user gives it (``ForceNoise``)."""
 
 from __future__ import annotations
 
 import math
+from collections.abc import Sequence
+from dataclasses import dataclass
 
 import numpy as np
 from numpy.lib.stride_tricks import sliding_window_view
 
 from gsfric._optional import optional
+from gsfric.errors import InputError
 from gsfric.signal.savgol import savgol_filter, savgol_weights
+
+PLAUSIBLE_SPREAD = (1e-9, 10.0)
+"""A given force noise must lie within these multiples of each measured force channel's
+standard deviation (``ForceNoise.check_plausible``): a channel's spread holds its noise, so a
+noise ten times larger is a unit error (kN given as N, a wrong channel); a billionth of it no
+load cell's converter resolves (24 bits are 6e-8)."""
 
 NOISE_DIFFERENCE_ORDER = 6
 """Order of the differences from which ``white_noise_std`` estimates the noise of a sampled
@@ -211,3 +221,79 @@ def spectral_noise_std(y: np.ndarray, step: float, low: float, segment: int = 32
         return np.zeros(y.shape[1:])
     level = np.median(density[above], axis=-1) / (2 * step) / EXPONENTIAL_MEDIAN
     return np.sqrt(np.quantile(level, 0.25, axis=0))
+
+
+@dataclass
+class ForceNoise:
+    """The load cells' noise as the user gives it.
+
+    Attributes
+    ----------
+    std : tuple of float
+        Standard deviation per leg (6), N.
+    source : str
+        ``specified`` or ``noise record``.
+    detail : str
+        Where it comes from (the option, the file).
+    motion : (float, float) or None
+        A noise record's poses: the largest travel of the platform frame's origin from its
+        first sample, m, and the largest turn, rad; None without poses.
+    """
+
+    std: tuple[float, ...]
+    source: str
+    detail: str = ""
+    motion: tuple[float, float] | None = None
+
+    @classmethod
+    def specified(cls, values: float | Sequence[float], detail: str = "--force-noise"
+                  ) -> ForceNoise:
+        """A sensor specification: one value for the six legs or six, each finite and > 0."""
+        values = np.atleast_1d(np.asarray(values, dtype=float)).ravel()
+        if values.size not in (1, 6):
+            raise InputError(f"{detail}: give one value or six (one per leg), got "
+                             f"{values.size}")
+        bad = np.flatnonzero(~np.isfinite(values) | (values <= 0))
+        if bad.size:
+            raise InputError(f"{detail}: the force noise must be a finite number > 0 N, got "
+                             f"{values[bad[0]]:g}")
+        return cls(tuple(float(v) for v in np.broadcast_to(values, (6,))), "specified", detail)
+
+    @classmethod
+    def from_record(cls, forces: np.ndarray, detail: str) -> ForceNoise:
+        """A recording at rest: each force channel (N, 6) less its mean."""
+        forces = np.asarray(forces, float)
+        if len(forces) < 20:
+            raise InputError(f"{detail}: a noise record needs at least 20 samples, got "
+                             f"{len(forces)}")
+        std = forces.std(axis=0, ddof=1)
+        if not np.all(std > 0):
+            leg = int(np.flatnonzero(~(std > 0))[0]) + 1
+            raise InputError(f"{detail}: F{leg} does not change over the record: no noise to "
+                             "measure")
+        return cls(tuple(float(v) for v in std), "noise record", detail)
+
+    def check_at_rest(self, travel: float, turn: float) -> None:
+        """``InputError`` when the record's poses (``motion``) travel more than ``travel`` m
+        or turn more than ``turn`` rad (``Settings.record_travel``, ``record_turn``)."""
+        if self.motion is None:
+            return
+        moved, turned = self.motion
+        if moved > travel or turned > turn:
+            raise InputError(f"{self.detail}: not at rest: the platform moves {moved:.3g} m "
+                             f"and turns {turned:.3g} rad from its first sample (a noise "
+                             f"record must stay within {travel:g} m and {turn:g} rad); record "
+                             "the load cells with the platform still")
+
+    def check_plausible(self, forces: np.ndarray, limits: tuple[float, float]) -> None:
+        """``InputError`` when a leg's noise lies outside ``limits`` (``PLAUSIBLE_SPREAD``,
+        discovery's ``Settings.noise_spread``) times the standard deviation of its measured
+        channel ``forces`` (N, 6), N."""
+        spread = np.asarray(forces, float).std(axis=0)
+        std = np.asarray(self.std)
+        for leg in np.flatnonzero((spread > 0) & ((std > limits[1] * spread)
+                                                  | (std < limits[0] * spread))):
+            raise InputError(f"{self.detail}: F{leg + 1}: a force noise of {std[leg]:.3g} N is "
+                             f"implausible against the measured channel's spread "
+                             f"{spread[leg]:.3g} N (standard deviation); the noise must lie "
+                             f"within {limits[0]:g} to {limits[1]:g} times it (is it in N?)")
