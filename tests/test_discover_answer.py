@@ -107,14 +107,16 @@ def test_python_api_discover_returns_the_typed_result_with_a_short_repr(answered
 
 def test_summary_and_report_are_what_the_files_hold(answered, again):
     """``summary()`` is summary.json's content, the answer and the file included, and
-    ``report()`` is report.md, the same as the command line writes."""
+    ``report(figures=False)`` is report.md written without the figures (``report()`` lists
+    them as well), the same as the command line writes."""
     cli, line, measured = answered
     result, out = again
     summary = result.summary()
     assert summary == json.loads((out / "summary.json").read_text())
     assert summary["answer"] == line == verdict_line(result)
     assert summary["data"]["file"] == str(measured)
-    assert result.report() == (out / "report.md").read_text()
+    assert result.report(figures=False) == (out / "report.md").read_text()
+    assert "## Plots" in result.report() and "## Plots" not in result.report(figures=False)
     assert result.report().splitlines()[2] == (cli / "report.md").read_text().splitlines()[2]
     assert f"`{measured}`" in result.report()
 

@@ -287,12 +287,16 @@ def test_discover_takes_the_force_noise_from_the_command_line(tmp_path, mains_re
     path = tmp_path / "measured.csv"
     frame.to_csv(path, index=False)
     out = tmp_path / "out"
+    out.mkdir()
+    for stale in ("residuals_time.png", "report.html"):     # an earlier run's, of another record
+        (out / stale).write_text("old")
     run = CliRunner().invoke(main, ["discover", "--measured", str(path), "--out", str(out),
                                     "--quiet", "--no-plots", "--force-noise", "0.03"])
     assert run.exit_code == 0, run.output
-    # --no-plots: the files of the answer, no figure and no 3-D view
+    # --no-plots: the files of the answer, no figure and no 3-D view, nor an earlier run's
     assert sorted(p.name for p in out.iterdir()) == ["platform.toml", "report.md",
                                                      "summary.json"]
+    assert "## Plots" not in (out / "report.md").read_text()
     summary = json.loads((out / "summary.json").read_text())
     floor = summary["noise"]["floor"]
     assert floor["force_source"] == "specified" and floor["force"] == [0.03] * 6

@@ -35,8 +35,9 @@ from gsfric.io.logs import LogFormat
               help="A progress bar over the workflow's stages on stderr [default: when stderr "
                    "is a terminal].")
 @click.option("--no-plots", is_flag=True,
-              help="Skip the plots and report.html (the 3-D view); summary.json, report.md "
-                   "and platform.toml are written.")
+              help="Skip the plots and report.html (the 3-D view), and remove an earlier "
+                   "run's from the folder; summary.json, report.md and platform.toml are "
+                   "written.")
 @click.option("--quiet", is_flag=True,
               help="No progress bar and no list of written files (warnings and errors still "
                    "go to stderr).")

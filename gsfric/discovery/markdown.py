@@ -30,11 +30,13 @@ def _table(header: list[str], rows: list[list]) -> list[str]:
     return lines + [""]
 
 
-def report(d: DiscoveryRecord) -> str:
-    """The readable report (Markdown): report.md's text."""
+def report(d: DiscoveryRecord, figures: bool = True) -> str:
+    """The readable report (Markdown): report.md's text; ``figures``: with the list of the
+    plots written beside it (none with ``--no-plots``)."""
     L = _header(d)
     for section in (_unexplained, _effects_named, _disagreement, _own_parameters, _rounds,
-                    _effects_found, _gaps, _method, _glossary):
+                    _effects_found, _gaps, *((_plots,) if figures else ()), _method,
+                    _glossary):
         L += section(d)
     return "\n".join(L)
 
@@ -274,17 +276,21 @@ def _gaps(d: DiscoveryRecord) -> list[str]:
     return L
 
 
+def _plots(d: DiscoveryRecord) -> list[str]:
+    """The plots written beside the report."""
+    return ["## Plots", "",
+            "- `residuals_time.png`: residual of each leg over time, before and after.",
+            "- `residuals_speed.png`: residual against the leg's sliding speed on a "
+            "symmetric-log axis, linear within the Stribeck velocity scale "
+            f"(+-{stribeck_scale(d):.3g} m/s, shaded) so that the low-speed band is readable "
+            "(friction shows as a step or peak at zero speed).",
+            "- `regimes.png`: RMS residual per band of each regime, before and after.", ""]
+
+
 def _method(d: DiscoveryRecord) -> list[str]:
-    """The plots and how the decisions are made."""
+    """How the decisions are made."""
     L: list[str] = []
-    L += ["## Plots", "",
-          "- `residuals_time.png`: residual of each leg over time, before and after.",
-          "- `residuals_speed.png`: residual against the leg's sliding speed on a "
-          "symmetric-log axis, linear within the Stribeck velocity scale "
-          f"(+-{stribeck_scale(d):.3g} m/s, shaded) so that the low-speed band is readable "
-          "(friction shows as a step or peak at zero speed).",
-          "- `regimes.png`: RMS residual per band of each regime, before and after.", "",
-          "## How the decisions are made", "",
+    L += ["## How the decisions are made", "",
           "Each candidate is fitted together with the refitted model parameters on a "
           "linearisation of the compiled model. The residual is prewhitened with an AR model "
           "per leg; a candidate is accepted when (1) the nested F-test on the prewhitened data "

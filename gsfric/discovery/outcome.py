@@ -99,6 +99,8 @@ class Discovery(DiscoveryRecord):
         per-leg gaps and the answer in one line (``answer``)."""
         return summary(self)
 
-    def report(self) -> str:
-        """report.md's text (``markdown.report``): the result for a reader, in Markdown."""
-        return markdown.report(self)
+    def report(self, figures: bool = True) -> str:
+        """report.md's text (``markdown.report``): the result for a reader, in Markdown;
+        ``figures``: with the list of the plots that ``discover`` writes beside it (False:
+        as ``--no-plots`` writes it)."""
+        return markdown.report(self, figures)

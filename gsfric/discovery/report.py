@@ -13,6 +13,10 @@ Files written in the output directory, each atomically:
 * ``report.html``: the 3-D view of the final model along the measured motion, with the
   measured and model forces, the residuals and the named effects' contributions per leg
   (``gsfric.discovery.view``).
+
+Without the figures (``--no-plots``) neither the plots nor report.html is written, the report
+does not list them, and an earlier run's copies in the folder are removed (they would show
+another record).
 """
 
 from __future__ import annotations
@@ -31,6 +35,8 @@ from gsfric.discovery.view import write_view
 from gsfric.io.files import atomic_write, output_folder
 
 PLOTS = ("residuals_time.png", "residuals_speed.png", "regimes.png")
+VIEW = "report.html"
+"""The 3-D view of model and measurement (``gsfric.discovery.view``)."""
 
 
 # -- plots ------------------------------------------------------------------------------------
@@ -162,9 +168,13 @@ def write(d: Discovery, out_dir: str | os.PathLike[str], *, figures: bool = True
         written.append(path)
         path = out / "report.md"
         with atomic_write(path) as handle:
-            handle.write(d.report())
+            handle.write(d.report(figures))
         written.append(path)
         if figures:
             written += plots(d, out)
-            written.append(write_view(d, out / "report.html"))
+            written.append(write_view(d, out / VIEW))
+    if not figures:
+        # an earlier run's figures in this folder would show another record beside these
+        for name in (*PLOTS, VIEW):
+            (Path(out_dir) / name).unlink(missing_ok=True)
     return [Path(out_dir) / p.name for p in written]
