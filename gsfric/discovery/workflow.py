@@ -43,7 +43,7 @@ from gsfric.errors import InputTypeError
 from gsfric.evaluation.flags import check_flagged, flag_counts
 from gsfric.models import platform_from
 from gsfric.platform.description import Platform
-from gsfric.platform.usable import check_forces, check_poses
+from gsfric.platform.usable import check_force_sign, check_forces, check_poses
 from gsfric.signal.noise import ForceNoise
 from gsfric.trajectory import Motion
 
@@ -116,6 +116,7 @@ def _problem(motion: Motion, forces: np.ndarray, platform: Platform, settings: S
     """The data against the model (``Problem``); an ``InputError`` when the model flags too
     many of the samples used (``evaluation.flags.check_flagged``)."""
     problem = Problem(motion, forces, platform, settings, poses=poses)
+    check_force_sign(forces, problem.result.F)
     used_flags = problem.result.flag[problem.used]
     check_flagged(platform, flag_counts(used_flags), int(np.count_nonzero(used_flags)),
                   len(used_flags))

@@ -31,6 +31,7 @@ from gsfric.identification.settings import (IMPLAUSIBLE_SIGMA, MAX_NFEV, TYPICAL
                                             WEAK_RELATIVE_STD)
 from gsfric.models import platform_from
 from gsfric.platform.description import Platform
+from gsfric.platform.usable import check_force_sign
 from gsfric.signal.noise import PLAUSIBLE_SPREAD, ForceNoise
 from gsfric.trajectory import Motion
 
@@ -101,6 +102,7 @@ def identify(motion: Motion, forces: np.ndarray, platform: Platform | str | None
     given = None if force_noise is None else _given_noise(force_noise, forces)
     weights = np.ones(6) if given is None else 1.0 / given
     F0, J0 = model.jacobian(ps.prior)
+    check_force_sign(forces, F0)
     st0 = structure(J0, weights, ps.units)
     if st0.rank == 0:
         raise InputError("the motion identifies no parameter: " + "; ".join(

@@ -37,6 +37,12 @@ the weight the legs carry beyond which the forces are in another unit: inclined 
 accelerations put the static load at 1 to 5 times the weight; a wrong unit (N and kN) puts it
 1000 times off."""
 
+SIGN_SHARE = 0.5
+"""A measured record whose summed actuator force (mean over the steps of F1 + ... + F6) has the
+opposite sign of the model's and more than ``SIGN_SHARE`` of its size is read with the opposite
+sign convention: the legs carry the weight, so the sum is the static load's; a model error
+(masses, friction) moves it by a fraction of itself, a reversed sign by twice its size."""
+
 SPEED_STROKES = 50.0
 """Strokes per second: a median speed of the platform above this many times the legs' stroke
 (d_max - d_min) per second is implausible for the platform (no hexapod crosses its stroke in
@@ -152,6 +158,21 @@ def check_forces(platform: Platform, forces: np.ndarray, where: str = "") -> Non
         raise InputError(f"{prefix}forces: the static load (mean of the summed |F1..F6|, "
                          f"{load:.4g} N) is only {ratio:.3g} times the weight the legs carry "
                          f"({weight:.4g} N): {advice}or give the rig's masses (--platform)")
+
+
+def check_force_sign(measured: np.ndarray, model: np.ndarray, where: str = "") -> None:
+    """Raise ``InputError`` when measured actuator forces (N, 6), N, run opposite to the
+    model's ``model`` (N, 6) along the same motion: their mean summed force of the other sign
+    and more than ``SIGN_SHARE`` of the model's size (``F > 0`` pushes the platform away from
+    the base)."""
+    prefix = f"{where}: " if where else ""
+    got = float(np.mean(np.sum(measured, axis=1)))
+    expected = float(np.mean(np.sum(model, axis=1)))
+    if np.isfinite(got) and got * expected < 0 and abs(got) > SIGN_SHARE * abs(expected):
+        raise InputError(f"{prefix}forces: F1..F6 sum to {got:.4g} N on average where the "
+                         f"model's sum to {expected:.4g} N: the load cells' sign is the "
+                         "opposite of gsfric's (F > 0 pushes the platform away from the "
+                         "base); negate F1..F6")
 
 
 def check_flagged_share(flagged: int, steps: int, where: str = "", ranges: str = "") -> None:
