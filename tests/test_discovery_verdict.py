@@ -329,7 +329,7 @@ def test_the_command_line_wins_over_the_record_and_the_column_map(tmp_path):
 def test_forces_of_the_opposite_sign_are_refused_before_any_fit():
     """Load cells read with the opposite sign convention: one line naming the cause, not a
     model that fits them with negative gains and offsets."""
-    data = synthesize(samples=600, noise=0.1, seed=5)
+    data = synthesize(samples=1200, noise=0.1, seed=5)
     forces = -data.frame[[f"F{i}" for i in range(1, 7)]].to_numpy()
     with pytest.raises(InputError, match=r"forces: F1..F6 sum to -\d.* the load cells' sign "
                                          r"is the opposite of gsfric's .* negate F1..F6"):
