@@ -12,7 +12,7 @@ from click.testing import CliRunner
 import gsfric
 from gsfric.cli import main
 from gsfric.evaluation import state_array
-from gsfric.identification import excite, validate
+from gsfric.identification import excite, files, validate
 from gsfric.identification.parameters import (
     body_from_factor,
     body_standard,
@@ -325,3 +325,14 @@ def test_excite_refuses_a_motion_of_too_few_or_too_many_samples(options, message
     billions of samples would exhaust the memory before any output: both refused at once."""
     with pytest.raises(gsfric.InputError, match=message):
         excite(**options)
+
+
+def test_a_bad_validation_record_is_refused_before_the_fit(tmp_path, monkeypatch):
+    """--validate's file is read with the measured one: a bad one costs no fit."""
+    data, _ = _record(seed=6, samples=400)
+    good, bad = tmp_path / "good.csv", tmp_path / "bad.csv"
+    gsfric.io.write_table(data.frame, good)
+    gsfric.io.write_table(data.frame.drop(columns="F6"), bad)
+    monkeypatch.setattr(files, "identify", lambda *a, **k: pytest.fail("fitted first"))
+    with pytest.raises(gsfric.InputError, match=r"bad\.csv: missing column 'F6'"):
+        files.identify_file(good, validate_file=bad)

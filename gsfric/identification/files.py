@@ -45,14 +45,15 @@ def read_record(path: str | os.PathLike[str], platform, log_format=None):
 def identify_file(measured: str | os.PathLike[str], platform_file=None, *,
                   validate_file=None, sensors: bool = False, force_noise=None,
                   log_format=None) -> Identification:
-    """Read a measured file (and a validation record), identify, keep the source's hash."""
+    """Read a measured file and a validation record (both before the fit: a bad second file
+    is refused at once), identify, keep the source's hash."""
     prior = platform_from(platform_file)
     motion, forces = read_record(measured, prior, log_format)
+    second = None if validate_file is None else read_record(validate_file, prior, log_format)
     result = identify(motion, forces, prior, sensors=sensors, force_noise=force_noise)
     result.source, result.source_sha256 = str(measured), file_sha256(measured)
-    if validate_file is not None:
-        motion2, forces2 = read_record(validate_file, prior, log_format)
-        result.validation = validate(result, motion2, forces2, str(validate_file))
+    if second is not None:
+        result.validation = validate(result, *second, str(validate_file))
     return result
 
 
