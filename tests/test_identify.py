@@ -309,7 +309,7 @@ def test_weakly_determined_parameters_are_named_with_their_effect_against_the_no
         assert (name in weak) == loose, name
     assert weak, "a 4 s record at 0.5 N of noise leaves the viscous friction weak"
     line = weak["friction.prismatic_viscous"]
-    assert "N of noise" in line and "needs every leg moving" in line
+    assert "N of noise" in line and "needs faster leg motion" in line
     assert all(f"weakly determined: {w}" in result.statement() for w in result.weak)
     assert result.summary()["weak"] == result.weak
 

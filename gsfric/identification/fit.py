@@ -42,6 +42,11 @@ HINTS = (
                               "centre of mass's offset changes the legs' loads"),
     ("platform.mass", "vertical accelerations (heave) or poses that load the legs differently"),
     ("legs.", "leg-length changes at varying speeds and accelerations, and tilts"),
+    ("friction.prismatic_viscous", "faster leg motion: the viscous force grows with the leg "
+                                   "speed (excite --max-speed, within the actuators' limit)"),
+    ("friction.joint_viscous", "faster rotations of the joints: the viscous moment grows with "
+                               "the joint rate (excite --max-speed, within the actuators' "
+                               "limit)"),
     ("friction.", "every leg moving in both directions at several speeds, under varying load"),
     ("effects.sensor_bias", "poses that change each leg's load"),
     ("effects.force_scale", "poses and accelerations that change each leg's load by a large "
