@@ -24,6 +24,7 @@ from gsfric.discovery.verdict import decide
 from gsfric.errors import InputError
 from gsfric.evaluation.evaluator import Evaluator
 from gsfric.io.logs import LogFormat
+from gsfric.platform.usable import check_force_sign
 from gsfric.signal.noise import ForceNoise, spectral_noise_std
 from gsfric.synth import synthesize
 from gsfric.trajectory import Motion
@@ -334,3 +335,14 @@ def test_forces_of_the_opposite_sign_are_refused_before_any_fit():
     with pytest.raises(InputError, match=r"forces: F1..F6 sum to -\d.* the load cells' sign "
                                          r"is the opposite of gsfric's .* negate F1..F6"):
         discover(data.motion, forces)
+
+
+def test_the_sign_check_leaves_legs_that_carry_no_net_load_alone():
+    """Legs that pull against each other (a summed force near zero against their sizes): a
+    small summed force of either sign says nothing of the load cells' convention."""
+    rng = np.random.default_rng(0)
+    carried = 40.0 + rng.normal(0.0, 5.0, (500, 6))
+    with pytest.raises(InputError, match="negate F1..F6"):
+        check_force_sign(-carried, carried)
+    balanced = np.tile([30.0, -30.0, 30.0, -30.0, 30.0, -29.0], (500, 1))
+    check_force_sign(-balanced + rng.normal(0.0, 1.0, (500, 6)), balanced)

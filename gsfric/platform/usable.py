@@ -164,11 +164,16 @@ def check_force_sign(measured: np.ndarray, model: np.ndarray, where: str = "") -
     """Raise ``InputError`` when measured actuator forces (N, 6), N, run opposite to the
     model's ``model`` (N, 6) along the same motion: their mean summed force of the other sign
     and more than ``SIGN_SHARE`` of the model's size (``F > 0`` pushes the platform away from
-    the base)."""
+    the base). Only where the model's mean summed force is at least ``SIGN_SHARE`` of its
+    mean summed magnitude: the legs carry a load of one sign, the weight."""
     prefix = f"{where}: " if where else ""
     got = float(np.mean(np.sum(measured, axis=1)))
     expected = float(np.mean(np.sum(model, axis=1)))
-    if np.isfinite(got) and got * expected < 0 and abs(got) > SIGN_SHARE * abs(expected):
+    # only where the model's legs carry a net load of one sign (not a platform whose legs
+    # pull against each other, nor one moved by its inertia alone)
+    carried = abs(expected) >= SIGN_SHARE * float(np.mean(np.sum(np.abs(model), axis=1)))
+    if carried and np.isfinite(got) and got * expected < 0 \
+            and abs(got) > SIGN_SHARE * abs(expected):
         raise InputError(f"{prefix}forces: F1..F6 sum to {got:.4g} N on average where the "
                          f"model's sum to {expected:.4g} N: the load cells' sign is the "
                          "opposite of gsfric's (F > 0 pushes the platform away from the "
