@@ -412,6 +412,33 @@ def test_the_held_guess_is_what_bvls_finds(monkeypatch):
     assert len(verdicts) > 100 and np.mean(verdicts) > 0.5
 
 
+def test_stacked_solves_are_the_single_solves_and_the_folds_choose_their_variant():
+    """The folds of a cross-validation are solved in one call: each result is that fold's own
+    solve to the bit, bounds met or not; with variants, each fold is scored by the variant
+    that fits its training blocks best (not the one that fits the held-out blocks best)."""
+    rng = np.random.default_rng(8)
+    k, rows = 5, 1200
+    X = rng.normal(size=(rows, 6, k)) * 10.0 ** rng.uniform(-1, 1, k)
+    z = X @ np.array([1.0, -0.5, 0.02, 0.0, 0.3]) + rng.normal(size=(rows, 6))
+    blocks = st.Blocks.build(X, z, 16, ridge=DEFAULTS.ridge)
+    lo, hi = np.array([0.0, 0.0, -np.inf, 0.0, -1.0]), np.array([np.inf, 0.2, 0.01, 1.0, 1.0])
+    sums = blocks.fold_sums(4)
+    stacked = st.solve_stacked(sums.train_A, sums.train_b, lo, hi, ridge=blocks.ridge)
+    for f, g in enumerate(blocks.folds(4)):
+        A, b, _ = blocks.without(g)
+        np.testing.assert_array_equal(stacked[f], st.solve(A, b, lo, hi, ridge=blocks.ridge))
+    variants = [[2], [3], [4]]
+    cv = st.cross_validate(blocks, [0, 1], lo, hi, 4, variants=variants)
+    for f, g in enumerate(blocks.folds(4)):
+        (A, b, c), (Ah, bh, ch) = blocks.without(g), blocks.held(g)
+        fits = []
+        for v in variants:
+            cols = [0, 1] + v
+            idx = np.ix_(cols, cols)
+            t = st.solve(A[idx], b[cols], lo[cols], hi[cols], ridge=blocks.ridge)
+            fits.append((st.sse(A[idx], b[cols], c, t), st.sse(Ah[idx], bh[cols], ch, t)))
+        assert cv[f] == min(fits)[1]
+
 def test_block_cross_products_add_up():
     rng = np.random.default_rng(3)
     X, z = rng.normal(size=(1003, 6, 4)), rng.normal(size=(1003, 6))

@@ -106,26 +106,6 @@ def noise_model(w: st.Whitener) -> NoiseModel:
                       [float(v) for v in w.marginal_std])
 
 
-def profile_cv(blocks: st.Blocks, null: list[int], variants: list[list[int]],
-               lower: np.ndarray, upper: np.ndarray, n_folds: int) -> np.ndarray:
-    """Held-out SSE per fold, the variant chosen on each fold's training blocks."""
-    groups = blocks.folds(n_folds)
-    out = np.empty(len(groups))
-    for f, g in enumerate(groups):
-        Af, bf, cf = blocks.held(g)
-        At, bt, ct = blocks.without(g)
-        best = None
-        for v in variants:
-            cols = null + v
-            idx = np.ix_(cols, cols)
-            t = st.solve(At[idx], bt[cols], lower[cols], upper[cols], ridge=blocks.ridge)
-            train = st.sse(At[idx], bt[cols], ct, t)
-            if best is None or train < best[0]:
-                best = (train, st.sse(Af[idx], bf[cols], cf, t))
-        out[f] = best[1]
-    return out
-
-
 @dataclass
 class Screen:
     """The tests of one round: per candidate its test, its best fit and the variant chosen;
@@ -170,8 +150,8 @@ def screen_candidates(problem: Problem, design: Design, whitener: st.Whitener,
         j = int(np.argmin([o.sse for o in options]))
         best = options[j]
         F, p, k = st.f_test(null, best, k=len(c.fitted))
-        cv = profile_cv(blocks, null_cols, design.variants[c.name], design.lower,
-                         design.upper, s.n_folds)
+        cv = st.cross_validate(blocks, null_cols, design.lower, design.upper, s.n_folds,
+                               variants=design.variants[c.name])
         cv_gain = float((cv_null.sum() - cv.sum()) / cv_null.sum())
         share = st.fold_share(blocks, cv, cv_null, s.n_folds)
         params = candidate_values(problem, design, c, best, j)

@@ -29,7 +29,7 @@ a fit is a small (k x k) solve whatever the number of samples.
 from __future__ import annotations
 
 from collections.abc import Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
 
@@ -209,6 +209,26 @@ class Whitener:
 # -- cross-products by blocks -----------------------------------------------------------------
 
 
+@dataclass(frozen=True)
+class FoldSums:
+    """The cross-products of each fold of a cross-validation (``Blocks.fold_sums``).
+
+    Attributes
+    ----------
+    held_A, held_b, held_c : ndarray, shapes (F, k, k), (F, k), (F,)
+        XtX, Xtz and ztz summed over each fold's held-out blocks.
+    train_A, train_b, train_c : ndarray, shapes (F, k, k), (F, k), (F,)
+        The same summed over each fold's training blocks (all the others).
+    """
+
+    held_A: np.ndarray
+    held_b: np.ndarray
+    held_c: np.ndarray
+    train_A: np.ndarray
+    train_b: np.ndarray
+    train_c: np.ndarray
+
+
 @dataclass
 class Blocks:
     """Cross-products of a prewhitened design per contiguous block of samples.
@@ -232,6 +252,7 @@ class Blocks:
     low_X: np.ndarray | None = None
     low_z: np.ndarray | None = None
     low_rows: float = 0.0
+    _folds: dict = field(default_factory=dict, init=False, repr=False, compare=False)
 
     @classmethod
     def build(cls, X: np.ndarray, z: np.ndarray, n_blocks: int, *, ridge: float) -> Blocks:
@@ -330,6 +351,19 @@ class Blocks:
         groups of blocks, as equal as they divide."""
         return np.array_split(np.arange(len(self.ztz)), n_folds)
 
+    def fold_sums(self, n_folds: int) -> FoldSums:
+        """The held-out and the training cross-products of every fold of ``folds``, summed
+        once per fold count (``held``, ``without``) and stacked for the solves of a
+        cross-validation."""
+        if n_folds not in self._folds:
+            held = [self.held(g) for g in self.folds(n_folds)]
+            train = [self.without(g) for g in self.folds(n_folds)]
+            self._folds[n_folds] = FoldSums(
+                np.stack([h[0] for h in held]), np.stack([h[1] for h in held]),
+                np.array([h[2] for h in held]), np.stack([t[0] for t in train]),
+                np.stack([t[1] for t in train]), np.array([t[2] for t in train]))
+        return self._folds[n_folds]
+
     def held(self, fold) -> tuple[np.ndarray, np.ndarray, float]:
         """Summed (XtX, Xtz, ztz) of the blocks ``fold`` (indices or a slice): a fold's
         held-out data."""
@@ -379,23 +413,32 @@ def solve(A: np.ndarray, b: np.ndarray, lower: np.ndarray | None = None,
     scaled diagonal, keeps confounded columns solvable.
     Within the bounds when the unconstrained solution is not: ``_bounded``.
     """
-    k = len(b)
+    return solve_stacked(A[None], b[None], lower, upper, ridge=ridge)[0]
+
+
+def solve_stacked(A: np.ndarray, b: np.ndarray, lower: np.ndarray | None = None,
+                  upper: np.ndarray | None = None, *, ridge: float) -> np.ndarray:
+    """``solve`` for F problems at once (the folds of a cross-validation): A (F, k, k),
+    b (F, k), the bounds (k,) shared; returns (F, k). Each problem's result is the one it
+    has alone: the unconstrained solves are LAPACK's, one matrix at a time, in one call."""
+    n, k = b.shape
     if k == 0:
-        return np.zeros(0)
-    diagonal = A.diagonal()
+        return np.zeros((n, 0))
+    diagonal = np.diagonal(A, axis1=1, axis2=2)
     d = np.sqrt(np.maximum(diagonal, 1e-300))
-    As = A / np.outer(d, d)
-    As.flat[::k + 1] += ridge
+    As = A / (d[:, :, None] * d[:, None, :])
+    steps = np.arange(k)
+    As[:, steps, steps] += ridge
     # a column without data (zero diagonal) carries no information: its coefficient is 0
     bs = np.where(diagonal > 0, b, 0.0) / d
-    t = np.linalg.solve(As, bs)
+    t = np.linalg.solve(As, bs[:, :, None])[:, :, 0]
     if lower is None and upper is None:
         return t / d
-    lo = np.full(k, -np.inf) if lower is None else np.asarray(lower, float) * d
-    hi = np.full(k, np.inf) if upper is None else np.asarray(upper, float) * d
-    if (t >= lo).all() and (t <= hi).all():
-        return t / d
-    return _bounded(As, bs, lo, hi, t) / d
+    lo = np.full((n, k), -np.inf) if lower is None else np.asarray(lower, float) * d
+    hi = np.full((n, k), np.inf) if upper is None else np.asarray(upper, float) * d
+    for f in np.flatnonzero(~((t >= lo) & (t <= hi)).all(axis=1)):
+        t[f] = _bounded(As[f], bs[f], lo[f], hi[f], t[f])
+    return t / d
 
 
 def _bounded(A: np.ndarray, b: np.ndarray, lo: np.ndarray, hi: np.ndarray,
@@ -510,17 +553,27 @@ def f_test(null: Fit, alternative: Fit, k: int | None = None) -> tuple[float, fl
 
 
 def cross_validate(blocks: Blocks, columns: Sequence[int], lower: np.ndarray,
-                   upper: np.ndarray, n_folds: int) -> np.ndarray:
-    """Held-out prewhitened SSE of each fold (contiguous groups of blocks), shape (n_folds,)."""
-    groups = blocks.folds(n_folds)
-    cols = list(columns)
-    idx = np.ix_(cols, cols)
-    out = np.empty(len(groups))
-    for f, g in enumerate(groups):
-        Af, bf, cf = blocks.held(g)
-        At, bt, _ = blocks.without(g)
-        t = solve(At[idx], bt[cols], lower[cols], upper[cols], ridge=blocks.ridge)
-        out[f] = sse(Af[idx], bf[cols], cf, t)
+                   upper: np.ndarray, n_folds: int,
+                   variants: Sequence[Sequence[int]] = ((),)) -> np.ndarray:
+    """Held-out prewhitened SSE of each fold (contiguous groups of blocks), shape (n_folds,),
+    of the fit of ``columns`` on the fold's training blocks. With ``variants`` (column lists
+    added to ``columns``, e.g. a candidate's delays), each fold's error is that of the variant
+    that fits its training blocks best: the choice is part of what is validated."""
+    folds = blocks.fold_sums(n_folds)
+    out = np.empty(len(folds.train_c))
+    best = np.empty(len(folds.train_c))
+    for first, variant in enumerate(variants):
+        cols = list(columns) + list(variant)
+        idx = np.ix_(cols, cols)
+        A = folds.train_A[:, cols][:, :, cols]
+        b = folds.train_b[:, cols]
+        t = solve_stacked(A, b, lower[cols], upper[cols], ridge=blocks.ridge)
+        for f in range(len(out)):
+            train = sse(A[f], b[f], folds.train_c[f], t[f])
+            if first == 0 or train < best[f]:
+                best[f] = train
+                out[f] = sse(folds.held_A[f][idx], folds.held_b[f][cols], folds.held_c[f],
+                             t[f])
     return out
 
 
