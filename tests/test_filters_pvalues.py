@@ -11,6 +11,7 @@ from hypothesis import strategies as st
 from scipy import signal, stats
 
 from gsfric.discovery import pvalues
+from gsfric.signal import filters
 from gsfric.signal.filters import all_pole, fir, fir_channels
 
 
@@ -29,9 +30,13 @@ def test_all_pole_after_fir_is_lfilter(seed):
 
 
 @pytest.mark.parametrize("seed", range(6))
-def test_fir_channels_is_each_channels_fir_to_the_bit(seed):
+@pytest.mark.parametrize("stretch", [None, 7])
+def test_fir_channels_is_each_channels_fir_to_the_bit(seed, stretch, monkeypatch):
     # the whitener's filter of every leg at once: the same sums in the same order as fir
-    # (lfilter), zeros where a channel's order is shorter, and exact zeros kept
+    # (lfilter), zeros where a channel's order is shorter, and exact zeros kept; the same
+    # when it is computed a few samples at a time (FIR_BYTES, a stretch of 7 samples here)
+    if stretch:
+        monkeypatch.setattr(filters, "FIR_BYTES", stretch * 6 * 3 * 8)
     rng = np.random.default_rng(seed)
     orders = rng.integers(0, 12, size=6)
     p = int(orders.max())
