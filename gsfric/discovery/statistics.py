@@ -322,8 +322,10 @@ class Blocks:
             # rows zeroed by a gap carry no observation
             rows[b] = zb.size if v is None else np.count_nonzero(zb)
             if low is not None:
-                low_X += np.einsum("ilq,ilk->lqk", low[start:stop], Xw)
-                low_z += np.einsum("ilq,il->lq", low[start:stop], zw)
+                # per leg, the components' products with the columns (BLAS, leg by leg)
+                legs_low = low[start:stop].transpose(1, 2, 0)
+                low_X += legs_low @ Xw.transpose(1, 0, 2)
+                low_z += (legs_low @ zw.T[:, :, None])[:, :, 0]
         low_rows = 0.0 if low is None else float(np.count_nonzero(np.any(low != 0, axis=0)))
         return cls(XtX, Xtz, ztz, rows, ridge, low_X, low_z, low_rows)
 
