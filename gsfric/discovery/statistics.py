@@ -253,6 +253,7 @@ class Blocks:
     low_z: np.ndarray | None = None
     low_rows: float = 0.0
     _folds: dict = field(default_factory=dict, init=False, repr=False, compare=False)
+    """Sums kept once computed: ``fold_sums`` by fold count, ``total``'s under "total"."""
 
     @classmethod
     def build(cls, X: np.ndarray, z: np.ndarray, n_blocks: int, *, ridge: float) -> Blocks:
@@ -331,10 +332,14 @@ class Blocks:
 
     def total(self, weights: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray, float,
                                                                float]:
-        """Summed (XtX, Xtz, ztz, rows), blocks weighted by ``weights`` (counts) if given."""
+        """Summed (XtX, Xtz, ztz, rows), blocks weighted by ``weights`` (counts) if given.
+        The unweighted sums are summed once and shared (read-only arrays)."""
         if weights is None:
-            return self.XtX.sum(0), self.Xtz.sum(0), float(self.ztz.sum()), float(
-                self.rows.sum())
+            if "total" not in self._folds:
+                XtX, Xtz = self.XtX.sum(0), self.Xtz.sum(0)
+                XtX.flags.writeable = Xtz.flags.writeable = False
+                self._folds["total"] = (XtX, Xtz, float(self.ztz.sum()), float(self.rows.sum()))
+            return self._folds["total"]
         w = np.asarray(weights, float)
         return (np.tensordot(w, self.XtX, 1), w @ self.Xtz, float(w @ self.ztz),
                 float(w @ self.rows))
@@ -467,12 +472,13 @@ def _bounded(A: np.ndarray, b: np.ndarray, lo: np.ndarray, hi: np.ndarray,
     held = pinned.copy()
     t = np.where(held, lo, 0.0)
     if not held.all():
-        L = np.linalg.cholesky(A[np.ix_(~held, ~held)])
-        c = np.linalg.solve(L, b[~held] - A[np.ix_(~held, held)] @ t[held])
-        side = optional("scipy.optimize").lsq_linear(L.T, c, (lo[~held], hi[~held]),
+        free, kept = np.flatnonzero(~held), np.flatnonzero(held)
+        L = np.linalg.cholesky(A[free[:, None], free])
+        c = np.linalg.solve(L, b[free] - A[free[:, None], kept] @ t[kept])
+        side = optional("scipy.optimize").lsq_linear(L.T, c, (lo[free], hi[free]),
                                                      method="bvls").active_mask
-        t[~held] = np.select([side < 0, side > 0], [lo[~held], hi[~held]], 0.0)
-        held[~held] = side != 0
+        t[free] = np.select([side < 0, side > 0], [lo[free], hi[free]], 0.0)
+        held[free] = side != 0
     return _held_solution(A, b, lo, hi, held, t)
 
 
@@ -481,10 +487,11 @@ def _held_solution(A: np.ndarray, b: np.ndarray, lo: np.ndarray, hi: np.ndarray,
     """The coefficients ``held`` at their values in ``at``, the others from their normal
     equations (clipped to their bounds)."""
     t = np.where(held, at, 0.0)
-    free = ~held
-    if free.any():
-        rhs = b[free] - A[np.ix_(free, held)] @ t[held]
-        t[free] = np.clip(np.linalg.solve(A[np.ix_(free, free)], rhs), lo[free], hi[free])
+    free = np.flatnonzero(~held)
+    if free.size:
+        kept = np.flatnonzero(held)
+        rhs = b[free] - A[free[:, None], kept] @ t[kept]
+        t[free] = np.clip(np.linalg.solve(A[free[:, None], free], rhs), lo[free], hi[free])
     return t
 
 
