@@ -38,11 +38,13 @@ from gsfric._checks import short, suggest
 from gsfric.errors import InputError
 from gsfric.evaluation.evaluator import Evaluator, state_array
 from gsfric.io.files import check_outputs
+from gsfric.io.readers import check_force_range
 from gsfric.io.tables import table_kind, write_table
 from gsfric.models import platform_from, sinusoidal
 from gsfric.platform.catalog import EFFECTS, apply_sensor, sensor_parameters
 from gsfric.platform.description import Platform
-from gsfric.signal.rotations import quaternion_multiply
+from gsfric.platform.usable import check_poses
+from gsfric.signal.rotations import quaternion_multiply, rotation_from_quaternion
 from gsfric.trajectory import Motion
 
 __all__ = ["SyntheticData", "parse_effect", "synthesize", "run_synth", "effect_contributions",
@@ -354,5 +356,19 @@ def run_synth(out: str | os.PathLike[str], platform_file: str | os.PathLike[str]
     platform = platform_from(platform_file)
     data = synthesize(platform, effects, samples=samples, rate=rate, noise=noise,
                       noise_correlation=noise_correlation, pose_noise=pose_noise, seed=seed)
+    _check_readable(data, f"{out} (noise = {noise:g} N, pose_noise = {pose_noise:g} m)")
     write_table(data.frame, out)
     return out
+
+
+def _check_readable(data: SyntheticData, where: str) -> None:
+    """``InputError`` when gsfric would refuse the record ``data`` on reading it (the noise
+    put the forces or the poses out of what a rig can measure): it is not written."""
+    frame = data.frame
+    where = f"{where}: the record would be refused when read"
+    check_force_range(frame[[f"F{i}" for i in range(1, 7)]].to_numpy(), where)
+    quaternion = frame[["qw", "qx", "qy", "qz"]].to_numpy()
+    check_poses(data.platform, frame[["x", "y", "z"]].to_numpy(),
+                rotation_from_quaternion(quaternion / np.linalg.norm(quaternion, axis=1,
+                                                                     keepdims=True)),
+                frame["t"].to_numpy(), where)

@@ -82,13 +82,8 @@ def _samples(path, names: list, values: list, measured: bool, log_format: LogFor
         raise InputError(f"{path}: {len(t)} data rows; at least {MIN_SAMPLES} are needed "
                          "to differentiate the motion")
     if measured:
-        forces = np.stack([columns[n] for n in FORCES], axis=1)
-        bad_rows, bad_legs = np.nonzero(np.abs(forces) > MAX_FORCE)
-        if len(bad_rows):
-            value = forces[bad_rows[0], bad_legs[0]]
-            raise InputError(f"{path}: row {reader.file_row(bad_rows[0]) + 1}: column "
-                             f"'F{bad_legs[0] + 1}' = {value:.4g} N is not a plausible actuator "
-                             f"force (|F| > {MAX_FORCE:g} N); forces must be in N")
+        check_force_range(np.stack([columns[n] for n in FORCES], axis=1), str(path),
+                          lambda i: reader.file_row(i) + 1)
     if measured and "D1" in columns:
         lengths = np.stack([columns[n] for n in LENGTHS], axis=1)
         bad_rows, bad_legs = np.nonzero(lengths <= 0)
@@ -96,6 +91,17 @@ def _samples(path, names: list, values: list, measured: bool, log_format: LogFor
             raise InputError(f"{path}: row {reader.file_row(bad_rows[0]) + 1}: column "
                              f"'D{bad_legs[0] + 1}' must be positive (a leg length)")
     return path, columns, orientation
+
+
+def check_force_range(forces: np.ndarray, where: str, row=lambda i: i + 1) -> None:
+    """``InputError`` naming the first force (N, 6), N, beyond ``MAX_FORCE``: ``where`` starts
+    the message, ``row`` maps a sample's index to the row the user sees."""
+    bad_rows, bad_legs = np.nonzero(np.abs(forces) > MAX_FORCE)
+    if len(bad_rows):
+        value = forces[bad_rows[0], bad_legs[0]]
+        raise InputError(f"{where}: row {row(bad_rows[0])}: column 'F{bad_legs[0] + 1}' = "
+                         f"{value:.4g} N is not a plausible actuator force (|F| > "
+                         f"{MAX_FORCE:g} N); forces must be in N")
 
 
 def motion_from_columns(path: Path, columns: dict[str, np.ndarray], orientation: tuple[str, ...],

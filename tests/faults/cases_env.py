@@ -122,6 +122,12 @@ BAD_VALUES = [
     ("synth-rate", ("synth", "--out", "{tmp}/o.csv", "--rate", "1e9"), r"--rate"),
     ("synth-effect", ("synth", "--out", "{tmp}/o.csv", "--effect", "warp_drive"),
      r"warp_drive"),
+    # noise that makes a record gsfric's readers refuse: refused before anything is written
+    ("synth-noise-absurd", ("synth", "--out", "{tmp}/o.csv", "--samples", "60", "--noise",
+                            "1e12"), r"noise = 1e\+12 N.*refused when read.*plausible actuator"),
+    ("synth-pose-noise-absurd", ("synth", "--out", "{tmp}/o.csv", "--samples", "60",
+                                 "--pose-noise", "10"),
+     r"pose_noise = 10 m.*refused when read.*outside the stroke"),
     ("paper-mode", ("paper", "--out", "{tmp}/o", "--mode", "fast"), r"--mode"),
     ("export-prefix", ("export", "--out", "{tmp}/o", "--prefix", "1 bad"), r"prefix"),
     ("export-model", ("export", "--out", "{tmp}/o", "--model", "magic"), r"--model"),
