@@ -252,7 +252,7 @@ class Blocks:
     low_X: np.ndarray | None = None
     low_z: np.ndarray | None = None
     low_rows: float = 0.0
-    _folds: dict = field(default_factory=dict, init=False, repr=False, compare=False)
+    _sums: dict = field(default_factory=dict, init=False, repr=False, compare=False)
     """Sums kept once computed: ``fold_sums`` by fold count, ``total``'s under "total"."""
 
     @classmethod
@@ -335,11 +335,11 @@ class Blocks:
         """Summed (XtX, Xtz, ztz, rows), blocks weighted by ``weights`` (counts) if given.
         The unweighted sums are summed once and shared (read-only arrays)."""
         if weights is None:
-            if "total" not in self._folds:
+            if "total" not in self._sums:
                 XtX, Xtz = self.XtX.sum(0), self.Xtz.sum(0)
                 XtX.flags.writeable = Xtz.flags.writeable = False
-                self._folds["total"] = (XtX, Xtz, float(self.ztz.sum()), float(self.rows.sum()))
-            return self._folds["total"]
+                self._sums["total"] = (XtX, Xtz, float(self.ztz.sum()), float(self.rows.sum()))
+            return self._sums["total"]
         w = np.asarray(weights, float)
         return (np.tensordot(w, self.XtX, 1), w @ self.Xtz, float(w @ self.ztz),
                 float(w @ self.rows))
@@ -362,14 +362,16 @@ class Blocks:
         """The held-out and the training cross-products of every fold of ``folds``, summed
         once per fold count (``held``, ``without``) and stacked for the solves of a
         cross-validation."""
-        if n_folds not in self._folds:
+        if n_folds not in self._sums:
             held = [self.held(g) for g in self.folds(n_folds)]
             train = [self.without(g) for g in self.folds(n_folds)]
-            self._folds[n_folds] = FoldSums(
-                np.stack([h[0] for h in held]), np.stack([h[1] for h in held]),
-                np.array([h[2] for h in held]), np.stack([t[0] for t in train]),
-                np.stack([t[1] for t in train]), np.array([t[2] for t in train]))
-        return self._folds[n_folds]
+            arrays = (np.stack([h[0] for h in held]), np.stack([h[1] for h in held]),
+                      np.array([h[2] for h in held]), np.stack([t[0] for t in train]),
+                      np.stack([t[1] for t in train]), np.array([t[2] for t in train]))
+            for a in arrays:
+                a.flags.writeable = False       # shared by every cross-validation
+            self._sums[n_folds] = FoldSums(*arrays)
+        return self._sums[n_folds]
 
     def held(self, fold) -> tuple[np.ndarray, np.ndarray, float]:
         """Summed (XtX, Xtz, ztz) of the blocks ``fold`` (indices or a slice): a fold's
