@@ -12,7 +12,8 @@ from click.testing import CliRunner
 
 from gsfric.cli import main
 from gsfric.discovery import CANDIDATE_NAMES, discover
-from gsfric.discovery.rest import data_problems, poses_from_columns, speed_uncertainty
+from gsfric.discovery.rest import poses_from_columns, speed_uncertainty
+from gsfric.platform.usable import data_problems
 from gsfric.discovery.settings import Settings
 from gsfric.errors import InputError
 from gsfric.models import reference_platform

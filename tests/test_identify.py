@@ -327,12 +327,43 @@ def test_excite_refuses_a_motion_of_too_few_or_too_many_samples(options, message
         excite(**options)
 
 
-def test_a_bad_validation_record_is_refused_before_the_fit(tmp_path, monkeypatch):
-    """--validate's file is read with the measured one: a bad one costs no fit."""
+def _dead_f3(frame):
+    frame = frame.copy()
+    frame["F3"] = 50.0
+    return frame
+
+
+@pytest.mark.parametrize("change, message", [
+    (lambda f: f.drop(columns="F6"), r"bad\.csv: missing column 'F6'"),
+    (_dead_f3, r"bad\.csv: F3: constant \(50 N in every row\): a dead channel"),
+])
+def test_a_bad_validation_record_is_refused_before_the_fit(tmp_path, monkeypatch, change,
+                                                           message):
+    """--validate's file is read and checked as the measured one is, before the fit: a bad
+    one costs no fit."""
     data, _ = _record(seed=6, samples=400)
     good, bad = tmp_path / "good.csv", tmp_path / "bad.csv"
     gsfric.io.write_table(data.frame, good)
-    gsfric.io.write_table(data.frame.drop(columns="F6"), bad)
+    gsfric.io.write_table(change(data.frame), bad)
     monkeypatch.setattr(files, "identify", lambda *a, **k: pytest.fail("fitted first"))
-    with pytest.raises(gsfric.InputError, match=r"bad\.csv: missing column 'F6'"):
+    with pytest.raises(gsfric.InputError, match=message):
         files.identify_file(good, validate_file=bad)
+
+
+def test_a_dead_load_cell_is_refused_as_discover_refuses_it():
+    """A channel that no model effect explains (constant, saturated, held samples) is never
+    fitted: identify refuses it with discover's words, before any parameter moves."""
+    data, forces = _record(seed=7, samples=600)
+    forces = forces.copy()
+    forces[:, 2] = 50.0
+    with pytest.raises(gsfric.InputError, match=r"F3: constant \(50 N in every row\): a dead"):
+        gsfric.identify(data.motion, forces)
+
+
+def test_a_validation_record_of_the_wrong_sign_is_refused(tmp_path):
+    """The second record gets the sign check of the first: reversed load cells are no
+    validation of anything."""
+    data, forces = _record(seed=8, samples=600)
+    result = gsfric.identify(data.motion, forces)
+    with pytest.raises(gsfric.InputError, match=r"second\.csv: .*negate F1\.\.F6"):
+        validate(result, data.motion, -forces, "second.csv")

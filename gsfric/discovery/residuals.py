@@ -33,6 +33,7 @@ from gsfric.discovery.settings import Settings
 from gsfric.errors import InputError
 from gsfric.evaluation.parameters import PRISMATIC_EPS
 from gsfric.platform.description import Platform
+from gsfric.platform.usable import check_force_channels
 from gsfric.signal.noise import divided_noise_std_every_window, high_frequency_std
 from gsfric.trajectory import Motion, taken_as_even
 
@@ -230,18 +231,13 @@ class _Secants:
 
 def checked_forces(motion: Motion, forces: np.ndarray, settings: Settings) -> np.ndarray:
     """The measured forces (N, 6), N, as floats; an ``InputError`` for a wrong shape, a
-    problem of the data that no model effect explains (``rest.data_problems``, runs of
+    problem of the data that no model effect explains (``check_force_channels``, runs of
     ``settings.held_run`` equal values) or a row that is not finite."""
     n = len(motion)
     forces = np.asarray(forces, float)
     if forces.shape != (n, 6):
         raise InputError(f"forces: expected shape ({n}, 6), got {forces.shape}")
-    problems = rest.data_problems(np.asarray(motion.t, float), forces,
-                                  held_run=settings.held_run)
-    if problems:
-        more = f" (and {len(problems) - 1} more)" if len(problems) > 1 else ""
-        raise InputError(f"measured data: {problems[0]}{more}; not a model effect, "
-                         "fix or cut the data")
+    check_force_channels(np.asarray(motion.t, float), forces, held_run=settings.held_run)
     if not np.isfinite(forces).all():
         row = int(np.flatnonzero(~np.isfinite(forces).all(axis=1))[0])
         raise InputError(f"forces: row {row + 1} is not finite")

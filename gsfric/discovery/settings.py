@@ -9,6 +9,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from gsfric.discovery.candidates import CANDIDATE_NAMES, REFIT
+from gsfric.platform.usable import HELD_RUN
 from gsfric.signal.noise import PLAUSIBLE_SPREAD
 
 
@@ -77,8 +78,9 @@ class Settings:
     the motion's filters fit one polynomial to the first or last window instead of centring
     one on each sample (at the longest window, 1601, half of it would leave out a tenth of a
     record of 8000 samples)."""
-    held_run: int = 5
-    """Consecutive equal values of a force channel that make a dropout (``rest.data_problems``)."""
+    held_run: int = HELD_RUN
+    """Consecutive equal values of a force channel that make a dropout
+    (``gsfric.platform.usable.data_problems``; default ``HELD_RUN``, identify's too)."""
     noise_window: int = 15
     """Window (samples) of the local cubic fit whose residual measures the force noise
     (``gsfric.signal.noise.high_frequency_std``): long enough for a robust scale, short beside

@@ -18,7 +18,7 @@ from gsfric.io.files import output_folder
 from gsfric.io.readers import read_measured_columns
 from gsfric.models import platform_from
 from gsfric.platform.text import commented_toml
-from gsfric.platform.usable import check_forces, check_poses
+from gsfric.platform.usable import check_force_channels, check_forces, check_poses
 from gsfric.signal.savgol import DEFAULT_POLYORDER
 
 OUTPUTS = ("platform.toml", "identification.json")
@@ -50,6 +50,8 @@ def identify_file(measured: str | os.PathLike[str], platform_file=None, *,
     prior = platform_from(platform_file)
     motion, forces = read_record(measured, prior, log_format)
     second = None if validate_file is None else read_record(validate_file, prior, log_format)
+    if second is not None:
+        check_force_channels(second[0].t, second[1], str(validate_file))
     result = identify(motion, forces, prior, sensors=sensors, force_noise=force_noise)
     result.source, result.source_sha256 = str(measured), file_sha256(measured)
     if second is not None:

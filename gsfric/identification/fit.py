@@ -31,7 +31,7 @@ from gsfric.identification.settings import (IMPLAUSIBLE_SIGMA, MAX_NFEV, TYPICAL
                                             WEAK_RELATIVE_STD)
 from gsfric.models import platform_from
 from gsfric.platform.description import Platform
-from gsfric.platform.usable import check_force_sign
+from gsfric.platform.usable import check_force_channels, check_force_sign
 from gsfric.signal.noise import PLAUSIBLE_SPREAD, ForceNoise
 from gsfric.trajectory import Motion
 
@@ -106,6 +106,7 @@ def identify(motion: Motion, forces: np.ndarray, platform: Platform | str | None
     model = Model(ps, state_array(motion), motion.t)
     given = None if force_noise is None else _given_noise(force_noise, forces)
     weights = np.ones(6) if given is None else 1.0 / given
+    check_force_channels(motion.t, forces)
     F0, J0 = model.jacobian(ps.prior)
     check_force_sign(forces, F0)
     st0 = structure(J0, weights, ps.units)
@@ -350,5 +351,8 @@ def validate(result: Identification, motion: Motion, forces: np.ndarray,
     out = []
     for platform in (result.prior, result.platform):
         ps = parameter_set(platform)
-        out.append(_rms(forces - Model(ps, x, motion.t).forces(ps.prior)))
+        predicted = Model(ps, x, motion.t).forces(ps.prior)
+        if platform is result.prior:
+            check_force_sign(forces, predicted, source)
+        out.append(_rms(forces - predicted))
     return Validation(out[0], out[1], result.noise, source)

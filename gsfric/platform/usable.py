@@ -6,8 +6,8 @@ are and which option fixes it, never a result: poses mostly outside the stroke (
 frame with another origin, another rig, mm given as m), speeds no hexapod of this size reaches,
 and forces whose static load is a thousand times the platform's weight (N declared as kN).
 Gaps in the sample times are reported (``check_gaps``), and an error when they hold most of
-the record. Problems of the force channels themselves (constant, saturated) are discovery's
-(``gsfric.discovery.rest.data_problems``).
+the record. Problems of the force channels themselves (constant, saturated, held samples) are
+an error for every command that fits a model to them (``check_force_channels``).
 """
 
 from __future__ import annotations
@@ -57,6 +57,90 @@ spacing once in a million steps), a lost block of samples always does."""
 FIXES = ("a pose offset and axes in the log format ([offset], axes; see docs/howto/read-a-log.md), "
          "`gsfric platform --template` with the rig's sizes, or --platform with the rig's "
          "platform file")
+
+
+HELD_RUN = 5
+"""Consecutive equal values of a noisy force channel that make a dropout (held or zeroed
+samples): a load cell's noise makes equal neighbours rare (``data_problems``)."""
+
+
+def check_force_channels(t: np.ndarray, forces: np.ndarray, where: str = "",
+                         held_run: int = HELD_RUN) -> None:
+    """``InputError`` naming the first problem of the measured force channels that no model
+    effect explains (``data_problems``): ``discover`` and ``identify`` refuse such data rather
+    than fit them. t (N,) s; forces (N, 6) N."""
+    problems = data_problems(t, forces, held_run=held_run)
+    if problems:
+        more = f" (and {len(problems) - 1} more)" if len(problems) > 1 else ""
+        prefix = f"{where}: " if where else "measured data: "
+        raise InputError(f"{prefix}{problems[0]}{more}; not a model effect, fix or cut the "
+                         "data")
+
+
+def data_problems(t: np.ndarray, forces: np.ndarray, *, held_run: int) -> list[str]:
+    """Problems of measured force data that no model effect can explain, one line each.
+
+    A channel that is constant, or that sits at its extreme value on a run of samples
+    (saturation), or that repeats one value on a run of at least ``held_run`` samples
+    (``Settings.held_run``) where it otherwise never does (a dropout recorded as held or
+    zeroed samples), or a gap in the sample times (dropout: a step above 1.5 times the
+    median). t (N,) s; forces (N, k) N.
+    """
+    out = []
+    forces = np.asarray(forces, float)
+    for i in range(forces.shape[1]):
+        f = forces[:, i]
+        name = f"F{i + 1}"
+        if not np.isfinite(f).any():
+            out.append(f"{name}: no finite value (a column of NaN)")
+            continue
+        spread = float(np.ptp(f))
+        if spread <= 1e-12 * max(1.0, float(np.abs(f).max())):
+            out.append(f"{name}: constant ({f[0]:.6g} N in every row): a dead channel")
+            continue
+        saturated = False
+        for edge in (f.max(), f.min()):
+            at = f == edge
+            if at.sum() >= max(5, len(f) // 200):
+                runs = np.diff(np.flatnonzero(np.diff(np.r_[0, at.astype(int), 0])))[::2]
+                if runs.size and runs.max() >= 5:
+                    row = int(np.flatnonzero(at)[0]) + 1
+                    out.append(f"{name}: saturated at {edge:.6g} N ({int(at.sum())} rows, "
+                               f"first row {row})")
+                    saturated = True
+                    break
+        held = None if saturated else _held_run(f, held_run)
+        if held is not None:
+            row, length = held
+            out.append(f"{name}: the same value ({f[row]:.6g} N) in {length} rows from row "
+                       f"{row + 1}: a dropout (held or zeroed samples)")
+    steps = np.diff(np.asarray(t, float))
+    if steps.size:
+        median = float(np.median(steps))
+        gaps = np.flatnonzero(steps > 1.5 * median)
+        if gaps.size:
+            missing = int(np.round(np.sum(steps[gaps]) / median)) - gaps.size
+            out.append(f"t: dropout of about {missing} samples at {gaps.size} place(s), first "
+                       f"after row {int(gaps[0]) + 1} (t = {float(t[gaps[0]]):.6g} s)")
+    return out
+
+
+def _held_run(f: np.ndarray, held_run: int) -> tuple[int, int] | None:
+    """The longest run (first index, length) of at least ``held_run`` equal
+    consecutive values of a channel whose neighbouring samples otherwise differ (a noisy load
+    cell: fewer than 1% equal neighbours; a coarsely quantised channel repeats values and is
+    not judged)."""
+    same = np.diff(f) == 0
+    edges = np.diff(np.r_[0, same.astype(np.int8), 0])
+    starts, stops = np.flatnonzero(edges == 1), np.flatnonzero(edges == -1)
+    if starts.size == 0:
+        return None
+    runs = stops - starts + 1                     # samples in each run of equal values
+    short = runs < held_run
+    if np.sum(runs[short] - 1) > 0.01 * same.size or short.all():
+        return None                               # quantised, or nothing held
+    k = int(np.argmax(runs))
+    return int(starts[k]), int(runs[k])
 
 
 def home_height(platform: Platform) -> float | None:
