@@ -3,6 +3,8 @@ data kept out of the platform file, the command's round trip."""
 
 from __future__ import annotations
 
+import dataclasses
+
 import json
 
 import numpy as np
@@ -337,6 +339,37 @@ def _dead_f3(frame):
     (lambda f: f.drop(columns="F6"), r"bad\.csv: missing column 'F6'"),
     (_dead_f3, r"bad\.csv: F3: constant \(50 N in every row\): a dead channel"),
 ])
+def _platform_with(**changes):
+    platform = reference_platform()
+    return dataclasses.replace(platform, **changes)
+
+
+def _legs_sharing_joints():
+    platform = reference_platform()
+    g = platform.geometry
+    base, top = np.array(g.base_joints, float), np.array(g.platform_joints, float)
+    base[1], top[1] = base[0], top[0]
+    return dataclasses.replace(platform, geometry=dataclasses.replace(
+        g, base_joints=base, platform_joints=top))
+
+
+@pytest.mark.parametrize("platform, options, message", [
+    (lambda: _platform_with(gravity=0.0), {},
+     r"force_noise: the legs carry no static load at the home pose .*--force-noise"),
+    (_legs_sharing_joints, {"force_noise": 0.1}, r"platform at home: 8 of 8 steps are flagged "
+                                                 r".*FLAG_SINGULAR"),
+    (reference_platform, {"force_noise": 1e9}, r"force_noise: 1e\+09 N is implausible"),
+    (reference_platform, {"force_noise": -1.0}, r"force_noise: must be a positive number"),
+    (reference_platform, {"max_speed": 1e9}, r"max_speed: 1e\+09 m/s crosses the legs' stroke"),
+])
+def test_excite_refuses_what_no_rig_has(platform, options, message):
+    """A design needs a force noise (the default is a share of the static load: none without
+    gravity), a platform the model can evaluate at its home pose, and limits a hexapod of this
+    stroke can reach: each refused at once with the field to fix, never a traceback."""
+    with pytest.raises(gsfric.InputError, match=message):
+        excite(platform(), duration=4.0, rate=100.0, **options)
+
+
 def test_a_bad_validation_record_is_refused_before_the_fit(tmp_path, monkeypatch, change,
                                                            message):
     """--validate's file is read and checked as the measured one is, before the fit: a bad

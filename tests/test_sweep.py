@@ -283,6 +283,21 @@ def test_platform_limits_round_trip_and_one_line_errors(tmp_path):
         assert "\n" not in str(info.value) and str(info.value).startswith("p.toml: limits.")
 
 
+@pytest.mark.parametrize("keys, words", [
+    ({"sampling": "lhs", "points": 3}, "points: applies to sampling = 'grid', not 'lhs'"),
+    ({"sampling": "grid", "samples": 50}, "samples: applies to sampling = 'lhs', not 'grid'"),
+    ({"samples": 10 ** 12}, "samples = 1000000000000 and states = 8 make 8e\\+12 states"),
+    ({"sampling": "grid", "points": 10 ** 5}, "points = 100000 per varying coordinate \\(2\\)"),
+])
+def test_a_workspace_key_is_used_or_refused(keys, words):
+    """A workspace key the sampling does not read is refused, not ignored; a workspace of
+    more states than a sweep can evaluate is refused before its poses take any memory."""
+    data = {**keys, "pose": {"z": [0.65, 0.75], "yaw": [-0.1, 0.1]}}
+    with pytest.raises(InputError, match=words) as info:
+        Workspace.from_dict(data, source="ws.toml")
+    assert "\n" not in str(info.value) and str(info.value).startswith("ws.toml: ")
+
+
 def test_merge_is_independent_of_arrival_order_and_folding(serial, inputs):
     """Task envelopes folded in a shuffled order, in steps, give the serial envelopes."""
     p = plan(**inputs)

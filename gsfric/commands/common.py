@@ -55,6 +55,13 @@ def log_options(command=None, *, keep=True):
     return with_options(command, options)
 
 
+def seed_option(what: str):
+    """``--seed``: a non-negative integer (NumPy's generators take no negative seed), 0 by
+    default; ``what`` says what it seeds."""
+    return click.option("--seed", type=click.IntRange(min=0), default=0, show_default=True,
+                        help=f"Seed of {what} (an integer >= 0; the same seed, the same result).")
+
+
 def with_options(command, options: list[Callable]):
     """``command`` decorated with the click ``options``, listed in the order --help shows them."""
     for option in reversed(options):

@@ -7,7 +7,7 @@ from pathlib import Path
 
 import click
 
-from gsfric.commands.common import checked_paths, force_noise_values, log_options
+from gsfric.commands.common import checked_paths, force_noise_values, log_options, seed_option
 from gsfric.discovery.answer import verdict_line
 from gsfric.discovery.api import discover as discover_data
 from gsfric.io.logs import LogFormat
@@ -20,8 +20,7 @@ from gsfric.io.logs import LogFormat
               help="Platform TOML of the current model (default: the reference platform).")
 @click.option("--out", "out_dir", type=click.Path(file_okay=False, path_type=Path),
               required=True, help="Directory for summary.json, the report and plots.")
-@click.option("--seed", type=int, default=0, show_default=True,
-              help="Seed of the block bootstrap.")
+@seed_option("the block bootstrap")
 @click.option("--force-noise", metavar="N|N1,...,N6",
               help="The load cells' noise (standard deviation, N; the sensor's specification), "
                    "one value or six, one per leg: the verdict compares the residual with it "

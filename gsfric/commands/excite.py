@@ -6,7 +6,7 @@ from pathlib import Path
 
 import click
 
-from gsfric.commands.common import checked_paths
+from gsfric.commands.common import checked_paths, seed_option
 from gsfric.identification.excite import MAX_ACCELERATION, MAX_SPEED, PERIOD
 from gsfric.identification.excite import excite as design
 from gsfric.io.files import check_outputs
@@ -36,7 +36,7 @@ from gsfric.models import platform_from
               help="Force noise (N) for the expected standard deviations [default: 0.5 % of "
                    "the mean static actuator force].")
 @click.option("--sensors", is_flag=True, help="Include the load cells' offsets and gains.")
-@click.option("--seed", type=int, default=0, show_default=True, help="Seed of the search.")
+@seed_option("the search")
 @checked_paths({"platform_file": "platform"}, files=("out",))
 def excite(platform_file, out, duration, rate, period, max_speed, max_acceleration,
            force_noise, sensors, seed):

@@ -8,7 +8,7 @@ from pathlib import Path
 
 import click
 
-from gsfric.commands.common import EXIT_CHECK, checked_paths, fail, partial_of
+from gsfric.commands.common import EXIT_CHECK, checked_paths, fail, partial_of, seed_option
 from gsfric.errors import GsfricWarning
 from gsfric.sweep import sweep as run_sweep
 from gsfric.sweep.plan import CHUNK_STEPS
@@ -61,7 +61,7 @@ def _pairs(values, option, ranged):
               help="Instead of random draws: N evenly spaced values of each --vary range, "
                    "ends included, every combination (N^k variants for k ranges). Not with "
                    "--variants or --tolerance.")
-@click.option("--seed", type=int, default=0, show_default=True, help="Seed of the variants.")
+@seed_option("the variants")
 @click.option("--scheduler", default=None, metavar="auto|serial|local|tcp://HOST:PORT",
               help="Where tasks run [default: DASK_SCHEDULER_ADDRESS if set, else serial for "
                    "small sweeps and a local cluster of one process per core].")
@@ -92,6 +92,9 @@ def sweep(out_dir, trajectories, workspace, platform_file, vary, tolerance, vari
         fail("--grid: not with --tolerance, which are random draws")
     if grid is not None and not vary:
         fail("--grid: give the ranges to lay it over with --vary NAME=MIN:MAX")
+    if variants is not None and not (vary or tolerance):
+        fail("--variants: gives the number of platform variants to draw; give the ranges "
+             "they are drawn from with --vary NAME=MIN:MAX or --tolerance NAME=SD")
     result = run_sweep(out_dir, trajectories=list(trajectories) or None, workspace=workspace,
                        platform=platform_file, vary=_pairs(vary, "--vary", True),
                        tolerances=_pairs(tolerance, "--tolerance", False),

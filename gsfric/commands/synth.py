@@ -6,7 +6,7 @@ from pathlib import Path
 
 import click
 
-from gsfric.commands.common import checked_paths
+from gsfric.commands.common import checked_paths, seed_option
 from gsfric.synth import run_synth
 
 
@@ -27,8 +27,7 @@ from gsfric.synth import run_synth
               show_default=True, help="AR(1) coefficient of the force noise (0: white).")
 @click.option("--pose-noise", type=float, default=0.0, show_default=True,
               help="Position noise standard deviation, m (angles: the same number in rad).")
-@click.option("--seed", type=int, default=0, show_default=True,
-              help="Seed of the noise (the same seed gives the same file).")
+@seed_option("the noise")
 @checked_paths({"platform_file": "platform"}, files=("out",))
 def synth(out, platform_file, effects, samples, rate, noise, noise_correlation, pose_noise,
           seed):

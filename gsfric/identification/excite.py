@@ -30,6 +30,7 @@ import numpy as np
 
 from gsfric.errors import InputError
 from gsfric.evaluation.evaluator import Evaluator, state_array
+from gsfric.evaluation.flags import check_flagged, flag_counts
 from gsfric.identification.parameters import parameter_set
 from gsfric.identification.regressor import Model, covariance, structure
 from gsfric.identification.settings import (EXCITE_CANDIDATES, EXCITE_HARMONICS,
@@ -37,6 +38,8 @@ from gsfric.identification.settings import (EXCITE_CANDIDATES, EXCITE_HARMONICS,
                                             MAX_SAMPLES_EXCITE, TYPICAL, WEAK_RELATIVE_STD)
 from gsfric.models import platform_from, pose_motion, sinusoidal
 from gsfric.platform.description import Platform
+from gsfric.platform.usable import SPEED_STROKES
+from gsfric.signal.noise import PLAUSIBLE_SPREAD
 from gsfric.trajectory import Motion
 
 PERIOD = 4.0
@@ -257,8 +260,9 @@ def excite(platform: Platform | str | None = None, *, duration: float = 60.0,
         if not (np.isfinite(value) and value > 0):
             raise InputError(f"{name}: must be a positive number, got {value!r}")
     _check_samples(duration, rate, period)
+    _check_speed_limit(platform, max_speed)
     ps = parameter_set(platform, sensors=sensors)
-    noise = force_noise if force_noise is not None else _default_noise(platform)
+    noise = _noise(platform, force_noise)
     limits = (float(max_speed), float(max_acceleration))
     coarse = np.linspace(0.0, period, min(MAX_SAMPLES_EXCITE, int(period * rate) + 1))
     rng = np.random.default_rng(seed)
@@ -332,8 +336,38 @@ def _excitation(ps, platform, coef, duration, rate, period, noise) -> Excitation
                                               * np.abs(ps.prior)))))
 
 
-def _default_noise(platform: Platform) -> float:
-    """``NOISE_SHARE`` of the mean static actuator force at the home pose, N."""
+def _noise(platform: Platform, force_noise: float | None) -> float:
+    """The force noise of the design, N: ``force_noise`` if given, else ``NOISE_SHARE`` of the
+    mean static actuator force at the home pose; an ``InputError`` for a platform the model
+    flags at its home pose (singular, beyond its stroke: ``check_flagged``), for a default of
+    zero (no static load) and for a noise outside ``PLAUSIBLE_SPREAD`` times that static
+    force."""
     still = sinusoidal(np.linspace(0.0, 1.0, 8), amplitude=np.zeros(6))
-    F = Evaluator(platform).actuator_forces(state_array(still))
-    return NOISE_SHARE * float(np.mean(np.abs(F)))
+    home = Evaluator(platform).evaluate_quiet(still)
+    flagged = int(np.count_nonzero(home.flag))
+    check_flagged(platform, flag_counts(home.flag), flagged, len(still), "platform at home")
+    static = float(np.mean(np.abs(home.F)))
+    if force_noise is None:
+        if static <= 0.0:
+            raise InputError("force_noise: the legs carry no static load at the home pose "
+                             "(gravity 0 or no masses), so the default 0.5 % of it is none; "
+                             "give the load cells' noise (--force-noise, N)")
+        return NOISE_SHARE * static
+    low, high = PLAUSIBLE_SPREAD
+    if not (np.isfinite(force_noise) and force_noise > 0):
+        raise InputError(f"force_noise: must be a positive number of N, got {force_noise!r}")
+    if static > 0 and not low * static <= force_noise <= high * static:
+        raise InputError(f"force_noise: {force_noise:.3g} N is implausible against the "
+                         f"{static:.3g} N the legs carry at rest: the noise must lie within "
+                         f"{low:g} to {high:g} times it (is it in N?)")
+    return float(force_noise)
+
+
+def _check_speed_limit(platform: Platform, max_speed: float) -> None:
+    """An ``InputError`` for a leg speed limit no hexapod of this stroke reaches
+    (``SPEED_STROKES`` strokes a second, the limit the readers apply to a record)."""
+    stroke = platform.geometry.stroke
+    if stroke is not None and max_speed > SPEED_STROKES * (stroke[1] - stroke[0]):
+        raise InputError(f"max_speed: {max_speed:g} m/s crosses the legs' stroke "
+                         f"({stroke[1] - stroke[0]:.3g} m) more than {SPEED_STROKES:g} times "
+                         "a second: no hexapod of this size moves so (is it in m/s?)")

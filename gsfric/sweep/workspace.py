@@ -64,6 +64,24 @@ def _table(data: Mapping, key: str, source: str) -> Mapping:
     return value
 
 
+MAX_STATES = 10 ** 8
+"""Dynamic states (poses x ``states``) a workspace may ask for: its poses are drawn at once,
+and 10^8 states are hours of evaluation already; a larger count is a typo, refused before any
+memory is taken."""
+
+
+def _check_size(workspace: Workspace, source: str) -> None:
+    """An ``InputError`` for a workspace of more than ``MAX_STATES`` dynamic states."""
+    varying = sum(1 for k in POSE if workspace.ranges[k][1] > workspace.ranges[k][0])
+    poses = (float(workspace.points) ** varying if workspace.sampling == "grid"
+             else float(workspace.samples))
+    if poses * workspace.states > MAX_STATES:
+        what = (f"points = {workspace.points} per varying coordinate ({varying})"
+                if workspace.sampling == "grid" else f"samples = {workspace.samples}")
+        raise InputError(f"{source}: {what} and states = {workspace.states} make "
+                         f"{poses * workspace.states:.3g} states, more than {MAX_STATES:.0e}")
+
+
 def _parse_integers(data: Mapping, source: str) -> dict[str, int]:
     ints = {}
     for key, default, low in _INTEGERS:
@@ -137,10 +155,16 @@ class Workspace:
         if sampling not in ("grid", "lhs"):
             raise InputError(f"{source}: sampling: expected 'grid' or 'lhs', got "
                              f"{short(sampling)}")
+        other = "points" if sampling == "lhs" else "samples"
+        if other in data:
+            raise InputError(f"{source}: {other}: applies to sampling = "
+                             f"'{'grid' if sampling == 'lhs' else 'lhs'}', not '{sampling}'")
         ints = _parse_integers(data, source)
         ranges = _parse_ranges(data, source)
         bounds = _parse_bounds(data, source)
-        return cls(ranges=ranges, sampling=sampling, bounds=bounds, **ints)
+        workspace = cls(ranges=ranges, sampling=sampling, bounds=bounds, **ints)
+        _check_size(workspace, source)
+        return workspace
 
     @classmethod
     def from_toml(cls, path: str | os.PathLike) -> Workspace:

@@ -122,6 +122,12 @@ BAD_VALUES = [
     ("synth-rate", ("synth", "--out", "{tmp}/o.csv", "--rate", "1e9"), r"--rate"),
     ("synth-effect", ("synth", "--out", "{tmp}/o.csv", "--effect", "warp_drive"),
      r"warp_drive"),
+    ("synth-seed", ("synth", "--out", "{tmp}/o.csv", "--seed", "-1"), r"--seed.*x>=0"),
+    ("excite-seed", ("excite", "--out", "{tmp}/o.csv", "--seed", "-1"), r"--seed.*x>=0"),
+    ("sweep-seed", ("sweep", "--trajectories", "{data}", "--out", "{tmp}/o", "--vary",
+                    "platform.payload_mass=0:2", "--seed", "-1"), r"--seed.*x>=0"),
+    ("sweep-variants-alone", ("sweep", "--trajectories", "{data}", "--out", "{tmp}/o",
+                              "--variants", "5"), r"^--variants: .* --vary .* --tolerance"),
     # noise that makes a record gsfric's readers refuse: refused before anything is written
     ("synth-noise-absurd", ("synth", "--out", "{tmp}/o.csv", "--samples", "60", "--noise",
                             "1e12"), r"noise = 1e\+12 N.*refused when read.*plausible actuator"),
