@@ -335,10 +335,6 @@ def _dead_f3(frame):
     return frame
 
 
-@pytest.mark.parametrize("change, message", [
-    (lambda f: f.drop(columns="F6"), r"bad\.csv: missing column 'F6'"),
-    (_dead_f3, r"bad\.csv: F3: constant \(50 N in every row\): a dead channel"),
-])
 def _platform_with(**changes):
     platform = reference_platform()
     return dataclasses.replace(platform, **changes)
@@ -370,6 +366,10 @@ def test_excite_refuses_what_no_rig_has(platform, options, message):
         excite(platform(), duration=4.0, rate=100.0, **options)
 
 
+@pytest.mark.parametrize("change, message", [
+    (lambda f: f.drop(columns="F6"), r"bad\.csv: missing column 'F6'"),
+    (_dead_f3, r"bad\.csv: F3: constant \(50 N in every row\): a dead channel"),
+])
 def test_a_bad_validation_record_is_refused_before_the_fit(tmp_path, monkeypatch, change,
                                                            message):
     """--validate's file is read and checked as the measured one is, before the fit: a bad
@@ -381,6 +381,25 @@ def test_a_bad_validation_record_is_refused_before_the_fit(tmp_path, monkeypatch
     monkeypatch.setattr(files, "identify", lambda *a, **k: pytest.fail("fitted first"))
     with pytest.raises(gsfric.InputError, match=message):
         files.identify_file(good, validate_file=bad)
+
+
+def test_a_prior_effect_the_record_does_not_show_is_removed_and_said_so(tmp_path):
+    """A prior with a Stribeck peak on a record without one: the fit removes the peak. A
+    parameter that then no longer acts, or acts only with another, is named so, with the
+    values the fit moved it between, never as the prior's value kept."""
+    data, forces = _record(seed=9, samples=1500)
+    prior = reference_platform().with_effect("stribeck", static=2.0, velocity=0.01)
+    result = gsfric.identify(data.motion, forces, prior)
+    assert result.parameters["effects.stribeck.static"].value < 0.1
+    lines = {u.split(":")[0]: u for u in result.unreachable}
+    assert any(name.startswith("effects.stribeck.") for name in lines)
+    files.write_outputs(result, tmp_path / "out")
+    text = (tmp_path / "out" / "platform.toml").read_text()
+    for name, e in result.parameters.items():
+        if e.std is None and e.value != e.prior:
+            assert ("the fit moved it from the prior's" in lines[name]
+                    or "only in combination" in lines[name]), lines[name]
+            assert f"{name} not identified alone (prior {e.prior:.6g};" in text
 
 
 def test_a_dead_load_cell_is_refused_as_discover_refuses_it():

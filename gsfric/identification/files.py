@@ -66,8 +66,10 @@ def _notes(result: Identification) -> dict[str, str]:
         key = name if not name.startswith("effects.") else ".".join(name.split(".")[:2])
         if e.std is not None:
             text = f"{name} = {e.value:.6g} +- {CONFIDENCE_Z * e.std:.3g} {e.unit} (95 %)"
+        elif e.value == e.prior:
+            text = f"{name} not identified (the prior's value)"
         else:
-            text = f"{name} not identified (prior {e.prior:.6g})"
+            text = f"{name} not identified alone (prior {e.prior:.6g}; identification.json)"
         if key.startswith("platform.first_moment"):
             key = "platform.com"
         elif key.startswith("platform.inertia_origin"):

@@ -241,7 +241,7 @@ def _result(model: Model, ps: ParameterSet, theta: np.ndarray, forces: np.ndarra
     return Identification(
         parameters=estimates, combinations=combinations,
         correlation=correlation, correlation_names=names,
-        platform=platform, prior=ps.platform, unreachable=_unreachable(ps, st),
+        platform=platform, prior=ps.platform, unreachable=_unreachable(ps, st, theta),
         weak=_weak(ps, estimates, J, noise, correlation, names),
         implausible=_implausible(ps, st, theta, cov, J, residual, 1.0 / noise) + doubts,
         residual=_rms(residual), residual_prior=_rms(prior_residual), noise=noise,
@@ -282,13 +282,20 @@ def _hint(name: str) -> str:
     return next(h for prefix, h in HINTS if name.startswith(prefix))
 
 
-def _unreachable(ps: ParameterSet, st: Structure) -> list[str]:
-    """One line per parameter not identifiable alone: why, and what motion would reach it."""
+def _unreachable(ps: ParameterSet, st: Structure, theta: np.ndarray | None = None
+                 ) -> list[str]:
+    """One line per parameter not identifiable alone at ``theta`` (default the prior): why,
+    and what motion would reach it."""
     out = []
     for k, name in enumerate(ps.names):
         if st.identifiable[k]:
             continue
-        if st.idle[k]:
+        moved = theta is not None and theta[k] != ps.prior[k]
+        if st.idle[k] and moved:
+            why = (f"the fit moved it from the prior's {ps.prior[k]:.6g} to {theta[k]:.6g}, "
+                   "where it no longer acts on the forces along this motion: the data show "
+                   "no such effect there")
+        elif st.idle[k]:
             why = "does not act on the forces along this motion"
         else:
             combos = [_expression({ps.names[j]: c for j, c in enumerate(coef) if abs(c) > 1e-9})
