@@ -17,7 +17,7 @@ from click.testing import CliRunner
 
 from gsfric import models
 from gsfric.cli import main
-from gsfric.errors import GsfricWarning, InputError
+from gsfric.errors import GsfricWarning, IgnoredColumnsWarning, InputError
 from gsfric.io.logs import ColumnReader, LogFormat
 from gsfric.io.readers import read_measured, read_trajectory
 from gsfric.io.tables import read_table, write_table
@@ -200,6 +200,30 @@ def test_bad_descriptions_are_one_line_exit_2_and_write_nothing(tmp_path, args, 
     assert len(lines) == 1 and lines[0].startswith("gsfric: error: "), result.stderr
     assert expected in lines[0]
     assert not out.exists()
+
+
+@pytest.mark.parametrize(("text", "expected"), [
+    ('keep = 5\n', "keep: expected a column name or a list of them, got 5"),
+    ('[units]\nqx = "rad"\n', "units: 'qx' is a quaternion without a unit: leave it out"),
+])
+def test_bad_log_format_files_say_which_key(tmp_path, text, expected):
+    (tmp_path / "f.toml").write_text(text)
+    with pytest.raises(InputError, match=re.escape(expected)):
+        LogFormat.from_toml(tmp_path / "f.toml")
+
+
+def test_one_kept_column_is_a_name_and_the_others_are_named_in_the_warning(tmp_path):
+    """``keep = "Mode"`` keeps the column Mode (not the letters M, o, d, e); a column neither
+    mapped nor kept is named in the warning that it is ignored."""
+    frame = models.sinusoidal(np.arange(60) / 100.0).to_frame()
+    frame["Mode"], frame["State"] = 2.0, 3.0
+    write_table(frame, tmp_path / "m.csv")
+    (tmp_path / "f.toml").write_text('keep = "Mode"\n')
+    with pytest.warns(IgnoredColumnsWarning, match=r"1 column ignored \(not gsfric inputs: "
+                                                   r"'State';") as caught:
+        motion = read_trajectory(tmp_path / "m.csv",
+                                 log_format=LogFormat.from_toml(tmp_path / "f.toml"))
+    assert len(motion) == 60 and caught[0].message.names == ("State",)
 
 
 def test_read_measured_with_units(tmp_path):

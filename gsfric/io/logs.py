@@ -125,6 +125,10 @@ def _pairs(text: str, what: str) -> dict[str, str]:
     return out
 
 
+SHOWN_IGNORED = 5
+"""Ignored columns a warning names (the rest are counted): the names a user maps or keeps."""
+
+
 @dataclass(frozen=True)
 class LogFormat:
     """How to read a log whose column names, units or angles are not gsfric's own.
@@ -222,7 +226,11 @@ class LogFormat:
                                  f"{seen[source]!r} and {key!r}")
             seen[source] = key
         for key, unit in units.items():
-            choices = UNITS[_quantity(key)]
+            quantity = _quantity(key)
+            choices = UNITS[quantity]
+            if unit not in choices and len(choices) == 1:
+                raise InputError(f"units: {key!r} is a {quantity} without a unit: leave it "
+                                 "out of [units]")
             if unit not in choices:
                 raise InputError(f"units: {key!r} in {unit!r}: use one of "
                                  f"{', '.join(choices)}")
@@ -233,7 +241,11 @@ class LogFormat:
         if wrap is not None and (isinstance(wrap, bool) or not isinstance(wrap, (int, np.integer))
                                  or wrap < 2):
             raise InputError(f"wrap: must be an integer >= 2, got {short(wrap)}")
-        keep = (self.keep,) if isinstance(self.keep, str) else tuple(map(str, self.keep))
+        keep = (self.keep,) if isinstance(self.keep, str) else self.keep
+        if not isinstance(keep, (list, tuple)) or not all(isinstance(k, str) for k in keep):
+            raise InputError(f"keep: expected a column name or a list of them, got "
+                             f"{short(self.keep)}")
+        keep = tuple(keep)
         frame = LogFrame(self.axes, self.offset)
         object.__setattr__(self, "force_noise", _force_noise(self.force_noise))
         object.__setattr__(self, "columns", columns)
@@ -271,7 +283,7 @@ class LogFormat:
         try:
             return cls(columns=data.get("columns", {}), units=data.get("units", {}),
                        angles=data.get("angles", "xyz"), wrap=data.get("wrap"),
-                       keep=tuple(data.get("keep", ())), axes=data.get("axes", ("x", "y", "z")),
+                       keep=data.get("keep", ()), axes=data.get("axes", ("x", "y", "z")),
                        offset=data.get("offset", {}), force_noise=data.get("force_noise"))
         except InputError as error:
             raise InputError(f"{where}: {error}") from None
@@ -388,10 +400,13 @@ class ColumnReader:
                 raise InputError(f"{path}: units given for {key!r}, which the file does not have")
         if ignored:
             count = f"{len(ignored)} column{'s' if len(ignored) > 1 else ''}"
+            named = ", ".join(map(repr, ignored[:SHOWN_IGNORED]))
+            if len(ignored) > SHOWN_IGNORED:
+                named += f" and {len(ignored) - SHOWN_IGNORED} more (simulate --verbose)"
             warnings.warn(IgnoredColumnsWarning(
-                f"{path}: {count} ignored (not gsfric inputs; --verbose names them; map them "
-                "with --column-map or carry them to the output with --keep-columns; in Python: "
-                "the warning's names, LogFormat columns, keep)", tuple(ignored)),
+                f"{path}: {count} ignored (not gsfric inputs: {named}; map them with "
+                "--column-map, or carry them to simulate's output with --keep-columns; in "
+                "Python: the warning's names, LogFormat columns, keep)", tuple(ignored)),
                 stacklevel=3)
         self.source = source
         self.forces = len(forces) == 6

@@ -232,16 +232,17 @@ def check_forces(platform: Platform, forces: np.ndarray, where: str = "") -> Non
     load = float(np.mean(np.sum(np.abs(forces), axis=1)))
     ratio = load / weight
     if ratio > UNIT_RATIO:
-        advice = ("forces in N declared as kN? declare F1..F6 in N, " if ratio > 300 else "")
+        advice = ("forces in N declared as kN? declare F1..F6 in N, or give"
+                  if ratio > 300 else "give")
         raise InputError(f"{prefix}forces: the static load (mean of the summed |F1..F6|, "
                          f"{load:.4g} N) is {ratio:.3g} times the weight the legs carry "
-                         f"({weight:.4g} N): {advice}or give the rig's masses (--platform)")
+                         f"({weight:.4g} N): {advice} the rig's masses (--platform)")
     if ratio < 1.0 / UNIT_RATIO:
-        advice = ("forces in kN read as N? declare F1..F6 = kN (--units F1=kN,...), "
-                  if ratio < 1.0 / 300 else "")
+        advice = ("forces in kN read as N? declare F1..F6 = kN (--units F1=kN,...), or give"
+                  if ratio < 1.0 / 300 else "give")
         raise InputError(f"{prefix}forces: the static load (mean of the summed |F1..F6|, "
                          f"{load:.4g} N) is only {ratio:.3g} times the weight the legs carry "
-                         f"({weight:.4g} N): {advice}or give the rig's masses (--platform)")
+                         f"({weight:.4g} N): {advice} the rig's masses (--platform)")
 
 
 def check_force_sign(measured: np.ndarray, model: np.ndarray, where: str = "") -> None:
