@@ -10,7 +10,7 @@ import numpy as np
 
 from gsfric.discovery.candidates import CANDIDATE_NAMES, REFIT
 from gsfric.platform.usable import HELD_RUN
-from gsfric.signal.noise import PLAUSIBLE_SPREAD
+from gsfric.signal.noise import HIGH_FREQUENCY_WINDOW, PLAUSIBLE_SPREAD
 
 
 @dataclass(frozen=True)
@@ -81,10 +81,9 @@ class Settings:
     held_run: int = HELD_RUN
     """Consecutive equal values of a force channel that make a dropout
     (``gsfric.platform.usable.data_problems``; default ``HELD_RUN``, identify's too)."""
-    noise_window: int = 15
+    noise_window: int = HIGH_FREQUENCY_WINDOW
     """Window (samples) of the local cubic fit whose residual measures the force noise
-    (``gsfric.signal.noise.high_frequency_std``): long enough for a robust scale, short beside
-    the moves."""
+    (``gsfric.signal.noise.high_frequency_std``; default ``HIGH_FREQUENCY_WINDOW``)."""
 
     # -- the load cells' noise as the user gives it ----------------------------------------
     record_travel: float = 1e-3

@@ -27,12 +27,13 @@ from gsfric.identification.parameters import (ParameterSet, body_from_factor, co
                                               nearest_consistent, parameter_set)
 from gsfric.identification.regressor import Model, Structure, covariance, structure
 from gsfric.identification.results import Combination, Estimate, Identification, Validation
-from gsfric.identification.settings import (IMPLAUSIBLE_SIGMA, MAX_NFEV, TYPICAL,
-                                            WEAK_RELATIVE_STD)
+from gsfric.identification.settings import (IMPLAUSIBLE_SIGMA, MAX_NFEV, MISFIT_RATIO,
+                                            TYPICAL, WEAK_RELATIVE_STD)
 from gsfric.models import platform_from
 from gsfric.platform.description import Platform
 from gsfric.platform.usable import check_force_channels, check_force_sign
-from gsfric.signal.noise import PLAUSIBLE_SPREAD, ForceNoise
+from gsfric.signal.noise import (HIGH_FREQUENCY_WINDOW, PLAUSIBLE_SPREAD, ForceNoise,
+                                 high_frequency_std)
 from gsfric.trajectory import Motion
 
 HINTS = (
@@ -244,9 +245,25 @@ def _result(model: Model, ps: ParameterSet, theta: np.ndarray, forces: np.ndarra
         platform=platform, prior=ps.platform, unreachable=_unreachable(ps, st, theta),
         weak=_weak(ps, estimates, J, noise, correlation, names),
         implausible=_implausible(ps, st, theta, cov, J, residual, 1.0 / noise) + doubts,
+        misfit=_misfit(residual, forces, given),
         residual=_rms(residual), residual_prior=_rms(prior_residual), noise=noise,
         noise_given=given is not None, rank=st.rank, condition=st.condition,
         samples=len(forces), evaluations=nfev)
+
+
+def _misfit(residual: np.ndarray, forces: np.ndarray, given: np.ndarray | None) -> list[str]:
+    """A line when the residual RMS exceeds ``MISFIT_RATIO`` times the noise: the given one,
+    else the forces' own high-frequency noise (independent of the fit, unlike the noise
+    estimated from the residual, which a misfit inflates)."""
+    noise = given if given is not None else high_frequency_std(forces, HIGH_FREQUENCY_WINDOW)
+    left, level = float(np.sqrt(np.mean(residual ** 2))), float(np.sqrt(np.mean(noise ** 2)))
+    if level <= 0 or left <= MISFIT_RATIO * level:
+        return []
+    what = "the given noise" if given is not None else "the forces' high-frequency noise"
+    return [f"the fit leaves {left:.4g} N RMS, {left / level:.3g} times {what} ({level:.4g} "
+            "N): the model does not reproduce the forces; start from the rig's rough masses "
+            "and friction (--platform) if the prior is far from it, else look for the effect "
+            "it lacks (gsfric discover)"]
 
 
 def _checked_platform(ps: ParameterSet, theta: np.ndarray) -> tuple[Platform, list[str]]:

@@ -118,6 +118,9 @@ class Identification:
     implausible : list of str
         Results no rig can have (a mass the data want negative): a non-empty list keeps the
         platform file from being written.
+    misfit : list of str
+        A line when the residual exceeds ``MISFIT_RATIO`` times the noise (given, or the
+        forces' own high-frequency noise): the model does not reproduce the forces.
     residual : ndarray, shape (6,)
         RMS residual per leg after the fit, N.
     residual_prior : ndarray, shape (6,)
@@ -164,6 +167,7 @@ class Identification:
     condition: float
     samples: int
     evaluations: int
+    misfit: list[str] = field(default_factory=list)
     source: str = ""
     source_sha256: str = ""
     validation: Validation | None = field(default=None)
@@ -183,7 +187,7 @@ class Identification:
             "noise_N": self.noise.tolist(),
             "noise": "given" if self.noise_given else "estimated from the residual",
             "unreachable": self.unreachable, "weak": self.weak,
-            "implausible": self.implausible,
+            "implausible": self.implausible, "misfit": self.misfit,
             "validation": None if self.validation is None else self.validation.summary(),
             "evaluations": self.evaluations,
         }
@@ -198,6 +202,7 @@ class Identification:
         lines += [f"not identifiable: {u}" for u in self.unreachable]
         lines += [f"weakly determined: {w}" for w in self.weak]
         lines += [f"implausible: {u}" for u in self.implausible]
+        lines += [f"misfit: {u}" for u in self.misfit]
         return "\n".join(lines)
 
 

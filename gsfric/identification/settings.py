@@ -71,3 +71,12 @@ WEAK_RELATIVE_STD = 0.05
 force along the motion: a parameter known to worse than a few percent is one whose whole effect
 is near the force noise, which a longer or faster motion shifts only as far as the limits
 allow."""
+
+MISFIT_RATIO = 10.0
+"""A fit whose residual RMS exceeds this many times the noise (given, or the forces' own
+high-frequency noise, ``high_frequency_std``) leaves forces the model does not reproduce: a
+prior far from the rig (a local minimum of the nonlinear fit) or an effect the model lacks.
+The statement says so (``Identification.misfit``). Ten: a high-frequency estimate sees the
+white part of a load cell's noise only, and strongly coloured noise (AR(1) with a coefficient
+of 0.99) has about seven times that spread; the misfit of a prior far from the rig is tens of
+times the noise."""

@@ -20,6 +20,10 @@ standard deviation (``ForceNoise.check_plausible``): a channel's spread holds it
 noise ten times larger is a unit error (kN given as N, a wrong channel); a billionth of it no
 load cell's converter resolves (24 bits are 6e-8)."""
 
+HIGH_FREQUENCY_WINDOW = 15
+"""Window (samples) of the local cubic fit whose residual measures a force channel's noise
+(``high_frequency_std``): long enough for a robust scale, short beside the moves."""
+
 NOISE_DIFFERENCE_ORDER = 6
 """Order of the differences from which ``white_noise_std`` estimates the noise of a sampled
 signal."""
