@@ -270,12 +270,27 @@ def test_bad_arguments(tmp_path):
     ("clean", "make or CMake target"), ("help", "make or CMake target"),
     ("ALL_BUILD", "make or CMake target"), ("m", "system library"),
     ("_Bool", "not a C identifier"), ("__hidden", "reserved in C"), ("_Hidden", "reserved in C"),
+    ("_", "reserved in C"), ("_lower", "reserved in C"), ("main", "the example program's"),
+    ("example", "the example program's"),
 ])
 def test_prefixes_that_the_build_or_the_compiler_reserve(tmp_path, prefix, why):
     message = error_of(run("export", "--out", tmp_path / "o", "--prefix", prefix))
     assert message.strip().startswith(f"gsfric: error: --prefix: {prefix!r} is ")
     assert why in message and len(message.strip().splitlines()) == 1, message
     assert not (tmp_path / "o").exists()
+
+
+def test_a_folder_holding_another_library_is_refused(tmp_path):
+    """A second prefix into a folder that holds an export would leave two libraries, one
+    Makefile and one manifest: refused, the first export untouched; the same prefix again
+    replaces its own files."""
+    folder = tmp_path / "e"
+    assert run("export", "--out", folder).exit_code == 0
+    before = {p.name: p.read_bytes() for p in folder.iterdir()}
+    message = error_of(run("export", "--out", folder, "--prefix", "other"))
+    assert "holds the library 'gsfric' (gsfric.h)" in message
+    assert {p.name: p.read_bytes() for p in folder.iterdir()} == before
+    assert run("export", "--out", folder).exit_code == 0
 
 
 def test_pose_state_normalises_any_finite_quaternion(exports, objects, tmp_path):
@@ -338,7 +353,10 @@ def test_verify_checks_the_library_its_manifest_names(exports, tmp_path):
     assert (manifest["prefix"], manifest["model"], manifest["code"]) == \
         ("first", "paper", "specialised")
     assert sorted(p.name for p in folder.iterdir()) == manifest["files"]
-    export_library(reference_platform(), folder, model="paper", prefix="second")
+    # a second library copied in by hand (export itself refuses the folder)
+    export_library(reference_platform(), tmp_path / "other", model="paper", prefix="second")
+    for name in ("second.h", "second.c", "manifest.json"):
+        shutil.copy(tmp_path / "other" / name, folder / name)
     message = error_of(run("export", "--verify", folder))
     assert "holds two libraries, second.h" in message and "first.h" in message
     (folder / "first.h").unlink()

@@ -21,7 +21,6 @@ from __future__ import annotations
 import importlib.resources
 import json
 import os
-import re
 import shlex
 import shutil
 import subprocess
@@ -37,7 +36,7 @@ from gsfric.evaluation.evaluator import Evaluator, state_array
 from gsfric.evaluation.flags import FLAG_NONFINITE, FLAG_ROTATION
 from gsfric.evaluation.parameters import model_function
 from gsfric.export.text import outputs
-from gsfric.export.writer import CFLAGS, MANIFEST_FILE, PLATFORM_FILE
+from gsfric.export.writer import CFLAGS, MANIFEST_FILE, PLATFORM_FILE, libraries
 from gsfric.models import paper_motion, random_motion, sinusoidal
 from gsfric.platform.description import Platform
 from gsfric.signal.rotations import quaternion_from_rotation
@@ -126,19 +125,6 @@ class VerifyReport:
                 f"  {verdict}"]
 
 
-def _libraries(folder: Path) -> list[str]:
-    """The prefixes of the libraries written by ``gsfric export`` in ``folder`` (a header
-    ``<prefix>.h`` defining ``<PREFIX>_MODEL`` beside its ``<prefix>.c``)."""
-    found = []
-    for header in sorted(folder.glob("*.h")):
-        model = re.search(r'^#define (\w+)_MODEL "(\w+)"$', header.read_text(errors="replace"),
-                          re.M)
-        if model and model.group(1) == header.stem.upper() and \
-                (folder / f"{header.stem}.c").is_file():
-            found.append(header.stem)
-    return found
-
-
 def _library(folder: Path) -> tuple[str, str]:
     """(prefix, model) of the library the manifest of ``folder`` names; ``InputError`` when
     there is none, or when the folder holds another library too."""
@@ -154,7 +140,7 @@ def _library(folder: Path) -> tuple[str, str]:
     except (OSError, UnicodeDecodeError, ValueError, TypeError, KeyError) as exc:
         raise InputError(f"--verify: {path} is not the manifest of an export "
                          f"({type(exc).__name__}: {exc}); export it again") from None
-    found = _libraries(folder)
+    found = libraries(folder)
     if prefix not in found:
         raise InputError(f"--verify: {path} names the library {prefix!r}, but {folder} has no "
                          f"{prefix}.h and {prefix}.c written by `gsfric export`")

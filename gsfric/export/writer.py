@@ -59,11 +59,14 @@ _C_RESERVED = {"auto", "break", "case", "char", "const", "continue", "default", 
                "else", "enum", "extern", "float", "for", "goto", "if", "inline", "int", "long",
                "register", "restrict", "return", "short", "signed", "sizeof", "static",
                "struct", "switch", "typedef", "union", "unsigned", "void", "volatile", "while",
-               "example", "main", "_Bool", "_Complex", "_Imaginary", "_Alignas", "_Alignof",
+               "_Bool", "_Complex", "_Imaginary", "_Alignas", "_Alignof",
                "_Atomic", "_Generic", "_Noreturn", "_Static_assert", "_Thread_local", "bool",
                "true", "false", "alignas", "alignof", "constexpr", "nullptr", "static_assert",
                "thread_local", "typeof", "typeof_unqual"}
-"""C keywords (C99 to C23) and the export's own names (example.c, main)."""
+"""C keywords (C99 to C23)."""
+
+_OWN_NAMES = {"example", "main"}
+"""The export's own names: its example program (example.c) and the program's entry point."""
 
 _C_HEADERS = {"assert", "complex", "ctype", "errno", "fenv", "float", "inttypes", "iso646",
               "limits", "locale", "math", "setjmp", "signal", "stdalign", "stdarg",
@@ -127,7 +130,9 @@ def check_prefix(prefix: str) -> str:
                          "not starting with a digit, not a C keyword)")
     why = ("the C standard header <{0}.h>, which {0}.h would hide" if prefix.lower() in
            _C_HEADERS else "a make or CMake target or system library name" if prefix.lower()
-           in _BUILD_NAMES else "reserved in C" if re.match(r"__|_[A-Z]", prefix) else
+           in _BUILD_NAMES else "reserved in C: names at file scope that start with _"
+           if prefix.startswith("_") else "the example program's (example.c, main)"
+           if prefix in _OWN_NAMES else
            "gsfric's own" if prefix.lower() == "gsfric_model" else "")
     if why:
         raise InputError(f"--prefix: {prefix!r} is reserved ({why.format(prefix.lower())}); "
@@ -256,6 +261,19 @@ def _fill(template: str, values: dict[str, str]) -> str:
                   else m.group(0), template)
 
 
+def libraries(folder: Path) -> list[str]:
+    """The prefixes of the libraries written by ``gsfric export`` in ``folder`` (a header
+    ``<prefix>.h`` defining ``<PREFIX>_MODEL`` beside its ``<prefix>.c``)."""
+    found = []
+    for header in sorted(folder.glob("*.h")):
+        model = re.search(r'^#define (\w+)_MODEL "(\w+)"$', header.read_text(errors="replace"),
+                          re.M)
+        if model and model.group(1) == header.stem.upper() and \
+                (folder / f"{header.stem}.c").is_file():
+            found.append(header.stem)
+    return found
+
+
 def export_library(platform: Platform, out, model: str | None = None, prefix: str = "gsfric",
                    platform_file=None, code: str = "specialised") -> Export:
     """Write the C library of ``platform`` into the folder ``out`` (atomically).
@@ -264,7 +282,8 @@ def export_library(platform: Platform, out, model: str | None = None, prefix: st
     ----------
     platform : Platform
     out : path-like
-        The folder (created; files of the same names in an existing folder are replaced).
+        The folder (created; files of the same names in an existing folder are replaced;
+        a folder holding another prefix's library is refused).
     model : {"coupled", "paper"} or None
         The friction model (None: the platform's own, ``friction.model``).
     prefix : str
@@ -276,6 +295,11 @@ def export_library(platform: Platform, out, model: str | None = None, prefix: st
         casadi when exporting), or CasADi's generated function reading the parameters.
     """
     check_prefix(prefix)
+    others = [p for p in libraries(Path(out)) if p != prefix] if Path(out).is_dir() else []
+    if others:
+        raise InputError(f"--out: {out} holds the library {others[0]!r} ({others[0]}.h); "
+                         f"export {prefix!r} into a folder of its own (--verify checks one "
+                         "library a folder)")
     model = platform.friction.model if model is None else model
     if model not in MODELS:
         raise InputError(f"--model: {model!r} is not one of {', '.join(MODELS)}")

@@ -514,6 +514,8 @@ def output_folder(path: PathArg, *, inputs: Inputs = ()) -> Iterator[Path]:
     OutputError
         A write failed (a full disk); nothing was left.
     """
+    if not str(path).strip():
+        raise InputError("--out: the output folder's path is empty")
     given = Path(path)
     protected = _named_inputs(inputs)
     _check_named([given], protected)
