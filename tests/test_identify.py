@@ -435,6 +435,14 @@ def test_a_dead_load_cell_is_refused_as_discover_refuses_it():
         gsfric.identify(data.motion, forces)
 
 
+def test_the_measured_record_is_no_validation(tmp_path):
+    data, _ = _record(seed=6, samples=400)
+    gsfric.io.write_table(data.frame, tmp_path / "a.csv")
+    gsfric.io.write_table(data.frame, tmp_path / "copy.csv")
+    with pytest.raises(gsfric.InputError, match=r"--validate: .*copy\.csv holds the same record"):
+        files.identify_file(tmp_path / "a.csv", validate_file=tmp_path / "copy.csv")
+
+
 def test_a_validation_record_of_the_wrong_sign_is_refused(tmp_path):
     """The second record gets the sign check of the first: reversed load cells are no
     validation of anything."""

@@ -47,6 +47,9 @@ def identify_file(measured: str | os.PathLike[str], platform_file=None, *,
                   log_format=None) -> Identification:
     """Read a measured file and a validation record (both before the fit: a bad second file
     is refused at once), identify, keep the source's hash."""
+    if validate_file is not None and file_sha256(validate_file) == file_sha256(measured):
+        raise InputError(f"--validate: {validate_file} holds the same record as --measured "
+                         f"{measured}: a validation needs a record the fit has not seen")
     prior = platform_from(platform_file)
     motion, forces = read_record(measured, prior, log_format)
     second = None if validate_file is None else read_record(validate_file, prior, log_format)

@@ -73,6 +73,10 @@ def parse_vary(vary: Mapping | None, tolerances: Mapping | None
         if ranges[name][0] < lo or ranges[name][1] > hi:
             raise InputError(f"vary: {name}: {ranges[name][0]:g}:{ranges[name][1]:g} leaves "
                              f"the valid range {lo:g}:{hi:g}")
+        if ranges[name][0] == ranges[name][1]:
+            raise InputError(f"vary: {name}: {ranges[name][0]:g}:{ranges[name][1]:g} is one "
+                             "value, and every variant would be the same: give MIN < MAX, or "
+                             "set the value in the platform file")
     sds = {}
     for name, value in tolerances.items():
         if name not in SCALAR_PARAMETERS + JOINT_TOLERANCES:

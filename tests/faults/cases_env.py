@@ -126,6 +126,9 @@ BAD_VALUES = [
     ("excite-seed", ("excite", "--out", "{tmp}/o.csv", "--seed", "-1"), r"--seed.*x>=0"),
     ("sweep-seed", ("sweep", "--trajectories", "{data}", "--out", "{tmp}/o", "--vary",
                     "platform.payload_mass=0:2", "--seed", "-1"), r"--seed.*x>=0"),
+    ("sweep-vary-one-value", ("sweep", "--trajectories", "{data}", "--out", "{tmp}/o",
+                              "--vary", "platform.payload_mass=2:2"),
+     r"vary: platform\.payload_mass: 2:2 is one value"),
     ("sweep-variants-alone", ("sweep", "--trajectories", "{data}", "--out", "{tmp}/o",
                               "--variants", "5"), r"^--variants: .* --vary .* --tolerance"),
     # noise that makes a record gsfric's readers refuse: refused before anything is written
