@@ -349,6 +349,14 @@ def _legs_sharing_joints():
         g, base_joints=base, platform_joints=top))
 
 
+def test_excite_says_the_duration_it_made():
+    """A duration is rounded up to whole periods: the report says how long the motion is."""
+    design = excite(duration=0.001, rate=100.0)
+    assert design.motion.t[-1] == pytest.approx(design.period)
+    assert design.report().startswith(f"excitation: {design.period:g} s (1 period of "
+                                      f"{design.period:g} s: a duration is rounded up")
+
+
 @pytest.mark.parametrize("platform, options, message", [
     (lambda: _platform_with(gravity=0.0), {},
      r"force_noise: the legs carry no static load at the home pose .*--force-noise"),

@@ -121,10 +121,19 @@ class Excitation:
 
     def report(self) -> str:
         """Lines for a reader: condition numbers and the expected std of each parameter."""
-        lines = [f"excitation: {len(self.motion)} samples, period {self.period:g} s, rank "
-                 f"{self.rank}, condition number {self.condition:.4g} (plain sinusoid: "
-                 f"{self.sinusoid_condition:.4g}, rank {self.sinusoid_rank}); expected std for "
-                 f"{self.force_noise:.4g} N force noise:"]
+        span = float(self.motion.t[-1] - self.motion.t[0])
+        periods = int(round(span / self.period))
+        lines = [f"excitation: {span:g} s ({periods} period{'s' if periods > 1 else ''} of "
+                 f"{self.period:g} s: a duration is rounded up to whole periods), "
+                 f"{len(self.motion)} samples, rank {self.rank}, condition number "
+                 f"{self.condition:.4g} (plain sinusoid: {self.sinusoid_condition:.4g}, rank "
+                 f"{self.sinusoid_rank}); expected std for {self.force_noise:.4g} N force "
+                 "noise:"]
+        if self.sinusoid_rank == self.rank and self.sinusoid_condition < self.condition:
+            lines.insert(1, "  (the plain sinusoid is better conditioned within these limits: "
+                            "the design maximises the determinant of the information, the "
+                            "parameters' joint precision, not the condition number; compare "
+                            "the expected stds below)")
         rel = self.relative_std()
         for name, std in self.expected_std.items():
             text = "not identifiable" if std is None else f"{std:.3g} {self.units[name]}"
