@@ -10,6 +10,8 @@ and angular rate columns, and columns gsfric does not read.
 
 from __future__ import annotations
 
+import dataclasses
+
 import numpy as np
 import pandas as pd
 import pytest
@@ -17,6 +19,7 @@ from click.testing import CliRunner
 
 from gsfric import models
 from gsfric.cli import main
+from gsfric.errors import InputError
 from gsfric.io.logs import LogFormat
 from gsfric.io.tables import read_table
 from gsfric.loginspect import inspect_log
@@ -247,6 +250,26 @@ def test_bad_input_gets_one_line_naming_the_column_or_row_and_writes_nothing(
     assert result.exit_code == 2
     assert message in result.stderr and len(result.stderr.strip().splitlines()) == 1
     assert not (tmp_path / "found").exists()
+
+
+def test_a_platform_where_a_rig_is_asked_for_and_joints_no_rig_has_say_so(tmp_path):
+    """``--rig`` given a platform file says to give it with --platform; a platform whose
+    joints are not three pairs on two circles names --platform, not a key it never held."""
+    log, _ = real_like_log()
+    log.to_csv(tmp_path / "log.csv", index=False)
+    models.reference_platform().to_toml(tmp_path / "p.toml")
+    result = _cli("log", "inspect", tmp_path / "log.csv", "--rig", tmp_path / "p.toml",
+                  "--out", tmp_path / "found")
+    assert result.exit_code == 2 and "not a rig's sizes" in result.stderr
+    assert "with --platform" in result.stderr
+    platform = models.reference_platform()
+    g = platform.geometry
+    base, top = np.array(g.base_joints, float), np.array(g.platform_joints, float)
+    base[1], top[1] = base[0], top[0]
+    shared = dataclasses.replace(platform, geometry=dataclasses.replace(
+        g, base_joints=base, platform_joints=top))
+    with pytest.raises(InputError, match=r"^--platform: its joints are not laid out as a rig"):
+        inspect_log(tmp_path / "log.csv", platform=shared)
 
 
 @pytest.mark.parametrize("name, kind, axis, unit", [

@@ -292,7 +292,11 @@ def _model(platform, rig, position, cmap: C.ColumnMap
                     "home_height, or else mid-stroke, the home height")
         return rig, rig.platform(), rig.home
     if platform is not None:
-        sizes = Rig.from_platform(platform) if platform.geometry.stroke is not None else None
+        try:
+            sizes = Rig.from_platform(platform) if platform.geometry.stroke is not None else None
+        except InputError as error:
+            raise InputError(f"--platform: its joints are not laid out as a rig's (three pairs "
+                             f"on two circles), which the proposal is made of: {error}") from None
         cmap.assume("rig", "the platform given (--platform)", "its joints give the legs, "
                     "its mid-stroke the home height")
         return sizes, platform, home_height(platform)

@@ -213,6 +213,9 @@ class Rig:
             if not isinstance(data, Mapping):
                 raise InputError(f"expected a table of keys, got {short(data)}")
             names = tuple(f.name for f in dataclasses.fields(cls))
+            if {"geometry", "platform"} <= set(data):
+                raise InputError("a platform file ([geometry], [platform]), not a rig's sizes: "
+                                 "a command that reads a platform takes it with --platform")
             for key in data:
                 if key not in names:
                     raise InputError(f"{key}: unknown key{suggest(str(key), names)}")
