@@ -205,6 +205,8 @@ def test_bad_descriptions_are_one_line_exit_2_and_write_nothing(tmp_path, args, 
 @pytest.mark.parametrize(("text", "expected"), [
     ('keep = 5\n', "keep: expected a column name or a list of them, got 5"),
     ('[units]\nqx = "rad"\n', "units: 'qx' is a quaternion without a unit: leave it out"),
+    ('[offset]\nroll = 180\n', "offset.roll: 180 rad is more than a turn: degrees? give it in "
+                                "rad (3.14159)"),
 ])
 def test_bad_log_format_files_say_which_key(tmp_path, text, expected):
     (tmp_path / "f.toml").write_text(text)

@@ -58,6 +58,9 @@ def _offset(value: object) -> dict[str, float]:
         if isinstance(number, bool) or not isinstance(number, (int, float, np.number)) \
                 or not np.isfinite(number):
             raise InputError(f"offset.{key}: expected a finite number, got {short(number)}")
+        if key in ("roll", "pitch", "yaw") and abs(number) > 2 * np.pi:
+            raise InputError(f"offset.{key}: {number:g} rad is more than a turn: degrees? "
+                             f"give it in rad ({np.radians(number):.6g})")
         out[str(key)] = float(number)
     return out
 
