@@ -189,6 +189,8 @@ def test_streamed_simulate_carries_columns_row_by_row(tmp_path):
     (("--column-map", "x"), "--column-map: expected name=value, got 'x'"),
     (("--keep-columns", "Temp"), "column 'Temp' to keep: no such column"),
     (("--column-map", "x=y"), "missing column 'y' (map the log's column"),
+    (("--angles", "XYZ"), "has no roll, pitch, yaw columns (its orientation is qw, qx, qy, "
+                          "qz), and no offset rotation"),
 ])
 def test_bad_descriptions_are_one_line_exit_2_and_write_nothing(tmp_path, args, expected):
     frame = models.sinusoidal(np.arange(40) / 100.0).to_frame()

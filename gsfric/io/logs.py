@@ -3,12 +3,13 @@
 
 from __future__ import annotations
 
+
 import difflib
 import math
 import os
 import warnings
 from collections.abc import Mapping
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from pathlib import Path
 from typing import Any
 
@@ -173,6 +174,9 @@ class LogFormat:
         The load cells' noise (standard deviation in N, whatever the units of F1..F6: the
         sensor's specification), one value or one per leg: ``gsfric discover`` compares its
         residual with it (``--force-noise`` on the command line wins).
+    angles_option : bool
+        ``angles`` came from the command line (``--angles``): a log without roll, pitch, yaw
+        columns (and without an offset rotation) then refuses it rather than ignore it.
 
     The TOML form (``LogFormat.from_toml``; ``gsfric simulate --column-map FILE.toml``)::
 
@@ -205,6 +209,7 @@ class LogFormat:
     axes: Any = ("x", "y", "z")
     offset: Mapping[str, float] = field(default_factory=dict)
     force_noise: float | tuple[float, ...] | None = None
+    angles_option: bool = False
 
     def __post_init__(self) -> None:
         columns = {str(k): str(v) for k, v in dict(self.columns).items()}
@@ -314,7 +319,8 @@ class LogFormat:
             data["angles"] = angles
         if keep is not None:
             data["keep"] = [k.strip() for k in keep.split(",") if k.strip()]
-        return cls.from_mapping(data, where)
+        fmt = cls.from_mapping(data, where)
+        return fmt if angles is None else replace(fmt, angles_option=True)
 
 
 def _force_noise(value) -> tuple[float, ...] | None:
@@ -387,6 +393,11 @@ class ColumnReader:
             return _missing(path, ignored, key, why)
 
         angles, others = _orientation(path, source, missing)
+        if fmt.angles_option and angles is not RPY and RPY not in others and not any(
+                fmt.offset.get(k) for k in RPY):
+            raise InputError(f"--angles: {path} has no roll, pitch, yaw columns (its "
+                             f"orientation is {', '.join(angles)}), and no offset rotation: "
+                             "the convention applies to nothing; leave --angles out")
         forces = [n for n in FORCES if n in source]
         if (self.measured or forces) and len(forces) < 6:
             raise missing(next(n for n in FORCES if n not in source),
