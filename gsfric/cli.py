@@ -151,7 +151,7 @@ class _Group(click.Group):
     def resolve_command(self, ctx, args):
         name, command, rest = super().resolve_command(ctx, args)
         if command is not None and not ctx.resilient_parsing:
-            _refuse_repeated_options(command, ctx, rest)
+            _check_given_options(command, ctx, rest)
         return name, command, rest
 
     def format_commands(self, ctx, formatter):
@@ -218,16 +218,17 @@ class _Group(click.Group):
             fail(exc.format_message(), EXIT_INPUT)
 
 
-def _refuse_repeated_options(command: click.Command, parent: click.Context,
+def _check_given_options(command: click.Command, parent: click.Context,
                              args: list[str]) -> None:
     """``UsageError`` for an option of one value given more than once (``--out a --out b``):
     click keeps the last, silently dropping the first. Options that collect their values
     (``--vary``), flags and counts may repeat; a group's subcommand is checked too. A line
     that does not parse raises click's own error, with the command named for its help hint
-    (click leaves it out of some, such as a missing option value)."""
+    (click leaves it out of some, such as a missing option value). An empty path (which
+    click would take for the current folder) is refused too."""
     ctx = click.Context(command, info_name=command.name, parent=parent)
     try:
-        _, rest, order = command.make_parser(ctx).parse_args(args=list(args))
+        values, rest, order = command.make_parser(ctx).parse_args(args=list(args))
     except click.UsageError as exc:
         if exc.ctx is None:
             exc.ctx = ctx
@@ -236,6 +237,9 @@ def _refuse_repeated_options(command: click.Command, parent: click.Context,
         return                                          # --help wins, as in click
     seen: set[str] = set()
     for param in order:
+        if isinstance(param.type, click.Path) and values.get(param.name) == "":
+            raise click.UsageError(f"{param.opts[0]}: an empty path; give a file or folder "
+                                   "name", ctx)
         if not isinstance(param, click.Option) or param.multiple or param.count or \
                 param.is_flag:
             continue
@@ -246,7 +250,7 @@ def _refuse_repeated_options(command: click.Command, parent: click.Context,
     if isinstance(command, click.Group) and rest:
         sub = command.get_command(ctx, rest[0])
         if sub is not None:
-            _refuse_repeated_options(sub, ctx, rest[1:])
+            _check_given_options(sub, ctx, rest[1:])
 
 
 def _help_hint(ctx: click.Context | None) -> str:

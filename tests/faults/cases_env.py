@@ -122,6 +122,7 @@ BAD_VALUES = [
     ("synth-rate", ("synth", "--out", "{tmp}/o.csv", "--rate", "1e9"), r"--rate"),
     ("synth-effect", ("synth", "--out", "{tmp}/o.csv", "--effect", "warp_drive"),
      r"warp_drive"),
+    ("export-out-empty", ("export", "--out", ""), r"^--out: an empty path"),
     ("synth-seed", ("synth", "--out", "{tmp}/o.csv", "--seed", "-1"), r"--seed.*x>=0"),
     ("excite-seed", ("excite", "--out", "{tmp}/o.csv", "--seed", "-1"), r"--seed.*x>=0"),
     ("sweep-seed", ("sweep", "--trajectories", "{data}", "--out", "{tmp}/o", "--vary",
