@@ -27,6 +27,7 @@ from gsfric.identification.settings import WEAK_RELATIVE_STD
 from gsfric.models import reference_platform, sinusoidal
 from gsfric.platform.description import Platform
 from gsfric.platform.text import commented_toml
+from gsfric.platform.usable import home_height
 from gsfric.synth import synthesize
 
 NOISE = 0.5
@@ -347,6 +348,23 @@ def _legs_sharing_joints():
     base[1], top[1] = base[0], top[0]
     return dataclasses.replace(platform, geometry=dataclasses.replace(
         g, base_joints=base, platform_joints=top))
+
+
+def test_excite_moves_about_the_platforms_own_home_pose():
+    """A platform twice the reference's size (home 1.5 m up): the design starts and ends at
+    its home pose, level with the legs at mid-stroke, and stays within its stroke."""
+    platform = reference_platform()
+    g = platform.geometry
+    big = dataclasses.replace(platform, geometry=dataclasses.replace(
+        g, base_joints=2 * np.asarray(g.base_joints), platform_joints=2 * np.asarray(
+            g.platform_joints), stroke=(2 * g.stroke[0], 2 * g.stroke[1])))
+    design = excite(big, duration=4.0, rate=100.0)
+    home = home_height(big)
+    assert home > 1.4
+    np.testing.assert_allclose(design.motion.position[[0, -1]], [[0, 0, home]] * 2, atol=1e-9)
+    lengths = big.leg_lengths(design.motion.position, design.motion.rotation)
+    assert big.geometry.stroke[0] < lengths.min() and lengths.max() < big.geometry.stroke[1]
+    assert np.ptp(lengths) > 0.1 * (big.geometry.stroke[1] - big.geometry.stroke[0])
 
 
 def test_excite_says_the_duration_it_made():

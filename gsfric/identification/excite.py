@@ -36,9 +36,9 @@ from gsfric.identification.regressor import Model, covariance, structure
 from gsfric.identification.settings import (EXCITE_CANDIDATES, EXCITE_HARMONICS,
                                             EXCITE_SAMPLES_PER_CYCLE, MAX_EXCITE_SAMPLES,
                                             MAX_SAMPLES_EXCITE, TYPICAL, WEAK_RELATIVE_STD)
-from gsfric.models import platform_from, pose_motion, sinusoidal
+from gsfric.models import HOME_HEIGHT, platform_from, pose_motion, sinusoidal
 from gsfric.platform.description import Platform
-from gsfric.platform.usable import SPEED_STROKES
+from gsfric.platform.usable import SPEED_STROKES, home_height
 from gsfric.signal.noise import PLAUSIBLE_SPREAD
 from gsfric.trajectory import Motion
 
@@ -169,8 +169,16 @@ def _series(coef: np.ndarray, t: np.ndarray, period: float):
     return q, qd, qdd
 
 
-def _motion(coef, t, period) -> Motion:
-    return pose_motion(t, *_series(coef, t, period))
+def _centre(platform: Platform) -> tuple[float, float, float]:
+    """The platform's home pose, m: level, at mid-stroke (``home_height``; the reference
+    platform's height for a platform without a stroke)."""
+    height = home_height(platform)
+    return (0.0, 0.0, HOME_HEIGHT if height is None else height)
+
+
+def _motion(coef, t, period, platform: Platform) -> Motion:
+    """The series of coefficients ``coef`` about the platform's home pose."""
+    return pose_motion(t, *_series(coef, t, period), centre=_centre(platform))
 
 
 def _feasible(platform: Platform, motion: Motion, limits: tuple[float, float]) -> bool:
@@ -195,11 +203,11 @@ def _feasible(platform: Platform, motion: Motion, limits: tuple[float, float]) -
 def _scaled(platform, shape, t, period, limits) -> np.ndarray | None:
     """The shape scaled to the largest size within the limits (bisection), None if none is."""
     low, high = 0.0, 1.0
-    if _feasible(platform, _motion(shape, t, period), limits):
+    if _feasible(platform, _motion(shape, t, period, platform), limits):
         return shape
     for _ in range(12):
         mid = 0.5 * (low + high)
-        if _feasible(platform, _motion(mid * shape, t, period), limits):
+        if _feasible(platform, _motion(mid * shape, t, period, platform), limits):
             low = mid
         else:
             high = mid
@@ -281,7 +289,7 @@ def excite(platform: Platform | str | None = None, *, duration: float = 60.0,
         shape = _scaled(platform, _shape(rng, basis, EXCITE_HARMONICS), coarse, period, limits)
         if shape is None:
             continue
-        key = _score(ps, _motion(shape, coarse, period), noise)[:2]
+        key = _score(ps, _motion(shape, coarse, period, platform), noise)[:2]
         if best_key is None or key > best_key:
             best, best_key = shape, key
     if best is None:
@@ -317,7 +325,7 @@ def _refine(ps, platform, best, best_key, rng, basis, t, period, limits, noise):
                         limits)
         if trial is None:
             continue
-        key = _score(ps, _motion(trial, t, period), noise)[:2]
+        key = _score(ps, _motion(trial, t, period, platform), noise)[:2]
         if key > best_key:
             best, best_key = trial, key
     return best
@@ -328,12 +336,12 @@ def _excitation(ps, platform, coef, duration, rate, period, noise) -> Excitation
     condition number for comparison."""
     periods = int(np.ceil(duration / period - 1e-9))
     t = np.arange(round(periods * period * rate) + 1) / rate
-    motion = _motion(coef, t, period)
+    motion = _motion(coef, t, period, platform)
     rank, log_det, condition, J = _score(ps, motion, noise)
     weights = np.full(6, 1.0 / noise)
     st = structure(J, weights, ps.units)
     std = np.sqrt(np.maximum(np.diag(covariance(J, weights, st)), 0.0))
-    plain = sinusoidal(t)
+    plain = sinusoidal(t, centre=_centre(platform))
     s_rank, _, s_condition, _ = _score(ps, plain, noise)
     return Excitation(
         motion=motion, coefficients=coef, period=period, log_det=log_det, condition=condition,
@@ -351,7 +359,8 @@ def _noise(platform: Platform, force_noise: float | None) -> float:
     flags at its home pose (singular, beyond its stroke: ``check_flagged``), for a default of
     zero (no static load) and for a noise outside ``PLAUSIBLE_SPREAD`` times that static
     force."""
-    still = sinusoidal(np.linspace(0.0, 1.0, 8), amplitude=np.zeros(6))
+    still = sinusoidal(np.linspace(0.0, 1.0, 8), amplitude=np.zeros(6),
+                       centre=_centre(platform))
     home = Evaluator(platform).evaluate_quiet(still)
     flagged = int(np.count_nonzero(home.flag))
     check_flagged(platform, flag_counts(home.flag), flagged, len(still), "platform at home")
