@@ -40,10 +40,10 @@ from gsfric.evaluation.evaluator import Evaluator, state_array
 from gsfric.io.files import check_outputs
 from gsfric.io.readers import check_force_range
 from gsfric.io.tables import table_kind, write_table
-from gsfric.models import platform_from, sinusoidal
+from gsfric.models import HOME_HEIGHT, platform_from, reference_platform, sinusoidal
 from gsfric.platform.catalog import EFFECTS, apply_sensor, sensor_parameters
 from gsfric.platform.description import Platform
-from gsfric.platform.usable import check_poses
+from gsfric.platform.usable import check_poses, home_height
 from gsfric.signal.rotations import quaternion_multiply, rotation_from_quaternion
 from gsfric.trajectory import Motion
 
@@ -54,7 +54,8 @@ EXCITATION_FREQUENCY = (0.3, 2.0)
 """Range of the excitation motion's frequencies, Hz."""
 
 def excitation_motion(rng: np.random.Generator, t: np.ndarray, scale: float = 1.0,
-                      frequency: tuple[float, float] = EXCITATION_FREQUENCY) -> Motion:
+                      frequency: tuple[float, float] = EXCITATION_FREQUENCY,
+                      platform: Platform | None = None) -> Motion:
     """A random six-axis motion that excites the effects the workflow looks for.
 
     Like ``gsfric.models.random_motion`` (amplitudes within its workspace-safe range: 30% to
@@ -73,6 +74,10 @@ def excitation_motion(rng: np.random.Generator, t: np.ndarray, scale: float = 1.
         Multiplies every amplitude.
     frequency : (float, float)
         Range of the frequencies, Hz.
+    platform : Platform, optional
+        The motion carried to this platform's size (``similar_pose``): about its home pose,
+        the translations scaled by its stroke. Default (and for the reference platform): as
+        drawn.
 
     Returns
     -------
@@ -82,7 +87,23 @@ def excitation_motion(rng: np.random.Generator, t: np.ndarray, scale: float = 1.
     amplitude = rng.uniform(0.3, 1.0, 6) * np.array([0.06, 0.06, 0.05, 0.1, 0.1, 0.12]) * scale
     freq = rng.uniform(frequency[0], frequency[1], 6)
     phase = rng.uniform(0.0, 2 * np.pi, 6)
-    return sinusoidal(np.asarray(t, float), amplitude, freq, phase)
+    centre, reach = similar_pose(platform)
+    amplitude[:3] *= reach
+    return sinusoidal(np.asarray(t, float), amplitude, freq, phase, centre=centre)
+
+
+def similar_pose(platform: Platform | None) -> tuple[tuple[float, float, float], float]:
+    """The centre (m) of the synthetic motions and the factor of their translations on
+    ``platform``: the reference platform's, carried over by the ratio of the home heights
+    (mid-stroke, ``home_height``) and of the strokes. Exactly ``HOME_HEIGHT`` and 1 for the
+    reference platform, and for a platform without a stroke."""
+    reference = reference_platform()
+    home, home_ref = home_height(platform) if platform else None, home_height(reference)
+    if home is None or home_ref is None:
+        return (0.0, 0.0, HOME_HEIGHT), 1.0
+    span = platform.geometry.stroke[1] - platform.geometry.stroke[0]
+    span_ref = reference.geometry.stroke[1] - reference.geometry.stroke[0]
+    return (0.0, 0.0, HOME_HEIGHT * (home / home_ref)), span / span_ref
 
 
 @dataclass
@@ -255,7 +276,8 @@ def synthesize(platform: Platform | None = None, effects=(), *, motion: Motion |
         Hidden effects, ``"name:param=value,..."`` or ``{name: {param: value}}``.
     motion : Motion, optional
         The motion to drive (its own times are used; ``samples`` and ``rate`` are then
-        ignored). Default: ``excitation_motion(rng, t)`` with ``t = arange(samples) / rate``.
+        ignored). Default: ``excitation_motion(rng, t, platform=...)`` with
+        ``t = arange(samples) / rate``, carried to the platform's size.
     samples : int
         Number of samples (>= 20).
     rate : float
@@ -278,7 +300,7 @@ def synthesize(platform: Platform | None = None, effects=(), *, motion: Motion |
     rng = np.random.default_rng(seed)
     if motion is None:
         t = np.arange(int(samples)) / float(rate)
-        motion = excitation_motion(rng, t)
+        motion = excitation_motion(rng, t, platform=model)
     hidden = _effects(effects)
     true = _true_platform(model, hidden, motion)
     forces = read_forces(true, motion)

@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import dataclasses
+
 import numpy as np
 import pandas as pd
 import pytest
@@ -11,12 +13,14 @@ from gsfric.cli import main
 from gsfric.errors import InputError
 from gsfric.evaluation.evaluator import Evaluator, state_array
 from gsfric.io.readers import read_measured
-from gsfric.models import reference_platform
+from gsfric.models import HOME_HEIGHT, reference_platform
+from gsfric.platform.usable import check_poses, home_height
 from gsfric.synth import (
     ar1_noise,
     excitation_motion,
     parse_effect,
     run_synth,
+    similar_pose,
     synthesize,
 )
 
@@ -133,3 +137,34 @@ def test_cli_synth_rejects_an_unknown_effect(tmp_path):
     assert result.exit_code == 2
     assert "unknown effect" in result.output
     assert len(result.output.strip().splitlines()) == 1
+
+
+def _scaled(factor: float):
+    platform = reference_platform()
+    g = platform.geometry
+    return dataclasses.replace(platform, geometry=dataclasses.replace(
+        g, base_joints=factor * np.asarray(g.base_joints),
+        platform_joints=factor * np.asarray(g.platform_joints),
+        stroke=(factor * g.stroke[0], factor * g.stroke[1])))
+
+
+def test_the_reference_motion_is_the_reference_platforms_own():
+    assert similar_pose(reference_platform()) == ((0.0, 0.0, HOME_HEIGHT), 1.0)
+    assert similar_pose(None) == ((0.0, 0.0, HOME_HEIGHT), 1.0)
+
+
+@pytest.mark.parametrize("factor", [2.0, 0.5])
+def test_a_platform_of_another_size_gets_a_motion_inside_its_stroke(factor):
+    """Twice and half the reference's size: the synthetic motion is the reference's carried
+    over by the platform's home height and stroke, so it stays within the stroke (the readers'
+    check passes) and moves about the platform's own home pose."""
+    platform = _scaled(factor)
+    assert home_height(platform) == pytest.approx(factor * home_height(reference_platform()))
+    data = synthesize(platform, samples=400, rate=200.0, noise=0.1, seed=3)
+    motion = data.motion
+    check_poses(platform, motion.position, motion.rotation, motion.t)
+    lengths = platform.leg_lengths(motion.position, motion.rotation)
+    stroke = platform.geometry.stroke
+    assert stroke[0] < lengths.min() and lengths.max() < stroke[1]
+    assert np.mean(motion.position[:, 2]) == pytest.approx(HOME_HEIGHT * factor, rel=0.05)
+

@@ -31,7 +31,10 @@ from gsfric.synth import run_synth
 @checked_paths({"platform_file": "platform"}, files=("out",))
 def synth(out, platform_file, effects, samples, rate, noise, noise_correlation, pose_noise,
           seed):
-    """Write synthetic measured data with hidden effects and noise (reproducible by seed)."""
+    """Write synthetic measured data with hidden effects and noise (reproducible by seed).
+
+    The motion is a random six-axis motion about the platform's home pose (level, legs at
+    mid-stroke), its translations scaled to the platform's stroke."""
     path = run_synth(out, platform_file=platform_file, effects=effects, samples=samples,
                      rate=rate, noise=noise, noise_correlation=noise_correlation,
                      pose_noise=pose_noise, seed=seed)
