@@ -33,8 +33,9 @@ def synth(out, platform_file, effects, samples, rate, noise, noise_correlation, 
           seed):
     """Write synthetic measured data with hidden effects and noise (reproducible by seed).
 
-    The motion is a random six-axis motion about the platform's home pose (level, legs at
-    mid-stroke), its translations scaled to the platform's stroke."""
+    The motion is a random six-axis motion: the reference platform's, carried over to the
+    platform's size (its height by the ratio of the home heights at mid-stroke, its
+    translations by the ratio of the strokes)."""
     path = run_synth(out, platform_file=platform_file, effects=effects, samples=samples,
                      rate=rate, noise=noise, noise_correlation=noise_correlation,
                      pose_noise=pose_noise, seed=seed)
