@@ -59,7 +59,6 @@ def _compiled_jacobian_is_dense() -> bool:
     return outputs.get("dF") == 6 * n_theta
 
 
-
 def _take_columns(part: np.ndarray, columns: Sequence[int], out: np.ndarray,
                   into: Sequence[int]) -> None:
     """``out[:, :, into] = part[:, :, columns]`` (shapes (m, 6, .)); into a stretch of
@@ -70,6 +69,7 @@ def _take_columns(part: np.ndarray, columns: Sequence[int], out: np.ndarray,
         np.take(part, columns, axis=2, out=out[:, :, first:first + len(into)], mode="clip")
     else:
         out[:, :, list(into)] = part[:, :, columns]
+
 
 class ParametricModel:
     """Actuator forces of a platform along a motion, as a function of the parameters theta.

@@ -363,8 +363,9 @@ class Blocks:
         once per fold count (``held``, ``without``) and stacked for the solves of a
         cross-validation."""
         if n_folds not in self._sums:
-            held = [self.held(g) for g in self.folds(n_folds)]
-            train = [self.without(g) for g in self.folds(n_folds)]
+            groups = self.folds(n_folds)
+            held = [self.held(g) for g in groups]
+            train = [self.without(g) for g in groups]
             arrays = (np.stack([h[0] for h in held]), np.stack([h[1] for h in held]),
                       np.array([h[2] for h in held]), np.stack([t[0] for t in train]),
                       np.stack([t[1] for t in train]), np.array([t[2] for t in train]))

@@ -279,7 +279,7 @@ def excite(platform: Platform | str | None = None, *, duration: float = 60.0,
     _check_samples(duration, rate, period)
     _check_speed_limit(platform, max_speed)
     ps = parameter_set(platform, sensors=sensors)
-    noise = _noise(platform, force_noise)
+    noise = _design_noise(platform, force_noise)
     limits = (float(max_speed), float(max_acceleration))
     coarse = np.linspace(0.0, period, min(MAX_SAMPLES_EXCITE, int(period * rate) + 1))
     rng = np.random.default_rng(seed)
@@ -353,7 +353,7 @@ def _excitation(ps, platform, coef, duration, rate, period, noise) -> Excitation
                                               * np.abs(ps.prior)))))
 
 
-def _noise(platform: Platform, force_noise: float | None) -> float:
+def _design_noise(platform: Platform, force_noise: float | None) -> float:
     """The force noise of the design, N: ``force_noise`` if given, else ``NOISE_SHARE`` of the
     mean static actuator force at the home pose; an ``InputError`` for a platform the model
     flags at its home pose (singular, beyond its stroke: ``check_flagged``), for a default of

@@ -47,7 +47,8 @@ def identify_file(measured: str | os.PathLike[str], platform_file=None, *,
                   log_format=None) -> Identification:
     """Read a measured file and a validation record (both before the fit: a bad second file
     is refused at once), identify, keep the source's hash."""
-    if validate_file is not None and file_sha256(validate_file) == file_sha256(measured):
+    digest = file_sha256(measured)
+    if validate_file is not None and file_sha256(validate_file) == digest:
         raise InputError(f"--validate: {validate_file} holds the same record as --measured "
                          f"{measured}: a validation needs a record the fit has not seen")
     prior = platform_from(platform_file)
@@ -56,7 +57,7 @@ def identify_file(measured: str | os.PathLike[str], platform_file=None, *,
     if second is not None:
         check_force_channels(second[0].t, second[1], str(validate_file))
     result = identify(motion, forces, prior, sensors=sensors, force_noise=force_noise)
-    result.source, result.source_sha256 = str(measured), file_sha256(measured)
+    result.source, result.source_sha256 = str(measured), digest
     if second is not None:
         result.validation = validate(result, *second, str(validate_file))
     return result

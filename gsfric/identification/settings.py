@@ -77,6 +77,6 @@ MISFIT_RATIO = 10.0
 high-frequency noise, ``high_frequency_std``) leaves forces the model does not reproduce: a
 prior far from the rig (a local minimum of the nonlinear fit) or an effect the model lacks.
 The statement says so (``Identification.misfit``). Ten: a high-frequency estimate sees the
-white part of a load cell's noise only, and strongly coloured noise (AR(1) with a coefficient
-of 0.99) has about seven times that spread; the misfit of a prior far from the rig is tens of
-times the noise."""
+white part of a load cell's noise only, so coloured noise leaves a good fit above it (AR(1)
+noise of coefficient 0.99: about twice), while a prior far from the rig leaves tens of times
+the noise (zero masses and friction: about fifteen)."""
