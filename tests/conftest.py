@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import gc
 import os
 
 import numpy as np
@@ -27,6 +28,14 @@ def pytest_configure(config):
     for name in ("OPENBLAS_NUM_THREADS", "OMP_NUM_THREADS", "MKL_NUM_THREADS"):
         os.environ.setdefault(name, share)
     _BLAS_LIMIT.append(threadpool_limits(limits=int(share), user_api="blas"))
+
+
+def pytest_collection_finish(session):
+    """What collection built (the imported modules, SymPy's and SciPy's included, and the test
+    items) lives for the whole session: frozen out of the cyclic garbage collector, whose full
+    collections would otherwise walk it again and again between tests."""
+    gc.collect()
+    gc.freeze()
 
 
 @pytest.fixture(autouse=True)

@@ -106,6 +106,11 @@ def test_a_noise_record_with_poses_must_be_at_rest(tmp_path):
     frame.assign(qw=np.cos(half), qz=np.sin(half)).to_csv(path, index=False)
     with pytest.raises(InputError, match=r"turns 0.002 rad"):
         read_noise_record(path).check_at_rest(Settings().record_travel, Settings().record_turn)
+    # the force channels are what a noise record is for: their absence is said first
+    frame.drop(columns="F1").to_csv(path, index=False)
+    with pytest.raises(InputError, match=r"rest.csv: no column 'F1': a noise record needs the "
+                                         r"force channels F1..F6$"):
+        read_noise_record(path)
 
 
 def test_a_force_noise_must_be_plausible_against_the_forces_spread():

@@ -164,7 +164,7 @@ def test_false_alarm_rate_on_noise(phi):
     assert fired <= 2, fired
 
 
-@pytest.mark.parametrize("base", ["paper", "coupled"])
+@pytest.mark.parametrize("base", [pytest.param("paper", marks=pytest.mark.slow), "coupled"])
 def test_play_in_a_joint_is_not_explained(base):
     """Point-to-point moves with rests, a play of 1 mm after each reversal (the friction of the
     model's own law missing while the leg travels through it), white force noise: through the

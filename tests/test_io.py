@@ -185,6 +185,19 @@ def test_table_errors(tmp_path):
 # -- trajectories -------------------------------------------------------------------------------
 
 
+def test_a_byte_that_is_not_utf8_is_named_by_its_place_in_the_file(tmp_path):
+    """pandas decodes a buffer at a time and counts from the buffer's start: the message
+    names the line and the offset in the file, as decoding the whole file finds them."""
+    data = b"t,x\n" + b"".join(b"%d,0.%d\n" % (k, k) for k in range(200_000)) + b"7,\xe9\n"
+    (tmp_path / "late.csv").write_bytes(data)
+    with pytest.raises(UnicodeDecodeError) as decoded:
+        data.decode("utf-8")
+    line = data[:decoded.value.start].count(b"\n") + 1
+    with pytest.raises(InputError, match=rf"late.csv: not UTF-8 text \(line {line}, byte "
+                                         rf"{decoded.value.start} of the file\)$"):
+        read_table(tmp_path / "late.csv")
+
+
 @pytest.mark.parametrize("suffix", [".csv", ".parquet"])
 @pytest.mark.parametrize("orientation", ["euler", "quaternion"])
 def test_read_trajectory(tmp_path, suffix, orientation):

@@ -317,7 +317,7 @@ def test_bad_files(tmp_path):
     with pytest.raises(InputError, match=r"missing.toml: file not found$"):
         Platform.from_toml(tmp_path / "missing.toml")
     (tmp_path / "bin.toml").write_bytes(b"gravity = 9.81\n\xff\xfe")
-    with pytest.raises(InputError, match=r"bin.toml: not UTF-8 text \(byte 15\)$"):
+    with pytest.raises(InputError, match=r"bin.toml: not UTF-8 text \(line 2, byte 15 of the file\)$"):
         Platform.from_toml(tmp_path / "bin.toml")
     (tmp_path / "syntax.toml").write_text("gravity = = 9.81\n[geometry\n")
     with pytest.raises(InputError, match=r"syntax.toml: invalid TOML: .*line 1"):

@@ -205,7 +205,7 @@ def test_jittered_log_times_are_differentiated_on_their_own_time_base():
     assert error < 0.75 * np.sqrt(np.mean((as_if_uniform.velocity - velocity)[inner] ** 2))
 
 
-@pytest.mark.parametrize("rate", [1000.0, 2000.0])
+@pytest.mark.parametrize("rate", [1000.0, pytest.param(2000.0, marks=pytest.mark.slow)])
 def test_jittered_kilohertz_log_keeps_its_accelerations(rate):
     """On a 1-2 kHz log with jittered times (+-10 % of the step) the spline's penalty is chosen
     for the acceleration: a motion of 0.3, 1 and 3 Hz on its three axes keeps its accelerations
@@ -292,7 +292,8 @@ def _gcv_by_filtering(y, polyorder):
 
 
 @pytest.mark.parametrize("noise", [0.0, 1e-15, 1e-9, 1e-7, 1e-6, 1e-4])
-@pytest.mark.parametrize("shape", [(3000,), (4000, 3), (20_000, 4)])
+@pytest.mark.parametrize("shape", [(3000,), (4000, 3),
+                                   pytest.param((20_000, 4), marks=pytest.mark.slow)])
 def test_gcv_window_is_the_window_filtering_gives(noise, shape):
     """The scores from the spectrum and from transforms, with their rounding bounds, leave
     the window that filtering with every candidate gives: on noise-free samples

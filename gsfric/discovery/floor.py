@@ -179,14 +179,14 @@ def read_noise_record(path: str | os.PathLike[str], log_format: LogFormat | None
     (``ForceNoise.motion``, checked by ``ForceNoise.check_at_rest``)."""
     fmt = log_format or LogFormat()
     found = dict(zip(*read_columns(path)))
-    motion = None
-    if all(fmt.columns.get(name, name) in found for name in ("t", "x", "y", "z")):
-        motion = record_motion(path, fmt)
     names = [fmt.columns.get(name, name) for name in FORCES]
     missing = [n for n in names if n not in found]
     if missing:
         raise InputError(f"{path}: no column {missing[0]!r}: a noise record needs the force "
                          "channels F1..F6")
+    motion = None
+    if all(fmt.columns.get(name, name) in found for name in ("t", "x", "y", "z")):
+        motion = record_motion(path, fmt)
     columns = numeric_columns(Path(path), [found[n] for n in names], list(FORCES))
     scale = np.array([UNITS["force"][fmt.units.get(name, "N")] for name in FORCES])
     forces = np.stack([columns[name] for name in FORCES], axis=1) * scale

@@ -5,6 +5,7 @@ replaced."""
 
 from __future__ import annotations
 
+import codecs
 import contextlib
 import contextvars
 import errno
@@ -589,6 +590,28 @@ def _move_folder(given: Path, path: Path, tmp: Path, names: list[str]) -> None:
         tmp.rmdir()
 
 
+def not_utf8(path: Path, chunk: int = 1 << 20) -> InputError:
+    """The one-line error for a file that is not UTF-8 text, naming the line and the offset in
+    the file of its first byte that is not (the file read again a chunk at a time: a reader's
+    own decode error counts from where its buffer started)."""
+    decoder = codecs.getincrementaldecoder("utf-8")()
+    offset = lines = 0  # the file's bytes before this chunk, and their line ends
+    with open(path, "rb") as handle:
+        while True:
+            data = handle.read(chunk)
+            pending = decoder.getstate()[0]  # a character cut by the chunk's start: no b"\n"
+            try:
+                decoder.decode(data, final=not data)
+            except UnicodeDecodeError as error:
+                line = lines + (pending + data)[:error.start].count(b"\n") + 1
+                byte = offset - len(pending) + error.start
+                return InputError(f"{path}: not UTF-8 text (line {line}, byte {byte} of the "
+                                  "file)")
+            if not data:
+                return InputError(f"{path}: not UTF-8 text")
+            offset, lines = offset + len(data), lines + data.count(b"\n")
+
+
 def read_toml(path: str | os.PathLike[str]) -> dict[str, Any]:
     """The tables of a TOML file; ``InputError`` in one line naming the file for a missing or
     unreadable file, a folder, text that is not UTF-8, invalid TOML (naming a repeated key and
@@ -605,8 +628,8 @@ def read_toml(path: str | os.PathLike[str]) -> dict[str, Any]:
         raise InputError(f"{path}: cannot read ({error.strerror})") from None
     try:
         text = raw.decode("utf-8")
-    except UnicodeDecodeError as error:
-        raise InputError(f"{path}: not UTF-8 text (byte {error.start})") from None
+    except UnicodeDecodeError:
+        raise not_utf8(path) from None
     try:
         return tomllib.loads(text.removeprefix("\ufeff"))
     except tomllib.TOMLDecodeError as error:

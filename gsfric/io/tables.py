@@ -20,7 +20,7 @@ from gsfric._checks import short
 from gsfric._optional import optional
 from gsfric.errors import InputError
 from gsfric.io.arrow import column_from_arrow, data_columns
-from gsfric.io.files import atomic_write, is_stream
+from gsfric.io.files import atomic_write, is_stream, not_utf8
 
 if TYPE_CHECKING:
     import pandas as pd
@@ -111,8 +111,8 @@ def csv_errors(path: Path) -> Iterator[None]:
             yield
     except pd.errors.EmptyDataError:
         raise InputError(f"{path}: file is empty (no header line)") from None
-    except UnicodeDecodeError as error:
-        raise InputError(f"{path}: not UTF-8 text (byte {error.start})") from None
+    except UnicodeDecodeError:
+        raise not_utf8(path) from None
     except (ValueError, OverflowError, pd.errors.ParserError, pd.errors.ParserWarning) as error:
         reason = field_count_problem(path) or str(error)
         raise InputError(f"{path}: cannot parse as CSV: {reason}") from None
