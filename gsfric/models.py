@@ -19,11 +19,14 @@ import numpy as np
 
 from gsfric._checks import as_array
 from gsfric._optional import optional
+from gsfric.evaluation.evaluator import Evaluator
 from gsfric.evaluation.paper_constants import (
     PAPER_ACCELERATION,
     PAPER_ANGULAR_ACCELERATION,
 )
+from gsfric.evaluation.result import Result
 from gsfric.platform.description import Body, Friction, Geometry, Legs, Platform
+from gsfric.platform.usable import check_force_sign, check_forces, home_height
 from gsfric.signal.rotations import quaternion_from_rotation, rotation_from_euler
 from gsfric.trajectory import Motion
 
@@ -224,6 +227,43 @@ def sinusoidal(t: np.ndarray, amplitude=(0.05, 0.05, 0.04, 0.08, 0.08, 0.1),
     qd = A * w * np.cos(arg)
     qdd = -A * w**2 * np.sin(arg)
     return pose_motion(t, q, qd, qdd, centre)
+
+
+def home_centre(platform: Platform) -> tuple[float, float, float]:
+    """The platform's home pose, m: level, at mid-stroke (``platform.usable.home_height``; the
+    reference platform's height for a platform without a stroke)."""
+    height = home_height(platform)
+    return (0.0, 0.0, HOME_HEIGHT if height is None else height)
+
+
+def resting_at_home(platform: Platform) -> Result:
+    """The model of ``platform`` at rest at its home pose (``home_centre``), over 8 steps,
+    flags included (no warning)."""
+    still = sinusoidal(np.linspace(0.0, 1.0, 8), amplitude=np.zeros(6),
+                       centre=home_centre(platform))
+    return Evaluator(platform).evaluate_quiet(still)
+
+
+def static_load(platform: Platform) -> float:
+    """The load the legs carry at rest at the home pose, N: the model's summed |F1..F6| there
+    (their weight shares, the platform's and the payload's, through the legs' inclinations),
+    the scale against which measured forces are checked for their unit
+    (``platform.usable.check_forces``). 0 where the model gives no finite load there."""
+    return _load(resting_at_home(platform).F)
+
+
+def _load(F: np.ndarray) -> float:
+    load = float(np.mean(np.sum(np.abs(F), axis=1)))
+    return load if np.isfinite(load) else 0.0
+
+
+def check_measured_forces(platform: Platform, forces: np.ndarray, where: str = "") -> None:
+    """``InputError`` (prefixed ``where``, a file) for measured forces (N, 6), N, in another
+    unit than N (``check_forces``) or of the opposite sign (``check_force_sign``) against the
+    model of ``platform`` at rest at its home pose."""
+    home = resting_at_home(platform).F
+    check_forces(_load(home), forces, where)
+    check_force_sign(forces, home, where)
 
 
 def pose_motion(t: np.ndarray, q: np.ndarray, qd: np.ndarray, qdd: np.ndarray,

@@ -34,7 +34,7 @@ import numpy as np
 import pandas as pd
 from scipy.signal import lfilter
 
-from gsfric._checks import short, suggest
+from gsfric._checks import as_count, short, suggest
 from gsfric.errors import InputError
 from gsfric.evaluation.evaluator import Evaluator, state_array
 from gsfric.io.files import check_outputs
@@ -316,10 +316,20 @@ def synthesize(platform: Platform | None = None, effects=(), *, motion: Motion |
                          contributions=contributions, sizes=sizes)
 
 
+MAX_SAMPLES = 1_000_000
+"""Most samples of a synthetic record: ``synthesize`` holds the record, the model's outputs
+along it and each effect's contribution in memory, about 2 kB a sample (2 GB at this
+count); a longer record is refused before any is drawn."""
+
+
 def _check_arguments(samples, rate, noise, noise_correlation, pose_noise) -> None:
     """``InputError`` for a number of samples, a rate or a noise level ``synthesize`` refuses."""
-    if int(samples) < 20:
+    samples = as_count(samples, "samples", minimum=1)
+    if samples < 20:
         raise InputError(f"samples: at least 20 are needed, got {samples}")
+    if samples > MAX_SAMPLES:
+        raise InputError(f"samples: {samples:,} is more than the {MAX_SAMPLES:,} a synthetic "
+                         "record holds in memory (about 2 kB a sample); a shorter record")
     if not (np.isfinite(rate) and rate > 0):
         raise InputError(f"rate: must be a positive number of Hz, got {rate!r}")
     if not (np.isfinite(noise) and noise >= 0):

@@ -68,3 +68,14 @@ def test_structures_equivalent_to_an_effect_name_a_candidate():
     """A lack-of-fit structure that equals a catalog effect names that candidate (a misspelt
     name would let the structure be reported as outside the catalog)."""
     assert set(CATALOG_EQUIVALENT.values()) <= set(cand.CANDIDATE_NAMES)
+
+
+def test_bushing_friction_is_fitted_at_the_rigs_own_bushing_spacing():
+    """The effect's force is coefficient / spacing times the bending moment: it is fitted at
+    the platform's ``[effects]`` spacing when there is one, else at the rig's bushings'
+    (``[friction] bushing_spacing``), so that its coefficient is the rig's."""
+    bushing = next(c for c in cand.CANDIDATES if c.name == "bushing_friction")
+    wide = models.reference_platform().with_friction(bushing_spacing=1.0)
+    assert bushing.fixed(wide, {}) == {"spacing": 1.0}
+    own = wide.with_effect("bushing_friction", coefficient=0.0, spacing=0.3)
+    assert bushing.fixed(own, {}) == {"spacing": 0.3}

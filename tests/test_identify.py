@@ -13,6 +13,7 @@ from click.testing import CliRunner
 
 import gsfric
 from gsfric.cli import main
+from gsfric.errors import InputTypeError
 from gsfric.evaluation import state_array
 from gsfric.identification import excite, files, validate
 from gsfric.identification.parameters import (
@@ -322,6 +323,8 @@ def test_weakly_determined_parameters_are_named_with_their_effect_against_the_no
     ({"rate": 1.0, "duration": 4.0}, r"period: 4 s at 1 Hz holds 4 samples"),
     ({"duration": 1e9}, r"duration: 1e\+09 s at 500 Hz is 5e\+11 samples, more than"),
     ({"rate": 1e6, "duration": 600.0}, r"duration: 600 s at 1e\+06 Hz is 6e\+08 samples"),
+    ({"period": 4000.0}, (r"period: 4000 s \(the duration of 60 s rounded up to whole "
+                          r"periods: 4000 s\) at 500 Hz is 2e\+06 samples")),
 ])
 def test_excite_refuses_a_motion_of_too_few_or_too_many_samples(options, message):
     """A period of a sample or two would be a motion that does not move; a duration of
@@ -422,7 +425,7 @@ def test_a_prior_effect_the_record_does_not_show_is_removed_and_said_so(tmp_path
     files.write_outputs(result, tmp_path / "out")
     text = (tmp_path / "out" / "platform.toml").read_text()
     for name, e in result.parameters.items():
-        if e.std is None and e.value != e.prior:
+        if e.std is None and e.moved:
             assert ("the fit moved it from the prior's" in lines[name]
                     or "only in combination" in lines[name]), lines[name]
             assert f"{name} not identified alone (prior {e.prior:.6g};" in text
@@ -476,3 +479,76 @@ def test_a_validation_record_of_the_wrong_sign_is_refused(tmp_path):
     result = gsfric.identify(data.motion, forces)
     with pytest.raises(gsfric.InputError, match=r"second\.csv: .*negate F1\.\.F6"):
         validate(result, data.motion, -forces, "second.csv")
+
+
+@pytest.mark.parametrize("options, error, message", [
+    ({"duration": "5"}, InputTypeError, r"duration: expected a number, got '5'"),
+    ({"duration": None}, InputTypeError, r"duration: expected a number, got None"),
+    ({"seed": -1}, gsfric.InputError, r"seed: must be an integer >= 0, got -1"),
+    ({"seed": 1.5}, InputTypeError, r"seed: expected an integer, got 1\.5"),
+    ({"sensors": "no"}, InputTypeError, r"sensors: expected True or False, got 'no'"),
+    ({"force_noise": True}, InputTypeError, r"force_noise: expected a number, got True"),
+])
+def test_excite_names_an_argument_of_the_wrong_kind(options, error, message):
+    with pytest.raises(error, match=message):
+        excite(**options)
+
+
+def test_a_duration_shorter_than_a_period_is_one_period():
+    design = excite(duration=1e-9, rate=100.0)
+    assert len(design.motion) == round(design.period * 100.0) + 1
+
+
+def test_identify_names_an_argument_of_the_wrong_kind_and_the_first_bad_force():
+    data, forces = _record(seed=6, samples=400)
+    cases = [((None, forces), {}, InputTypeError,
+              r"identify: motion must be a gsfric\.Motion, got None"),
+             ((data.motion, forces), {"force_noise": "abc"}, InputTypeError,
+              r"--force-noise: expected a number \(N\) or six, got 'abc'"),
+             ((data.motion, forces), {"force_noise": True}, InputTypeError,
+              r"--force-noise: expected a number \(N\) or six, got True"),
+             ((data.motion, forces), {"sensors": "no"}, InputTypeError,
+              r"sensors: expected True or False, got 'no'")]
+    bad = forces.copy()
+    bad[3, 2] = np.nan
+    cases.append(((data.motion, bad), {}, gsfric.InputError,
+                  r"forces\[3\]\[2\]: must be finite, got nan"))
+    for args, options, error, message in cases:
+        with pytest.raises(error, match=message):
+            gsfric.identify(*args, **options)
+
+
+def test_steps_the_model_flags_are_left_out_of_the_fit_and_said(tmp_path):
+    """A stroke that the record leaves for a third of its steps: those steps' forces are not
+    the model's (a leg beyond its stroke), left out and counted; the rest identify as a
+    whole record does. Most steps flagged: refused, as discover refuses it."""
+    data, forces = _record(seed=3, samples=2000)
+    lengths = gsfric.evaluate(reference_platform(), data.motion).D
+    short = reference_platform().with_geometry(
+        stroke=(0.5, float(np.quantile(lengths.max(axis=1), 0.7))))
+    result = gsfric.identify(data.motion, forces, short)
+    outside = np.any(lengths > short.geometry.stroke[1], axis=1)
+    assert result.flagged == np.count_nonzero(outside) and 0 < result.flagged < 1000
+    assert result.samples == 2000 - result.flagged
+    assert f"left out: {result.flagged} of 2000 steps" in result.statement()
+    assert result.summary()["flagged_left_out"] == result.flagged
+    whole = gsfric.identify(data.motion, forces)
+    mass, same = result.parameters["platform.mass"], whole.parameters["platform.mass"]
+    assert abs(mass.value - same.value) < 3 * mass.std
+    tight = reference_platform().with_geometry(
+        stroke=(0.5, float(np.quantile(lengths.max(axis=1), 0.3))))
+    with pytest.raises(gsfric.InputError, match=r"steps are flagged by the model"):
+        gsfric.identify(data.motion, forces, tight)
+
+
+def test_a_parameter_the_fit_leaves_at_its_prior_is_not_said_to_have_moved():
+    """Translations only: the inertia does not act; the rows that hold it leave it at the
+    prior to rounding, which is no move."""
+    t = np.arange(1200) / 200.0
+    motion = sinusoidal(t, amplitude=(0.05, 0.04, 0.05, 0.0, 0.0, 0.0))
+    forces = gsfric.evaluate(reference_platform(), motion).F
+    forces = forces + np.random.default_rng(2).normal(0.0, 0.1, forces.shape)
+    result = gsfric.identify(motion, forces)
+    lines = [u for u in result.unreachable if u.startswith("platform.inertia_origin.xx")]
+    assert lines and "does not act on the forces along this motion" in lines[0]
+    assert not result.parameters["platform.inertia_origin.xx"].moved

@@ -25,9 +25,11 @@ from gsfric.errors import DataWarning, GsfricWarning, InputError
 from gsfric.io.logs import LogFormat
 from gsfric.io.readers import read_measured, read_trajectory
 from gsfric.io.tables import read_table, write_table
+from gsfric.platform.usable import check_forces
 from gsfric.signal.local import local_polynomial_derivatives
 from gsfric.signal.savgol import savgol_derivatives
 from gsfric.simulate.run import simulate_file
+from gsfric.synth import synthesize
 from gsfric.trajectory import Motion
 
 pytestmark = pytest.mark.integration  # end to end: `make check` leaves it out
@@ -281,16 +283,29 @@ def test_forces_in_newtons_declared_as_kilonewtons_are_an_error(tmp_path):
     result = _cli("discover", "--measured", measured, "--units",
                   ",".join(f"F{i}=kN" for i in range(1, 7)), "--out", tmp_path / "d")
     assert result.exit_code == 2, result.output
-    assert "times the weight the legs carry" in result.stderr
+    assert "times the load the model puts on the legs at rest" in result.stderr
     assert "forces in N declared as kN?" in result.stderr
     motion, forces, _ = read_measured(measured)
-    from gsfric.platform.usable import check_forces
-    check_forces(models.reference_platform(), forces)              # in N: fine
+    check_forces(models.static_load(models.reference_platform()), forces)              # in N: fine
     with pytest.raises(InputError, match="forces in kN read as N"):
-        check_forces(models.reference_platform(), forces / 1000.0)
+        check_forces(models.static_load(models.reference_platform()), forces / 1000.0)
 
 
 # -- the shipped controller log: the tutorial's CLI -------------------------------------------
+
+
+def test_the_unit_check_weighs_the_forces_against_the_models_own_load():
+    """A light platform on heavy legs: the legs' own weight is most of what the actuators
+    carry. Its model's forces pass the unit check (the platform and payload weigh a
+    hundredth of that load); the same forces in kN read as N do not."""
+    light = models.reference_platform().with_body(mass=0.1, payload_mass=0.0)
+    data = synthesize(light, samples=1000, rate=200.0, seed=1)
+    forces = data.frame[[f"F{i}" for i in range(1, 7)]].to_numpy()
+    weight = light.gravity * (light.platform.mass + light.platform.payload_mass)
+    assert np.mean(np.sum(np.abs(forces), axis=1)) > 30 * weight
+    check_forces(models.static_load(light), forces)
+    with pytest.raises(InputError, match="forces in kN read as N"):
+        check_forces(models.static_load(light), forces / 1000.0)
 
 
 def test_the_controller_log_reads_simulates_and_discovers(tmp_path):

@@ -834,6 +834,11 @@ def test_platform_in_millimetres_warns(platform):
     for name in ("base_joints", "platform_joints"):
         assert any(re.search(rf"geometry\.{name}: a joint is \d+(\.\d+)? m from the origin "
                              r".*lengths must be in m, not mm", str(w.message)) for w in record)
+    # a rig of tens of metres (a ship's or a building's test rig) is one, in metres
+    with warnings.catch_warnings():
+        warnings.simplefilter("error", GsfricWarning)
+        platform.with_geometry(base_joints=geometry.base_joints * 80.0,
+                               platform_joints=geometry.platform_joints * 80.0, stroke=None)
 
 
 def test_inertia_violating_the_triangle_inequality_warns(platform):

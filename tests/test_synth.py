@@ -10,7 +10,7 @@ import pytest
 from click.testing import CliRunner
 
 from gsfric.cli import main
-from gsfric.errors import InputError
+from gsfric.errors import InputError, InputTypeError
 from gsfric.evaluation.evaluator import Evaluator, state_array
 from gsfric.io.readers import read_measured
 from gsfric.models import HOME_HEIGHT, reference_platform
@@ -106,6 +106,18 @@ def test_excitation_motion_reverses_every_leg():
 def test_bad_effect_text(text, message):
     with pytest.raises(InputError, match=message):
         parse_effect(text)
+
+
+@pytest.mark.parametrize("samples, error, message", [
+    (10, InputError, r"samples: at least 20 are needed, got 10"),
+    (100_000_000, InputError, (r"samples: 100,000,000 is more than the 1,000,000 a "
+                               r"synthetic record holds in memory")),
+    (400.0, InputTypeError, r"samples: expected an integer, got 400\.0"),
+])
+def test_a_number_of_samples_it_cannot_hold_is_refused_before_any_is_drawn(samples, error,
+                                                                            message):
+    with pytest.raises(error, match=message):
+        synthesize(samples=samples)
 
 
 def test_parse_effect():

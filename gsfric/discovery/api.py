@@ -28,9 +28,9 @@ from gsfric.errors import InputError, InputTypeError
 from gsfric.io.files import check_output_folder, check_outputs
 from gsfric.io.logs import FORCES, LogFormat
 from gsfric.io.readers import motion_from_frame, read_measured_columns
-from gsfric.models import platform_from
+from gsfric.models import check_measured_forces, platform_from
 from gsfric.platform.description import Platform
-from gsfric.platform.usable import check_forces, check_poses
+from gsfric.platform.usable import check_poses
 from gsfric.signal.noise import ForceNoise
 from gsfric.signal.savgol import DEFAULT_POLYORDER
 from gsfric.trajectory import Motion
@@ -151,7 +151,7 @@ def _discover_file(measured: str | os.PathLike[str], platform, log_format: LogFo
                                                           log_format)
     poses = poses_from_columns(columns)
     check_poses(model, *poses, motion.t, str(measured))
-    check_forces(model, forces, str(measured))
+    check_measured_forces(model, forces, str(measured))
     result = discover_motion(motion, forces, model, poses=poses, **run)
     notes = []
     how = motion.differentiation()

@@ -26,7 +26,6 @@ import numpy as np
 
 from gsfric.errors import GsfricError
 from gsfric.platform import catalog
-from gsfric.platform.catalog import EFFECTS
 from gsfric.platform.description import Platform
 
 INF = np.inf
@@ -223,8 +222,11 @@ def _stroke_ends(context: dict) -> dict | None:
 
 
 def _bushing_spacing(platform: Platform, context: dict) -> dict:
+    """The spacing the effect is fitted at: its own where the platform's [effects] give one,
+    else the rig's bushings' (``[friction] bushing_spacing``); the coefficient alone is fitted
+    (only their ratio acts on the forces)."""
     own = platform.effects.get("bushing_friction", {})
-    return {"spacing": float(own.get("spacing", EFFECTS["bushing_friction"]["spacing"]))}
+    return {"spacing": float(own.get("spacing", platform.friction.bushing_spacing))}
 
 
 def _coupled_applies(platform: Platform) -> str | None:

@@ -41,7 +41,7 @@ from gsfric.discovery.rounds import run_rounds
 from gsfric.discovery.settings import Settings
 from gsfric.errors import InputTypeError
 from gsfric.evaluation.flags import check_flagged, flag_counts
-from gsfric.models import platform_from
+from gsfric.models import platform_from, static_load
 from gsfric.platform.description import Platform
 from gsfric.platform.usable import check_force_sign, check_forces, check_poses
 from gsfric.signal.noise import ForceNoise
@@ -145,7 +145,7 @@ def _checked_data(motion: Motion, forces: np.ndarray, platform: Platform,
     recorded = poses if poses is not None else motion.recorded_poses()
     check_poses(platform, *(recorded if recorded is not None else (motion.position,
                                                                    motion.rotation)), motion.t)
-    check_forces(platform, forces)
+    check_forces(static_load(platform), forces)
     if force_noise is not None:
         force_noise.check_at_rest(settings.record_travel, settings.record_turn)
         force_noise.check_plausible(forces, settings.noise_spread)

@@ -28,6 +28,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from gsfric._checks import as_count, as_flag, as_float
 from gsfric.errors import InputError
 from gsfric.evaluation.evaluator import Evaluator, state_array
 from gsfric.evaluation.flags import check_flagged, flag_counts
@@ -36,9 +37,9 @@ from gsfric.identification.regressor import Model, covariance, structure
 from gsfric.identification.settings import (EXCITE_CANDIDATES, EXCITE_HARMONICS,
                                             EXCITE_SAMPLES_PER_CYCLE, MAX_EXCITE_SAMPLES,
                                             MAX_SAMPLES_EXCITE, TYPICAL, WEAK_RELATIVE_STD)
-from gsfric.models import HOME_HEIGHT, platform_from, pose_motion, sinusoidal
+from gsfric.models import home_centre, platform_from, pose_motion, resting_at_home, sinusoidal
 from gsfric.platform.description import Platform
-from gsfric.platform.usable import SPEED_STROKES, home_height
+from gsfric.platform.usable import SPEED_STROKES
 from gsfric.signal.noise import PLAUSIBLE_SPREAD
 from gsfric.trajectory import Motion
 
@@ -169,16 +170,9 @@ def _series(coef: np.ndarray, t: np.ndarray, period: float):
     return q, qd, qdd
 
 
-def _centre(platform: Platform) -> tuple[float, float, float]:
-    """The platform's home pose, m: level, at mid-stroke (``home_height``; the reference
-    platform's height for a platform without a stroke)."""
-    height = home_height(platform)
-    return (0.0, 0.0, HOME_HEIGHT if height is None else height)
-
-
 def _motion(coef, t, period, platform: Platform) -> Motion:
     """The series of coefficients ``coef`` about the platform's home pose."""
-    return pose_motion(t, *_series(coef, t, period), centre=_centre(platform))
+    return pose_motion(t, *_series(coef, t, period), centre=home_centre(platform))
 
 
 def _feasible(platform: Platform, motion: Motion, limits: tuple[float, float]) -> bool:
@@ -272,10 +266,12 @@ def excite(platform: Platform | str | None = None, *, duration: float = 60.0,
         platform with no feasible motion.
     """
     platform = platform_from(platform)
-    for name, value in (("duration", duration), ("rate", rate), ("period", period),
-                        ("max_speed", max_speed), ("max_acceleration", max_acceleration)):
-        if not (np.isfinite(value) and value > 0):
-            raise InputError(f"{name}: must be a positive number, got {value!r}")
+    duration, rate, period, max_speed, max_acceleration = (
+        _positive(value, name) for name, value in (
+            ("duration", duration), ("rate", rate), ("period", period),
+            ("max_speed", max_speed), ("max_acceleration", max_acceleration)))
+    sensors, seed = as_flag(sensors, "sensors"), as_count(seed, "seed", minimum=0)
+    force_noise = None if force_noise is None else as_float(force_noise, "force_noise")
     _check_samples(duration, rate, period)
     _check_speed_limit(platform, max_speed)
     ps = parameter_set(platform, sensors=sensors)
@@ -299,6 +295,21 @@ def excite(platform: Platform | str | None = None, *, duration: float = 60.0,
     return _excitation(ps, platform, best, duration, rate, period, noise)
 
 
+def _positive(value, name: str) -> float:
+    """A finite number > 0; ``InputTypeError`` for what is not a number, ``InputError``
+    otherwise, naming ``name``."""
+    value = as_float(value, name)
+    if value <= 0:
+        raise InputError(f"{name}: must be a positive number, got {value:g}")
+    return value
+
+
+def _periods(duration: float, period: float) -> int:
+    """Whole periods of the series that hold ``duration`` (at least one; a duration within
+    rounding of a whole number of periods is that number)."""
+    return max(1, int(np.ceil(duration / period - 1e-9)))
+
+
 def _check_samples(duration: float, rate: float, period: float) -> None:
     """An ``InputError`` for a period that holds too few samples at the rate to draw the
     series, or a motion of more samples than ``MAX_EXCITE_SAMPLES``."""
@@ -309,12 +320,17 @@ def _check_samples(duration: float, rate: float, period: float) -> None:
                          f"({EXCITE_SAMPLES_PER_CYCLE} a cycle of its highest harmonic, "
                          f"{EXCITE_HARMONICS} cycles a period): a period of at least "
                          f"{fewest / rate:.3g} s at this rate")
-    samples = np.ceil(duration / period - 1e-9) * period * rate + 1
+    whole = _periods(duration, period) * period
+    samples = whole * rate + 1
     if samples > MAX_EXCITE_SAMPLES:
-        raise InputError(f"duration: {duration:g} s at {rate:g} Hz is {samples:.3g} samples, "
-                         f"more than the {MAX_EXCITE_SAMPLES:,} an excitation is designed "
-                         "with (each sample's regressor is kept); a shorter duration or a "
-                         "lower rate")
+        name, given = "duration", f"{duration:g} s"
+        if duration * rate + 1 <= MAX_EXCITE_SAMPLES:  # the rounding to whole periods is why
+            name, given = "period", (f"{period:g} s (the duration of {duration:g} s rounded "
+                                     f"up to whole periods: {whole:g} s)")
+        raise InputError(f"{name}: {given} at {rate:g} Hz is {samples:.3g} samples, more "
+                         f"than the {MAX_EXCITE_SAMPLES:,} an excitation is designed with "
+                         "(each sample's regressor is kept); a shorter duration or period, "
+                         "or a lower rate")
 
 
 def _refine(ps, platform, best, best_key, rng, basis, t, period, limits, noise):
@@ -334,14 +350,14 @@ def _refine(ps, platform, best, best_key, rng, basis, t, period, limits, noise):
 def _excitation(ps, platform, coef, duration, rate, period, noise) -> Excitation:
     """The Excitation of coefficients over the whole duration, with the plain sinusoid's
     condition number for comparison."""
-    periods = int(np.ceil(duration / period - 1e-9))
+    periods = _periods(duration, period)
     t = np.arange(round(periods * period * rate) + 1) / rate
     motion = _motion(coef, t, period, platform)
     rank, log_det, condition, J = _score(ps, motion, noise)
     weights = np.full(6, 1.0 / noise)
     st = structure(J, weights, ps.units)
     std = np.sqrt(np.maximum(np.diag(covariance(J, weights, st)), 0.0))
-    plain = sinusoidal(t, centre=_centre(platform))
+    plain = sinusoidal(t, centre=home_centre(platform))
     s_rank, _, s_condition, _ = _score(ps, plain, noise)
     return Excitation(
         motion=motion, coefficients=coef, period=period, log_det=log_det, condition=condition,
@@ -359,11 +375,9 @@ def _design_noise(platform: Platform, force_noise: float | None) -> float:
     flags at its home pose (singular, beyond its stroke: ``check_flagged``), for a default of
     zero (no static load) and for a noise outside ``PLAUSIBLE_SPREAD`` times that static
     force."""
-    still = sinusoidal(np.linspace(0.0, 1.0, 8), amplitude=np.zeros(6),
-                       centre=_centre(platform))
-    home = Evaluator(platform).evaluate_quiet(still)
+    home = resting_at_home(platform)
     flagged = int(np.count_nonzero(home.flag))
-    check_flagged(platform, flag_counts(home.flag), flagged, len(still), "platform at home")
+    check_flagged(platform, flag_counts(home.flag), flagged, len(home.flag), "platform at home")
     static = float(np.mean(np.abs(home.F)))
     if force_noise is None:
         if static <= 0.0:

@@ -16,9 +16,9 @@ from gsfric.identification.results import Identification
 from gsfric.identification.settings import CONFIDENCE_Z
 from gsfric.io.files import output_folder
 from gsfric.io.readers import read_measured_columns
-from gsfric.models import platform_from
+from gsfric.models import check_measured_forces, platform_from
 from gsfric.platform.text import commented_toml
-from gsfric.platform.usable import check_force_channels, check_forces, check_poses
+from gsfric.platform.usable import check_force_channels, check_poses
 from gsfric.signal.savgol import DEFAULT_POLYORDER
 
 OUTPUTS = ("platform.toml", "identification.json")
@@ -38,7 +38,7 @@ def read_record(path: str | os.PathLike[str], platform, log_format=None):
     and force range as ``discover`` checks them."""
     motion, forces, _, _ = read_measured_columns(path, None, DEFAULT_POLYORDER, log_format)
     check_poses(platform, motion.position, motion.rotation, motion.t, str(path))
-    check_forces(platform, forces, str(path))
+    check_measured_forces(platform, forces, str(path))
     return motion, forces
 
 
@@ -70,7 +70,7 @@ def _notes(result: Identification) -> dict[str, str]:
         key = name if not name.startswith("effects.") else ".".join(name.split(".")[:2])
         if e.std is not None:
             text = f"{name} = {e.value:.6g} +- {CONFIDENCE_Z * e.std:.3g} {e.unit} (95 %)"
-        elif e.value == e.prior:
+        elif not e.moved:
             text = f"{name} not identified (the prior's value)"
         else:
             text = f"{name} not identified alone (prior {e.prior:.6g}; identification.json)"

@@ -19,14 +19,17 @@ from functools import partial
 
 import numpy as np
 
-from gsfric.errors import GsfricWarning, InputError
-from gsfric.evaluation.evaluator import state_array
+from gsfric._checks import as_array, as_flag, short
+from gsfric.errors import GsfricWarning, InputError, InputTypeError
+from gsfric.evaluation.evaluator import Evaluator, state_array
+from gsfric.evaluation.flags import check_flagged, flag_counts
 from gsfric.evaluation.fitting import fit
 from gsfric.identification.parameters import (ParameterSet, body_from_factor, consistent,
                                               factor_bounds, factor_of_body,
                                               nearest_consistent, parameter_set)
 from gsfric.identification.regressor import Model, Structure, covariance, structure
-from gsfric.identification.results import Combination, Estimate, Identification, Validation
+from gsfric.identification.results import (Combination, Estimate, Identification, Validation,
+                                           moved)
 from gsfric.identification.settings import (IMPLAUSIBLE_SIGMA, MAX_NFEV, MISFIT_RATIO,
                                             TYPICAL, WEAK_RELATIVE_STD)
 from gsfric.models import platform_from
@@ -98,16 +101,17 @@ def identify(motion: Motion, forces: np.ndarray, platform: Platform | str | None
     >>> result.rank == len(result.parameters), result.platform.platform.mass > 0
     (True, True)
     """
+    if not isinstance(motion, Motion):
+        raise InputTypeError(f"identify: motion must be a gsfric.Motion, got {short(motion)} "
+                             "(gsfric.read_measured)")
     prior = platform_from(platform)
-    forces = np.asarray(forces, float)
-    if forces.shape != (len(motion), 6) or not np.all(np.isfinite(forces)):
-        raise InputError(f"forces: expected finite values of shape ({len(motion)}, 6), got "
-                         f"shape {forces.shape}")
-    ps = parameter_set(prior, sensors=sensors)
-    model = Model(ps, state_array(motion), motion.t)
+    forces = np.array(as_array(forces, (len(motion), 6), "forces"))
+    ps = parameter_set(prior, sensors=as_flag(sensors, "sensors"))
     given = None if force_noise is None else _given_noise(force_noise, forces)
     weights = np.ones(6) if given is None else 1.0 / given
     check_force_channels(motion.t, forces)
+    keep = _unflagged(prior, motion)
+    model, forces = Model(ps, state_array(motion)[keep], motion.t[keep]), forces[keep]
     F0, J0 = model.jacobian(ps.prior)
     check_force_sign(forces, F0)
     st0 = structure(J0, weights, ps.units)
@@ -120,7 +124,19 @@ def identify(motion: Motion, forces: np.ndarray, platform: Platform | str | None
         weights = 1.0 / _noise(forces - model.forces(_theta(ps, z)), st0.rank)
         z, more = _solve(model, ps, structure(J0, weights, ps.units), weights, forces, start=z)
         nfev += more
-    return _result(model, ps, _theta(ps, z), forces, weights, given, nfev)
+    result = _result(model, ps, _theta(ps, z), forces, weights, given, nfev)
+    result.flagged = int(np.count_nonzero(~keep))
+    return result
+
+
+def _unflagged(platform: Platform, motion: Motion) -> np.ndarray:
+    """The steps (N,) bool that the model of ``platform`` does not flag along ``motion``: the
+    forces of a flagged one (a leg outside the stroke, near a singularity, the coupled solve
+    not converged) are not the model's to fit. An ``InputError`` when most are flagged
+    (``evaluation.flags.check_flagged``, as ``discover`` refuses such a record)."""
+    flag = Evaluator(platform).evaluate_quiet(motion).flag
+    check_flagged(platform, flag_counts(flag), int(np.count_nonzero(flag)), len(flag))
+    return flag == 0
 
 
 def _step(J: np.ndarray, weights: np.ndarray, st: Structure, residual: np.ndarray
@@ -307,8 +323,8 @@ def _unreachable(ps: ParameterSet, st: Structure, theta: np.ndarray | None = Non
     for k, name in enumerate(ps.names):
         if st.identifiable[k]:
             continue
-        moved = theta is not None and theta[k] != ps.prior[k]
-        if st.idle[k] and moved:
+        shifted = theta is not None and moved(theta[k], ps.prior[k], ps.units[k])
+        if st.idle[k] and shifted:
             why = (f"the fit moved it from the prior's {ps.prior[k]:.6g} to {theta[k]:.6g}, "
                    "where it no longer acts on the forces along this motion: the data show "
                    "no such effect there")

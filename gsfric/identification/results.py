@@ -7,7 +7,14 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from gsfric.identification.settings import MOVED_RTOL, TYPICAL
 from gsfric.platform.description import Platform
+
+
+def moved(value: float, prior: float, unit: str) -> bool:
+    """Whether a parameter's value differs from its prior by more than the fit's rounding
+    (``MOVED_RTOL`` of its size, ``max(|prior|, TYPICAL[unit])``)."""
+    return abs(value - prior) > MOVED_RTOL * max(abs(prior), TYPICAL.get(unit, 1.0))
 
 
 @dataclass
@@ -32,6 +39,11 @@ class Estimate:
     unit: str
     identifiable: bool
     prior: float
+
+    @property
+    def moved(self) -> bool:
+        """Whether the fit moved it from the prior (``moved``)."""
+        return moved(self.value, self.prior, self.unit)
 
     @property
     def rel_std(self) -> float | None:
@@ -133,8 +145,13 @@ class Identification:
     condition : float
         Condition number of the column-normalised base regressor.
     samples : int
+        Steps fitted.
     evaluations : int
         Residual evaluations of the nonlinear least squares.
+    flagged : int
+        Steps of the record that the prior's model flags (a leg outside the stroke, a pose near
+        a singularity, the coupled friction solve not converged), left out of the fit: their
+        forces are not the model's to reproduce.
     source, source_sha256 : str
         The measured file and its SHA-256 (empty for arrays).
     validation : Validation or None
@@ -168,6 +185,7 @@ class Identification:
     samples: int
     evaluations: int
     misfit: list[str] = field(default_factory=list)
+    flagged: int = 0
     source: str = ""
     source_sha256: str = ""
     validation: Validation | None = field(default=None)
@@ -176,7 +194,7 @@ class Identification:
         """The JSON-ready content of identification.json (units in the keys or fields)."""
         return {
             "source": self.source, "source_sha256": self.source_sha256,
-            "samples": self.samples, "rank": self.rank,
+            "samples": self.samples, "flagged_left_out": self.flagged, "rank": self.rank,
             "n_parameters": len(self.parameters), "condition_number": self.condition,
             "parameters": {n: e.summary() for n, e in self.parameters.items()},
             "combinations": {n: c.summary() for n, c in self.combinations.items()},
@@ -199,6 +217,10 @@ class Identification:
                  f"{np.sqrt(np.mean(self.residual ** 2)):.4g} N RMS (prior "
                  f"{np.sqrt(np.mean(self.residual_prior ** 2)):.4g} N) vs noise "
                  f"{np.sqrt(np.mean(self.noise ** 2)):.4g} N"]
+        if self.flagged:
+            lines.append(f"left out: {self.flagged} of {self.samples + self.flagged} steps the "
+                         "prior's model flags (outside the stroke, near a singularity or an "
+                         "unconverged friction solve; their flag in `gsfric simulate`)")
         lines += [f"not identifiable: {u}" for u in self.unreachable]
         lines += [f"weakly determined: {w}" for w in self.weak]
         lines += [f"implausible: {u}" for u in self.implausible]

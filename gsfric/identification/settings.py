@@ -16,6 +16,11 @@ ZERO_RTOL = 1e-9
 largest one does not act on the forces along this motion at all (an inertia without rotation,
 a friction coefficient without speed): it is held at its prior value and named as unreached."""
 
+MOVED_RTOL = 1e-6
+"""A parameter the data do not reach has moved in the fit when it differs from its prior by
+more than ``MOVED_RTOL`` of its size (``max(|prior|, TYPICAL[unit])``): the rows that hold it
+leave it there to the fit's rounding, far below this."""
+
 MIXED_TOL = 1e-3
 """A parameter is individually identifiable when less than ``MIXED_TOL`` of its (unit-scaled)
 direction lies in the regressor's null space; otherwise only combinations with others are."""

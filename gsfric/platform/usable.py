@@ -4,7 +4,8 @@ physics, that ``simulate`` and ``discover`` run on what they read.
 Data that are mostly unusable for the platform are an ``InputError`` that says how far off they
 are and which option fixes it, never a result: poses mostly outside the stroke (a controller's
 frame with another origin, another rig, mm given as m), speeds no hexapod of this size reaches,
-and forces whose static load is a thousand times the platform's weight (N declared as kN).
+and forces a thousand times the load the platform's model puts on its legs (N declared as
+kN).
 Gaps in the sample times are reported (``check_gaps``), and an error when they hold most of
 the record. Problems of the force channels themselves (constant, saturated, held samples) are
 an error for every command that fits a model to them (``check_force_channels``).
@@ -32,10 +33,10 @@ not the rig's (its sizes, the offset of its poses), and the forces of the rest b
 another machine."""
 
 UNIT_RATIO = 30.0
-"""Factor between the static load (mean over the steps of the summed magnitudes of F1..F6) and
-the weight the legs carry beyond which the forces are in another unit: inclined legs and
-accelerations put the static load at 1 to 5 times the weight; a wrong unit (N and kN) puts it
-1000 times off."""
+"""Factor between the measured load (mean over the steps of the summed magnitudes of F1..F6)
+and the load the model puts on the legs at rest at the home pose (``models.static_load``)
+beyond which the forces are in another unit: motion, friction and the poses away from home
+move the load by a factor of a few at most; a wrong unit (N and kN) puts it 1000 times off."""
 
 SIGN_SHARE = 0.5
 """A measured record whose summed actuator force (mean over the steps of F1 + ... + F6) has the
@@ -219,14 +220,15 @@ def _check_speed(prefix: str, t: np.ndarray, position: np.ndarray, stroke: float
                          f"{limit:.3g} m/s){hint}; check the units of t and x, y, z")
 
 
-def check_forces(platform: Platform, forces: np.ndarray, where: str = "") -> None:
+def check_forces(static: float, forces: np.ndarray, where: str = "") -> None:
     """Raise ``InputError`` when measured actuator forces (N, 6), N, are in another unit than
-    N: their static load (the mean over the steps of sum |F_i|) more than ``UNIT_RATIO``
-    times the weight the legs carry, or less than its inverse."""
+    N: their load (the mean over the steps of sum |F_i|) more than ``UNIT_RATIO`` times the
+    ``static`` load the platform's model puts on the legs at rest at its home pose
+    (``gsfric.models.static_load``), or less than its inverse."""
     prefix = f"{where}: " if where else ""
-    weight = platform.gravity * (platform.platform.mass + platform.platform.payload_mass)
+    weight = float(static)
     forces = np.asarray(forces, float)
-    if weight <= 0 or forces.ndim != 2 or forces.shape[1:] != (6,) or not len(forces) \
+    if not weight > 0 or forces.ndim != 2 or forces.shape[1:] != (6,) or not len(forces) \
             or not np.isfinite(forces).all():
         return
     load = float(np.mean(np.sum(np.abs(forces), axis=1)))
@@ -234,15 +236,17 @@ def check_forces(platform: Platform, forces: np.ndarray, where: str = "") -> Non
     if ratio > UNIT_RATIO:
         advice = ("forces in N declared as kN? declare F1..F6 in N, or give"
                   if ratio > 300 else "give")
-        raise InputError(f"{prefix}forces: the static load (mean of the summed |F1..F6|, "
-                         f"{load:.4g} N) is {ratio:.3g} times the weight the legs carry "
-                         f"({weight:.4g} N): {advice} the rig's masses (--platform)")
+        raise InputError(f"{prefix}forces: their load (mean of the summed |F1..F6|, "
+                         f"{load:.4g} N) is {ratio:.3g} times the load the model puts on the "
+                         f"legs at rest at the home pose ({weight:.4g} N): {advice} the rig's "
+                         "masses (--platform)")
     if ratio < 1.0 / UNIT_RATIO:
         advice = ("forces in kN read as N? declare F1..F6 = kN (--units F1=kN,...), or give"
                   if ratio < 1.0 / 300 else "give")
-        raise InputError(f"{prefix}forces: the static load (mean of the summed |F1..F6|, "
-                         f"{load:.4g} N) is only {ratio:.3g} times the weight the legs carry "
-                         f"({weight:.4g} N): {advice} the rig's masses (--platform)")
+        raise InputError(f"{prefix}forces: their load (mean of the summed |F1..F6|, "
+                         f"{load:.4g} N) is only {ratio:.3g} times the load the model puts "
+                         f"on the legs at rest at the home pose ({weight:.4g} N): {advice} "
+                         "the rig's masses (--platform)")
 
 
 def check_force_sign(measured: np.ndarray, model: np.ndarray, where: str = "") -> None:

@@ -34,9 +34,11 @@ _UNIT_TOL = 1e-12
 _TRIANGLE_TOL = 1e-9
 """Relative excess of the principal moments' triangle inequality taken for rounding."""
 
-MAX_JOINT_DISTANCE = 20.0
+MAX_JOINT_DISTANCE = 100.0
 """A joint farther than this from its frame's origin, m, draws a ``GsfricWarning``: lengths
-given in millimetres rather than metres (the largest hexapods measure a few metres)."""
+given in millimetres rather than metres. The largest hexapods (test rigs for ships and
+buildings) measure tens of metres; a desktop hexapod's joints in millimetres already lie
+hundreds of "metres" out."""
 
 
 def inertia_tensor(value: object, name: str) -> np.ndarray:

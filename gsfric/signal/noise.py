@@ -10,8 +10,9 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.lib.stride_tricks import sliding_window_view
 
+from gsfric._checks import is_number, short
 from gsfric._optional import optional
-from gsfric.errors import InputError
+from gsfric.errors import InputError, InputTypeError
 from gsfric.signal.savgol import savgol_filter, savgol_weights
 
 PLAUSIBLE_SPREAD = (1e-9, 10.0)
@@ -252,7 +253,10 @@ class ForceNoise:
     @classmethod
     def specified(cls, values: float | Sequence[float], detail: str = "--force-noise"
                   ) -> ForceNoise:
-        """A sensor specification: one value for the six legs or six, each finite and > 0."""
+        """A sensor specification: one value for the six legs or six, each finite and > 0;
+        ``InputTypeError`` for what is not a number (text, a bool, None)."""
+        if not all(is_number(v) for v in np.ravel(np.asarray(values, dtype=object))):
+            raise InputTypeError(f"{detail}: expected a number (N) or six, got {short(values)}")
         values = np.atleast_1d(np.asarray(values, dtype=float)).ravel()
         if values.size not in (1, 6):
             raise InputError(f"{detail}: give one value or six (one per leg), got "

@@ -51,9 +51,9 @@ from gsfric.io.files import (
     output_group,
 )
 from gsfric.io.tables import check_file, count_rows, table_kind
-from gsfric.models import platform_from
+from gsfric.models import check_measured_forces, platform_from
 from gsfric.platform.catalog import sensor_parameters
-from gsfric.platform.usable import check_flagged_share, check_forces, check_gaps, check_poses
+from gsfric.platform.usable import check_flagged_share, check_gaps, check_poses
 from gsfric.signal.savgol import DEFAULT_POLYORDER
 from gsfric.simulate.delay import SensorDelay
 from gsfric.simulate.differentiate import DEFAULT_CHUNK, MotionChunk, iter_motions
@@ -350,7 +350,7 @@ def check_chunk(platform, part: MotionChunk, trajectory: Path) -> None:
     """A chunk read from ``trajectory`` checked against the platform before any physics, by
     every command that evaluates a file (``gsfric.platform.usable``): its recorded poses
     (``check_poses``), its time gaps (``check_gaps``), and a measured-data file's forces
-    F1..F6 (``check_forces``: their unit)."""
+    F1..F6 (``models.check_measured_forces``: their unit and sign)."""
     motion = part.motion
     recorded = motion.recorded_poses()
     position, rotation = recorded if recorded is not None else (motion.position,
@@ -358,7 +358,7 @@ def check_chunk(platform, part: MotionChunk, trajectory: Path) -> None:
     check_poses(platform, position, rotation, motion.t, str(trajectory))
     check_gaps(motion.t, str(trajectory))
     if "F1" in part.carried:
-        check_forces(platform, np.stack([part.carried[f"F{i}"] for i in range(1, 7)], axis=1),
+        check_measured_forces(platform, np.stack([part.carried[f"F{i}"] for i in range(1, 7)], axis=1),
                      str(trajectory))
 
 
