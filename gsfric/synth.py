@@ -76,8 +76,9 @@ def excitation_motion(rng: np.random.Generator, t: np.ndarray, scale: float = 1.
         Range of the frequencies, Hz.
     platform : Platform, optional
         The motion carried to this platform's size (``similar_pose``): about its home pose,
-        the translations scaled by its stroke. Default (and for the reference platform): as
-        drawn.
+        the translations scaled by its stroke, the rotations by its stroke against its radius,
+        the frequencies so that the accelerations stay the reference's. Default (and for the
+        reference platform): as drawn.
 
     Returns
     -------
@@ -87,23 +88,57 @@ def excitation_motion(rng: np.random.Generator, t: np.ndarray, scale: float = 1.
     amplitude = rng.uniform(0.3, 1.0, 6) * np.array([0.06, 0.06, 0.05, 0.1, 0.1, 0.12]) * scale
     freq = rng.uniform(frequency[0], frequency[1], 6)
     phase = rng.uniform(0.0, 2 * np.pi, 6)
-    centre, reach = similar_pose(platform)
-    amplitude[:3] *= reach
-    return sinusoidal(np.asarray(t, float), amplitude, freq, phase, centre=centre)
+    similar = similar_pose(platform)
+    amplitude[:3] *= similar.reach
+    amplitude[3:] *= similar.turn
+    return sinusoidal(np.asarray(t, float), amplitude, freq / similar.pace, phase,
+                      centre=similar.centre)
 
 
-def similar_pose(platform: Platform | None) -> tuple[tuple[float, float, float], float]:
-    """The centre (m) of the synthetic motions and the factor of their translations on
-    ``platform``: the reference platform's, carried over by the ratio of the home heights
-    (mid-stroke, ``home_height``) and of the strokes. Exactly ``HOME_HEIGHT`` and 1 for the
-    reference platform, and for a platform without a stroke."""
+@dataclass(frozen=True)
+class Similar:
+    """The reference platform's synthetic motions carried to another platform
+    (``similar_pose``).
+
+    Attributes
+    ----------
+    centre : (float, float, float)
+        Centre of the motion, m: the platform's home pose (``home_height``) less the
+        reference's offset from its own, scaled as the translations.
+    reach : float
+        Factor of the translations: the ratio of the strokes.
+    turn : float
+        Factor of the rotations: the legs' length change per stroke the reference's (a
+        rotation moves a leg by about the platform's radius times its angle), at most 1.
+    pace : float
+        Factor of the periods, the square root of ``reach``: accelerations (amplitude over
+        period squared) stay the reference's, and with them the inertial loads against the
+        weight, whatever the size.
+    """
+
+    centre: tuple[float, float, float]
+    reach: float
+    turn: float
+    pace: float
+
+
+def similar_pose(platform: Platform | None) -> Similar:
+    """The synthetic motions on ``platform`` (``Similar``): exactly the reference's (centre
+    ``HOME_HEIGHT``, factors 1) on the reference platform, and on a platform without a
+    stroke."""
     reference = reference_platform()
     home, home_ref = home_height(platform) if platform else None, home_height(reference)
     if home is None or home_ref is None:
-        return (0.0, 0.0, HOME_HEIGHT), 1.0
+        return Similar((0.0, 0.0, HOME_HEIGHT), 1.0, 1.0, 1.0)
     span = platform.geometry.stroke[1] - platform.geometry.stroke[0]
     span_ref = reference.geometry.stroke[1] - reference.geometry.stroke[0]
-    return (0.0, 0.0, HOME_HEIGHT * (home / home_ref)), span / span_ref
+    reach = span / span_ref
+    radius = float(np.linalg.norm(platform.geometry.platform_joints, axis=1).max())
+    radius_ref = float(np.linalg.norm(reference.geometry.platform_joints, axis=1).max())
+    turn = min(1.0, reach * radius_ref / radius)
+    # the terms vanish exactly on the reference platform: its motions stay as drawn
+    height = HOME_HEIGHT + (home - home_ref) + (HOME_HEIGHT - home_ref) * (reach - 1.0)
+    return Similar((0.0, 0.0, height), reach, turn, float(np.sqrt(reach)))
 
 
 @dataclass

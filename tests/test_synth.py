@@ -20,6 +20,7 @@ from gsfric.synth import (
     excitation_motion,
     parse_effect,
     run_synth,
+    Similar,
     similar_pose,
     synthesize,
 )
@@ -161,8 +162,8 @@ def _scaled(factor: float):
 
 
 def test_the_reference_motion_is_the_reference_platforms_own():
-    assert similar_pose(reference_platform()) == ((0.0, 0.0, HOME_HEIGHT), 1.0)
-    assert similar_pose(None) == ((0.0, 0.0, HOME_HEIGHT), 1.0)
+    for platform in (reference_platform(), None):
+        assert similar_pose(platform) == Similar((0.0, 0.0, HOME_HEIGHT), 1.0, 1.0, 1.0)
 
 
 @pytest.mark.parametrize("factor", [2.0, 0.5])
@@ -180,3 +181,20 @@ def test_a_platform_of_another_size_gets_a_motion_inside_its_stroke(factor):
     assert stroke[0] < lengths.min() and lengths.max() < stroke[1]
     assert np.mean(motion.position[:, 2]) == pytest.approx(HOME_HEIGHT * factor, rel=0.05)
 
+
+
+def test_a_short_stroke_gets_a_motion_inside_it_and_a_large_rig_the_same_accelerations():
+    """A stroke of a sixth of the reference's on the same joints: the rotations shrink with
+    the translations (a turn moves the legs by the radius times the angle), and the motion
+    stays inside it. Ten times the reference's size: the periods grow by the square root of
+    the size, so the accelerations (and the inertial loads against the weight) stay the
+    reference's instead of growing tenfold."""
+    short = reference_platform().with_geometry(stroke=(0.7, 0.8))
+    motion = synthesize(short, samples=2000, rate=200.0, seed=1).motion
+    lengths = short.leg_lengths(motion.position, motion.rotation)
+    assert 0.7 < lengths.min() and lengths.max() < 0.8
+    reference = synthesize(samples=2000, rate=200.0, seed=1).motion
+    large = synthesize(_scaled(10.0), samples=2000, rate=200.0, seed=1).motion
+    ratio = np.abs(large.acceleration).max() / np.abs(reference.acceleration).max()
+    assert 0.5 < ratio < 2.0
+    assert np.ptp(large.position, axis=0).max() > 5 * np.ptp(reference.position, axis=0).max()

@@ -34,8 +34,10 @@ def synth(out, platform_file, effects, samples, rate, noise, noise_correlation, 
     """Write synthetic measured data with hidden effects and noise (reproducible by seed).
 
     The motion is a random six-axis motion: the reference platform's, carried over to the
-    platform's size (its height by the ratio of the home heights at mid-stroke, its
-    translations by the ratio of the strokes)."""
+    platform's size. It moves about the platform's home pose (level, legs at mid-stroke); its
+    translations scale with the stroke, its rotations with the stroke over the platform's
+    radius, and its periods with the square root of the stroke, so that the accelerations
+    stay the reference's. At most 1,000,000 samples (the record is held in memory)."""
     path = run_synth(out, platform_file=platform_file, effects=effects, samples=samples,
                      rate=rate, noise=noise, noise_correlation=noise_correlation,
                      pose_noise=pose_noise, seed=seed)
