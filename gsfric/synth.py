@@ -38,7 +38,7 @@ from gsfric._checks import as_count, short, suggest
 from gsfric.errors import InputError
 from gsfric.evaluation.evaluator import Evaluator, state_array
 from gsfric.io.files import check_outputs
-from gsfric.io.readers import check_force_range
+from gsfric.io.readers import check_force_range, read_trajectory
 from gsfric.io.tables import table_kind, write_table
 from gsfric.models import HOME_HEIGHT, platform_from, reference_platform, sinusoidal
 from gsfric.platform.catalog import EFFECTS, apply_sensor, sensor_parameters
@@ -410,19 +410,24 @@ def _measured_frame(rng: np.random.Generator, motion: Motion, forces: np.ndarray
 
 def run_synth(out: str | os.PathLike[str], platform_file: str | os.PathLike[str] | None = None,
               effects=(), samples: int = 4000, rate: float = 200.0, noise: float = 0.1,
-              noise_correlation: float = 0.0, pose_noise: float = 0.0, seed: int = 0) -> Path:
+              noise_correlation: float = 0.0, pose_noise: float = 0.0, seed: int = 0,
+              motion_file: str | os.PathLike[str] | None = None) -> Path:
     """``gsfric synth``: write synthetic measured data to ``out`` (CSV or Parquet).
 
     Parameters are those of ``synthesize``; ``platform_file`` is a platform TOML (default the
-    reference platform). Returns the path written (atomically).
+    reference platform); ``motion_file`` a trajectory file to drive (``gsfric excite``'s, for
+    example) instead of the random motion, its own times replacing ``samples`` and ``rate``.
+    Returns the path written (atomically).
     """
 
     out = Path(out)
-    check_outputs([out], {"platform": platform_file})
+    check_outputs([out], {"platform": platform_file, "motion": motion_file})
     table_kind(out)
     platform = platform_from(platform_file)
-    data = synthesize(platform, effects, samples=samples, rate=rate, noise=noise,
-                      noise_correlation=noise_correlation, pose_noise=pose_noise, seed=seed)
+    motion = None if motion_file is None else read_trajectory(motion_file)
+    data = synthesize(platform, effects, motion=motion, samples=samples, rate=rate,
+                      noise=noise, noise_correlation=noise_correlation, pose_noise=pose_noise,
+                      seed=seed)
     _check_readable(data, f"{out} (noise = {noise:g} N, pose_noise = {pose_noise:g} m)")
     write_table(data.frame, out)
     return out

@@ -12,15 +12,16 @@ from click.testing import CliRunner
 from gsfric.cli import main
 from gsfric.errors import InputError, InputTypeError
 from gsfric.evaluation.evaluator import Evaluator, state_array
-from gsfric.io.readers import read_measured
-from gsfric.models import HOME_HEIGHT, reference_platform
+from gsfric.io.readers import read_measured, read_trajectory
+from gsfric.io.tables import write_table
+from gsfric.models import HOME_HEIGHT, reference_platform, sinusoidal
 from gsfric.platform.usable import check_poses, home_height
 from gsfric.synth import (
+    Similar,
     ar1_noise,
     excitation_motion,
     parse_effect,
     run_synth,
-    Similar,
     similar_pose,
     synthesize,
 )
@@ -198,3 +199,24 @@ def test_a_short_stroke_gets_a_motion_inside_it_and_a_large_rig_the_same_acceler
     ratio = np.abs(large.acceleration).max() / np.abs(reference.acceleration).max()
     assert 0.5 < ratio < 2.0
     assert np.ptp(large.position, axis=0).max() > 5 * np.ptp(reference.position, axis=0).max()
+
+
+def test_synth_drives_a_trajectory_file_such_as_an_excitation(tmp_path):
+    """``--motion``: the record follows the file's poses at its own times (an excitation
+    rehearsed from the command line); --samples beside it is refused, not ignored."""
+    motion = sinusoidal(np.arange(301) / 100.0)
+    write_table(motion.to_frame(), tmp_path / "motion.csv")
+    runner = CliRunner()
+    result = runner.invoke(main, ["synth", "--motion", str(tmp_path / "motion.csv"), "--out",
+                                  str(tmp_path / "m.csv"), "--noise", "0"])
+    assert result.exit_code == 0, result.output
+    measured, forces, _ = read_measured(tmp_path / "m.csv")
+    np.testing.assert_allclose(measured.t, motion.t, rtol=0, atol=1e-12)
+    np.testing.assert_allclose(measured.position, motion.position, rtol=0, atol=1e-9)
+    driven = read_trajectory(tmp_path / "motion.csv")     # the file, as every command reads it
+    truth = Evaluator(reference_platform()).evaluate_quiet(driven).F
+    np.testing.assert_allclose(forces, truth, rtol=1e-12, atol=1e-9)
+    result = runner.invoke(main, ["synth", "--motion", str(tmp_path / "motion.csv"), "--out",
+                                  str(tmp_path / "n.csv"), "--samples", "100"])
+    assert result.exit_code == 2 and "--samples: the --motion file's own times" in result.output
+    assert not (tmp_path / "n.csv").exists()
