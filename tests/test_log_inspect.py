@@ -308,3 +308,23 @@ def test_a_usage_error_points_to_the_subcommands_help(tmp_path):
                   "--platform", tmp_path / "b.toml")
     assert result.exit_code == 2
     assert result.stderr.strip().endswith("(see `gsfric log inspect --help`)")
+
+
+def test_positions_of_a_large_rig_are_metres_when_its_platform_is_given(tmp_path):
+    """Heights of 30 m without a unit: mm for a log on its own (no hexapod of unknown size
+    moves its frame 20 m out), m for the 40-times reference platform it was recorded on (its
+    legs reach 44 m)."""
+    g = models.reference_platform().geometry
+    large = models.reference_platform().with_geometry(
+        base_joints=40 * g.base_joints, platform_joints=40 * g.platform_joints,
+        stroke=(40 * g.stroke[0], 40 * g.stroke[1]))
+    t = np.arange(2000) / 100.0
+    pd.DataFrame({"time": t, "x": 0.5 * np.sin(t), "y": 0.4 * np.sin(1.3 * t),
+                  "z": home_height(large) + 0.5 * np.sin(0.7 * t), "roll": 0.02 * np.sin(t),
+                  "pitch": 0.02 * np.cos(t), "yaw": 0.03 * np.sin(0.5 * t)}
+                 ).to_csv(tmp_path / "large.csv", index=False)
+    given = inspect_log(tmp_path / "large.csv", platform=large)
+    position = next(a for a in given.assumptions if a.topic == "position")
+    assert position.value.endswith(" in m") and position.evidence.endswith("below 88: m")
+    assert given.log_format.units.get("x", "m") == "m"
+    assert inspect_log(tmp_path / "large.csv").log_format.units["x"] == "mm"

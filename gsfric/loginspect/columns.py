@@ -202,8 +202,9 @@ def group(data: Mapping[str, np.ndarray], roles: Mapping[str, Role], kind: str
 
 
 def pose_units(path: Path, data, roles, columns: dict[str, str], kind: str,
-               cmap: ColumnMap) -> tuple[np.ndarray, str]:
-    """The pose columns (N, k) in SI and their unit (from the names, or the values)."""
+               cmap: ColumnMap, mm_reach: float = V.MM_REACH) -> tuple[np.ndarray, str]:
+    """The pose columns (N, k) in SI and their unit (from the names, or the values: positions
+    beyond ``mm_reach`` are mm, ``values.length_unit``)."""
     raw = np.stack([data[c].astype(float) for c in columns.values()], axis=1)
     if not np.isfinite(raw).all():
         row, k = np.argwhere(~np.isfinite(raw))[0]
@@ -229,7 +230,7 @@ def pose_units(path: Path, data, roles, columns: dict[str, str], kind: str,
             raise InputError(f"{path}: column {first!r}: unit {unit!r} "
                              "is not a " + ("length" if kind == "position" else "an angle"))
     elif kind == "position":
-        unit, evidence = V.length_unit(raw)
+        unit, evidence = V.length_unit(raw, mm_reach)
     else:
         unit, evidence = V.angle_unit(raw)
     factor = UNITS["length" if kind == "position" else "angle"][unit]

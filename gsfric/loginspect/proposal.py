@@ -165,8 +165,10 @@ def inspect_log(path: str | os.PathLike[str], *, platform: Platform | None = Non
     roles = C.roles_of(data)
     cmap = C.ColumnMap()
     clock = C.time_column(path, data, roles, time, cmap)
+    longest = None if platform is None or platform.geometry.stroke is None \
+        else platform.geometry.stroke[1]
     position, kind, angles, convention, velocity, omega = _poses(path, data, roles, clock.t,
-                                                                 cmap)
+                                                                 cmap, V.mm_reach(longest))
     C.force_columns(data, roles, cmap)
     frame_axes = _frame(roles, cmap, axes)
     rest = _rest(clock.t, position, angles, kind, V.still_samples(velocity, omega), cmap)
@@ -186,7 +188,7 @@ def inspect_log(path: str | os.PathLike[str], *, platform: Platform | None = Non
     return LogInspection(path, fmt, final, tuple(cmap.assumptions), rest, extent, span, ignored)
 
 
-def _poses(path, data, roles, t, cmap: C.ColumnMap):
+def _poses(path, data, roles, t, cmap: C.ColumnMap, mm_reach: float):
     """Position (N, 3), m, and orientation angles (N, 3 or 4) in SI in the log's frame; the
     orientation kind; the roll/pitch/yaw convention (None for others); the velocity and the
     angular velocity (N, 3 each, SI, the log's frame). Also maps the log's own rates."""
@@ -196,7 +198,7 @@ def _poses(path, data, roles, t, cmap: C.ColumnMap):
                                                for c in data)]
         raise InputError(f"{path}: no position column for {', '.join(missing)} (names like x, "
                          "surge, pos_x; or map the columns by hand: docs/howto/read-a-log.md)")
-    position, _ = C.pose_units(path, data, roles, columns, "position", cmap)
+    position, _ = C.pose_units(path, data, roles, columns, "position", cmap, mm_reach)
     for kind in ("angle", "quaternion", "euler"):
         group = C.group(data, roles, kind)
         if group is not None:

@@ -142,12 +142,20 @@ def _wrap(raw: np.ndarray, typical: float) -> tuple[int | None, str]:
     return None, ""
 
 
-def length_unit(values: np.ndarray) -> tuple[str, str]:
-    """m or mm for positions (N, 3) written without a unit, with the evidence."""
+def mm_reach(longest: float | None) -> float:
+    """Positions beyond which they are mm (``length_unit``): ``MM_REACH``, or for a platform
+    whose longest leg is ``longest`` m, twice that when it is more (no pose of it in m lies
+    beyond)."""
+    return MM_REACH if longest is None else max(MM_REACH, 2.0 * float(longest))
+
+
+def length_unit(values: np.ndarray, limit: float = MM_REACH) -> tuple[str, str]:
+    """m or mm for positions (N, 3) written without a unit, with the evidence: mm beyond
+    ``limit`` (``mm_reach``)."""
     reach = float(np.nanmax(np.abs(values)))
-    if reach > MM_REACH:
-        return "mm", f"values up to {reach:.4g}, beyond {MM_REACH:g} m: mm"
-    return "m", f"values within {reach:.4g}, below {MM_REACH:g}: m"
+    if reach > limit:
+        return "mm", f"values up to {reach:.4g}, beyond {limit:g} m: mm"
+    return "m", f"values within {reach:.4g}, below {limit:g}: m"
 
 
 def angle_unit(values: np.ndarray) -> tuple[str, str]:
