@@ -124,9 +124,8 @@ def identify(motion: Motion, forces: np.ndarray, platform: Platform | str | None
         weights = 1.0 / _noise(forces - model.forces(_theta(ps, z)), st0.rank)
         z, more = _solve(model, ps, structure(J0, weights, ps.units), weights, forces, start=z)
         nfev += more
-    result = _result(model, ps, _theta(ps, z), forces, weights, given, nfev)
-    result.flagged = int(np.count_nonzero(~keep))
-    return result
+    return _result(model, ps, _theta(ps, z), forces, weights, given, nfev,
+                   flagged=int(np.count_nonzero(~keep)))
 
 
 def _unflagged(platform: Platform, motion: Motion) -> np.ndarray:
@@ -230,8 +229,8 @@ def _solve(model: Model, ps: ParameterSet, st: Structure, weights: np.ndarray,
 
 
 def _result(model: Model, ps: ParameterSet, theta: np.ndarray, forces: np.ndarray,
-            weights: np.ndarray, given, nfev: int) -> Identification:
-    """The Identification at the solution theta."""
+            weights: np.ndarray, given, nfev: int, flagged: int = 0) -> Identification:
+    """The Identification at the solution theta (``flagged`` steps left out of the fit)."""
     F, J = model.jacobian(theta)
     residual = forces - F
     noise = _noise(residual, 0) if given is None else given
@@ -264,7 +263,7 @@ def _result(model: Model, ps: ParameterSet, theta: np.ndarray, forces: np.ndarra
         misfit=_misfit(residual, forces, given),
         residual=_rms(residual), residual_prior=_rms(prior_residual), noise=noise,
         noise_given=given is not None, rank=st.rank, condition=st.condition,
-        samples=len(forces), evaluations=nfev)
+        samples=len(forces), evaluations=nfev, flagged=flagged)
 
 
 def _misfit(residual: np.ndarray, forces: np.ndarray, given: np.ndarray | None) -> list[str]:
