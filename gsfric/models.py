@@ -19,6 +19,7 @@ import numpy as np
 
 from gsfric._checks import as_array
 from gsfric._optional import optional
+from gsfric.compiled.state import state_of
 from gsfric.evaluation.evaluator import Evaluator
 from gsfric.evaluation.paper_constants import (
     PAPER_ACCELERATION,
@@ -244,26 +245,30 @@ def resting_at_home(platform: Platform) -> Result:
     return Evaluator(platform).evaluate_quiet(still)
 
 
-def static_load(platform: Platform) -> float:
-    """The load the legs carry at rest at the home pose, N: the model's summed |F1..F6| there
-    (their weight shares, the platform's and the payload's, through the legs' inclinations),
-    the scale against which measured forces are checked for their unit
-    (``platform.usable.check_forces``). 0 where the model gives no finite load there."""
-    return _load(resting_at_home(platform).F)
+CHECK_STEPS = 500
+"""Steps of a record, spread evenly over it, along which the model's forces are computed to
+check the measured ones' unit and sign (``check_measured_forces``): the unit check compares
+loads within a factor of ``platform.usable.UNIT_RATIO``, the sign check their means, both
+settled by a few hundred steps to far better than that."""
 
 
-def _load(F: np.ndarray) -> float:
-    load = float(np.mean(np.sum(np.abs(F), axis=1)))
-    return load if np.isfinite(load) else 0.0
-
-
-def check_measured_forces(platform: Platform, forces: np.ndarray, where: str = "") -> None:
-    """``InputError`` (prefixed ``where``, a file) for measured forces (N, 6), N, in another
-    unit than N (``check_forces``) or of the opposite sign (``check_force_sign``) against the
-    model of ``platform`` at rest at its home pose."""
-    home = resting_at_home(platform).F
-    check_forces(_load(home), forces, where)
-    check_force_sign(forces, home, where)
+def check_measured_forces(platform: Platform, motion: Motion, forces: np.ndarray,
+                          where: str = "") -> None:
+    """``InputError`` (prefixed ``where``, a file) for measured forces (N, 6), N, along
+    ``motion`` in another unit than N (``check_forces``) or of the opposite sign
+    (``check_force_sign``) against the model of ``platform`` along the same poses, rates and
+    accelerations (``CHECK_STEPS`` of them; steps whose forces the model cannot give, at a
+    singular pose, are left out, and without any the check is skipped)."""
+    rows = np.unique(np.linspace(0, len(motion) - 1, min(len(motion), CHECK_STEPS)).astype(int))
+    x = state_of(tuple(a[rows] for a in (motion.position, motion.rotation, motion.velocity,
+                                         motion.omega, motion.acceleration, motion.alpha)))
+    model = Evaluator(platform).actuator_forces(x)
+    finite = np.isfinite(model).all(axis=1)
+    if not finite.any():
+        return
+    measured = np.asarray(forces, float)[rows][finite]
+    check_forces(float(np.mean(np.sum(np.abs(model[finite]), axis=1))), measured, where)
+    check_force_sign(measured, model[finite], where)
 
 
 def pose_motion(t: np.ndarray, q: np.ndarray, qd: np.ndarray, qdd: np.ndarray,

@@ -34,7 +34,7 @@ import numpy as np
 import pandas as pd
 from scipy.signal import lfilter
 
-from gsfric._checks import as_count, short, suggest
+from gsfric._checks import as_count, as_float, short, suggest
 from gsfric.errors import InputError
 from gsfric.evaluation.evaluator import Evaluator, state_array
 from gsfric.io.files import check_outputs
@@ -43,7 +43,7 @@ from gsfric.io.tables import table_kind, write_table
 from gsfric.models import HOME_HEIGHT, platform_from, reference_platform, sinusoidal
 from gsfric.platform.catalog import EFFECTS, apply_sensor, sensor_parameters
 from gsfric.platform.description import Platform
-from gsfric.platform.usable import check_poses, home_height
+from gsfric.platform.usable import check_gaps, check_poses, home_height
 from gsfric.signal.rotations import quaternion_multiply, rotation_from_quaternion
 from gsfric.trajectory import Motion
 
@@ -330,7 +330,8 @@ def synthesize(platform: Platform | None = None, effects=(), *, motion: Motion |
     -------
     SyntheticData
     """
-    _check_arguments(samples, rate, noise, noise_correlation, pose_noise)
+    _check_arguments(samples if motion is None else motion, rate, noise, noise_correlation,
+                     pose_noise)
     model = platform_from(platform)
     rng = np.random.default_rng(seed)
     if motion is None:
@@ -358,20 +359,25 @@ count); a longer record is refused before any is drawn."""
 
 
 def _check_arguments(samples, rate, noise, noise_correlation, pose_noise) -> None:
-    """``InputError`` for a number of samples, a rate or a noise level ``synthesize`` refuses."""
-    samples = as_count(samples, "samples", minimum=1)
-    if samples < 20:
-        raise InputError(f"samples: at least 20 are needed, got {samples}")
-    if samples > MAX_SAMPLES:
-        raise InputError(f"samples: {samples:,} is more than the {MAX_SAMPLES:,} a synthetic "
-                         "record holds in memory (about 2 kB a sample); a shorter record")
-    if not (np.isfinite(rate) and rate > 0):
-        raise InputError(f"rate: must be a positive number of Hz, got {rate!r}")
-    if not (np.isfinite(noise) and noise >= 0):
-        raise InputError(f"noise: must be >= 0, got {noise!r}")
-    if not (np.isfinite(pose_noise) and pose_noise >= 0):
-        raise InputError(f"pose_noise: must be >= 0, got {pose_noise!r}")
-    if not 0.0 <= noise_correlation < 1.0:
+    """``InputError`` (``InputTypeError`` for what is not a number) for a number of samples
+    (or a ``Motion`` to drive), a rate or a noise level ``synthesize`` refuses."""
+    if isinstance(samples, Motion):
+        if len(samples) > MAX_SAMPLES:
+            raise InputError(f"motion: {len(samples):,} steps, more than the {MAX_SAMPLES:,} "
+                             "a synthetic record holds in memory (about 2 kB a sample)")
+    else:
+        samples = as_count(samples, "samples", minimum=1)
+        if samples < 20:
+            raise InputError(f"samples: at least 20 are needed, got {samples}")
+        if samples > MAX_SAMPLES:
+            raise InputError(f"samples: {samples:,} is more than the {MAX_SAMPLES:,} a "
+                             "synthetic record holds in memory (about 2 kB a sample); a "
+                             "shorter record")
+        if as_float(rate, "rate") <= 0:
+            raise InputError(f"rate: must be a positive number of Hz, got {rate!r}")
+    as_float(noise, "noise", minimum=0.0)
+    as_float(pose_noise, "pose_noise", minimum=0.0)
+    if not 0.0 <= as_float(noise_correlation, "noise_correlation") < 1.0:
         raise InputError(f"noise_correlation: must be in [0, 1), got {noise_correlation!r}")
 
 
@@ -424,13 +430,22 @@ def run_synth(out: str | os.PathLike[str], platform_file: str | os.PathLike[str]
     check_outputs([out], {"platform": platform_file, "motion": motion_file})
     table_kind(out)
     platform = platform_from(platform_file)
-    motion = None if motion_file is None else read_trajectory(motion_file)
+    motion = None if motion_file is None else _motion_file(motion_file, platform)
     data = synthesize(platform, effects, motion=motion, samples=samples, rate=rate,
                       noise=noise, noise_correlation=noise_correlation, pose_noise=pose_noise,
                       seed=seed)
     _check_readable(data, f"{out} (noise = {noise:g} N, pose_noise = {pose_noise:g} m)")
     write_table(data.frame, out)
     return out
+
+
+def _motion_file(path, platform: Platform) -> Motion:
+    """The motion of a trajectory file, checked against the platform as every command that
+    evaluates a file checks it (its poses within the stroke, its gaps), naming the file."""
+    motion = read_trajectory(path)
+    check_poses(platform, motion.position, motion.rotation, motion.t, str(path))
+    check_gaps(motion.t, str(path))
+    return motion
 
 
 def _check_readable(data: SyntheticData, where: str) -> None:

@@ -321,10 +321,10 @@ def test_weakly_determined_parameters_are_named_with_their_effect_against_the_no
 @pytest.mark.parametrize("options, message", [
     ({"period": 0.002}, r"period: 0\.002 s at 500 Hz holds 1 samples; .* at least 0\.2 s"),
     ({"rate": 1.0, "duration": 4.0}, r"period: 4 s at 1 Hz holds 4 samples"),
-    ({"duration": 1e9}, r"duration: 1e\+09 s at 500 Hz is 5e\+11 samples, more than"),
-    ({"rate": 1e6, "duration": 600.0}, r"duration: 600 s at 1e\+06 Hz is 6e\+08 samples"),
+    ({"duration": 1e9}, r"duration: 1e\+09 s at 500 Hz is 500,000,000,001 samples, more than"),
+    ({"rate": 1e6, "duration": 600.0}, r"duration: 600 s at 1e\+06 Hz is 600,000,001 samples"),
     ({"period": 4000.0}, (r"period: 4000 s \(the duration of 60 s rounded up to whole "
-                          r"periods: 4000 s\) at 500 Hz is 2e\+06 samples")),
+                          r"periods: 4000 s\) at 500 Hz is 2,000,001 samples")),
 ])
 def test_excite_refuses_a_motion_of_too_few_or_too_many_samples(options, message):
     """A period of a sample or two would be a motion that does not move; a duration of

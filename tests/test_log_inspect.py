@@ -325,6 +325,8 @@ def test_positions_of_a_large_rig_are_metres_when_its_platform_is_given(tmp_path
                  ).to_csv(tmp_path / "large.csv", index=False)
     given = inspect_log(tmp_path / "large.csv", platform=large)
     position = next(a for a in given.assumptions if a.topic == "position")
-    assert position.value.endswith(" in m") and position.evidence.endswith("below 88: m")
+    assert position.value.endswith(" in m") and position.evidence.endswith("below 88 m: m")
     assert given.log_format.units.get("x", "m") == "m"
     assert inspect_log(tmp_path / "large.csv").log_format.units["x"] == "mm"
+    sized = inspect_log(tmp_path / "large.csv", rig=Rig.from_platform(large))
+    assert sized.log_format.units.get("x", "m") == "m"

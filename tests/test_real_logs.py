@@ -25,7 +25,6 @@ from gsfric.errors import DataWarning, GsfricWarning, InputError
 from gsfric.io.logs import LogFormat
 from gsfric.io.readers import read_measured, read_trajectory
 from gsfric.io.tables import read_table, write_table
-from gsfric.platform.usable import check_forces
 from gsfric.signal.local import local_polynomial_derivatives
 from gsfric.signal.savgol import savgol_derivatives
 from gsfric.simulate.run import simulate_file
@@ -283,12 +282,13 @@ def test_forces_in_newtons_declared_as_kilonewtons_are_an_error(tmp_path):
     result = _cli("discover", "--measured", measured, "--units",
                   ",".join(f"F{i}=kN" for i in range(1, 7)), "--out", tmp_path / "d")
     assert result.exit_code == 2, result.output
-    assert "times the load the model puts on the legs at rest" in result.stderr
+    assert "times the model's along the same poses" in result.stderr
     assert "forces in N declared as kN?" in result.stderr
     motion, forces, _ = read_measured(measured)
-    check_forces(models.static_load(models.reference_platform()), forces)              # in N: fine
+    reference = models.reference_platform()
+    models.check_measured_forces(reference, motion, forces)              # in N: fine
     with pytest.raises(InputError, match="forces in kN read as N"):
-        check_forces(models.static_load(models.reference_platform()), forces / 1000.0)
+        models.check_measured_forces(reference, motion, forces / 1000.0)
 
 
 # -- the shipped controller log: the tutorial's CLI -------------------------------------------
@@ -303,9 +303,24 @@ def test_the_unit_check_weighs_the_forces_against_the_models_own_load():
     forces = data.frame[[f"F{i}" for i in range(1, 7)]].to_numpy()
     weight = light.gravity * (light.platform.mass + light.platform.payload_mass)
     assert np.mean(np.sum(np.abs(forces), axis=1)) > 30 * weight
-    check_forces(models.static_load(light), forces)
+    models.check_measured_forces(light, data.motion, forces)
     with pytest.raises(InputError, match="forces in kN read as N"):
-        check_forces(models.static_load(light), forces / 1000.0)
+        models.check_measured_forces(light, data.motion, forces / 1000.0)
+
+
+def test_the_unit_and_sign_checks_follow_the_records_own_poses():
+    """Base joints on a plinth 0.69 m up, and a platform file without a stroke: no home pose
+    is known (the reference's height would lay the legs flat), the record's poses are. Its
+    forces pass; negated, they are refused as of the wrong sign."""
+    reference = models.reference_platform()
+    raised = reference.with_geometry(base_joints=reference.geometry.base_joints
+                                     + [0.0, 0.0, 0.69])
+    data = synthesize(raised, samples=600, rate=200.0, seed=2)
+    forces = data.frame[[f"F{i}" for i in range(1, 7)]].to_numpy()
+    loose = raised.with_geometry(stroke=None)
+    models.check_measured_forces(loose, data.motion, forces)
+    with pytest.raises(InputError, match=r"negate F1\.\.F6"):
+        models.check_measured_forces(loose, data.motion, -forces)
 
 
 def test_the_controller_log_reads_simulates_and_discovers(tmp_path):

@@ -9,6 +9,7 @@ import pandas as pd
 import pytest
 from click.testing import CliRunner
 
+import gsfric.synth as synth_module
 from gsfric.cli import main
 from gsfric.errors import InputError, InputTypeError
 from gsfric.evaluation.evaluator import Evaluator, state_array
@@ -220,3 +221,22 @@ def test_synth_drives_a_trajectory_file_such_as_an_excitation(tmp_path):
                                   str(tmp_path / "n.csv"), "--samples", "100"])
     assert result.exit_code == 2 and "--samples: the --motion file's own times" in result.output
     assert not (tmp_path / "n.csv").exists()
+
+
+def test_a_motion_given_sets_the_samples_and_is_checked_as_a_file_is(tmp_path, monkeypatch):
+    """With a motion, ``samples`` is not used (nor checked); the motion's own length is held
+    to the limit; a motion file outside the platform's stroke is refused naming the file,
+    before any physics."""
+    motion = sinusoidal(np.arange(40) / 100.0)
+    assert len(synthesize(motion=motion, samples=5).frame) == 40
+    monkeypatch.setattr(synth_module, "MAX_SAMPLES", 30)
+    with pytest.raises(InputError, match=r"motion: 40 steps, more than the 30"):
+        synthesize(motion=motion)
+    monkeypatch.undo()
+    write_table(motion.to_frame(), tmp_path / "motion.csv")
+    short = reference_platform().with_geometry(stroke=(0.5, 0.6))
+    short.to_toml(tmp_path / "short.toml")
+    with pytest.raises(InputError, match=r"motion\.csv: 40 of 40 steps have a leg outside"):
+        run_synth(tmp_path / "m.csv", platform_file=tmp_path / "short.toml",
+                  motion_file=tmp_path / "motion.csv")
+    assert not (tmp_path / "m.csv").exists()

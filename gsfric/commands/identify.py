@@ -51,8 +51,9 @@ def identify(measured, platform_file, out_dir, validate_file, sensors, force_noi
         click.echo(f"wrote {path}")
     if result.validation is not None:
         v = result.validation
+        left = f"; {v.flagged} flagged steps left out" if v.flagged else ""
         click.echo(f"validation on {v.source}: {_rms(v.before):.4g} N RMS before, "
-                   f"{_rms(v.after):.4g} N after (noise {_rms(v.noise):.4g} N)")
+                   f"{_rms(v.after):.4g} N after (noise {_rms(v.noise):.4g} N{left})")
     click.echo(result.statement())
 
 

@@ -19,7 +19,8 @@ from gsfric.synth import run_synth
               help="Hidden effect to add, e.g. stribeck:static=2,velocity=0.01 (repeatable).")
 @click.option("--motion", "motion_file", type=click.Path(dir_okay=False, exists=True),
               help="Trajectory file to drive (e.g. `gsfric excite`'s) instead of the random "
-                   "motion; its times replace --samples and --rate.")
+                   "motion, its poses as every command reads them (smoothed where they are "
+                   "noisy); its times replace --samples and --rate.")
 @click.option("--samples", type=click.IntRange(20), default=4000, show_default=True,
               help="Number of samples (rows) to write.")
 @click.option("--rate", type=click.FloatRange(1.0, 1e6), default=200.0, show_default=True,

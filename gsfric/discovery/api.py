@@ -151,7 +151,7 @@ def _discover_file(measured: str | os.PathLike[str], platform, log_format: LogFo
                                                           log_format)
     poses = poses_from_columns(columns)
     check_poses(model, *poses, motion.t, str(measured))
-    check_measured_forces(model, forces, str(measured))
+    check_measured_forces(model, motion, forces, str(measured))
     result = discover_motion(motion, forces, model, poses=poses, **run)
     notes = []
     how = motion.differentiation()

@@ -41,9 +41,9 @@ from gsfric.discovery.rounds import run_rounds
 from gsfric.discovery.settings import Settings
 from gsfric.errors import InputTypeError
 from gsfric.evaluation.flags import check_flagged, flag_counts
-from gsfric.models import platform_from, static_load
+from gsfric.models import check_measured_forces, platform_from
 from gsfric.platform.description import Platform
-from gsfric.platform.usable import check_force_sign, check_forces, check_poses
+from gsfric.platform.usable import check_poses
 from gsfric.signal.noise import ForceNoise
 from gsfric.trajectory import Motion
 
@@ -116,7 +116,6 @@ def _problem(motion: Motion, forces: np.ndarray, platform: Platform, settings: S
     """The data against the model (``Problem``); an ``InputError`` when the model flags too
     many of the samples used (``evaluation.flags.check_flagged``)."""
     problem = Problem(motion, forces, platform, settings, poses=poses)
-    check_force_sign(forces, problem.result.F)
     used_flags = problem.result.flag[problem.used]
     check_flagged(platform, flag_counts(used_flags), int(np.count_nonzero(used_flags)),
                   len(used_flags))
@@ -145,7 +144,7 @@ def _checked_data(motion: Motion, forces: np.ndarray, platform: Platform,
     recorded = poses if poses is not None else motion.recorded_poses()
     check_poses(platform, *(recorded if recorded is not None else (motion.position,
                                                                    motion.rotation)), motion.t)
-    check_forces(static_load(platform), forces)
+    check_measured_forces(platform, motion, forces)
     if force_noise is not None:
         force_noise.check_at_rest(settings.record_travel, settings.record_turn)
         force_noise.check_plausible(forces, settings.noise_spread)

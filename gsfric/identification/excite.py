@@ -327,7 +327,7 @@ def _check_samples(duration: float, rate: float, period: float) -> None:
         if duration * rate + 1 <= MAX_EXCITE_SAMPLES:  # the rounding to whole periods is why
             name, given = "period", (f"{period:g} s (the duration of {duration:g} s rounded "
                                      f"up to whole periods: {whole:g} s)")
-        raise InputError(f"{name}: {given} at {rate:g} Hz is {samples:.3g} samples, more "
+        raise InputError(f"{name}: {given} at {rate:g} Hz is {round(samples):,} samples, more "
                          f"than the {MAX_EXCITE_SAMPLES:,} an excitation is designed with "
                          "(each sample's regressor is kept); a shorter duration or period, "
                          "or a lower rate")

@@ -38,7 +38,7 @@ def read_record(path: str | os.PathLike[str], platform, log_format=None):
     and force range as ``discover`` checks them."""
     motion, forces, _, _ = read_measured_columns(path, None, DEFAULT_POLYORDER, log_format)
     check_poses(platform, motion.position, motion.rotation, motion.t, str(path))
-    check_measured_forces(platform, forces, str(path))
+    check_measured_forces(platform, motion, forces, str(path))
     return motion, forces
 
 

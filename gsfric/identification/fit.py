@@ -32,7 +32,7 @@ from gsfric.identification.results import (Combination, Estimate, Identification
                                            moved)
 from gsfric.identification.settings import (IMPLAUSIBLE_SIGMA, MAX_NFEV, MISFIT_RATIO,
                                             TYPICAL, WEAK_RELATIVE_STD)
-from gsfric.models import platform_from
+from gsfric.models import check_measured_forces, platform_from
 from gsfric.platform.description import Platform
 from gsfric.platform.usable import check_force_channels, check_force_sign
 from gsfric.signal.noise import (HIGH_FREQUENCY_WINDOW, PLAUSIBLE_SPREAD, ForceNoise,
@@ -110,10 +110,10 @@ def identify(motion: Motion, forces: np.ndarray, platform: Platform | str | None
     given = None if force_noise is None else _given_noise(force_noise, forces)
     weights = np.ones(6) if given is None else 1.0 / given
     check_force_channels(motion.t, forces)
+    check_measured_forces(prior, motion, forces)
     keep = _unflagged(prior, motion)
     model, forces = Model(ps, state_array(motion)[keep], motion.t[keep]), forces[keep]
     F0, J0 = model.jacobian(ps.prior)
-    check_force_sign(forces, F0)
     st0 = structure(J0, weights, ps.units)
     if st0.rank == 0:
         raise InputError("the motion identifies no parameter: " + "; ".join(
@@ -384,14 +384,17 @@ def _implausible(ps: ParameterSet, st: Structure, theta: np.ndarray, cov: np.nda
 def validate(result: Identification, motion: Motion, forces: np.ndarray,
              source: str = "") -> Validation:
     """Prediction error on a second record (``motion``, measured ``forces`` (N, 6) N) with the
-    prior and the identified platform."""
+    prior and the identified platform, on the steps the prior's model does not flag (as the
+    fit leaves them out)."""
     forces = np.asarray(forces, float)
-    x = state_array(motion)
+    keep = _unflagged(result.prior, motion)
+    x, t, forces = state_array(motion)[keep], motion.t[keep], forces[keep]
     out = []
     for platform in (result.prior, result.platform):
         ps = parameter_set(platform)
-        predicted = Model(ps, x, motion.t).forces(ps.prior)
+        predicted = Model(ps, x, t).forces(ps.prior)
         if platform is result.prior:
             check_force_sign(forces, predicted, source)
         out.append(_rms(forces - predicted))
-    return Validation(out[0], out[1], result.noise, source)
+    return Validation(out[0], out[1], result.noise, source,
+                      flagged=int(np.count_nonzero(~keep)))

@@ -93,16 +93,20 @@ class Validation:
     noise : ndarray, shape (6,)
         The identification's noise level per leg, N: "within the noise" is ``after`` near it.
     source : str
+    flagged : int
+        Steps of the record the prior's model flags, left out (as the fit leaves them out).
     """
 
     before: np.ndarray
     after: np.ndarray
     noise: np.ndarray
     source: str = ""
+    flagged: int = 0
 
     def summary(self) -> dict:
         return {"source": self.source, "rms_before_N": self.before.tolist(),
-                "rms_after_N": self.after.tolist(), "noise_N": self.noise.tolist()}
+                "rms_after_N": self.after.tolist(), "noise_N": self.noise.tolist(),
+                "flagged_left_out": self.flagged}
 
 
 @dataclass

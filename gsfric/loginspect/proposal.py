@@ -165,8 +165,9 @@ def inspect_log(path: str | os.PathLike[str], *, platform: Platform | None = Non
     roles = C.roles_of(data)
     cmap = C.ColumnMap()
     clock = C.time_column(path, data, roles, time, cmap)
-    longest = None if platform is None or platform.geometry.stroke is None \
-        else platform.geometry.stroke[1]
+    stroke = platform.geometry.stroke if platform is not None else \
+        rig.stroke if rig is not None else None
+    longest = None if stroke is None else stroke[1]
     position, kind, angles, convention, velocity, omega = _poses(path, data, roles, clock.t,
                                                                  cmap, V.mm_reach(longest))
     C.force_columns(data, roles, cmap)

@@ -155,7 +155,7 @@ def length_unit(values: np.ndarray, limit: float = MM_REACH) -> tuple[str, str]:
     reach = float(np.nanmax(np.abs(values)))
     if reach > limit:
         return "mm", f"values up to {reach:.4g}, beyond {limit:g} m: mm"
-    return "m", f"values within {reach:.4g}, below {limit:g}: m"
+    return "m", f"values within {reach:.4g}, below {limit:g} m: m"
 
 
 def angle_unit(values: np.ndarray) -> tuple[str, str]:

@@ -4,8 +4,7 @@ physics, that ``simulate`` and ``discover`` run on what they read.
 Data that are mostly unusable for the platform are an ``InputError`` that says how far off they
 are and which option fixes it, never a result: poses mostly outside the stroke (a controller's
 frame with another origin, another rig, mm given as m), speeds no hexapod of this size reaches,
-and forces a thousand times the load the platform's model puts on its legs (N declared as
-kN).
+and forces a thousand times the platform's model's along the same poses (N declared as kN).
 Gaps in the sample times are reported (``check_gaps``), and an error when they hold most of
 the record. Problems of the force channels themselves (constant, saturated, held samples) are
 an error for every command that fits a model to them (``check_force_channels``).
@@ -34,9 +33,9 @@ another machine."""
 
 UNIT_RATIO = 30.0
 """Factor between the measured load (mean over the steps of the summed magnitudes of F1..F6)
-and the load the model puts on the legs at rest at the home pose (``models.static_load``)
-beyond which the forces are in another unit: motion, friction and the poses away from home
-move the load by a factor of a few at most; a wrong unit (N and kN) puts it 1000 times off."""
+and the model's along the same poses (``models.check_measured_forces``) beyond which the forces
+are in another unit: effects the model lacks and a prior's wrong masses move the load by a
+factor of a few at most; a wrong unit (N and kN) puts it 1000 times off."""
 
 SIGN_SHARE = 0.5
 """A measured record whose summed actuator force (mean over the steps of F1 + ... + F6) has the
@@ -220,13 +219,13 @@ def _check_speed(prefix: str, t: np.ndarray, position: np.ndarray, stroke: float
                          f"{limit:.3g} m/s){hint}; check the units of t and x, y, z")
 
 
-def check_forces(static: float, forces: np.ndarray, where: str = "") -> None:
+def check_forces(model_load: float, forces: np.ndarray, where: str = "") -> None:
     """Raise ``InputError`` when measured actuator forces (N, 6), N, are in another unit than
-    N: their load (the mean over the steps of sum |F_i|) more than ``UNIT_RATIO`` times the
-    ``static`` load the platform's model puts on the legs at rest at its home pose
-    (``gsfric.models.static_load``), or less than its inverse."""
+    N: their load (the mean over the steps of sum |F_i|) more than ``UNIT_RATIO`` times
+    ``model_load``, the platform's model's along the same steps
+    (``gsfric.models.check_measured_forces``), or less than its inverse."""
     prefix = f"{where}: " if where else ""
-    weight = float(static)
+    weight = float(model_load)
     forces = np.asarray(forces, float)
     if not weight > 0 or forces.ndim != 2 or forces.shape[1:] != (6,) or not len(forces) \
             or not np.isfinite(forces).all():
@@ -237,16 +236,14 @@ def check_forces(static: float, forces: np.ndarray, where: str = "") -> None:
         advice = ("forces in N declared as kN? declare F1..F6 in N, or give"
                   if ratio > 300 else "give")
         raise InputError(f"{prefix}forces: their load (mean of the summed |F1..F6|, "
-                         f"{load:.4g} N) is {ratio:.3g} times the load the model puts on the "
-                         f"legs at rest at the home pose ({weight:.4g} N): {advice} the rig's "
-                         "masses (--platform)")
+                         f"{load:.4g} N) is {ratio:.3g} times the model's along the same "
+                         f"poses ({weight:.4g} N): {advice} the rig's masses (--platform)")
     if ratio < 1.0 / UNIT_RATIO:
         advice = ("forces in kN read as N? declare F1..F6 = kN (--units F1=kN,...), or give"
                   if ratio < 1.0 / 300 else "give")
         raise InputError(f"{prefix}forces: their load (mean of the summed |F1..F6|, "
-                         f"{load:.4g} N) is only {ratio:.3g} times the load the model puts "
-                         f"on the legs at rest at the home pose ({weight:.4g} N): {advice} "
-                         "the rig's masses (--platform)")
+                         f"{load:.4g} N) is only {ratio:.3g} times the model's along the same "
+                         f"poses ({weight:.4g} N): {advice} the rig's masses (--platform)")
 
 
 def check_force_sign(measured: np.ndarray, model: np.ndarray, where: str = "") -> None:

@@ -358,7 +358,7 @@ def check_chunk(platform, part: MotionChunk, trajectory: Path) -> None:
     check_poses(platform, position, rotation, motion.t, str(trajectory))
     check_gaps(motion.t, str(trajectory))
     if "F1" in part.carried:
-        check_measured_forces(platform, np.stack([part.carried[f"F{i}"] for i in range(1, 7)], axis=1),
+        check_measured_forces(platform, motion, np.stack([part.carried[f"F{i}"] for i in range(1, 7)], axis=1),
                      str(trajectory))
 
 
