@@ -27,7 +27,7 @@ from gsfric.evaluation.paper_constants import (
 )
 from gsfric.evaluation.result import Result
 from gsfric.platform.description import Body, Friction, Geometry, Legs, Platform
-from gsfric.platform.usable import check_force_sign, check_forces, home_height
+from gsfric.platform.usable import UNIT_RATIO, check_force_sign, check_forces, home_height
 from gsfric.signal.rotations import quaternion_from_rotation, rotation_from_euler
 from gsfric.trajectory import Motion
 
@@ -253,12 +253,13 @@ settled by a few hundred steps to far better than that."""
 
 
 def check_measured_forces(platform: Platform, motion: Motion, forces: np.ndarray,
-                          where: str = "") -> None:
+                          where: str = "", limit: float = UNIT_RATIO) -> None:
     """``InputError`` (prefixed ``where``, a file) for measured forces (N, 6), N, along
     ``motion`` in another unit than N (``check_forces``) or of the opposite sign
     (``check_force_sign``) against the model of ``platform`` along the same poses, rates and
     accelerations (``CHECK_STEPS`` of them; steps whose forces the model cannot give, at a
-    singular pose, are left out, and without any the check is skipped)."""
+    singular pose, are left out, and without any the check is skipped). ``limit``: the
+    factor between the loads beyond which the unit is another (``check_forces``)."""
     rows = np.unique(np.linspace(0, len(motion) - 1, min(len(motion), CHECK_STEPS)).astype(int))
     x = state_of(tuple(a[rows] for a in (motion.position, motion.rotation, motion.velocity,
                                          motion.omega, motion.acceleration, motion.alpha)))
@@ -267,7 +268,8 @@ def check_measured_forces(platform: Platform, motion: Motion, forces: np.ndarray
     if not finite.any():
         return
     measured = np.asarray(forces, float)[rows][finite]
-    check_forces(float(np.mean(np.sum(np.abs(model[finite]), axis=1))), measured, where)
+    check_forces(float(np.mean(np.sum(np.abs(model[finite]), axis=1))), measured, where,
+                 limit)
     check_force_sign(measured, model[finite], where)
 
 

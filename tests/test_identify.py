@@ -552,3 +552,23 @@ def test_a_parameter_the_fit_leaves_at_its_prior_is_not_said_to_have_moved():
     lines = [u for u in result.unreachable if u.startswith("platform.inertia_origin.xx")]
     assert lines and "does not act on the forces along this motion" in lines[0]
     assert not result.parameters["platform.inertia_origin.xx"].moved
+
+
+def test_a_prior_tens_of_times_too_light_is_a_guess_to_correct_not_a_unit_error():
+    """The rig weighs 50 times the prior (masses and seals): discover, which trusts its
+    platform, refuses the forces as another unit; identify, whose prior is a guess, fits them
+    and finds the rig's mass. The forces of a rig of the prior's weight in kN read as N (a
+    factor of 1000) are refused."""
+    prior = reference_platform()
+    heavy = prior.with_body(mass=50 * prior.platform.mass,
+                            payload_mass=50 * prior.platform.payload_mass).with_legs(
+        lower_mass=50 * prior.legs.lower_mass, upper_mass=50 * prior.legs.upper_mass
+    ).with_friction(prismatic_seal=50 * prior.friction.prismatic_seal)
+    data = synthesize(heavy, samples=1500, rate=500.0, noise=25.0, seed=5)
+    forces = data.frame[[f"F{i}" for i in range(1, 7)]].to_numpy()
+    with pytest.raises(gsfric.InputError, match=r"times the model's along the same poses"):
+        gsfric.discover(data.motion, forces, prior)
+    mass = gsfric.identify(data.motion, forces, prior).parameters["platform.mass"]
+    assert abs(mass.value - 50 * 13.0) < 4 * mass.std
+    with pytest.raises(gsfric.InputError, match=r"forces in kN read as N"):
+        gsfric.identify(data.motion, forces / 50 / 1000, prior)    # the prior's rig, in kN

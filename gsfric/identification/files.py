@@ -13,7 +13,7 @@ import numpy as np
 from gsfric.errors import InputError
 from gsfric.identification.fit import identify, validate
 from gsfric.identification.results import Identification
-from gsfric.identification.settings import CONFIDENCE_Z
+from gsfric.identification.settings import CONFIDENCE_Z, PRIOR_LOAD_RATIO
 from gsfric.io.files import output_folder
 from gsfric.io.readers import read_measured_columns
 from gsfric.models import check_measured_forces, platform_from
@@ -35,10 +35,11 @@ def file_sha256(path: str | os.PathLike[str]) -> str:
 
 def read_record(path: str | os.PathLike[str], platform, log_format=None):
     """Motion and forces (N, 6) N of a measured file, checked against the platform's stroke
-    and force range as ``discover`` checks them."""
+    and force range as ``discover`` checks them (the force range against the prior as a guess:
+    ``PRIOR_LOAD_RATIO``)."""
     motion, forces, _, _ = read_measured_columns(path, None, DEFAULT_POLYORDER, log_format)
     check_poses(platform, motion.position, motion.rotation, motion.t, str(path))
-    check_measured_forces(platform, motion, forces, str(path))
+    check_measured_forces(platform, motion, forces, str(path), PRIOR_LOAD_RATIO)
     return motion, forces
 
 

@@ -31,7 +31,7 @@ from gsfric.identification.regressor import Model, Structure, covariance, struct
 from gsfric.identification.results import (Combination, Estimate, Identification, Validation,
                                            moved)
 from gsfric.identification.settings import (IMPLAUSIBLE_SIGMA, MAX_NFEV, MISFIT_RATIO,
-                                            TYPICAL, WEAK_RELATIVE_STD)
+                                            PRIOR_LOAD_RATIO, TYPICAL, WEAK_RELATIVE_STD)
 from gsfric.models import check_measured_forces, platform_from
 from gsfric.platform.description import Platform
 from gsfric.platform.usable import check_force_channels, check_force_sign
@@ -110,7 +110,7 @@ def identify(motion: Motion, forces: np.ndarray, platform: Platform | str | None
     given = None if force_noise is None else _given_noise(force_noise, forces)
     weights = np.ones(6) if given is None else 1.0 / given
     check_force_channels(motion.t, forces)
-    check_measured_forces(prior, motion, forces)
+    check_measured_forces(prior, motion, forces, limit=PRIOR_LOAD_RATIO)
     keep = _unflagged(prior, motion)
     model, forces = Model(ps, state_array(motion)[keep], motion.t[keep]), forces[keep]
     F0, J0 = model.jacobian(ps.prior)

@@ -36,6 +36,13 @@ TYPICAL = {"kg": 1.0, "kg m": 0.1, "kg m^2": 0.01, "N": 1.0, "1": 0.01, "N s/m":
 """Typical size of a parameter of each unit: the floor of its finite-difference step, and the
 scale of the test for columns that do not act (``ZERO_RTOL``)."""
 
+PRIOR_LOAD_RATIO = 300.0
+"""Factor between the measured forces' load and the prior's model's along the same poses
+beyond which ``identify`` takes the forces to be in another unit (``check_forces``): the prior
+is a guess that identify corrects, masses off by tens of times included, so only the factor a
+unit makes (1000 between N and kN) is refused; ``discover``, which trusts its platform, refuses
+30 (``UNIT_RATIO``)."""
+
 IMPLAUSIBLE_SIGMA = 3.0
 """A mass the data call for (the unconstrained estimate) more than ``IMPLAUSIBLE_SIGMA``
 standard deviations below zero is implausible: the fit is refused, not written (a force sign or

@@ -219,9 +219,10 @@ def _check_speed(prefix: str, t: np.ndarray, position: np.ndarray, stroke: float
                          f"{limit:.3g} m/s){hint}; check the units of t and x, y, z")
 
 
-def check_forces(model_load: float, forces: np.ndarray, where: str = "") -> None:
+def check_forces(model_load: float, forces: np.ndarray, where: str = "",
+                 limit: float = UNIT_RATIO) -> None:
     """Raise ``InputError`` when measured actuator forces (N, 6), N, are in another unit than
-    N: their load (the mean over the steps of sum |F_i|) more than ``UNIT_RATIO`` times
+    N: their load (the mean over the steps of sum |F_i|) more than ``limit`` times
     ``model_load``, the platform's model's along the same steps
     (``gsfric.models.check_measured_forces``), or less than its inverse."""
     prefix = f"{where}: " if where else ""
@@ -232,13 +233,13 @@ def check_forces(model_load: float, forces: np.ndarray, where: str = "") -> None
         return
     load = float(np.mean(np.sum(np.abs(forces), axis=1)))
     ratio = load / weight
-    if ratio > UNIT_RATIO:
+    if ratio > limit:
         advice = ("forces in N declared as kN? declare F1..F6 in N, or give"
                   if ratio > 300 else "give")
         raise InputError(f"{prefix}forces: their load (mean of the summed |F1..F6|, "
                          f"{load:.4g} N) is {ratio:.3g} times the model's along the same "
                          f"poses ({weight:.4g} N): {advice} the rig's masses (--platform)")
-    if ratio < 1.0 / UNIT_RATIO:
+    if ratio < 1.0 / limit:
         advice = ("forces in kN read as N? declare F1..F6 = kN (--units F1=kN,...), or give"
                   if ratio < 1.0 / 300 else "give")
         raise InputError(f"{prefix}forces: their load (mean of the summed |F1..F6|, "
