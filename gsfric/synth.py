@@ -135,7 +135,7 @@ def similar_pose(platform: Platform | None) -> Similar:
     reach = span / span_ref
     radius = float(np.linalg.norm(platform.geometry.platform_joints, axis=1).max())
     radius_ref = float(np.linalg.norm(reference.geometry.platform_joints, axis=1).max())
-    turn = min(1.0, reach * radius_ref / radius)
+    turn = min(1.0, reach * radius_ref / radius) if radius > 0 else 1.0
     # the terms vanish exactly on the reference platform: its motions stay as drawn
     height = HOME_HEIGHT + (home - home_ref) + (HOME_HEIGHT - home_ref) * (reach - 1.0)
     return Similar((0.0, 0.0, height), reach, turn, float(np.sqrt(reach)))
