@@ -182,9 +182,6 @@ def test_table_errors(tmp_path):
         read_table(tmp_path / "dir.csv")
 
 
-# -- trajectories -------------------------------------------------------------------------------
-
-
 def test_a_byte_that_is_not_utf8_is_named_by_its_place_in_the_file(tmp_path):
     """pandas decodes a buffer at a time and counts from the buffer's start: the message
     names the line and the offset in the file, as decoding the whole file finds them."""
@@ -196,6 +193,9 @@ def test_a_byte_that_is_not_utf8_is_named_by_its_place_in_the_file(tmp_path):
     with pytest.raises(InputError, match=rf"late.csv: not UTF-8 text \(line {line}, byte "
                                          rf"{decoded.value.start} of the file\)$"):
         read_table(tmp_path / "late.csv")
+
+
+# -- trajectories -------------------------------------------------------------------------------
 
 
 @pytest.mark.parametrize("suffix", [".csv", ".parquet"])

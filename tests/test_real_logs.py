@@ -291,9 +291,6 @@ def test_forces_in_newtons_declared_as_kilonewtons_are_an_error(tmp_path):
         models.check_measured_forces(reference, motion, forces / 1000.0)
 
 
-# -- the shipped controller log: the tutorial's CLI -------------------------------------------
-
-
 def test_the_unit_check_weighs_the_forces_against_the_models_own_load():
     """A light platform on heavy legs: the legs' own weight is most of what the actuators
     carry. Its model's forces pass the unit check (the platform and payload weigh a
@@ -321,6 +318,9 @@ def test_the_unit_and_sign_checks_follow_the_records_own_poses():
     models.check_measured_forces(loose, data.motion, forces)
     with pytest.raises(InputError, match=r"negate F1\.\.F6"):
         models.check_measured_forces(loose, data.motion, -forces)
+
+
+# -- the shipped controller log: the tutorial's CLI -------------------------------------------
 
 
 def test_the_controller_log_reads_simulates_and_discovers(tmp_path):
