@@ -572,3 +572,12 @@ def test_a_prior_tens_of_times_too_light_is_a_guess_to_correct_not_a_unit_error(
     assert abs(mass.value - 50 * 13.0) < 4 * mass.std
     with pytest.raises(gsfric.InputError, match=r"forces in kN read as N"):
         gsfric.identify(data.motion, forces / 50 / 1000, prior)    # the prior's rig, in kN
+
+
+def test_a_record_the_platforms_model_mostly_flags_is_refused_naming_it(tmp_path):
+    data, _ = _record(seed=4, samples=600)
+    gsfric.io.write_table(data.frame, tmp_path / "r.csv")
+    reference_platform().with_friction(joint_coulomb=0.5).to_toml(tmp_path / "locked.toml")
+    with pytest.raises(gsfric.InputError, match=r"r\.csv: \d+ of 600 steps are flagged by the "
+                                                r"model, .*FLAG_COUPLING"):
+        files.identify_file(tmp_path / "r.csv", tmp_path / "locked.toml")

@@ -11,7 +11,7 @@ from pathlib import Path
 import numpy as np
 
 from gsfric.errors import InputError
-from gsfric.identification.fit import identify, validate
+from gsfric.identification.fit import identify, unflagged_steps, validate
 from gsfric.identification.results import Identification
 from gsfric.identification.settings import CONFIDENCE_Z, PRIOR_LOAD_RATIO
 from gsfric.io.files import output_folder
@@ -36,10 +36,11 @@ def file_sha256(path: str | os.PathLike[str]) -> str:
 def read_record(path: str | os.PathLike[str], platform, log_format=None):
     """Motion and forces (N, 6) N of a measured file, checked against the platform's stroke
     and force range as ``discover`` checks them (the force range against the prior as a guess:
-    ``PRIOR_LOAD_RATIO``)."""
+    ``PRIOR_LOAD_RATIO``), and refused, naming it, when the model flags most of its steps."""
     motion, forces, _, _ = read_measured_columns(path, None, DEFAULT_POLYORDER, log_format)
     check_poses(platform, motion.position, motion.rotation, motion.t, str(path))
     check_measured_forces(platform, motion, forces, str(path), PRIOR_LOAD_RATIO)
+    unflagged_steps(platform, motion, str(path))
     return motion, forces
 
 

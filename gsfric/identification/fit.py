@@ -111,7 +111,7 @@ def identify(motion: Motion, forces: np.ndarray, platform: Platform | str | None
     weights = np.ones(6) if given is None else 1.0 / given
     check_force_channels(motion.t, forces)
     check_measured_forces(prior, motion, forces, limit=PRIOR_LOAD_RATIO)
-    keep = _unflagged(prior, motion)
+    keep = unflagged_steps(prior, motion)
     model, forces = Model(ps, state_array(motion)[keep], motion.t[keep]), forces[keep]
     F0, J0 = model.jacobian(ps.prior)
     st0 = structure(J0, weights, ps.units)
@@ -128,13 +128,14 @@ def identify(motion: Motion, forces: np.ndarray, platform: Platform | str | None
                    flagged=int(np.count_nonzero(~keep)))
 
 
-def _unflagged(platform: Platform, motion: Motion) -> np.ndarray:
+def unflagged_steps(platform: Platform, motion: Motion, where: str = "") -> np.ndarray:
     """The steps (N,) bool that the model of ``platform`` does not flag along ``motion``: the
     forces of a flagged one (a leg outside the stroke, near a singularity, the coupled solve
-    not converged) are not the model's to fit. An ``InputError`` when most are flagged
-    (``evaluation.flags.check_flagged``, as ``discover`` refuses such a record)."""
+    not converged) are not the model's to fit. An ``InputError`` (prefixed ``where``, a file)
+    when most are flagged (``evaluation.flags.check_flagged``, as ``discover`` refuses such a
+    record)."""
     flag = Evaluator(platform).evaluate_quiet(motion).flag
-    check_flagged(platform, flag_counts(flag), int(np.count_nonzero(flag)), len(flag))
+    check_flagged(platform, flag_counts(flag), int(np.count_nonzero(flag)), len(flag), where)
     return flag == 0
 
 
@@ -387,7 +388,7 @@ def validate(result: Identification, motion: Motion, forces: np.ndarray,
     prior and the identified platform, on the steps the prior's model does not flag (as the
     fit leaves them out)."""
     forces = np.asarray(forces, float)
-    keep = _unflagged(result.prior, motion)
+    keep = unflagged_steps(result.prior, motion)
     x, t, forces = state_array(motion)[keep], motion.t[keep], forces[keep]
     out = []
     for platform in (result.prior, result.platform):
